@@ -1,0 +1,81 @@
+#pragma once
+// 2-D geometry in SI units (m, rad). Headings are mathematical: 0 rad points
+// along +x, counter-clockwise positive, wrapped to (-pi, pi].
+//
+// SUMO's convention (degrees, 0 = north, clockwise) appears only in the
+// conversion helpers at the bottom, which the `sim` boundary uses.
+
+#include <Eigen/Core>
+#include <optional>
+#include <vector>
+
+namespace vsd {
+
+using Vec2 = Eigen::Vector2d;
+using Polyline = std::vector<Vec2>;
+
+constexpr double kPi = 3.14159265358979323846;
+
+/// Wraps an angle to (-pi, pi].
+double wrapAngle(double angle_rad);
+/// Unit vector of a heading.
+Vec2 headingVector(double heading_rad);
+/// Heading of a direction vector (atan2).
+double headingOf(const Vec2& direction);
+
+/// Where a point lies relative to a polyline.
+struct PolylineProjection {
+  double arcLength = 0.0;      ///< m along the polyline to the foot point (clamped to [0, length])
+  double lateralOffset = 0.0;  ///< m, signed: > 0 left of the direction of travel
+  double heading = 0.0;        ///< rad, direction of the segment holding the foot point
+  std::size_t segment = 0;     ///< index of that segment (points segment, segment + 1)
+  Vec2 foot = Vec2::Zero();    ///< closest point on the polyline
+};
+
+/// A polyline with cumulative arc lengths, for repeated queries (at least 2 points).
+class MeasuredPolyline {
+ public:
+  MeasuredPolyline() = default;
+  explicit MeasuredPolyline(Polyline points);
+
+  const Polyline& points() const { return points_; }
+  double length() const { return cumulative_.empty() ? 0.0 : cumulative_.back(); }
+  bool empty() const { return points_.size() < 2; }
+
+  /// Closest point on the polyline.
+  PolylineProjection project(const Vec2& point) const;
+  /// Point at arc length s; beyond either end the end segment is extended linearly.
+  Vec2 pointAt(double arc_length) const;
+  /// Direction at arc length s (of the segment holding it, end segments beyond the ends).
+  double headingAt(double arc_length) const;
+
+ private:
+  std::size_t segmentAt(double arc_length) const;
+
+  Polyline points_;
+  std::vector<double> cumulative_;
+};
+
+/// Sum of segment lengths.
+double polylineLength(const Polyline& points);
+
+/// The polyline moved sideways by `left_offset` m (negative: right). Each vertex moves
+/// along the bisector of its adjacent segment normals, scaled so that both segments stay
+/// exactly `left_offset` away (mitre), with the scale capped to avoid spikes at sharp turns.
+Polyline offsetPolyline(const Polyline& points, double left_offset);
+
+/// First point on the polyline whose x equals `x` (linear interpolation), if any.
+std::optional<Vec2> pointAtX(const Polyline& points, double x);
+
+/// The part of the polyline with x in [x_min, x_max], with interpolated end points.
+/// Meant for polylines that advance in x (roads of the scenario frame).
+Polyline clipToXRange(const Polyline& points, double x_min, double x_max);
+
+// --- SUMO conventions (only for the sim boundary) --------------------------------------
+
+/// SUMO angle (deg, 0 = north, clockwise) -> heading (rad, 0 = +x, counter-clockwise).
+double headingFromSumoAngle(double sumo_angle_deg);
+/// Heading (rad) -> SUMO angle in [0, 360) deg.
+double sumoAngleFromHeading(double heading_rad);
+
+}  // namespace vsd

@@ -1,0 +1,78 @@
+#pragma once
+// Small helpers over HDF5's C++ API for the project's files (traces, datasets):
+// datasets that grow along their first dimension (streamed writing with flat
+// memory), attributes, string lists. Datasets are written without object
+// timestamps so that the same content gives the same bytes.
+//
+// Compression uses only deflate (+ shuffle), which h5py reads without plugins.
+
+#include <H5Cpp.h>
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace vsd::h5 {
+
+template <typename T>
+const H5::PredType& nativeType();
+template <>
+inline const H5::PredType& nativeType<double>() { return H5::PredType::NATIVE_DOUBLE; }
+template <>
+inline const H5::PredType& nativeType<float>() { return H5::PredType::NATIVE_FLOAT; }
+template <>
+inline const H5::PredType& nativeType<std::int64_t>() { return H5::PredType::NATIVE_INT64; }
+template <>
+inline const H5::PredType& nativeType<std::int32_t>() { return H5::PredType::NATIVE_INT32; }
+template <>
+inline const H5::PredType& nativeType<std::uint8_t>() { return H5::PredType::NATIVE_UINT8; }
+template <>
+inline const H5::PredType& nativeType<std::int8_t>() { return H5::PredType::NATIVE_INT8; }
+
+/// A dataset of shape [rows, row_shape...] that grows by appending rows.
+template <typename T>
+class Appendable {
+ public:
+  Appendable() = default;
+  /// `chunk_rows` rows per chunk; `deflate_level` 0 = uncompressed, 1..9 = gzip (+ shuffle).
+  Appendable(H5::Group& parent, const std::string& name, std::vector<hsize_t> row_shape, hsize_t chunk_rows,
+             int deflate_level);
+
+  /// Appends `rows` rows laid out contiguously (row-major) at `data`.
+  void append(const T* data, hsize_t rows);
+  void append(const std::vector<T>& data);
+  hsize_t rows() const { return rows_; }
+  hsize_t rowSize() const;
+
+ private:
+  H5::DataSet dataset_;
+  std::vector<hsize_t> rowShape_;
+  hsize_t rows_ = 0;
+};
+
+void writeAttribute(H5::H5Object& object, const std::string& name, const std::string& value);
+void writeAttribute(H5::H5Object& object, const std::string& name, double value);
+void writeAttribute(H5::H5Object& object, const std::string& name, std::int64_t value);
+bool hasAttribute(const H5::H5Object& object, const std::string& name);
+std::string readStringAttribute(const H5::H5Object& object, const std::string& name);
+double readDoubleAttribute(const H5::H5Object& object, const std::string& name);
+std::int64_t readIntAttribute(const H5::H5Object& object, const std::string& name);
+
+/// A 1-D dataset of variable-length UTF-8 strings.
+void writeStrings(H5::Group& parent, const std::string& name, const std::vector<std::string>& values);
+std::vector<std::string> readStrings(const H5::Group& parent, const std::string& name);
+
+/// Dimensions of a dataset.
+std::vector<hsize_t> shapeOf(const H5::DataSet& dataset);
+/// Reads rows [first, first + count) of a dataset of T (all trailing dimensions).
+template <typename T>
+std::vector<T> readRows(const H5::DataSet& dataset, hsize_t first, hsize_t count);
+/// Reads a whole dataset of T.
+template <typename T>
+std::vector<T> readAll(const H5::DataSet& dataset);
+
+/// Turns HDF5's exceptions into silence: HDF5 prints its error stack to stderr by
+/// default, which we report ourselves as one line.
+void silenceErrorStack();
+
+}  // namespace vsd::h5

@@ -1,0 +1,19 @@
+#pragma once
+// Logging goes to stderr through spdlog; stdout is reserved for results
+// (summaries, tables) so that they can be piped.
+
+#include <spdlog/spdlog.h>
+
+#include <string>
+
+namespace vsd {
+
+enum class Verbosity { Quiet, Normal, Verbose };
+
+/// Configures the process-wide logger and the progress display.
+void configureLogging(Verbosity verbosity);
+
+/// Version of this tool ("0.1.0", plus the git commit when built from a checkout).
+std::string toolVersion();
+
+}  // namespace vsd

@@ -1,0 +1,52 @@
+#pragma once
+// Simulates many concrete scenarios that share one SUMO network in one libsumo
+// simulation. The Co (and any other scripted vehicle) is a SUMO vehicle on its
+// lane following its scripted speed (speed mode 0); the Ego is driven by its
+// EgoController through the kinematic model and placed with moveToXY.
+//
+// Everything returned is in each scenario's own frame.
+
+#include <cstdint>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "vsd/core/trace.hpp"
+#include "vsd/road/road_geometry.hpp"
+#include "vsd/scenario/concrete_scenario.hpp"
+#include "vsd/sim/controller.hpp"
+#include "vsd/sim/sumo_session.hpp"
+
+namespace vsd::sim {
+
+/// One scenario of a batch: what to simulate and where its road sits in the net.
+struct ScenarioRun {
+  const scenario::ConcreteScenario* scenario = nullptr;
+  const road::RoadGeometry* road = nullptr;
+  Vec2 offset = Vec2::Zero();  ///< net coordinates of the scenario frame's origin
+};
+
+struct SimulatedScenario {
+  std::uint64_t index = 0;
+  Trace trace;                     ///< vehicles[0] = Ego, then the others in scenario order
+  std::vector<LaneGeometry> lanes; ///< the road's lanes as SUMO built them (scenario frame)
+  std::string failure;             ///< empty if the run completed; otherwise why it did not
+  bool ok() const { return failure.empty(); }
+};
+
+struct BatchOptions {
+  double step = 0.2;                     ///< s
+  int steps = 25;
+  std::string collisionAction = "warn";  ///< SUMO --collision.action
+  std::vector<std::string> sumoOptions;  ///< appended to SUMO's command line
+  std::filesystem::path fcdOutput;       ///< SUMO FCD XML for this batch (empty: none)
+  std::filesystem::path scenarioDir;     ///< base for relative controller library paths
+};
+
+/// Runs all `runs` in one simulation of `net`. Per-scenario faults (a vehicle
+/// SUMO removes, a controller that fails) are recorded in `failure`; faults of
+/// the whole batch (SUMO cannot load the net, an unknown controller) throw.
+std::vector<SimulatedScenario> simulateBatch(const std::filesystem::path& net, const std::vector<ScenarioRun>& runs,
+                                             ControllerRegistry& registry, const BatchOptions& options);
+
+}  // namespace vsd::sim

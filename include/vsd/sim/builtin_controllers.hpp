@@ -1,0 +1,101 @@
+#pragma once
+// Built-in Ego controllers. Longitudinal and lateral parts are separate classes
+// so that controllers can combine them.
+
+#include "vsd/sim/controller.hpp"
+
+namespace vsd::sim {
+
+/// Lane keeping by pure pursuit on the lane-centre preview:
+/// lookahead L = max(min_lookahead, lookahead_time * v), curvature = 2 sin(alpha) / L,
+/// alpha = bearing of the lane-centre point L ahead in the Ego frame.
+/// With no lane in sight it drives straight (curvature 0).
+class PurePursuitLateral {
+ public:
+  void init(const ControllerParams& params);
+  double curvature(const Observation& observation) const;
+
+ private:
+  double lookaheadTime_ = 0.4;   ///< s
+  double minLookahead_ = 4.0;    ///< m
+};
+
+/// Parameters every car-following controller here shares, read from the scenario:
+/// time_gap [s], standstill_gap [m], max_accel / max_decel [m/s^2] (command limits) and
+/// set_speed [m/s] (cruise speed; default: the Ego's speed at its first step).
+struct FollowingParameters {
+  double timeGap = 2.0;
+  double standstillGap = 2.0;
+  double maxAccel = 2.0;
+  double maxDecel = 9.0;
+
+  void read(const ControllerParams& params);
+  /// Forgets the set speed taken from a previous scenario's first step.
+  void reset() { setSpeed_ = configuredSetSpeed_; }
+  double setSpeed(const Observation& observation);
+  double clamp(double accel) const;
+
+ private:
+  std::optional<double> configuredSetSpeed_;
+  std::optional<double> setSpeed_;
+};
+
+/// The paper's Ego, longitudinally: a P-controller on the time gap to the leader,
+///   a = k_gap * (gap - max(standstill_gap, time_gap * v)) + k_speed * (v_leader - v),
+/// never more than the cruise command k_cruise * (set_speed - v); with no leader
+/// it cruises at set_speed (default: the initial speed).
+/// Collision avoidance on top: b_req = the smallest constant deceleration that keeps
+/// `emergency_margin` to the leader (assumed to keep braking at its current rate
+/// until it stops); when b_req > emergency_trigger the command is at most -1.1 b_req.
+/// The result is clamped to [-max_decel, max_accel].
+class TimeGapLongitudinal {
+ public:
+  void init(const ControllerParams& params);
+  void reset() { following_.reset(); }
+  double accel(const Observation& observation);
+
+ private:
+  FollowingParameters following_;
+  double kGap_ = 0.3;              ///< 1/s^2
+  double kSpeed_ = 0.8;            ///< 1/s
+  double kCruise_ = 0.5;           ///< 1/s
+  double emergencyMargin_ = 1.0;   ///< m
+  double emergencyTrigger_ = 2.0;  ///< m/s^2
+};
+
+/// Smallest constant deceleration (m/s^2, >= 0) of a follower at `speed` that keeps at
+/// least `margin` m to a leader `gap` m ahead at `leader_speed` accelerating with
+/// `leader_accel` (<= 0: braking until it stops). Returns +inf if even `max_decel`
+/// cannot keep the margin.
+double requiredDeceleration(double gap, double speed, double leader_speed, double leader_accel, double margin,
+                            double max_decel);
+
+/// `paper_ego`: TimeGapLongitudinal + PurePursuitLateral.
+class PaperEgoController final : public EgoController {
+ public:
+  void init(const ControllerParams& params) override;
+  void reset() override { longitudinal_.reset(); }
+  Command step(const Observation& observation, double dt) override;
+
+ private:
+  TimeGapLongitudinal longitudinal_;
+  PurePursuitLateral lateral_;
+};
+
+/// `idm`: Intelligent Driver Model (Treiber et al. 2000) + PurePursuitLateral; max_accel
+/// is IDM's a, comfort_decel its b, exponent its delta, set_speed its v0.
+class IdmController final : public EgoController {
+ public:
+  IdmController();
+  void init(const ControllerParams& params) override;
+  void reset() override { following_.reset(); }
+  Command step(const Observation& observation, double dt) override;
+
+ private:
+  FollowingParameters following_;
+  double comfortDecel_ = 2.0;  ///< m/s^2
+  double exponent_ = 4.0;
+  PurePursuitLateral lateral_;
+};
+
+}  // namespace vsd::sim

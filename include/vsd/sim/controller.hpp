@@ -1,0 +1,134 @@
+#pragma once
+// Ego controllers: what drives the vehicle under test.
+//
+// A controller sees an Observation built from SUMO's state (lane geometry,
+// leader) and the Ego's own kinematic state, and returns a Command with a
+// longitudinal part (acceleration) and a lateral part (path curvature). The
+// kinematic vehicle model (vehicle_model.hpp) applies the command; the new pose
+// is then pushed into SUMO with moveToXY so that SUMO sees the Ego where the
+// controller put it.
+//
+// Controllers are selected by name from the scenario YAML through a
+// ControllerRegistry; unknown names fail with the list of available ones.
+
+#include <array>
+#include <filesystem>
+#include <functional>
+#include <map>
+#include <memory>
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "vsd/core/trace.hpp"
+#include "vsd/sim/controller_abi.h"
+
+namespace vsd::sim {
+
+constexpr int kPreviewPoints = VSD_PREVIEW_POINTS;
+
+/// What the Ego's controller sees at one instant. Scenario frame, SI units.
+struct Observation {
+  double time = 0.0;       ///< s since the scenario started
+  VehicleState ego;        ///< own state (centre of the vehicle)
+  double egoLength = 5.0;  ///< m
+  double egoWidth = 1.8;   ///< m
+
+  struct Lane {
+    double lateralOffset = 0.0;  ///< m, Ego centre relative to the lane centre, > 0 left
+    double headingError = 0.0;   ///< rad, Ego heading minus lane direction, (-pi, pi]
+    double width = 3.5;          ///< m
+    double previewSpacing = 4.0; ///< m between preview points
+    /// Lane centre at previewSpacing * (i + 1) m ahead along the lane, in the Ego frame (x forward, y left).
+    std::array<Vec2, kPreviewPoints> preview{};
+  };
+  std::optional<Lane> lane;  ///< absent when the Ego is off the road
+
+  struct Leader {
+    double gap = 0.0;    ///< m, bumper to bumper along the lane
+    double speed = 0.0;  ///< m/s
+    double accel = 0.0;  ///< m/s^2
+  };
+  std::optional<Leader> leader;  ///< absent when no vehicle is ahead within range
+};
+
+struct Command {
+  double accel = 0.0;      ///< m/s^2, longitudinal
+  double curvature = 0.0;  ///< 1/m, > 0 turns left
+};
+
+/// Named numeric parameters from the scenario YAML (already evaluated for one
+/// concrete scenario). Reading a parameter validates its range; afterwards
+/// rejectUnknown() fails on names the controller does not know (typos).
+class ControllerParams {
+ public:
+  ControllerParams(std::vector<std::pair<std::string, double>> values, std::string where);
+
+  /// The value of `name`, or `fallback` if absent. Throws ConfigError naming
+  /// the parameter, its value and [min, max] if out of range.
+  double get(const std::string& name, double fallback, double min, double max) const;
+  /// Like get() but absent parameters stay absent.
+  std::optional<double> find(const std::string& name, double min, double max) const;
+  /// Throws ConfigError for any parameter never asked for, listing the known ones.
+  void rejectUnknown(const std::string& controller_name) const;
+
+  const std::vector<std::pair<std::string, double>>& values() const { return values_; }
+
+ private:
+  std::vector<std::pair<std::string, double>> values_;
+  std::string where_;
+  mutable std::vector<std::string> known_;
+};
+
+class EgoController {
+ public:
+  virtual ~EgoController() = default;
+  /// Reads parameters (called once per concrete scenario, before reset()).
+  virtual void init(const ControllerParams& params) = 0;
+  /// Forgets all state from a previous scenario.
+  virtual void reset() = 0;
+  /// Decides the command for the next `dt` seconds. Throws vsd::Error to fail the scenario.
+  virtual Command step(const Observation& observation, double dt) = 0;
+};
+
+/// Registry of controllers by name. Built-ins are added by withBuiltins();
+/// loadLibrary() adds the controllers a plugin exports.
+class ControllerRegistry {
+ public:
+  using Factory = std::function<std::unique_ptr<EgoController>()>;
+
+  /// A registry holding the built-in controllers (paper_ego, idm).
+  static ControllerRegistry withBuiltins();
+
+  void add(const std::string& name, const std::string& description, Factory factory);
+  /// Throws ConfigError naming `name` and listing every available controller.
+  std::unique_ptr<EgoController> create(const std::string& name) const;
+  bool contains(const std::string& name) const { return entries_.count(name) > 0; }
+  /// name -> description
+  std::map<std::string, std::string> available() const;
+
+  /// dlopen()s a plugin (see controller_abi.h) and registers its controllers.
+  /// Throws ConfigError for a missing file, a library that cannot be loaded, a
+  /// missing entry point, an ABI version mismatch or a duplicate name.
+  void loadLibrary(const std::filesystem::path& library);
+
+ private:
+  struct Entry {
+    std::string description;
+    Factory factory;
+  };
+  std::map<std::string, Entry> entries_;
+};
+
+/// Creates and initialises the controller a scenario asks for, loading its
+/// library first if one is named (relative to `scenario_dir`).
+std::unique_ptr<EgoController> makeController(ControllerRegistry& registry, const std::string& name,
+                                              const std::filesystem::path& library,
+                                              const std::filesystem::path& scenario_dir,
+                                              const ControllerParams& params);
+
+/// The C view of an Observation (for plugins).
+vsd_observation toAbi(const Observation& observation);
+
+}  // namespace vsd::sim

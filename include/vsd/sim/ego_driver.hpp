@@ -1,0 +1,65 @@
+#pragma once
+// Closed loop of one Ego in a running libsumo simulation:
+//   observe (SUMO lane geometry + leader) -> controller -> kinematic model -> moveToXY.
+// Used for generated scenarios and for closed-loop Egos on arbitrary maps.
+
+#include <memory>
+#include <string>
+#include <unordered_map>
+
+#include "vsd/sim/controller.hpp"
+#include "vsd/sim/sumo_session.hpp"
+#include "vsd/sim/vehicle_model.hpp"
+
+namespace vsd::sim {
+
+/// Lane shapes fetched from SUMO once and kept in a frame shifted by a per-lane offset.
+class LaneCache {
+ public:
+  /// The lane in the frame net - offset (the offset must be the same on every call for a lane).
+  const MeasuredPolyline& centre(const std::string& lane_id, const Vec2& offset);
+  double width(const std::string& lane_id, const Vec2& offset);
+
+ private:
+  struct Entry {
+    MeasuredPolyline centre;
+    double width;
+  };
+  const Entry& get(const std::string& lane_id, const Vec2& offset);
+  std::unordered_map<std::string, Entry> entries_;
+};
+
+class EgoDriver {
+ public:
+  /// `offset`: net coordinates of the scenario frame's origin. The vehicle must
+  /// already exist in SUMO (added, not necessarily inserted yet).
+  EgoDriver(std::string vehicle_id, std::unique_ptr<EgoController> controller, const VehicleState& initial,
+            double length, double width, const Vec2& offset, VehicleLimits limits = {});
+
+  const VehicleState& state() const { return state_; }
+  const std::string& vehicleId() const { return vehicleId_; }
+
+  /// Places the vehicle in SUMO at the current state (moveToXY + speed).
+  void pushToSumo() const;
+  /// Builds the controller's observation from SUMO's current state.
+  Observation observe(double time, LaneCache& lanes) const;
+  /// One closed-loop step: observe, decide, advance the model by dt with the
+  /// heading disturbance, push the new pose to SUMO. Throws vsd::Error if the
+  /// controller fails.
+  void step(double time, double dt, double heading_noise, LaneCache& lanes);
+
+  /// Range within which a vehicle ahead counts as leader (m).
+  static constexpr double kLeaderRange = 200.0;
+
+ private:
+  std::string vehicleId_;
+  std::unique_ptr<EgoController> controller_;
+  VehicleState state_;
+  double length_;
+  double width_;
+  Vec2 offset_;
+  VehicleLimits limits_;
+  double minGap_ = 0.0;
+};
+
+}  // namespace vsd::sim

@@ -1,0 +1,48 @@
+#pragma once
+// RAII around a libsumo simulation. libsumo holds one simulation per process:
+// opening a second session while one is open throws SumoError.
+//
+// This header keeps libsumo's own headers out of other modules.
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "vsd/core/geometry.hpp"
+
+namespace vsd::sim {
+
+class SumoSession {
+ public:
+  /// Loads a simulation with the given SUMO command-line arguments (without
+  /// the program name), e.g. {"-n", "net.net.xml", "--step-length", "0.2"}.
+  /// Quiet defaults (no step log, no warnings on stdout) are prepended.
+  /// Throws SumoError with SUMO's message if loading fails.
+  explicit SumoSession(const std::vector<std::string>& arguments);
+  SumoSession(const SumoSession&) = delete;
+  SumoSession& operator=(const SumoSession&) = delete;
+  ~SumoSession();
+
+  /// Advances one step.
+  void step();
+  /// Simulation time in s.
+  double time() const;
+
+  /// "Eclipse SUMO sumo Version 1.15.0" (from libsumo, no simulation needed).
+  static std::string version();
+
+ private:
+  bool open_ = false;
+};
+
+/// A lane of the loaded network, in a chosen frame (net coordinates minus an offset).
+struct LaneGeometry {
+  std::string id;
+  Polyline centre;     ///< m
+  double width = 0.0;  ///< m
+};
+
+/// Lane `lane_id`'s shape and width from the loaded SUMO network, shifted by -offset.
+LaneGeometry fetchLane(const std::string& lane_id, const Vec2& offset);
+
+}  // namespace vsd::sim

@@ -1,0 +1,22 @@
+#pragma once
+// Subcommands of the vsd-sumo executable. Each registers its flags and sets the
+// action to run after parsing; the action only calls library functions.
+
+#include <CLI/CLI.hpp>
+
+#include <functional>
+#include <string>
+
+namespace vsd::cli {
+
+using Action = std::function<int()>;
+
+struct CommandContext {
+  std::string commandLine;  ///< the whole invocation, for manifests
+  Action action;            ///< set by the chosen subcommand
+};
+
+void addRunCommand(CLI::App& app, CommandContext& context);
+void addBenchCommand(CLI::App& app, CommandContext& context);
+
+}  // namespace vsd::cli

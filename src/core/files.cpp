@@ -1,0 +1,153 @@
+#include "vsd/core/files.hpp"
+
+#include <openssl/evp.h>
+#include <unistd.h>
+
+#include <array>
+#include <cstdlib>
+#include <fstream>
+#include <memory>
+#include <sstream>
+
+#include "vsd/core/error.hpp"
+
+namespace fs = std::filesystem;
+
+namespace vsd {
+
+AtomicOutput::AtomicOutput(fs::path final_path) : finalPath_(std::move(final_path)) {
+  // Same directory as the final file so that rename() never crosses file systems;
+  // a leading dot and the ".part" suffix make an abandoned file obviously unfinished.
+  tempPath_ = finalPath_.parent_path() /
+              ("." + finalPath_.filename().string() + "." + std::to_string(::getpid()) + ".part");
+}
+
+AtomicOutput::AtomicOutput(AtomicOutput&& other) noexcept
+    : finalPath_(std::move(other.finalPath_)), tempPath_(std::move(other.tempPath_)), active_(other.active_) {
+  other.active_ = false;
+}
+
+AtomicOutput& AtomicOutput::operator=(AtomicOutput&& other) noexcept {
+  if (this != &other) {
+    abandon();
+    finalPath_ = std::move(other.finalPath_);
+    tempPath_ = std::move(other.tempPath_);
+    active_ = other.active_;
+    other.active_ = false;
+  }
+  return *this;
+}
+
+AtomicOutput::~AtomicOutput() { abandon(); }
+
+void AtomicOutput::commit() {
+  if (!active_) throw IoError("internal: commit() of an already finished output " + finalPath_.string());
+  std::error_code ec;
+  fs::rename(tempPath_, finalPath_, ec);
+  if (ec) throw IoError(finalPath_.string() + ": cannot rename finished file into place: " + ec.message());
+  active_ = false;
+}
+
+void AtomicOutput::abandon() {
+  if (!active_) return;
+  std::error_code ec;
+  fs::remove(tempPath_, ec);
+  active_ = false;
+}
+
+void writeTextFileAtomically(const fs::path& path, const std::string& contents) {
+  AtomicOutput output(path);
+  {
+    std::ofstream stream(output.tempPath(), std::ios::binary | std::ios::trunc);
+    if (!stream) throw IoError(path.string() + ": cannot open for writing");
+    stream << contents;
+    stream.flush();
+    if (!stream) throw IoError(path.string() + ": write failed (disk full?)");
+  }
+  output.commit();
+}
+
+std::string readTextFile(const fs::path& path) {
+  std::ifstream stream(path, std::ios::binary);
+  if (!stream) throw IoError(path.string() + ": cannot open for reading (does it exist?)");
+  std::ostringstream buffer;
+  buffer << stream.rdbuf();
+  return buffer.str();
+}
+
+namespace {
+
+struct DigestContextDeleter {
+  void operator()(EVP_MD_CTX* context) const { EVP_MD_CTX_free(context); }
+};
+
+std::string hexOf(const unsigned char* bytes, unsigned int size) {
+  static constexpr char kDigits[] = "0123456789abcdef";
+  std::string hex(size * 2U, '0');
+  for (unsigned int i = 0; i < size; ++i) {
+    hex[2U * i] = kDigits[bytes[i] >> 4U];
+    hex[2U * i + 1U] = kDigits[bytes[i] & 0x0FU];
+  }
+  return hex;
+}
+
+class Sha256 {
+ public:
+  Sha256() : context_(EVP_MD_CTX_new()) {
+    if (!context_ || EVP_DigestInit_ex(context_.get(), EVP_sha256(), nullptr) != 1) {
+      throw Error("OpenSSL: cannot initialise SHA-256");
+    }
+  }
+  void update(const void* data, std::size_t size) { EVP_DigestUpdate(context_.get(), data, size); }
+  std::string hex() {
+    std::array<unsigned char, EVP_MAX_MD_SIZE> digest{};
+    unsigned int size = 0;
+    EVP_DigestFinal_ex(context_.get(), digest.data(), &size);
+    return hexOf(digest.data(), size);
+  }
+
+ private:
+  std::unique_ptr<EVP_MD_CTX, DigestContextDeleter> context_;
+};
+
+}  // namespace
+
+std::string sha256OfFile(const fs::path& path) {
+  std::ifstream stream(path, std::ios::binary);
+  if (!stream) throw IoError(path.string() + ": cannot open for hashing (does it exist?)");
+  Sha256 hasher;
+  std::array<char, 1 << 16> buffer{};
+  while (stream) {
+    stream.read(buffer.data(), static_cast<std::streamsize>(buffer.size()));
+    hasher.update(buffer.data(), static_cast<std::size_t>(stream.gcount()));
+  }
+  return hasher.hex();
+}
+
+std::string sha256OfString(const std::string& bytes) {
+  Sha256 hasher;
+  hasher.update(bytes.data(), bytes.size());
+  return hasher.hex();
+}
+
+void ensureDirectory(const fs::path& path) {
+  std::error_code ec;
+  fs::create_directories(path, ec);
+  if (ec) throw IoError(path.string() + ": cannot create directory: " + ec.message());
+  if (!fs::is_directory(path)) throw IoError(path.string() + ": exists but is not a directory");
+}
+
+TemporaryDirectory::TemporaryDirectory(const std::string& prefix) {
+  const char* base = std::getenv("TMPDIR");
+  std::string pattern = (fs::path(base && *base ? base : "/tmp") / (prefix + "-XXXXXX")).string();
+  if (::mkdtemp(pattern.data()) == nullptr) throw IoError(pattern + ": cannot create temporary directory");
+  path_ = pattern;
+}
+
+TemporaryDirectory::~TemporaryDirectory() {
+  if (keep_) return;
+  std::error_code ec;
+  fs::remove_all(path_, ec);
+}
+
+}  // namespace vsd

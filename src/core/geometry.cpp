@@ -1,0 +1,154 @@
+#include "vsd/core/geometry.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "vsd/core/error.hpp"
+
+namespace vsd {
+
+double wrapAngle(double angle_rad) {
+  double wrapped = std::fmod(angle_rad + kPi, 2.0 * kPi);
+  if (wrapped <= 0.0) wrapped += 2.0 * kPi;
+  return wrapped - kPi;
+}
+
+Vec2 headingVector(double heading_rad) { return {std::cos(heading_rad), std::sin(heading_rad)}; }
+
+double headingOf(const Vec2& direction) { return std::atan2(direction.y(), direction.x()); }
+
+MeasuredPolyline::MeasuredPolyline(Polyline points) : points_(std::move(points)) {
+  if (points_.size() < 2) throw Error("MeasuredPolyline needs at least 2 points, got " + std::to_string(points_.size()));
+  cumulative_.resize(points_.size());
+  cumulative_[0] = 0.0;
+  for (std::size_t i = 1; i < points_.size(); ++i) {
+    cumulative_[i] = cumulative_[i - 1] + (points_[i] - points_[i - 1]).norm();
+  }
+}
+
+std::size_t MeasuredPolyline::segmentAt(double arc_length) const {
+  // upper_bound finds the first vertex beyond s; the segment starts one before it.
+  const auto it = std::upper_bound(cumulative_.begin(), cumulative_.end(), arc_length);
+  const auto index = static_cast<std::size_t>(std::distance(cumulative_.begin(), it));
+  if (index == 0) return 0;
+  return std::min(index - 1, points_.size() - 2);
+}
+
+Vec2 MeasuredPolyline::pointAt(double arc_length) const {
+  const std::size_t seg = segmentAt(arc_length);
+  const Vec2 delta = points_[seg + 1] - points_[seg];
+  const double seg_length = cumulative_[seg + 1] - cumulative_[seg];
+  if (seg_length <= 0.0) return points_[seg];
+  return points_[seg] + delta * ((arc_length - cumulative_[seg]) / seg_length);
+}
+
+double MeasuredPolyline::headingAt(double arc_length) const {
+  std::size_t seg = segmentAt(arc_length);
+  // Zero-length segments have no direction: use the next one that has.
+  while (seg + 2 < points_.size() && (points_[seg + 1] - points_[seg]).squaredNorm() == 0.0) ++seg;
+  return headingOf(points_[seg + 1] - points_[seg]);
+}
+
+PolylineProjection MeasuredPolyline::project(const Vec2& point) const {
+  PolylineProjection best;
+  double best_distance_sq = std::numeric_limits<double>::infinity();
+  for (std::size_t seg = 0; seg + 1 < points_.size(); ++seg) {
+    const Vec2 start = points_[seg];
+    const Vec2 delta = points_[seg + 1] - start;
+    const double length_sq = delta.squaredNorm();
+    double fraction = 0.0;
+    if (length_sq > 0.0) fraction = std::clamp((point - start).dot(delta) / length_sq, 0.0, 1.0);
+    const Vec2 foot = start + fraction * delta;
+    const double distance_sq = (point - foot).squaredNorm();
+    if (distance_sq < best_distance_sq) {
+      best_distance_sq = distance_sq;
+      best.segment = seg;
+      best.foot = foot;
+      best.arcLength = cumulative_[seg] + fraction * std::sqrt(length_sq);
+      best.heading = length_sq > 0.0 ? headingOf(delta) : best.heading;
+      const Vec2 relative = point - foot;
+      const double cross = delta.x() * relative.y() - delta.y() * relative.x();
+      best.lateralOffset = std::copysign(std::sqrt(distance_sq), cross);
+    }
+  }
+  return best;
+}
+
+double polylineLength(const Polyline& points) {
+  double length = 0.0;
+  for (std::size_t i = 1; i < points.size(); ++i) length += (points[i] - points[i - 1]).norm();
+  return length;
+}
+
+Polyline offsetPolyline(const Polyline& points, double left_offset) {
+  const std::size_t n = points.size();
+  Polyline result(n);
+  if (n < 2) return points;
+  auto segment_normal = [&](std::size_t seg) -> Vec2 {
+    const Vec2 delta = points[seg + 1] - points[seg];
+    const double length = delta.norm();
+    if (length <= 0.0) return Vec2::Zero();
+    return Vec2(-delta.y(), delta.x()) / length;  // left normal
+  };
+  for (std::size_t i = 0; i < n; ++i) {
+    const Vec2 before = i > 0 ? segment_normal(i - 1) : segment_normal(0);
+    const Vec2 after = i + 1 < n ? segment_normal(i) : segment_normal(n - 2);
+    Vec2 bisector = before + after;
+    const double bisector_length = bisector.norm();
+    if (bisector_length < 1e-9) {
+      bisector = after.squaredNorm() > 0.0 ? after : before;
+      result[i] = points[i] + left_offset * bisector;
+      continue;
+    }
+    bisector /= bisector_length;
+    // Mitre: the offset along the bisector is d / cos(half turn angle); capped at 4 d.
+    const double cos_half = std::max(bisector.dot(after.squaredNorm() > 0.0 ? after : before), 0.25);
+    result[i] = points[i] + (left_offset / cos_half) * bisector;
+  }
+  return result;
+}
+
+std::optional<Vec2> pointAtX(const Polyline& points, double x) {
+  for (std::size_t i = 0; i + 1 < points.size(); ++i) {
+    const Vec2& a = points[i];
+    const Vec2& b = points[i + 1];
+    const double lo = std::min(a.x(), b.x());
+    const double hi = std::max(a.x(), b.x());
+    if (x < lo || x > hi) continue;
+    if (b.x() == a.x()) return a;
+    const double fraction = (x - a.x()) / (b.x() - a.x());
+    return Vec2(x, a.y() + fraction * (b.y() - a.y()));
+  }
+  return std::nullopt;
+}
+
+Polyline clipToXRange(const Polyline& points, double x_min, double x_max) {
+  Polyline clipped;
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const Vec2& p = points[i];
+    const bool inside = p.x() >= x_min && p.x() <= x_max;
+    if (i > 0) {
+      const Vec2& prev = points[i - 1];
+      // Add crossings of the range borders between prev and p, in travel order.
+      for (double border : {x_min, x_max}) {
+        const bool crosses = (prev.x() - border) * (p.x() - border) < 0.0;
+        if (!crosses) continue;
+        const double fraction = (border - prev.x()) / (p.x() - prev.x());
+        clipped.emplace_back(border, prev.y() + fraction * (p.y() - prev.y()));
+      }
+    }
+    if (inside) clipped.push_back(p);
+  }
+  return clipped;
+}
+
+double headingFromSumoAngle(double sumo_angle_deg) { return wrapAngle(kPi / 2.0 - sumo_angle_deg * kPi / 180.0); }
+
+double sumoAngleFromHeading(double heading_rad) {
+  double angle = 90.0 - heading_rad * 180.0 / kPi;
+  angle = std::fmod(angle, 360.0);
+  if (angle < 0.0) angle += 360.0;
+  return angle;
+}
+
+}  // namespace vsd

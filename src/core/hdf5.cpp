@@ -1,0 +1,187 @@
+#include "vsd/core/hdf5.hpp"
+
+#include <numeric>
+
+namespace vsd::h5 {
+
+namespace {
+hsize_t product(const std::vector<hsize_t>& values) {
+  return std::accumulate(values.begin(), values.end(), hsize_t{1}, std::multiplies<>());
+}
+}  // namespace
+
+template <typename T>
+Appendable<T>::Appendable(H5::Group& parent, const std::string& name, std::vector<hsize_t> row_shape,
+                          hsize_t chunk_rows, int deflate_level)
+    : rowShape_(std::move(row_shape)) {
+  std::vector<hsize_t> dims = {0};
+  std::vector<hsize_t> max_dims = {H5S_UNLIMITED};
+  std::vector<hsize_t> chunk = {std::max<hsize_t>(chunk_rows, 1)};
+  for (hsize_t extent : rowShape_) {
+    dims.push_back(extent);
+    max_dims.push_back(extent);
+    chunk.push_back(std::max<hsize_t>(extent, 1));
+  }
+  H5::DataSpace space(static_cast<int>(dims.size()), dims.data(), max_dims.data());
+  H5::DSetCreatPropList properties;
+  properties.setChunk(static_cast<int>(chunk.size()), chunk.data());
+  if (deflate_level > 0) {
+    properties.setShuffle();
+    properties.setDeflate(deflate_level);
+  }
+  H5Pset_obj_track_times(properties.getId(), false);
+  dataset_ = parent.createDataSet(name, nativeType<T>(), space, properties);
+}
+
+template <typename T>
+hsize_t Appendable<T>::rowSize() const {
+  return product(rowShape_);
+}
+
+template <typename T>
+void Appendable<T>::append(const T* data, hsize_t rows) {
+  if (rows == 0) return;
+  std::vector<hsize_t> new_dims = {rows_ + rows};
+  new_dims.insert(new_dims.end(), rowShape_.begin(), rowShape_.end());
+  dataset_.extend(new_dims.data());
+  H5::DataSpace file_space = dataset_.getSpace();
+  std::vector<hsize_t> start(new_dims.size(), 0);
+  start[0] = rows_;
+  std::vector<hsize_t> count = new_dims;
+  count[0] = rows;
+  file_space.selectHyperslab(H5S_SELECT_SET, count.data(), start.data());
+  H5::DataSpace memory_space(static_cast<int>(count.size()), count.data());
+  dataset_.write(data, nativeType<T>(), memory_space, file_space);
+  rows_ += rows;
+}
+
+template <typename T>
+void Appendable<T>::append(const std::vector<T>& data) {
+  const hsize_t row_size = rowSize();
+  append(data.data(), row_size == 0 ? 0 : data.size() / row_size);
+}
+
+template class Appendable<double>;
+template class Appendable<float>;
+template class Appendable<std::int64_t>;
+template class Appendable<std::int32_t>;
+template class Appendable<std::uint8_t>;
+template class Appendable<std::int8_t>;
+
+void writeAttribute(H5::H5Object& object, const std::string& name, const std::string& value) {
+  // Variable-length UTF-8: h5py returns these as str (fixed-length ones come back as bytes).
+  H5::StrType type(H5::PredType::C_S1, H5T_VARIABLE);
+  type.setCset(H5T_CSET_UTF8);
+  H5::Attribute attribute = object.createAttribute(name, type, H5::DataSpace(H5S_SCALAR));
+  attribute.write(type, value);
+}
+
+void writeAttribute(H5::H5Object& object, const std::string& name, double value) {
+  H5::Attribute attribute = object.createAttribute(name, H5::PredType::NATIVE_DOUBLE, H5::DataSpace(H5S_SCALAR));
+  attribute.write(H5::PredType::NATIVE_DOUBLE, &value);
+}
+
+void writeAttribute(H5::H5Object& object, const std::string& name, std::int64_t value) {
+  H5::Attribute attribute = object.createAttribute(name, H5::PredType::NATIVE_INT64, H5::DataSpace(H5S_SCALAR));
+  attribute.write(H5::PredType::NATIVE_INT64, &value);
+}
+
+bool hasAttribute(const H5::H5Object& object, const std::string& name) { return object.attrExists(name); }
+
+std::string readStringAttribute(const H5::H5Object& object, const std::string& name) {
+  H5::Attribute attribute = object.openAttribute(name);
+  H5::StrType type = attribute.getStrType();
+  std::string value;
+  attribute.read(type, value);
+  while (!value.empty() && value.back() == '\0') value.pop_back();
+  return value;
+}
+
+double readDoubleAttribute(const H5::H5Object& object, const std::string& name) {
+  double value = 0.0;
+  object.openAttribute(name).read(H5::PredType::NATIVE_DOUBLE, &value);
+  return value;
+}
+
+std::int64_t readIntAttribute(const H5::H5Object& object, const std::string& name) {
+  std::int64_t value = 0;
+  object.openAttribute(name).read(H5::PredType::NATIVE_INT64, &value);
+  return value;
+}
+
+void writeStrings(H5::Group& parent, const std::string& name, const std::vector<std::string>& values) {
+  H5::StrType type(H5::PredType::C_S1, H5T_VARIABLE);
+  type.setCset(H5T_CSET_UTF8);
+  const hsize_t count = values.size();
+  H5::DataSpace space(1, &count);
+  H5::DSetCreatPropList properties;
+  H5Pset_obj_track_times(properties.getId(), false);
+  H5::DataSet dataset = parent.createDataSet(name, type, space, properties);
+  std::vector<const char*> pointers;
+  pointers.reserve(values.size());
+  for (const auto& value : values) pointers.push_back(value.c_str());
+  if (!pointers.empty()) dataset.write(pointers.data(), type);
+}
+
+std::vector<std::string> readStrings(const H5::Group& parent, const std::string& name) {
+  H5::DataSet dataset = parent.openDataSet(name);
+  const auto dims = shapeOf(dataset);
+  const hsize_t count = dims.empty() ? 0 : dims[0];
+  std::vector<std::string> values;
+  if (count == 0) return values;
+  H5::StrType type(H5::PredType::C_S1, H5T_VARIABLE);
+  type.setCset(H5T_CSET_UTF8);
+  std::vector<char*> pointers(count, nullptr);
+  dataset.read(pointers.data(), type);
+  for (char* pointer : pointers) values.emplace_back(pointer != nullptr ? pointer : "");
+  H5::DataSpace space = dataset.getSpace();
+  H5Dvlen_reclaim(type.getId(), space.getId(), H5P_DEFAULT, pointers.data());
+  return values;
+}
+
+std::vector<hsize_t> shapeOf(const H5::DataSet& dataset) {
+  H5::DataSpace space = dataset.getSpace();
+  const int rank = space.getSimpleExtentNdims();
+  std::vector<hsize_t> dims(static_cast<std::size_t>(rank));
+  if (rank > 0) space.getSimpleExtentDims(dims.data());
+  return dims;
+}
+
+template <typename T>
+std::vector<T> readRows(const H5::DataSet& dataset, hsize_t first, hsize_t count) {
+  const auto dims = shapeOf(dataset);
+  std::vector<hsize_t> start(dims.size(), 0);
+  std::vector<hsize_t> extent = dims;
+  if (!dims.empty()) {
+    start[0] = first;
+    extent[0] = count;
+  }
+  std::vector<T> values(static_cast<std::size_t>(product(extent)));
+  if (values.empty()) return values;
+  H5::DataSpace file_space = dataset.getSpace();
+  file_space.selectHyperslab(H5S_SELECT_SET, extent.data(), start.data());
+  H5::DataSpace memory_space(static_cast<int>(extent.size()), extent.data());
+  dataset.read(values.data(), nativeType<T>(), memory_space, file_space);
+  return values;
+}
+
+template <typename T>
+std::vector<T> readAll(const H5::DataSet& dataset) {
+  const auto dims = shapeOf(dataset);
+  return readRows<T>(dataset, 0, dims.empty() ? 1 : dims[0]);
+}
+
+#define VSD_INSTANTIATE_READ(T)                                                           \
+  template std::vector<T> readRows<T>(const H5::DataSet&, hsize_t, hsize_t);             \
+  template std::vector<T> readAll<T>(const H5::DataSet&);
+VSD_INSTANTIATE_READ(double)
+VSD_INSTANTIATE_READ(float)
+VSD_INSTANTIATE_READ(std::int64_t)
+VSD_INSTANTIATE_READ(std::int32_t)
+VSD_INSTANTIATE_READ(std::uint8_t)
+VSD_INSTANTIATE_READ(std::int8_t)
+#undef VSD_INSTANTIATE_READ
+
+void silenceErrorStack() { H5::Exception::dontPrint(); }
+
+}  // namespace vsd::h5

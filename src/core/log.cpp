@@ -1,0 +1,39 @@
+#include "vsd/core/log.hpp"
+
+#include <spdlog/sinks/stdout_color_sinks.h>
+
+#include "vsd/core/progress.hpp"
+
+#ifndef VSD_VERSION
+#define VSD_VERSION "unknown"
+#endif
+#ifndef VSD_GIT_COMMIT
+#define VSD_GIT_COMMIT ""
+#endif
+
+namespace vsd {
+
+void configureLogging(Verbosity verbosity) {
+  auto logger = spdlog::stderr_color_mt("vsd");
+  logger->set_pattern("%^%l%$: %v");
+  switch (verbosity) {
+    case Verbosity::Quiet:
+      logger->set_level(spdlog::level::warn);
+      Progress::setEnabled(false);
+      break;
+    case Verbosity::Normal:
+      logger->set_level(spdlog::level::info);
+      break;
+    case Verbosity::Verbose:
+      logger->set_level(spdlog::level::debug);
+      break;
+  }
+  spdlog::set_default_logger(logger);
+}
+
+std::string toolVersion() {
+  const std::string commit = VSD_GIT_COMMIT;
+  return commit.empty() ? std::string(VSD_VERSION) : std::string(VSD_VERSION) + "+" + commit;
+}
+
+}  // namespace vsd

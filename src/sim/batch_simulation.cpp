@@ -1,0 +1,280 @@
+#include "vsd/sim/batch_simulation.hpp"
+
+#include <fmt/format.h>
+#include <libsumo/libsumo.h>
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <optional>
+#include <unordered_map>
+#include <unordered_set>
+
+#include "vsd/core/error.hpp"
+#include "vsd/core/log.hpp"
+#include "vsd/core/progress.hpp"
+#include "vsd/road/network.hpp"
+#include "vsd/sim/ego_driver.hpp"
+
+namespace vsd::sim {
+
+namespace {
+
+/// SUMO vehicle types by (length, width); scripted vehicles ignore SUMO's
+/// car-following, so only the dimensions matter (minGap 0: gaps are bumper to bumper).
+class VehicleTypes {
+ public:
+  const std::string& get(double length, double width) {
+    const auto key = std::make_pair(length, width);
+    auto it = types_.find(key);
+    if (it != types_.end()) return it->second;
+    const std::string id = fmt::format("vsd_{}x{}", length, width);
+    libsumo::VehicleType::copy("DEFAULT_VEHTYPE", id);
+    libsumo::VehicleType::setLength(id, length);
+    libsumo::VehicleType::setWidth(id, width);
+    libsumo::VehicleType::setMinGap(id, 0.0);
+    libsumo::VehicleType::setMaxSpeed(id, 100.0);
+    libsumo::VehicleType::setSpeedFactor(id, 1.0);
+    libsumo::VehicleType::setAccel(id, 20.0);
+    libsumo::VehicleType::setDecel(id, 20.0);
+    libsumo::VehicleType::setEmergencyDecel(id, 20.0);
+    return types_.emplace(key, id).first->second;
+  }
+
+ private:
+  std::map<std::pair<double, double>, std::string> types_;
+};
+
+struct Member {
+  const ScenarioRun* run = nullptr;
+  std::string edge;
+  std::string egoId;
+  std::vector<std::string> otherIds;
+  std::optional<EgoDriver> ego;
+  SimulatedScenario result;
+  bool active = true;
+};
+
+VehicleState sumoState(const std::string& id, double length, const Vec2& offset) {
+  const auto front = libsumo::Vehicle::getPosition(id);
+  const double heading = headingFromSumoAngle(libsumo::Vehicle::getAngle(id));
+  VehicleState state;
+  const Vec2 centre = Vec2(front.x, front.y) - 0.5 * length * headingVector(heading) - offset;
+  state.x = centre.x();
+  state.y = centre.y();
+  state.heading = heading;
+  state.speed = libsumo::Vehicle::getSpeed(id);
+  return state;
+}
+
+void initTrack(VehicleTrack& track, const std::string& id, VehicleRole role, double length, double width,
+               std::size_t instants) {
+  track.id = id;
+  track.role = role;
+  track.length = length;
+  track.width = width;
+  track.states.assign(instants, VehicleState{});
+  track.valid.assign(instants, 0);
+}
+
+std::vector<std::string> sessionArguments(const std::filesystem::path& net, const BatchOptions& options) {
+  std::vector<std::string> args = {"--net-file", net.string(),
+                                   "--step-length", fmt::format("{}", options.step),
+                                   "--begin", "0",
+                                   "--collision.action", options.collisionAction,
+                                   "--collision.check-junctions", "false",
+                                   "--time-to-teleport", "-1",       // no jam teleports: a stopped Co stays
+                                   "--default.speeddev", "0",        // no random speed factors
+                                   "--seed", "42",
+                                   "--xml-validation", "never"};
+  if (!options.fcdOutput.empty()) {
+    args.insert(args.end(), {"--fcd-output", options.fcdOutput.string()});
+  }
+  args.insert(args.end(), options.sumoOptions.begin(), options.sumoOptions.end());
+  return args;
+}
+
+/// Why SUMO removed `id` in the last step (best effort).
+std::string removalReason(const std::string& id, const std::unordered_set<std::string>& arrived,
+                          const std::unordered_set<std::string>& colliding,
+                          const std::unordered_set<std::string>& teleporting) {
+  if (colliding.count(id)) return "collision";
+  if (teleporting.count(id)) return "teleport";
+  if (arrived.count(id)) return "reached the end of its road";
+  return "removed";
+}
+
+std::unordered_set<std::string> asSet(const std::vector<std::string>& ids) { return {ids.begin(), ids.end()}; }
+
+}  // namespace
+
+std::vector<SimulatedScenario> simulateBatch(const std::filesystem::path& net, const std::vector<ScenarioRun>& runs,
+                                             ControllerRegistry& registry, const BatchOptions& options) {
+  const auto t_start = std::chrono::steady_clock::now();
+  SumoSession session(sessionArguments(net, options));
+  const double load_seconds = secondsSince(t_start);
+  const std::size_t instants = static_cast<std::size_t>(options.steps) + 1;
+  const double dt = options.step;
+
+  VehicleTypes types;
+  LaneCache lanes;
+  std::vector<Member> members(runs.size());
+  std::unordered_map<std::string, std::size_t> owner;  // SUMO vehicle id -> member
+  std::unordered_set<std::string> expected;             // vehicles that should be in the simulation
+
+  for (std::size_t m = 0; m < runs.size(); ++m) {
+    Member& member = members[m];
+    const ScenarioRun& run = runs[m];
+    const auto& concrete = *run.scenario;
+    const auto& spec = *concrete.logical;
+    member.run = &run;
+    member.result.index = concrete.index;
+    member.result.trace.step = dt;
+    member.edge = road::edgeIdFor(concrete.index);
+    const std::string route = "r" + member.edge;
+    libsumo::Route::add(route, {member.edge});
+
+    for (int lane = 0; lane < run.road->lanes; ++lane) {
+      member.result.lanes.push_back(fetchLane(fmt::format("{}_{}", member.edge, lane), run.offset));
+    }
+
+    // Ego: starts on its lane's centre line at its x, heading along the lane.
+    const auto& ego_spec = concrete.ego;
+    const auto ego_start = road::startPoseOnLane(*run.road, ego_spec.lane, ego_spec.x, ego_spec.id);
+    member.egoId = member.edge + "." + ego_spec.id;
+    libsumo::Vehicle::add(member.egoId, route, types.get(ego_spec.length, ego_spec.width), "now",
+                          std::to_string(ego_spec.lane), "base", fmt::format("{}", ego_spec.speed));
+    libsumo::Vehicle::setSpeedMode(member.egoId, 0);
+    libsumo::Vehicle::setLaneChangeMode(member.egoId, 0);
+    VehicleState initial;
+    initial.x = ego_start.position.x();
+    initial.y = ego_start.position.y();
+    initial.heading = ego_start.heading;
+    initial.speed = ego_spec.speed;
+    const ControllerParams params(concrete.controllerParams, spec.ego.controller.where);
+    auto controller = makeController(registry, spec.ego.controller.name, spec.ego.controller.library,
+                                     options.scenarioDir, params);
+    member.ego.emplace(member.egoId, std::move(controller), initial, ego_spec.length, ego_spec.width, run.offset);
+    member.ego->pushToSumo();
+    owner.emplace(member.egoId, m);
+    expected.insert(member.egoId);
+
+    auto& trace = member.result.trace;
+    trace.vehicles.resize(1 + concrete.others.size());
+    initTrack(trace.vehicles[0], ego_spec.id, VehicleRole::Ego, ego_spec.length, ego_spec.width, instants);
+
+    for (std::size_t o = 0; o < concrete.others.size(); ++o) {
+      const auto& other = concrete.others[o];
+      // The centre starts on the lane at x; the front bumper L/2 further along the lane,
+      // which is where SUMO (lane-bound) puts it.
+      const auto start = road::startPoseOnLane(*run.road, other.lane, other.x, other.id);
+      const MeasuredPolyline lane_centre(run.road->laneCentre(other.lane));
+      const double centre_arc = lane_centre.project(start.position).arcLength;
+      const Vec2 front_local = lane_centre.pointAt(centre_arc + 0.5 * other.length);
+      const Vec2 back_local = lane_centre.pointAt(centre_arc - 0.5 * other.length);
+      const std::string id = member.edge + "." + other.id;
+      libsumo::Vehicle::add(id, route, types.get(other.length, other.width), "now", std::to_string(other.lane), "base",
+                            fmt::format("{}", other.speed));
+      libsumo::Vehicle::setSpeedMode(id, 0);
+      libsumo::Vehicle::setLaneChangeMode(id, 0);
+      const Vec2 front = front_local + run.offset;
+      // keepRoute = 1: onto its own road, on the lane (it then drives along the lane).
+      libsumo::Vehicle::moveToXY(id, member.edge, other.lane, front.x(), front.y(),
+                                 sumoAngleFromHeading(headingOf(front_local - back_local)), /*keepRoute=*/1);
+      libsumo::Vehicle::setSpeed(id, other.speed);
+      member.otherIds.push_back(id);
+      owner.emplace(id, m);
+      expected.insert(id);
+      initTrack(trace.vehicles[1 + o], other.id, VehicleRole::Other, other.length, other.width, instants);
+    }
+  }
+
+  auto record = [&](std::size_t k) {
+    for (auto& member : members) {
+      if (!member.active) continue;
+      auto& trace = member.result.trace;
+      trace.vehicles[0].states[k] = member.ego->state();
+      trace.vehicles[0].valid[k] = 1;
+      const auto& others = member.run->scenario->others;
+      for (std::size_t o = 0; o < member.otherIds.size(); ++o) {
+        trace.vehicles[1 + o].states[k] = sumoState(member.otherIds[o], others[o].length, member.run->offset);
+        trace.vehicles[1 + o].valid[k] = 1;
+      }
+    }
+  };
+
+  auto fail = [&](Member& member, const std::string& reason) {
+    if (!member.active) return;
+    member.active = false;
+    member.result.failure = reason;
+    // Take the scenario's remaining vehicles out so they cannot affect anything else.
+    std::vector<std::string> ids = member.otherIds;
+    ids.push_back(member.egoId);
+    const auto alive = asSet(libsumo::Vehicle::getIDList());
+    for (const auto& id : ids) {
+      if (alive.count(id)) libsumo::Vehicle::remove(id);
+      expected.erase(id);
+    }
+  };
+
+  // A vehicle SUMO removed (end of road, collision with action remove/teleport)
+  // fails its scenario; the others go on.
+  auto checkRemovals = [&](double time) {
+    if (static_cast<std::size_t>(libsumo::Vehicle::getIDCount()) == expected.size()) return;
+    const auto alive = asSet(libsumo::Vehicle::getIDList());
+    const auto arrived = asSet(libsumo::Simulation::getArrivedIDList());
+    const auto colliding = asSet(libsumo::Simulation::getCollidingVehiclesIDList());
+    const auto teleporting = asSet(libsumo::Simulation::getStartingTeleportIDList());
+    std::vector<std::string> missing;
+    for (const auto& id : expected) {
+      if (!alive.count(id)) missing.push_back(id);
+    }
+    std::sort(missing.begin(), missing.end());
+    for (const auto& id : missing) {
+      Member& member = members[owner.at(id)];
+      const std::string vehicle = id.substr(member.edge.size() + 1);
+      fail(member, fmt::format("SUMO removed vehicle '{}' at t = {:.1f} s ({})", vehicle, time,
+                               removalReason(id, arrived, colliding, teleporting)));
+    }
+  };
+
+  const double setup_seconds = secondsSince(t_start) - load_seconds;
+  session.step();  // inserts every vehicle at its start pose: t = 0
+  checkRemovals(0.0);
+  record(0);
+
+  for (int k = 0; k < options.steps; ++k) {
+    const double time = k * dt;
+    for (auto& member : members) {
+      if (!member.active) continue;
+      try {
+        member.ego->step(time, dt, member.run->scenario->headingNoise[static_cast<std::size_t>(k)], lanes);
+      } catch (const ConfigError&) {
+        throw;
+      } catch (const Error& error) {
+        fail(member, fmt::format("Ego controller failed at t = {:.1f} s: {}", time, error.what()));
+        continue;
+      }
+      const auto& others = member.run->scenario->others;
+      for (std::size_t o = 0; o < member.otherIds.size(); ++o) {
+        libsumo::Vehicle::setSpeed(member.otherIds[o], others[o].scriptedSpeed[static_cast<std::size_t>(k) + 1]);
+      }
+    }
+    session.step();
+    checkRemovals(time + dt);
+    record(static_cast<std::size_t>(k) + 1);
+  }
+
+  const double step_seconds = secondsSince(t_start) - load_seconds - setup_seconds;
+  spdlog::debug("simulateBatch: {} scenarios, load {:.3f} s, add vehicles {:.3f} s, {} steps {:.3f} s",
+                members.size(), load_seconds, setup_seconds, options.steps, step_seconds);
+  std::vector<SimulatedScenario> results;
+  results.reserve(members.size());
+  for (auto& member : members) {
+    for (auto& track : member.result.trace.vehicles) fillAccelerationFromSpeed(track, dt);
+    results.push_back(std::move(member.result));
+  }
+  return results;
+}
+
+}  // namespace vsd::sim

@@ -1,0 +1,164 @@
+#include "vsd/sim/builtin_controllers.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace vsd::sim {
+
+void PurePursuitLateral::init(const ControllerParams& params) {
+  lookaheadTime_ = params.get("lookahead_time", lookaheadTime_, 0.1, 10.0);
+  minLookahead_ = params.get("min_lookahead", minLookahead_, 1.0, 100.0);
+}
+
+double PurePursuitLateral::curvature(const Observation& observation) const {
+  if (!observation.lane) return 0.0;
+  const auto& lane = *observation.lane;
+  const double max_distance = lane.previewSpacing * kPreviewPoints;
+  const double lookahead = std::clamp(lookaheadTime_ * observation.ego.speed, minLookahead_, max_distance);
+  // Interpolate the lane-centre point at `lookahead` m ahead along the preview.
+  const double position = lookahead / lane.previewSpacing - 1.0;
+  Vec2 target;
+  if (position <= 0.0) {
+    target = lane.preview[0] * (lookahead / lane.previewSpacing);
+  } else {
+    const auto lower = std::min(static_cast<std::size_t>(position), static_cast<std::size_t>(kPreviewPoints - 2));
+    const double fraction = std::min(position - static_cast<double>(lower), 1.0);
+    target = lane.preview[lower] + fraction * (lane.preview[lower + 1] - lane.preview[lower]);
+  }
+  const double distance = target.norm();
+  if (distance < 1e-6) return 0.0;
+  const double sin_alpha = target.y() / distance;
+  return 2.0 * sin_alpha / distance;
+}
+
+namespace {
+
+/// Minimum over t >= 0 of the gap when the follower brakes with `decel` and the
+/// leader accelerates with `leader_accel` (both stop at 0, never reverse).
+double minimumGap(double gap, double speed, double decel, double leader_speed, double leader_accel) {
+  auto travel = [](double v, double a, double t) {
+    if (a < 0.0) {
+      const double stop = v / -a;
+      if (t >= stop) return v * stop + 0.5 * a * stop * stop;
+    }
+    return v * t + 0.5 * a * t * t;
+  };
+  auto gap_at = [&](double t) { return gap + travel(leader_speed, leader_accel, t) - travel(speed, -decel, t); };
+  // The gap is piecewise quadratic; its minimum is at t = 0, at a stop time, at the
+  // instant both speeds are equal, or (if the follower never stops) at infinity.
+  double result = gap;
+  const double follower_stop = decel > 0.0 ? speed / decel : std::numeric_limits<double>::infinity();
+  const double leader_stop = leader_accel < 0.0 ? leader_speed / -leader_accel : std::numeric_limits<double>::infinity();
+  for (double t : {follower_stop, leader_stop}) {
+    if (std::isfinite(t)) result = std::min(result, gap_at(t));
+  }
+  const double relative_accel = leader_accel + decel;  // d/dt (v_leader - v_follower)
+  if (relative_accel > 0.0) {
+    const double t_equal = (speed - leader_speed) / relative_accel;
+    if (t_equal > 0.0 && t_equal < std::min(follower_stop, leader_stop)) result = std::min(result, gap_at(t_equal));
+  }
+  if (!std::isfinite(follower_stop) && speed > leader_speed && leader_accel <= 0.0) {
+    result = -std::numeric_limits<double>::infinity();
+  }
+  return result;
+}
+
+}  // namespace
+
+double requiredDeceleration(double gap, double speed, double leader_speed, double leader_accel, double margin,
+                            double max_decel) {
+  if (minimumGap(gap, speed, 0.0, leader_speed, leader_accel) >= margin) return 0.0;
+  if (minimumGap(gap, speed, max_decel, leader_speed, leader_accel) < margin) {
+    return std::numeric_limits<double>::infinity();
+  }
+  double lo = 0.0;
+  double hi = max_decel;
+  for (int i = 0; i < 40; ++i) {  // bisection: the minimum gap grows with the deceleration
+    const double mid = 0.5 * (lo + hi);
+    if (minimumGap(gap, speed, mid, leader_speed, leader_accel) >= margin) hi = mid;
+    else lo = mid;
+  }
+  return hi;
+}
+
+void FollowingParameters::read(const ControllerParams& params) {
+  timeGap = params.get("time_gap", timeGap, 0.1, 10.0);
+  standstillGap = params.get("standstill_gap", standstillGap, 0.0, 50.0);
+  maxAccel = params.get("max_accel", maxAccel, 0.1, 20.0);
+  maxDecel = params.get("max_decel", maxDecel, 0.1, 20.0);
+  configuredSetSpeed_ = params.find("set_speed", 0.0, 100.0);
+  setSpeed_ = configuredSetSpeed_;
+}
+
+double FollowingParameters::setSpeed(const Observation& observation) {
+  if (!setSpeed_) setSpeed_ = std::max(observation.ego.speed, 0.1);
+  return *setSpeed_;
+}
+
+double FollowingParameters::clamp(double accel) const { return std::clamp(accel, -maxDecel, maxAccel); }
+
+void TimeGapLongitudinal::init(const ControllerParams& params) {
+  following_.read(params);
+  kGap_ = params.get("k_gap", kGap_, 0.0, 10.0);
+  kSpeed_ = params.get("k_speed", kSpeed_, 0.0, 10.0);
+  kCruise_ = params.get("k_cruise", kCruise_, 0.0, 10.0);
+  emergencyMargin_ = params.get("emergency_margin", emergencyMargin_, 0.0, 50.0);
+  emergencyTrigger_ = params.get("emergency_trigger", emergencyTrigger_, 0.0, 100.0);
+}
+
+double TimeGapLongitudinal::accel(const Observation& observation) {
+  const double speed = observation.ego.speed;
+  double command = kCruise_ * (following_.setSpeed(observation) - speed);
+  if (observation.leader) {
+    const auto& leader = *observation.leader;
+    const double desired_gap = std::max(following_.standstillGap, following_.timeGap * speed);
+    const double follow = kGap_ * (leader.gap - desired_gap) + kSpeed_ * (leader.speed - speed);
+    command = std::min(command, follow);
+    // Only braking of the leader is extrapolated: a measured acceleration > 0 may be noise.
+    const double required = requiredDeceleration(leader.gap, speed, leader.speed, std::min(leader.accel, 0.0),
+                                                 emergencyMargin_, following_.maxDecel);
+    if (required > emergencyTrigger_) command = std::min(command, -1.1 * required);
+  }
+  return following_.clamp(command);
+}
+
+void PaperEgoController::init(const ControllerParams& params) {
+  longitudinal_.init(params);
+  lateral_.init(params);
+  params.rejectUnknown("paper_ego");
+}
+
+Command PaperEgoController::step(const Observation& observation, double /*dt*/) {
+  return {longitudinal_.accel(observation), lateral_.curvature(observation)};
+}
+
+IdmController::IdmController() {
+  following_.timeGap = 1.5;
+  following_.maxAccel = 1.5;
+}
+
+void IdmController::init(const ControllerParams& params) {
+  following_.read(params);
+  comfortDecel_ = params.get("comfort_decel", comfortDecel_, 0.1, 20.0);
+  exponent_ = params.get("exponent", exponent_, 1.0, 10.0);
+  lateral_.init(params);
+  params.rejectUnknown("idm");
+}
+
+Command IdmController::step(const Observation& observation, double /*dt*/) {
+  const double speed = observation.ego.speed;
+  const double free_term = std::pow(speed / following_.setSpeed(observation), exponent_);
+  double interaction = 0.0;
+  if (observation.leader) {
+    const auto& leader = *observation.leader;
+    const double approach = speed - leader.speed;
+    const double dynamic_gap = speed * approach / (2.0 * std::sqrt(following_.maxAccel * comfortDecel_));
+    const double desired_gap = following_.standstillGap + std::max(0.0, speed * following_.timeGap + dynamic_gap);
+    const double gap = std::max(leader.gap, 0.1);
+    interaction = (desired_gap / gap) * (desired_gap / gap);
+  }
+  return {following_.clamp(following_.maxAccel * (1.0 - free_term - interaction)), lateral_.curvature(observation)};
+}
+
+}  // namespace vsd::sim

@@ -1,0 +1,235 @@
+#include "vsd/sim/controller.hpp"
+
+#include <dlfcn.h>
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "vsd/core/error.hpp"
+#include "vsd/sim/builtin_controllers.hpp"
+
+namespace fs = std::filesystem;
+
+namespace vsd::sim {
+
+// --- parameters ------------------------------------------------------------------------
+
+ControllerParams::ControllerParams(std::vector<std::pair<std::string, double>> values, std::string where)
+    : values_(std::move(values)), where_(std::move(where)) {}
+
+std::optional<double> ControllerParams::find(const std::string& name, double min, double max) const {
+  if (std::find(known_.begin(), known_.end(), name) == known_.end()) known_.push_back(name);
+  for (const auto& [key, value] : values_) {
+    if (key != name) continue;
+    if (!(value >= min && value <= max)) {
+      throw ConfigError(fmt::format("{}: params.{}: got {}, expected a value in [{}, {}]", where_, name, value, min, max));
+    }
+    return value;
+  }
+  return std::nullopt;
+}
+
+double ControllerParams::get(const std::string& name, double fallback, double min, double max) const {
+  return find(name, min, max).value_or(fallback);
+}
+
+void ControllerParams::rejectUnknown(const std::string& controller_name) const {
+  for (const auto& [key, value] : values_) {
+    if (std::find(known_.begin(), known_.end(), key) == known_.end()) {
+      throw ConfigError(fmt::format("{}: params.{}: unknown parameter of controller '{}' (it knows: {})", where_, key,
+                                    controller_name, fmt::join(known_, ", ")));
+    }
+  }
+}
+
+// --- registry --------------------------------------------------------------------------
+
+ControllerRegistry ControllerRegistry::withBuiltins() {
+  ControllerRegistry registry;
+  registry.add("paper_ego", "time-gap P-controller (2 s) + pure-pursuit lane keeping (Winkelmann et al.)",
+               [] { return std::make_unique<PaperEgoController>(); });
+  registry.add("idm", "Intelligent Driver Model + pure-pursuit lane keeping",
+               [] { return std::make_unique<IdmController>(); });
+  return registry;
+}
+
+void ControllerRegistry::add(const std::string& name, const std::string& description, Factory factory) {
+  if (!entries_.emplace(name, Entry{description, std::move(factory)}).second) {
+    throw ConfigError(fmt::format("controller '{}' is registered twice", name));
+  }
+}
+
+std::map<std::string, std::string> ControllerRegistry::available() const {
+  std::map<std::string, std::string> result;
+  for (const auto& [name, entry] : entries_) result.emplace(name, entry.description);
+  return result;
+}
+
+std::unique_ptr<EgoController> ControllerRegistry::create(const std::string& name) const {
+  const auto it = entries_.find(name);
+  if (it == entries_.end()) {
+    std::vector<std::string> names;
+    for (const auto& [known, entry] : entries_) names.push_back(known);
+    throw ConfigError(fmt::format("unknown controller '{}' (available: {})", name, fmt::join(names, ", ")));
+  }
+  return it->second.factory();
+}
+
+namespace {
+
+/// Keeps a plugin loaded for as long as any of its controllers lives.
+class LibraryHandle {
+ public:
+  explicit LibraryHandle(void* handle) : handle_(handle) {}
+  LibraryHandle(const LibraryHandle&) = delete;
+  LibraryHandle& operator=(const LibraryHandle&) = delete;
+  ~LibraryHandle() {
+    if (handle_ != nullptr) ::dlclose(handle_);
+  }
+  void* get() const { return handle_; }
+
+ private:
+  void* handle_;
+};
+
+/// Adapts a plugin controller (C ABI) to EgoController.
+class PluginController final : public EgoController {
+ public:
+  PluginController(std::shared_ptr<LibraryHandle> library, const vsd_controller_api* api)
+      : library_(std::move(library)), api_(api) {}
+  PluginController(const PluginController&) = delete;
+  PluginController& operator=(const PluginController&) = delete;
+  ~PluginController() override { destroy(); }
+
+  void init(const ControllerParams& params) override {
+    destroy();
+    std::vector<const char*> names;
+    std::vector<double> values;
+    for (const auto& [name, value] : params.values()) {
+      names.push_back(name.c_str());
+      values.push_back(value);
+    }
+    std::array<char, 512> error{};
+    instance_ = api_->create(names.data(), values.data(), static_cast<int>(names.size()), error.data(),
+                             static_cast<int>(error.size()));
+    if (instance_ == nullptr) {
+      error.back() = '\0';
+      throw ConfigError(fmt::format("controller '{}' rejected its parameters: {}", api_->name,
+                                    error[0] != '\0' ? error.data() : "(no reason given)"));
+    }
+  }
+
+  void reset() override {
+    if (instance_ != nullptr && api_->reset != nullptr) api_->reset(instance_);
+  }
+
+  Command step(const Observation& observation, double dt) override {
+    const vsd_observation abi = toAbi(observation);
+    vsd_command command{0.0, 0.0};
+    const int status = api_->step(instance_, &abi, dt, &command);
+    if (status != 0) throw Error(fmt::format("controller '{}' step failed with status {}", api_->name, status));
+    if (!std::isfinite(command.accel) || !std::isfinite(command.curvature)) {
+      throw Error(fmt::format("controller '{}' returned a non-finite command", api_->name));
+    }
+    return {command.accel, command.curvature};
+  }
+
+ private:
+  void destroy() {
+    if (instance_ != nullptr && api_->destroy != nullptr) api_->destroy(instance_);
+    instance_ = nullptr;
+  }
+
+  std::shared_ptr<LibraryHandle> library_;
+  const vsd_controller_api* api_;
+  vsd_controller* instance_ = nullptr;
+};
+
+}  // namespace
+
+void ControllerRegistry::loadLibrary(const fs::path& library) {
+  if (!fs::exists(library)) {
+    throw ConfigError(fmt::format("controller library '{}' does not exist", library.string()));
+  }
+  ::dlerror();
+  void* raw = ::dlopen(fs::absolute(library).c_str(), RTLD_NOW | RTLD_LOCAL);
+  if (raw == nullptr) {
+    const char* reason = ::dlerror();
+    throw ConfigError(fmt::format("controller library '{}' cannot be loaded: {}", library.string(),
+                                  reason != nullptr ? reason : "unknown reason"));
+  }
+  auto handle = std::make_shared<LibraryHandle>(raw);
+  auto* entry = reinterpret_cast<vsd_controller_entry_fn>(::dlsym(raw, "vsd_controller_entry"));
+  if (entry == nullptr) {
+    throw ConfigError(fmt::format(
+        "controller library '{}' does not export vsd_controller_entry (expected a plugin built against "
+        "include/vsd/sim/controller_abi.h)",
+        library.string()));
+  }
+  int count = 0;
+  for (int index = 0;; ++index) {
+    const vsd_controller_api* api = entry(index);
+    if (api == nullptr) break;
+    if (api->abi_version != VSD_CONTROLLER_ABI_VERSION) {
+      throw ConfigError(fmt::format("controller library '{}': controller #{} has ABI version {}, expected {}",
+                                    library.string(), index, api->abi_version, VSD_CONTROLLER_ABI_VERSION));
+    }
+    if (api->name == nullptr || api->create == nullptr || api->step == nullptr) {
+      throw ConfigError(fmt::format("controller library '{}': controller #{} lacks a name, create() or step()",
+                                    library.string(), index));
+    }
+    if (contains(api->name)) continue;  // the same library loaded twice: keep the first registration
+    add(api->name, api->description != nullptr ? api->description : "",
+        [handle, api] { return std::make_unique<PluginController>(handle, api); });
+    ++count;
+    if (index > 1000) break;
+  }
+  if (count == 0 && entry(0) == nullptr) {
+    throw ConfigError(fmt::format("controller library '{}' exports no controllers", library.string()));
+  }
+}
+
+std::unique_ptr<EgoController> makeController(ControllerRegistry& registry, const std::string& name,
+                                              const fs::path& library, const fs::path& scenario_dir,
+                                              const ControllerParams& params) {
+  if (!library.empty() && !registry.contains(name)) {
+    registry.loadLibrary(library.is_absolute() ? library : scenario_dir / library);
+  }
+  auto controller = registry.create(name);
+  controller->init(params);
+  controller->reset();
+  return controller;
+}
+
+vsd_observation toAbi(const Observation& observation) {
+  vsd_observation abi{};
+  abi.time = observation.time;
+  abi.x = observation.ego.x;
+  abi.y = observation.ego.y;
+  abi.heading = observation.ego.heading;
+  abi.speed = observation.ego.speed;
+  abi.accel = observation.ego.accel;
+  abi.length = observation.egoLength;
+  abi.width = observation.egoWidth;
+  if (observation.lane) {
+    abi.has_lane = 1;
+    abi.lane_lateral_offset = observation.lane->lateralOffset;
+    abi.lane_heading_error = observation.lane->headingError;
+    abi.lane_width = observation.lane->width;
+    abi.preview_spacing = observation.lane->previewSpacing;
+    for (int i = 0; i < kPreviewPoints; ++i) {
+      abi.preview_x[i] = observation.lane->preview[static_cast<std::size_t>(i)].x();
+      abi.preview_y[i] = observation.lane->preview[static_cast<std::size_t>(i)].y();
+    }
+  }
+  if (observation.leader) {
+    abi.has_leader = 1;
+    abi.leader_gap = observation.leader->gap;
+    abi.leader_speed = observation.leader->speed;
+    abi.leader_accel = observation.leader->accel;
+  }
+  return abi;
+}
+
+}  // namespace vsd::sim

@@ -1,0 +1,96 @@
+#include "vsd/sim/ego_driver.hpp"
+
+#include <libsumo/libsumo.h>
+
+#include <cmath>
+
+#include "vsd/core/error.hpp"
+
+namespace vsd::sim {
+
+const LaneCache::Entry& LaneCache::get(const std::string& lane_id, const Vec2& offset) {
+  auto it = entries_.find(lane_id);
+  if (it == entries_.end()) {
+    LaneGeometry lane = fetchLane(lane_id, offset);
+    if (lane.centre.size() < 2) lane.centre.push_back(lane.centre.empty() ? Vec2::Zero() : lane.centre.front());
+    if (lane.centre.size() < 2) lane.centre.push_back(lane.centre.front());
+    it = entries_.emplace(lane_id, Entry{MeasuredPolyline(std::move(lane.centre)), lane.width}).first;
+  }
+  return it->second;
+}
+
+const MeasuredPolyline& LaneCache::centre(const std::string& lane_id, const Vec2& offset) {
+  return get(lane_id, offset).centre;
+}
+
+double LaneCache::width(const std::string& lane_id, const Vec2& offset) { return get(lane_id, offset).width; }
+
+EgoDriver::EgoDriver(std::string vehicle_id, std::unique_ptr<EgoController> controller, const VehicleState& initial,
+                     double length, double width, const Vec2& offset, VehicleLimits limits)
+    : vehicleId_(std::move(vehicle_id)),
+      controller_(std::move(controller)),
+      state_(initial),
+      length_(length),
+      width_(width),
+      offset_(offset),
+      limits_(limits) {
+  minGap_ = libsumo::Vehicle::getMinGap(vehicleId_);
+}
+
+void EgoDriver::pushToSumo() const {
+  // SUMO positions vehicles by their front bumper.
+  const Vec2 front = state_.position() + 0.5 * length_ * headingVector(state_.heading) + offset_;
+  // keepRoute = 3: match only along the Ego's own route (cheap, and never onto a
+  // neighbouring scenario's road) and place it exactly, even off the lane.
+  libsumo::Vehicle::moveToXY(vehicleId_, "", -1, front.x(), front.y(), sumoAngleFromHeading(state_.heading),
+                             /*keepRoute=*/3);
+  libsumo::Vehicle::setSpeed(vehicleId_, state_.speed);
+}
+
+Observation EgoDriver::observe(double time, LaneCache& lanes) const {
+  Observation observation;
+  observation.time = time;
+  observation.ego = state_;
+  observation.egoLength = length_;
+  observation.egoWidth = width_;
+
+  const std::string lane_id = libsumo::Vehicle::getLaneID(vehicleId_);
+  if (!lane_id.empty()) {
+    const MeasuredPolyline& centre = lanes.centre(lane_id, offset_);
+    const auto projection = centre.project(state_.position());
+    Observation::Lane lane;
+    lane.lateralOffset = projection.lateralOffset;
+    lane.headingError = wrapAngle(state_.heading - projection.heading);
+    lane.width = lanes.width(lane_id, offset_);
+    const double cos_h = std::cos(state_.heading);
+    const double sin_h = std::sin(state_.heading);
+    for (int i = 0; i < kPreviewPoints; ++i) {
+      const Vec2 ahead = centre.pointAt(projection.arcLength + lane.previewSpacing * (i + 1)) - state_.position();
+      lane.preview[static_cast<std::size_t>(i)] =
+          Vec2(cos_h * ahead.x() + sin_h * ahead.y(), -sin_h * ahead.x() + cos_h * ahead.y());
+    }
+    observation.lane = lane;
+  }
+
+  const auto [leader_id, distance] = libsumo::Vehicle::getLeader(vehicleId_, kLeaderRange);
+  if (!leader_id.empty() && distance > -1e6) {
+    Observation::Leader leader;
+    leader.gap = distance + minGap_;  // getLeader() measures from the Ego's front + minGap
+    leader.speed = libsumo::Vehicle::getSpeed(leader_id);
+    leader.accel = libsumo::Vehicle::getAcceleration(leader_id);
+    observation.leader = leader;
+  }
+  return observation;
+}
+
+void EgoDriver::step(double time, double dt, double heading_noise, LaneCache& lanes) {
+  const Observation observation = observe(time, lanes);
+  const Command command = controller_->step(observation, dt);
+  if (!std::isfinite(command.accel) || !std::isfinite(command.curvature)) {
+    throw Error("controller returned a non-finite command");
+  }
+  state_ = advanceKinematic(state_, command, dt, heading_noise, limits_);
+  pushToSumo();
+}
+
+}  // namespace vsd::sim

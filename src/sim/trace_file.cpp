@@ -1,0 +1,190 @@
+#include "vsd/sim/trace_file.hpp"
+
+#include <fmt/format.h>
+
+#include "vsd/core/error.hpp"
+#include "vsd/core/hdf5.hpp"
+#include "vsd/core/log.hpp"
+
+namespace vsd::sim {
+
+namespace {
+constexpr hsize_t kChunkRows = 256;
+constexpr int kDeflateLevel = 1;  // fast; traces compress ~2x
+}  // namespace
+
+struct TraceFileWriter::Impl {
+  H5::H5File file;
+  std::size_t vehicles = 0;
+  std::size_t instants = 0;
+  h5::Appendable<std::int64_t> sample;
+  h5::Appendable<std::uint8_t> ok;
+  h5::Appendable<double> states;
+  h5::Appendable<std::uint8_t> valid;
+  std::vector<std::int64_t> sampleBuffer;
+  std::vector<std::uint8_t> okBuffer;
+  std::vector<double> stateBuffer;
+  std::vector<std::uint8_t> validBuffer;
+  bool open = true;
+
+  void flush() {
+    sample.append(sampleBuffer);
+    ok.append(okBuffer);
+    states.append(stateBuffer);
+    valid.append(validBuffer);
+    sampleBuffer.clear();
+    okBuffer.clear();
+    stateBuffer.clear();
+    validBuffer.clear();
+  }
+};
+
+TraceFileWriter::TraceFileWriter(const std::filesystem::path& path, const std::string& functional_scenario, double step,
+                                 std::size_t instants, const std::vector<std::string>& vehicle_ids,
+                                 const std::vector<double>& vehicle_lengths, const std::vector<double>& vehicle_widths)
+    : impl_(std::make_unique<Impl>()) {
+  h5::silenceErrorStack();
+  try {
+    impl_->file = H5::H5File(path.string(), H5F_ACC_TRUNC);
+    impl_->vehicles = vehicle_ids.size();
+    impl_->instants = instants;
+    H5::Group root = impl_->file.openGroup("/");
+    h5::writeAttribute(root, "schema", std::string(kTraceSchema));
+    h5::writeAttribute(root, "functional_scenario", functional_scenario);
+    h5::writeAttribute(root, "step", step);
+    h5::writeAttribute(root, "instants", static_cast<std::int64_t>(instants));
+    h5::writeAttribute(root, "tool_version", toolVersion());
+    h5::writeStrings(root, "vehicle_ids", vehicle_ids);
+    h5::writeStrings(root, "fields", {"x", "y", "heading", "speed", "accel"});
+    h5::Appendable<double> lengths(root, "vehicle_length", {}, vehicle_ids.size(), 0);
+    lengths.append(vehicle_lengths.data(), vehicle_lengths.size());
+    h5::Appendable<double> widths(root, "vehicle_width", {}, vehicle_ids.size(), 0);
+    widths.append(vehicle_widths.data(), vehicle_widths.size());
+    const hsize_t v = impl_->vehicles;
+    const hsize_t t = impl_->instants;
+    impl_->sample = h5::Appendable<std::int64_t>(root, "sample", {}, kChunkRows, kDeflateLevel);
+    impl_->ok = h5::Appendable<std::uint8_t>(root, "ok", {}, kChunkRows, kDeflateLevel);
+    impl_->states = h5::Appendable<double>(root, "states", {v, t, kTraceFields}, kChunkRows, kDeflateLevel);
+    impl_->valid = h5::Appendable<std::uint8_t>(root, "valid", {v, t}, kChunkRows, kDeflateLevel);
+  } catch (const H5::Exception& error) {
+    throw IoError(fmt::format("{}: cannot create trace file: {}", path.string(), error.getDetailMsg()));
+  }
+}
+
+TraceFileWriter::~TraceFileWriter() {
+  try {
+    close();
+  } catch (const std::exception& error) {
+    spdlog::warn("closing trace file failed: {}", error.what());
+  }
+}
+
+void TraceFileWriter::append(std::uint64_t sample, const Trace& trace, bool ok) {
+  if (trace.vehicles.size() != impl_->vehicles) {
+    throw Error(fmt::format("internal: trace of sample {} has {} vehicles, the trace file {}", sample,
+                            trace.vehicles.size(), impl_->vehicles));
+  }
+  impl_->sampleBuffer.push_back(static_cast<std::int64_t>(sample));
+  impl_->okBuffer.push_back(ok ? 1 : 0);
+  for (const auto& track : trace.vehicles) {
+    for (std::size_t k = 0; k < impl_->instants; ++k) {
+      const bool present = k < track.states.size();
+      const VehicleState state = present ? track.states[k] : VehicleState{};
+      impl_->stateBuffer.insert(impl_->stateBuffer.end(), {state.x, state.y, state.heading, state.speed, state.accel});
+      impl_->validBuffer.push_back(present ? track.valid[k] : 0);
+    }
+  }
+  if (impl_->sampleBuffer.size() >= kChunkRows) impl_->flush();
+}
+
+void TraceFileWriter::close() {
+  if (!impl_ || !impl_->open) return;
+  impl_->open = false;
+  try {
+    impl_->flush();
+    impl_->file.close();
+  } catch (const H5::Exception& error) {
+    throw IoError(fmt::format("trace file: write failed: {}", error.getDetailMsg()));
+  }
+}
+
+struct TraceFileReader::Impl {
+  std::filesystem::path path;
+  H5::H5File file;
+  std::string functionalScenario;
+  double step = 0.0;
+  std::size_t instants = 0;
+  std::vector<std::string> vehicleIds;
+  std::vector<double> lengths;
+  std::vector<double> widths;
+  std::vector<std::int64_t> samples;
+  std::vector<std::uint8_t> ok;
+  H5::DataSet states;
+  H5::DataSet valid;
+};
+
+TraceFileReader::TraceFileReader(const std::filesystem::path& path) : impl_(std::make_unique<Impl>()) {
+  h5::silenceErrorStack();
+  impl_->path = path;
+  if (!std::filesystem::exists(path)) throw DatasetError(path.string() + ": trace file does not exist");
+  try {
+    impl_->file = H5::H5File(path.string(), H5F_ACC_RDONLY);
+  } catch (const H5::Exception&) {
+    throw DatasetError(path.string() + ": not an HDF5 file (corrupt or foreign)");
+  }
+  try {
+    H5::Group root = impl_->file.openGroup("/");
+    if (!h5::hasAttribute(root, "schema")) throw DatasetError(path.string() + ": not a vsd-sumo trace file (no schema)");
+    const auto schema = h5::readStringAttribute(root, "schema");
+    if (schema != kTraceSchema) {
+      throw DatasetError(fmt::format("{}: trace schema '{}' is not supported (expected '{}')", path.string(), schema,
+                                     kTraceSchema));
+    }
+    impl_->functionalScenario = h5::readStringAttribute(root, "functional_scenario");
+    impl_->step = h5::readDoubleAttribute(root, "step");
+    impl_->instants = static_cast<std::size_t>(h5::readIntAttribute(root, "instants"));
+    impl_->vehicleIds = h5::readStrings(root, "vehicle_ids");
+    impl_->lengths = h5::readAll<double>(root.openDataSet("vehicle_length"));
+    impl_->widths = h5::readAll<double>(root.openDataSet("vehicle_width"));
+    impl_->samples = h5::readAll<std::int64_t>(root.openDataSet("sample"));
+    impl_->ok = h5::readAll<std::uint8_t>(root.openDataSet("ok"));
+    impl_->states = root.openDataSet("states");
+    impl_->valid = root.openDataSet("valid");
+  } catch (const H5::Exception& error) {
+    throw DatasetError(fmt::format("{}: damaged trace file: {}", path.string(), error.getDetailMsg()));
+  }
+}
+
+TraceFileReader::~TraceFileReader() = default;
+
+std::size_t TraceFileReader::size() const { return impl_->samples.size(); }
+const std::string& TraceFileReader::functionalScenario() const { return impl_->functionalScenario; }
+double TraceFileReader::step() const { return impl_->step; }
+const std::vector<std::string>& TraceFileReader::vehicleIds() const { return impl_->vehicleIds; }
+std::uint64_t TraceFileReader::sample(std::size_t row) const { return static_cast<std::uint64_t>(impl_->samples.at(row)); }
+bool TraceFileReader::ok(std::size_t row) const { return impl_->ok.at(row) != 0; }
+
+Trace TraceFileReader::trace(std::size_t row) const {
+  if (row >= size()) throw DatasetError(fmt::format("{}: row {} out of range (size {})", impl_->path.string(), row, size()));
+  const auto states = h5::readRows<double>(impl_->states, row, 1);
+  const auto valid = h5::readRows<std::uint8_t>(impl_->valid, row, 1);
+  Trace trace;
+  trace.step = impl_->step;
+  const std::size_t t = impl_->instants;
+  for (std::size_t v = 0; v < impl_->vehicleIds.size(); ++v) {
+    VehicleTrack track;
+    track.id = impl_->vehicleIds[v];
+    track.role = v == 0 ? VehicleRole::Ego : VehicleRole::Other;
+    track.length = impl_->lengths[v];
+    track.width = impl_->widths[v];
+    for (std::size_t k = 0; k < t; ++k) {
+      const double* s = &states[(v * t + k) * kTraceFields];
+      track.states.push_back({s[0], s[1], s[2], s[3], s[4]});
+      track.valid.push_back(valid[v * t + k]);
+    }
+    trace.vehicles.push_back(std::move(track));
+  }
+  return trace;
+}
+
+}  // namespace vsd::sim

@@ -1,0 +1,128 @@
+// The vsd-sumo executable as a user runs it: exit codes, one-line errors,
+// outputs readable from Python, replay of FCD output.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <regex>
+
+#include "test_support.hpp"
+
+using namespace vsd;
+namespace fs = std::filesystem;
+
+namespace {
+
+std::size_t lineCount(const std::string& text) {
+  return static_cast<std::size_t>(std::count(text.begin(), text.end(), '\n'));
+}
+
+/// Runs vsd-sumo with stderr only (stdout discarded) to check error output.
+ProcessResult runForErrors(const std::vector<std::string>& args, const fs::path& work) {
+  std::string command = test::vsdSumo().string() + " --quiet";
+  for (const auto& arg : args) command += " '" + arg + "'";
+  return test::run({"sh", "-c", command + " >/dev/null"}, work);
+}
+
+}  // namespace
+
+TEST(Cli, HelpListsSubcommandsAndRunOptions) {
+  TemporaryDirectory dir;
+  const auto top = test::run({test::vsdSumo().string(), "--help"}, dir.path());
+  EXPECT_EQ(top.exitCode, 0);
+  EXPECT_NE(top.output.find("run"), std::string::npos);
+  const auto run = test::run({test::vsdSumo().string(), "run", "--help"}, dir.path());
+  EXPECT_EQ(run.exitCode, 0);
+  for (const char* option : {"--samples", "--seed", "--out", "--jobs", "--batch", "--keep-nets", "--fcd"}) {
+    EXPECT_NE(run.output.find(option), std::string::npos) << option;
+  }
+}
+
+TEST(Cli, RunPrintsASummaryAndWritesTheOutputs) {
+  TemporaryDirectory dir;
+  const auto out = dir.path() / "out";
+  const auto result = test::run({test::vsdSumo().string(), "run", test::scenarioFile("acc_lk.yaml").string(),
+                                 "--samples", "30", "--seed", "3", "--out", out.string(), "--jobs", "2"},
+                                dir.path());
+  ASSERT_EQ(result.exitCode, 0) << result.output;
+  EXPECT_NE(result.output.find("acc_lk: 30 concrete scenarios (seed 3)"), std::string::npos) << result.output;
+  EXPECT_NE(result.output.find("completed 30, failed 0"), std::string::npos) << result.output;
+  EXPECT_TRUE(std::regex_search(result.output, std::regex("d_min +[-0-9.]+ +[-0-9.]+ +[-0-9.]+ +m")))
+      << result.output;
+  // Not a terminal: progress comes as plain lines.
+  EXPECT_NE(result.output.find("run acc_lk: 30/30 scenarios"), std::string::npos) << result.output;
+  for (const char* file : {"concrete.csv", "traces.h5", "manifest.json"}) EXPECT_TRUE(fs::exists(out / file)) << file;
+
+  // The documented trace schema, read with h5py.
+  const auto python = test::writeFile(dir.path() / "read.py", R"(
+import sys, h5py, numpy as np
+with h5py.File(sys.argv[1], "r") as f:
+    assert f.attrs["schema"] == "vsd-traces/1", f.attrs["schema"]
+    assert f.attrs["functional_scenario"] == "acc_lk"
+    assert list(f["vehicle_ids"].asstr()[:]) == ["ego", "co"]
+    assert list(f["fields"].asstr()[:]) == ["x", "y", "heading", "speed", "accel"]
+    states = f["states"][:]
+    assert states.shape == (30, 2, 26, 5), states.shape
+    assert np.all(f["valid"][:] == 1) and np.all(f["ok"][:] == 1)
+    assert np.allclose(states[:, 0, 0, 0], -50.0)
+    assert list(f["sample"][:]) == list(range(30))
+print("ok")
+)");
+  const auto read = test::run({test::python(), python.string(), (out / "traces.h5").string()}, dir.path());
+  EXPECT_EQ(read.exitCode, 0) << read.output;
+}
+
+TEST(Cli, BadInputGivesOneLineNamingTheProblemAndNoOutput) {
+  TemporaryDirectory dir;
+  struct Case {
+    std::string name;
+    std::string yaml;
+    std::string expected;
+  };
+  const std::vector<Case> cases = {
+      {"malformed", "name: x\ninputs: [ {name: a, min: 1\n", "malformed YAML"},
+      {"unknown_key", test::scenarioVariant("acc.yaml", "  lanes: 1\n", "  lanes: 1\n  colour: red\n"),
+       "road.colour: unknown key 'colour'"},
+      {"min_max", test::scenarioVariant("acc.yaml", "min: -8,          max: -1", "min: -1,          max: -8"),
+       "min -1 > max -8"},
+      {"unknown_input", test::scenarioVariant("acc.yaml", "v_ego - 4", "v_egoo - 4"), "unknown name 'v_egoo'"},
+      {"negative_duration", test::scenarioVariant("acc.yaml", "duration: 5.0", "duration: -1"), "time.duration"},
+      {"unknown_controller", test::scenarioVariant("acc.yaml", "name: paper_ego", "name: tesla_fsd"),
+       "unknown controller 'tesla_fsd' (available: idm, paper_ego)"},
+      {"missing_library",
+       test::scenarioVariant("acc.yaml", "name: paper_ego", "name: mine\n      library: /nonexistent/libmine.so"),
+       "controller library '/nonexistent/libmine.so' does not exist"},
+      {"netconvert", test::scenarioVariant("acc.yaml", "criteria:", "sumo: {netconvert_options: [--nope]}\ncriteria:"),
+       "netconvert failed"},
+  };
+  for (const auto& c : cases) {
+    const auto file = test::writeFile(dir.path() / (c.name + ".yaml"), c.yaml);
+    const auto out = dir.path() / ("out_" + c.name);
+    const auto result = runForErrors({"run", file.string(), "--samples", "5", "--out", out.string()}, dir.path());
+    EXPECT_EQ(result.exitCode, 1) << c.name << ": " << result.output;
+    EXPECT_EQ(lineCount(result.output), 1u) << c.name << ": " << result.output;
+    EXPECT_NE(result.output.find(c.expected), std::string::npos) << c.name << ": " << result.output;
+    EXPECT_NE(result.output.find("vsd-sumo: error:"), std::string::npos) << c.name;
+    EXPECT_TRUE(!fs::exists(out) || fs::is_empty(out)) << c.name << ": output left behind";
+  }
+  // A missing scenario file and a bad flag are usage errors.
+  const auto missing = runForErrors({"run", (dir.path() / "nope.yaml").string()}, dir.path());
+  EXPECT_NE(missing.exitCode, 0);
+  EXPECT_NE(missing.output.find("nope.yaml"), std::string::npos);
+  const auto flag = runForErrors({"run", test::scenarioFile("acc.yaml").string(), "--jobs", "0"}, dir.path());
+  EXPECT_EQ(flag.exitCode, 1);
+  EXPECT_NE(flag.output.find("--jobs: got '0'"), std::string::npos) << flag.output;
+}
+
+TEST(Cli, FcdOutputReplaysInSumo) {
+  TemporaryDirectory dir;
+  const auto out = dir.path() / "out";
+  const auto result = test::run({test::vsdSumo().string(), "--quiet", "run", test::scenarioFile("acc_lk.yaml").string(),
+                                 "--samples", "8", "--batch", "4", "--fcd", "--out", out.string()},
+                                dir.path());
+  ASSERT_EQ(result.exitCode, 0) << result.output;
+  const auto replay = test::run(
+      {test::python(), (test::sourceDir() / "tools" / "replay_fcd.py").string(), out.string(), "--batch", "1", "--check"},
+      dir.path());
+  EXPECT_EQ(replay.exitCode, 0) << replay.output;
+  EXPECT_NE(replay.output.find("replayed 8 vehicles over 26 steps"), std::string::npos) << replay.output;
+}

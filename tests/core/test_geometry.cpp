@@ -1,0 +1,90 @@
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "vsd/core/geometry.hpp"
+#include "vsd/core/trace.hpp"
+
+using namespace vsd;
+
+TEST(Geometry, WrapAngleStaysInHalfOpenInterval) {
+  EXPECT_NEAR(wrapAngle(3.0 * kPi), kPi, 1e-12);
+  EXPECT_NEAR(wrapAngle(-kPi), kPi, 1e-12);
+  EXPECT_NEAR(wrapAngle(2.0 * kPi + 0.25), 0.25, 1e-12);
+  EXPECT_NEAR(wrapAngle(-0.25), -0.25, 1e-12);
+}
+
+TEST(Geometry, SumoAngleConversionRoundTripsAndMatchesConventions) {
+  // SUMO: 0 deg = north (+y), 90 deg = east (+x), clockwise.
+  EXPECT_NEAR(headingFromSumoAngle(90.0), 0.0, 1e-12);
+  EXPECT_NEAR(headingFromSumoAngle(0.0), kPi / 2.0, 1e-12);
+  EXPECT_NEAR(headingFromSumoAngle(180.0), -kPi / 2.0, 1e-12);
+  for (double heading : {-3.0, -1.0, 0.0, 0.5, 2.9}) {
+    EXPECT_NEAR(headingFromSumoAngle(sumoAngleFromHeading(heading)), heading, 1e-12);
+    const double angle = sumoAngleFromHeading(heading);
+    EXPECT_GE(angle, 0.0);
+    EXPECT_LT(angle, 360.0);
+  }
+}
+
+TEST(Geometry, ProjectionGivesArcLengthAndSignedOffset) {
+  const MeasuredPolyline line({{0, 0}, {10, 0}, {10, 10}});
+  EXPECT_DOUBLE_EQ(line.length(), 20.0);
+  auto left = line.project({4, 1.5});
+  EXPECT_NEAR(left.arcLength, 4.0, 1e-12);
+  EXPECT_NEAR(left.lateralOffset, 1.5, 1e-12);  // left of travel direction is positive
+  EXPECT_NEAR(left.heading, 0.0, 1e-12);
+  auto right = line.project({11, 5});
+  EXPECT_NEAR(right.arcLength, 15.0, 1e-12);
+  EXPECT_NEAR(right.lateralOffset, -1.0, 1e-12);
+  EXPECT_NEAR(right.heading, kPi / 2.0, 1e-12);
+}
+
+TEST(Geometry, PointAtExtendsEndSegmentsLinearly) {
+  const MeasuredPolyline line({{0, 0}, {10, 0}, {10, 10}});
+  EXPECT_TRUE(line.pointAt(5).isApprox(Vec2(5, 0)));
+  EXPECT_TRUE(line.pointAt(12).isApprox(Vec2(10, 2)));
+  EXPECT_TRUE(line.pointAt(25).isApprox(Vec2(10, 15)));
+  EXPECT_TRUE(line.pointAt(-3).isApprox(Vec2(-3, 0)));
+  EXPECT_NEAR(line.headingAt(12), kPi / 2.0, 1e-12);
+}
+
+TEST(Geometry, OffsetPolylineKeepsDistanceFromBothSegments) {
+  // A 45 degree left turn: every offset segment runs parallel to its original at
+  // exactly the offset, on the inner (left) and the outer (right) side alike.
+  const Polyline line = {{0, 0}, {10, 0}, {20, 10}};
+  for (double offset : {2.0, -1.5}) {
+    const Polyline moved = offsetPolyline(line, offset);
+    ASSERT_EQ(moved.size(), 3u);
+    for (std::size_t seg = 0; seg + 1 < line.size(); ++seg) {
+      for (const Vec2& p : {moved[seg], moved[seg + 1]}) {
+        const Vec2 direction = (line[seg + 1] - line[seg]).normalized();
+        const Vec2 relative = p - line[seg];
+        EXPECT_NEAR(direction.x() * relative.y() - direction.y() * relative.x(), offset, 1e-9);
+      }
+    }
+  }
+  EXPECT_TRUE(offsetPolyline(line, 2.0)[0].isApprox(Vec2(0, 2)));
+}
+
+TEST(Geometry, ClipToXRangeInterpolatesBorders) {
+  const Polyline line = {{-70, 0}, {-50, 2}, {0, 2}, {60, 8}};
+  const Polyline clipped = clipToXRange(line, -55, 55);
+  ASSERT_EQ(clipped.size(), 4u);
+  EXPECT_TRUE(clipped.front().isApprox(Vec2(-55, 1.5)));
+  EXPECT_TRUE(clipped.back().isApprox(Vec2(55, 7.5)));
+  const auto at = pointAtX(line, -60);
+  ASSERT_TRUE(at.has_value());
+  EXPECT_NEAR(at->y(), 1.0, 1e-12);
+  EXPECT_FALSE(pointAtX(line, 100).has_value());
+}
+
+TEST(Trace, AccelerationFromSpeedDifferences) {
+  VehicleTrack track;
+  for (double v : {10.0, 9.0, 9.0, 9.5}) track.states.push_back({0, 0, 0, v, 99.0});
+  fillAccelerationFromSpeed(track, 0.2);
+  EXPECT_NEAR(track.states[1].accel, -5.0, 1e-12);
+  EXPECT_NEAR(track.states[2].accel, 0.0, 1e-12);
+  EXPECT_NEAR(track.states[3].accel, 2.5, 1e-12);
+  EXPECT_NEAR(track.states[0].accel, track.states[1].accel, 1e-12);
+}

@@ -1,0 +1,209 @@
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <cmath>
+
+#include "test_support.hpp"
+#include "vsd/core/csv.hpp"
+#include "vsd/core/error.hpp"
+#include "vsd/pipeline/run.hpp"
+#include "vsd/sim/trace_file.hpp"
+
+using namespace vsd;
+using namespace vsd::pipeline;
+namespace fs = std::filesystem;
+
+namespace {
+
+RunOptions options(const fs::path& scenario, const fs::path& out, std::uint64_t samples) {
+  RunOptions result;
+  result.scenarioFile = scenario;
+  result.outputDir = out;
+  result.samples = samples;
+  result.seed = 7;
+  return result;
+}
+
+std::vector<double> allStates(const fs::path& traces) {
+  sim::TraceFileReader reader(traces);
+  std::vector<double> values;
+  for (std::size_t row = 0; row < reader.size(); ++row) {
+    for (const auto& track : reader.trace(row).vehicles) {
+      for (const auto& s : track.states) values.insert(values.end(), {s.x, s.y, s.heading, s.speed, s.accel});
+    }
+  }
+  return values;
+}
+
+}  // namespace
+
+TEST(Run, WritesConcreteCsvTracesAndManifest) {
+  TemporaryDirectory dir;
+  auto run_options = options(test::scenarioFile("acc_lk.yaml"), dir.path() / "out", 40);
+  run_options.commandLine = "vsd-sumo run scenarios/acc_lk.yaml --samples 40";
+  const auto summary = runScenarios(run_options);
+  EXPECT_EQ(summary.ok + summary.failed, 40u);
+  EXPECT_EQ(summary.ok, 40u);
+
+  const auto csv = CsvTable::read(dir.path() / "out" / "concrete.csv");
+  EXPECT_EQ(csv.rows(), 40u);
+  const std::vector<std::string> expected_header = {
+      "functional_scenario", "sample", "seed", "status", "failure", "a0", "a1", "a2", "a3", "v_ego", "x_co", "v_co",
+      "t_v_co", "a_co", "t_a_co", "a_min", "d_min", "p_lat_max", "ttc_min", "thw_min", "lane_offset_max"};
+  EXPECT_EQ(csv.header(), expected_header);
+  for (std::size_t row = 0; row < csv.rows(); ++row) {
+    EXPECT_EQ(csv.cell(row, 0), "acc_lk");
+    EXPECT_EQ(csv.cell(row, 1), std::to_string(row));
+    EXPECT_EQ(csv.cell(row, 2), "7");
+    EXPECT_EQ(csv.cell(row, 3), "ok");
+    EXPECT_TRUE(std::isfinite(csv.number(row, csv.column("d_min"))));
+  }
+
+  sim::TraceFileReader traces(dir.path() / "out" / "traces.h5");
+  EXPECT_EQ(traces.size(), 40u);
+  EXPECT_EQ(traces.functionalScenario(), "acc_lk");
+  EXPECT_EQ(traces.vehicleIds(), (std::vector<std::string>{"ego", "co"}));
+  const auto trace = traces.trace(5);
+  EXPECT_EQ(trace.instants(), 26u);
+  EXPECT_DOUBLE_EQ(trace.ego().states[0].x, -50.0);
+
+  const auto manifest = nlohmann::json::parse(readTextFile(dir.path() / "out" / "manifest.json"));
+  EXPECT_EQ(manifest["scenario_sha256"], sha256OfFile(test::scenarioFile("acc_lk.yaml")));
+  EXPECT_EQ(manifest["seed"], 7);
+  EXPECT_EQ(manifest["command_line"], "vsd-sumo run scenarios/acc_lk.yaml --samples 40");
+  EXPECT_NE(manifest["sumo_version"].get<std::string>().find("1.15"), std::string::npos);
+  EXPECT_FALSE(manifest["tool_version"].get<std::string>().empty());
+  EXPECT_EQ(manifest["outputs"]["traces.h5"]["sha256"], sha256OfFile(dir.path() / "out" / "traces.h5"));
+  // Nothing temporary is left behind.
+  for (const auto& entry : fs::directory_iterator(dir.path() / "out")) {
+    EXPECT_NE(entry.path().filename().string().front(), '.') << entry.path();
+  }
+}
+
+TEST(Run, SameSeedGivesIdenticalOutputsWhateverJobsAndBatch) {
+  TemporaryDirectory dir;
+  auto a = options(test::scenarioFile("acc_lk.yaml"), dir.path() / "a", 45);
+  a.batch = 7;
+  auto b = options(test::scenarioFile("acc_lk.yaml"), dir.path() / "b", 45);
+  b.batch = 20;
+  b.jobs = 2;
+  auto c = options(test::scenarioFile("acc_lk.yaml"), dir.path() / "c", 45);
+  c.batch = 1000;
+  c.jobs = 3;
+  runScenarios(a);
+  runScenarios(b);
+  runScenarios(c);
+  const auto csv_a = readTextFile(dir.path() / "a" / "concrete.csv");
+  EXPECT_EQ(csv_a, readTextFile(dir.path() / "b" / "concrete.csv"));
+  EXPECT_EQ(csv_a, readTextFile(dir.path() / "c" / "concrete.csv"));
+  const auto states_a = allStates(dir.path() / "a" / "traces.h5");
+  EXPECT_EQ(states_a, allStates(dir.path() / "b" / "traces.h5"));
+  EXPECT_EQ(states_a, allStates(dir.path() / "c" / "traces.h5"));
+  EXPECT_EQ(sha256OfFile(dir.path() / "a" / "traces.h5"), sha256OfFile(dir.path() / "b" / "traces.h5"));
+
+  auto other_seed = options(test::scenarioFile("acc_lk.yaml"), dir.path() / "d", 45);
+  other_seed.seed = 8;
+  runScenarios(other_seed);
+  EXPECT_NE(csv_a, readTextFile(dir.path() / "d" / "concrete.csv"));
+}
+
+TEST(Run, PerScenarioFaultsAreRecordedAndTheRestGoesOn) {
+  TemporaryDirectory dir;
+  const auto scenario = test::writeFile(
+      dir.path() / "short_road.yaml",
+      test::shortRoadScenario());
+  const auto summary = runScenarios(options(scenario, dir.path() / "out", 40));
+  EXPECT_GT(summary.failed, 0u);
+  EXPECT_GT(summary.ok, 0u);
+  const auto csv = CsvTable::read(dir.path() / "out" / "concrete.csv");
+  std::size_t failed_rows = 0;
+  for (std::size_t row = 0; row < csv.rows(); ++row) {
+    if (csv.cell(row, csv.column("status")) != "failed") continue;
+    ++failed_rows;
+    EXPECT_NE(csv.cell(row, csv.column("failure")).find("SUMO removed vehicle 'co'"), std::string::npos);
+    EXPECT_TRUE(std::isnan(csv.number(row, csv.column("d_min"))));
+  }
+  EXPECT_EQ(failed_rows, summary.failed);
+  sim::TraceFileReader traces(dir.path() / "out" / "traces.h5");
+  EXPECT_EQ(traces.size(), 40u);
+}
+
+TEST(Run, RunLevelFaultsLeaveNoOutputThatLooksComplete) {
+  TemporaryDirectory dir;
+  // An unknown controller: rejected before anything is written.
+  const auto unknown = test::writeFile(
+      dir.path() / "unknown.yaml", test::scenarioVariant("acc.yaml", "name: paper_ego", "name: paper_egoo"));
+  try {
+    runScenarios(options(unknown, dir.path() / "out1", 10));
+    FAIL() << "expected ConfigError";
+  } catch (const ConfigError& error) {
+    EXPECT_NE(std::string(error.what()).find("unknown controller 'paper_egoo'"), std::string::npos);
+  }
+  EXPECT_FALSE(fs::exists(dir.path() / "out1"));
+
+  // netconvert rejects every network: the run stops, nothing is left behind.
+  const auto broken = test::writeFile(dir.path() / "netconvert.yaml",
+                                      test::scenarioVariant("acc.yaml", "criteria:",
+                                                            "sumo: {netconvert_options: [--bogus-option]}\ncriteria:"));
+  try {
+    runScenarios(options(broken, dir.path() / "out2", 10));
+    FAIL() << "expected SumoError";
+  } catch (const SumoError& error) {
+    EXPECT_NE(std::string(error.what()).find("netconvert failed"), std::string::npos) << error.what();
+  }
+  EXPECT_TRUE(fs::is_empty(dir.path() / "out2"));
+
+  // An earlier complete run is not damaged by a failing one.
+  runScenarios(options(test::scenarioFile("acc.yaml"), dir.path() / "out3", 5));
+  const auto before = readTextFile(dir.path() / "out3" / "concrete.csv");
+  EXPECT_THROW(runScenarios(options(broken, dir.path() / "out3", 10)), SumoError);
+  EXPECT_EQ(readTextFile(dir.path() / "out3" / "concrete.csv"), before);
+  EXPECT_TRUE(fs::exists(dir.path() / "out3" / "manifest.json"));
+}
+
+TEST(Run, KeepsNetsAndWritesFcdOnRequest) {
+  TemporaryDirectory dir;
+  auto run_options = options(test::scenarioFile("lk.yaml"), dir.path() / "out", 12);
+  run_options.batch = 5;
+  run_options.fcd = true;
+  runScenarios(run_options);
+  for (int b = 0; b < 3; ++b) {
+    const auto stem = "batch_0000" + std::to_string(b);
+    EXPECT_TRUE(fs::exists(dir.path() / "out" / "nets" / (stem + ".net.xml")));
+    EXPECT_TRUE(fs::exists(dir.path() / "out" / "nets" / (stem + ".sumocfg")));
+    EXPECT_TRUE(fs::exists(dir.path() / "out" / "fcd" / (stem + ".fcd.xml")));
+  }
+  const auto fcd = readTextFile(dir.path() / "out" / "fcd" / "batch_00002.fcd.xml");
+  EXPECT_NE(fcd.find("id=\"s10.ego\""), std::string::npos);
+}
+
+TEST(Run, ExternalControllerPluginDrivesTheEgo) {
+  TemporaryDirectory dir;
+  std::string text = test::scenarioVariant("acc_lk.yaml", "params: {time_gap: 2.0, set_speed: v_ego}",
+                                          "params: {time_gap: 3.0, set_speed: v_ego}");
+  text.replace(text.find("name: paper_ego"), std::string("name: paper_ego").size(),
+               "name: cautious_ego\n      library: " + test::cautiousEgoPlugin().string() + "\n     ");
+  const auto scenario = test::writeFile(dir.path() / "plugin.yaml", text);
+  const auto summary = runScenarios(options(scenario, dir.path() / "out", 30));
+  EXPECT_EQ(summary.ok, 30u);
+  // Its 3 s time gap makes it keep more distance than the built-in 2 s controller.
+  const auto builtin = runScenarios(options(test::scenarioFile("acc_lk.yaml"), dir.path() / "builtin", 30));
+  const auto mean_thw = [](const RunSummary& s) {
+    for (const auto& metric : s.metrics) {
+      if (metric.name == "thw_min") return metric.mean;
+    }
+    return 0.0;
+  };
+  EXPECT_GT(mean_thw(summary), mean_thw(builtin));
+}
+
+TEST(Run, OptionsAreValidated) {
+  RunOptions bad = options(test::scenarioFile("acc.yaml"), "unused", 0);
+  EXPECT_THROW(bad.validate(), ConfigError);
+  bad.samples = 10;
+  bad.batch = 5000;
+  EXPECT_THROW(bad.validate(), ConfigError);
+  bad.batch = 10;
+  bad.jobs = 0;
+  EXPECT_THROW(bad.validate(), ConfigError);
+}

@@ -1,0 +1,166 @@
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <regex>
+
+#include "test_support.hpp"
+#include "vsd/core/error.hpp"
+#include "vsd/road/network.hpp"
+#include "vsd/sim/batch_simulation.hpp"
+#include "vsd/sim/builtin_controllers.hpp"
+
+using namespace vsd;
+using namespace vsd::sim;
+
+namespace {
+
+/// Samples, builds and simulates `count` scenarios of a logical scenario in one net.
+struct Batch {
+  std::shared_ptr<const scenario::LogicalScenario> logical;
+  std::vector<scenario::ConcreteScenario> scenarios;
+  std::vector<road::RoadGeometry> roads;
+  road::BatchLayout layout{1000.0};
+  std::vector<SimulatedScenario> results;
+
+  Batch(const std::shared_ptr<const scenario::LogicalScenario>& scenario, std::size_t count,
+        const std::filesystem::path& dir, ControllerRegistry registry = ControllerRegistry::withBuiltins(),
+        std::filesystem::path fcd = {})
+      : logical(scenario), layout(road::BatchLayout::cellSizeFor(scenario->road)) {
+    road::NetworkBuilder builder;
+    for (std::uint64_t i = 0; i < count; ++i) {
+      scenarios.push_back(scenario::sampleConcreteScenario(logical, 1, i));
+      roads.push_back(road::buildRoadGeometry(scenarios.back()));
+      builder.add(i, roads.back(), layout.offsetFor(i));
+    }
+    builder.writePlainXml(dir / "net");
+    const auto net = road::PendingNetwork::start(dir / "net", {}).wait();
+    std::vector<ScenarioRun> runs;
+    for (std::size_t i = 0; i < count; ++i) runs.push_back({&scenarios[i], &roads[i], layout.offsetFor(i)});
+    BatchOptions options;
+    options.steps = logical->steps();
+    options.fcdOutput = fcd;
+    results = simulateBatch(net, runs, registry, options);
+  }
+};
+
+}  // namespace
+
+TEST(BatchSimulation, EgoAndCoStartWhereTheScenarioSays) {
+  TemporaryDirectory dir;
+  const Batch batch(scenario::loadLogicalScenario(test::scenarioFile("acc_lk.yaml")), 10, dir.path());
+  for (std::size_t i = 0; i < 10; ++i) {
+    const auto& result = batch.results[i];
+    ASSERT_TRUE(result.ok()) << result.failure;
+    const auto& concrete = batch.scenarios[i];
+    const auto& ego = result.trace.vehicles[0].states[0];
+    const auto& co = result.trace.vehicles[1].states[0];
+    const auto lane_point = pointAtX(batch.roads[i].centre, -50.0);
+    ASSERT_TRUE(lane_point.has_value());
+    EXPECT_NEAR(ego.x, -50.0, 1e-9);
+    EXPECT_NEAR(ego.y, lane_point->y(), 1e-9);  // on the lane centre
+    EXPECT_NEAR(ego.speed, concrete.ego.speed, 1e-12);
+    // The Co's front bumper is placed L/2 along the lane ahead of the lane point at x_co; its
+    // reported centre is the centre of SUMO's rigid 5 m box (front minus L/2 along the chord).
+    const MeasuredPolyline lane(batch.roads[i].centre);
+    const double x_co = concrete.inputs[*concrete.logical->inputIndex("x_co")];
+    const double arc = lane.project(*pointAtX(batch.roads[i].centre, x_co)).arcLength;
+    const Vec2 front = lane.pointAt(arc + 2.5);
+    const Vec2 box_centre = front - 2.5 * (front - lane.pointAt(arc - 2.5)).normalized();
+    EXPECT_NEAR(co.x, box_centre.x(), 0.02);
+    EXPECT_NEAR(co.y, box_centre.y(), 0.02);
+    EXPECT_NEAR(co.x, x_co, 0.25);
+    EXPECT_NEAR(co.speed, concrete.others[0].scriptedSpeed[0], 1e-6);
+    ASSERT_EQ(result.lanes.size(), 1u);
+    EXPECT_NEAR(result.lanes[0].width, concrete.laneWidth, 0.01);
+    for (std::size_t k = 0; k < result.trace.instants(); ++k) {
+      ASSERT_TRUE(result.trace.vehicles[0].validAt(k));
+      ASSERT_TRUE(result.trace.vehicles[1].validAt(k));
+      // SUMO drives the Co at its scripted speed.
+      EXPECT_NEAR(result.trace.vehicles[1].states[k].speed, concrete.others[0].scriptedSpeed[k], 1e-6);
+    }
+  }
+}
+
+TEST(BatchSimulation, SumoSeesTheEgoWhereTheControllerPutIt) {
+  TemporaryDirectory dir;
+  const auto fcd = dir.path() / "fcd.xml";
+  const Batch batch(scenario::loadLogicalScenario(test::scenarioFile("acc_lk.yaml")), 3, dir.path(),
+                    ControllerRegistry::withBuiltins(), fcd);
+  // FCD reports SUMO's front-bumper position of every vehicle at every step.
+  const std::string xml = readTextFile(fcd);
+  const std::regex pattern(
+      R"re(<timestep time="([0-9.]+)">|<vehicle id="s([0-9]+)\.ego" x="([-0-9.]+)" y="([-0-9.]+)" angle="([-0-9.]+)")re");
+  double time = 0.0;
+  int compared = 0;
+  for (auto it = std::sregex_iterator(xml.begin(), xml.end(), pattern); it != std::sregex_iterator(); ++it) {
+    const auto& match = *it;
+    if (match[1].matched) {
+      time = std::stod(match[1]);
+      continue;
+    }
+    const auto index = std::stoul(match[2]);
+    // FCD time T holds instant k = T / 0.2.
+    const auto k = static_cast<std::size_t>(std::lround(time / 0.2));
+    const auto& state = batch.results[index].trace.vehicles[0].states[k];
+    const Vec2 front = state.position() + 2.5 * headingVector(state.heading) + batch.layout.offsetFor(index);
+    EXPECT_NEAR(std::stod(match[3]), front.x(), 0.011) << "sample " << index << " t " << time;
+    EXPECT_NEAR(std::stod(match[4]), front.y(), 0.011) << "sample " << index << " t " << time;
+    EXPECT_NEAR(headingFromSumoAngle(std::stod(match[5])), state.heading, 0.01);
+    ++compared;
+  }
+  EXPECT_EQ(compared, 3 * 26);
+}
+
+TEST(BatchSimulation, AVehicleSumoRemovesFailsOnlyItsScenario) {
+  TemporaryDirectory dir;
+  // No lead-out: a fast Co reaches the end of its road and SUMO removes it.
+  auto logical = scenario::parseLogicalScenario(
+      test::shortRoadScenario(),
+      test::scenarioFile("acc.yaml"));
+  const Batch batch(logical, 40, dir.path());
+  int failed = 0;
+  for (std::size_t i = 0; i < batch.results.size(); ++i) {
+    const auto& result = batch.results[i];
+    const auto& co = result.trace.vehicles[1];
+    if (result.ok()) {
+      for (std::size_t k = 0; k < co.states.size(); ++k) ASSERT_TRUE(co.validAt(k));
+      continue;
+    }
+    ++failed;
+    EXPECT_NE(result.failure.find("SUMO removed vehicle 'co'"), std::string::npos) << result.failure;
+    EXPECT_NE(result.failure.find("end of its road"), std::string::npos) << result.failure;
+    EXPECT_FALSE(co.validAt(co.states.size() - 1));
+  }
+  EXPECT_GT(failed, 0);
+  EXPECT_LT(failed, 40);
+}
+
+namespace {
+/// A controller that gives up after 1 s, to check per-scenario failure handling.
+class FailingController final : public EgoController {
+ public:
+  void init(const ControllerParams& params) override { params.rejectUnknown("failing"); }
+  void reset() override {}
+  Command step(const Observation& observation, double) override {
+    if (observation.time >= 1.0) throw Error("sensor fusion lost track");
+    return {};
+  }
+};
+}  // namespace
+
+TEST(BatchSimulation, AFailingControllerFailsItsScenarioWithTheReason) {
+  TemporaryDirectory dir;
+  auto registry = ControllerRegistry::withBuiltins();
+  registry.add("failing", "fails at t = 1 s", [] { return std::make_unique<FailingController>(); });
+  auto logical = scenario::parseLogicalScenario(
+      test::scenarioVariant("acc.yaml", "name: paper_ego\n      params: {time_gap: 2.0, set_speed: v_ego}",
+                            "name: failing"),
+      test::scenarioFile("acc.yaml"));
+  const Batch batch(logical, 2, dir.path(), registry);
+  for (const auto& result : batch.results) {
+    EXPECT_NE(result.failure.find("Ego controller failed at t = 1.0 s: sensor fusion lost track"), std::string::npos)
+        << result.failure;
+    EXPECT_TRUE(result.trace.vehicles[0].validAt(5));
+    EXPECT_FALSE(result.trace.vehicles[0].validAt(6));
+  }
+}

@@ -1,0 +1,148 @@
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+
+#include "test_support.hpp"
+#include "vsd/core/error.hpp"
+#include "vsd/sim/builtin_controllers.hpp"
+#include "vsd/sim/controller.hpp"
+#include "vsd/sim/vehicle_model.hpp"
+
+using namespace vsd;
+using namespace vsd::sim;
+
+namespace {
+
+std::string errorOf(const std::function<void()>& action) {
+  try {
+    action();
+  } catch (const ConfigError& error) {
+    return error.what();
+  }
+  return "";
+}
+
+/// Observation on a straight lane along +x, Ego at lateral offset `offset`.
+Observation straightLane(double speed, double offset) {
+  Observation observation;
+  observation.ego = {0.0, offset, 0.0, speed, 0.0};
+  Observation::Lane lane;
+  lane.lateralOffset = offset;
+  for (int i = 0; i < kPreviewPoints; ++i) {
+    lane.preview[static_cast<std::size_t>(i)] = Vec2(lane.previewSpacing * (i + 1), -offset);
+  }
+  observation.lane = lane;
+  return observation;
+}
+
+}  // namespace
+
+TEST(ControllerRegistry, UnknownNameListsTheAvailableControllers) {
+  const auto registry = ControllerRegistry::withBuiltins();
+  const auto message = errorOf([&] { registry.create("paper_eggo"); });
+  EXPECT_NE(message.find("unknown controller 'paper_eggo'"), std::string::npos) << message;
+  EXPECT_NE(message.find("idm, paper_ego"), std::string::npos) << message;
+}
+
+TEST(ControllerParams, OutOfRangeAndUnknownParametersAreNamed) {
+  auto registry = ControllerRegistry::withBuiltins();
+  const auto range = errorOf([&] {
+    makeController(registry, "paper_ego", "", "", ControllerParams({{"time_gap", -2.0}}, "acc.yaml:40: controller"));
+  });
+  EXPECT_NE(range.find("params.time_gap: got -2"), std::string::npos) << range;
+  EXPECT_NE(range.find("acc.yaml:40"), std::string::npos) << range;
+  const auto unknown = errorOf([&] {
+    makeController(registry, "paper_ego", "", "", ControllerParams({{"time_gapp", 2.0}}, "controller"));
+  });
+  EXPECT_NE(unknown.find("params.time_gapp: unknown parameter"), std::string::npos) << unknown;
+  EXPECT_NE(unknown.find("time_gap"), std::string::npos) << unknown;
+}
+
+TEST(ControllerPlugin, ExampleLibraryIsLoadedAndDrives) {
+  auto registry = ControllerRegistry::withBuiltins();
+  auto controller = makeController(registry, "cautious_ego", test::cautiousEgoPlugin(), "",
+                                   ControllerParams({{"time_gap", 3.0}, {"set_speed", 12.0}}, "controller"));
+  EXPECT_TRUE(registry.contains("cautious_ego"));
+  // Left of the lane centre: steers right. Slower than the set speed: accelerates.
+  auto command = controller->step(straightLane(10.0, 0.8), 0.2);
+  EXPECT_LT(command.curvature, 0.0);
+  EXPECT_GT(command.accel, 0.0);
+  // A leader closer than the 3 s gap: brakes.
+  Observation close = straightLane(12.0, 0.0);
+  close.leader = Observation::Leader{15.0, 12.0, 0.0};
+  EXPECT_LT(controller->step(close, 0.2).accel, 0.0);
+}
+
+TEST(ControllerPlugin, PluginParameterErrorsReachTheUser) {
+  auto registry = ControllerRegistry::withBuiltins();
+  const auto message = errorOf([&] {
+    makeController(registry, "cautious_ego", test::cautiousEgoPlugin(), "", ControllerParams({{"gain", 1.0}}, "c"));
+  });
+  EXPECT_NE(message.find("unknown parameter 'gain'"), std::string::npos) << message;
+}
+
+TEST(ControllerPlugin, MissingBrokenAndForeignLibrariesAreRejected) {
+  TemporaryDirectory dir;
+  auto registry = ControllerRegistry::withBuiltins();
+  EXPECT_NE(errorOf([&] { registry.loadLibrary(dir.path() / "nope.so"); }).find("does not exist"), std::string::npos);
+  const auto broken = test::writeFile(dir.path() / "broken.so", "this is not an ELF file");
+  EXPECT_NE(errorOf([&] { registry.loadLibrary(broken); }).find("cannot be loaded"), std::string::npos);
+  const auto foreign = errorOf([&] { registry.loadLibrary("/usr/lib/x86_64-linux-gnu/libyaml-cpp.so"); });
+  EXPECT_NE(foreign.find("does not export vsd_controller_entry"), std::string::npos) << foreign;
+}
+
+TEST(VehicleModel, IntegratesSpeedPositionAndHeading) {
+  const VehicleState start{0.0, 0.0, 0.0, 10.0, 0.0};
+  const auto straight = advanceKinematic(start, {-5.0, 0.0}, 0.2, 0.0);
+  EXPECT_NEAR(straight.speed, 9.0, 1e-12);
+  EXPECT_NEAR(straight.x, 1.9, 1e-12);  // trapezoid: (10 + 9) / 2 * 0.2
+  EXPECT_NEAR(straight.accel, -5.0, 1e-12);
+  // Stops within the step and never reverses.
+  const auto stop = advanceKinematic({0.0, 0.0, 0.0, 1.0, 0.0}, {-9.0, 0.0}, 0.2, 0.0);
+  EXPECT_EQ(stop.speed, 0.0);
+  EXPECT_NEAR(stop.x, 1.0 / 18.0, 1e-12);
+  // Curvature turns left; heading noise is added on top.
+  const auto turn = advanceKinematic(start, {0.0, 0.1}, 0.2, 0.0);
+  EXPECT_NEAR(turn.heading, 0.2, 1e-12);
+  EXPECT_GT(turn.y, 0.0);
+  const auto noisy = advanceKinematic(start, {0.0, 0.0}, 0.2, 0.05);
+  EXPECT_NEAR(noisy.heading, 0.05, 1e-12);
+  EXPECT_NEAR(noisy.y, 0.0, 1e-12);  // the disturbance acts from the next step on
+  // Commands beyond the limits are clamped.
+  EXPECT_NEAR(advanceKinematic(start, {-50.0, 0.0}, 0.2, 0.0).accel, -9.0, 1e-12);
+}
+
+TEST(TimeGapLongitudinal, RequiredDecelerationMatchesKinematics) {
+  // Stationary obstacle 20 m ahead at 10 m/s: v^2 / (2 d) = 2.5 m/s^2.
+  EXPECT_NEAR(requiredDeceleration(20.0, 10.0, 0.0, 0.0, 0.0, 9.0), 2.5, 1e-6);
+  // Same speed, no braking: nothing required.
+  EXPECT_EQ(requiredDeceleration(5.0, 10.0, 10.0, 0.0, 1.0, 9.0), 0.0);
+  // Closing on a slower leader: relative kinematics (v_rel^2 / (2 (d - margin))).
+  EXPECT_NEAR(requiredDeceleration(11.0, 14.0, 10.0, 0.0, 1.0, 9.0), 16.0 / 20.0, 1e-6);
+  // Unavoidable: reports infinity.
+  EXPECT_TRUE(std::isinf(requiredDeceleration(1.0, 20.0, 0.0, 0.0, 0.5, 9.0)));
+}
+
+TEST(PaperEgo, KeepsTheTimeGapCruisesAndKeepsTheLane) {
+  PaperEgoController controller;
+  controller.init(ControllerParams({{"set_speed", 12.0}}, "c"));
+  controller.reset();
+  // At exactly 2 s gap behind an equally fast leader: no action.
+  Observation following = straightLane(12.0, 0.0);
+  following.leader = Observation::Leader{24.0, 12.0, 0.0};
+  EXPECT_NEAR(controller.step(following, 0.2).accel, 0.0, 1e-9);
+  // Too close: brakes; far behind a fast leader: accelerates up to the set speed only.
+  following.leader->gap = 12.0;
+  EXPECT_LT(controller.step(following, 0.2).accel, 0.0);
+  Observation free_road = straightLane(10.0, 0.0);
+  EXPECT_GT(controller.step(free_road, 0.2).accel, 0.0);
+  EXPECT_NEAR(controller.step(straightLane(12.0, 0.0), 0.2).accel, 0.0, 1e-12);
+  // Lane keeping steers towards the centre.
+  EXPECT_LT(controller.step(straightLane(12.0, 0.5), 0.2).curvature, 0.0);
+  EXPECT_GT(controller.step(straightLane(12.0, -0.5), 0.2).curvature, 0.0);
+  // Emergency: a stopped obstacle 15 m ahead at 12 m/s needs > 4.8 m/s^2.
+  Observation emergency = straightLane(12.0, 0.0);
+  emergency.leader = Observation::Leader{15.0, 0.0, 0.0};
+  EXPECT_LT(controller.step(emergency, 0.2).accel, -5.0);
+}

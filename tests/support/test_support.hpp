@@ -1,0 +1,56 @@
+#pragma once
+// Paths and helpers shared by the tests.
+
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include "vsd/core/files.hpp"
+#include "vsd/core/process.hpp"
+
+namespace vsd::test {
+
+inline std::filesystem::path sourceDir() { return VSD_SOURCE_DIR; }
+inline std::filesystem::path binaryDir() { return VSD_BINARY_DIR; }
+inline std::filesystem::path scenarioFile(const std::string& name) { return sourceDir() / "scenarios" / name; }
+inline std::filesystem::path vsdSumo() { return binaryDir() / "vsd-sumo"; }
+inline std::filesystem::path cautiousEgoPlugin() { return binaryDir() / "plugins" / "libvsd_cautious_ego.so"; }
+/// Debian's python3 (with h5py, numpy, sklearn, traci), not a pyenv one from PATH.
+inline std::string python() { return VSD_PYTHON; }
+
+inline std::filesystem::path writeFile(const std::filesystem::path& path, const std::string& contents) {
+  std::filesystem::create_directories(path.parent_path());
+  std::ofstream stream(path, std::ios::binary | std::ios::trunc);
+  stream << contents;
+  return path;
+}
+
+/// Runs a command; output (stdout + stderr) is captured in a file inside `work`.
+inline ProcessResult run(const std::vector<std::string>& argv, const std::filesystem::path& work) {
+  std::filesystem::create_directories(work);
+  const auto log = work / "command.log";
+  std::filesystem::remove(log);
+  return runProcess(argv, log);
+}
+
+/// Reads a scenario file and replaces `from` by `to` (to derive variants of the paper's scenarios).
+inline std::string scenarioVariant(const std::string& name, const std::string& from, const std::string& to) {
+  std::string text = readTextFile(scenarioFile(name));
+  const auto at = text.find(from);
+  if (at == std::string::npos) throw std::runtime_error("scenarioVariant: '" + from + "' not in " + name);
+  text.replace(at, from.size(), to);
+  return text;
+}
+
+/// acc.yaml with a road that ends at x = 10 m: many Cos reach its end within 5 s
+/// and SUMO removes them.
+inline std::string shortRoadScenario() {
+  std::string text =
+      scenarioVariant("acc.yaml", "extension: {before: 30, after: 150}", "extension: {before: 30, after: 0}");
+  const std::string range = "x_range: [-55, 55]";
+  text.replace(text.find(range), range.size(), "x_range: [-55, 10]");
+  return text;
+}
+
+}  // namespace vsd::test
