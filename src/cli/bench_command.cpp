@@ -14,6 +14,7 @@
 #include "vsd/core/files.hpp"
 #include "vsd/core/process.hpp"
 #include "vsd/pipeline/run.hpp"
+#include "vsd/vector/dataset.hpp"
 
 namespace fs = std::filesystem;
 
@@ -38,16 +39,23 @@ struct Measurement {
   double rate() const { return static_cast<double>(samples) / seconds; }
 };
 
-Measurement measureRun(const BenchOptions& options, std::uint64_t samples, std::size_t batch, const fs::path& work) {
-  const fs::path out = work / fmt::format("run_{}_{}", samples, batch);
-  const std::vector<std::string> argv = {fs::read_symlink("/proc/self/exe").string(), "--quiet", "run",
-                                         options.scenario.string(), "--samples", std::to_string(samples),
-                                         "--batch", std::to_string(batch), "--jobs", std::to_string(options.jobs),
-                                         "--seed", "1", "--out", out.string()};
+/// Runs this executable with `args` as a separate process (start-up and file writing included).
+ProcessResult runSelf(const std::vector<std::string>& args, const fs::path& work) {
+  std::vector<std::string> argv = {fs::read_symlink("/proc/self/exe").string(), "--quiet"};
+  argv.insert(argv.end(), args.begin(), args.end());
   const auto result = runProcess(argv, work / "bench.log");
   if (result.exitCode != 0) {
-    throw Error(fmt::format("benchmark run failed (exit {}): {}", result.exitCode, firstErrorLine(result.output)));
+    throw Error(fmt::format("benchmark process failed (exit {}): {}", result.exitCode, firstErrorLine(result.output)));
   }
+  return result;
+}
+
+Measurement measureRun(const BenchOptions& options, std::uint64_t samples, std::size_t batch, const fs::path& work) {
+  const fs::path out = work / fmt::format("run_{}_{}", samples, batch);
+  const auto result = runSelf({"run", options.scenario.string(), "--samples", std::to_string(samples), "--batch",
+                               std::to_string(batch), "--jobs", std::to_string(options.jobs), "--seed", "1", "--out",
+                               out.string()},
+                              work);
   std::error_code ignored;
   fs::remove_all(out, ignored);
   return {samples, batch, result.seconds, result.maxRssKiB};
@@ -74,6 +82,38 @@ int runBench(const BenchOptions& options) {
   return 0;
 }
 
+struct ExportBenchOptions {
+  fs::path map = "/usr/share/sumo/tools/game/A10KW.sumocfg";
+  double end = 300.0;
+  std::string egos = "all";
+  std::vector<double> memoryEnds = {100.0, 400.0};
+};
+
+int runExportBench(const ExportBenchOptions& options) {
+  TemporaryDirectory work("vsd-bench");
+  fmt::print("vsd-sumo bench export: {} (--egos {}), one process, defaults otherwise\n", options.map.string(),
+             options.egos);
+  fmt::print("  {:<22} {:>9} {:>9} {:>12} {:>14} {:>10}\n", "mode", "sim [s]", "samples", "samples/s", "bytes/sample",
+             "peak RSS");
+  auto measure = [&](double end, int compression) {
+    const fs::path out = work.path() / "bench.h5";
+    const auto result = runSelf({"export", options.map.string(), "--out", out.string(), "--egos", options.egos, "--end",
+                                 fmt::format("{}", end), "--compression", std::to_string(compression)},
+                                work.path());
+    const vector::DatasetReader reader(out);
+    const auto samples = static_cast<double>(reader.size());
+    fmt::print("  {:<22} {:>9.0f} {:>9.0f} {:>12.0f} {:>14.0f} {:>7.1f} MiB\n",
+               fmt::format("compression {}", compression), end, samples, samples / result.seconds,
+               static_cast<double>(fs::file_size(out)) / samples, static_cast<double>(result.maxRssKiB) / 1024.0);
+    fs::remove(out);
+  };
+  measure(options.end, 1);
+  measure(options.end, 0);
+  fmt::print("  peak memory as the number of samples grows (compression 1):\n");
+  for (const double end : options.memoryEnds) measure(end, 1);
+  return 0;
+}
+
 }  // namespace
 
 void addBenchCommand(CLI::App& app, CommandContext& context) {
@@ -90,6 +130,17 @@ void addBenchCommand(CLI::App& app, CommandContext& context) {
   run->add_option("--batch", options->batch, "Batch size of the batched runs")->capture_default_str();
   run->add_option("--jobs", options->jobs, "Worker processes")->capture_default_str();
   run->callback([options, &context] { context.action = [options] { return runBench(*options); }; });
+
+  auto export_options = std::make_shared<ExportBenchOptions>();
+  CLI::App* exporting = bench->add_subcommand("export", "Throughput, size and peak memory of `vsd-sumo export`");
+  exporting->add_option("map", export_options->map, "SUMO configuration")->check(CLI::ExistingFile)->capture_default_str();
+  exporting->add_option("--end", export_options->end, "Simulated seconds")->capture_default_str();
+  exporting->add_option("--egos", export_options->egos, "Ego selection")->capture_default_str();
+  exporting->add_option("--memory-ends", export_options->memoryEnds, "Simulated seconds for the memory runs")
+      ->capture_default_str();
+  exporting->callback([export_options, &context] {
+    context.action = [export_options] { return runExportBench(*export_options); };
+  });
 }
 
 }  // namespace vsd::cli

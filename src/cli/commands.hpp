@@ -17,6 +17,8 @@ struct CommandContext {
 };
 
 void addRunCommand(CLI::App& app, CommandContext& context);
+void addExportCommand(CLI::App& app, CommandContext& context);
+void addDatasetCommand(CLI::App& app, CommandContext& context);
 void addBenchCommand(CLI::App& app, CommandContext& context);
 
 }  // namespace vsd::cli

@@ -37,6 +37,8 @@ int main(int argc, char** argv) {
   vsd::cli::CommandContext context;
   context.commandLine = joinCommandLine(argc, argv);
   vsd::cli::addRunCommand(app, context);
+  vsd::cli::addExportCommand(app, context);
+  vsd::cli::addDatasetCommand(app, context);
   vsd::cli::addBenchCommand(app, context);
 
   try {

@@ -23,6 +23,8 @@ void addRunCommand(CLI::App& app, CommandContext& context) {
       ->capture_default_str();
   run->add_option("--first-sample", options->firstSample, "Index of the first concrete scenario")
       ->capture_default_str();
+  run->add_option("--compression", options->compression, "Deflate level of dataset.h5's vectors: 0 (none) .. 9")
+      ->capture_default_str();
   run->add_flag("--keep-nets", options->keepNets, "Keep the generated networks in <out>/nets (open with sumo-gui)");
   run->add_flag("--fcd", options->fcd,
                 "Write SUMO FCD XML per batch to <out>/fcd (replay: tools/replay_fcd.py); implies --keep-nets");

@@ -26,6 +26,8 @@
 #include "vsd/scenario/concrete_scenario.hpp"
 #include "vsd/sim/batch_simulation.hpp"
 #include "vsd/sim/trace_file.hpp"
+#include "vsd/vector/dataset.hpp"
+#include "vsd/vector/vectorize.hpp"
 
 namespace fs = std::filesystem;
 
@@ -290,12 +292,13 @@ class SummaryBuilder {
   std::optional<std::size_t> dMinIndex_;
 };
 
-/// concrete.csv + traces.h5, written under temporary names.
+/// concrete.csv + traces.h5 + dataset.h5, written under temporary names.
 class RunFiles {
  public:
   RunFiles(const Context& context, const fs::path& out, const std::vector<std::string>& metric_names)
-      : csvOutput_(out / "concrete.csv"), traceOutput_(out / "traces.h5"), logical_(*context.logical),
-        seed_(context.options.seed) {
+      : csvOutput_(out / "concrete.csv"), traceOutput_(out / "traces.h5"), datasetOutput_(out / "dataset.h5"),
+        logical_(*context.logical), seed_(context.options.seed),
+        scenarioSha256_(sha256OfFile(context.logical->sourceFile)) {
     csvStream_.open(csvOutput_.tempPath(), std::ios::binary | std::ios::trunc);
     if (!csvStream_) throw IoError(csvOutput_.finalPath().string() + ": cannot open for writing");
     csv_.emplace(csvStream_);
@@ -314,6 +317,14 @@ class RunFiles {
     }
     traces_.emplace(traceOutput_.tempPath(), logical_.name, logical_.step,
                     static_cast<std::size_t>(logical_.steps()) + 1, ids, lengths, widths);
+    vector::DatasetHeader dataset_header;
+    dataset_header.kind = "generated";
+    dataset_header.step = logical_.step;
+    dataset_header.horizon = logical_.steps();
+    dataset_header.inputNames = logical_.inputNames();
+    dataset_header.metricNames = metric_names;
+    dataset_header.compression = context.options.compression;
+    dataset_.emplace(datasetOutput_.tempPath(), dataset_header);
     emptyTrace_.step = logical_.step;
     for (std::size_t v = 0; v < ids.size(); ++v) {
       VehicleTrack track;
@@ -332,6 +343,18 @@ class RunFiles {
     csv_->writeRow(row);
     // A scenario that failed before simulation has no trace: store an all-invalid one.
     traces_->append(outcome.index, outcome.trace.vehicles.empty() ? emptyTrace_ : outcome.trace, outcome.ok());
+    // A failed run has no complete future of the Ego: it cannot be a training sample.
+    if (outcome.ok()) dataset_->append(sceneOf(outcome));
+  }
+
+  vector::VectorizedScene sceneOf(const ScenarioOutcome& outcome) const {
+    auto scene = vector::buildScene(logical_.name, outcome.trace, 0,
+                                    vector::regionLanePolylines(outcome.lanes, logical_.road.xMin, logical_.road.xMax));
+    scene.sample = outcome.index;
+    scene.inputs = outcome.inputs;
+    scene.metrics = outcome.metrics;
+    scene.provenance = {logical_.sourceFile.string(), scenarioSha256_, logical_.ego.id, 0.0};
+    return scene;
   }
 
   /// Finishes both files and renames them into place.
@@ -340,19 +363,24 @@ class RunFiles {
     if (!csvStream_) throw IoError(csvOutput_.finalPath().string() + ": write failed (disk full?)");
     csvStream_.close();
     traces_->close();
+    dataset_->close();
     csvOutput_.commit();
     traceOutput_.commit();
-    return {csvOutput_.finalPath(), traceOutput_.finalPath()};
+    datasetOutput_.commit();
+    return {csvOutput_.finalPath(), traceOutput_.finalPath(), datasetOutput_.finalPath()};
   }
 
  private:
   AtomicOutput csvOutput_;
   AtomicOutput traceOutput_;
+  AtomicOutput datasetOutput_;
   const scenario::LogicalScenario& logical_;
   std::uint64_t seed_;
+  std::string scenarioSha256_;
   std::ofstream csvStream_;
   std::optional<CsvWriter> csv_;
   std::optional<sim::TraceFileWriter> traces_;
+  std::optional<vector::DatasetWriter> dataset_;
   Trace emptyTrace_;
 };
 

@@ -12,8 +12,6 @@ const LaneCache::Entry& LaneCache::get(const std::string& lane_id, const Vec2& o
   auto it = entries_.find(lane_id);
   if (it == entries_.end()) {
     LaneGeometry lane = fetchLane(lane_id, offset);
-    if (lane.centre.size() < 2) lane.centre.push_back(lane.centre.empty() ? Vec2::Zero() : lane.centre.front());
-    if (lane.centre.size() < 2) lane.centre.push_back(lane.centre.front());
     it = entries_.emplace(lane_id, Entry{MeasuredPolyline(std::move(lane.centre)), lane.width}).first;
   }
   return it->second;
@@ -56,8 +54,17 @@ Observation EgoDriver::observe(double time, LaneCache& lanes) const {
 
   const std::string lane_id = libsumo::Vehicle::getLaneID(vehicleId_);
   if (!lane_id.empty()) {
-    const MeasuredPolyline& centre = lanes.centre(lane_id, offset_);
-    const auto projection = centre.project(state_.position());
+    const MeasuredPolyline* centre_ptr = &lanes.centre(lane_id, offset_);
+    auto projection = centre_ptr->project(state_.position());
+    // Near the end of the lane the preview continues along the route (through the
+    // junction's internal lane); on a single long road this never happens.
+    const double preview_end = projection.arcLength + Observation::Lane{}.previewSpacing * kPreviewPoints;
+    MeasuredPolyline extended;
+    if (preview_end > centre_ptr->length()) {
+      extended = routeAhead(lane_id, lanes, preview_end);
+      centre_ptr = &extended;
+    }
+    const MeasuredPolyline& centre = *centre_ptr;
     Observation::Lane lane;
     lane.lateralOffset = projection.lateralOffset;
     lane.headingError = wrapAngle(state_.heading - projection.heading);
@@ -73,7 +80,7 @@ Observation EgoDriver::observe(double time, LaneCache& lanes) const {
   }
 
   const auto [leader_id, distance] = libsumo::Vehicle::getLeader(vehicleId_, kLeaderRange);
-  if (!leader_id.empty() && distance > -1e6) {
+  if (!leader_id.empty()) {
     Observation::Leader leader;
     leader.gap = distance + minGap_;  // getLeader() measures from the Ego's front + minGap
     leader.speed = libsumo::Vehicle::getSpeed(leader_id);
@@ -81,6 +88,30 @@ Observation EgoDriver::observe(double time, LaneCache& lanes) const {
     observation.leader = leader;
   }
   return observation;
+}
+
+MeasuredPolyline EgoDriver::routeAhead(const std::string& lane_id, LaneCache& lanes, double length) const {
+  Polyline path = lanes.centre(lane_id, offset_).points();
+  std::vector<std::string> continuation;
+  for (const auto& best : libsumo::Vehicle::getBestLanes(vehicleId_)) {
+    if (best.laneID == lane_id) continuation = best.continuationLanes;
+  }
+  std::string previous = lane_id;
+  auto append = [&](const std::string& id) {
+    const Polyline& points = lanes.centre(id, offset_).points();
+    const bool joined = !path.empty() && (points.front() - path.back()).norm() < 1e-6;
+    path.insert(path.end(), points.begin() + (joined ? 1 : 0), points.end());
+  };
+  for (const auto& next : continuation) {
+    if (next == previous || next.empty()) continue;
+    for (const auto& link : libsumo::Lane::getLinks(previous)) {
+      if (link.approachedLane == next && !link.approachedInternal.empty()) append(link.approachedInternal);
+    }
+    append(next);
+    previous = next;
+    if (polylineLength(path) >= length) break;
+  }
+  return MeasuredPolyline(std::move(path));
 }
 
 void EgoDriver::step(double time, double dt, double heading_noise, LaneCache& lanes) {

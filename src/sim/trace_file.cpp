@@ -21,21 +21,12 @@ struct TraceFileWriter::Impl {
   h5::Appendable<std::uint8_t> ok;
   h5::Appendable<double> states;
   h5::Appendable<std::uint8_t> valid;
-  std::vector<std::int64_t> sampleBuffer;
-  std::vector<std::uint8_t> okBuffer;
-  std::vector<double> stateBuffer;
-  std::vector<std::uint8_t> validBuffer;
+  std::size_t buffered = 0;
   bool open = true;
 
   void flush() {
-    sample.append(sampleBuffer);
-    ok.append(okBuffer);
-    states.append(stateBuffer);
-    valid.append(validBuffer);
-    sampleBuffer.clear();
-    okBuffer.clear();
-    stateBuffer.clear();
-    validBuffer.clear();
+    h5::flushAll(sample, ok, states, valid);
+    buffered = 0;
   }
 };
 
@@ -84,17 +75,17 @@ void TraceFileWriter::append(std::uint64_t sample, const Trace& trace, bool ok) 
     throw Error(fmt::format("internal: trace of sample {} has {} vehicles, the trace file {}", sample,
                             trace.vehicles.size(), impl_->vehicles));
   }
-  impl_->sampleBuffer.push_back(static_cast<std::int64_t>(sample));
-  impl_->okBuffer.push_back(ok ? 1 : 0);
+  impl_->sample.push(static_cast<std::int64_t>(sample));
+  impl_->ok.push(ok ? 1 : 0);
   for (const auto& track : trace.vehicles) {
     for (std::size_t k = 0; k < impl_->instants; ++k) {
       const bool present = k < track.states.size();
       const VehicleState state = present ? track.states[k] : VehicleState{};
-      impl_->stateBuffer.insert(impl_->stateBuffer.end(), {state.x, state.y, state.heading, state.speed, state.accel});
-      impl_->validBuffer.push_back(present ? track.valid[k] : 0);
+      impl_->states.push({state.x, state.y, state.heading, state.speed, state.accel});
+      impl_->valid.push(present ? track.valid[k] : std::uint8_t{0});
     }
   }
-  if (impl_->sampleBuffer.size() >= kChunkRows) impl_->flush();
+  if (++impl_->buffered >= kChunkRows) impl_->flush();
 }
 
 void TraceFileWriter::close() {

@@ -126,3 +126,88 @@ TEST(Cli, FcdOutputReplaysInSumo) {
   EXPECT_EQ(replay.exitCode, 0) << replay.output;
   EXPECT_NE(replay.output.find("replayed 8 vehicles over 26 steps"), std::string::npos) << replay.output;
 }
+
+TEST(Cli, DatasetsFromRunAndExportValidateAndLoadInPython) {
+  TemporaryDirectory dir;
+  const auto run_out = dir.path() / "acc_lk";
+  ASSERT_EQ(test::run({test::vsdSumo().string(), "--quiet", "run", test::scenarioFile("acc_lk.yaml").string(),
+                       "--samples", "12", "--out", run_out.string()},
+                      dir.path())
+                .exitCode,
+            0);
+  const auto map = dir.path() / "od.h5";
+  const auto exported = test::run(
+      {test::vsdSumo().string(), "--quiet", "export", "--opendrive",
+       (test::sourceDir() / "sumo_nets/opendrive_curve/curve.xodr").string(), "--routes",
+       (test::sourceDir() / "sumo_nets/opendrive_curve/curve.rou.xml").string(), "--out", map.string(), "--end", "40"},
+      dir.path());
+  ASSERT_EQ(exported.exitCode, 0) << exported.output;
+  EXPECT_NE(exported.output.find("bytes per sample"), std::string::npos) << exported.output;
+
+  const auto validate = test::run({test::vsdSumo().string(), "dataset", "validate", run_out.string(), map.string()},
+                                  dir.path());
+  EXPECT_EQ(validate.exitCode, 0) << validate.output;
+  EXPECT_NE(validate.output.find("dataset.h5: valid (12 samples)"), std::string::npos) << validate.output;
+
+  const auto info = test::run({test::vsdSumo().string(), "dataset", "info", map.string()}, dir.path());
+  EXPECT_EQ(info.exitCode, 0);
+  for (const char* text : {"schema vsd-dataset/1", "kind map", "curve.xodr", "bytes per sample", "timestamp"}) {
+    EXPECT_NE(info.output.find(text), std::string::npos) << text << "\n" << info.output;
+  }
+  const auto svg = dir.path() / "s3.svg";
+  const auto show = test::run(
+      {test::vsdSumo().string(), "dataset", "show", run_out.string(), "--sample", "3", "--svg", svg.string()}, dir.path());
+  EXPECT_EQ(show.exitCode, 0) << show.output;
+  EXPECT_NE(show.output.find("v_ego ="), std::string::npos);
+  const auto drawing = readTextFile(svg);
+  EXPECT_NE(drawing.find("<svg"), std::string::npos);
+  EXPECT_NE(drawing.find("5 s"), std::string::npos);  // Co timestamps as in the paper's figure
+
+  // The Python reader in tools/ validates both and agrees with the C++ reader.
+  const auto reader = (test::sourceDir() / "tools" / "vsd_dataset.py").string();
+  for (const auto& path : {run_out, map}) {
+    const auto result = test::run({test::python(), reader, "validate", path.string()}, dir.path());
+    EXPECT_EQ(result.exitCode, 0) << result.output;
+  }
+  const auto compare = test::writeFile(dir.path() / "compare.py", R"(
+import json, subprocess, sys
+sys.path.insert(0, sys.argv[1])
+from vsd_dataset import Dataset
+ds = Dataset(sys.argv[2])
+s = ds.sample(3)
+ego = s["polylines"][s["ego_polyline"]]["vectors"][-1]
+print(json.dumps({"n": len(ds), "polylines": len(s["polylines"]), "vectors": sum(len(p["vectors"]) for p in s["polylines"]),
+                  "ego": [round(float(v), 4) for v in ego[:4]], "v_ego": s["inputs"]["v_ego"]}))
+)");
+  const auto py = test::run({test::python(), compare.string(), (test::sourceDir() / "tools").string(), run_out.string()},
+                            dir.path());
+  ASSERT_EQ(py.exitCode, 0) << py.output;
+  EXPECT_NE(py.output.find("\"n\": 12, \"polylines\": 4, \"vectors\": 74"), std::string::npos) << py.output;
+  EXPECT_NE(py.output.find("\"ego\": [-50.0,"), std::string::npos) << py.output;
+}
+
+TEST(Cli, ExportAndDatasetBadInputGiveOneLine) {
+  TemporaryDirectory dir;
+  const auto garbage = test::writeFile(dir.path() / "garbage.h5", "definitely not HDF5");
+  const auto info = runForErrors({"dataset", "info", garbage.string()}, dir.path());
+  EXPECT_EQ(info.exitCode, 1);
+  EXPECT_EQ(lineCount(info.output), 1u) << info.output;
+  EXPECT_NE(info.output.find("garbage.h5: not an HDF5 file"), std::string::npos) << info.output;
+
+  const auto validate = test::run({test::vsdSumo().string(), "dataset", "validate", garbage.string()}, dir.path());
+  EXPECT_EQ(validate.exitCode, 1);
+  EXPECT_NE(validate.output.find("INVALID"), std::string::npos);
+
+  const auto out = dir.path() / "x.h5";
+  const auto ghost = runForErrors({"export", "--opendrive", (test::sourceDir() / "sumo_nets/opendrive_curve/curve.xodr").string(),
+                                   "--routes", (test::sourceDir() / "sumo_nets/opendrive_curve/curve.rou.xml").string(),
+                                   "--out", out.string(), "--egos", "ghost", "--end", "30"},
+                                  dir.path());
+  EXPECT_EQ(ghost.exitCode, 1);
+  EXPECT_EQ(lineCount(ghost.output), 1u) << ghost.output;
+  EXPECT_NE(ghost.output.find("vehicle 'ghost' never appears"), std::string::npos) << ghost.output;
+  EXPECT_FALSE(fs::exists(out));
+  const auto no_map = runForErrors({"export", "--out", out.string()}, dir.path());
+  EXPECT_EQ(no_map.exitCode, 1);
+  EXPECT_NE(no_map.output.find("no map given"), std::string::npos) << no_map.output;
+}

@@ -8,6 +8,7 @@
 #include "vsd/core/error.hpp"
 #include "vsd/pipeline/run.hpp"
 #include "vsd/sim/trace_file.hpp"
+#include "vsd/vector/dataset.hpp"
 
 using namespace vsd;
 using namespace vsd::pipeline;
@@ -206,4 +207,46 @@ TEST(Run, OptionsAreValidated) {
   bad.batch = 10;
   bad.jobs = 0;
   EXPECT_THROW(bad.validate(), ConfigError);
+}
+
+TEST(Run, DatasetHoldsThePaperSceneOfEveryCompletedRun) {
+  TemporaryDirectory dir;
+  auto run_options = options(test::scenarioFile("acc.yaml"), dir.path() / "out", 15);
+  runScenarios(run_options);
+  sim::TraceFileReader traces(dir.path() / "out" / "traces.h5");
+  const vector::DatasetReader dataset(dir.path() / "out" / "dataset.h5");
+  ASSERT_EQ(dataset.size(), 15u);
+  EXPECT_EQ(dataset.header().inputNames, (std::vector<std::string>{"v_ego", "x_co", "v_co", "t_v_co", "a_co", "t_a_co"}));
+  const auto csv = CsvTable::read(dir.path() / "out" / "concrete.csv");
+  for (std::size_t i = 0; i < dataset.size(); ++i) {
+    const auto scene = dataset.scene(i);
+    const auto trace = traces.trace(i);
+    // (2 lane boundaries * 24 + Co * 25 + Ego * 1) vectors of 7 features, as in the paper's footnote.
+    ASSERT_EQ(scene.polylines.size(), 4u);
+    EXPECT_EQ(scene.polylines[0].vectors.size(), 24u);
+    EXPECT_EQ(scene.polylines[1].vectors.size(), 24u);
+    EXPECT_EQ(scene.polylines[2].vectors.size(), 25u);
+    EXPECT_EQ(scene.polylines[3].vectors.size(), 1u);
+    EXPECT_EQ(scene.vectorCount(), 74u);
+    // Geometry against the trace (float32 storage: millimetres).
+    const auto& co = trace.vehicles[1];
+    for (std::size_t k = 1; k <= 25; ++k) {
+      EXPECT_NEAR(scene.polylines[2].vectors[k - 1][2], co.states[k].x, 1e-3);
+      EXPECT_NEAR(scene.polylines[2].vectors[k - 1][3], co.states[k].y, 1e-3);
+      EXPECT_NEAR(scene.target[k - 1].x(), trace.ego().states[k].x, 1e-3);
+    }
+    const auto ego = scene.egoInitialState();
+    EXPECT_NEAR(ego.x, trace.ego().states[0].x, 1e-9);
+    EXPECT_NEAR(ego.speed, trace.ego().states[0].speed, 1e-3);
+    EXPECT_NEAR(ego.heading, trace.ego().states[0].heading, 1e-4);
+    // Lane boundaries: half a lane width from the Ego's lane centre at its start.
+    const Vec2 left(scene.polylines[0].vectors[0][0], scene.polylines[0].vectors[0][1]);
+    const Vec2 right(scene.polylines[1].vectors[0][0], scene.polylines[1].vectors[0][1]);
+    EXPECT_NEAR(left.x(), -55.0, 0.5);
+    EXPECT_GT((left - right).norm(), 3.2 - 0.02);
+    EXPECT_LT((left - right).norm(), 3.8 + 0.02);
+    // Inputs and metrics travel with the sample.
+    EXPECT_EQ(scene.inputs[0], csv.number(i, csv.column("v_ego")));
+    EXPECT_EQ(scene.metrics[1], csv.number(i, csv.column("d_min")));
+  }
 }

@@ -7,6 +7,7 @@
 
 #include <Eigen/Core>
 #include <optional>
+#include <string>
 #include <vector>
 
 namespace vsd {
@@ -63,6 +64,13 @@ double polylineLength(const Polyline& points);
 /// along the bisector of its adjacent segment normals, scaled so that both segments stay
 /// exactly `left_offset` away (mitre), with the scale capped to avoid spikes at sharp turns.
 Polyline offsetPolyline(const Polyline& points, double left_offset);
+
+/// A lane as a road network describes it: centre line and width.
+struct LaneGeometry {
+  std::string id;
+  Polyline centre;     ///< m
+  double width = 0.0;  ///< m
+};
 
 /// First point on the polyline whose x equals `x` (linear interpolation), if any.
 std::optional<Vec2> pointAtX(const Polyline& points, double x);

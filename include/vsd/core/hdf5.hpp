@@ -9,6 +9,7 @@
 #include <H5Cpp.h>
 
 #include <cstdint>
+#include <initializer_list>
 #include <string>
 #include <vector>
 
@@ -44,11 +45,31 @@ class Appendable {
   hsize_t rows() const { return rows_; }
   hsize_t rowSize() const;
 
+  /// Buffers values (row-major); flush() appends the buffered rows. Writers push per
+  /// sample and flush every few hundred samples, so memory stays flat.
+  void push(T value) { buffer_.push_back(value); }
+  void push(std::initializer_list<T> values) { buffer_.insert(buffer_.end(), values); }
+  template <typename Iterator>
+  void push(Iterator first, Iterator last) {
+    buffer_.insert(buffer_.end(), first, last);
+  }
+  void flush() {
+    append(buffer_);
+    buffer_.clear();
+  }
+
  private:
   H5::DataSet dataset_;
   std::vector<hsize_t> rowShape_;
   hsize_t rows_ = 0;
+  std::vector<T> buffer_;
 };
+
+/// Flushes every given buffered column.
+template <typename... Columns>
+void flushAll(Columns&... columns) {
+  (columns.flush(), ...);
+}
 
 void writeAttribute(H5::H5Object& object, const std::string& name, const std::string& value);
 void writeAttribute(H5::H5Object& object, const std::string& name, double value);

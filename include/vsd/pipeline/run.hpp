@@ -37,6 +37,7 @@ struct RunOptions {
   bool keepNets = false;            ///< keep <out>/nets/batch_*.{nod,edg,net}.xml + .sumocfg
   bool fcd = false;                 ///< write <out>/fcd/batch_*.fcd.xml (implies keepNets)
   bool writeFiles = true;           ///< false: only call the outcome callback (used by compare)
+  int compression = 1;              ///< deflate level of dataset.h5's vectors (0 = none)
   std::string commandLine;          ///< recorded in the manifest
 
   /// Throws ConfigError naming the flag and the accepted range.
@@ -50,7 +51,7 @@ struct ScenarioOutcome {
   std::vector<double> metrics;   ///< in RunSummary::metricNames order; NaN when failed
   std::string failure;           ///< empty when the run completed
   Trace trace;
-  std::vector<sim::LaneGeometry> lanes;  ///< the road's lanes as SUMO built them (scenario frame)
+  std::vector<LaneGeometry> lanes;  ///< the road's lanes as SUMO built them (scenario frame)
   int egoLane = 0;
   bool ok() const { return failure.empty(); }
 };

@@ -82,6 +82,10 @@ class PendingNetwork {
   std::filesystem::path stem_;
 };
 
+/// Converts an OpenDRIVE map to a SUMO network with netconvert. Throws SumoError
+/// naming the file and netconvert's first error line.
+void convertOpenDrive(const std::filesystem::path& xodr, const std::filesystem::path& net);
+
 /// Options this project always gives netconvert (net coordinates = generator coordinates, ...).
 std::vector<std::string> baseNetconvertOptions();
 

@@ -52,6 +52,9 @@ class EgoDriver {
   static constexpr double kLeaderRange = 200.0;
 
  private:
+  /// The lane centre from `lane_id` on along the Ego's route, at least `length` m if the route allows.
+  MeasuredPolyline routeAhead(const std::string& lane_id, LaneCache& lanes, double length) const;
+
   std::string vehicleId_;
   std::unique_ptr<EgoController> controller_;
   VehicleState state_;

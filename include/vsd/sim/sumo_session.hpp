@@ -35,13 +35,6 @@ class SumoSession {
   bool open_ = false;
 };
 
-/// A lane of the loaded network, in a chosen frame (net coordinates minus an offset).
-struct LaneGeometry {
-  std::string id;
-  Polyline centre;     ///< m
-  double width = 0.0;  ///< m
-};
-
 /// Lane `lane_id`'s shape and width from the loaded SUMO network, shifted by -offset.
 LaneGeometry fetchLane(const std::string& lane_id, const Vec2& offset);
 

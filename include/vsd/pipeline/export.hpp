@@ -1,0 +1,86 @@
+#pragma once
+// `vsd-sumo export`: vectorized scenes from an arbitrary SUMO map with its own
+// demand. SUMO drives the traffic; chosen vehicles are Egos. For every Ego and
+// every window start t0 (every `stride` s while it drives), a scene holds
+//   - every lane within `radius` of the Ego at t0 (left and right boundary,
+//     split into vectors of at most `max_vector_length`, junction-internal
+//     lanes included),
+//   - every other vehicle that is within the radius at some instant of
+//     [t0 - history, t0 + horizon], one vector per step; instants where it is
+//     absent or outside the radius are masked (vector_valid = 0),
+//   - the Ego's history and initial vector; its future is the target.
+// Windows in which the Ego leaves the network are not complete and are counted
+// as skipped. With --closed-loop every Ego is driven by an Ego controller (the
+// plugin API of `run`) from its first step on.
+
+#include <cstdint>
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "vsd/sim/map_simulation.hpp"
+
+namespace vsd::pipeline {
+
+/// Which vehicles are Egos: all | random:K | vtype:NAME | id,id,...
+struct EgoSelection {
+  enum class Kind { All, Random, VehicleType, Ids };
+  Kind kind = Kind::All;
+  std::size_t count = 0;         ///< Random
+  std::string vehicleType;       ///< VehicleType
+  std::vector<std::string> ids;  ///< Ids
+  /// Throws ConfigError naming --egos, the value and the accepted forms.
+  static EgoSelection parse(const std::string& text);
+};
+
+struct ExportOptions {
+  sim::MapSource source;                 ///< a .sumocfg, or --net + --routes
+  std::filesystem::path openDrive;       ///< alternatively an OpenDRIVE map (+ source.routes), imported by netconvert
+  std::filesystem::path output;          ///< dataset file (.h5)
+  std::string egos = "all";
+  std::uint64_t seed = 1;                ///< Ego selection and SUMO's --seed
+  double step = 0.2;                     ///< s
+  double horizon = 5.0;                  ///< s of Ego future (target)
+  double history = 0.0;                  ///< s of past before t0 in the polylines
+  double stride = 1.0;                   ///< s between window starts of one Ego
+  double radius = 60.0;                  ///< m around the Ego at t0
+  double maxVectorLength = 5.0;          ///< m, lane boundary vectors
+  std::optional<double> begin;           ///< s of simulation time (default: the map's)
+  std::optional<double> end;
+  std::string label;                     ///< default: the map file's stem
+  std::uint64_t maxSamples = 0;          ///< stop after this many (0: no limit)
+  double laneChangeDuration = 2.0;       ///< s, SUMO lane changes (0: the map's own, e.g. sublane)
+  int compression = 1;                   ///< deflate level of the dataset's vectors (0 = none)
+  bool closedLoop = false;
+  std::string controller = "paper_ego";
+  std::filesystem::path controllerLibrary;
+  std::vector<std::pair<std::string, double>> controllerParams;
+
+  /// Throws ConfigError naming the flag, the value and the constraint.
+  void validate() const;
+};
+
+struct ExportSummary {
+  std::filesystem::path output;
+  std::string label;
+  std::uint64_t samples = 0;
+  std::uint64_t egos = 0;            ///< Egos with at least one sample
+  std::uint64_t windowsSkipped = 0;  ///< windows the Ego left before their end
+  std::uint64_t vehiclesSeen = 0;
+  std::uint64_t laneVectors = 0;     ///< lane-boundary vectors of the whole network
+  double simulatedSeconds = 0.0;
+  double seconds = 0.0;
+  double samplesPerSecond = 0.0;
+  double bytesPerSample = 0.0;
+  bool closedLoop = false;
+  std::string report() const;
+};
+
+/// Runs the export. Throws ConfigError / SumoError for a map SUMO or netconvert
+/// rejects, an Ego id that never appears, an empty selection, a window longer than
+/// the simulation; the output file is then not created (or an older one is kept).
+ExportSummary exportMap(const ExportOptions& options);
+
+}  // namespace vsd::pipeline

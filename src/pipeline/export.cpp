@@ -1,0 +1,447 @@
+#include "vsd/pipeline/export.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <deque>
+#include <functional>
+#include <unordered_map>
+#include <unordered_set>
+
+#include "vsd/core/error.hpp"
+#include "vsd/core/files.hpp"
+#include "vsd/core/interrupt.hpp"
+#include "vsd/core/log.hpp"
+#include "vsd/core/progress.hpp"
+#include "vsd/core/random.hpp"
+#include "vsd/road/network.hpp"
+#include "vsd/sim/controller.hpp"
+#include "vsd/vector/dataset.hpp"
+#include "vsd/vector/vectorize.hpp"
+
+namespace fs = std::filesystem;
+
+namespace vsd::pipeline {
+
+EgoSelection EgoSelection::parse(const std::string& text) {
+  const std::string expected = "all, random:K (K > 0), vtype:NAME, or a comma-separated list of vehicle ids";
+  EgoSelection selection;
+  if (text == "all") return selection;
+  if (text.rfind("random:", 0) == 0) {
+    selection.kind = Kind::Random;
+    const std::string count = text.substr(7);
+    char* end = nullptr;
+    const long long value = std::strtoll(count.c_str(), &end, 10);
+    if (count.empty() || *end != '\0' || value <= 0) throw ConfigError::field("command line", "--egos", text, expected);
+    selection.count = static_cast<std::size_t>(value);
+    return selection;
+  }
+  if (text.rfind("vtype:", 0) == 0) {
+    selection.kind = Kind::VehicleType;
+    selection.vehicleType = text.substr(6);
+    if (selection.vehicleType.empty()) throw ConfigError::field("command line", "--egos", text, expected);
+    return selection;
+  }
+  selection.kind = Kind::Ids;
+  std::size_t start = 0;
+  while (start <= text.size()) {
+    const std::size_t comma = text.find(',', start);
+    const std::string id = text.substr(start, comma == std::string::npos ? std::string::npos : comma - start);
+    if (id.empty()) throw ConfigError::field("command line", "--egos", text, expected);
+    selection.ids.push_back(id);
+    if (comma == std::string::npos) break;
+    start = comma + 1;
+  }
+  return selection;
+}
+
+namespace {
+
+bool isMultipleOf(double value, double step) {
+  const double ratio = value / step;
+  return std::abs(ratio - std::round(ratio)) < 1e-6;
+}
+
+int stepsOf(double seconds, double step) { return static_cast<int>(std::lround(seconds / step)); }
+
+}  // namespace
+
+void ExportOptions::validate() const {
+  const std::string where = "command line";
+  if (source.config.empty() && source.net.empty() && openDrive.empty()) {
+    throw ConfigError("no map given: pass a .sumocfg, or --net with --routes, or --opendrive with --routes");
+  }
+  const int given = (!source.config.empty() ? 1 : 0) + (!source.net.empty() ? 1 : 0) + (!openDrive.empty() ? 1 : 0);
+  if (given > 1) throw ConfigError("give exactly one map: a .sumocfg, --net or --opendrive");
+  if (!source.config.empty() && !source.routes.empty()) {
+    throw ConfigError("--routes is only used with --net or --opendrive (a .sumocfg names its own route files)");
+  }
+  if (output.empty()) throw ConfigError("--out is required (the dataset file to write)");
+  if (!(step > 0.0)) throw ConfigError::field(where, "--step", formatValue(step), "a step > 0 s");
+  if (!(horizon > 0.0) || !isMultipleOf(horizon, step)) {
+    throw ConfigError::field(where, "--horizon", formatValue(horizon), "a multiple of --step > 0 s");
+  }
+  if (history < 0.0 || !isMultipleOf(history, step)) {
+    throw ConfigError::field(where, "--history", formatValue(history), "a multiple of --step >= 0 s");
+  }
+  if (!(stride >= step) || !isMultipleOf(stride, step)) {
+    throw ConfigError::field(where, "--stride", formatValue(stride), "a multiple of --step >= --step");
+  }
+  if (laneChangeDuration < 0.0) {
+    throw ConfigError::field(where, "--lane-change-duration", formatValue(laneChangeDuration), "a duration >= 0 s");
+  }
+  if (!(radius > 0.0)) throw ConfigError::field(where, "--radius", formatValue(radius), "a radius > 0 m");
+  if (!(maxVectorLength > 0.0)) {
+    throw ConfigError::field(where, "--max-vector-length", formatValue(maxVectorLength), "a length > 0 m");
+  }
+  if (begin && end && *end <= *begin) {
+    throw ConfigError::field(where, "--end", formatValue(*end), "an end time after --begin");
+  }
+  EgoSelection::parse(egos);
+}
+
+namespace {
+
+/// The last window-length of states of one vehicle.
+struct History {
+  std::deque<std::pair<std::int64_t, VehicleState>> states;  ///< (step, state), increasing steps
+  double length = 5.0;
+  double width = 1.8;
+  std::int64_t lastStep = 0;
+  bool ego = false;
+  std::int64_t nextT0 = 0;  ///< Egos: step of the next window start
+  std::uint64_t samples = 0;
+  Vec2 windowLo = Vec2::Zero();  ///< bounding box of the states in the current window
+  Vec2 windowHi = Vec2::Zero();
+
+  const VehicleState* at(std::int64_t step) const {
+    if (states.empty() || step < states.front().first || step > states.back().first) return nullptr;
+    // Steps are consecutive unless the vehicle was away (teleport): try the direct index first.
+    const auto offset = static_cast<std::size_t>(step - states.front().first);
+    if (offset < states.size() && states[offset].first == step) return &states[offset].second;
+    const auto it = std::lower_bound(states.begin(), states.end(), step,
+                                     [](const auto& entry, std::int64_t value) { return entry.first < value; });
+    return it != states.end() && it->first == step ? &it->second : nullptr;
+  }
+};
+
+class Exporter {
+ public:
+  Exporter(const ExportOptions& options, const vector::LaneIndex& lanes, vector::DatasetWriter& writer,
+           vector::Provenance provenance, std::string label)
+      : options_(options),
+        lanes_(lanes),
+        writer_(writer),
+        provenance_(std::move(provenance)),
+        label_(std::move(label)),
+        historySteps_(stepsOf(options.history, options.step)),
+        horizonSteps_(stepsOf(options.horizon, options.step)),
+        strideSteps_(stepsOf(options.stride, options.step)) {}
+
+  /// Records the vehicles of step `step`; returns the Egos seen for the first time.
+  std::vector<std::string> record(std::int64_t step, const std::vector<sim::VehicleSnapshot>& vehicles,
+                                  const std::function<bool(const sim::VehicleSnapshot&)>& is_ego) {
+    std::vector<std::string> fresh;
+    const std::int64_t window = historySteps_ + horizonSteps_;
+    for (const auto& vehicle : vehicles) {
+      auto [it, inserted] = histories_.try_emplace(vehicle.id);
+      History& history = it->second;
+      if (inserted) {
+        history.length = vehicle.length;
+        history.width = vehicle.width;
+        history.ego = is_ego(vehicle);
+        history.nextT0 = step + historySteps_;
+        if (history.ego) fresh.push_back(vehicle.id);
+        ++vehiclesSeen_;
+      }
+      history.states.emplace_back(step, vehicle.state);
+      while (history.states.front().first < step - window) history.states.pop_front();
+      history.lastStep = step;
+    }
+    return fresh;
+  }
+
+  /// Emits the windows that end at `step`; forgets vehicles gone for a whole window.
+  void emit(std::int64_t step, double time) {
+    const std::int64_t window = historySteps_ + horizonSteps_;
+    // Each vehicle's bounding box over the window, once per step (dozens of
+    // windows may end in one step, each asking which vehicles came near).
+    for (auto& [id, history] : histories_) {
+      history.windowLo = history.windowHi = history.states.back().second.position();
+      for (const auto& [s, state] : history.states) {
+        history.windowLo = history.windowLo.cwiseMin(state.position());
+        history.windowHi = history.windowHi.cwiseMax(state.position());
+      }
+    }
+    for (auto it = histories_.begin(); it != histories_.end();) {
+      History& history = it->second;
+      if (history.ego && history.lastStep == step && step == history.nextT0 + horizonSteps_) {
+        if (completeWindow(history, step)) {
+          emitWindow(it->first, history, step, time);
+        } else {
+          ++skipped_;
+        }
+        history.nextT0 += strideSteps_;
+      }
+      if (history.lastStep < step - window) {
+        // Gone for good: a window it had started but not finished is skipped.
+        if (history.ego && history.nextT0 <= history.lastStep) ++skipped_;
+        if (history.ego && history.samples > 0) ++egosWithSamples_;
+        it = histories_.erase(it);
+      } else {
+        ++it;
+      }
+    }
+  }
+
+  void finish() {
+    for (auto& [id, history] : histories_) {
+      if (history.ego && history.samples > 0) ++egosWithSamples_;
+    }
+    histories_.clear();
+  }
+
+  std::uint64_t samples() const { return samples_; }
+  std::uint64_t skipped() const { return skipped_; }
+  std::uint64_t egos() const { return egosWithSamples_; }
+  std::uint64_t vehiclesSeen() const { return vehiclesSeen_; }
+
+ private:
+  bool completeWindow(const History& history, std::int64_t step) const {
+    const std::int64_t first = step - historySteps_ - horizonSteps_;
+    std::int64_t present = 0;
+    for (const auto& [s, state] : history.states) {
+      if (s >= first && s <= step) ++present;
+    }
+    return present == historySteps_ + horizonSteps_ + 1;
+  }
+
+  void emitWindow(const std::string& ego_id, History& ego, std::int64_t step, double time) {
+    const std::int64_t first = step - historySteps_ - horizonSteps_;
+    const std::int64_t t0 = step - horizonSteps_;
+    const std::size_t instants = static_cast<std::size_t>(historySteps_ + horizonSteps_ + 1);
+    const VehicleState& ego_start = *ego.at(t0);
+    const Vec2 centre = ego_start.position();
+    const double radius_sq = options_.radius * options_.radius;
+
+    Trace trace;
+    trace.step = options_.step;
+    trace.vehicles.push_back(trackOf(ego, first, instants, nullptr, 0.0));
+    trace.vehicles.front().role = VehicleRole::Ego;
+    for (const auto& [id, other] : histories_) {
+      if (&other == &ego) continue;
+      const Vec2 nearest = centre.cwiseMax(other.windowLo).cwiseMin(other.windowHi);
+      if ((nearest - centre).squaredNorm() > radius_sq) continue;  // the whole window stays away
+      bool near = false;
+      for (const auto& [s, state] : other.states) {
+        if (s >= first && s <= step && (state.position() - centre).squaredNorm() <= radius_sq) {
+          near = true;
+          break;
+        }
+      }
+      if (near) trace.vehicles.push_back(trackOf(other, first, instants, &centre, radius_sq));
+    }
+
+    auto scene = vector::buildScene(label_, trace, static_cast<std::size_t>(historySteps_),
+                                    lanes_.query(centre, options_.radius));
+    scene.sample = samples_;
+    scene.provenance = provenance_;
+    scene.provenance.egoId = ego_id;
+    // SUMO counts time in milliseconds: round away the float noise of the subtraction.
+    scene.provenance.t0 = std::round((time - static_cast<double>(horizonSteps_) * options_.step) * 1000.0) / 1000.0;
+    writer_.append(scene);
+    ++samples_;
+    ++ego.samples;
+  }
+
+  /// The states of `history` at steps first .. first + instants - 1; masked where absent
+  /// or (if `centre` is given) outside the radius.
+  static VehicleTrack trackOf(const History& history, std::int64_t first, std::size_t instants, const Vec2* centre,
+                              double radius_sq) {
+    VehicleTrack track;
+    track.length = history.length;
+    track.width = history.width;
+    track.states.resize(instants);
+    track.valid.assign(instants, 0);
+    for (std::size_t k = 0; k < instants; ++k) {
+      const VehicleState* state = history.at(first + static_cast<std::int64_t>(k));
+      if (state == nullptr) continue;
+      track.states[k] = *state;
+      track.valid[k] = centre == nullptr || (state->position() - *centre).squaredNorm() <= radius_sq ? 1 : 0;
+    }
+    return track;
+  }
+
+  const ExportOptions& options_;
+  const vector::LaneIndex& lanes_;
+  vector::DatasetWriter& writer_;
+  vector::Provenance provenance_;
+  std::string label_;
+  std::int64_t historySteps_;
+  std::int64_t horizonSteps_;
+  std::int64_t strideSteps_;
+  std::unordered_map<std::string, History> histories_;
+  std::uint64_t samples_ = 0;
+  std::uint64_t skipped_ = 0;
+  std::uint64_t egosWithSamples_ = 0;
+  std::uint64_t vehiclesSeen_ = 0;
+};
+
+}  // namespace
+
+ExportSummary exportMap(const ExportOptions& options) {
+  options.validate();
+  const auto start = std::chrono::steady_clock::now();
+  const EgoSelection selection = EgoSelection::parse(options.egos);
+
+  TemporaryDirectory work("vsd-export");
+  sim::MapSimulationOptions simulation_options;
+  simulation_options.source = options.source;
+  simulation_options.step = options.step;
+  simulation_options.begin = options.begin;
+  simulation_options.end = options.end;
+  simulation_options.seed = options.seed;
+  simulation_options.laneChangeDuration = options.laneChangeDuration;
+  fs::path map_file = options.source.mainFile();
+  if (!options.openDrive.empty()) {
+    simulation_options.source.net = work.path() / "opendrive.net.xml";
+    road::convertOpenDrive(options.openDrive, simulation_options.source.net);
+    map_file = options.openDrive;
+  }
+  const std::string label = options.label.empty() ? map_file.stem().string() : options.label;
+
+  // Ego choice. random:K needs every vehicle that will depart: a SUMO-only first run lists them.
+  std::unordered_set<std::string> chosen;
+  if (selection.kind == EgoSelection::Kind::Random) {
+    spdlog::info("listing the vehicles of {} (a first, SUMO-only run) to draw {} Egos", map_file.string(),
+                 selection.count);
+    const auto departed = sim::MapSimulation::listDepartures(simulation_options);
+    if (departed.size() < selection.count) {
+      throw ConfigError(fmt::format("--egos random:{}: only {} vehicles depart in {}", selection.count, departed.size(),
+                                    map_file.string()));
+    }
+    Rng rng = Rng::derive(options.seed, 0, RandomStream::EgoSelection);
+    const auto order = rng.permutation(departed.size());
+    for (std::size_t i = 0; i < selection.count; ++i) chosen.insert(departed[order[i]]);
+  } else if (selection.kind == EgoSelection::Kind::Ids) {
+    chosen.insert(selection.ids.begin(), selection.ids.end());
+  }
+
+  sim::MapSimulation simulation(simulation_options);
+  const double begin = simulation.time();
+  const double window_seconds = options.history + options.horizon;
+  if (const auto end = simulation.endTime(); end && *end - begin < window_seconds) {
+    throw ConfigError(fmt::format("a window of {} s (--history {} + --horizon {}) is longer than the simulation "
+                                  "({} s from {} to {})",
+                                  window_seconds, options.history, options.horizon, *end - begin, begin, *end));
+  }
+  const vector::LaneIndex lanes(simulation.lanes(), options.maxVectorLength);
+
+  auto registry = sim::ControllerRegistry::withBuiltins();
+  const sim::ControllerParams params(options.controllerParams, "command line: --controller-param");
+  if (options.closedLoop) {  // fail fast on an unknown controller or bad parameters
+    sim::makeController(registry, options.controller, options.controllerLibrary, fs::current_path(), params);
+  }
+
+  if (!options.output.parent_path().empty()) ensureDirectory(options.output.parent_path());
+  AtomicOutput output(options.output);
+  vector::DatasetHeader header;
+  header.kind = "map";
+  header.step = options.step;
+  header.horizon = stepsOf(options.horizon, options.step);
+  header.history = stepsOf(options.history, options.step);
+  header.compression = options.compression;
+  std::optional<vector::DatasetWriter> writer;
+  writer.emplace(output.tempPath(), header);
+  writer->setSharedVectors(lanes.pool());
+  const vector::Provenance provenance{map_file.string(), sha256OfFile(map_file), "", 0.0};
+  Exporter exporter(options, lanes, *writer, provenance, label);
+
+  std::unordered_set<std::string> seen_egos;
+  std::unordered_set<std::string> seen_types;
+  const auto is_ego = [&](const sim::VehicleSnapshot& vehicle) {
+    if (selection.kind == EgoSelection::Kind::VehicleType) seen_types.insert(vehicle.type);
+    switch (selection.kind) {
+      case EgoSelection::Kind::All: return true;
+      case EgoSelection::Kind::VehicleType: return vehicle.type == selection.vehicleType;
+      default: return chosen.count(vehicle.id) > 0;
+    }
+  };
+
+  const auto end = simulation.endTime();
+  Progress progress(fmt::format("export {}", label), end ? static_cast<std::size_t>(*end - begin) : 0,
+                    "s simulated");
+  std::int64_t step = 0;
+  double reported = begin;
+  while (simulation.step()) {
+    throwIfInterrupted();
+    ++step;
+    for (const auto& id : exporter.record(step, simulation.vehicles(), is_ego)) {
+      seen_egos.insert(id);
+      if (options.closedLoop) {
+        simulation.takeOver(id, sim::makeController(registry, options.controller, options.controllerLibrary,
+                                                     fs::current_path(), params));
+      }
+    }
+    exporter.emit(step, simulation.time());
+    if (simulation.time() - reported >= 1.0) {
+      progress.advance(static_cast<std::size_t>(simulation.time() - reported));
+      reported += std::floor(simulation.time() - reported);
+    }
+    if (options.maxSamples > 0 && exporter.samples() >= options.maxSamples) break;
+  }
+  progress.finish();
+  exporter.finish();
+
+  if (selection.kind == EgoSelection::Kind::Ids) {
+    for (const auto& id : selection.ids) {
+      if (!seen_egos.count(id)) {
+        throw ConfigError(fmt::format("--egos: vehicle '{}' never appears in {} (between t = {} and {} s)", id,
+                                      map_file.string(), begin, simulation.time()));
+      }
+    }
+  }
+  if (selection.kind == EgoSelection::Kind::VehicleType && exporter.vehiclesSeen() > 0 &&
+      !seen_types.count(selection.vehicleType)) {
+    std::vector<std::string> types(seen_types.begin(), seen_types.end());
+    std::sort(types.begin(), types.end());
+    throw ConfigError(fmt::format("--egos vtype:{}: no vehicle of that type in {} (types: {})", selection.vehicleType,
+                                  map_file.string(), fmt::join(types, ", ")));
+  }
+  if (exporter.samples() == 0) {
+    throw ConfigError(fmt::format("no complete window in {}: no Ego stayed {} s (history + horizon) in the network "
+                                  "between t = {} and {} s",
+                                  map_file.string(), window_seconds, begin, simulation.time()));
+  }
+  writer->close();
+  writer.reset();
+  output.commit();
+
+  ExportSummary summary;
+  summary.output = options.output;
+  summary.label = label;
+  summary.samples = exporter.samples();
+  summary.egos = exporter.egos();
+  summary.windowsSkipped = exporter.skipped();
+  summary.vehiclesSeen = exporter.vehiclesSeen();
+  summary.laneVectors = lanes.vectors();
+  summary.simulatedSeconds = simulation.time() - begin;
+  summary.seconds = secondsSince(start);
+  summary.samplesPerSecond = static_cast<double>(summary.samples) / std::max(summary.seconds, 1e-9);
+  summary.bytesPerSample = static_cast<double>(fs::file_size(options.output)) / static_cast<double>(summary.samples);
+  summary.closedLoop = options.closedLoop;
+  return summary;
+}
+
+std::string ExportSummary::report() const {
+  return fmt::format(
+      "{}: {} samples from {} Egos{} ({} vehicles seen, {:.0f} s simulated) in {:.2f} s = {:.0f} samples/s\n"
+      "  windows skipped (Ego left the network before the window ended): {}\n"
+      "  lane-boundary vectors in the network: {}\n"
+      "  {} ({:.0f} bytes per sample)\n",
+      label, samples, egos, closedLoop ? " driven by the controller (closed loop)" : "", vehiclesSeen,
+      simulatedSeconds, seconds, samplesPerSecond, windowsSkipped, laneVectors, output.string(), bytesPerSample);
+}
+
+}  // namespace vsd::pipeline

@@ -1,0 +1,605 @@
+#include "vsd/vector/dataset.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <unordered_map>
+
+#include "vsd/core/error.hpp"
+#include "vsd/core/files.hpp"
+#include "vsd/core/hdf5.hpp"
+#include "vsd/core/log.hpp"
+
+namespace fs = std::filesystem;
+
+namespace vsd::vector {
+
+namespace {
+
+constexpr hsize_t kChunkSamples = 256;
+constexpr hsize_t kChunkVectors = 8192;
+constexpr int kDeflate = 4;  // small per-sample and per-polyline arrays
+
+std::string joinedFeatureNames() {
+  std::string names;
+  for (std::size_t f = 0; f < kFeatures; ++f) names += (f == 0 ? "" : ",") + std::string(kFeatureNames[f]);
+  return names;
+}
+
+/// Index of `value` in a growing string table.
+class StringTable {
+ public:
+  std::int32_t index(const std::string& value) {
+    const auto [it, inserted] = lookup_.emplace(value, static_cast<std::int32_t>(values_.size()));
+    if (inserted) values_.push_back(value);
+    return it->second;
+  }
+  const std::vector<std::string>& values() const { return values_; }
+
+ private:
+  std::unordered_map<std::string, std::int32_t> lookup_;
+  std::vector<std::string> values_;
+};
+
+}  // namespace
+
+// --- writer --------------------------------------------------------------------------------
+
+struct DatasetWriter::Impl {
+  H5::H5File file;
+  DatasetHeader header;
+  bool open = true;
+  std::size_t samples = 0;
+  std::int64_t vectorsWritten = 0;
+  std::int64_t polylinesWritten = 0;
+
+  h5::Appendable<float> vectors;
+  h5::Appendable<std::uint8_t> vectorValid;
+  h5::Appendable<double> sharedVectors;
+  std::size_t sharedSize = 0;
+  h5::Appendable<std::int8_t> polylineType;
+  h5::Appendable<std::uint8_t> polylineShared;
+  h5::Appendable<std::int64_t> polylineVectorStart;
+  h5::Appendable<std::int32_t> polylineVectorCount;
+  h5::Appendable<std::int64_t> samplePolylineStart;
+  h5::Appendable<std::int32_t> samplePolylineCount;
+  h5::Appendable<std::int32_t> sampleEgoPolyline;
+  h5::Appendable<double> sampleOrigin;
+  h5::Appendable<std::int32_t> sampleLabel;
+  h5::Appendable<std::int64_t> sampleIndex;
+  h5::Appendable<std::int32_t> sampleSource;
+  h5::Appendable<std::int32_t> sampleEgo;
+  h5::Appendable<double> sampleT0;
+  h5::Appendable<float> targets;
+  h5::Appendable<std::uint8_t> targetValid;
+  std::optional<h5::Appendable<double>> inputs;
+  std::optional<h5::Appendable<double>> metrics;
+
+  std::size_t buffered = 0;  ///< samples pushed since the last flush
+
+  StringTable labels;
+  StringTable sources;
+  std::unordered_map<std::int32_t, std::string> sourceSha;
+  StringTable egoIds;
+
+  void flush() {
+    h5::flushAll(vectors, vectorValid, polylineType, polylineShared, polylineVectorStart, polylineVectorCount,
+                 samplePolylineStart, samplePolylineCount, sampleEgoPolyline, sampleOrigin, sampleLabel, sampleIndex,
+                 sampleSource, sampleEgo, sampleT0, targets, targetValid);
+    if (inputs) inputs->flush();
+    if (metrics) metrics->flush();
+    buffered = 0;
+  }
+};
+
+DatasetWriter::DatasetWriter(const fs::path& path, DatasetHeader header) : impl_(std::make_unique<Impl>()) {
+  h5::silenceErrorStack();
+  impl_->header = std::move(header);
+  const auto& h = impl_->header;
+  if (h.compression < 0 || h.compression > 9) {
+    throw ConfigError::field("command line", "--compression", std::to_string(h.compression), "a deflate level 0..9");
+  }
+  try {
+    impl_->file = H5::H5File(path.string(), H5F_ACC_TRUNC);
+    H5::Group root = impl_->file.openGroup("/");
+    h5::writeAttribute(root, "schema", std::string(kDatasetSchema));
+    h5::writeAttribute(root, "feature_version", static_cast<std::int64_t>(kFeatureVersion));
+    h5::writeAttribute(root, "features", joinedFeatureNames());
+    h5::writeAttribute(root, "kind", h.kind);
+    h5::writeAttribute(root, "step", h.step);
+    h5::writeAttribute(root, "horizon", static_cast<std::int64_t>(h.horizon));
+    h5::writeAttribute(root, "history", static_cast<std::int64_t>(h.history));
+    h5::writeAttribute(root, "tool_version", toolVersion());
+    h5::writeStrings(root, "input_names", h.inputNames);
+    h5::writeStrings(root, "metric_names", h.metricNames);
+    const auto horizon = static_cast<hsize_t>(h.horizon);
+    impl_->vectors = h5::Appendable<float>(root, "vectors", {kFeatures}, kChunkVectors, h.compression);
+    impl_->vectorValid = h5::Appendable<std::uint8_t>(root, "vector_valid", {}, kChunkVectors, h.compression);
+    impl_->sharedVectors = h5::Appendable<double>(root, "shared_vectors", {kFeatures}, kChunkVectors, kDeflate);
+    impl_->polylineType = h5::Appendable<std::int8_t>(root, "polyline_type", {}, kChunkVectors, kDeflate);
+    impl_->polylineShared = h5::Appendable<std::uint8_t>(root, "polyline_shared", {}, kChunkVectors, kDeflate);
+    impl_->polylineVectorStart = h5::Appendable<std::int64_t>(root, "polyline_vector_start", {}, kChunkVectors, kDeflate);
+    impl_->polylineVectorCount = h5::Appendable<std::int32_t>(root, "polyline_vector_count", {}, kChunkVectors, kDeflate);
+    impl_->samplePolylineStart = h5::Appendable<std::int64_t>(root, "sample_polyline_start", {}, kChunkSamples, kDeflate);
+    impl_->samplePolylineCount = h5::Appendable<std::int32_t>(root, "sample_polyline_count", {}, kChunkSamples, kDeflate);
+    impl_->sampleEgoPolyline = h5::Appendable<std::int32_t>(root, "sample_ego_polyline", {}, kChunkSamples, kDeflate);
+    impl_->sampleOrigin = h5::Appendable<double>(root, "sample_origin", {2}, kChunkSamples, kDeflate);
+    impl_->sampleLabel = h5::Appendable<std::int32_t>(root, "sample_label", {}, kChunkSamples, kDeflate);
+    impl_->sampleIndex = h5::Appendable<std::int64_t>(root, "sample_index", {}, kChunkSamples, kDeflate);
+    impl_->sampleSource = h5::Appendable<std::int32_t>(root, "sample_source", {}, kChunkSamples, kDeflate);
+    impl_->sampleEgo = h5::Appendable<std::int32_t>(root, "sample_ego", {}, kChunkSamples, kDeflate);
+    impl_->sampleT0 = h5::Appendable<double>(root, "sample_t0", {}, kChunkSamples, kDeflate);
+    impl_->targets = h5::Appendable<float>(root, "targets", {horizon, 2}, kChunkSamples, kDeflate);
+    impl_->targetValid = h5::Appendable<std::uint8_t>(root, "target_valid", {horizon}, kChunkSamples, kDeflate);
+    if (!h.inputNames.empty()) {
+      impl_->inputs.emplace(root, "inputs", std::vector<hsize_t>{h.inputNames.size()}, kChunkSamples, kDeflate);
+    }
+    if (!h.metricNames.empty()) {
+      impl_->metrics.emplace(root, "metrics", std::vector<hsize_t>{h.metricNames.size()}, kChunkSamples, kDeflate);
+    }
+  } catch (const H5::Exception& error) {
+    throw IoError(fmt::format("{}: cannot create dataset: {}", path.string(), error.getDetailMsg()));
+  }
+}
+
+DatasetWriter::~DatasetWriter() {
+  try {
+    close();
+  } catch (const std::exception& error) {
+    spdlog::warn("closing dataset failed: {}", error.what());
+  }
+}
+
+std::size_t DatasetWriter::size() const { return impl_->samples; }
+
+void DatasetWriter::setSharedVectors(const std::vector<Feature>& pool) {
+  if (impl_->samples > 0 || impl_->sharedSize > 0) throw Error("internal: setSharedVectors() after append()");
+  std::vector<double> flat;
+  flat.reserve(pool.size() * kFeatures);
+  for (const auto& feature : pool) flat.insert(flat.end(), feature.begin(), feature.end());
+  try {
+    impl_->sharedVectors.append(flat);
+  } catch (const H5::Exception& error) {
+    throw IoError(fmt::format("dataset: write failed: {}", error.getDetailMsg()));
+  }
+  impl_->sharedSize = pool.size();
+}
+
+void DatasetWriter::append(const VectorizedScene& scene) {
+  auto& d = *impl_;
+  if (!d.open) throw Error("internal: append() to a closed dataset");
+  if (scene.target.size() != static_cast<std::size_t>(d.header.horizon)) {
+    throw Error(fmt::format("internal: scene with {} target steps in a dataset with horizon {}", scene.target.size(),
+                            d.header.horizon));
+  }
+  if (scene.inputs.size() != d.header.inputNames.size() || scene.metrics.size() != d.header.metricNames.size()) {
+    throw Error("internal: scene inputs/metrics do not match the dataset's columns");
+  }
+  const Vec2 origin = scene.egoInitialState().position();
+  d.samplePolylineStart.push(d.polylinesWritten);
+  d.samplePolylineCount.push(static_cast<std::int32_t>(scene.polylines.size()));
+  d.sampleEgoPolyline.push(static_cast<std::int32_t>(scene.egoPolyline));
+  d.sampleOrigin.push({origin.x(), origin.y()});
+  for (const auto& polyline : scene.polylines) {
+    d.polylineType.push(static_cast<std::int8_t>(polyline.type));
+    d.polylineVectorCount.push(static_cast<std::int32_t>(polyline.vectors.size()));
+    const bool shared = polyline.sharedStart >= 0 && d.sharedSize > 0;
+    d.polylineShared.push(shared ? 1 : 0);
+    ++d.polylinesWritten;
+    if (shared) {
+      d.polylineVectorStart.push(polyline.sharedStart);
+      continue;
+    }
+    d.polylineVectorStart.push(d.vectorsWritten);
+    for (std::size_t v = 0; v < polyline.vectors.size(); ++v) {
+      const auto& f = polyline.vectors[v];
+      d.vectors.push({static_cast<float>(f[0] - origin.x()), static_cast<float>(f[1] - origin.y()),
+                      static_cast<float>(f[2] - origin.x()), static_cast<float>(f[3] - origin.y()),
+                      static_cast<float>(f[4]), static_cast<float>(f[5]), static_cast<float>(f[6])});
+      d.vectorValid.push(polyline.valid[v]);
+    }
+    d.vectorsWritten += static_cast<std::int64_t>(polyline.vectors.size());
+  }
+  d.sampleLabel.push(d.labels.index(scene.label));
+  d.sampleIndex.push(static_cast<std::int64_t>(scene.sample));
+  const std::int32_t source = d.sources.index(scene.provenance.source);
+  d.sourceSha.emplace(source, scene.provenance.sourceSha256);
+  d.sampleSource.push(source);
+  d.sampleEgo.push(d.egoIds.index(scene.provenance.egoId));
+  d.sampleT0.push(scene.provenance.t0);
+  for (std::size_t k = 0; k < scene.target.size(); ++k) {
+    d.targets.push({static_cast<float>(scene.target[k].x() - origin.x()),
+                    static_cast<float>(scene.target[k].y() - origin.y())});
+    d.targetValid.push(scene.targetValid[k]);
+  }
+  if (d.inputs) d.inputs->push(scene.inputs.begin(), scene.inputs.end());
+  if (d.metrics) d.metrics->push(scene.metrics.begin(), scene.metrics.end());
+  ++d.samples;
+  if (++d.buffered >= kChunkSamples) d.flush();
+}
+
+void DatasetWriter::close() {
+  if (!impl_ || !impl_->open) return;
+  auto& d = *impl_;
+  d.open = false;
+  try {
+    d.flush();
+    H5::Group root = d.file.openGroup("/");
+    h5::writeStrings(root, "labels", d.labels.values());
+    h5::writeStrings(root, "sources", d.sources.values());
+    std::vector<std::string> shas;
+    for (std::size_t s = 0; s < d.sources.values().size(); ++s) shas.push_back(d.sourceSha[static_cast<std::int32_t>(s)]);
+    h5::writeStrings(root, "source_sha256", shas);
+    h5::writeStrings(root, "ego_ids", d.egoIds.values());
+    d.file.close();
+  } catch (const H5::Exception& error) {
+    throw IoError(fmt::format("dataset: write failed: {}", error.getDetailMsg()));
+  }
+}
+
+// --- reader --------------------------------------------------------------------------------
+
+struct DatasetReader::Impl {
+  fs::path path;
+  H5::H5File file;
+  DatasetHeader header;
+  std::string toolVersion;
+  std::vector<std::string> labels;
+  std::vector<std::string> sources;
+  std::vector<std::string> sourceSha;
+  std::vector<std::string> egoIds;
+  // Per-sample index arrays (read eagerly: small).
+  std::vector<std::int64_t> samplePolylineStart;
+  std::vector<std::int32_t> samplePolylineCount;
+  std::vector<std::int32_t> sampleEgoPolyline;
+  std::vector<double> sampleOrigin;
+  std::vector<std::int32_t> sampleLabel;
+  std::vector<std::int64_t> sampleIndex;
+  std::vector<std::int32_t> sampleSource;
+  std::vector<std::int32_t> sampleEgo;
+  std::vector<double> sampleT0;
+  // Read per sample.
+  H5::DataSet vectors, vectorValid, polylineType, polylineShared, polylineVectorStart, polylineVectorCount, targets,
+      targetValid;
+  std::vector<double> sharedVectors;  ///< the map's lane vectors (read eagerly: small)
+  std::optional<H5::DataSet> inputs, metrics;
+
+  [[noreturn]] void fail(const std::string& problem) const {
+    throw DatasetError(fmt::format("{}: {}", path.string(), problem));
+  }
+};
+
+DatasetReader::DatasetReader(const fs::path& path) : impl_(std::make_unique<Impl>()) {
+  h5::silenceErrorStack();
+  auto& d = *impl_;
+  d.path = path;
+  if (!fs::exists(path)) d.fail("dataset does not exist");
+  if (fs::is_directory(path)) d.fail("is a folder (expected a dataset .h5 file, or a run folder with dataset.h5)");
+  try {
+    d.file = H5::H5File(path.string(), H5F_ACC_RDONLY);
+  } catch (const H5::Exception&) {
+    d.fail("not an HDF5 file (corrupt, truncated or foreign)");
+  }
+  try {
+    H5::Group root = d.file.openGroup("/");
+    if (!h5::hasAttribute(root, "schema")) d.fail("not a vsd-sumo dataset (no 'schema' attribute)");
+    const auto schema = h5::readStringAttribute(root, "schema");
+    if (schema != kDatasetSchema) {
+      d.fail(fmt::format("dataset schema '{}' is not supported by this version (expected '{}')", schema, kDatasetSchema));
+    }
+    const auto features = h5::readIntAttribute(root, "feature_version");
+    if (features != kFeatureVersion) {
+      d.fail(fmt::format("feature version {} is not supported (expected {})", features, kFeatureVersion));
+    }
+    d.header.kind = h5::readStringAttribute(root, "kind");
+    d.header.step = h5::readDoubleAttribute(root, "step");
+    d.header.horizon = static_cast<int>(h5::readIntAttribute(root, "horizon"));
+    d.header.history = static_cast<int>(h5::readIntAttribute(root, "history"));
+    d.header.inputNames = h5::readStrings(root, "input_names");
+    d.header.metricNames = h5::readStrings(root, "metric_names");
+    d.toolVersion = h5::readStringAttribute(root, "tool_version");
+    d.labels = h5::readStrings(root, "labels");
+    d.sources = h5::readStrings(root, "sources");
+    d.sourceSha = h5::readStrings(root, "source_sha256");
+    d.egoIds = h5::readStrings(root, "ego_ids");
+    d.samplePolylineStart = h5::readAll<std::int64_t>(root.openDataSet("sample_polyline_start"));
+    d.samplePolylineCount = h5::readAll<std::int32_t>(root.openDataSet("sample_polyline_count"));
+    d.sampleEgoPolyline = h5::readAll<std::int32_t>(root.openDataSet("sample_ego_polyline"));
+    d.sampleOrigin = h5::readAll<double>(root.openDataSet("sample_origin"));
+    d.sampleLabel = h5::readAll<std::int32_t>(root.openDataSet("sample_label"));
+    d.sampleIndex = h5::readAll<std::int64_t>(root.openDataSet("sample_index"));
+    d.sampleSource = h5::readAll<std::int32_t>(root.openDataSet("sample_source"));
+    d.sampleEgo = h5::readAll<std::int32_t>(root.openDataSet("sample_ego"));
+    d.sampleT0 = h5::readAll<double>(root.openDataSet("sample_t0"));
+    d.vectors = root.openDataSet("vectors");
+    d.vectorValid = root.openDataSet("vector_valid");
+    d.polylineType = root.openDataSet("polyline_type");
+    d.polylineShared = root.openDataSet("polyline_shared");
+    d.sharedVectors = h5::readAll<double>(root.openDataSet("shared_vectors"));
+    d.polylineVectorStart = root.openDataSet("polyline_vector_start");
+    d.polylineVectorCount = root.openDataSet("polyline_vector_count");
+    d.targets = root.openDataSet("targets");
+    d.targetValid = root.openDataSet("target_valid");
+    if (root.nameExists("inputs")) d.inputs = root.openDataSet("inputs");
+    if (root.nameExists("metrics")) d.metrics = root.openDataSet("metrics");
+  } catch (const H5::Exception& error) {
+    d.fail(fmt::format("damaged dataset: {}", error.getDetailMsg()));
+  }
+  const std::size_t n = d.sampleLabel.size();
+  for (const auto* size : {&d.samplePolylineStart, &d.sampleIndex}) {
+    if (size->size() != n) d.fail("per-sample arrays have different lengths (damaged file)");
+  }
+  if (d.samplePolylineCount.size() != n || d.sampleEgoPolyline.size() != n || d.sampleOrigin.size() != 2 * n ||
+      d.sampleSource.size() != n || d.sampleEgo.size() != n || d.sampleT0.size() != n) {
+    d.fail("per-sample arrays have different lengths (damaged file)");
+  }
+  for (std::size_t i = 0; i < n; ++i) {
+    if (d.sampleLabel[i] < 0 || static_cast<std::size_t>(d.sampleLabel[i]) >= d.labels.size()) {
+      d.fail(fmt::format("sample {} refers to label #{} of {}", i, d.sampleLabel[i], d.labels.size()));
+    }
+  }
+}
+
+DatasetReader::~DatasetReader() = default;
+
+const fs::path& DatasetReader::path() const { return impl_->path; }
+const DatasetHeader& DatasetReader::header() const { return impl_->header; }
+const std::string& DatasetReader::toolVersion() const { return impl_->toolVersion; }
+std::size_t DatasetReader::size() const { return impl_->sampleLabel.size(); }
+const std::vector<std::string>& DatasetReader::labels() const { return impl_->labels; }
+const std::string& DatasetReader::label(std::size_t sample) const {
+  return impl_->labels[static_cast<std::size_t>(impl_->sampleLabel.at(sample))];
+}
+
+std::vector<std::size_t> DatasetReader::samplesWithLabel(const std::string& wanted) const {
+  std::vector<std::size_t> result;
+  for (std::size_t i = 0; i < size(); ++i) {
+    if (label(i) == wanted) result.push_back(i);
+  }
+  return result;
+}
+
+VectorizedScene DatasetReader::scene(std::size_t sample) const {
+  const auto& d = *impl_;
+  if (sample >= size()) d.fail(fmt::format("sample {} out of range (the dataset has {})", sample, size()));
+  VectorizedScene scene;
+  try {
+    const auto first_polyline = static_cast<hsize_t>(d.samplePolylineStart[sample]);
+    const auto polylines = static_cast<hsize_t>(d.samplePolylineCount[sample]);
+    const auto types = h5::readRows<std::int8_t>(d.polylineType, first_polyline, polylines);
+    const auto shared = h5::readRows<std::uint8_t>(d.polylineShared, first_polyline, polylines);
+    const auto starts = h5::readRows<std::int64_t>(d.polylineVectorStart, first_polyline, polylines);
+    const auto counts = h5::readRows<std::int32_t>(d.polylineVectorCount, first_polyline, polylines);
+    // The sample's own (inline) vectors are contiguous in /vectors.
+    hsize_t first_vector = 0;
+    hsize_t vector_count = 0;
+    bool any_inline = false;
+    for (hsize_t p = 0; p < polylines; ++p) {
+      if (shared[p]) continue;
+      if (!any_inline) first_vector = static_cast<hsize_t>(starts[p]);
+      any_inline = true;
+      vector_count += static_cast<hsize_t>(counts[p]);
+    }
+    const auto raw = h5::readRows<float>(d.vectors, first_vector, vector_count);
+    const auto valid = h5::readRows<std::uint8_t>(d.vectorValid, first_vector, vector_count);
+    const double ox = d.sampleOrigin[2 * sample];
+    const double oy = d.sampleOrigin[2 * sample + 1];
+    const std::size_t pool_size = d.sharedVectors.size() / kFeatures;
+    std::size_t v = 0;
+    for (hsize_t p = 0; p < polylines; ++p) {
+      ScenePolyline polyline;
+      polyline.type = static_cast<ObjectType>(types[p]);
+      if (shared[p]) {
+        const auto start = static_cast<std::size_t>(starts[p]);
+        const auto count = static_cast<std::size_t>(counts[p]);
+        if (starts[p] < 0 || start + count > pool_size) {
+          d.fail(fmt::format("sample {} polyline {} refers to shared vectors {}..{} of {}", sample, p, start,
+                             start + count, pool_size));
+        }
+        polyline.sharedStart = starts[p];
+        for (std::size_t i = 0; i < count; ++i) {
+          Feature feature;
+          std::copy_n(&d.sharedVectors[(start + i) * kFeatures], kFeatures, feature.begin());
+          feature[5] = static_cast<double>(p);
+          polyline.vectors.push_back(feature);
+        }
+        polyline.valid.assign(count, 1);
+        scene.polylines.push_back(std::move(polyline));
+        continue;
+      }
+      for (std::int32_t i = 0; i < counts[p]; ++i, ++v) {
+        const float* f = &raw[v * kFeatures];
+        const auto d64 = [&](std::size_t feature) { return static_cast<double>(f[feature]); };
+        polyline.vectors.push_back({d64(0) + ox, d64(1) + oy, d64(2) + ox, d64(3) + oy, d64(4), d64(5), d64(6)});
+        polyline.valid.push_back(valid[v]);
+      }
+      scene.polylines.push_back(std::move(polyline));
+    }
+    const auto target = h5::readRows<float>(d.targets, sample, 1);
+    scene.targetValid = h5::readRows<std::uint8_t>(d.targetValid, sample, 1);
+    for (std::size_t k = 0; k + 1 < target.size(); k += 2) {
+      scene.target.emplace_back(static_cast<double>(target[k]) + ox, static_cast<double>(target[k + 1]) + oy);
+    }
+    if (d.inputs) scene.inputs = h5::readRows<double>(*d.inputs, sample, 1);
+    if (d.metrics) scene.metrics = h5::readRows<double>(*d.metrics, sample, 1);
+  } catch (const H5::Exception& error) {
+    d.fail(fmt::format("cannot read sample {}: {}", sample, error.getDetailMsg()));
+  }
+  scene.label = label(sample);
+  scene.sample = static_cast<std::uint64_t>(d.sampleIndex[sample]);
+  scene.step = d.header.step;
+  scene.egoPolyline = static_cast<std::size_t>(d.sampleEgoPolyline[sample]);
+  const auto source = static_cast<std::size_t>(d.sampleSource[sample]);
+  if (source < d.sources.size()) {
+    scene.provenance.source = d.sources[source];
+    scene.provenance.sourceSha256 = source < d.sourceSha.size() ? d.sourceSha[source] : "";
+  }
+  const auto ego = static_cast<std::size_t>(d.sampleEgo[sample]);
+  if (ego < d.egoIds.size()) scene.provenance.egoId = d.egoIds[ego];
+  scene.provenance.t0 = d.sampleT0[sample];
+  return scene;
+}
+
+// --- validation and summaries -----------------------------------------------------------------
+
+namespace {
+
+void checkScene(const VectorizedScene& scene, std::size_t sample, const DatasetHeader& header,
+                std::vector<std::string>& problems) {
+  auto problem = [&](const std::string& text) {
+    if (problems.size() < 50) problems.push_back(fmt::format("sample {}: {}", sample, text));
+  };
+  if (scene.polylines.empty()) return problem("no polylines");
+  if (scene.egoPolyline >= scene.polylines.size()) return problem("Ego polyline index out of range");
+  std::size_t egos = 0;
+  const double max_time = header.horizon * header.step + 1e-4;
+  const double min_time = -header.history * header.step - 1e-4;
+  for (std::size_t p = 0; p < scene.polylines.size(); ++p) {
+    const auto& polyline = scene.polylines[p];
+    const int type = static_cast<int>(polyline.type);
+    if (type < 1 || type > 3) problem(fmt::format("polyline {} has object type {}", p, type));
+    if (polyline.type == ObjectType::Ego) ++egos;
+    if (polyline.vectors.empty()) problem(fmt::format("polyline {} has no vectors", p));
+    for (std::size_t v = 0; v < polyline.vectors.size(); ++v) {
+      const auto& f = polyline.vectors[v];
+      if (static_cast<int>(f[4]) != type) problem(fmt::format("polyline {} vector {}: object_type {}", p, v, f[4]));
+      if (static_cast<std::size_t>(f[5]) != p) problem(fmt::format("polyline {} vector {}: polyline_id {}", p, v, f[5]));
+      if (polyline.valid[v] == 0) continue;
+      for (std::size_t i = 0; i < 4; ++i) {
+        if (!std::isfinite(f[i])) problem(fmt::format("polyline {} vector {}: non-finite coordinate", p, v));
+      }
+      if (polyline.type == ObjectType::LaneBoundary && f[6] != 0.0) {
+        problem(fmt::format("lane polyline {} vector {}: timestamp {} (expected 0)", p, v, f[6]));
+      }
+      if (!(f[6] >= min_time && f[6] <= max_time)) {
+        problem(fmt::format("polyline {} vector {}: timestamp {} outside [{}, {}] s", p, v, f[6], min_time, max_time));
+      }
+    }
+  }
+  if (egos != 1) problem(fmt::format("{} Ego polylines (expected 1)", egos));
+  const auto& ego = scene.polylines[scene.egoPolyline];
+  if (ego.type != ObjectType::Ego) problem("the Ego polyline index points to a non-Ego polyline");
+  if (!ego.vectors.empty() && (ego.vectors.back()[6] != 0.0 || ego.valid.back() == 0)) {
+    problem("the Ego polyline does not end with a valid initial vector at t = 0");
+  }
+  if (scene.target.size() != static_cast<std::size_t>(header.horizon)) problem("target length differs from the horizon");
+  for (std::size_t k = 0; k < scene.target.size(); ++k) {
+    if (scene.targetValid[k] && !scene.target[k].allFinite()) problem(fmt::format("target {} is not finite", k));
+  }
+}
+
+}  // namespace
+
+DatasetValidation validateDataset(const fs::path& path) {
+  DatasetValidation result;
+  result.path = path;
+  try {
+    const DatasetReader reader(path);
+    result.samples = reader.size();
+    for (std::size_t i = 0; i < reader.size(); ++i) {
+      checkScene(reader.scene(i), i, reader.header(), result.problems);
+    }
+  } catch (const Error& error) {
+    result.problems.push_back(error.what());
+  }
+  return result;
+}
+
+DatasetSummary summarizeDataset(const fs::path& path) {
+  const DatasetReader reader(path);
+  DatasetSummary summary;
+  summary.path = path;
+  summary.schema = kDatasetSchema;
+  summary.header = reader.header();
+  summary.samples = reader.size();
+  summary.bytes = fs::file_size(path);
+  summary.toolVersion = reader.toolVersion();
+  summary.featureMin.fill(std::numeric_limits<double>::infinity());
+  summary.featureMax.fill(-std::numeric_limits<double>::infinity());
+  std::size_t vectors = 0;
+  std::size_t polylines = 0;
+  std::map<std::string, bool> sources;
+  for (std::size_t i = 0; i < reader.size(); ++i) {
+    const auto scene = reader.scene(i);
+    ++summary.samplesPerLabel[scene.label];
+    sources[scene.provenance.source] = true;
+    polylines += scene.polylines.size();
+    for (const auto& polyline : scene.polylines) {
+      for (std::size_t v = 0; v < polyline.vectors.size(); ++v) {
+        ++vectors;
+        if (!polyline.valid[v]) continue;
+        for (std::size_t f = 0; f < kFeatures; ++f) {
+          summary.featureMin[f] = std::min(summary.featureMin[f], polyline.vectors[v][f]);
+          summary.featureMax[f] = std::max(summary.featureMax[f], polyline.vectors[v][f]);
+        }
+      }
+    }
+  }
+  for (const auto& [source, present] : sources) summary.sources.push_back(source);
+  if (summary.samples > 0) {
+    summary.vectorsPerSample = static_cast<double>(vectors) / static_cast<double>(summary.samples);
+    summary.polylinesPerSample = static_cast<double>(polylines) / static_cast<double>(summary.samples);
+  }
+  return summary;
+}
+
+std::string DatasetSummary::report() const {
+  std::string text = fmt::format("{}\n  schema {} (features v{}: {}), kind {}, written by vsd-sumo {}\n", path.string(),
+                                 schema, kFeatureVersion, joinedFeatureNames(), header.kind, toolVersion);
+  text += fmt::format("  samples {}, step {} s, horizon {} steps, history {} steps\n", samples, header.step,
+                      header.horizon, header.history);
+  for (const auto& [label, count] : samplesPerLabel) text += fmt::format("    {:<20} {:>8} samples\n", label, count);
+  text += fmt::format("  {:.1f} polylines and {:.1f} vectors per sample; {} bytes on disk = {:.0f} bytes per sample\n",
+                      polylinesPerSample, vectorsPerSample, bytes,
+                      samples > 0 ? static_cast<double>(bytes) / static_cast<double>(samples) : 0.0);
+  if (!header.inputNames.empty()) text += fmt::format("  inputs: {}\n", fmt::join(header.inputNames, ", "));
+  if (!header.metricNames.empty()) text += fmt::format("  metrics: {}\n", fmt::join(header.metricNames, ", "));
+  text += "  provenance:\n";
+  for (const auto& source : sources) text += fmt::format("    {}\n", source);
+  if (samples > 0) {
+    text += "  feature ranges (valid vectors):\n";
+    for (std::size_t f = 0; f < kFeatures; ++f) {
+      text += fmt::format("    {:<12} {:>12.3f} {:>12.3f}\n", kFeatureNames[f], featureMin[f], featureMax[f]);
+    }
+  }
+  return text;
+}
+
+// --- collections -------------------------------------------------------------------------------
+
+fs::path resolveDatasetPath(const fs::path& path) {
+  if (fs::is_directory(path)) return path / "dataset.h5";
+  return path;
+}
+
+void DatasetCollection::add(const fs::path& path_or_run_folder) {
+  readers_.push_back(std::make_unique<DatasetReader>(resolveDatasetPath(path_or_run_folder)));
+}
+
+std::vector<DatasetCollection::SampleRef> DatasetCollection::all() const {
+  std::vector<SampleRef> refs;
+  for (std::size_t f = 0; f < readers_.size(); ++f) {
+    for (std::size_t i = 0; i < readers_[f]->size(); ++i) refs.push_back({f, i});
+  }
+  return refs;
+}
+
+std::vector<DatasetCollection::SampleRef> DatasetCollection::withLabel(const std::string& label) const {
+  std::vector<SampleRef> refs;
+  for (std::size_t f = 0; f < readers_.size(); ++f) {
+    for (std::size_t i : readers_[f]->samplesWithLabel(label)) refs.push_back({f, i});
+  }
+  return refs;
+}
+
+std::map<std::string, std::size_t> DatasetCollection::labelCounts() const {
+  std::map<std::string, std::size_t> counts;
+  for (const auto& reader : readers_) {
+    for (std::size_t i = 0; i < reader->size(); ++i) ++counts[reader->label(i)];
+  }
+  return counts;
+}
+
+}  // namespace vsd::vector

@@ -1,0 +1,107 @@
+#include "vsd/vector/scene_svg.hpp"
+
+#include <fmt/format.h>
+
+#include <cmath>
+
+#include "vsd/core/svg.hpp"
+
+namespace vsd::vector {
+
+namespace {
+constexpr const char* kLaneColour = "#9a9a9a";
+constexpr const char* kVehicleColour = "#7b3294";
+constexpr const char* kEgoColour = "#1f78b4";
+}  // namespace
+
+std::string renderSceneSvg(const VectorizedScene& scene, const std::vector<TrajectoryOverlay>& overlays,
+                           const std::string& title, int width_px) {
+  Vec2 lo(std::numeric_limits<double>::infinity(), std::numeric_limits<double>::infinity());
+  Vec2 hi = -lo;
+  auto extend = [&](const Vec2& p) {
+    if (!p.allFinite()) return;
+    lo = lo.cwiseMin(p);
+    hi = hi.cwiseMax(p);
+  };
+  for (const auto& polyline : scene.polylines) {
+    for (std::size_t v = 0; v < polyline.vectors.size(); ++v) {
+      if (!polyline.valid[v]) continue;
+      extend({polyline.vectors[v][0], polyline.vectors[v][1]});
+      extend({polyline.vectors[v][2], polyline.vectors[v][3]});
+    }
+  }
+  for (std::size_t k = 0; k < scene.target.size(); ++k) {
+    if (scene.targetValid[k]) extend(scene.target[k]);
+  }
+  for (const auto& overlay : overlays) {
+    for (const auto& p : overlay.points) extend(p);
+  }
+  if (!lo.allFinite()) lo = hi = Vec2::Zero();
+  const Vec2 pad = ((hi - lo) * 0.03).cwiseMax(Vec2(2.0, 2.0));
+  // Very elongated scenes would be a few pixels high: keep at least 1/6 of the width.
+  Vec2 span = hi - lo + 2.0 * pad;
+  if (span.y() < span.x() / 6.0) {
+    const double grow = (span.x() / 6.0 - span.y()) / 2.0;
+    lo.y() -= grow;
+    hi.y() += grow;
+  }
+  SvgCanvas canvas(lo - pad, hi + pad, width_px, 0, /*equal_aspect=*/true, /*margin=*/40);
+
+  for (const auto& polyline : scene.polylines) {
+    if (polyline.type != ObjectType::LaneBoundary) continue;
+    for (std::size_t v = 0; v < polyline.vectors.size(); ++v) {
+      const auto& f = polyline.vectors[v];
+      canvas.line({f[0], f[1]}, {f[2], f[3]}, kLaneColour, 1.2);
+    }
+  }
+  for (const auto& polyline : scene.polylines) {
+    if (polyline.type != ObjectType::Vehicle) continue;
+    for (std::size_t v = 0; v < polyline.vectors.size(); ++v) {
+      if (!polyline.valid[v]) continue;
+      const auto& f = polyline.vectors[v];
+      canvas.arrow({f[0], f[1]}, {f[2], f[3]}, kVehicleColour, 1.4);
+      // Timestamps every second, as in the paper's figure of the ACC&LK data.
+      const double t = f[6];
+      if (std::abs(t - std::round(t)) < 1e-3) canvas.text({f[2], f[3]}, fmt::format("{:.0f} s", t), 10, kVehicleColour);
+    }
+  }
+  const auto& ego = scene.polylines.at(scene.egoPolyline);
+  for (std::size_t v = 0; v < ego.vectors.size(); ++v) {
+    const auto& f = ego.vectors[v];
+    canvas.arrow({f[0], f[1]}, {f[2], f[3]}, kEgoColour, v + 1 == ego.vectors.size() ? 3.0 : 1.4);
+  }
+  Polyline truth;
+  truth.emplace_back(ego.vectors.back()[0], ego.vectors.back()[1]);
+  for (std::size_t k = 0; k < scene.target.size(); ++k) {
+    if (scene.targetValid[k]) truth.push_back(scene.target[k]);
+  }
+  canvas.polyline(truth, kEgoColour, 1.5, false, 0.6);
+  for (std::size_t k = 1; k < truth.size(); ++k) canvas.circle(truth[k], 2.5, kEgoColour);
+  for (const auto& overlay : overlays) {
+    canvas.polyline(overlay.points, overlay.colour, 2.0, overlay.dashed);
+    for (const auto& p : overlay.points) canvas.circle(p, 2.0, overlay.colour);
+  }
+
+  // Legend and title.
+  double y = 18.0;
+  if (!title.empty()) {
+    canvas.textPx(10, y, title, 13, "#222222");
+    y += 18.0;
+  }
+  struct Entry {
+    const char* colour;
+    std::string text;
+  };
+  std::vector<Entry> legend = {{kLaneColour, "lane boundaries"}, {kVehicleColour, "other vehicles (timestamps in s)"},
+                               {kEgoColour, "Ego: initial vector and future"}};
+  for (const auto& overlay : overlays) legend.push_back({overlay.colour.c_str(), overlay.label});
+  double x = 10.0;
+  for (const auto& entry : legend) {
+    canvas.rectPx(x, y - 9, 12, 4, entry.colour);
+    canvas.textPx(x + 16, y - 4, entry.text, 11, "#333333");
+    x += 28.0 + 6.2 * static_cast<double>(entry.text.size());
+  }
+  return canvas.str();
+}
+
+}  // namespace vsd::vector

@@ -1,0 +1,182 @@
+#include "vsd/vector/vectorize.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "vsd/core/error.hpp"
+
+namespace vsd::vector {
+
+std::pair<Polyline, Polyline> laneBoundaries(const Polyline& centre, double width) {
+  return {offsetPolyline(centre, 0.5 * width), offsetPolyline(centre, -0.5 * width)};
+}
+
+std::vector<std::pair<Vec2, Vec2>> splitIntoVectors(const Polyline& line, double max_length) {
+  std::vector<std::pair<Vec2, Vec2>> vectors;
+  for (std::size_t i = 0; i + 1 < line.size(); ++i) {
+    const Vec2& a = line[i];
+    const Vec2& b = line[i + 1];
+    const double length = (b - a).norm();
+    if (length <= 0.0) continue;
+    const int parts = max_length > 0.0 ? std::max(1, static_cast<int>(std::ceil(length / max_length))) : 1;
+    for (int p = 0; p < parts; ++p) {
+      vectors.emplace_back(a + (b - a) * (static_cast<double>(p) / parts), a + (b - a) * (static_cast<double>(p + 1) / parts));
+    }
+  }
+  return vectors;
+}
+
+ScenePolyline boundaryPolyline(const std::vector<std::pair<Vec2, Vec2>>& vectors) {
+  ScenePolyline polyline;
+  polyline.type = ObjectType::LaneBoundary;
+  polyline.vectors.reserve(vectors.size());
+  for (const auto& [start, end] : vectors) {
+    polyline.vectors.push_back(
+        {start.x(), start.y(), end.x(), end.y(), static_cast<double>(ObjectType::LaneBoundary), 0.0, 0.0});
+  }
+  polyline.valid.assign(polyline.vectors.size(), 1);
+  return polyline;
+}
+
+VectorizedScene buildScene(const std::string& label, const Trace& trace, std::size_t t0_index,
+                           std::vector<ScenePolyline> lane_polylines) {
+  if (trace.vehicles.empty()) throw Error("internal: buildScene without an Ego");
+  const VehicleTrack& ego = trace.ego();
+  if (!ego.validAt(t0_index)) throw Error("internal: buildScene with an Ego absent at t0");
+  const double dt = trace.step;
+  VectorizedScene scene;
+  scene.label = label;
+  scene.step = dt;
+  scene.polylines = std::move(lane_polylines);
+
+  auto timestamp = [&](std::size_t k) { return (static_cast<double>(k) - static_cast<double>(t0_index)) * dt; };
+  auto motion = [&](const VehicleTrack& track, std::size_t first, std::size_t last, ObjectType type) {
+    ScenePolyline polyline;
+    polyline.type = type;
+    for (std::size_t k = first + 1; k <= last && k < track.states.size(); ++k) {
+      const auto& from = track.states[k - 1];
+      const auto& to = track.states[k];
+      polyline.vectors.push_back({from.x, from.y, to.x, to.y, static_cast<double>(type), 0.0, timestamp(k)});
+      polyline.valid.push_back(track.validAt(k - 1) && track.validAt(k) ? 1 : 0);
+    }
+    return polyline;
+  };
+
+  for (std::size_t v = 1; v < trace.vehicles.size(); ++v) {
+    ScenePolyline polyline = motion(trace.vehicles[v], 0, trace.vehicles[v].states.size() - 1, ObjectType::Vehicle);
+    if (std::any_of(polyline.valid.begin(), polyline.valid.end(), [](std::uint8_t valid) { return valid != 0; })) {
+      scene.polylines.push_back(std::move(polyline));
+    }
+  }
+
+  ScenePolyline ego_polyline = motion(ego, 0, t0_index, ObjectType::Ego);
+  ego_polyline.vectors.push_back(egoInitialVector(ego.states[t0_index], dt, 0));
+  ego_polyline.valid.push_back(1);
+  scene.egoPolyline = scene.polylines.size();
+  scene.polylines.push_back(std::move(ego_polyline));
+
+  for (std::size_t k = t0_index + 1; k < ego.states.size(); ++k) {
+    scene.target.push_back(ego.states[k].position());
+    scene.targetValid.push_back(ego.validAt(k) ? 1 : 0);
+  }
+  numberPolylines(scene);
+  return scene;
+}
+
+std::vector<ScenePolyline> regionLanePolylines(const std::vector<LaneGeometry>& lanes, double x_min, double x_max) {
+  std::vector<ScenePolyline> polylines;
+  for (const auto& lane : lanes) {
+    // Clip the centre first: its points are the generator's lane points, so the
+    // region keeps exactly points - 1 segments; the boundaries follow from it.
+    const Polyline centre = clipToXRange(lane.centre, x_min, x_max);
+    if (centre.size() < 2) continue;
+    const auto [left, right] = laneBoundaries(centre, lane.width);
+    polylines.push_back(boundaryPolyline(splitIntoVectors(left, 0.0)));
+    polylines.push_back(boundaryPolyline(splitIntoVectors(right, 0.0)));
+  }
+  return polylines;
+}
+
+LaneIndex::LaneIndex(const std::vector<LaneGeometry>& lanes, double max_vector_length, double cell_size)
+    : cellSize_(cell_size) {
+  if (!(max_vector_length > 0.0)) throw ConfigError("lane vectors: max vector length must be > 0 m");
+  std::vector<const LaneGeometry*> ordered;
+  for (const auto& lane : lanes) ordered.push_back(&lane);
+  std::sort(ordered.begin(), ordered.end(), [](const auto* a, const auto* b) { return a->id < b->id; });
+  for (const auto* lane : ordered) {
+    if (lane->centre.size() < 2) continue;
+    const auto [left, right] = laneBoundaries(lane->centre, lane->width);
+    for (const Polyline* side : {&left, &right}) {
+      const auto boundary = static_cast<std::uint32_t>(boundaries_.size());
+      boundaries_.push_back(splitIntoVectors(*side, max_vector_length));
+      const auto& vectors = boundaries_.back();
+      boundaryStart_.push_back(static_cast<std::uint32_t>(pool_.size()));
+      const auto lane_polyline = boundaryPolyline(vectors);
+      pool_.insert(pool_.end(), lane_polyline.vectors.begin(), lane_polyline.vectors.end());
+      for (std::uint32_t v = 0; v < vectors.size(); ++v) {
+        // Register the vector in every cell its bounding box touches (vectors are short).
+        const Vec2 lo = vectors[v].first.cwiseMin(vectors[v].second);
+        const Vec2 hi = vectors[v].first.cwiseMax(vectors[v].second);
+        for (auto ix = static_cast<std::int64_t>(std::floor(lo.x() / cellSize_));
+             ix <= static_cast<std::int64_t>(std::floor(hi.x() / cellSize_)); ++ix) {
+          for (auto iy = static_cast<std::int64_t>(std::floor(lo.y() / cellSize_));
+               iy <= static_cast<std::int64_t>(std::floor(hi.y() / cellSize_)); ++iy) {
+            grid_[cellKey(ix, iy)].push_back({boundary, v});
+          }
+        }
+      }
+    }
+  }
+}
+
+std::int64_t LaneIndex::cellKey(std::int64_t ix, std::int64_t iy) const {
+  return (ix + (std::int64_t{1} << 30)) * (std::int64_t{1} << 31) + (iy + (std::int64_t{1} << 30));
+}
+
+std::vector<ScenePolyline> LaneIndex::query(const Vec2& centre, double radius) const {
+  std::vector<std::uint32_t> hits;  // pool indices of the vectors within the radius
+  const double radius_sq = radius * radius;
+  const auto ix0 = static_cast<std::int64_t>(std::floor((centre.x() - radius) / cellSize_));
+  const auto ix1 = static_cast<std::int64_t>(std::floor((centre.x() + radius) / cellSize_));
+  const auto iy0 = static_cast<std::int64_t>(std::floor((centre.y() - radius) / cellSize_));
+  const auto iy1 = static_cast<std::int64_t>(std::floor((centre.y() + radius) / cellSize_));
+  for (auto ix = ix0; ix <= ix1; ++ix) {
+    for (auto iy = iy0; iy <= iy1; ++iy) {
+      const auto it = grid_.find(cellKey(ix, iy));
+      if (it == grid_.end()) continue;
+      for (const Entry& entry : it->second) {
+        const auto& [a, b] = boundaries_[entry.boundary][entry.vector];
+        const Vec2 delta = b - a;
+        const double length_sq = delta.squaredNorm();
+        const double fraction = length_sq > 0.0 ? std::clamp((centre - a).dot(delta) / length_sq, 0.0, 1.0) : 0.0;
+        if ((a + fraction * delta - centre).squaredNorm() <= radius_sq) {
+          hits.push_back(boundaryStart_[entry.boundary] + entry.vector);
+        }
+      }
+    }
+  }
+  // Pool order is network order; a vector spanning two cells is found twice.
+  std::sort(hits.begin(), hits.end());
+  hits.erase(std::unique(hits.begin(), hits.end()), hits.end());
+  std::vector<ScenePolyline> polylines;
+  std::size_t i = 0;
+  while (i < hits.size()) {
+    // A run of consecutive pool vectors that belong to one boundary.
+    const std::uint32_t first = hits[i];
+    const auto boundary_end = std::upper_bound(boundaryStart_.begin(), boundaryStart_.end(), first);
+    const std::uint32_t limit = boundary_end == boundaryStart_.end() ? static_cast<std::uint32_t>(pool_.size())
+                                                                     : *boundary_end;
+    std::size_t j = i + 1;
+    while (j < hits.size() && hits[j] == hits[j - 1] + 1 && hits[j] < limit) ++j;
+    ScenePolyline polyline;
+    polyline.type = ObjectType::LaneBoundary;
+    polyline.vectors.assign(pool_.begin() + first, pool_.begin() + first + static_cast<std::ptrdiff_t>(j - i));
+    polyline.valid.assign(j - i, 1);
+    polyline.sharedStart = first;
+    polylines.push_back(std::move(polyline));
+    i = j;
+  }
+  return polylines;
+}
+
+}  // namespace vsd::vector

@@ -1,0 +1,181 @@
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <set>
+
+#include "test_support.hpp"
+#include "vsd/core/error.hpp"
+#include "vsd/pipeline/export.hpp"
+#include "vsd/pipeline/run.hpp"
+#include "vsd/vector/dataset.hpp"
+
+using namespace vsd;
+using namespace vsd::pipeline;
+namespace fs = std::filesystem;
+
+namespace {
+
+const fs::path kOsmMap = "/usr/share/sumo/tools/game/A10KW.sumocfg";  // OSM import with its own demand (sumo-tools)
+
+fs::path openDriveMap() { return test::sourceDir() / "sumo_nets" / "opendrive_curve" / "curve.xodr"; }
+fs::path openDriveRoutes() { return test::sourceDir() / "sumo_nets" / "opendrive_curve" / "curve.rou.xml"; }
+
+ExportOptions openDriveExport(const fs::path& out) {
+  ExportOptions options;
+  options.openDrive = openDriveMap();
+  options.source.routes = {openDriveRoutes()};
+  options.output = out;
+  options.end = 60.0;
+  return options;
+}
+
+}  // namespace
+
+TEST(Export, RealOsmMapGivesValidScenesAroundTheChosenEgos) {
+  TemporaryDirectory dir;
+  ExportOptions options;
+  options.source.config = kOsmMap;
+  options.output = dir.path() / "a10.h5";
+  options.egos = "random:8";
+  options.seed = 3;
+  options.end = 45.0;
+  const auto summary = exportMap(options);
+  EXPECT_GT(summary.samples, 20u);
+  EXPECT_LE(summary.egos, 8u);
+  EXPECT_GT(summary.vehiclesSeen, 8u);
+
+  const auto validation = vector::validateDataset(options.output);
+  EXPECT_TRUE(validation.ok()) << (validation.problems.empty() ? "" : validation.problems.front());
+  const vector::DatasetReader reader(options.output);
+  EXPECT_EQ(reader.header().kind, "map");
+  std::set<std::string> egos;
+  bool masked_vehicle = false;
+  for (std::size_t i = 0; i < reader.size(); ++i) {
+    const auto scene = reader.scene(i);
+    egos.insert(scene.provenance.egoId);
+    EXPECT_EQ(scene.label, "A10KW");
+    EXPECT_EQ(scene.provenance.source, kOsmMap.string());
+    EXPECT_EQ(scene.provenance.sourceSha256, sha256OfFile(kOsmMap));
+    const Vec2 ego = scene.egoInitialState().position();
+    std::size_t lanes = 0;
+    for (const auto& polyline : scene.polylines) {
+      for (std::size_t v = 0; v < polyline.vectors.size(); ++v) {
+        if (!polyline.valid[v]) {
+          masked_vehicle = true;
+          continue;
+        }
+        const auto& f = polyline.vectors[v];
+        const double nearest = std::min((Vec2(f[0], f[1]) - ego).norm(), (Vec2(f[2], f[3]) - ego).norm());
+        if (polyline.type == vector::ObjectType::LaneBoundary) {
+          ++lanes;
+          EXPECT_LE(nearest, 60.0 + 5.0);  // within the radius (+ one vector length)
+        } else if (polyline.type == vector::ObjectType::Vehicle) {
+          EXPECT_LE(nearest, 60.0 + 10.0);
+        }
+      }
+    }
+    EXPECT_GT(lanes, 0u);
+    // The target continues the Ego's motion (lane changes are continuous, no 3.5 m jumps).
+    const double first_step = (scene.target.front() - ego).norm();
+    EXPECT_NEAR(first_step, scene.egoInitialState().speed * 0.2, 1.5);
+  }
+  EXPECT_EQ(egos.size(), summary.egos);
+  EXPECT_TRUE(masked_vehicle);  // vehicles entering or leaving the radius are masked, not dropped
+}
+
+TEST(Export, OpenDriveMapWithHistoryAndClosedLoop) {
+  TemporaryDirectory dir;
+  auto options = openDriveExport(dir.path() / "od.h5");
+  options.history = 1.0;
+  options.stride = 2.0;
+  const auto summary = exportMap(options);
+  EXPECT_GT(summary.samples, 10u);
+  EXPECT_TRUE(vector::validateDataset(options.output).ok());
+  const vector::DatasetReader reader(options.output);
+  EXPECT_EQ(reader.header().history, 5);
+  const auto scene = reader.scene(0);
+  EXPECT_EQ(scene.polylines[scene.egoPolyline].vectors.size(), 6u);  // 5 history vectors + initial vector
+  EXPECT_EQ(scene.label, "curve");
+
+  auto closed = openDriveExport(dir.path() / "closed.h5");
+  closed.egos = "vtype:truck";
+  closed.closedLoop = true;
+  closed.controllerParams = {{"time_gap", 3.0}};
+  const auto closed_summary = exportMap(closed);
+  EXPECT_TRUE(closed_summary.closedLoop);
+  EXPECT_GT(closed_summary.samples, 0u);
+  EXPECT_TRUE(vector::validateDataset(closed.output).ok());
+}
+
+TEST(Export, BadInputIsRejectedAndLeavesNoFile) {
+  TemporaryDirectory dir;
+  auto expect_error = [&](ExportOptions options, const std::string& expected) {
+    options.output = dir.path() / "out.h5";
+    try {
+      exportMap(options);
+      ADD_FAILURE() << "expected an error containing: " << expected;
+    } catch (const Error& error) {
+      EXPECT_NE(std::string(error.what()).find(expected), std::string::npos) << error.what();
+    }
+    EXPECT_FALSE(fs::exists(dir.path() / "out.h5")) << expected;
+    for (const auto& entry : fs::directory_iterator(dir.path())) {
+      EXPECT_EQ(entry.path().filename().string().find(".out.h5"), std::string::npos) << "temporary file left";
+    }
+  };
+  auto never = openDriveExport("");
+  never.egos = "east.0,ghost42";
+  expect_error(never, "vehicle 'ghost42' never appears");
+  auto empty = openDriveExport("");
+  empty.egos = "vtype:bus";
+  expect_error(empty, "no vehicle of that type");
+  auto too_long = openDriveExport("");
+  too_long.end = 3.0;
+  expect_error(too_long, "is longer than the simulation");
+  auto too_many = openDriveExport("");
+  too_many.egos = "random:1000";
+  expect_error(too_many, "only");
+  auto broken = openDriveExport("");
+  broken.openDrive = test::writeFile(dir.path() / "broken.xodr", "<OpenDRIVE><road></OpenDRIVE>");
+  expect_error(broken, "netconvert cannot import OpenDRIVE map");
+  ExportOptions missing_net;
+  missing_net.source.config = test::writeFile(
+      dir.path() / "bad.sumocfg",
+      "<configuration><input><net-file value=\"nowhere.net.xml\"/></input></configuration>");
+  expect_error(missing_net, "SUMO could not load");
+  ExportOptions no_map;
+  expect_error(no_map, "no map given");
+  auto bad_stride = openDriveExport("");
+  bad_stride.stride = 0.3;
+  expect_error(bad_stride, "--stride");
+  EXPECT_THROW(EgoSelection::parse("random:zero"), ConfigError);
+  EXPECT_THROW(EgoSelection::parse("a,,b"), ConfigError);
+  EXPECT_EQ(EgoSelection::parse("veh12,veh40").ids.size(), 2u);
+}
+
+TEST(Export, GeneratedAndExportedSamplesAreTheSameKindOfObject) {
+  TemporaryDirectory dir;
+  RunOptions run;
+  run.scenarioFile = test::scenarioFile("acc.yaml");
+  run.outputDir = dir.path() / "acc";
+  run.samples = 20;
+  runScenarios(run);
+  exportMap(openDriveExport(dir.path() / "od.h5"));
+
+  vector::DatasetCollection collection;
+  collection.add(dir.path() / "acc");  // a run folder: its dataset.h5
+  collection.add(dir.path() / "od.h5");
+  const auto counts = collection.labelCounts();
+  EXPECT_EQ(counts.at("acc"), 20u);
+  EXPECT_GT(counts.at("curve"), 0u);
+  for (const auto& ref : {collection.withLabel("acc").front(), collection.withLabel("curve").front()}) {
+    const auto scene = collection.scene(ref);
+    EXPECT_EQ(scene.polylines.front().type, vector::ObjectType::LaneBoundary);
+    EXPECT_EQ(scene.egoPolyline, scene.polylines.size() - 1);
+    EXPECT_EQ(scene.polylines.back().type, vector::ObjectType::Ego);
+    EXPECT_EQ(scene.target.size(), 25u);
+    EXPECT_DOUBLE_EQ(scene.step, 0.2);
+  }
+  for (const auto& path : {dir.path() / "acc" / "dataset.h5", dir.path() / "od.h5"}) {
+    EXPECT_TRUE(vector::validateDataset(path).ok()) << path;
+  }
+}

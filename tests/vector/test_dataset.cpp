@@ -1,0 +1,197 @@
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "test_support.hpp"
+#include "vsd/core/error.hpp"
+#include "vsd/core/files.hpp"
+#include "vsd/vector/dataset.hpp"
+#include "vsd/vector/vectorize.hpp"
+
+using namespace vsd;
+using namespace vsd::vector;
+namespace fs = std::filesystem;
+
+namespace {
+
+/// A scene far from the origin (map coordinates), with a masked vector.
+VectorizedScene sceneAt(const Vec2& origin, std::uint64_t sample, const std::string& label) {
+  Trace trace;
+  trace.step = 0.2;
+  VehicleTrack ego;
+  VehicleTrack other;
+  for (int k = 0; k < 26; ++k) {
+    ego.states.push_back({origin.x() + 2.0 * k, origin.y(), 0.0, 10.0, 0.0});
+    other.states.push_back({origin.x() + 20.0 + 1.6 * k, origin.y() + 3.5, 0.0, 8.0, 0.0});
+    ego.valid.push_back(1);
+    other.valid.push_back(k == 7 ? 0 : 1);
+  }
+  trace.vehicles = {ego, other};
+  LaneGeometry lane;
+  lane.id = "l";
+  lane.width = 3.5;
+  lane.centre = {origin - Vec2(50, 0), origin + Vec2(100, 0)};
+  auto scene = buildScene(label, trace, 0, regionLanePolylines({lane}, origin.x() - 40, origin.x() + 60));
+  scene.sample = sample;
+  scene.inputs = {1.5, static_cast<double>(sample)};
+  scene.metrics = {-2.0};
+  scene.provenance = {"map.sumocfg", "abc123", "veh" + std::to_string(sample), 12.4};
+  return scene;
+}
+
+DatasetHeader header() {
+  DatasetHeader h;
+  h.inputNames = {"a", "b"};
+  h.metricNames = {"a_min"};
+  return h;
+}
+
+void expectSame(const VectorizedScene& a, const VectorizedScene& b, double tolerance) {
+  ASSERT_EQ(a.polylines.size(), b.polylines.size());
+  EXPECT_EQ(a.egoPolyline, b.egoPolyline);
+  for (std::size_t p = 0; p < a.polylines.size(); ++p) {
+    ASSERT_EQ(a.polylines[p].vectors.size(), b.polylines[p].vectors.size());
+    EXPECT_EQ(a.polylines[p].valid, b.polylines[p].valid);
+    EXPECT_EQ(a.polylines[p].type, b.polylines[p].type);
+    for (std::size_t v = 0; v < a.polylines[p].vectors.size(); ++v) {
+      for (std::size_t f = 0; f < kFeatures; ++f) {
+        EXPECT_NEAR(a.polylines[p].vectors[v][f], b.polylines[p].vectors[v][f], tolerance) << p << "/" << v << "/" << f;
+      }
+    }
+  }
+  ASSERT_EQ(a.target.size(), b.target.size());
+  for (std::size_t k = 0; k < a.target.size(); ++k) EXPECT_LT((a.target[k] - b.target[k]).norm(), tolerance);
+}
+
+}  // namespace
+
+TEST(Dataset, RoundTripKeepsMillimetresFarFromTheOrigin) {
+  TemporaryDirectory dir;
+  const auto path = dir.path() / "d.h5";
+  std::vector<VectorizedScene> scenes;
+  {
+    DatasetWriter writer(path, header());
+    for (std::uint64_t i = 0; i < 600; ++i) {  // more than one buffered chunk
+      scenes.push_back(sceneAt(Vec2(4000.0 + 7.0 * static_cast<double>(i), -2500.0), i, i % 3 ? "acc" : "lk"));
+      writer.append(scenes.back());
+    }
+    writer.close();
+  }
+  const DatasetReader reader(path);
+  ASSERT_EQ(reader.size(), 600u);
+  EXPECT_EQ(reader.header().inputNames, header().inputNames);
+  for (std::size_t i : {0u, 255u, 256u, 599u}) {
+    const auto scene = reader.scene(i);
+    expectSame(scenes[i], scene, 1e-3);
+    EXPECT_EQ(scene.label, scenes[i].label);
+    EXPECT_EQ(scene.sample, i);
+    EXPECT_EQ(scene.inputs, scenes[i].inputs);
+    EXPECT_EQ(scene.metrics, scenes[i].metrics);
+    EXPECT_EQ(scene.provenance.egoId, "veh" + std::to_string(i));
+    EXPECT_EQ(scene.provenance.sourceSha256, "abc123");
+    EXPECT_DOUBLE_EQ(scene.provenance.t0, 12.4);
+  }
+  EXPECT_EQ(reader.samplesWithLabel("lk").size(), 200u);
+  EXPECT_TRUE(validateDataset(path).ok());
+}
+
+TEST(Dataset, SharedLanePoolIsStoredOnceAndReadBack) {
+  TemporaryDirectory dir;
+  LaneGeometry lane;
+  lane.id = "road_0";
+  lane.width = 3.2;
+  lane.centre = {{0, 0}, {300, 0}, {400, 80}};
+  const LaneIndex index({lane}, 5.0);
+  Trace trace;
+  trace.step = 0.2;
+  VehicleTrack ego;
+  for (int k = 0; k < 26; ++k) {
+    ego.states.push_back({100.0 + 2.0 * k, 0.0, 0.0, 10.0, 0.0});
+    ego.valid.push_back(1);
+  }
+  trace.vehicles = {ego};
+  const auto scene = buildScene("map", trace, 0, index.query({100.0, 0.0}, 60.0));
+  DatasetHeader map_header;
+  map_header.kind = "map";
+  const auto path = dir.path() / "map.h5";
+  {
+    DatasetWriter writer(path, map_header);
+    writer.setSharedVectors(index.pool());
+    for (int i = 0; i < 50; ++i) writer.append(scene);
+    writer.close();
+  }
+  const DatasetReader reader(path);
+  expectSame(scene, reader.scene(49), 1e-3);
+  EXPECT_TRUE(validateDataset(path).ok());
+  // 50 samples of ~50 lane vectors each, but the lane vectors are stored once.
+  EXPECT_LT(fs::file_size(path), 50u * 50u * 7u * 4u);
+}
+
+TEST(Dataset, ForeignCorruptAndUnknownFilesAreRejectedByName) {
+  TemporaryDirectory dir;
+  const auto text = test::writeFile(dir.path() / "notes.h5", "not hdf5 at all");
+  try {
+    DatasetReader reader(text);
+    FAIL();
+  } catch (const DatasetError& error) {
+    EXPECT_NE(std::string(error.what()).find("notes.h5: not an HDF5 file"), std::string::npos) << error.what();
+  }
+  EXPECT_THROW(DatasetReader(dir.path() / "missing.h5"), DatasetError);
+  // Another schema version: written by a future vsd-sumo, or tampered with.
+  const auto path = dir.path() / "future.h5";
+  {
+    DatasetWriter writer(path, header());
+    writer.append(sceneAt(Vec2(0, 0), 0, "acc"));
+    writer.close();
+  }
+  const auto script = test::writeFile(dir.path() / "bump.py",
+                                      "import h5py, sys\nwith h5py.File(sys.argv[1], 'a') as f:\n"
+                                      "    f.attrs['schema'] = 'vsd-dataset/2'\n");
+  ASSERT_EQ(test::run({test::python(), script.string(), path.string()}, dir.path()).exitCode, 0);
+  try {
+    DatasetReader reader(path);
+    FAIL();
+  } catch (const DatasetError& error) {
+    EXPECT_NE(std::string(error.what()).find("'vsd-dataset/2' is not supported"), std::string::npos) << error.what();
+  }
+  const auto validation = validateDataset(path);
+  EXPECT_FALSE(validation.ok());
+  ASSERT_EQ(validation.problems.size(), 1u);
+}
+
+TEST(Dataset, ValidationFindsBrokenInvariants) {
+  TemporaryDirectory dir;
+  auto scene = sceneAt(Vec2(0, 0), 0, "acc");
+  scene.polylines[2].vectors[3][6] = 99.0;  // a timestamp beyond the horizon
+  scene.polylines[0].vectors[0][5] = 7.0;   // a wrong polyline id
+  const auto path = dir.path() / "bad.h5";
+  {
+    DatasetWriter writer(path, header());
+    writer.append(scene);
+    writer.close();
+  }
+  const auto validation = validateDataset(path);
+  ASSERT_EQ(validation.problems.size(), 2u);
+  EXPECT_NE(validation.problems[0].find("polyline_id"), std::string::npos) << validation.problems[0];
+  EXPECT_NE(validation.problems[1].find("timestamp 99"), std::string::npos) << validation.problems[1];
+}
+
+TEST(DatasetCollection, CombinesFilesAndSelectsByLabelWithoutCopying) {
+  TemporaryDirectory dir;
+  for (const char* name : {"one", "two"}) {
+    DatasetWriter writer(dir.path() / (std::string(name) + ".h5"), header());
+    for (std::uint64_t i = 0; i < 10; ++i) writer.append(sceneAt(Vec2(0, 0), i, i < 4 ? "acc" : name));
+    writer.close();
+  }
+  DatasetCollection collection;
+  collection.add(dir.path() / "one.h5");
+  collection.add(dir.path() / "two.h5");
+  EXPECT_EQ(collection.all().size(), 20u);
+  const auto counts = collection.labelCounts();
+  EXPECT_EQ(counts.at("acc"), 8u);
+  EXPECT_EQ(counts.at("one"), 6u);
+  const auto acc = collection.withLabel("acc");
+  ASSERT_EQ(acc.size(), 8u);
+  EXPECT_EQ(acc[4].file, 1u);
+  EXPECT_EQ(collection.scene(acc[4]).label, "acc");
+}
