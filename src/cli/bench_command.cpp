@@ -8,11 +8,14 @@
 
 #include <filesystem>
 #include <memory>
+#include <optional>
+#include <tuple>
 
 #include "commands.hpp"
 #include "vsd/core/error.hpp"
 #include "vsd/core/files.hpp"
 #include "vsd/core/process.hpp"
+#include "vsd/model/model.hpp"
 #include "vsd/pipeline/run.hpp"
 #include "vsd/vector/dataset.hpp"
 
@@ -114,6 +117,74 @@ int runExportBench(const ExportBenchOptions& options) {
   return 0;
 }
 
+struct ModelBenchOptions {
+  fs::path work;               ///< keeps the generated data and models here (default: a temporary folder)
+  std::uint64_t samples = 2000;
+  std::uint64_t testSamples = 2000;
+  bool singles = false;
+  int threads = 2;
+};
+
+int runModelBench(const ModelBenchOptions& options) {
+  std::optional<TemporaryDirectory> temporary;
+  fs::path work = options.work;
+  if (work.empty()) {
+    temporary.emplace("vsd-bench");
+    work = temporary->path();
+  }
+  ensureDirectory(work);
+  const fs::path scenarios = fs::path(VSD_SOURCE_DIR) / "scenarios";
+  fmt::print("vsd-sumo bench model: VectorNet on {} training + {} test samples per functional scenario ({} threads)\n",
+             options.samples, options.testSamples, options.threads);
+  double simulation_rate = 0.0;
+  for (const std::string name : {"acc", "lk", "acc_lk"}) {
+    for (const auto& [kind, samples, seed] : {std::tuple{std::string("train"), options.samples, 1},
+                                                std::tuple{std::string("test"), options.testSamples, 2}}) {
+      const fs::path out = work / fmt::format("{}_{}", kind, name);
+      if (fs::exists(out / "dataset.h5")) continue;
+      const auto result = runSelf({"run", (scenarios / (name + ".yaml")).string(), "--samples", std::to_string(samples),
+                                   "--seed", std::to_string(seed), "--out", out.string()},
+                                  work);
+      if (name == "acc_lk") simulation_rate = static_cast<double>(samples) / result.seconds;
+    }
+  }
+  auto train_and_evaluate = [&](const std::string& mix, const std::vector<std::string>& labels,
+                                const std::string& model_name) {
+    model::TrainOptions train_options;
+    for (const auto& label : labels) train_options.data.push_back(work / ("train_" + label));
+    train_options.mix = model::Mix::parse(mix);
+    train_options.output = work / model_name;
+    train_options.threads = options.threads;
+    const auto summary = model::train(train_options);
+    const model::Predictor predictor(train_options.output, options.threads);
+    std::vector<fs::path> tests;
+    for (const std::string label : {"acc", "lk", "acc_lk"}) tests.push_back(work / ("test_" + label));
+    const auto evaluation = model::evaluate(predictor, tests);
+    fmt::print("  mix {:<32} trained in {:>5.1f} s ({} epochs, {:.0f} samples/s), test ADE [m]:", mix, summary.seconds,
+               summary.plannedEpochs, summary.samplesPerSecond);
+    for (const auto& [label, errors] : evaluation.perLabel) fmt::print(" {} {:.3f}", label, errors.ade);
+    fmt::print("\n");
+    return std::pair{summary, evaluation};
+  };
+  const auto [summary, evaluation] = train_and_evaluate(
+      fmt::format("acc={0},lk={0},acc_lk={0}", options.samples), {"acc", "lk", "acc_lk"}, "all.pt");
+  if (options.singles) {
+    for (const std::string label : {"acc", "lk", "acc_lk"}) {
+      train_and_evaluate(fmt::format("{}={}", label, options.samples), {label}, label + ".pt");
+    }
+  }
+  const double inference_rate = static_cast<double>(evaluation.overall.samples) / evaluation.predictionSeconds;
+  fmt::print("  training throughput: {:.0f} samples/s; {} samples to convergence (end of the schedule) in {:.1f} s\n",
+             summary.samplesPerSecond, 3 * options.samples, summary.seconds);
+  fmt::print("  inference: {:.0f} scenes/s batched", inference_rate);
+  if (simulation_rate > 0.0) {
+    fmt::print(" = {:.1f}x the simulation throughput of `vsd-sumo run` ({:.0f} scenarios/s, acc_lk)",
+               inference_rate / simulation_rate, simulation_rate);
+  }
+  fmt::print("\n");
+  return 0;
+}
+
 }  // namespace
 
 void addBenchCommand(CLI::App& app, CommandContext& context) {
@@ -140,6 +211,19 @@ void addBenchCommand(CLI::App& app, CommandContext& context) {
       ->capture_default_str();
   exporting->callback([export_options, &context] {
     context.action = [export_options] { return runExportBench(*export_options); };
+  });
+
+  auto model_options = std::make_shared<ModelBenchOptions>();
+  CLI::App* modeling = bench->add_subcommand("model", "Training and inference throughput and test ADE of VectorNet");
+  modeling->add_option("--work", model_options->work, "Keep data and models in this folder (reused when present)");
+  modeling->add_option("--samples", model_options->samples, "Training samples per functional scenario")
+      ->capture_default_str();
+  modeling->add_option("--test-samples", model_options->testSamples, "Test samples per functional scenario")
+      ->capture_default_str();
+  modeling->add_flag("--singles", model_options->singles, "Also train one model per functional scenario");
+  modeling->add_option("--threads", model_options->threads, "libtorch threads")->capture_default_str();
+  modeling->callback([model_options, &context] {
+    context.action = [model_options] { return runModelBench(*model_options); };
   });
 }
 

@@ -39,6 +39,9 @@ int main(int argc, char** argv) {
   vsd::cli::addRunCommand(app, context);
   vsd::cli::addExportCommand(app, context);
   vsd::cli::addDatasetCommand(app, context);
+  vsd::cli::addTrainCommand(app, context);
+  vsd::cli::addPredictCommand(app, context);
+  vsd::cli::addEvaluateCommand(app, context);
   vsd::cli::addBenchCommand(app, context);
 
   try {

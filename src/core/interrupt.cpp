@@ -20,6 +20,8 @@ void installInterruptHandlers() {
 
 bool interrupted() { return g_interrupted != 0; }
 
+void clearInterruption() { g_interrupted = 0; }
+
 void throwIfInterrupted() {
   if (interrupted()) throw InterruptedError();
 }

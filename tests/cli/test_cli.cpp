@@ -211,3 +211,69 @@ TEST(Cli, ExportAndDatasetBadInputGiveOneLine) {
   EXPECT_EQ(no_map.exitCode, 1);
   EXPECT_NE(no_map.output.find("no map given"), std::string::npos) << no_map.output;
 }
+
+TEST(Cli, TrainPredictEvaluate) {
+  TemporaryDirectory dir;
+  const auto data = dir.path() / "acc";
+  ASSERT_EQ(test::run({test::vsdSumo().string(), "--quiet", "run", test::scenarioFile("acc.yaml").string(), "--samples",
+                       "30", "--out", data.string()},
+                      dir.path())
+                .exitCode,
+            0);
+  const auto model = dir.path() / "models" / "m.pt";
+  const auto trained = test::run({test::vsdSumo().string(), "train", "--data", data.string(), "--mix", "acc=30", "--out",
+                                  model.string(), "--steps", "30", "--batch", "8", "--hidden", "8", "--global-width",
+                                  "8", "--decoder-hidden", "16"},
+                                 dir.path());
+  ASSERT_EQ(trained.exitCode, 0) << trained.output;
+  EXPECT_NE(trained.output.find("epoch   1/8: train loss"), std::string::npos) << trained.output;
+  EXPECT_NE(trained.output.find("samples/s"), std::string::npos);
+  EXPECT_NE(trained.output.find("trained VectorNet: best validation ADE"), std::string::npos) << trained.output;
+  EXPECT_NE(trained.output.find("acc 27/3"), std::string::npos) << trained.output;  // 90 % / 10 %
+
+  const auto csv = dir.path() / "eval.csv";
+  const auto evaluated = test::run(
+      {test::vsdSumo().string(), "evaluate", "--model", model.string(), "--data", data.string(), "--csv", csv.string()},
+      dir.path());
+  ASSERT_EQ(evaluated.exitCode, 0) << evaluated.output;
+  EXPECT_NE(evaluated.output.find("ADE [m]"), std::string::npos);
+  EXPECT_NE(evaluated.output.find("scenes/s"), std::string::npos);
+  EXPECT_EQ(readTextFile(csv).rfind("label,samples,ade_m,fde_m\nacc,30,", 0), 0u) << readTextFile(csv);
+
+  const auto predictions = dir.path() / "pred.h5";
+  const auto predicted = test::run(
+      {test::vsdSumo().string(), "predict", "--model", model.string(), "--data", data.string(), "--out", predictions.string()},
+      dir.path());
+  ASSERT_EQ(predicted.exitCode, 0) << predicted.output;
+  const auto check = test::writeFile(dir.path() / "check.py", R"(
+import sys, h5py, numpy as np
+with h5py.File(sys.argv[1], "r") as f:
+    assert f.attrs["schema"] == "vsd-predictions/1"
+    p, t, v = f["predictions"][:], f["targets"][:], f["target_valid"][:]
+    assert p.shape == (30, 25, 2) and t.shape == (30, 25, 2) and v.all()
+    ade = np.linalg.norm(p - t, axis=-1).mean(axis=1)
+    assert np.allclose(ade, f["ade"][:], atol=1e-9)
+    assert list(f["labels"].asstr()[:]) == ["acc"]
+print("ok")
+)");
+  const auto read = test::run({test::python(), check.string(), predictions.string()}, dir.path());
+  EXPECT_EQ(read.exitCode, 0) << read.output;
+
+  // Bad input: one line, exit 1.
+  const auto empty_mix = runForErrors({"train", "--data", data.string(), "--mix", "acc=0", "--out",
+                                       (dir.path() / "x.pt").string()},
+                                      dir.path());
+  EXPECT_EQ(empty_mix.exitCode, 1);
+  EXPECT_EQ(lineCount(empty_mix.output), 1u) << empty_mix.output;
+  EXPECT_NE(empty_mix.output.find("the mix is empty"), std::string::npos);
+  const auto too_many = runForErrors({"train", "--data", data.string(), "--mix", "acc=31", "--out",
+                                      (dir.path() / "x.pt").string()},
+                                     dir.path());
+  EXPECT_NE(too_many.output.find("holds only 30 samples"), std::string::npos) << too_many.output;
+  const auto garbage = test::writeFile(dir.path() / "garbage.pt", "zzz");
+  const auto corrupt = runForErrors({"evaluate", "--model", garbage.string(), "--data", data.string()}, dir.path());
+  EXPECT_EQ(corrupt.exitCode, 1);
+  EXPECT_EQ(lineCount(corrupt.output), 1u) << corrupt.output;
+  EXPECT_NE(corrupt.output.find("not a vsd-sumo model file"), std::string::npos);
+  EXPECT_FALSE(fs::exists(dir.path() / "x.pt"));
+}

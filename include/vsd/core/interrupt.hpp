@@ -16,5 +16,7 @@ void installInterruptHandlers();
 bool interrupted();
 /// Throws InterruptedError if a signal arrived.
 void throwIfInterrupted();
+/// Forgets a signal that has been handled (for callers that go on, e.g. tests).
+void clearInterruption();
 
 }  // namespace vsd

@@ -1,0 +1,108 @@
+// train / predict / evaluate: VectorNet on datasets.
+#include <fmt/format.h>
+
+#include <memory>
+
+#include "commands.hpp"
+#include "vsd/core/progress.hpp"
+#include "vsd/model/model.hpp"
+
+namespace vsd::cli {
+
+namespace {
+
+std::string duration(double seconds) {
+  if (seconds >= 3600.0) return fmt::format("{:.1f} h", seconds / 3600.0);
+  if (seconds >= 60.0) return fmt::format("{:.1f} min", seconds / 60.0);
+  return fmt::format("{:.0f} s", seconds);
+}
+
+}  // namespace
+
+void addTrainCommand(CLI::App& app, CommandContext& context) {
+  auto options = std::make_shared<model::TrainOptions>();
+  auto mix = std::make_shared<std::string>();
+  CLI::App* command = app.add_subcommand("train", "Train VectorNet on datasets mixed from functional scenarios and maps");
+  command->add_option("-d,--data", options->data, "Dataset files or run folders")->required();
+  command->add_option("--mix", *mix, "Samples per label, e.g. acc=2000,lk=2000,acc_lk=200 (default: all)");
+  command->add_option("-o,--out", options->output, "Model file to write (the best epoch)")->required();
+  command->add_option("-s,--seed", options->seed, "Seed (sample choice, split, initialisation, order)")
+      ->capture_default_str();
+  command->add_option("--threads", options->threads, "libtorch threads")->capture_default_str();
+  command->add_option("--steps", options->steps, "Optimizer steps (length of the learning-rate schedule)")
+      ->capture_default_str();
+  command->add_option("--patience", options->patience, "Stop after this many epochs without improvement")
+      ->capture_default_str();
+  command->add_option("--batch", options->batchSize, "Batch size")->capture_default_str();
+  command->add_option("--lr", options->learningRate, "Peak learning rate (AdamW)")->capture_default_str();
+  command->add_option("--weight-decay", options->weightDecay, "AdamW weight decay")->capture_default_str();
+  command->add_option("--validation-fraction", options->validationFraction, "Share of each label for validation")
+      ->capture_default_str();
+  command->add_option("--hidden", options->config.hidden, "Subgraph width")->capture_default_str();
+  command->add_option("--layers", options->config.subgraphLayers, "Subgraph layers")->capture_default_str();
+  command->add_option("--global-width", options->config.globalWidth, "Attention width")->capture_default_str();
+  command->add_option("--heads", options->config.heads, "Attention heads")->capture_default_str();
+  command->add_option("--decoder-hidden", options->config.decoderHidden, "Decoder width")->capture_default_str();
+  command->add_flag("--resume", options->resume, "Continue an interrupted training from <out>.last");
+  command->callback([=, &context] {
+    context.action = [=] {
+      options->mix = model::Mix::parse(*mix);
+      const auto summary = model::train(*options, [&](const model::EpochRecord& record) {
+        const int planned = record.plannedEpochs;
+        fmt::print("epoch {:>3}/{}: train loss {:.3f} m, validation ADE {:.3f} m (FDE {:.3f} m), lr {:.2e}, "
+                   "{:.0f} samples/s, {:.1f} s{}, at most {} left\n",
+                   record.epoch, planned, record.trainLoss, record.validationAde, record.validationFde,
+                   record.learningRate, record.samplesPerSecond, record.seconds, record.best ? " *best*" : "",
+                   duration(record.seconds * (planned - record.epoch)));
+        std::fflush(stdout);
+      });
+      fmt::print("{}", summary.report());
+      return 0;
+    };
+  });
+}
+
+void addPredictCommand(CLI::App& app, CommandContext& context) {
+  auto model_file = std::make_shared<std::filesystem::path>();
+  auto data = std::make_shared<std::filesystem::path>();
+  auto out = std::make_shared<std::filesystem::path>();
+  auto threads = std::make_shared<int>(2);
+  CLI::App* command = app.add_subcommand("predict", "Predict the Ego of every sample of a dataset (vsd-predictions/1)");
+  command->add_option("-m,--model", *model_file, "Model file")->required();
+  command->add_option("-d,--data", *data, "Dataset file or run folder")->required();
+  command->add_option("-o,--out", *out, "Predictions file (.h5)")->required();
+  command->add_option("--threads", *threads, "libtorch threads")->capture_default_str();
+  command->callback([=, &context] {
+    context.action = [=] {
+      const model::Predictor predictor(*model_file, *threads);
+      const auto count = model::writePredictions(predictor, *model_file, *data, *out);
+      fmt::print("predicted {} samples of {} with {} -> {}\n", count, data->string(), model_file->string(),
+                 out->string());
+      return 0;
+    };
+  });
+}
+
+void addEvaluateCommand(CLI::App& app, CommandContext& context) {
+  auto model_file = std::make_shared<std::filesystem::path>();
+  auto data = std::make_shared<std::vector<std::filesystem::path>>();
+  auto csv = std::make_shared<std::filesystem::path>();
+  auto threads = std::make_shared<int>(2);
+  CLI::App* command = app.add_subcommand("evaluate", "ADE and FDE of a model per functional scenario");
+  command->add_option("-m,--model", *model_file, "Model file")->required();
+  command->add_option("-d,--data", *data, "Dataset files or run folders")->required();
+  command->add_option("--csv", *csv, "Also write the table as CSV");
+  command->add_option("--threads", *threads, "libtorch threads")->capture_default_str();
+  command->callback([=, &context] {
+    context.action = [=] {
+      const model::Predictor predictor(*model_file, *threads);
+      const auto evaluation = model::evaluate(predictor, *data);
+      fmt::print("{} (trained on {}, validation ADE {:.3f} m):\n{}", model_file->string(), predictor.info().mix,
+                 predictor.info().validationAde, evaluation.table());
+      if (!csv->empty()) evaluation.writeCsv(*csv);
+      return 0;
+    };
+  });
+}
+
+}  // namespace vsd::cli

@@ -1,0 +1,166 @@
+#include "checkpoint.hpp"
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include "vsd/core/error.hpp"
+#include "vsd/core/files.hpp"
+
+namespace fs = std::filesystem;
+
+namespace vsd::model {
+
+namespace {
+constexpr const char* kInfoKey = "vsd_model_info";
+constexpr const char* kStateKey = "vsd_training_state";
+constexpr const char* kOptimizerKey = "optimizer";
+}  // namespace
+
+std::string infoToJson(const ModelInfo& info) {
+  const auto& c = info.config;
+  nlohmann::json json = {
+      {"format", "vsd-model/1"},
+      {"architecture", "VectorNet"},
+      {"config",
+       {{"hidden", c.hidden},
+        {"subgraph_layers", c.subgraphLayers},
+        {"global_width", c.globalWidth},
+        {"heads", c.heads},
+        {"decoder_hidden", c.decoderHidden},
+        {"horizon", c.horizon},
+        {"step", c.step},
+        {"coordinate_scale", c.coordinateScale}}},
+      {"feature_version", info.featureVersion},
+      {"dataset_schema", info.datasetSchema},
+      {"mix", info.mix},
+      {"seed", info.seed},
+      {"epoch", info.epoch},
+      {"validation_ade", info.validationAde},
+      {"labels", info.labels},
+      {"tool_version", info.toolVersion},
+  };
+  return json.dump();
+}
+
+ModelInfo infoFromJson(const std::string& text, const fs::path& file) {
+  ModelInfo info;
+  try {
+    const auto json = nlohmann::json::parse(text);
+    if (json.value("format", "") != "vsd-model/1") {
+      throw ModelError(fmt::format("{}: model format '{}' is not supported (expected vsd-model/1)", file.string(),
+                                   json.value("format", "")));
+    }
+    const auto& c = json.at("config");
+    info.config.hidden = c.at("hidden");
+    info.config.subgraphLayers = c.at("subgraph_layers");
+    info.config.globalWidth = c.at("global_width");
+    info.config.heads = c.at("heads");
+    info.config.decoderHidden = c.at("decoder_hidden");
+    info.config.horizon = c.at("horizon");
+    info.config.step = c.at("step");
+    info.config.coordinateScale = c.at("coordinate_scale");
+    info.featureVersion = json.at("feature_version");
+    info.datasetSchema = json.at("dataset_schema");
+    info.mix = json.at("mix");
+    info.seed = json.at("seed");
+    info.epoch = json.at("epoch");
+    info.validationAde = json.at("validation_ade");
+    info.labels = json.at("labels").get<std::vector<std::string>>();
+    info.toolVersion = json.at("tool_version");
+  } catch (const nlohmann::json::exception& error) {
+    throw ModelError(fmt::format("{}: damaged model description: {}", file.string(), error.what()));
+  }
+  return info;
+}
+
+namespace {
+
+void writeArchive(torch::serialize::OutputArchive& archive, const fs::path& path) {
+  AtomicOutput output(path);
+  try {
+    archive.save_to(output.tempPath().string());
+  } catch (const c10::Error& error) {
+    throw IoError(fmt::format("{}: cannot write model: {}", path.string(), error.what_without_backtrace()));
+  }
+  output.commit();
+}
+
+void openArchive(const fs::path& path, torch::serialize::InputArchive& archive) {
+  if (!fs::exists(path)) throw ModelError(fmt::format("{}: model file does not exist", path.string()));
+  try {
+    archive.load_from(path.string());
+  } catch (const c10::Error&) {
+    throw ModelError(fmt::format("{}: not a vsd-sumo model file (corrupt, truncated or foreign)", path.string()));
+  }
+}
+
+}  // namespace
+
+void saveModel(const fs::path& path, VectorNet& network, const ModelInfo& info) {
+  torch::serialize::OutputArchive archive;
+  network->save(archive);
+  archive.write(kInfoKey, c10::IValue(infoToJson(info)));
+  writeArchive(archive, path);
+}
+
+ModelInfo readModelInfo(const fs::path& path, torch::serialize::InputArchive& archive) {
+  openArchive(path, archive);
+  c10::IValue value;
+  if (!archive.try_read(kInfoKey, value) || !value.isString()) {
+    throw ModelError(fmt::format("{}: a torch archive, but not a vsd-sumo model (no model description)", path.string()));
+  }
+  ModelInfo info = infoFromJson(value.toStringRef(), path);
+  if (info.featureVersion != vector::kFeatureVersion) {
+    throw ModelError(fmt::format("{}: the model was trained on feature schema v{}, this vsd-sumo uses v{}",
+                                 path.string(), info.featureVersion, vector::kFeatureVersion));
+  }
+  return info;
+}
+
+VectorNet loadModel(const fs::path& path, ModelInfo& info) {
+  torch::serialize::InputArchive archive;
+  info = readModelInfo(path, archive);
+  info.config.validate();
+  VectorNet network(info.config);
+  try {
+    network->load(archive);
+  } catch (const c10::Error& error) {
+    throw ModelError(fmt::format("{}: parameters do not match the described architecture: {}", path.string(),
+                                 error.what_without_backtrace()));
+  }
+  network->eval();
+  return network;
+}
+
+void saveCheckpoint(const fs::path& path, VectorNet& network, torch::optim::Optimizer& optimizer,
+                    const ModelInfo& info, const std::string& state_json) {
+  torch::serialize::OutputArchive archive;
+  network->save(archive);
+  torch::serialize::OutputArchive optimizer_archive;
+  optimizer.save(optimizer_archive);
+  archive.write(kOptimizerKey, optimizer_archive);
+  archive.write(kInfoKey, c10::IValue(infoToJson(info)));
+  archive.write(kStateKey, c10::IValue(state_json));
+  writeArchive(archive, path);
+}
+
+std::string loadCheckpoint(const fs::path& path, VectorNet& network, torch::optim::Optimizer& optimizer) {
+  torch::serialize::InputArchive archive;
+  readModelInfo(path, archive);
+  c10::IValue state;
+  if (!archive.try_read(kStateKey, state) || !state.isString()) {
+    throw ModelError(fmt::format("{}: not a training checkpoint (no training state)", path.string()));
+  }
+  try {
+    network->load(archive);
+    torch::serialize::InputArchive optimizer_archive;
+    archive.read(kOptimizerKey, optimizer_archive);
+    optimizer.load(optimizer_archive);
+  } catch (const c10::Error& error) {
+    throw ModelError(fmt::format("{}: checkpoint does not match this training's architecture: {}", path.string(),
+                                 error.what_without_backtrace()));
+  }
+  return state.toStringRef();
+}
+
+}  // namespace vsd::model

@@ -1,0 +1,34 @@
+#pragma once
+// Model files: the network's parameters and a JSON description (architecture,
+// feature schema, training provenance) in one torch archive, written atomically.
+// Training checkpoints (<model>.last) add the optimizer state for --resume.
+
+#include <torch/torch.h>
+
+#include <filesystem>
+#include <string>
+
+#include "network.hpp"
+
+namespace vsd::model {
+
+std::string infoToJson(const ModelInfo& info);
+ModelInfo infoFromJson(const std::string& text, const std::filesystem::path& file);
+
+/// Writes a model file (temporary name, then rename).
+void saveModel(const std::filesystem::path& path, VectorNet& network, const ModelInfo& info);
+
+/// Reads a model file's description without building the network. Throws ModelError.
+ModelInfo readModelInfo(const std::filesystem::path& path, torch::serialize::InputArchive& archive);
+
+/// Loads a model file into a new network. Throws ModelError naming the file for a
+/// missing, corrupt or foreign file or another feature schema.
+VectorNet loadModel(const std::filesystem::path& path, ModelInfo& info);
+
+/// Training checkpoint: network, optimizer and the training loop's state (JSON).
+void saveCheckpoint(const std::filesystem::path& path, VectorNet& network, torch::optim::Optimizer& optimizer,
+                    const ModelInfo& info, const std::string& state_json);
+/// Restores a checkpoint into `network` and `optimizer`; returns the state JSON.
+std::string loadCheckpoint(const std::filesystem::path& path, VectorNet& network, torch::optim::Optimizer& optimizer);
+
+}  // namespace vsd::model

@@ -1,0 +1,310 @@
+// VectorNet: tensors and masks, invariances, frames, training, checkpoints, bad input.
+#include <gtest/gtest.h>
+
+#include <csignal>
+#include <cmath>
+
+#include "../../src/model/tensors.hpp"
+#include "test_support.hpp"
+#include "vsd/core/error.hpp"
+#include "vsd/core/interrupt.hpp"
+#include "vsd/model/model.hpp"
+#include "vsd/vector/vectorize.hpp"
+
+using namespace vsd;
+using namespace vsd::model;
+namespace fs = std::filesystem;
+
+namespace {
+
+/// A scene like the paper's ACC: one lane, a leader, the Ego. Everything is a function of
+/// (speed, gap, leader speed, heading, position), so a model can learn it.
+vector::VectorizedScene syntheticScene(std::uint64_t i, const std::string& label = "acc") {
+  const double speed = 8.0 + static_cast<double>(i % 9);
+  const double leader_speed = speed - 2.0 + static_cast<double>(i % 5);
+  const double heading = 0.3 * std::sin(static_cast<double>(i));
+  const Vec2 origin(100.0 * static_cast<double>(i % 7), -40.0 * static_cast<double>(i % 3));
+  const Vec2 u = headingVector(heading);
+  Trace trace;
+  trace.step = 0.2;
+  VehicleTrack ego;
+  VehicleTrack leader;
+  double ego_speed = speed;
+  Vec2 p = origin;
+  for (int k = 0; k < 26; ++k) {
+    const double t = 0.2 * k;
+    const Vec2 lead = origin + (20.0 + leader_speed * t) * u;
+    ego.states.push_back({p.x(), p.y(), heading, ego_speed, 0.0});
+    leader.states.push_back({lead.x(), lead.y(), heading, leader_speed, 0.0});
+    ego.valid.push_back(1);
+    leader.valid.push_back(1);
+    ego_speed = std::max(0.0, ego_speed + 0.2 * 0.5 * (leader_speed - ego_speed));
+    p += 0.2 * ego_speed * u;
+  }
+  trace.vehicles = {ego, leader};
+  LaneGeometry lane;
+  lane.id = "l";
+  lane.width = 3.5;
+  lane.centre = {origin - 60.0 * u, origin + 120.0 * u};
+  auto scene = vector::buildScene(label, trace, 0, vector::regionLanePolylines({lane}, -1e9, 1e9));
+  scene.sample = i;
+  return scene;
+}
+
+fs::path writeDataset(const fs::path& path, std::size_t count, const std::string& label = "acc",
+                      int horizon = 25) {
+  vector::DatasetHeader header;
+  header.horizon = horizon;
+  vector::DatasetWriter writer(path, header);
+  for (std::size_t i = 0; i < count; ++i) {
+    auto scene = syntheticScene(i, label);
+    scene.target.resize(static_cast<std::size_t>(horizon));
+    scene.targetValid.resize(static_cast<std::size_t>(horizon));
+    writer.append(scene);
+  }
+  writer.close();
+  return path;
+}
+
+TrainOptions tinyTraining(const fs::path& data, const fs::path& out) {
+  TrainOptions options;
+  options.data = {data};
+  options.output = out;
+  options.config.hidden = 16;
+  options.config.globalWidth = 16;
+  options.config.decoderHidden = 32;
+  options.steps = 60;
+  options.batchSize = 8;
+  options.seed = 5;
+  return options;
+}
+
+double maxDifference(const std::vector<Polyline>& a, const std::vector<Polyline>& b) {
+  double worst = 0.0;
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    for (std::size_t k = 0; k < a[i].size(); ++k) worst = std::max(worst, (a[i][k] - b[i][k]).norm());
+  }
+  return worst;
+}
+
+class ModelTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    data_ = writeDataset(dir_.path() / "acc.h5", 40);
+    auto options = tinyTraining(data_, dir_.path() / "m.pt");
+    train(options);
+    model_ = options.output;
+  }
+  TemporaryDirectory dir_;
+  fs::path data_;
+  fs::path model_;
+};
+
+}  // namespace
+
+TEST(ModelTensors, ShapesMasksAndTheEgoFrame) {
+  VectorNetConfig config;
+  std::vector<vector::VectorizedScene> scenes = {syntheticScene(1), syntheticScene(2)};
+  scenes[1].polylines[2].valid[3] = 0;  // one masked leader vector
+  const auto tensors = buildTensors(scenes, config);
+  // Lanes (2) and the leader are "other" polylines; the Ego has its own tensor.
+  EXPECT_EQ(tensors.features.sizes(), (std::vector<std::int64_t>{2, 3, 25, kInputFeatures}));
+  EXPECT_EQ(tensors.egoFeatures.sizes(), (std::vector<std::int64_t>{2, 1, 1, kInputFeatures}));
+  // Per scene: two lane boundaries of 1 vector each (2-point centre line) and 25 leader vectors.
+  EXPECT_EQ(tensors.vectorMask.sum().item<std::int64_t>(), 2 * (1 + 1 + 25) - 1);
+  EXPECT_FALSE(tensors.vectorMask[1][2][3].item<bool>());
+  EXPECT_TRUE(tensors.polylineMask.all().item<bool>());
+  // The Ego's initial vector starts at the origin and points along +x, speed * dt long.
+  const auto ego = tensors.egoFeatures[0][0][0];
+  EXPECT_NEAR(ego[0].item<float>(), 0.0, 1e-6);
+  EXPECT_NEAR(ego[1].item<float>(), 0.0, 1e-6);
+  EXPECT_NEAR(static_cast<double>(ego[2].item<float>()) * config.coordinateScale, 9.0 * 0.2, 1e-4);
+  EXPECT_NEAR(ego[3].item<float>(), 0.0, 1e-5);
+  EXPECT_EQ(ego[6].item<float>(), 1.0F);  // one-hot: Ego
+  EXPECT_NEAR(tensors.egoStep[0][0].item<float>(), 9.0 * 0.2, 1e-5);
+}
+
+TEST(ModelTensors, EgoFrameRoundTrip) {
+  VectorNetConfig config;
+  const std::vector<vector::VectorizedScene> scenes = {syntheticScene(3), syntheticScene(11)};
+  const auto tensors = buildTensors(scenes, config);
+  for (std::size_t i = 0; i < scenes.size(); ++i) {
+    const auto back = toSceneFrame(tensors.targets[static_cast<std::int64_t>(i)], tensors.origins[i], tensors.headings[i]);
+    for (std::size_t k = 0; k < back.size(); ++k) EXPECT_LT((back[k] - scenes[i].target[k]).norm(), 1e-4);
+  }
+}
+
+TEST(ModelTensors, NonFiniteFeaturesAreRejectedWithTheSample) {
+  auto scene = syntheticScene(4);
+  scene.polylines[2].vectors[5][2] = std::nan("");
+  try {
+    buildTensors({scene}, VectorNetConfig{});
+    FAIL();
+  } catch (const DatasetError& error) {
+    EXPECT_NE(std::string(error.what()).find("sample 4"), std::string::npos) << error.what();
+    EXPECT_NE(std::string(error.what()).find("non-finite"), std::string::npos) << error.what();
+  }
+}
+
+TEST_F(ModelTest, PaddingDoesNotChangeAPrediction) {
+  const Predictor predictor(model_);
+  const auto alone = predictor.predict({syntheticScene(7)});
+  // In a batch with a much larger scene (more polylines and vectors: more padding).
+  auto big = syntheticScene(8);
+  for (int extra = 0; extra < 5; ++extra) big.polylines.insert(big.polylines.begin(), big.polylines[0]);
+  big.polylines[0].vectors.resize(40, big.polylines[0].vectors.back());
+  big.polylines[0].valid.resize(40, 1);
+  big.egoPolyline += 5;
+  vector::numberPolylines(big);
+  const auto batched = predictor.predict({big, syntheticScene(7), big});
+  EXPECT_LT(maxDifference(alone, {batched[1]}), 1e-4);
+}
+
+TEST_F(ModelTest, PermutingPolylinesDoesNotChangeAPrediction) {
+  const Predictor predictor(model_);
+  auto scene = syntheticScene(9);
+  const auto reference = predictor.predict({scene});
+  // Ego first, then the leader, then the lanes in reverse order.
+  auto permuted = scene;
+  permuted.polylines = {scene.polylines[3], scene.polylines[2], scene.polylines[1], scene.polylines[0]};
+  permuted.egoPolyline = 0;
+  vector::numberPolylines(permuted);
+  EXPECT_LT(maxDifference(reference, predictor.predict({permuted})), 1e-4);
+}
+
+TEST_F(ModelTest, CheckpointRoundTripGivesIdenticalPredictions) {
+  const Predictor first(model_);
+  fs::copy_file(model_, dir_.path() / "copy.pt");
+  const Predictor second(dir_.path() / "copy.pt");
+  std::vector<vector::VectorizedScene> scenes;
+  for (std::uint64_t i = 0; i < 10; ++i) scenes.push_back(syntheticScene(i));
+  EXPECT_EQ(maxDifference(first.predict(scenes), second.predict(scenes)), 0.0);
+  EXPECT_EQ(first.info().labels, std::vector<std::string>{"acc"});
+  EXPECT_EQ(first.info().config.hidden, 16);
+}
+
+TEST_F(ModelTest, SameSeedAndThreadsGiveTheSameModel) {
+  auto options = tinyTraining(data_, dir_.path() / "again.pt");
+  train(options);
+  std::vector<vector::VectorizedScene> scenes;
+  for (std::uint64_t i = 0; i < 10; ++i) scenes.push_back(syntheticScene(i));
+  EXPECT_EQ(maxDifference(Predictor(model_).predict(scenes), Predictor(options.output).predict(scenes)), 0.0);
+  options.seed = 6;
+  options.output = dir_.path() / "other.pt";
+  train(options);
+  EXPECT_GT(maxDifference(Predictor(model_).predict(scenes), Predictor(options.output).predict(scenes)), 1e-3);
+}
+
+TEST(ModelTraining, ATinyModelOverfitsAHandfulOfSamples) {
+  TemporaryDirectory dir;
+  auto options = tinyTraining(writeDataset(dir.path() / "few.h5", 10), dir.path() / "few.pt");
+  options.config.hidden = 32;
+  options.config.globalWidth = 32;
+  options.config.decoderHidden = 64;
+  options.validationFraction = 0.1;
+  options.steps = 1500;
+  options.patience = 100000;  // one validation sample: no early stopping
+  options.batchSize = 9;
+  options.learningRate = 3e-3;
+  const auto summary = train(options);
+  // The training ADE of the 9 training samples (the 10th validates) goes to almost zero;
+  // the model file holds the best epoch on the held-out sample, not this one.
+  EXPECT_GT(summary.epochs.front().trainLoss, 1.0);
+  EXPECT_LT(summary.epochs.back().trainLoss, 0.05);
+}
+
+TEST(ModelTraining, BadMixesAndDataAreRejected) {
+  TemporaryDirectory dir;
+  const auto data = writeDataset(dir.path() / "acc.h5", 30);
+  auto options = tinyTraining(data, dir.path() / "m.pt");
+  auto error_of = [&](const TrainOptions& o) {
+    try {
+      train(o);
+    } catch (const Error& error) {
+      return std::string(error.what());
+    }
+    return std::string();
+  };
+  options.mix = Mix::parse("acc=0");
+  EXPECT_NE(error_of(options).find("the mix is empty"), std::string::npos);
+  options.mix = Mix::parse("acc=31");
+  EXPECT_NE(error_of(options).find("holds only 30 samples labelled 'acc'"), std::string::npos);
+  options.mix = Mix::parse("lk=5");
+  EXPECT_NE(error_of(options).find("no sample is labelled 'lk'"), std::string::npos);
+  EXPECT_THROW(Mix::parse("acc=2000,acc=3"), ConfigError);
+  EXPECT_THROW(Mix::parse("acc:2000"), ConfigError);
+  EXPECT_THROW(Mix::parse("acc=-1"), ConfigError);
+  options.mix = {};
+  options.data = {data, writeDataset(dir.path() / "short.h5", 10, "lk", 10)};
+  EXPECT_NE(error_of(options).find("must share step and horizon"), std::string::npos);
+  EXPECT_FALSE(fs::exists(dir.path() / "m.pt"));
+}
+
+TEST(ModelFiles, CorruptForeignAndOtherSchemaModelsAreRejected) {
+  TemporaryDirectory dir;
+  const auto garbage = test::writeFile(dir.path() / "garbage.pt", "not a model");
+  try {
+    Predictor predictor(garbage);
+    FAIL();
+  } catch (const ModelError& error) {
+    EXPECT_NE(std::string(error.what()).find("garbage.pt: not a vsd-sumo model file"), std::string::npos);
+  }
+  EXPECT_THROW(Predictor(dir.path() / "missing.pt"), ModelError);
+
+  // A model for another feature schema (written by a future vsd-sumo).
+  const auto data = writeDataset(dir.path() / "acc.h5", 20);
+  auto options = tinyTraining(data, dir.path() / "m.pt");
+  options.steps = 5;
+  train(options);
+  const auto script = test::writeFile(dir.path() / "bump.py", R"(
+import sys, zipfile, shutil
+src, dst = sys.argv[1], sys.argv[2]
+with zipfile.ZipFile(src) as zin, zipfile.ZipFile(dst, "w", zipfile.ZIP_STORED) as zout:
+    for item in zin.infolist():
+        data = zin.read(item.filename)
+        data = data.replace(b'"feature_version":1', b'"feature_version":2')
+        zout.writestr(item, data)
+)");
+  const auto bumped = dir.path() / "v2.pt";
+  ASSERT_EQ(test::run({test::python(), script.string(), options.output.string(), bumped.string()}, dir.path()).exitCode, 0);
+  try {
+    Predictor predictor(bumped);
+    FAIL() << "a model for feature schema v2 was accepted";
+  } catch (const ModelError& error) {
+    EXPECT_NE(std::string(error.what()).find("feature schema v2"), std::string::npos) << error.what();
+  }
+  // A dataset with another horizon than the model's.
+  const Predictor predictor(options.output);
+  vector::DatasetHeader other;
+  other.horizon = 10;
+  EXPECT_THROW(predictor.checkCompatible(other, "other.h5"), ModelError);
+}
+
+TEST(ModelTraining, InterruptedTrainingKeepsTheBestModelAndResumes) {
+  TemporaryDirectory dir;
+  const auto data = writeDataset(dir.path() / "acc.h5", 40);
+  auto options = tinyTraining(data, dir.path() / "m.pt");
+  options.steps = 50;  // 36 training samples / batch 8 = 5 steps per epoch -> 10 epochs
+  installInterruptHandlers();
+  int epochs_seen = 0;
+  EXPECT_THROW(train(options,
+                     [&](const EpochRecord&) {
+                       if (++epochs_seen == 3) std::raise(SIGINT);
+                     }),
+               InterruptedError);
+  clearInterruption();
+  ASSERT_TRUE(fs::exists(options.output));  // the best of the first epochs, complete
+  const Predictor interrupted(options.output);
+  EXPECT_LE(interrupted.info().epoch, 3);
+  options.resume = true;
+  const auto summary = train(options);
+  EXPECT_EQ(summary.epochs.size(), 10u);  // 3 before + 7 after the interruption
+  EXPECT_EQ(summary.epochs.front().epoch, 1);
+  EXPECT_EQ(summary.epochs.back().epoch, 10);
+  const Predictor resumed(options.output);
+  EXPECT_GE(resumed.info().epoch, interrupted.info().epoch);
+
+  auto fresh = tinyTraining(data, dir.path() / "fresh.pt");
+  fresh.resume = true;
+  EXPECT_THROW(train(fresh), ConfigError);  // nothing to resume
+}
