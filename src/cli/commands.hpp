@@ -22,6 +22,8 @@ void addDatasetCommand(CLI::App& app, CommandContext& context);
 void addTrainCommand(CLI::App& app, CommandContext& context);
 void addPredictCommand(CLI::App& app, CommandContext& context);
 void addEvaluateCommand(CLI::App& app, CommandContext& context);
+void addBaselineCommand(CLI::App& app, CommandContext& context);
+void addExperimentCommand(CLI::App& app, CommandContext& context);
 void addBenchCommand(CLI::App& app, CommandContext& context);
 
 }  // namespace vsd::cli

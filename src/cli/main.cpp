@@ -42,6 +42,8 @@ int main(int argc, char** argv) {
   vsd::cli::addTrainCommand(app, context);
   vsd::cli::addPredictCommand(app, context);
   vsd::cli::addEvaluateCommand(app, context);
+  vsd::cli::addBaselineCommand(app, context);
+  vsd::cli::addExperimentCommand(app, context);
   vsd::cli::addBenchCommand(app, context);
 
   try {

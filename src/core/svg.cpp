@@ -4,6 +4,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <regex>
+#include <stdexcept>
 
 namespace vsd {
 
@@ -120,6 +122,37 @@ std::string SvgCanvas::str() const {
       "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{0}\" height=\"{1}\" viewBox=\"0 0 {0} {1}\">\n"
       "<rect width=\"100%\" height=\"100%\" fill=\"white\"/>\n{2}</svg>\n",
       width_, height_, body_);
+}
+
+std::string composeSvgRow(const std::vector<std::string>& panels, const std::string& title, int gap_px) {
+  static const std::regex size_pattern(R"re(<svg[^>]*?\swidth="([0-9.]+)"\s+height="([0-9.]+)")re");
+  const double title_height = title.empty() ? 0.0 : 34.0;
+  double width = 0.0;
+  double height = 0.0;
+  std::string body;
+  for (const auto& panel : panels) {
+    std::smatch match;
+    if (!std::regex_search(panel, match, size_pattern)) {
+      throw std::invalid_argument("composeSvgRow: a panel is not an <svg> element with width and height");
+    }
+    const double panel_width = std::stod(match[1].str());
+    const double panel_height = std::stod(match[2].str());
+    const auto open = panel.find("<svg");
+    body += panel.substr(0, open + 4) + fmt::format(" x=\"{:.0f}\" y=\"{:.0f}\"", width, title_height) +
+            panel.substr(open + 4);
+    width += panel_width + gap_px;
+    height = std::max(height, panel_height);
+  }
+  width = std::max(0.0, width - gap_px);
+  std::string header;
+  if (!title.empty()) {
+    header = fmt::format("<text x=\"10\" y=\"22\" font-size=\"18\" font-family=\"sans-serif\" fill=\"black\">{}</text>\n",
+                         escapeXml(title));
+  }
+  return fmt::format(
+      "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{0:.0f}\" height=\"{1:.0f}\" viewBox=\"0 0 {0:.0f} {1:.0f}\">\n"
+      "<rect width=\"100%\" height=\"100%\" fill=\"white\"/>\n{2}{3}</svg>\n",
+      width, height + title_height, header, body);
 }
 
 }  // namespace vsd

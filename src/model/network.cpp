@@ -1,11 +1,10 @@
 #include "network.hpp"
 
-#include <dlfcn.h>
-
 #include <cmath>
 #include <limits>
 
 #include "tensors.hpp"
+#include "vsd/core/threads.hpp"
 
 namespace vsd::model {
 
@@ -15,12 +14,7 @@ torch::Tensor maskedMax(const torch::Tensor& nodes, const torch::Tensor& mask) {
 
 void configureThreads(int threads) {
   at::set_num_threads(threads);
-  // OpenBLAS (Debian's libopenblas0-pthread behind libblas.so.3) has its own pool;
-  // looked up at run time so that another BLAS also works.
-  using SetThreads = void (*)(int);
-  if (auto* set_blas_threads = reinterpret_cast<SetThreads>(::dlsym(RTLD_DEFAULT, "openblas_set_num_threads"))) {
-    set_blas_threads(1);
-  }
+  setBlasThreads(1);
 }
 
 torch::Tensor rowParallelLinear(const torch::nn::Linear& linear, const torch::Tensor& x) {

@@ -1,4 +1,5 @@
 #include "vsd/scenario/logical_scenario.hpp"
+#include "vsd/scenario/yaml_reader.hpp"
 
 #include <fmt/format.h>
 #include <yaml-cpp/yaml.h>
@@ -32,160 +33,12 @@ namespace {
 
 constexpr double kDegree = 3.14159265358979323846 / 180.0;
 
-/// Reads YAML with messages of the form "file:line: field: problem".
-class Reader {
- public:
-  explicit Reader(std::string file) : file_(std::move(file)) {}
-
-  std::string where(const YAML::Node& node, const std::string& field) const {
-    const auto mark = node.Mark();
-    if (mark.line >= 0) return fmt::format("{}:{}: {}", file_, mark.line + 1, field);
-    return fmt::format("{}: {}", file_, field);
-  }
-
-  [[noreturn]] void fail(const YAML::Node& node, const std::string& field, const std::string& problem) const {
-    throw ConfigError(fmt::format("{}: {}", where(node, field), problem));
-  }
-
-  void requireMap(const YAML::Node& node, const std::string& field) const {
-    if (!node.IsMap()) fail(node, field, "expected a mapping (key: value pairs)");
-  }
-
-  void checkKeys(const YAML::Node& node, const std::string& field, const std::set<std::string>& allowed) const {
-    requireMap(node, field);
-    for (const auto& entry : node) {
-      const auto key = entry.first.as<std::string>();
-      if (allowed.count(key) == 0) {
-        fail(entry.first, field.empty() ? key : field + "." + key,
-             fmt::format("unknown key '{}' (allowed: {})", key, fmt::join(allowed, ", ")));
-      }
-    }
-  }
-
-  std::string scalar(const YAML::Node& node, const std::string& field) const {
-    if (!node.IsScalar()) fail(node, field, "expected a single value");
-    return node.Scalar();
-  }
-
-  double number(const YAML::Node& node, const std::string& field) const {
-    const std::string text = scalar(node, field);
-    try {
-      std::size_t used = 0;
-      const double value = std::stod(text, &used);
-      if (used == text.size() && std::isfinite(value)) return value;
-    } catch (const std::exception&) {
-    }
-    throw ConfigError::field(where(node, field), field, text, "a finite number");
-  }
-
-  double number(const YAML::Node& map, const std::string& key, const std::string& field, double fallback) const {
-    const auto node = map[key];
-    if (!node) return fallback;
-    return number(node, field);
-  }
-
-  int integer(const YAML::Node& map, const std::string& key, const std::string& field, int fallback, int minimum) const {
-    const auto node = map[key];
-    if (!node) return fallback;
-    const double value = number(node, field);
-    if (value != std::floor(value) || value < minimum || value > 1e6) {
-      throw ConfigError::field(where(node, field), field, scalar(node, field),
-                               fmt::format("an integer >= {}", minimum));
-    }
-    return static_cast<int>(value);
-  }
-
-  Expression expression(const YAML::Node& node, const std::string& field, const std::vector<std::string>& variables) const {
-    return Expression::compile(scalar(node, field), variables, where(node, field));
-  }
-
-  Distribution distribution(const YAML::Node& node, const std::string& field, const std::vector<std::string>& variables,
-                            const std::set<std::string>& extra_keys = {}) const {
-    Distribution result;
-    result.where = where(node, field);
-    if (node.IsScalar()) {  // shorthand: a constant
-      result.kind = Distribution::Kind::Constant;
-      result.value = expression(node, field, variables);
-      return result;
-    }
-    std::set<std::string> allowed = {"distribution", "min", "max", "mean", "std", "value", "choices"};
-    allowed.insert(extra_keys.begin(), extra_keys.end());
-    checkKeys(node, field, allowed);
-    std::string kind = node["distribution"] ? scalar(node["distribution"], field + ".distribution") : "";
-    if (kind.empty()) {
-      if (node["value"]) kind = "constant";
-      else if (node["choices"]) kind = "choice";
-      else if (node["mean"] || node["std"]) kind = "normal";
-      else kind = "uniform";
-    }
-    auto require = [&](const char* key) {
-      if (!node[key]) fail(node, field, fmt::format("'{}' distribution needs '{}'", kind, key));
-      return expression(node[key], field + "." + key, variables);
-    };
-    auto forbid = [&](std::initializer_list<const char*> keys) {
-      for (const char* key : keys) {
-        if (node[key]) fail(node[key], field + "." + key, fmt::format("not used by a '{}' distribution", kind));
-      }
-    };
-    if (kind == "uniform") {
-      forbid({"mean", "std", "value", "choices"});
-      result.kind = Distribution::Kind::Uniform;
-      result.min = require("min");
-      result.max = require("max");
-      checkOrder(result.min, result.max, node, field);
-    } else if (kind == "normal") {
-      forbid({"value", "choices"});
-      result.kind = Distribution::Kind::Normal;
-      result.mean = require("mean");
-      result.stddev = require("std");
-      if (result.stddev.isConstant() && result.stddev.evaluate({}) < 0.0) {
-        throw ConfigError::field(where(node["std"], field + ".std"), field + ".std", result.stddev.text(),
-                                 "a standard deviation >= 0");
-      }
-      if (node["min"] || node["max"]) {
-        result.hasBounds = true;
-        result.min = require("min");
-        result.max = require("max");
-        checkOrder(result.min, result.max, node, field);
-      }
-    } else if (kind == "constant") {
-      forbid({"min", "max", "mean", "std", "choices"});
-      result.kind = Distribution::Kind::Constant;
-      result.value = require("value");
-    } else if (kind == "choice") {
-      forbid({"min", "max", "mean", "std", "value"});
-      result.kind = Distribution::Kind::Choice;
-      const auto choices = node["choices"];
-      if (!choices.IsSequence() || choices.size() == 0) {
-        fail(choices, field + ".choices", "expected a non-empty list of numbers");
-      }
-      for (std::size_t i = 0; i < choices.size(); ++i) {
-        result.choices.push_back(number(choices[i], fmt::format("{}.choices[{}]", field, i)));
-      }
-    } else {
-      throw ConfigError::field(where(node["distribution"], field + ".distribution"), field + ".distribution", kind,
-                               "one of uniform, normal, constant, choice");
-    }
-    return result;
-  }
-
-  void checkOrder(const Expression& min, const Expression& max, const YAML::Node& node, const std::string& field) const {
-    if (min.isConstant() && max.isConstant() && min.evaluate({}) > max.evaluate({})) {
-      throw ConfigError(fmt::format("{}: min {} > max {} (expected min <= max)", where(node, field), min.text(),
-                                    max.text()));
-    }
-  }
-
- private:
-  std::string file_;
-};
-
 bool isIdentifier(const std::string& name) {
   static const std::regex pattern("[A-Za-z][A-Za-z0-9_]*");
   return std::regex_match(name, pattern);
 }
 
-void parseTime(const Reader& reader, const YAML::Node& node, LogicalScenario& scenario) {
+void parseTime(const YamlReader& reader, const YAML::Node& node, LogicalScenario& scenario) {
   if (!node) return;
   reader.checkKeys(node, "time", {"step", "duration"});
   scenario.step = reader.number(node, "step", "time.step", scenario.step);
@@ -205,7 +58,7 @@ void parseTime(const Reader& reader, const YAML::Node& node, LogicalScenario& sc
   }
 }
 
-void parseInputs(const Reader& reader, const YAML::Node& node, LogicalScenario& scenario) {
+void parseInputs(const YamlReader& reader, const YAML::Node& node, LogicalScenario& scenario) {
   if (!node) return;
   if (!node.IsSequence()) reader.fail(node, "inputs", "expected a list of inputs");
   std::vector<std::string> earlier;
@@ -233,7 +86,7 @@ void parseInputs(const Reader& reader, const YAML::Node& node, LogicalScenario& 
   }
 }
 
-void parseRoad(const Reader& reader, const YAML::Node& node, LogicalScenario& scenario) {
+void parseRoad(const YamlReader& reader, const YAML::Node& node, LogicalScenario& scenario) {
   if (!node) reader.fail(YAML::Node(), "road", "missing section 'road'");
   reader.checkKeys(node, "road", {"x_range", "points", "centre", "centre_noise", "lanes", "lane_width",
                                   "lane_width_noise", "speed_limit", "extension"});
@@ -276,7 +129,7 @@ void parseRoad(const Reader& reader, const YAML::Node& node, LogicalScenario& sc
   }
 }
 
-void parseCommonVehicle(const Reader& reader, const YAML::Node& node, const std::string& field,
+void parseCommonVehicle(const YamlReader& reader, const YAML::Node& node, const std::string& field,
                         const std::vector<std::string>& inputs, const LogicalScenario& scenario, VehicleSpec& vehicle) {
   vehicle.where = reader.where(node, field);
   if (!node["x"]) reader.fail(node, field, "missing 'x' (initial x of the vehicle's centre, m)");
@@ -291,7 +144,7 @@ void parseCommonVehicle(const Reader& reader, const YAML::Node& node, const std:
   if (!(vehicle.length > 0.0) || !(vehicle.width > 0.0)) reader.fail(node, field, "length and width must be > 0 m");
 }
 
-void parseController(const Reader& reader, const YAML::Node& node, const std::string& field,
+void parseController(const YamlReader& reader, const YAML::Node& node, const std::string& field,
                      const std::vector<std::string>& inputs, ControllerSpec& controller) {
   controller.where = reader.where(node, field);
   reader.checkKeys(node, field, {"name", "library", "params"});
@@ -307,7 +160,7 @@ void parseController(const Reader& reader, const YAML::Node& node, const std::st
   }
 }
 
-void parseVehicles(const Reader& reader, const YAML::Node& node, LogicalScenario& scenario) {
+void parseVehicles(const YamlReader& reader, const YAML::Node& node, LogicalScenario& scenario) {
   if (!node) reader.fail(YAML::Node(), "vehicles", "missing section 'vehicles' (at least 'ego')");
   reader.checkKeys(node, "vehicles", {"ego", "others"});
   const auto inputs = scenario.inputNames();
@@ -369,7 +222,7 @@ void parseVehicles(const Reader& reader, const YAML::Node& node, LogicalScenario
   }
 }
 
-void parseRest(const Reader& reader, const YAML::Node& root, LogicalScenario& scenario) {
+void parseRest(const YamlReader& reader, const YAML::Node& root, LogicalScenario& scenario) {
   if (const auto metrics = root["metrics"]) {
     if (!metrics.IsSequence()) reader.fail(metrics, "metrics", "expected a list of metric names");
     for (std::size_t i = 0; i < metrics.size(); ++i) {
@@ -413,13 +266,8 @@ void parseRest(const Reader& reader, const YAML::Node& root, LogicalScenario& sc
 
 std::shared_ptr<const LogicalScenario> parseLogicalScenario(const std::string& yaml_text,
                                                             const std::filesystem::path& source_name) {
-  const Reader reader(source_name.string());
-  YAML::Node root;
-  try {
-    root = YAML::Load(yaml_text);
-  } catch (const YAML::Exception& error) {
-    throw ConfigError(fmt::format("{}:{}: malformed YAML: {}", source_name.string(), error.mark.line + 1, error.msg));
-  }
+  const YamlReader reader(source_name.string());
+  const YAML::Node root = loadYaml(yaml_text, source_name.string());
   if (!root.IsMap()) throw ConfigError(source_name.string() + ": expected a YAML mapping at the top level");
   reader.checkKeys(root, "", {"schema", "name", "description", "time", "inputs", "road", "vehicles", "metrics",
                               "criteria", "sumo"});

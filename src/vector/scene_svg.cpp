@@ -45,7 +45,29 @@ std::string renderSceneSvg(const VectorizedScene& scene, const std::vector<Traje
     lo.y() -= grow;
     hi.y() += grow;
   }
-  SvgCanvas canvas(lo - pad, hi + pad, width_px, 0, /*equal_aspect=*/true, /*margin=*/40);
+  // The legend wraps to further rows on narrow drawings; the margin makes room for them.
+  struct Entry {
+    std::string colour;
+    std::string text;
+  };
+  std::vector<Entry> legend = {{kLaneColour, "lane boundaries"},
+                               {kVehicleColour, "other vehicles (timestamps in s)"},
+                               {kEgoColour, "Ego: initial vector and simulated future"}};
+  for (const auto& overlay : overlays) legend.push_back({overlay.colour, overlay.label});
+  std::vector<std::pair<Vec2, Entry>> legend_layout;
+  double legend_x = 10.0;
+  double legend_row = 0.0;
+  for (const auto& entry : legend) {
+    const double entry_width = 28.0 + 6.2 * static_cast<double>(entry.text.size());
+    if (legend_x > 10.0 && legend_x + entry_width > width_px) {
+      legend_x = 10.0;
+      legend_row += 16.0;
+    }
+    legend_layout.push_back({Vec2(legend_x, legend_row), entry});
+    legend_x += entry_width;
+  }
+  const int margin = 40 + static_cast<int>(legend_row);
+  SvgCanvas canvas(lo - pad, hi + pad, width_px, 0, /*equal_aspect=*/true, margin);
 
   for (const auto& polyline : scene.polylines) {
     if (polyline.type != ObjectType::LaneBoundary) continue;
@@ -82,24 +104,15 @@ std::string renderSceneSvg(const VectorizedScene& scene, const std::vector<Traje
     for (const auto& p : overlay.points) canvas.circle(p, 2.0, overlay.colour);
   }
 
-  // Legend and title.
+  // Title and legend (laid out above, before the drawing).
   double y = 18.0;
   if (!title.empty()) {
     canvas.textPx(10, y, title, 13, "#222222");
     y += 18.0;
   }
-  struct Entry {
-    const char* colour;
-    std::string text;
-  };
-  std::vector<Entry> legend = {{kLaneColour, "lane boundaries"}, {kVehicleColour, "other vehicles (timestamps in s)"},
-                               {kEgoColour, "Ego: initial vector and future"}};
-  for (const auto& overlay : overlays) legend.push_back({overlay.colour.c_str(), overlay.label});
-  double x = 10.0;
-  for (const auto& entry : legend) {
-    canvas.rectPx(x, y - 9, 12, 4, entry.colour);
-    canvas.textPx(x + 16, y - 4, entry.text, 11, "#333333");
-    x += 28.0 + 6.2 * static_cast<double>(entry.text.size());
+  for (const auto& [at, entry] : legend_layout) {
+    canvas.rectPx(at.x(), y + at.y() - 9, 12, 4, entry.colour);
+    canvas.textPx(at.x() + 16, y + at.y() - 4, entry.text, 11, "#333333");
   }
   return canvas.str();
 }

@@ -180,3 +180,81 @@ std::vector<ScenePolyline> LaneIndex::query(const Vec2& centre, double radius) c
 }
 
 }  // namespace vsd::vector
+
+namespace vsd::vector {
+
+Trace sceneTrace(const VectorizedScene& scene, const Polyline& ego_future, double ego_length, double other_length) {
+  const double dt = scene.step;
+  const std::size_t instants = ego_future.size() + 1;
+  Trace trace;
+  trace.step = dt;
+  const auto initial = scene.egoInitialState();
+  Polyline positions = {initial.position()};
+  positions.insert(positions.end(), ego_future.begin(), ego_future.end());
+  VehicleTrack ego = trackFromPositions(positions, dt, initial.speed, initial.heading);
+  ego.id = "ego";
+  ego.role = VehicleRole::Ego;
+  ego.length = ego_length;
+  for (std::size_t k = 1; k < instants && k - 1 < scene.targetValid.size(); ++k) ego.valid[k] = scene.targetValid[k - 1];
+  trace.vehicles.push_back(std::move(ego));
+
+  for (const auto& polyline : scene.polylines) {
+    if (polyline.type != ObjectType::Vehicle) continue;
+    VehicleTrack track;
+    track.length = other_length;
+    track.states.assign(instants, VehicleState{});
+    track.valid.assign(instants, 0);
+    for (std::size_t v = 0; v < polyline.vectors.size(); ++v) {
+      if (!polyline.valid[v]) continue;
+      const auto& f = polyline.vectors[v];
+      const auto end_instant = std::lround(f[6] / dt);
+      const Vec2 start(f[0], f[1]);
+      const Vec2 end(f[2], f[3]);
+      const double heading = (end - start).norm() > 1e-9 ? headingOf(end - start) : 0.0;
+      const double speed = (end - start).norm() / dt;
+      // A vector's end point sets its instant; its start point fills the instant
+      // before only if no earlier vector ended there (e.g. after a masked step).
+      if (end_instant >= 1 && end_instant - 1 < static_cast<long>(instants) &&
+          !track.valid[static_cast<std::size_t>(end_instant - 1)]) {
+        track.states[static_cast<std::size_t>(end_instant - 1)] = {start.x(), start.y(), heading, speed, 0.0};
+        track.valid[static_cast<std::size_t>(end_instant - 1)] = 1;
+      }
+      if (end_instant >= 0 && end_instant < static_cast<long>(instants)) {
+        track.states[static_cast<std::size_t>(end_instant)] = {end.x(), end.y(), heading, speed, 0.0};
+        track.valid[static_cast<std::size_t>(end_instant)] = 1;
+      }
+    }
+    fillAccelerationFromSpeed(track, dt);
+    trace.vehicles.push_back(std::move(track));
+  }
+  return trace;
+}
+
+Polyline egoLaneCentre(const VectorizedScene& scene) {
+  const Vec2 ego = scene.egoInitialState().position();
+  Polyline best;
+  double best_distance = std::numeric_limits<double>::infinity();
+  for (std::size_t p = 0; p + 1 < scene.polylines.size(); ++p) {
+    const auto& left = scene.polylines[p];
+    const auto& right = scene.polylines[p + 1];
+    if (left.type != ObjectType::LaneBoundary || right.type != ObjectType::LaneBoundary ||
+        left.vectors.size() != right.vectors.size() || left.vectors.empty()) {
+      continue;
+    }
+    Polyline centre;
+    for (std::size_t v = 0; v < left.vectors.size(); ++v) {
+      centre.emplace_back(0.5 * (left.vectors[v][0] + right.vectors[v][0]), 0.5 * (left.vectors[v][1] + right.vectors[v][1]));
+    }
+    centre.emplace_back(0.5 * (left.vectors.back()[2] + right.vectors.back()[2]),
+                        0.5 * (left.vectors.back()[3] + right.vectors.back()[3]));
+    const double distance = std::abs(MeasuredPolyline(centre).project(ego).lateralOffset);
+    if (distance < best_distance) {
+      best_distance = distance;
+      best = std::move(centre);
+    }
+    ++p;  // boundaries come in (left, right) pairs
+  }
+  return best;
+}
+
+}  // namespace vsd::vector

@@ -88,3 +88,45 @@ TEST(Trace, AccelerationFromSpeedDifferences) {
   EXPECT_NEAR(track.states[3].accel, 2.5, 1e-12);
   EXPECT_NEAR(track.states[0].accel, track.states[1].accel, 1e-12);
 }
+
+TEST(Trace, TrackFromPositionsRecoversASuddenBrakeAtTheStart) {
+  // The simulator's trapezoidal integration along a straight heading of 0.3 rad:
+  // 10 m/s, braking at -5 m/s^2 from t = 0 for 1 s, then constant speed.
+  const double dt = 0.2;
+  const double heading = 0.3;
+  const Vec2 direction(std::cos(heading), std::sin(heading));
+  std::vector<double> speed = {10.0};
+  Polyline positions = {Vec2(3.0, -2.0)};
+  for (int k = 1; k <= 25; ++k) {
+    speed.push_back(speed.back() + (k <= 5 ? -5.0 * dt : 0.0));
+    positions.push_back(positions.back() + 0.5 * (speed[k - 1] + speed[k]) * dt * direction);
+  }
+  const auto track = trackFromPositions(positions, dt, 10.0, heading);
+  ASSERT_EQ(track.states.size(), 26u);
+  // The first step's acceleration is exact: no smoothing window blurs the jump at t = 0.
+  EXPECT_NEAR(track.states[1].accel, -5.0, 1e-9);
+  double a_min = 0.0;
+  for (std::size_t k = 1; k < track.states.size(); ++k) a_min = std::min(a_min, track.states[k].accel);
+  EXPECT_NEAR(a_min, -5.0, 1e-9);
+  // Where the acceleration is constant, speeds at instants are exact; at the end of the
+  // braking the midpoint difference averages the two steps around it.
+  EXPECT_NEAR(track.states[3].speed, speed[3], 1e-9);
+  EXPECT_NEAR(track.states[20].speed, 5.0, 1e-9);
+  EXPECT_NEAR(track.states[6].accel, -2.5, 1e-9);
+  EXPECT_NEAR(track.states[25].accel, 0.0, 1e-9);
+  for (const auto& state : track.states) EXPECT_NEAR(state.heading, heading, 1e-9);
+  EXPECT_EQ(track.states[7].x, positions[7].x());
+}
+
+TEST(Trace, TrackFromPositionsKeepsHeadingAtStandstillAndHandlesShortInput) {
+  const Polyline still(6, Vec2(1.0, 1.0));
+  const auto track = trackFromPositions(still, 0.2, 0.0, 1.2);
+  for (const auto& state : track.states) {
+    EXPECT_NEAR(state.heading, 1.2, 1e-12);
+    EXPECT_EQ(state.speed, 0.0);
+  }
+  EXPECT_TRUE(trackFromPositions({}, 0.2, 1.0, 0.0).states.empty());
+  const auto single = trackFromPositions({Vec2(0, 0)}, 0.2, 4.0, 0.5);
+  ASSERT_EQ(single.states.size(), 1u);
+  EXPECT_EQ(single.states[0].speed, 4.0);
+}

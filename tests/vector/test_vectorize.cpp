@@ -147,3 +147,53 @@ TEST(LaneIndex, ReturnsOnlyVectorsWithinTheRadiusAsRunsOfThePool) {
   }
   EXPECT_TRUE(index.query({100.0, 200.0}, 20.0).empty());
 }
+
+TEST(SceneTrace, RebuildsTheTraceTheSceneCameFromAndTheEgosLane) {
+  const Trace trace = followingTrace();
+  LaneGeometry lane = straightLane(-55.0, 55.0, 1.0, 25, 3.5);
+  LaneGeometry other_lane = straightLane(-55.0, 55.0, 4.5, 25, 3.5);
+  const auto scene = buildScene("acc", trace, 0, regionLanePolylines({other_lane, lane}, -55.0, 55.0));
+
+  const auto rebuilt = sceneTrace(scene, scene.target, 4.5, 5.5);
+  ASSERT_EQ(rebuilt.vehicles.size(), 2u);
+  EXPECT_EQ(rebuilt.step, 0.2);
+  const auto& ego = rebuilt.vehicles[0];
+  const auto& co = rebuilt.vehicles[1];
+  EXPECT_EQ(ego.role, VehicleRole::Ego);
+  EXPECT_EQ(ego.length, 4.5);
+  EXPECT_EQ(co.length, 5.5);
+  ASSERT_EQ(ego.states.size(), 26u);
+  ASSERT_EQ(co.states.size(), 26u);
+  for (std::size_t k = 0; k < 26; ++k) {
+    EXPECT_TRUE(ego.states[k].position().isApprox(trace.vehicles[0].states[k].position(), 1e-9)) << k;
+    EXPECT_NEAR(ego.states[k].speed, 10.0, 1e-9) << k;
+    EXPECT_NEAR(ego.states[k].accel, 0.0, 1e-9) << k;
+    EXPECT_TRUE(co.validAt(k)) << k;
+    EXPECT_TRUE(co.states[k].position().isApprox(trace.vehicles[1].states[k].position(), 1e-9)) << k;
+    EXPECT_NEAR(co.states[k].speed, 8.0, 1e-9) << k;
+  }
+
+  // A prediction replaces the Ego's future; the Co stays as recorded.
+  Polyline stopped(25, scene.egoInitialState().position());
+  const auto stopping = sceneTrace(scene, stopped);
+  EXPECT_NEAR(stopping.vehicles[0].states[1].accel, -10.0 / 0.1, 1e-9);
+  EXPECT_TRUE(stopping.vehicles[1].states[25].position().isApprox(trace.vehicles[1].states[25].position(), 1e-9));
+
+  // The Ego's lane: the midline of the boundary pair nearest to it (y = 1, not 4.5).
+  const auto centre = egoLaneCentre(scene);
+  ASSERT_EQ(centre.size(), 25u);
+  for (const auto& point : centre) EXPECT_NEAR(point.y(), 1.0, 1e-9);
+  EXPECT_NEAR(centre.front().x(), -55.0, 1e-9);
+}
+
+TEST(SceneTrace, MaskedCoInstantsStayInvalid) {
+  Trace trace = followingTrace();
+  trace.vehicles[1].valid[10] = 0;
+  const auto scene = buildScene("acc", trace, 0, {});
+  const auto rebuilt = sceneTrace(scene, scene.target);
+  const auto& co = rebuilt.vehicles[1];
+  EXPECT_FALSE(co.validAt(10));
+  EXPECT_TRUE(co.validAt(9));
+  EXPECT_TRUE(co.validAt(11));
+  EXPECT_TRUE(egoLaneCentre(scene).empty());
+}

@@ -52,4 +52,17 @@ struct Trace {
 /// accelerations are comparable.
 void fillAccelerationFromSpeed(VehicleTrack& track, double step);
 
+/// A track from positions alone (e.g. a predicted trajectory), positions[0] at t = 0
+/// where the speed and heading are known (the Ego's initial vector). Speeds come from
+/// step lengths: u_j = |p_j - p_{j-1}| / dt is the speed at the step's midpoint
+/// (t_j - dt/2) - exact for the simulator's trapezoidal integration and second-order
+/// accurate for any smooth motion - so no smoothing window blurs a sudden brake at t = 0:
+///   accel at instant j >= 1: (u_j - u_{j-1}) / (t of u_j - t of u_{j-1}), with u_0 = the
+///                            initial speed at t = 0 (so accel_1 covers [0, dt/2]);
+///   speed at instant k:      (u_k + u_{k+1}) / 2, the last one extrapolated with accel_F;
+///   heading at instant k:    direction of p_{k+1} - p_{k-1} (one-sided at the end).
+/// On simulated positions, a_min from this track is within a few cm/s^2 of the
+/// simulation's (README "Metrics from predicted trajectories").
+VehicleTrack trackFromPositions(const Polyline& positions, double step, double initial_speed, double initial_heading);
+
 }  // namespace vsd

@@ -1,0 +1,238 @@
+#include "spec.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <set>
+
+#include "vsd/core/error.hpp"
+#include "vsd/core/files.hpp"
+#include "vsd/metrics/metrics.hpp"
+#include "vsd/scenario/yaml_reader.hpp"
+
+namespace fs = std::filesystem;
+
+namespace vsd::experiment {
+
+const Source& Spec::source(const std::string& label) const {
+  for (const auto& source : sources) {
+    if (source.label == label) return source;
+  }
+  throw ConfigError(fmt::format("{}: no functional scenario '{}'", file.string(), label));
+}
+
+const AdeSpec& Spec::row(int number) const {
+  for (const auto& row : ade) {
+    if (row.row == number) return row;
+  }
+  throw ConfigError(fmt::format("{}: no ade row {}", file.string(), number));
+}
+
+Spec parseSpec(const fs::path& file, bool quick) {
+  std::string text;
+  try {
+    text = readTextFile(file);
+  } catch (const IoError& error) {
+    throw ConfigError(error.what());
+  }
+  const scenario::YamlReader reader(file.string());
+  const auto root = scenario::loadYaml(text, file.string());
+  reader.checkKeys(root, "", {"schema", "name", "seed", "scenarios", "data", "training", "ade", "mae", "figures", "quick"});
+  Spec spec;
+  spec.file = file;
+  spec.quick = quick;
+  if (root["schema"] && reader.scalar(root["schema"], "schema") != "vsd-experiment/1") {
+    throw ConfigError::field(reader.where(root["schema"], "schema"), "schema", reader.scalar(root["schema"], "schema"),
+                             "vsd-experiment/1");
+  }
+  if (!root["name"]) reader.fail(root, "name", "missing (the results' folder name)");
+  spec.name = reader.scalar(root["name"], "name");
+  spec.seed = static_cast<std::uint64_t>(reader.integer(root, "seed", "seed", 1, 0));
+  const fs::path base = file.parent_path();
+  auto resolve = [&](const fs::path& path) { return path.is_absolute() ? path : base / path; };
+
+  const auto scenarios = root["scenarios"];
+  if (!scenarios) reader.fail(root, "scenarios", "missing (functional scenarios by label)");
+  reader.requireMap(scenarios, "scenarios");
+  for (const auto& entry : scenarios) {
+    Source source;
+    source.label = entry.first.as<std::string>();
+    const std::string field = "scenarios." + source.label;
+    reader.checkKeys(entry.second, field, {"scenario", "train", "test"});
+    if (entry.second["scenario"]) {
+      source.scenario = resolve(reader.scalar(entry.second["scenario"], field + ".scenario"));
+      if (!fs::is_regular_file(source.scenario)) {
+        reader.fail(entry.second["scenario"], field + ".scenario",
+                    fmt::format("'{}' does not exist (a logical scenario file)", source.scenario.string()));
+      }
+    } else if (entry.second["train"] && entry.second["test"]) {
+      source.trainRun = resolve(reader.scalar(entry.second["train"], field + ".train"));
+      source.testRun = resolve(reader.scalar(entry.second["test"], field + ".test"));
+      for (const auto& [path, key] : {std::pair{source.trainRun, "train"}, std::pair{source.testRun, "test"}}) {
+        for (const char* needed : {"dataset.h5", "concrete.csv"}) {
+          if (!fs::is_regular_file(path / needed)) {
+            reader.fail(entry.second[key], field + "." + key,
+                        fmt::format("'{}' is not a run folder of vsd-sumo run (no {})", path.string(), needed));
+          }
+        }
+      }
+    } else {
+      reader.fail(entry.second, field, "needs 'scenario' (to simulate) or 'train' and 'test' (existing runs)");
+    }
+    spec.sources.push_back(source);
+  }
+
+  if (const auto data = root["data"]) {
+    reader.checkKeys(data, "data", {"train_samples", "test_samples", "train_seed", "test_seed", "jobs"});
+    spec.trainSamples = static_cast<std::uint64_t>(reader.integer(data, "train_samples", "data.train_samples", 3000, 2));
+    spec.testSamples = static_cast<std::uint64_t>(reader.integer(data, "test_samples", "data.test_samples", 10000, 1));
+    spec.trainSeed = static_cast<std::uint64_t>(reader.integer(data, "train_seed", "data.train_seed", 1, 0));
+    spec.testSeed = static_cast<std::uint64_t>(reader.integer(data, "test_seed", "data.test_seed", 2, 0));
+    spec.jobs = reader.integer(data, "jobs", "data.jobs", 2, 1);
+  }
+  if (const auto training = root["training"]) {
+    reader.checkKeys(training, "training", {"steps", "batch", "learning_rate", "threads"});
+    spec.steps = reader.integer(training, "steps", "training.steps", spec.steps, 1);
+    spec.batch = reader.integer(training, "batch", "training.batch", spec.batch, 1);
+    spec.learningRate = reader.number(training, "learning_rate", "training.learning_rate", spec.learningRate);
+    spec.threads = reader.integer(training, "threads", "training.threads", spec.threads, 1);
+  }
+
+  auto requireLabel = [&](const YAML::Node& node, const std::string& field, const std::string& label) {
+    for (const auto& source : spec.sources) {
+      if (source.label == label) return;
+    }
+    std::vector<std::string> known;
+    for (const auto& source : spec.sources) known.push_back(source.label);
+    reader.fail(node, field, fmt::format("unknown functional scenario '{}' (defined under scenarios: {})", label,
+                                         fmt::join(known, ", ")));
+  };
+  auto labelled_counts = [&](const YAML::Node& node, const std::string& field) {
+    std::vector<std::pair<std::string, std::size_t>> counts;
+    reader.requireMap(node, field);
+    for (const auto& entry : node) {
+      const auto label = entry.first.as<std::string>();
+      requireLabel(entry.first, field + "." + label, label);
+      counts.emplace_back(label, static_cast<std::size_t>(reader.integer(node, label, field + "." + label, 0, 0)));
+    }
+    return counts;
+  };
+  auto labelled_numbers = [&](const YAML::Node& node, const std::string& field) {
+    std::map<std::string, double> numbers;
+    reader.requireMap(node, field);
+    for (const auto& entry : node) {
+      const auto key = entry.first.as<std::string>();
+      numbers[key] = reader.number(entry.second, field + "." + key);
+    }
+    return numbers;
+  };
+
+  auto requireRow = [&](const YAML::Node& node, const std::string& field, int number) {
+    for (const auto& row : spec.ade) {
+      if (row.row == number) return;
+    }
+    reader.fail(node, field, fmt::format("no ade row {}", number));
+  };
+
+  const auto ade = root["ade"];
+  if (!ade || !ade.IsSequence()) reader.fail(root, "ade", "expected a list of training mixes");
+  std::set<int> rows;
+  for (std::size_t i = 0; i < ade.size(); ++i) {
+    const std::string field = fmt::format("ade[{}]", i);
+    reader.checkKeys(ade[i], field, {"row", "mix", "paper"});
+    AdeSpec row;
+    row.row = reader.integer(ade[i], "row", field + ".row", static_cast<int>(i) + 1, 1);
+    if (!rows.insert(row.row).second) reader.fail(ade[i], field + ".row", fmt::format("row {} appears twice", row.row));
+    if (!ade[i]["mix"]) reader.fail(ade[i], field, "missing 'mix'");
+    row.mix = labelled_counts(ade[i]["mix"], field + ".mix");
+    for (const auto& [label, count] : row.mix) {
+      if (!spec.sources.empty() && spec.source(label).scenario.empty()) continue;  // existing runs: checked at training
+      if (count > spec.trainSamples && !quick) {
+        reader.fail(ade[i]["mix"], field + ".mix." + label,
+                    fmt::format("{} samples, but data.train_samples is {}", count, spec.trainSamples));
+      }
+    }
+    if (ade[i]["paper"]) row.paper = labelled_numbers(ade[i]["paper"], field + ".paper");
+    spec.ade.push_back(row);
+  }
+
+  if (const auto mae = root["mae"]) {
+    reader.checkKeys(mae, "mae", {"samples", "vectornet_rows", "metrics", "extra_trees", "bnn"});
+    spec.maeSamples = static_cast<std::size_t>(reader.integer(mae, "samples", "mae.samples", 2000, 2));
+    if (const auto rows_node = mae["vectornet_rows"]) {
+      for (const auto& [label, row] : labelled_counts(rows_node, "mae.vectornet_rows")) {
+        requireRow(rows_node[label], "mae.vectornet_rows." + label, static_cast<int>(row));
+        spec.vectornetRows[label] = static_cast<int>(row);
+      }
+    }
+    if (const auto metrics = mae["metrics"]) {
+      reader.requireMap(metrics, "mae.metrics");
+      for (const auto& by_label : metrics) {
+        const auto label = by_label.first.as<std::string>();
+        requireLabel(by_label.first, "mae.metrics." + label, label);
+        if (!spec.vectornetRows.count(label)) {
+          reader.fail(by_label.first, "mae.metrics." + label, "has no entry in mae.vectornet_rows");
+        }
+        reader.requireMap(by_label.second, "mae.metrics." + label);
+        for (const auto& by_metric : by_label.second) {
+          const auto metric = by_metric.first.as<std::string>();
+          const std::string field = "mae.metrics." + label + "." + metric;
+          if (!metrics::findMetric(metric)) reader.fail(by_metric.first, field, fmt::format("unknown metric '{}'", metric));
+          MaeMetricSpec item{label, metric, {}};
+          if (by_metric.second && by_metric.second.IsMap()) item.paper = labelled_numbers(by_metric.second, field);
+          spec.maeMetrics.push_back(item);
+        }
+      }
+    }
+    if (const auto trees = mae["extra_trees"]) {
+      reader.checkKeys(trees, "mae.extra_trees", {"trees", "max_features", "min_samples_split"});
+      spec.extraTrees.trees = reader.integer(trees, "trees", "mae.extra_trees.trees", 100, 1);
+      spec.extraTrees.maxFeatures = reader.number(trees, "max_features", "mae.extra_trees.max_features", 1.0);
+      spec.extraTrees.minSamplesSplit = reader.integer(trees, "min_samples_split", "mae.extra_trees.min_samples_split", 2, 2);
+    }
+    if (const auto bnn = mae["bnn"]) {
+      reader.checkKeys(bnn, "mae.bnn", {"hidden", "layers", "epochs"});
+      spec.bnn.hidden = reader.integer(bnn, "hidden", "mae.bnn.hidden", spec.bnn.hidden, 1);
+      spec.bnn.layers = reader.integer(bnn, "layers", "mae.bnn.layers", spec.bnn.layers, 1);
+      spec.bnn.epochs = reader.integer(bnn, "epochs", "mae.bnn.epochs", spec.bnn.epochs, 1);
+    }
+  }
+  spec.extraTrees.seed = spec.bnn.seed = spec.seed;
+
+  if (const auto figures = root["figures"]) {
+    for (std::size_t i = 0; i < figures.size(); ++i) {
+      const std::string field = fmt::format("figures[{}]", i);
+      reader.checkKeys(figures[i], field, {"name", "row", "title"});
+      FigureSpec figure;
+      if (!figures[i]["name"] || !figures[i]["row"]) reader.fail(figures[i], field, "needs 'name' and 'row'");
+      figure.name = reader.scalar(figures[i]["name"], field + ".name");
+      figure.row = reader.integer(figures[i], "row", field + ".row", 0, 1);
+      requireRow(figures[i]["row"], field + ".row", figure.row);
+      if (figures[i]["title"]) figure.title = reader.scalar(figures[i]["title"], field + ".title");
+      spec.figures.push_back(figure);
+    }
+  }
+
+  if (quick) {
+    const auto q = root["quick"];
+    if (!q) reader.fail(root, "quick", "missing: --quick needs the spec's small sizes");
+    reader.checkKeys(q, "quick", {"train_samples", "test_samples", "mix_scale", "steps", "mae_samples", "bnn_epochs", "trees"});
+    spec.trainSamples = static_cast<std::uint64_t>(reader.integer(q, "train_samples", "quick.train_samples", 300, 2));
+    spec.testSamples = static_cast<std::uint64_t>(reader.integer(q, "test_samples", "quick.test_samples", 300, 1));
+    const double scale = reader.number(q, "mix_scale", "quick.mix_scale", 0.1);
+    for (auto& row : spec.ade) {
+      for (auto& [label, count] : row.mix) {
+        if (count > 0) count = std::max<std::size_t>(10, static_cast<std::size_t>(std::lround(static_cast<double>(count) * scale)));
+        count = std::min<std::size_t>(count, spec.trainSamples);
+      }
+    }
+    spec.steps = reader.integer(q, "steps", "quick.steps", 500, 1);
+    spec.maeSamples = static_cast<std::size_t>(reader.integer(q, "mae_samples", "quick.mae_samples", 200, 2));
+    spec.bnn.epochs = reader.integer(q, "bnn_epochs", "quick.bnn_epochs", 80, 1);
+    spec.extraTrees.trees = reader.integer(q, "trees", "quick.trees", 30, 1);
+  }
+  return spec;
+}
+
+}  // namespace vsd::experiment

@@ -1,0 +1,68 @@
+#pragma once
+// The experiment YAML as typed structs (internal to the experiment module).
+
+#include <filesystem>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "vsd/baseline/baseline.hpp"
+
+namespace vsd::experiment {
+
+struct Source {
+  std::string label;
+  std::filesystem::path scenario;  ///< a logical scenario to simulate, or
+  std::filesystem::path trainRun;  ///< existing run folders
+  std::filesystem::path testRun;
+};
+
+struct AdeSpec {
+  int row = 0;
+  std::vector<std::pair<std::string, std::size_t>> mix;
+  std::map<std::string, double> paper;
+};
+
+struct MaeMetricSpec {
+  std::string label;
+  std::string metric;
+  std::map<std::string, double> paper;  ///< et, bnn, vectornet
+};
+
+struct FigureSpec {
+  std::string name;
+  int row = 0;
+  std::string title;
+};
+
+struct Spec {
+  std::filesystem::path file;
+  std::string name;
+  std::uint64_t seed = 1;
+  std::vector<Source> sources;
+  std::uint64_t trainSamples = 3000;
+  std::uint64_t testSamples = 10000;
+  std::uint64_t trainSeed = 1;
+  std::uint64_t testSeed = 2;
+  int jobs = 2;
+  int steps = 6000;
+  int batch = 64;
+  double learningRate = 2e-3;
+  int threads = 2;
+  std::vector<AdeSpec> ade;
+  std::size_t maeSamples = 2000;
+  std::map<std::string, int> vectornetRows;
+  std::vector<MaeMetricSpec> maeMetrics;
+  baseline::ExtraTreesOptions extraTrees;
+  baseline::BnnOptions bnn;
+  std::vector<FigureSpec> figures;
+  bool quick = false;
+
+  const Source& source(const std::string& label) const;
+  const AdeSpec& row(int number) const;
+};
+
+/// Parses and checks the spec; with `quick`, applies its `quick:` section.
+Spec parseSpec(const std::filesystem::path& file, bool quick);
+
+}  // namespace vsd::experiment

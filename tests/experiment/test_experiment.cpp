@@ -1,0 +1,231 @@
+// `vsd-sumo experiment`: the paper's pipeline at --quick sizes end to end, its cache
+// (a re-run reuses everything; a removed or half-written artefact is rebuilt with its
+// dependants and nothing else), the findings' rules, and bad specs.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <regex>
+
+#include "../../src/experiment/cache.hpp"
+#include "../../src/experiment/results.hpp"
+#include "test_support.hpp"
+#include "vsd/core/csv.hpp"
+#include "vsd/core/error.hpp"
+#include "vsd/core/files.hpp"
+
+namespace fs = std::filesystem;
+using namespace vsd;
+using namespace vsd::experiment;
+
+namespace {
+
+ProcessResult runExperimentCli(const std::vector<std::string>& args, const fs::path& work) {
+  std::vector<std::string> argv = {test::vsdSumo().string(), "experiment"};
+  argv.insert(argv.end(), args.begin(), args.end());
+  return test::run(argv, work);
+}
+
+std::size_t builtCount(const std::string& output) {
+  static const std::regex pattern(R"(\((\d+) artefacts built, (\d+) reused)");
+  std::smatch match;
+  if (!std::regex_search(output, match, pattern)) return 999;
+  return std::stoul(match[1].str());
+}
+
+/// ade.csv as (row, label) -> ADE.
+std::map<std::pair<std::string, std::string>, double> adeValues(const fs::path& csv) {
+  const auto table = CsvTable::read(csv);
+  std::map<std::pair<std::string, std::string>, double> values;
+  for (std::size_t r = 0; r < table.rows(); ++r) {
+    values[{table.cell(r, table.column("row")), table.cell(r, table.column("test_label"))}] =
+        table.number(r, table.column("ade_m"));
+  }
+  return values;
+}
+
+AdeRow row(int number, std::map<std::string, std::size_t> mix, std::map<std::string, double> ade) {
+  AdeRow result;
+  result.row = number;
+  result.mix = std::move(mix);
+  result.ade = std::move(ade);
+  return result;
+}
+
+}  // namespace
+
+TEST(Experiment, QuickRunProducesTheTablesFiguresAndManifestAndCachesArtefacts) {
+  TemporaryDirectory dir;
+  const auto out = dir.path() / "quick";
+  const auto spec = test::sourceDir() / "scenarios" / "experiments" / "paper.yaml";
+  const auto first = runExperimentCli({spec.string(), "--quick", "--out", out.string()}, dir.path());
+  ASSERT_EQ(first.exitCode, 0) << first.output;
+
+  // Ten rows x three test sets, every ADE finite and positive, the paper's values next to ours.
+  const auto ade = adeValues(out / "ade.csv");
+  ASSERT_EQ(ade.size(), 30u);
+  for (const auto& [key, value] : ade) {
+    EXPECT_TRUE(std::isfinite(value) && value > 0.0) << key.first << " " << key.second;
+  }
+  const auto ade_table = CsvTable::read(out / "ade.csv");
+  EXPECT_EQ(ade_table.cell(0, ade_table.column("paper_ade_m")), "0.37");
+  // In-distribution beats out-of-distribution even at quick sizes: ACC-only on LK is far off.
+  EXPECT_LT(ade.at({"1", "acc"}), ade.at({"1", "lk"}));
+  EXPECT_LT(ade.at({"2", "lk"}), ade.at({"2", "acc"}));
+
+  const auto mae = CsvTable::read(out / "mae.csv");
+  ASSERT_EQ(mae.rows(), 6u);  // acc: a_min, d_min; lk: p_lat_max; acc_lk: all three
+  for (std::size_t r = 0; r < mae.rows(); ++r) {
+    for (const char* column : {"et", "bnn", "vectornet", "vectornet_from_true_positions", "bnn_mean_std"}) {
+      const double value = mae.number(r, mae.column(column));
+      EXPECT_TRUE(std::isfinite(value) && value >= 0.0) << column << " row " << r;
+    }
+    // Positions reproduce distances exactly: d_min and p_lat_max have no reconstruction error.
+    if (mae.cell(r, mae.column("metric")) != "a_min") {
+      // (datasets store positions as float32: about 1e-5 m at 100 m from the origin)
+      EXPECT_LT(mae.number(r, mae.column("vectornet_from_true_positions")), 1e-4);
+    }
+  }
+  for (const char* figure : {"fig6_trained_on_all_three", "fig7_trained_on_acc_lk", "fig8_trained_on_acc_and_lk"}) {
+    const auto svg = readTextFile(out / "figures" / (std::string(figure) + ".svg"));
+    EXPECT_EQ(svg.rfind("<svg", 0), 0u) << figure;
+    EXPECT_NE(svg.find("VectorNet prediction"), std::string::npos) << figure;
+    EXPECT_EQ(std::count(svg.begin(), svg.end(), '\n') > 50, true) << figure;
+  }
+  const auto findings = readTextFile(out / "findings.md");
+  for (const char* id : {"(a)", "(b)", "(c)", "(d)"}) EXPECT_NE(findings.find(id), std::string::npos);
+  const auto manifest = readTextFile(out / "manifest.json");
+  EXPECT_NE(manifest.find("\"quick\": true"), std::string::npos);
+  EXPECT_NE(manifest.find("\"sumo_version\""), std::string::npos);
+
+  // A re-run reuses everything and gives the same numbers.
+  const auto second = runExperimentCli({spec.string(), "--quick", "--out", out.string()}, dir.path());
+  ASSERT_EQ(second.exitCode, 0) << second.output;
+  EXPECT_EQ(builtCount(second.output), 0u) << second.output;
+  EXPECT_EQ(adeValues(out / "ade.csv"), ade);
+
+  // Artefacts left half-written by an interrupted run (no key) are rebuilt: row 3's model and
+  // its evaluation. Downstream keys name what an artefact was built from (data, mix, seed),
+  // not its bytes, so nothing else is redone. Same seed and threads: the same ADEs again.
+  const auto row3_model = out / "cache" / "models" / "row3";
+  fs::remove(ArtefactCache::keyFile(row3_model));
+  test::writeFile(row3_model / "model.pt", "truncated");
+  fs::remove(ArtefactCache::keyFile(out / "cache" / "eval" / "row3"));
+  const auto third = runExperimentCli({spec.string(), "--quick", "--out", out.string()}, dir.path());
+  ASSERT_EQ(third.exitCode, 0) << third.output;
+  EXPECT_EQ(builtCount(third.output), 2u) << third.output;
+  EXPECT_NE(third.output.find("row 3 model"), std::string::npos) << third.output;
+  EXPECT_EQ(adeValues(out / "ade.csv"), ade);
+
+  // Existing run folders can stand in for simulated data, but must hold the right scenario.
+  const auto runs = out / "cache" / "data";
+  const auto wrong = test::writeFile(dir.path() / "wrong_runs.yaml", fmt::format(R"(schema: vsd-experiment/1
+name: wrong
+scenarios:
+  acc: {{train: {0}/lk_train, test: {0}/lk_test}}
+ade:
+  - {{row: 1, mix: {{acc: 20}}}}
+)",
+                                                                                   runs.string()));
+  const auto wrong_result = runExperimentCli({wrong.string(), "--out", (dir.path() / "wrong").string()}, dir.path());
+  EXPECT_EQ(wrong_result.exitCode, 1);
+  EXPECT_NE(wrong_result.output.find("holds functional scenario 'lk', expected 'acc'"), std::string::npos)
+      << wrong_result.output;
+  EXPECT_FALSE(fs::exists(dir.path() / "wrong"));
+}
+
+TEST(Experiment, BadSpecsGiveOneLineNamingFileFieldAndValue) {
+  TemporaryDirectory dir;
+  const auto scenarios = test::sourceDir() / "scenarios";
+  const std::string head = fmt::format("schema: vsd-experiment/1\nname: bad\nscenarios:\n  acc: {{scenario: {}}}\n",
+                                       (scenarios / "acc.yaml").string());
+  struct Case {
+    std::string name;
+    std::string yaml;
+    std::string expected;
+  };
+  const std::vector<Case> cases = {
+      {"missing_scenario", "schema: vsd-experiment/1\nname: bad\nscenarios:\n  acc: {scenario: nowhere.yaml}\nade: []\n",
+       "nowhere.yaml' does not exist (a logical scenario file)"},
+      {"missing_run", "schema: vsd-experiment/1\nname: bad\nscenarios:\n  acc: {train: no/run, test: no/run}\nade: []\n",
+       "no/run' is not a run folder of vsd-sumo run (no dataset.h5)"},
+      {"unknown_label", head + "ade:\n  - {row: 1, mix: {acc: 20, lkk: 20}}\n",
+       "ade[0].mix.lkk: unknown functional scenario 'lkk' (defined under scenarios: acc)"},
+      {"unknown_metric",
+       head + "ade:\n  - {row: 1, mix: {acc: 20}}\nmae:\n  vectornet_rows: {acc: 1}\n  metrics: {acc: {a_max: {}}}\n",
+       "mae.metrics.acc.a_max: unknown metric 'a_max'"},
+      {"unknown_row", head + "ade:\n  - {row: 1, mix: {acc: 20}}\nfigures:\n  - {name: f, row: 7}\n",
+       "figures[0].row: no ade row 7"},
+      {"unknown_key", head + "ade: []\ntrainig: {steps: 10}\n", "unknown key 'trainig'"},
+      {"too_many", head + "data: {train_samples: 100}\nade:\n  - {row: 1, mix: {acc: 200}}\n",
+       "ade[0].mix.acc: 200 samples, but data.train_samples is 100"},
+      {"wrong_label",
+       fmt::format("schema: vsd-experiment/1\nname: bad\nscenarios:\n  acc: {{scenario: {}}}\nade: []\n",
+                   (scenarios / "lk.yaml").string()),
+       "describes functional scenario 'lk', expected 'acc'"},
+      {"no_quick", head + "ade:\n  - {row: 1, mix: {acc: 20}}\n", "quick: missing"},
+  };
+  for (const auto& c : cases) {
+    const auto file = test::writeFile(dir.path() / (c.name + ".yaml"), c.yaml);
+    const auto out = dir.path() / ("out_" + c.name);
+    std::vector<std::string> args = {file.string(), "--out", out.string()};
+    if (c.name == "no_quick") args.push_back("--quick");
+    const auto result = runExperimentCli(args, dir.path());
+    EXPECT_EQ(result.exitCode, 1) << c.name << ": " << result.output;
+    EXPECT_EQ(std::count(result.output.begin(), result.output.end(), '\n'), 1) << c.name << ": " << result.output;
+    EXPECT_NE(result.output.find(c.expected), std::string::npos) << c.name << ": " << result.output;
+    EXPECT_NE(result.output.find(file.string()), std::string::npos) << c.name << ": " << result.output;
+    EXPECT_FALSE(fs::exists(out)) << c.name << ": output left behind";
+  }
+}
+
+TEST(Experiment, CacheKeysAreExactAndClearingRemovesTheKeyFirst) {
+  TemporaryDirectory dir;
+  const ArtefactCache cache(dir.path());
+  const auto folder = cache.folder("models/row1");
+  CacheKey key("model");
+  key.add("mix", "acc=2000").add("seed", 1);
+  EXPECT_FALSE(cache.valid(folder, key));
+  cache.clear(folder);
+  test::writeFile(folder / "model.pt", "weights");
+  EXPECT_FALSE(cache.valid(folder, key)) << "no key yet: an unfinished artefact";
+  cache.commit(folder, key);
+  EXPECT_TRUE(cache.valid(folder, key));
+  CacheKey other("model");
+  other.add("mix", "acc=2000").add("seed", 2);
+  EXPECT_FALSE(cache.valid(folder, other));
+  EXPECT_NE(key.digest(), other.digest());
+  cache.clear(folder);
+  EXPECT_FALSE(fs::exists(ArtefactCache::keyFile(folder)));
+  EXPECT_TRUE(fs::is_directory(folder) && fs::is_empty(folder));
+}
+
+TEST(Experiment, FindingsFollowTheirThresholds) {
+  // The paper's own Table II: (a)-(d) all hold.
+  std::vector<AdeRow> paper = {
+      row(1, {{"acc", 2000}}, {{"acc", 0.37}, {"lk", 12.47}, {"acc_lk", 8.96}}),
+      row(2, {{"lk", 2000}}, {{"acc", 2.40}, {"lk", 0.40}, {"acc_lk", 6.48}}),
+      row(3, {{"acc_lk", 2000}}, {{"acc", 0.43}, {"lk", 14.86}, {"acc_lk", 0.52}}),
+      row(4, {{"acc", 2000}, {"lk", 2000}}, {{"acc", 0.39}, {"lk", 0.41}, {"acc_lk", 4.69}}),
+      row(9, {{"acc", 2000}, {"lk", 2000}, {"acc_lk", 200}}, {{"acc", 0.41}, {"lk", 0.42}, {"acc_lk", 0.83}}),
+      row(10, {{"acc_lk", 200}}, {{"acc", 0.88}, {"lk", 9.95}, {"acc_lk", 1.13}}),
+  };
+  auto findings = checkFindings(paper);
+  ASSERT_EQ(findings.size(), 4u);
+  for (const auto& finding : findings) EXPECT_EQ(finding.verdict, "holds") << finding.id << ": " << finding.evidence;
+
+  // An in-distribution ADE above 0.6 m: (a) does not hold.
+  paper[2].ade["acc_lk"] = 0.65;
+  findings = checkFindings(paper);
+  EXPECT_EQ(findings[0].verdict, "does not hold");
+  // ACC&LK -> ACC at 1.5 m is neither generalising (<= 1 m) nor failing (>= 2 m).
+  paper[2].ade["acc"] = 1.5;
+  EXPECT_EQ(checkFindings(paper)[1].verdict, "inconclusive");
+  // ACC + LK -> ACC&LK at 0.6 m generalises: (c) does not hold.
+  paper[3].ade["acc_lk"] = 0.6;
+  EXPECT_EQ(checkFindings(paper)[2].verdict, "does not hold");
+  // Row 9 worse than row 10: (d) does not hold. A row with another mix is not checked.
+  paper[4].ade["acc_lk"] = 1.2;
+  EXPECT_EQ(checkFindings(paper)[3].verdict, "does not hold");
+  paper[5].mix = {{"acc", 200}};
+  EXPECT_EQ(checkFindings(paper)[3].verdict, "not checked");
+}
