@@ -185,6 +185,34 @@ int runModelBench(const ModelBenchOptions& options) {
   return 0;
 }
 
+struct CompareBenchOptions {
+  fs::path model;
+  fs::path scenario = "scenarios/acc_lk.yaml";
+  std::vector<std::uint64_t> samples = {500, 5000};
+  int jobs = 1;
+};
+
+/// `vsd-sumo compare` as separate processes: prediction + simulation + report, wall time,
+/// report size and peak memory.
+int runCompareBench(const CompareBenchOptions& options) {
+  TemporaryDirectory work("vsd-bench-compare");
+  fmt::print("vsd-sumo bench compare: {} with {} (jobs {}), end to end: vectorize -> predict -> simulate -> "
+             "compare -> report\n",
+             options.scenario.string(), options.model.string(), options.jobs);
+  fmt::print("  {:>8} {:>10} {:>14} {:>14} {:>12}\n", "samples", "seconds", "scenarios/s", "report [MiB]", "peak RSS");
+  for (const auto samples : options.samples) {
+    const fs::path out = work.path() / fmt::format("compare_{}", samples);
+    const auto result = runSelf({"compare", options.scenario.string(), "--model", options.model.string(), "--samples",
+                                 std::to_string(samples), "--seed", "99", "--jobs", std::to_string(options.jobs),
+                                 "--out", out.string()},
+                                work.path());
+    const double report_mib = static_cast<double>(fs::file_size(out / "index.html")) / (1024.0 * 1024.0);
+    fmt::print("  {:>8} {:>10.2f} {:>14.1f} {:>14.2f} {:>8.1f} MiB\n", samples, result.seconds,
+               static_cast<double>(samples) / result.seconds, report_mib, static_cast<double>(result.maxRssKiB) / 1024.0);
+  }
+  return 0;
+}
+
 }  // namespace
 
 void addBenchCommand(CLI::App& app, CommandContext& context) {
@@ -224,6 +252,18 @@ void addBenchCommand(CLI::App& app, CommandContext& context) {
   modeling->add_option("--threads", model_options->threads, "libtorch threads")->capture_default_str();
   modeling->callback([model_options, &context] {
     context.action = [model_options] { return runModelBench(*model_options); };
+  });
+
+  auto compare_options = std::make_shared<CompareBenchOptions>();
+  CLI::App* comparing = bench->add_subcommand("compare", "Wall time, report size and peak memory of `vsd-sumo compare`");
+  comparing->add_option("--model", compare_options->model, "VectorNet model file")->required()->check(CLI::ExistingFile);
+  comparing->add_option("scenario", compare_options->scenario, "Logical scenario")
+      ->check(CLI::ExistingFile)
+      ->capture_default_str();
+  comparing->add_option("--samples", compare_options->samples, "Scenario counts to compare")->capture_default_str();
+  comparing->add_option("--jobs", compare_options->jobs, "SUMO worker processes")->capture_default_str();
+  comparing->callback([compare_options, &context] {
+    context.action = [compare_options] { return runCompareBench(*compare_options); };
   });
 }
 

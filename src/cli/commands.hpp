@@ -24,6 +24,7 @@ void addPredictCommand(CLI::App& app, CommandContext& context);
 void addEvaluateCommand(CLI::App& app, CommandContext& context);
 void addBaselineCommand(CLI::App& app, CommandContext& context);
 void addExperimentCommand(CLI::App& app, CommandContext& context);
+void addCompareCommand(CLI::App& app, CommandContext& context);
 void addBenchCommand(CLI::App& app, CommandContext& context);
 
 }  // namespace vsd::cli

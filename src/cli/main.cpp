@@ -44,6 +44,7 @@ int main(int argc, char** argv) {
   vsd::cli::addEvaluateCommand(app, context);
   vsd::cli::addBaselineCommand(app, context);
   vsd::cli::addExperimentCommand(app, context);
+  vsd::cli::addCompareCommand(app, context);
   vsd::cli::addBenchCommand(app, context);
 
   try {

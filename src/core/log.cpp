@@ -2,6 +2,8 @@
 
 #include <spdlog/sinks/stdout_color_sinks.h>
 
+#include <ctime>
+
 #include "vsd/core/progress.hpp"
 
 #ifndef VSD_VERSION
@@ -34,6 +36,15 @@ void configureLogging(Verbosity verbosity) {
 std::string toolVersion() {
   const std::string commit = VSD_GIT_COMMIT;
   return commit.empty() ? std::string(VSD_VERSION) : std::string(VSD_VERSION) + "+" + commit;
+}
+
+std::string utcTimestamp() {
+  const std::time_t now = std::time(nullptr);
+  std::tm utc{};
+  gmtime_r(&now, &utc);
+  char buffer[32];
+  std::strftime(buffer, sizeof(buffer), "%Y-%m-%dT%H:%M:%SZ", &utc);
+  return buffer;
 }
 
 }  // namespace vsd

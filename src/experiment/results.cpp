@@ -86,14 +86,6 @@ std::vector<std::string> labelsOf(const Spec& spec) {
   return labels;
 }
 
-std::string utcNow() {
-  const auto now = std::chrono::system_clock::to_time_t(std::chrono::system_clock::now());
-  std::tm utc{};
-  gmtime_r(&now, &utc);
-  char text[32];
-  std::strftime(text, sizeof text, "%Y-%m-%dT%H:%M:%SZ", &utc);
-  return text;
-}
 
 std::string sizesLine(const Spec& spec) {
   return fmt::format(
@@ -276,7 +268,7 @@ void writeResults(const Spec& spec, const ExperimentOptions& options, Experiment
   manifest["tool_version"] = toolVersion();
   manifest["sumo_version"] = sim::SumoSession::version();
   manifest["command_line"] = options.commandLine;
-  manifest["finished_utc"] = utcNow();
+  manifest["finished_utc"] = utcTimestamp();
   manifest["seconds"] = summary.seconds;
   manifest["seeds"] = {{"experiment", spec.seed}, {"train_data", spec.trainSeed}, {"test_data", spec.testSeed}};
   manifest["sizes"] = {{"train_samples", spec.trainSamples}, {"test_samples", spec.testSamples},

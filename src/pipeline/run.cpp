@@ -21,13 +21,13 @@
 #include "vsd/core/progress.hpp"
 #include "vsd/metrics/metrics.hpp"
 #include "vsd/pipeline/outcome_codec.hpp"
+#include "vsd/pipeline/scenes.hpp"
 #include "vsd/pipeline/worker_pool.hpp"
 #include "vsd/road/network.hpp"
 #include "vsd/scenario/concrete_scenario.hpp"
 #include "vsd/sim/batch_simulation.hpp"
 #include "vsd/sim/trace_file.hpp"
 #include "vsd/vector/dataset.hpp"
-#include "vsd/vector/vectorize.hpp"
 
 namespace fs = std::filesystem;
 
@@ -348,11 +348,7 @@ class RunFiles {
   }
 
   vector::VectorizedScene sceneOf(const ScenarioOutcome& outcome) const {
-    auto scene = vector::buildScene(logical_.name, outcome.trace, 0,
-                                    vector::regionLanePolylines(outcome.lanes, logical_.road.xMin, logical_.road.xMax));
-    scene.sample = outcome.index;
-    scene.inputs = outcome.inputs;
-    scene.metrics = outcome.metrics;
+    auto scene = simulatedScene(logical_, outcome);
     scene.provenance = {logical_.sourceFile.string(), scenarioSha256_, logical_.ego.id, 0.0};
     return scene;
   }
@@ -384,14 +380,6 @@ class RunFiles {
   Trace emptyTrace_;
 };
 
-std::string isoTimeNow() {
-  const std::time_t now = std::time(nullptr);
-  std::tm utc{};
-  gmtime_r(&now, &utc);
-  char buffer[32];
-  std::strftime(buffer, sizeof(buffer), "%Y-%m-%dT%H:%M:%SZ", &utc);
-  return buffer;
-}
 
 void writeManifest(const Context& context, const RunSummary& summary, const fs::path& out,
                    const std::vector<fs::path>& outputs, const std::string& started) {
@@ -409,7 +397,7 @@ void writeManifest(const Context& context, const RunSummary& summary, const fs::
   manifest["batch"] = context.options.batch;
   manifest["jobs"] = context.options.jobs;
   manifest["started"] = started;
-  manifest["finished"] = isoTimeNow();
+  manifest["finished"] = utcTimestamp();
   manifest["seconds"] = summary.seconds;
   manifest["ok"] = summary.ok;
   manifest["failed"] = summary.failed;
@@ -467,7 +455,7 @@ RunSummary runScenarios(const std::shared_ptr<const scenario::LogicalScenario>& 
                         const OutcomeCallback& on_outcome) {
   options.validate();
   const auto start = std::chrono::steady_clock::now();
-  const std::string started = isoTimeNow();
+  const std::string started = utcTimestamp();
 
   Context context;
   context.logical = logical;

@@ -12,10 +12,38 @@ namespace {
 constexpr const char* kLaneColour = "#9a9a9a";
 constexpr const char* kVehicleColour = "#7b3294";
 constexpr const char* kEgoColour = "#1f78b4";
+
+/// Clips segment a-b to the box [lo, hi] (Liang-Barsky); false if nothing is inside.
+bool clipSegment(Vec2& a, Vec2& b, const Vec2& lo, const Vec2& hi) {
+  const Vec2 d = b - a;
+  double t0 = 0.0;
+  double t1 = 1.0;
+  for (int axis = 0; axis < 2; ++axis) {
+    for (const auto& [p, q] : {std::pair{-d[axis], a[axis] - lo[axis]}, std::pair{d[axis], hi[axis] - a[axis]}}) {
+      if (std::abs(p) < 1e-12) {
+        if (q < 0.0) return false;
+        continue;
+      }
+      const double t = q / p;
+      if (p < 0.0) {
+        t0 = std::max(t0, t);
+      } else {
+        t1 = std::min(t1, t);
+      }
+      if (t0 > t1) return false;
+    }
+  }
+  const Vec2 start = a + t0 * d;
+  b = a + t1 * d;
+  a = start;
+  return true;
+}
 }  // namespace
 
 std::string renderSceneSvg(const VectorizedScene& scene, const std::vector<TrajectoryOverlay>& overlays,
-                           const std::string& title, int width_px) {
+                           const std::string& title, int width_px, const std::string& target_label,
+                           double focus_margin_m) {
+  const bool focus = focus_margin_m > 0.0;
   Vec2 lo(std::numeric_limits<double>::infinity(), std::numeric_limits<double>::infinity());
   Vec2 hi = -lo;
   auto extend = [&](const Vec2& p) {
@@ -24,6 +52,7 @@ std::string renderSceneSvg(const VectorizedScene& scene, const std::vector<Traje
     hi = hi.cwiseMax(p);
   };
   for (const auto& polyline : scene.polylines) {
+    if (focus && polyline.type == ObjectType::LaneBoundary) continue;
     for (std::size_t v = 0; v < polyline.vectors.size(); ++v) {
       if (!polyline.valid[v]) continue;
       extend({polyline.vectors[v][0], polyline.vectors[v][1]});
@@ -37,6 +66,10 @@ std::string renderSceneSvg(const VectorizedScene& scene, const std::vector<Traje
     for (const auto& p : overlay.points) extend(p);
   }
   if (!lo.allFinite()) lo = hi = Vec2::Zero();
+  if (focus) {
+    lo -= Vec2(focus_margin_m, focus_margin_m);
+    hi += Vec2(focus_margin_m, focus_margin_m);
+  }
   const Vec2 pad = ((hi - lo) * 0.03).cwiseMax(Vec2(2.0, 2.0));
   // Very elongated scenes would be a few pixels high: keep at least 1/6 of the width.
   Vec2 span = hi - lo + 2.0 * pad;
@@ -52,7 +85,7 @@ std::string renderSceneSvg(const VectorizedScene& scene, const std::vector<Traje
   };
   std::vector<Entry> legend = {{kLaneColour, "lane boundaries"},
                                {kVehicleColour, "other vehicles (timestamps in s)"},
-                               {kEgoColour, "Ego: initial vector and simulated future"}};
+                               {kEgoColour, "Ego: initial vector and " + target_label}};
   for (const auto& overlay : overlays) legend.push_back({overlay.colour, overlay.label});
   std::vector<std::pair<Vec2, Entry>> legend_layout;
   double legend_x = 10.0;
@@ -69,11 +102,16 @@ std::string renderSceneSvg(const VectorizedScene& scene, const std::vector<Traje
   const int margin = 40 + static_cast<int>(legend_row);
   SvgCanvas canvas(lo - pad, hi + pad, width_px, 0, /*equal_aspect=*/true, margin);
 
+  const Vec2 view_lo = lo - pad;
+  const Vec2 view_hi = hi + pad;
   for (const auto& polyline : scene.polylines) {
     if (polyline.type != ObjectType::LaneBoundary) continue;
     for (std::size_t v = 0; v < polyline.vectors.size(); ++v) {
       const auto& f = polyline.vectors[v];
-      canvas.line({f[0], f[1]}, {f[2], f[3]}, kLaneColour, 1.2);
+      Vec2 a(f[0], f[1]);
+      Vec2 b(f[2], f[3]);
+      if (focus && !clipSegment(a, b, view_lo, view_hi)) continue;
+      canvas.line(a, b, kLaneColour, 1.2);
     }
   }
   for (const auto& polyline : scene.polylines) {

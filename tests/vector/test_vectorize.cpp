@@ -2,6 +2,9 @@
 
 #include <cmath>
 
+#include <regex>
+
+#include "vsd/vector/scene_svg.hpp"
 #include "vsd/vector/vectorize.hpp"
 
 using namespace vsd;
@@ -196,4 +199,45 @@ TEST(SceneTrace, MaskedCoInstantsStayInvalid) {
   EXPECT_TRUE(co.validAt(9));
   EXPECT_TRUE(co.validAt(11));
   EXPECT_TRUE(egoLaneCentre(scene).empty());
+}
+
+// Zoomed drawings (the comparison report's worst scenarios) keep every line inside the
+// picture: lanes far from the vehicles are clipped, not drawn over the legend.
+TEST(SceneSvg, FocusZoomsToTheVehiclesAndClipsTheLanes) {
+  const Trace trace = followingTrace();  // vehicles between x = -50 and +10 m
+  const auto scene = buildScene("acc", trace, 0, regionLanePolylines({straightLane(-400.0, 400.0, 1.0, 25, 3.5)}, -400.0, 400.0));
+  const auto whole = renderSceneSvg(scene, {}, "whole", 600);
+  const auto focused = renderSceneSvg(scene, {}, "focused", 600, "simulated future", /*focus_margin_m=*/5.0);
+  auto extent = [](const std::string& svg) {
+    // x coordinates of the lane lines, in pixels
+    const std::regex points(R"re(points="([-0-9.]+),[-0-9.]+ ([-0-9.]+),[-0-9.]+ " fill="none" stroke="#9a9a9a")re");
+    double lo = 1e9;
+    double hi = -1e9;
+    for (auto it = std::sregex_iterator(svg.begin(), svg.end(), points); it != std::sregex_iterator(); ++it) {
+      for (int g : {1, 2}) {
+        lo = std::min(lo, std::stod((*it)[g]));
+        hi = std::max(hi, std::stod((*it)[g]));
+      }
+    }
+    return std::pair{lo, hi};
+  };
+  const auto [whole_lo, whole_hi] = extent(whole);
+  const auto [focus_lo, focus_hi] = extent(focused);
+  ASSERT_LT(focus_lo, focus_hi);
+  EXPECT_GE(focus_lo, 0.0);
+  EXPECT_LE(focus_hi, 600.0);
+  // 800 m of road in the whole drawing, ~70 m in the focused one: a lane vector of
+  // 33 m spans ~20 px in the first and ~200 px in the second.
+  auto longest = [](const std::string& svg) {
+    const std::regex lane(R"re(points="([-0-9.]+),[-0-9.]+ ([-0-9.]+),[-0-9.]+ " fill="none" stroke="#9a9a9a")re");
+    double result = 0.0;
+    for (auto it = std::sregex_iterator(svg.begin(), svg.end(), lane); it != std::sregex_iterator(); ++it) {
+      result = std::max(result, std::abs(std::stod((*it)[2]) - std::stod((*it)[1])));
+    }
+    return result;
+  };
+  EXPECT_LT(longest(whole), 30.0);
+  EXPECT_GT(longest(focused), 150.0);
+  EXPECT_LT(whole_lo, 100.0);
+  EXPECT_GT(whole_hi, 500.0);
 }

@@ -16,4 +16,7 @@ void configureLogging(Verbosity verbosity);
 /// Version of this tool ("0.1.0", plus the git commit when built from a checkout).
 std::string toolVersion();
 
+/// The current time in UTC, ISO 8601 ("2026-11-21T09:33:05Z"), for manifests and reports.
+std::string utcTimestamp();
+
 }  // namespace vsd

@@ -18,8 +18,12 @@ struct TrajectoryOverlay {
   bool dashed = true;
 };
 
-/// A self-contained <svg> element; `title` is printed at the top.
+/// A self-contained <svg> element; `title` is printed at the top. `target_label` names
+/// the scene's target in the legend ("simulated future", "recorded future").
+/// `focus_margin_m` > 0 zooms to the vehicles (Ego, its target, overlays, other vehicles)
+/// plus that margin in metres, with lanes clipped to the view; 0 draws the whole scene.
 std::string renderSceneSvg(const VectorizedScene& scene, const std::vector<TrajectoryOverlay>& overlays = {},
-                           const std::string& title = "", int width_px = 900);
+                           const std::string& title = "", int width_px = 900,
+                           const std::string& target_label = "simulated future", double focus_margin_m = 0.0);
 
 }  // namespace vsd::vector

@@ -1,0 +1,71 @@
+#pragma once
+// `vsd-sumo compare`: does a trained model's prediction hold up?
+//
+// Scenario mode: samples fresh concrete scenarios from a logical scenario, builds
+// their scenes *without simulating* (pipeline::plannedScene), predicts the Ego with
+// VectorNet, then simulates the same scenarios with SUMO and compares trajectories,
+// metrics and pass/fail criteria.
+// Dataset mode: predicts the samples of existing datasets (e.g. exported from a real
+// map) and compares against their recorded future.
+//
+// Writes <out>/index.html (self-contained report) and <out>/comparison.csv, into a
+// temporary folder renamed into place when complete.
+
+#include <cstdint>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "vsd/core/geometry.hpp"
+#include "vsd/metrics/metrics.hpp"
+#include "vsd/report/comparison.hpp"
+#include "vsd/vector/scene.hpp"
+
+namespace vsd::compare {
+
+struct CompareOptions {
+  std::filesystem::path model;                 ///< VectorNet model file (.pt)
+  std::filesystem::path scenarioFile;          ///< scenario mode: logical scenario (YAML)
+  std::vector<std::filesystem::path> data;     ///< dataset mode: dataset files or run folders
+  std::filesystem::path output;                ///< default: reports/<scenario name> or reports/<first dataset stem>
+  bool force = false;                          ///< replace an existing output folder
+  std::uint64_t samples = 500;                 ///< scenario mode: scenarios; dataset mode: first N samples (0 = all)
+  std::uint64_t seed = 1;                      ///< scenario mode: sampling seed
+  int jobs = 1;                                ///< scenario mode: SUMO worker processes
+  std::size_t batch = 250;                     ///< scenario mode: scenarios per SUMO network
+  int threads = 2;                             ///< libtorch threads
+  int worst = 6;                               ///< scenarios drawn in the report (largest ADE), 0..50
+  /// Dataset mode: metrics to compare (default: the dataset's metrics for generated data,
+  /// else a_min, d_min, ttc_min, thw_min) and criteria "name: expression" (scenario mode
+  /// takes both from the scenario file).
+  std::vector<std::string> metrics;
+  std::vector<std::string> criteria;
+  double egoLength = 5.0;                      ///< dataset mode: m (datasets do not store lengths)
+  double otherLength = 5.0;                    ///< dataset mode: m
+  std::string commandLine;                     ///< recorded in the report's provenance
+
+  /// Throws ConfigError naming the flag and what is accepted.
+  void validate() const;
+};
+
+struct CompareSummary {
+  report::Comparison comparison;
+  report::ComparisonStatistics statistics;
+  std::filesystem::path output;
+  std::vector<std::filesystem::path> files;
+  double seconds = 0.0;
+  std::string report() const;  ///< what the CLI prints
+};
+
+/// Runs the comparison. Throws ConfigError (options, scenario, criteria, existing output),
+/// ModelError (model file, feature schema, step/horizon mismatch), DatasetError, SumoError
+/// (for faults of the whole run; a scenario SUMO fails on is listed in the report).
+CompareSummary runComparison(const CompareOptions& options);
+
+/// Metrics of a scene's Ego moving along `future` (positions t_1..t_F in the scene frame;
+/// speeds and accelerations reconstructed from positions, see core/trace.hpp), with the
+/// other vehicles as the scene holds them and the lane the Ego starts on.
+std::vector<double> metricsOfFuture(const metrics::MetricSet& metric_set, const vector::VectorizedScene& scene,
+                                    const Polyline& future, double ego_length, double other_length);
+
+}  // namespace vsd::compare

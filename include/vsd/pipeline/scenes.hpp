@@ -1,0 +1,42 @@
+#pragma once
+// Vectorized scenes of generated scenarios, from two sources that must agree:
+//   - simulatedScene: what `run` stores in dataset.h5 — lanes as SUMO built them,
+//     the Co as SUMO moved it, the Ego's simulated future as target;
+//   - plannedScene: the same scene *before* simulating — lanes from the road
+//     generator, the Co integrated from its scripted speed the way SUMO does it
+//     (lane-bound, Euler), the Ego's initial vector; no target. This is what a
+//     model sees for a scenario nobody has simulated (`vsd-sumo compare`).
+// Both go through vector::buildScene, so their layout is identical; tests check
+// that their vectors agree to millimetres.
+
+#include <string>
+#include <vector>
+
+#include "vsd/core/geometry.hpp"
+#include "vsd/core/trace.hpp"
+#include "vsd/pipeline/run.hpp"
+#include "vsd/road/road_geometry.hpp"
+#include "vsd/scenario/concrete_scenario.hpp"
+#include "vsd/vector/scene.hpp"
+
+namespace vsd::pipeline {
+
+/// The scene `run` writes for a completed outcome (lanes clipped to the scenario region).
+vector::VectorizedScene simulatedScene(const scenario::LogicalScenario& logical, const ScenarioOutcome& outcome);
+
+/// The road's lanes as the generator builds them (centre over the whole edge, width).
+std::vector<LaneGeometry> plannedLanes(const road::RoadGeometry& road);
+
+/// Trace of a concrete scenario before simulation, in its scenario frame: the Ego valid
+/// at t = 0 only (start pose on its lane, sampled speed); every other vehicle valid at
+/// every instant, on its lane's centre line, its front bumper advanced by scripted
+/// speed x step per step (SUMO's Euler update with speed mode 0), its centre half a
+/// length behind the front along the back-to-front direction (SUMO's vehicle angle).
+/// Throws ConfigError if a vehicle starts outside its road.
+Trace plannedTrace(const scenario::ConcreteScenario& concrete, const road::RoadGeometry& road);
+
+/// The scene of a concrete scenario before simulation (targets all invalid), with
+/// its sample index and inputs set.
+vector::VectorizedScene plannedScene(const scenario::ConcreteScenario& concrete);
+
+}  // namespace vsd::pipeline

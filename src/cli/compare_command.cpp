@@ -1,0 +1,46 @@
+// compare: predicted vs simulated (or recorded) Ego behaviour, as an HTML report.
+#include <fmt/format.h>
+
+#include <memory>
+
+#include "commands.hpp"
+#include "vsd/compare/compare.hpp"
+
+namespace vsd::cli {
+
+void addCompareCommand(CLI::App& app, CommandContext& context) {
+  auto options = std::make_shared<compare::CompareOptions>();
+  CLI::App* command = app.add_subcommand(
+      "compare", "Predict the Ego in fresh scenarios of a logical scenario (or in dataset samples), simulate them, and "
+                 "write an HTML report and comparison.csv of predicted vs simulated (or recorded) behaviour");
+  command->add_option("scenario", options->scenarioFile, "Logical scenario (YAML), e.g. scenarios/acc_lk.yaml")
+      ->check(CLI::ExistingFile);
+  command->add_option("-m,--model", options->model, "VectorNet model file (vsd-sumo train)")->required();
+  command->add_option("-d,--data", options->data, "Instead of a scenario: dataset files or run folders (predicted "
+                                                  "vs recorded)");
+  command->add_option("-o,--out", options->output, "Report folder (default: reports/<scenario or dataset name>)");
+  command->add_flag("--force", options->force, "Replace an existing report folder");
+  command->add_option("-n,--samples", options->samples,
+                      "Scenarios to sample and simulate (datasets: the first N samples, 0 = all)")
+      ->capture_default_str();
+  command->add_option("-s,--seed", options->seed, "Sampling seed")->capture_default_str();
+  command->add_option("-j,--jobs", options->jobs, "SUMO worker processes")->capture_default_str();
+  command->add_option("--threads", options->threads, "libtorch threads")->capture_default_str();
+  command->add_option("--worst", options->worst, "Scenarios with the largest ADE drawn in the report")
+      ->capture_default_str();
+  command->add_option("--metrics", options->metrics, "Datasets: metrics to compare, e.g. a_min,d_min")->delimiter(',');
+  command->add_option("--criterion", options->criteria, "Datasets: pass/fail criterion 'name: expression', e.g. "
+                                                        "'close: d_min < 2' (repeatable)");
+  command->add_option("--ego-length", options->egoLength, "Datasets: Ego length (m)")->capture_default_str();
+  command->add_option("--other-length", options->otherLength, "Datasets: other vehicles' length (m)")
+      ->capture_default_str();
+  command->callback([=, &context] {
+    context.action = [=, &context] {
+      options->commandLine = context.commandLine;
+      fmt::print("{}", compare::runComparison(*options).report());
+      return 0;
+    };
+  });
+}
+
+}  // namespace vsd::cli

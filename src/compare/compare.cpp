@@ -1,0 +1,476 @@
+#include "vsd/compare/compare.hpp"
+
+#include <fmt/format.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <ctime>
+#include <functional>
+#include <limits>
+#include <numeric>
+#include <optional>
+
+#include "vsd/core/error.hpp"
+#include "vsd/core/files.hpp"
+#include "vsd/core/interrupt.hpp"
+#include "vsd/core/log.hpp"
+#include "vsd/core/progress.hpp"
+#include "vsd/model/model.hpp"
+#include "vsd/pipeline/run.hpp"
+#include "vsd/pipeline/scenes.hpp"
+#include "vsd/scenario/concrete_scenario.hpp"
+#include "vsd/scenario/expression.hpp"
+#include "vsd/scenario/logical_scenario.hpp"
+#include "vsd/sim/sumo_session.hpp"
+#include "vsd/vector/dataset.hpp"
+#include "vsd/vector/scene_svg.hpp"
+#include "vsd/vector/vectorize.hpp"
+
+namespace fs = std::filesystem;
+
+namespace vsd::compare {
+
+namespace {
+
+/// Scenes predicted per call: bounds the memory of the padded batch tensors.
+constexpr std::size_t kPredictChunk = 4096;
+
+/// Pass/fail criteria compiled against the metric names.
+class Criteria {
+ public:
+  Criteria(const std::vector<report::CriterionSpec>& specs, const std::vector<std::string>& where,
+           const std::vector<std::string>& metric_names) {
+    for (std::size_t c = 0; c < specs.size(); ++c) {
+      expressions_.push_back(scenario::Expression::compile(specs[c].expression, metric_names, where[c]));
+    }
+  }
+  /// Per criterion: 1 fails, 0 passes, -1 when a metric is NaN (not computable).
+  std::vector<int> evaluate(const std::vector<double>& metric_values) const {
+    std::vector<int> result;
+    const bool any_nan = std::any_of(metric_values.begin(), metric_values.end(), [](double v) { return std::isnan(v); });
+    for (const auto& expression : expressions_) {
+      const double value = expression.evaluate(metric_values);
+      result.push_back(any_nan || std::isnan(value) ? -1 : (value != 0.0 ? 1 : 0));
+    }
+    return result;
+  }
+
+ private:
+  std::vector<scenario::Expression> expressions_;
+};
+
+/// "name: expression" or a bare expression (named after itself).
+report::CriterionSpec parseCriterion(const std::string& text) {
+  const auto colon = text.find(':');
+  auto trim = [](std::string s) {
+    const auto first = s.find_first_not_of(" \t");
+    const auto last = s.find_last_not_of(" \t");
+    return first == std::string::npos ? std::string() : s.substr(first, last - first + 1);
+  };
+  report::CriterionSpec spec;
+  if (colon == std::string::npos) {
+    spec.expression = trim(text);
+    spec.name = spec.expression;
+  } else {
+    spec.name = trim(text.substr(0, colon));
+    spec.expression = trim(text.substr(colon + 1));
+  }
+  if (spec.name.empty() || spec.expression.empty()) {
+    throw ConfigError::field("command line", "--criterion", text, "'name: expression', e.g. 'close: d_min < 2'");
+  }
+  return spec;
+}
+
+std::vector<std::string> unitsOf(const std::vector<std::string>& names) {
+  std::vector<std::string> units;
+  for (const auto& name : names) units.push_back(metrics::findMetric(name)->unit);
+  return units;
+}
+
+/// The output folder is built under a temporary name next to it and renamed into place.
+class OutputFolder {
+ public:
+  OutputFolder(fs::path final_path, bool force) : final_(std::move(final_path)), force_(force) {
+    if (fs::exists(final_) && !force_) {
+      throw ConfigError(fmt::format("--out {}: the folder exists; choose another or pass --force to replace it",
+                                    final_.string()));
+    }
+    const fs::path parent = final_.has_parent_path() ? final_.parent_path() : fs::path(".");
+    ensureDirectory(parent);
+    temp_ = parent / fmt::format(".{}.partial-{}", final_.filename().string(), ::getpid());
+    fs::remove_all(temp_);
+    fs::create_directories(temp_);
+  }
+  OutputFolder(const OutputFolder&) = delete;
+  OutputFolder& operator=(const OutputFolder&) = delete;
+  ~OutputFolder() {
+    std::error_code ignored;
+    if (!committed_) fs::remove_all(temp_, ignored);
+  }
+  const fs::path& temp() const { return temp_; }
+  void commit() {
+    if (fs::exists(final_)) fs::remove_all(final_);  // only reachable with --force
+    fs::rename(temp_, final_);
+    committed_ = true;
+  }
+
+ private:
+  fs::path final_;
+  fs::path temp_;
+  bool force_ = false;
+  bool committed_ = false;
+};
+
+/// The two futures of a compared scenario; its scene is fetched again only to draw it.
+struct Futures {
+  Polyline prediction;
+  Polyline reference;
+  std::vector<std::uint8_t> referenceValid;
+};
+using SceneSource = std::function<vector::VectorizedScene(std::size_t)>;
+
+/// Predictions of scenes[i] for i in `which`, a bounded chunk at a time (no full copy).
+std::vector<Polyline> predictInChunks(const model::Predictor& predictor, const std::vector<vector::VectorizedScene>& scenes,
+                                      const std::vector<std::size_t>& which) {
+  std::vector<Polyline> predictions;
+  predictions.reserve(which.size());
+  for (std::size_t first = 0; first < which.size(); first += kPredictChunk) {
+    throwIfInterrupted();
+    std::vector<vector::VectorizedScene> chunk;
+    for (std::size_t i = first; i < std::min(which.size(), first + kPredictChunk); ++i) chunk.push_back(scenes[which[i]]);
+    auto part = predictor.predict(chunk);
+    for (auto& prediction : part) predictions.push_back(std::move(prediction));
+  }
+  return predictions;
+}
+
+std::string metricCaption(const report::Comparison& comparison, const report::ComparedScenario& row) {
+  std::string caption;
+  for (std::size_t m = 0; m < comparison.metricNames.size(); ++m) {
+    caption += fmt::format("{}{} {:.2f} predicted / {:.2f} {}", m ? "; " : "", comparison.metricNames[m],
+                           row.predicted[m], row.reference[m], comparison.referenceName);
+  }
+  return caption;
+}
+
+/// Draws the `count` scenarios with the largest ADE.
+std::vector<report::SceneDrawing> drawWorst(const report::Comparison& comparison,
+                                            const std::vector<std::optional<Futures>>& futures, int count,
+                                            const SceneSource& scene_of) {
+  std::vector<std::size_t> order;
+  for (std::size_t i = 0; i < comparison.scenarios.size(); ++i) {
+    if (comparison.scenarios[i].ok() && futures[i]) order.push_back(i);
+  }
+  const auto shown = std::min(order.size(), static_cast<std::size_t>(count));
+  std::partial_sort(order.begin(), order.begin() + static_cast<std::ptrdiff_t>(shown), order.end(),
+                    [&](std::size_t a, std::size_t b) { return comparison.scenarios[a].ade > comparison.scenarios[b].ade; });
+  std::vector<report::SceneDrawing> drawings;
+  for (std::size_t r = 0; r < shown; ++r) {
+    const auto& row = comparison.scenarios[order[r]];
+    const auto& future = *futures[order[r]];
+    auto scene = scene_of(order[r]);
+    scene.target = future.reference;
+    scene.targetValid = future.referenceValid;
+    const std::string title = fmt::format("{} sample {}: ADE {:.2f} m, FDE {:.2f} m", row.label, row.sample, row.ade, row.fde);
+    std::vector<vector::TrajectoryOverlay> overlays = {{"VectorNet prediction", {}, "#e31a1c", true}};
+    overlays[0].points.push_back(scene.egoInitialState().position());
+    for (const auto& p : future.prediction) overlays[0].points.push_back(p);
+    drawings.push_back({row.sample, metricCaption(comparison, row),
+                        vector::renderSceneSvg(scene, overlays, title, 560, comparison.referenceName + " future",
+                                               /*focus_margin_m=*/8.0)});
+  }
+  return drawings;
+}
+
+struct Run {
+  report::Comparison comparison;
+  std::vector<report::SceneDrawing> worst;
+};
+
+Run compareScenario(const CompareOptions& options, const model::Predictor& predictor) {
+  const auto logical = scenario::loadLogicalScenario(options.scenarioFile);
+  vector::DatasetHeader header;
+  header.step = logical->step;
+  header.horizon = logical->steps();
+  predictor.checkCompatible(header, options.scenarioFile.string());
+  const metrics::MetricSet metric_set(logical->metrics, !logical->others.empty(),
+                                      logical->sourceFile.string() + ": metrics");
+  Run run;
+  auto& comparison = run.comparison;
+  comparison.title = fmt::format("{}, {} fresh scenarios (seed {})", logical->name, options.samples, options.seed);
+  comparison.referenceName = "simulated";
+  comparison.inputNames = logical->inputNames();
+  comparison.metricNames = metric_set.names();
+  comparison.metricUnits = unitsOf(comparison.metricNames);
+  std::vector<std::string> where;
+  for (const auto& criterion : logical->criteria) {
+    comparison.criteria.push_back({criterion.name, criterion.expression});
+    where.push_back(criterion.where);
+  }
+  const Criteria criteria(comparison.criteria, where, comparison.metricNames);
+  const double ego_length = logical->ego.length;
+  const double other_length = logical->others.empty() ? 5.0 : logical->others.front().length;
+
+  // 1. Scenes before simulation.
+  auto start = std::chrono::steady_clock::now();
+  std::vector<vector::VectorizedScene> planned;
+  std::vector<std::string> plan_failure(options.samples);
+  planned.reserve(options.samples);
+  for (std::uint64_t index = 0; index < options.samples; ++index) {
+    throwIfInterrupted();
+    const auto concrete = scenario::sampleConcreteScenario(logical, options.seed, index);
+    try {
+      planned.push_back(pipeline::plannedScene(concrete));
+    } catch (const ConfigError& error) {  // e.g. a vehicle starting off its road: SUMO fails it too
+      plan_failure[index] = error.what();
+      planned.emplace_back();
+    }
+  }
+  comparison.timings.push_back({"vectorize", secondsSince(start)});
+  spdlog::info("vectorized {} scenarios without simulating them", options.samples);
+
+  // 2. Predictions of every scene that could be planned.
+  start = std::chrono::steady_clock::now();
+  std::vector<std::size_t> to_predict;
+  std::vector<std::size_t> predicted_index(options.samples, std::numeric_limits<std::size_t>::max());
+  for (std::size_t i = 0; i < planned.size(); ++i) {
+    if (!plan_failure[i].empty()) continue;
+    predicted_index[i] = to_predict.size();
+    to_predict.push_back(i);
+  }
+  const auto predictions = predictInChunks(predictor, planned, to_predict);
+  comparison.timings.push_back({"predict", secondsSince(start)});
+  spdlog::info("predicted the Ego in {} scenarios", predictions.size());
+
+  // 3. Simulation of the same concrete scenarios, compared as they arrive.
+  pipeline::RunOptions run_options;
+  run_options.scenarioFile = options.scenarioFile;
+  run_options.samples = options.samples;
+  run_options.seed = options.seed;
+  run_options.jobs = options.jobs;
+  run_options.batch = options.batch;
+  run_options.writeFiles = false;
+  std::vector<std::optional<Futures>> futures(options.samples);
+  comparison.scenarios.resize(options.samples);
+  double lane_deviation = 0.0;
+  double vehicle_deviation = 0.0;
+  start = std::chrono::steady_clock::now();
+  pipeline::runScenarios(logical, run_options, [&](const pipeline::ScenarioOutcome& outcome) {
+    auto& row = comparison.scenarios[outcome.index];
+    row.sample = outcome.index;
+    row.label = logical->name;
+    row.inputs = outcome.inputs;
+    if (!plan_failure[outcome.index].empty()) {
+      row.failure = outcome.ok() ? "could not be vectorized: " + plan_failure[outcome.index] : outcome.failure;
+      return;
+    }
+    if (!outcome.ok()) {
+      row.failure = outcome.failure;
+      return;
+    }
+    const auto& scene = planned[outcome.index];
+    const auto& prediction = predictions[predicted_index[outcome.index]];
+    auto simulated = pipeline::simulatedScene(*logical, outcome);
+    // How far the scene the model saw is from the one SUMO produced (lanes, the Co).
+    for (std::size_t p = 0; p < std::min(scene.polylines.size(), simulated.polylines.size()); ++p) {
+      const auto& a = scene.polylines[p];
+      const auto& b = simulated.polylines[p];
+      if (a.type == vector::ObjectType::Ego || a.vectors.size() != b.vectors.size()) continue;
+      double& worst = a.type == vector::ObjectType::LaneBoundary ? lane_deviation : vehicle_deviation;
+      for (std::size_t v = 0; v < a.vectors.size(); ++v) {
+        for (std::size_t f = 0; f < 4; ++f) worst = std::max(worst, std::abs(a.vectors[v][f] - b.vectors[v][f]));
+      }
+    }
+    // The scene the model saw, now with the future the simulation produced.
+    vector::VectorizedScene scored = scene;
+    scored.target = simulated.target;
+    scored.targetValid = simulated.targetValid;
+    const auto errors = model::displacementErrors(prediction, scored);
+    row.ade = errors.ade;
+    row.fde = errors.fde;
+    row.predicted = metricsOfFuture(metric_set, scored, prediction, ego_length, other_length);
+    row.reference = outcome.metrics;
+    row.fromReferencePositions = metricsOfFuture(metric_set, scored, simulated.target, ego_length, other_length);
+    row.predictedFails = criteria.evaluate(row.predicted);
+    row.referenceFails = criteria.evaluate(row.reference);
+    futures[outcome.index] = Futures{prediction, simulated.target, simulated.targetValid};
+  });
+  comparison.timings.push_back({"simulate", secondsSince(start)});
+  comparison.notes.push_back(fmt::format(
+      "The model saw scenes built before simulation; they deviate from the simulated scenes by at most {:.3f} m "
+      "(lane boundaries) and {:.3f} m (other vehicles): netconvert stores coordinates to 0.01 m.",
+      lane_deviation, vehicle_deviation));
+  comparison.provenance.push_back({"scenario file", options.scenarioFile.string()});
+  comparison.provenance.push_back({"scenario SHA-256", sha256OfFile(options.scenarioFile)});
+  comparison.provenance.push_back({"seed", std::to_string(options.seed)});
+  comparison.provenance.push_back({"scenarios", std::to_string(options.samples)});
+  comparison.provenance.push_back({"SUMO", sim::SumoSession::version()});
+  run.worst = drawWorst(comparison, futures, options.worst, [&](std::size_t i) { return planned[i]; });
+  return run;
+}
+
+Run compareDatasets(const CompareOptions& options, const model::Predictor& predictor) {
+  vector::DatasetCollection collection;
+  for (const auto& path : options.data) collection.add(path);
+  for (std::size_t f = 0; f < collection.files(); ++f) {
+    predictor.checkCompatible(collection.reader(f).header(), collection.reader(f).path().string());
+  }
+  auto refs = collection.all();
+  if (options.samples > 0 && refs.size() > options.samples) refs.resize(options.samples);
+  if (refs.empty()) throw DatasetError(fmt::format("{}: no samples to compare", options.data.front().string()));
+
+  const auto& first_header = collection.reader(0).header();
+  std::vector<std::string> names = options.metrics;
+  if (names.empty()) {
+    names = first_header.kind == "generated" ? first_header.metricNames
+                                              : std::vector<std::string>{"a_min", "d_min", "ttc_min", "thw_min"};
+  }
+  const metrics::MetricSet metric_set(names, /*has_other_vehicles=*/true, "--metrics");
+
+  Run run;
+  auto& comparison = run.comparison;
+  std::string files;
+  for (const auto& path : options.data) files += (files.empty() ? "" : ", ") + path.filename().string();
+  comparison.title = fmt::format("{} samples of {}", refs.size(), files);
+  comparison.referenceName = "recorded";
+  comparison.metricNames = metric_set.names();
+  comparison.metricUnits = unitsOf(comparison.metricNames);
+  std::vector<std::string> where;
+  for (const auto& text : options.criteria) {
+    comparison.criteria.push_back(parseCriterion(text));
+    where.push_back("--criterion '" + text + "'");
+  }
+  const Criteria criteria(comparison.criteria, where, comparison.metricNames);
+
+  double read_seconds = 0.0;
+  double predict_seconds = 0.0;
+  auto start = std::chrono::steady_clock::now();
+  std::vector<std::optional<Futures>> futures(refs.size());
+  comparison.scenarios.resize(refs.size());
+  for (std::size_t first = 0; first < refs.size(); first += kPredictChunk) {
+    auto stage = std::chrono::steady_clock::now();
+    std::vector<vector::VectorizedScene> scenes;
+    for (std::size_t i = first; i < std::min(refs.size(), first + kPredictChunk); ++i) scenes.push_back(collection.scene(refs[i]));
+    read_seconds += secondsSince(stage);
+    stage = std::chrono::steady_clock::now();
+    std::vector<std::size_t> all(scenes.size());
+    std::iota(all.begin(), all.end(), std::size_t{0});
+    const auto predictions = predictInChunks(predictor, scenes, all);
+    predict_seconds += secondsSince(stage);
+    for (std::size_t j = 0; j < scenes.size(); ++j) {
+      const auto& scene = scenes[j];
+      auto& row = comparison.scenarios[first + j];
+      row.sample = first + j;
+      row.label = scene.label;
+      if (std::none_of(scene.targetValid.begin(), scene.targetValid.end(), [](std::uint8_t v) { return v != 0; })) {
+        row.failure = "no recorded future (the Ego left the map at once)";
+        continue;
+      }
+      const auto errors = model::displacementErrors(predictions[j], scene);
+      row.ade = errors.ade;
+      row.fde = errors.fde;
+      row.predicted = metricsOfFuture(metric_set, scene, predictions[j], options.egoLength, options.otherLength);
+      row.reference = metricsOfFuture(metric_set, scene, scene.target, options.egoLength, options.otherLength);
+      row.predictedFails = criteria.evaluate(row.predicted);
+      row.referenceFails = criteria.evaluate(row.reference);
+      futures[first + j] = Futures{predictions[j], scene.target, scene.targetValid};
+    }
+  }
+  comparison.timings.push_back({"read", read_seconds});
+  comparison.timings.push_back({"predict", predict_seconds});
+  comparison.timings.push_back({"compare", secondsSince(start) - read_seconds - predict_seconds});
+  comparison.notes.push_back(fmt::format(
+      "Both sides go through the same metric code: the recorded and the predicted Ego positions, speeds and "
+      "accelerations reconstructed from positions; vehicle lengths {} m (Ego) and {} m (others).",
+      options.egoLength, options.otherLength));
+  for (std::size_t f = 0; f < collection.files(); ++f) {
+    const auto& path = collection.reader(f).path();
+    comparison.provenance.push_back({"dataset", path.string()});
+    comparison.provenance.push_back({"dataset SHA-256", sha256OfFile(path)});
+  }
+  run.worst = drawWorst(comparison, futures, options.worst, [&](std::size_t i) { return collection.scene(refs[i]); });
+  return run;
+}
+
+}  // namespace
+
+void CompareOptions::validate() const {
+  if (scenarioFile.empty() == data.empty()) {
+    throw ConfigError("compare: give either a logical scenario (SCENARIO) or datasets (--data), not both or neither");
+  }
+  if (!scenarioFile.empty() && (samples < 1 || samples > 10'000'000)) {
+    throw ConfigError::field("command line", "--samples", std::to_string(samples), "1 .. 10000000");
+  }
+  if (jobs < 1 || jobs > 256) throw ConfigError::field("command line", "--jobs", std::to_string(jobs), "1 .. 256");
+  if (threads < 1 || threads > 256) throw ConfigError::field("command line", "--threads", std::to_string(threads), "1 .. 256");
+  if (worst < 0 || worst > 50) throw ConfigError::field("command line", "--worst", std::to_string(worst), "0 .. 50");
+  if (!(egoLength > 0.0) || !(otherLength > 0.0)) {
+    throw ConfigError::field("command line", "--ego-length/--other-length",
+                             fmt::format("{}/{}", egoLength, otherLength), "> 0 m");
+  }
+  if (!scenarioFile.empty() && (!metrics.empty() || !criteria.empty())) {
+    throw ConfigError("compare: --metrics and --criterion are for datasets; a scenario file defines its own "
+                      "'metrics' and 'criteria'");
+  }
+}
+
+std::vector<double> metricsOfFuture(const metrics::MetricSet& metric_set, const vector::VectorizedScene& scene,
+                                    const Polyline& future, double ego_length, double other_length) {
+  return metric_set.evaluate(vector::sceneTrace(scene, future, ego_length, other_length), vector::egoLaneCentre(scene));
+}
+
+CompareSummary runComparison(const CompareOptions& options_in) {
+  const auto start = std::chrono::steady_clock::now();
+  CompareOptions options = options_in;
+  options.validate();
+  if (options.output.empty()) {
+    options.output = fs::path("reports") / (options.scenarioFile.empty() ? vector::resolveDatasetPath(options.data.front()).stem()
+                                                                          : options.scenarioFile.stem());
+  }
+  if (!fs::is_regular_file(options.model)) {
+    throw ModelError(fmt::format("--model {}: no such file", options.model.string()));
+  }
+  const model::Predictor predictor(options.model, options.threads);
+  OutputFolder folder(options.output, options.force);  // refuses an existing folder before any work
+
+  Run run = options.scenarioFile.empty() ? compareDatasets(options, predictor) : compareScenario(options, predictor);
+  auto& comparison = run.comparison;
+  const auto& info = predictor.info();
+  comparison.provenance.insert(
+      comparison.provenance.begin(),
+      {{"model file", options.model.string()},
+       {"model SHA-256", sha256OfFile(options.model)},
+       {"model", fmt::format("trained on {} (labels {}), seed {}, epoch {}, validation ADE {:.3f} m", info.mix,
+                             fmt::join(info.labels, ", "), info.seed, info.epoch, info.validationAde)}});
+  comparison.provenance.push_back({"vsd-sumo", toolVersion()});
+  comparison.provenance.push_back({"libtorch threads", std::to_string(options.threads)});
+  comparison.provenance.push_back({"command line", options.commandLine});
+  comparison.provenance.push_back({"written", utcTimestamp()});
+
+  CompareSummary summary;
+  summary.statistics = report::computeStatistics(comparison);
+  if (summary.statistics.compared == 0) {
+    throw Error(fmt::format("compare: no scenario could be compared ({} failed); first reason: {}",
+                                summary.statistics.failed, comparison.scenarios.front().failure));
+  }
+  report::writeComparisonCsv(comparison, folder.temp() / "comparison.csv");
+  writeTextFileAtomically(folder.temp() / "index.html", report::renderHtmlReport(comparison, summary.statistics, run.worst));
+  folder.commit();
+
+  summary.output = options.output;
+  summary.files = {options.output / "index.html", options.output / "comparison.csv"};
+  summary.seconds = secondsSince(start);
+  summary.comparison = std::move(comparison);
+  return summary;
+}
+
+std::string CompareSummary::report() const {
+  std::string text = report::textSummary(comparison, statistics);
+  text += fmt::format("  total {:.1f} s\nreport: {}\n", seconds, (output / "index.html").string());
+  text += fmt::format("table:  {}\n", (output / "comparison.csv").string());
+  return text;
+}
+
+}  // namespace vsd::compare

@@ -1,0 +1,86 @@
+#include "vsd/pipeline/scenes.hpp"
+
+#include <cmath>
+
+#include "vsd/vector/vectorize.hpp"
+
+namespace vsd::pipeline {
+
+namespace {
+
+vector::VectorizedScene generatedScene(const scenario::LogicalScenario& logical, const Trace& trace,
+                                       const std::vector<LaneGeometry>& lanes) {
+  return vector::buildScene(logical.name, trace, 0, vector::regionLanePolylines(lanes, logical.road.xMin, logical.road.xMax));
+}
+
+VehicleTrack emptyTrack(const scenario::ConcreteVehicle& vehicle, VehicleRole role, std::size_t instants) {
+  VehicleTrack track;
+  track.id = vehicle.id;
+  track.role = role;
+  track.length = vehicle.length;
+  track.width = vehicle.width;
+  track.states.assign(instants, VehicleState{});
+  track.valid.assign(instants, 0);
+  return track;
+}
+
+}  // namespace
+
+vector::VectorizedScene simulatedScene(const scenario::LogicalScenario& logical, const ScenarioOutcome& outcome) {
+  auto scene = generatedScene(logical, outcome.trace, outcome.lanes);
+  scene.sample = outcome.index;
+  scene.inputs = outcome.inputs;
+  scene.metrics = outcome.metrics;
+  return scene;
+}
+
+std::vector<LaneGeometry> plannedLanes(const road::RoadGeometry& road) {
+  std::vector<LaneGeometry> lanes;
+  for (int lane = 0; lane < road.lanes; ++lane) {
+    lanes.push_back({std::to_string(lane), road.laneCentre(lane), road.laneWidth});
+  }
+  return lanes;
+}
+
+Trace plannedTrace(const scenario::ConcreteScenario& concrete, const road::RoadGeometry& road) {
+  const double dt = concrete.step();
+  const auto instants = static_cast<std::size_t>(concrete.steps()) + 1;
+  Trace trace;
+  trace.step = dt;
+
+  VehicleTrack ego = emptyTrack(concrete.ego, VehicleRole::Ego, instants);
+  const auto ego_start = road::startPoseOnLane(road, concrete.ego.lane, concrete.ego.x, concrete.ego.id);
+  ego.states[0] = {ego_start.position.x(), ego_start.position.y(), ego_start.heading, concrete.ego.speed, 0.0};
+  ego.valid[0] = 1;
+  trace.vehicles.push_back(std::move(ego));
+
+  for (const auto& other : concrete.others) {
+    VehicleTrack track = emptyTrack(other, VehicleRole::Other, instants);
+    const auto start = road::startPoseOnLane(road, other.lane, other.x, other.id);
+    const MeasuredPolyline lane_centre(road.laneCentre(other.lane));
+    // SUMO tracks the front bumper's arc length along the lane.
+    double front_arc = lane_centre.project(start.position).arcLength + 0.5 * other.length;
+    for (std::size_t k = 0; k < instants; ++k) {
+      if (k > 0) front_arc += other.scriptedSpeed[k] * dt;
+      const Vec2 front = lane_centre.pointAt(front_arc);
+      const Vec2 back = lane_centre.pointAt(front_arc - other.length);
+      const double heading = headingOf(front - back);
+      const Vec2 centre = front - 0.5 * other.length * headingVector(heading);
+      track.states[k] = {centre.x(), centre.y(), heading, other.scriptedSpeed[k], 0.0};
+      track.valid[k] = 1;
+    }
+    fillAccelerationFromSpeed(track, dt);
+    trace.vehicles.push_back(std::move(track));
+  }
+  return trace;
+}
+
+vector::VectorizedScene plannedScene(const scenario::ConcreteScenario& concrete) {
+  const auto road = road::buildRoadGeometry(concrete);
+  auto scene = generatedScene(*concrete.logical, plannedTrace(concrete, road), plannedLanes(road));
+  scene.sample = concrete.index;
+  scene.inputs = concrete.inputs;
+  return scene;
+}
+
+}  // namespace vsd::pipeline

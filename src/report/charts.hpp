@@ -1,0 +1,24 @@
+#pragma once
+// Small SVG charts for the comparison report (no scripts, no external resources).
+
+#include <limits>
+#include <string>
+#include <vector>
+
+namespace vsd::report {
+
+/// Round tick positions covering [lo, hi] (about `count` of them, steps of 1, 2 or 5 x 10^n).
+std::vector<double> niceTicks(double lo, double hi, int count = 5);
+
+/// Predicted (y) against reference (x) with the diagonal y = x; non-finite pairs are
+/// left out. At most `max_points` points are drawn (every k-th); the caption says so.
+std::string scatterSvg(const std::vector<double>& reference, const std::vector<double>& predicted,
+                       const std::string& title, const std::string& x_label, const std::string& y_label,
+                       std::size_t max_points = 2000);
+
+/// Histogram of the finite values in `bins` equal bins, with a marker at `marker`
+/// (e.g. 0 for errors) when it lies inside the range.
+std::string histogramSvg(const std::vector<double>& values, const std::string& title, const std::string& x_label,
+                         int bins = 30, double marker = std::numeric_limits<double>::quiet_NaN());
+
+}  // namespace vsd::report

@@ -1,0 +1,220 @@
+// `vsd-sumo compare` end to end: a small model trained once, fresh scenarios predicted
+// without simulating them, then simulated and compared.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "test_support.hpp"
+#include "vsd/compare/compare.hpp"
+#include "vsd/core/csv.hpp"
+#include "vsd/core/error.hpp"
+#include "vsd/core/files.hpp"
+#include "vsd/model/model.hpp"
+#include "vsd/pipeline/run.hpp"
+
+using namespace vsd;
+using namespace vsd::compare;
+namespace fs = std::filesystem;
+
+namespace {
+
+/// Simulates `samples` scenarios of a paper scenario into `out` (concrete.csv, dataset.h5, ...).
+void simulate(const std::string& scenario, const fs::path& out, std::uint64_t samples, std::uint64_t seed) {
+  pipeline::RunOptions run;
+  run.scenarioFile = test::scenarioFile(scenario);
+  run.outputDir = out;
+  run.samples = samples;
+  run.seed = seed;
+  pipeline::runScenarios(run);
+}
+
+/// One small model per test process: acc_lk, 300 scenarios, a short schedule (~5 s). The
+/// tests check consistency (compare vs evaluate, failures, errors), not accuracy.
+class CompareTest : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    dir_ = new TemporaryDirectory();
+    simulate("acc_lk.yaml", dir_->path() / "train", 300, 5);
+    model::TrainOptions train;
+    train.data = {dir_->path() / "train"};
+    train.output = dir_->path() / "m.pt";
+    train.steps = 300;
+    train.patience = 1000;
+    model::train(train);
+  }
+  static void TearDownTestSuite() {
+    delete dir_;
+    dir_ = nullptr;
+  }
+  static fs::path modelFile() { return dir_->path() / "m.pt"; }
+
+  CompareOptions scenarioOptions(const fs::path& out, std::uint64_t samples = 60) const {
+    CompareOptions options;
+    options.model = modelFile();
+    options.scenarioFile = test::scenarioFile("acc_lk.yaml");
+    options.samples = samples;
+    options.seed = 99;
+    options.output = out;
+    options.worst = 3;
+    return options;
+  }
+
+  static TemporaryDirectory* dir_;
+  TemporaryDirectory work_;
+};
+TemporaryDirectory* CompareTest::dir_ = nullptr;
+
+std::string errorOf(const std::function<void()>& call) {
+  try {
+    call();
+  } catch (const Error& error) {
+    return error.what();
+  }
+  return "";
+}
+
+}  // namespace
+
+// The prediction from scenes built *before* simulation must score like `evaluate` on the
+// scenes the simulation stored (same seed, same scenarios): this is what makes the
+// comparison a test of the model and not of the vectorization.
+TEST_F(CompareTest, ScenarioModeScoresLikeEvaluateOnTheSimulatedScenes) {
+  const auto summary = runComparison(scenarioOptions(work_.path() / "report"));
+  const auto& stats = summary.statistics;
+  EXPECT_EQ(stats.compared + stats.failed, 60u);
+  EXPECT_GE(stats.compared, 55u);
+
+  simulate("acc_lk.yaml", work_.path() / "simulated", 60, 99);
+  const model::Predictor predictor(modelFile());
+  const auto evaluation = model::evaluate(predictor, {work_.path() / "simulated"});
+  EXPECT_EQ(evaluation.overall.samples, stats.compared);
+  EXPECT_NEAR(stats.ade.mean, evaluation.overall.ade, 0.01);
+  EXPECT_NEAR(stats.fde.mean, evaluation.overall.fde, 0.02);
+
+  // Every metric of the scenario, with MAE, bias and the reconstruction floor.
+  ASSERT_EQ(stats.metrics.size(), 6u);
+  for (const auto& metric : stats.metrics) {
+    EXPECT_GT(metric.pairs + metric.bothInfinite + metric.finitenessMismatch, 0u) << metric.name;
+    if (metric.pairs > 0) {
+      EXPECT_TRUE(std::isfinite(metric.mae)) << metric.name;
+    }
+    EXPECT_TRUE(metric.floorMae.has_value()) << metric.name;
+  }
+  // d_min from positions is exact: the floor is only float rounding and netconvert's 1 cm.
+  EXPECT_LT(*stats.metrics[1].floorMae, 0.02);
+  ASSERT_EQ(stats.criteria.size(), 1u);
+  const auto& criterion = stats.criteria[0];
+  EXPECT_EQ(criterion.bothFail + criterion.falseAlarm + criterion.missed + criterion.bothPass + criterion.undefined,
+            stats.compared);
+
+  // comparison.csv agrees with concrete.csv of the separate run: same scenarios, same simulation.
+  const auto compared = CsvTable::read(work_.path() / "report" / "comparison.csv");
+  const auto concrete = CsvTable::read(work_.path() / "simulated" / "concrete.csv");
+  ASSERT_EQ(compared.rows(), 60u);
+  for (std::size_t row = 0; row < 60; ++row) {
+    EXPECT_EQ(compared.cell(row, compared.column("sample")), concrete.cell(row, concrete.column("sample")));
+    EXPECT_EQ(compared.cell(row, compared.column("v_ego")), concrete.cell(row, concrete.column("v_ego")));
+    EXPECT_EQ(compared.cell(row, compared.column("d_min_simulated")), concrete.cell(row, concrete.column("d_min")));
+  }
+  const auto html = readTextFile(work_.path() / "report" / "index.html");
+  EXPECT_NE(html.find("The 3 scenarios with the largest ADE"), std::string::npos);
+  EXPECT_NE(html.find("VectorNet prediction"), std::string::npos);
+  EXPECT_NE(html.find(sha256OfFile(modelFile())), std::string::npos);
+  EXPECT_LT(fs::file_size(work_.path() / "report" / "index.html"), 5u * 1024 * 1024);
+  // Nothing but the two outputs, and no temporary folder left beside them.
+  std::size_t entries = 0;
+  for (const auto& entry : fs::directory_iterator(work_.path())) entries += entry.path().filename().string()[0] == '.';
+  EXPECT_EQ(entries, 0u);
+}
+
+TEST_F(CompareTest, AScenarioSumoFailsOnIsListedAndTheRestIsCompared) {
+  const auto scenario = test::writeFile(work_.path() / "short_road.yaml", test::shortRoadScenario());
+  auto options = scenarioOptions(work_.path() / "short");
+  options.scenarioFile = scenario;
+  options.samples = 40;
+  const auto summary = runComparison(options);
+  EXPECT_GT(summary.statistics.failed, 0u);
+  EXPECT_GT(summary.statistics.compared, 0u);
+  const auto html = readTextFile(work_.path() / "short" / "index.html");
+  EXPECT_NE(html.find("without a simulated reference"), std::string::npos);
+  EXPECT_NE(html.find("SUMO removed vehicle &#39;co&#39;"), std::string::npos);
+  const auto csv = CsvTable::read(work_.path() / "short" / "comparison.csv");
+  std::size_t failed = 0;
+  for (std::size_t row = 0; row < csv.rows(); ++row) failed += csv.cell(row, csv.column("status")) == "failed";
+  EXPECT_EQ(failed, summary.statistics.failed);
+}
+
+// Dataset mode on the simulated run's own dataset: predicted vs recorded is exactly `evaluate`.
+TEST_F(CompareTest, DatasetModeComparesAgainstTheRecordedFuture) {
+  simulate("acc.yaml", work_.path() / "acc", 50, 3);
+  CompareOptions options;
+  options.model = modelFile();
+  options.data = {work_.path() / "acc"};
+  options.output = work_.path() / "dataset_report";
+  options.criteria = {"close: d_min < 2", "ttc_min < 1.5"};
+  const auto summary = runComparison(options);
+  const model::Predictor predictor(modelFile());
+  const auto evaluation = model::evaluate(predictor, {work_.path() / "acc"});
+  EXPECT_EQ(summary.statistics.compared, evaluation.overall.samples);
+  EXPECT_NEAR(summary.statistics.ade.mean, evaluation.overall.ade, 1e-9);
+  EXPECT_EQ(summary.comparison.referenceName, "recorded");
+  // A generated dataset brings its scenario's metrics.
+  EXPECT_EQ(summary.comparison.metricNames, (std::vector<std::string>{"a_min", "d_min", "p_lat_max", "ttc_min",
+                                                                      "thw_min", "lane_offset_max"}));
+  ASSERT_EQ(summary.statistics.criteria.size(), 2u);
+  EXPECT_EQ(summary.statistics.criteria[1].name, "ttc_min < 1.5");
+  const auto csv = CsvTable::read(work_.path() / "dataset_report" / "comparison.csv");
+  EXPECT_TRUE(csv.findColumn("d_min_recorded").has_value());
+  EXPECT_TRUE(csv.findColumn("close_recorded_fail").has_value());
+}
+
+TEST_F(CompareTest, BadInputGetsOneClearErrorAndLeavesNothingBehind) {
+  // An existing output folder is refused unless --force, and left untouched.
+  const auto existing = work_.path() / "existing";
+  test::writeFile(existing / "keep.txt", "mine");
+  EXPECT_NE(errorOf([&] { runComparison(scenarioOptions(existing, 5)); }).find("exists; choose another or pass --force"),
+            std::string::npos);
+  EXPECT_TRUE(fs::exists(existing / "keep.txt"));
+  auto forced = scenarioOptions(existing, 5);
+  forced.force = true;
+  runComparison(forced);
+  EXPECT_FALSE(fs::exists(existing / "keep.txt"));
+  EXPECT_TRUE(fs::exists(existing / "index.html"));
+
+  // A model for another step/horizon than the scenario's.
+  const auto longer = test::writeFile(work_.path() / "longer.yaml",
+                                      test::scenarioVariant("acc_lk.yaml", "duration: 5.0", "duration: 6.0"));
+  auto options = scenarioOptions(work_.path() / "out_longer", 5);
+  options.scenarioFile = longer;
+  EXPECT_NE(errorOf([&] { runComparison(options); }).find("30 steps of 0.2 s, but the model"), std::string::npos);
+  // A corrupt model file.
+  const auto corrupt = test::writeFile(work_.path() / "corrupt.pt", "not a model");
+  options = scenarioOptions(work_.path() / "out_corrupt", 5);
+  options.model = corrupt;
+  EXPECT_NE(errorOf([&] { runComparison(options); }).find("corrupt.pt"), std::string::npos);
+  // A criterion over a metric the run does not compute.
+  options = CompareOptions{};
+  options.model = modelFile();
+  options.data = {dir_->path() / "train"};
+  options.output = work_.path() / "out_criterion";
+  options.criteria = {"close: gap_min < 2"};
+  EXPECT_NE(errorOf([&] { runComparison(options); }).find("gap_min"), std::string::npos);
+  // Scenario and datasets at once.
+  options.scenarioFile = test::scenarioFile("acc.yaml");
+  EXPECT_NE(errorOf([&] { runComparison(options); }).find("either a logical scenario"), std::string::npos);
+  for (const char* out : {"out_longer", "out_corrupt", "out_criterion"}) EXPECT_FALSE(fs::exists(work_.path() / out));
+  std::size_t hidden = 0;
+  for (const auto& entry : fs::directory_iterator(work_.path())) hidden += entry.path().filename().string()[0] == '.';
+  EXPECT_EQ(hidden, 0u);
+}
+
+TEST_F(CompareTest, CommandLineRefusesAScenarioWithoutAnEgo) {
+  const auto no_ego = test::writeFile(work_.path() / "no_ego.yaml", test::scenarioVariant("lk.yaml", "  ego:", "  egg:"));
+  const auto result = test::run({test::vsdSumo().string(), "compare", no_ego.string(), "--model", modelFile().string(),
+                                 "--out", (work_.path() / "out").string()},
+                                work_.path());
+  EXPECT_NE(result.exitCode, 0);
+  EXPECT_NE(result.output.find("no_ego.yaml"), std::string::npos) << result.output;
+  EXPECT_NE(result.output.find("vehicles"), std::string::npos) << result.output;
+  EXPECT_FALSE(fs::exists(work_.path() / "out"));
+}
