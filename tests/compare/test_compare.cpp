@@ -187,6 +187,12 @@ TEST_F(CompareTest, BadInputGetsOneClearErrorAndLeavesNothingBehind) {
   auto options = scenarioOptions(work_.path() / "out_longer", 5);
   options.scenarioFile = longer;
   EXPECT_NE(errorOf([&] { runComparison(options); }).find("30 steps of 0.2 s, but the model"), std::string::npos);
+  // A model written for another feature schema.
+  const auto v2 = work_.path() / "v2.pt";
+  ASSERT_TRUE(test::writeModelForFeatureSchemaV2(modelFile(), v2));
+  options = scenarioOptions(work_.path() / "out_v2", 5);
+  options.model = v2;
+  EXPECT_NE(errorOf([&] { runComparison(options); }).find("feature schema v2"), std::string::npos);
   // A corrupt model file.
   const auto corrupt = test::writeFile(work_.path() / "corrupt.pt", "not a model");
   options = scenarioOptions(work_.path() / "out_corrupt", 5);
@@ -202,7 +208,9 @@ TEST_F(CompareTest, BadInputGetsOneClearErrorAndLeavesNothingBehind) {
   // Scenario and datasets at once.
   options.scenarioFile = test::scenarioFile("acc.yaml");
   EXPECT_NE(errorOf([&] { runComparison(options); }).find("either a logical scenario"), std::string::npos);
-  for (const char* out : {"out_longer", "out_corrupt", "out_criterion"}) EXPECT_FALSE(fs::exists(work_.path() / out));
+  for (const char* out : {"out_longer", "out_v2", "out_corrupt", "out_criterion"}) {
+    EXPECT_FALSE(fs::exists(work_.path() / out)) << out;
+  }
   std::size_t hidden = 0;
   for (const auto& entry : fs::directory_iterator(work_.path())) hidden += entry.path().filename().string()[0] == '.';
   EXPECT_EQ(hidden, 0u);

@@ -256,17 +256,8 @@ TEST(ModelFiles, CorruptForeignAndOtherSchemaModelsAreRejected) {
   auto options = tinyTraining(data, dir.path() / "m.pt");
   options.steps = 5;
   train(options);
-  const auto script = test::writeFile(dir.path() / "bump.py", R"(
-import sys, zipfile, shutil
-src, dst = sys.argv[1], sys.argv[2]
-with zipfile.ZipFile(src) as zin, zipfile.ZipFile(dst, "w", zipfile.ZIP_STORED) as zout:
-    for item in zin.infolist():
-        data = zin.read(item.filename)
-        data = data.replace(b'"feature_version":1', b'"feature_version":2')
-        zout.writestr(item, data)
-)");
   const auto bumped = dir.path() / "v2.pt";
-  ASSERT_EQ(test::run({test::python(), script.string(), options.output.string(), bumped.string()}, dir.path()).exitCode, 0);
+  ASSERT_TRUE(test::writeModelForFeatureSchemaV2(options.output, bumped));
   try {
     Predictor predictor(bumped);
     FAIL() << "a model for feature schema v2 was accepted";

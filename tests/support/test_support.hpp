@@ -34,6 +34,20 @@ inline ProcessResult run(const std::vector<std::string>& argv, const std::filesy
   return runProcess(argv, log);
 }
 
+/// Copies a model file as if a future vsd-sumo had written it for feature schema v2
+/// (the JSON description inside the torch archive edited); true on success.
+inline bool writeModelForFeatureSchemaV2(const std::filesystem::path& model, const std::filesystem::path& copy) {
+  const auto work = copy.parent_path();
+  const auto script = writeFile(work / "feature_schema_v2.py", R"(
+import sys, zipfile
+src, dst = sys.argv[1], sys.argv[2]
+with zipfile.ZipFile(src) as zin, zipfile.ZipFile(dst, "w", zipfile.ZIP_STORED) as zout:
+    for item in zin.infolist():
+        zout.writestr(item, zin.read(item.filename).replace(b'"feature_version":1', b'"feature_version":2'))
+)");
+  return run({python(), script.string(), model.string(), copy.string()}, work).exitCode == 0;
+}
+
 /// Reads a scenario file and replaces `from` by `to` (to derive variants of the paper's scenarios).
 inline std::string scenarioVariant(const std::string& name, const std::string& from, const std::string& to) {
   std::string text = readTextFile(scenarioFile(name));
