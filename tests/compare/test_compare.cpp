@@ -10,6 +10,7 @@
 #include "vsd/core/error.hpp"
 #include "vsd/core/files.hpp"
 #include "vsd/model/model.hpp"
+#include "vsd/pipeline/export.hpp"
 #include "vsd/pipeline/run.hpp"
 
 using namespace vsd;
@@ -166,6 +167,31 @@ TEST_F(CompareTest, DatasetModeComparesAgainstTheRecordedFuture) {
   const auto csv = CsvTable::read(work_.path() / "dataset_report" / "comparison.csv");
   EXPECT_TRUE(csv.findColumn("d_min_recorded").has_value());
   EXPECT_TRUE(csv.findColumn("close_recorded_fail").has_value());
+}
+
+// A real OSM-imported map (Debian's sumo-tools) with its own traffic: nothing to simulate
+// again, the prediction is compared with the recorded future of each Ego window.
+TEST_F(CompareTest, DatasetModeWorksOnAnExportedRealMap) {
+  pipeline::ExportOptions exporting;
+  exporting.source.config = "/usr/share/sumo/tools/game/A10KW.sumocfg";
+  exporting.output = work_.path() / "a10.h5";
+  exporting.egos = "random:20";
+  exporting.seed = 3;
+  exporting.end = 120.0;
+  pipeline::exportMap(exporting);
+  CompareOptions options;
+  options.model = modelFile();
+  options.data = {exporting.output};
+  options.output = work_.path() / "map_report";
+  options.criteria = {"close: d_min < 2"};
+  const auto summary = runComparison(options);
+  EXPECT_GT(summary.statistics.compared, 20u);
+  EXPECT_EQ(summary.comparison.metricNames, (std::vector<std::string>{"a_min", "d_min", "ttc_min", "thw_min"}));
+  EXPECT_TRUE(std::isfinite(summary.statistics.ade.mean));
+  const auto html = readTextFile(work_.path() / "map_report" / "index.html");
+  EXPECT_NE(html.find("Predicted vs recorded"), std::string::npos);
+  EXPECT_NE(html.find("a10.h5"), std::string::npos);
+  EXPECT_NE(html.find("Ego: initial vector and recorded future"), std::string::npos);
 }
 
 TEST_F(CompareTest, BadInputGetsOneClearErrorAndLeavesNothingBehind) {
