@@ -9,16 +9,17 @@ namespace vsd::cli {
 
 void addBaselineCommand(CLI::App& app, CommandContext& context) {
   auto options = std::make_shared<baseline::BaselineOptions>();
-  auto targets = std::make_shared<std::string>();
-  auto inputs = std::make_shared<std::string>();
   CLI::App* command = app.add_subcommand(
       "baseline", "Regression metamodel (extra trees or BNN) from concrete inputs to metrics, evaluated on a test run");
   command->add_option("-d,--data", options->train, "Training run: concrete.csv or its folder")->required();
   command->add_option("-t,--test", options->test, "Test run of the same functional scenario")->required();
   command->add_option("-m,--model", options->model, "et (extra trees) or bnn (Bayesian neural network)")
       ->capture_default_str();
-  command->add_option("--targets", *targets, "Metrics to predict, e.g. a_min,d_min,p_lat_max")->required();
-  command->add_option("--inputs", *inputs, "Input columns (default: every input of the scenario)");
+  command->add_option("--targets", options->targets, "Metrics to predict, e.g. a_min,d_min,p_lat_max")
+      ->required()
+      ->delimiter(',');
+  command->add_option("--inputs", options->inputs, "Input columns (default: every input of the scenario)")
+      ->delimiter(',');
   command->add_option("--train-rows", options->maxTrainRows, "Use the first N completed rows (0: all)")
       ->capture_default_str();
   command->add_option("-o,--out", options->predictionsCsv, "Write per-row truth and prediction (and std) as CSV");
@@ -33,19 +34,6 @@ void addBaselineCommand(CLI::App& app, CommandContext& context) {
   command->add_option("-s,--seed", options->extraTrees.seed, "Seed")->capture_default_str();
   command->callback([=, &context] {
     context.action = [=] {
-      auto split = [](const std::string& text) {
-        std::vector<std::string> items;
-        std::size_t start = 0;
-        while (start <= text.size() && !text.empty()) {
-          const auto comma = text.find(',', start);
-          items.push_back(text.substr(start, comma == std::string::npos ? std::string::npos : comma - start));
-          if (comma == std::string::npos) break;
-          start = comma + 1;
-        }
-        return items;
-      };
-      options->targets = split(*targets);
-      options->inputs = split(*inputs);
       options->bnn.seed = options->extraTrees.seed;
       fmt::print("{}", baseline::runBaseline(*options).report());
       return 0;

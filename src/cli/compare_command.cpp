@@ -21,8 +21,7 @@ void addCompareCommand(CLI::App& app, CommandContext& context) {
   command->add_option("-o,--out", options->output, "Report folder (default: reports/<scenario or dataset name>)");
   command->add_flag("--force", options->force, "Replace an existing report folder");
   command->add_option("-n,--samples", options->samples,
-                      "Scenarios to sample and simulate (datasets: the first N samples, 0 = all)")
-      ->capture_default_str();
+                      "Scenarios to sample and simulate (default 500); datasets: the first N samples (default: all)");
   command->add_option("-s,--seed", options->seed, "Sampling seed")->capture_default_str();
   command->add_option("-j,--jobs", options->jobs, "SUMO worker processes")->capture_default_str();
   command->add_option("--threads", options->threads, "libtorch threads")->capture_default_str();

@@ -26,7 +26,6 @@
 #include "vsd/sim/sumo_session.hpp"
 #include "vsd/vector/dataset.hpp"
 #include "vsd/vector/scene_svg.hpp"
-#include "vsd/vector/vectorize.hpp"
 
 namespace fs = std::filesystem;
 
@@ -92,16 +91,20 @@ std::vector<std::string> unitsOf(const std::vector<std::string>& names) {
 /// The output folder is built under a temporary name next to it and renamed into place.
 class OutputFolder {
  public:
-  OutputFolder(fs::path final_path, bool force) : final_(std::move(final_path)), force_(force) {
-    if (fs::exists(final_) && !force_) {
+  OutputFolder(const fs::path& final_path, bool force) : final_(final_path.lexically_normal()) {
+    if (final_.filename().empty()) final_ = final_.parent_path();  // "reports/acc_lk/"
+    if (fs::exists(final_) && !force) {
       throw ConfigError(fmt::format("--out {}: the folder exists; choose another or pass --force to replace it",
                                     final_.string()));
     }
     const fs::path parent = final_.has_parent_path() ? final_.parent_path() : fs::path(".");
     ensureDirectory(parent);
     temp_ = parent / fmt::format(".{}.partial-{}", final_.filename().string(), ::getpid());
-    fs::remove_all(temp_);
-    fs::create_directories(temp_);
+    std::error_code error;
+    fs::remove_all(temp_, error);
+    if (!fs::create_directories(temp_, error) || error) {
+      throw IoError(fmt::format("{}: cannot create the output folder: {}", temp_.string(), error.message()));
+    }
   }
   OutputFolder(const OutputFolder&) = delete;
   OutputFolder& operator=(const OutputFolder&) = delete;
@@ -111,15 +114,16 @@ class OutputFolder {
   }
   const fs::path& temp() const { return temp_; }
   void commit() {
-    if (fs::exists(final_)) fs::remove_all(final_);  // only reachable with --force
-    fs::rename(temp_, final_);
+    std::error_code error;
+    fs::remove_all(final_, error);  // exists only with --force
+    if (!error) fs::rename(temp_, final_, error);
+    if (error) throw IoError(fmt::format("{}: cannot move the report into place: {}", final_.string(), error.message()));
     committed_ = true;
   }
 
  private:
   fs::path final_;
   fs::path temp_;
-  bool force_ = false;
   bool committed_ = false;
 };
 
@@ -290,9 +294,9 @@ Run compareScenario(const CompareOptions& options, const model::Predictor& predi
     const auto errors = model::displacementErrors(prediction, scored);
     row.ade = errors.ade;
     row.fde = errors.fde;
-    row.predicted = metricsOfFuture(metric_set, scored, prediction, ego_length, other_length);
+    row.predicted = pipeline::metricsOfFuture(metric_set, scored, prediction, ego_length, other_length);
     row.reference = outcome.metrics;
-    row.fromReferencePositions = metricsOfFuture(metric_set, scored, simulated.target, ego_length, other_length);
+    row.fromReferencePositions = pipeline::metricsOfFuture(metric_set, scored, simulated.target, ego_length, other_length);
     row.predictedFails = criteria.evaluate(row.predicted);
     row.referenceFails = criteria.evaluate(row.reference);
     futures[outcome.index] = Futures{prediction, simulated.target, simulated.targetValid};
@@ -371,8 +375,8 @@ Run compareDatasets(const CompareOptions& options, const model::Predictor& predi
       const auto errors = model::displacementErrors(predictions[j], scene);
       row.ade = errors.ade;
       row.fde = errors.fde;
-      row.predicted = metricsOfFuture(metric_set, scene, predictions[j], options.egoLength, options.otherLength);
-      row.reference = metricsOfFuture(metric_set, scene, scene.target, options.egoLength, options.otherLength);
+      row.predicted = pipeline::metricsOfFuture(metric_set, scene, predictions[j], options.egoLength, options.otherLength);
+      row.reference = pipeline::metricsOfFuture(metric_set, scene, scene.target, options.egoLength, options.otherLength);
       row.predictedFails = criteria.evaluate(row.predicted);
       row.referenceFails = criteria.evaluate(row.reference);
       futures[first + j] = Futures{predictions[j], scene.target, scene.targetValid};
@@ -400,8 +404,8 @@ void CompareOptions::validate() const {
   if (scenarioFile.empty() == data.empty()) {
     throw ConfigError("compare: give either a logical scenario (SCENARIO) or datasets (--data), not both or neither");
   }
-  if (!scenarioFile.empty() && (samples < 1 || samples > 10'000'000)) {
-    throw ConfigError::field("command line", "--samples", std::to_string(samples), "1 .. 10000000");
+  if (samples > 10'000'000) {
+    throw ConfigError::field("command line", "--samples", std::to_string(samples), "0 (default) .. 10000000");
   }
   if (jobs < 1 || jobs > 256) throw ConfigError::field("command line", "--jobs", std::to_string(jobs), "1 .. 256");
   if (threads < 1 || threads > 256) throw ConfigError::field("command line", "--threads", std::to_string(threads), "1 .. 256");
@@ -416,15 +420,11 @@ void CompareOptions::validate() const {
   }
 }
 
-std::vector<double> metricsOfFuture(const metrics::MetricSet& metric_set, const vector::VectorizedScene& scene,
-                                    const Polyline& future, double ego_length, double other_length) {
-  return metric_set.evaluate(vector::sceneTrace(scene, future, ego_length, other_length), vector::egoLaneCentre(scene));
-}
-
 CompareSummary runComparison(const CompareOptions& options_in) {
   const auto start = std::chrono::steady_clock::now();
   CompareOptions options = options_in;
   options.validate();
+  if (!options.scenarioFile.empty() && options.samples == 0) options.samples = CompareOptions::kDefaultScenarios;
   if (options.output.empty()) {
     options.output = fs::path("reports") / (options.scenarioFile.empty() ? vector::resolveDatasetPath(options.data.front()).stem()
                                                                           : options.scenarioFile.stem());

@@ -30,10 +30,10 @@
 #include "vsd/metrics/metrics.hpp"
 #include "vsd/model/model.hpp"
 #include "vsd/pipeline/run.hpp"
+#include "vsd/pipeline/scenes.hpp"
 #include "vsd/scenario/logical_scenario.hpp"
 #include "vsd/vector/dataset.hpp"
 #include "vsd/vector/scene_svg.hpp"
-#include "vsd/vector/vectorize.hpp"
 
 namespace fs = std::filesystem;
 using nlohmann::json;
@@ -456,11 +456,10 @@ class ExperimentRunner {
     std::vector<std::size_t> counted(names.size(), 0);
     for (std::size_t i = 0; i < scenes.size(); ++i) {
       const auto& scene = scenes[i];
-      const auto lane = vector::egoLaneCentre(scene);
-      const auto from_prediction = metric_set.evaluate(
-          vector::sceneTrace(scene, predictions[i], label_data.egoLength, label_data.otherLength), lane);
+      const auto from_prediction =
+          pipeline::metricsOfFuture(metric_set, scene, predictions[i], label_data.egoLength, label_data.otherLength);
       const auto from_truth =
-          metric_set.evaluate(vector::sceneTrace(scene, scene.target, label_data.egoLength, label_data.otherLength), lane);
+          pipeline::metricsOfFuture(metric_set, scene, scene.target, label_data.egoLength, label_data.otherLength);
       for (std::size_t m = 0; m < names.size(); ++m) {
         const double simulated = scene.metrics.at(stored_index[m]);
         // Infinite values (e.g. ttc_min without closing in) and NaN have no error to average.

@@ -83,4 +83,9 @@ vector::VectorizedScene plannedScene(const scenario::ConcreteScenario& concrete)
   return scene;
 }
 
+std::vector<double> metricsOfFuture(const metrics::MetricSet& metric_set, const vector::VectorizedScene& scene,
+                                    const Polyline& future, double ego_length, double other_length) {
+  return metric_set.evaluate(vector::sceneTrace(scene, future, ego_length, other_length), vector::egoLaneCentre(scene));
+}
+
 }  // namespace vsd::pipeline

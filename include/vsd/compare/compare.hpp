@@ -16,10 +16,7 @@
 #include <string>
 #include <vector>
 
-#include "vsd/core/geometry.hpp"
-#include "vsd/metrics/metrics.hpp"
 #include "vsd/report/comparison.hpp"
-#include "vsd/vector/scene.hpp"
 
 namespace vsd::compare {
 
@@ -29,7 +26,9 @@ struct CompareOptions {
   std::vector<std::filesystem::path> data;     ///< dataset mode: dataset files or run folders
   std::filesystem::path output;                ///< default: reports/<scenario name> or reports/<first dataset stem>
   bool force = false;                          ///< replace an existing output folder
-  std::uint64_t samples = 500;                 ///< scenario mode: scenarios; dataset mode: first N samples (0 = all)
+  static constexpr std::uint64_t kDefaultScenarios = 500;
+  /// Scenario mode: scenarios to sample (0: kDefaultScenarios); dataset mode: the first N samples (0: all).
+  std::uint64_t samples = 0;
   std::uint64_t seed = 1;                      ///< scenario mode: sampling seed
   int jobs = 1;                                ///< scenario mode: SUMO worker processes
   std::size_t batch = 250;                     ///< scenario mode: scenarios per SUMO network
@@ -61,11 +60,5 @@ struct CompareSummary {
 /// ModelError (model file, feature schema, step/horizon mismatch), DatasetError, SumoError
 /// (for faults of the whole run; a scenario SUMO fails on is listed in the report).
 CompareSummary runComparison(const CompareOptions& options);
-
-/// Metrics of a scene's Ego moving along `future` (positions t_1..t_F in the scene frame;
-/// speeds and accelerations reconstructed from positions, see core/trace.hpp), with the
-/// other vehicles as the scene holds them and the lane the Ego starts on.
-std::vector<double> metricsOfFuture(const metrics::MetricSet& metric_set, const vector::VectorizedScene& scene,
-                                    const Polyline& future, double ego_length, double other_length);
 
 }  // namespace vsd::compare

@@ -14,6 +14,7 @@
 
 #include "vsd/core/geometry.hpp"
 #include "vsd/core/trace.hpp"
+#include "vsd/metrics/metrics.hpp"
 #include "vsd/pipeline/run.hpp"
 #include "vsd/road/road_geometry.hpp"
 #include "vsd/scenario/concrete_scenario.hpp"
@@ -38,5 +39,12 @@ Trace plannedTrace(const scenario::ConcreteScenario& concrete, const road::RoadG
 /// The scene of a concrete scenario before simulation (targets all invalid), with
 /// its sample index and inputs set.
 vector::VectorizedScene plannedScene(const scenario::ConcreteScenario& concrete);
+
+/// Metrics of a scene's Ego moving along `future` (positions t_1..t_F in the scene frame,
+/// valid where the scene's targetValid says; speeds and accelerations reconstructed from
+/// positions, see core/trace.hpp), with the other vehicles as the scene holds them and
+/// the lane the Ego starts on. Scores predictions and recorded futures with one code path.
+std::vector<double> metricsOfFuture(const metrics::MetricSet& metric_set, const vector::VectorizedScene& scene,
+                                    const Polyline& future, double ego_length, double other_length);
 
 }  // namespace vsd::pipeline
