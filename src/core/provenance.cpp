@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include "vsd/core/error.hpp"
+#include "vsd/core/log.hpp"
 
 #ifndef VSD_SOURCE_DIR
 #define VSD_SOURCE_DIR ""
@@ -21,6 +22,18 @@ bool isInside(const fs::path& path, const fs::path& folder) {
   return !relative.empty() && *relative.begin() != "..";
 }
 }  // namespace
+
+std::string codeIdentity(const std::vector<std::string>& modules) {
+  const auto built = buildProvenance();
+  if (built.modules.empty()) return toolVersion();
+  std::string text;
+  for (const auto& module : modules) {
+    const auto found = built.modules.find(module);
+    if (found == built.modules.end()) throw Error(fmt::format("no module '{}' in this build's provenance", module));
+    text += fmt::format("{}={};", module, found->second);
+  }
+  return text;
+}
 
 void refuseDirtyCommittedResults(const fs::path& output, bool allow_dirty, const std::string& flag) {
   refuseDirtyCommittedResults(output, allow_dirty, flag, buildProvenance(), VSD_SOURCE_DIR);

@@ -53,8 +53,8 @@ TEST(Files, Sha256MatchesKnownDigest) {
 // <source>/results unless forced; anywhere else, and clean builds, are fine.
 TEST(Provenance, DirtyBuildsMayNotWriteCommittedResults) {
   TemporaryDirectory tree;
-  const BuildProvenance dirty{"0123456789ab", true};
-  const BuildProvenance clean{"0123456789ab", false};
+  const BuildProvenance dirty{"0123456789ab", true, {}};
+  const BuildProvenance clean{"0123456789ab", false, {}};
   const auto results = tree.path() / "results" / "paper";
   try {
     refuseDirtyCommittedResults(results, false, "--allow-dirty", dirty, tree.path());
@@ -74,4 +74,19 @@ TEST(Provenance, DirtyBuildsMayNotWriteCommittedResults) {
     EXPECT_NE(toolVersion().find("+" + built.commit), std::string::npos) << toolVersion();
     EXPECT_EQ(toolVersion().find("-dirty") != std::string::npos, built.dirty) << toolVersion();
   }
+}
+
+TEST(Provenance, ModulesHaveTheirOwnCodeIdentity) {
+  const auto built = buildProvenance();
+  if (built.commit.empty()) GTEST_SKIP() << "built outside a git checkout: the tool version stands in";
+  // Every module's code is identified on its own, so an experiment cache keeps artefacts
+  // whose modules did not change.
+  for (const char* module : {"core", "sim", "vector", "model", "experiment"}) {
+    ASSERT_TRUE(built.modules.count(module)) << module;
+    EXPECT_GE(built.modules.at(module).size(), 26u) << module << ": two tree ids";
+  }
+  EXPECT_NE(built.modules.at("model"), built.modules.at("sim"));
+  EXPECT_EQ(codeIdentity({"core", "model"}),
+            "core=" + built.modules.at("core") + ";model=" + built.modules.at("model") + ";");
+  EXPECT_THROW(codeIdentity({"modle"}), Error);
 }

@@ -3,7 +3,9 @@
 // produced them.
 
 #include <filesystem>
+#include <map>
 #include <string>
+#include <vector>
 
 namespace vsd {
 
@@ -12,8 +14,17 @@ namespace vsd {
 struct BuildProvenance {
   std::string commit;  ///< short git commit; empty when built outside a git checkout
   bool dirty = false;  ///< tracked files differed from that commit when the binary was built
+  /// Per module (src/<m>, include/vsd/<m>): its code's git tree ids, plus a hash of its
+  /// uncommitted diff if it had one. Empty outside a git checkout.
+  std::map<std::string, std::string> modules;
 };
 BuildProvenance buildProvenance();
+
+/// One text that changes exactly when the code of one of `modules` changes (between
+/// builds): their identities from buildProvenance(). Outside a git checkout, where
+/// module code cannot be told apart, the tool version with its commit instead.
+/// Throws Error for a module name this build does not have.
+std::string codeIdentity(const std::vector<std::string>& modules);
 
 /// Throws ConfigError if `output` lies inside the repository's committed results
 /// (<source tree>/results) and the binary was built from a dirty tree, unless
