@@ -6,6 +6,7 @@
 
 #include <fmt/format.h>
 
+#include <chrono>
 #include <filesystem>
 #include <memory>
 #include <optional>
@@ -14,6 +15,7 @@
 #include "commands.hpp"
 #include "vsd/core/error.hpp"
 #include "vsd/core/files.hpp"
+#include "vsd/core/progress.hpp"
 #include "vsd/core/process.hpp"
 #include "vsd/model/model.hpp"
 #include "vsd/pipeline/run.hpp"
@@ -123,7 +125,30 @@ struct ModelBenchOptions {
   std::uint64_t testSamples = 2000;
   bool singles = false;
   int threads = 2;
+  std::string decoder = "kinematic";
+  std::string frame = "ego";
+  int draws = 32;              ///< sampled futures per scene for the inference benchmark
 };
+
+/// Scenes per second of predicting the most likely future and `draws` sampled futures of
+/// every test scene (read once, predicted in chunks as `evaluate` does).
+double samplingRate(const model::Predictor& predictor, const std::vector<fs::path>& tests, int draws) {
+  std::vector<vector::VectorizedScene> scenes;
+  for (const auto& path : tests) {
+    const vector::DatasetReader reader(vector::resolveDatasetPath(path));
+    for (std::size_t i = 0; i < reader.size(); ++i) scenes.push_back(reader.scene(i));
+  }
+  model::PredictOptions options;
+  options.samples = draws;
+  const auto start = std::chrono::steady_clock::now();
+  std::size_t predicted = 0;
+  for (std::size_t first = 0; first < scenes.size(); first += 4096) {
+    const std::vector<vector::VectorizedScene> chunk(scenes.begin() + static_cast<std::ptrdiff_t>(first),
+                                                     scenes.begin() + static_cast<std::ptrdiff_t>(std::min(scenes.size(), first + 4096)));
+    predicted += predictor.predictDistribution(chunk, options).size();
+  }
+  return static_cast<double>(predicted) / secondsSince(start);
+}
 
 int runModelBench(const ModelBenchOptions& options) {
   std::optional<TemporaryDirectory> temporary;
@@ -155,6 +180,8 @@ int runModelBench(const ModelBenchOptions& options) {
     train_options.mix = model::Mix::parse(mix);
     train_options.output = work / model_name;
     train_options.threads = options.threads;
+    train_options.config.decoder = options.decoder;
+    train_options.config.frame = options.frame;
     const auto summary = model::train(train_options);
     const model::Predictor predictor(train_options.output, options.threads);
     std::vector<fs::path> tests;
@@ -164,24 +191,34 @@ int runModelBench(const ModelBenchOptions& options) {
                summary.plannedEpochs, summary.samplesPerSecond);
     for (const auto& [label, errors] : evaluation.perLabel) fmt::print(" {} {:.3f}", label, errors.ade);
     fmt::print("\n");
+    if (evaluation.overall.scored > 0) fmt::print("{}", evaluation.table());
     return std::pair{summary, evaluation};
   };
+  fmt::print("  decoder {}, frame {}\n", options.decoder, options.frame);
+  const std::string suffix = fmt::format("_{}_{}.pt", options.decoder, options.frame);
   const auto [summary, evaluation] = train_and_evaluate(
-      fmt::format("acc={0},lk={0},acc_lk={0}", options.samples), {"acc", "lk", "acc_lk"}, "all.pt");
+      fmt::format("acc={0},lk={0},acc_lk={0}", options.samples), {"acc", "lk", "acc_lk"}, "all" + suffix);
   if (options.singles) {
     for (const std::string label : {"acc", "lk", "acc_lk"}) {
-      train_and_evaluate(fmt::format("{}={}", label, options.samples), {label}, label + ".pt");
+      train_and_evaluate(fmt::format("{}={}", label, options.samples), {label}, label + suffix);
     }
   }
   const double inference_rate = static_cast<double>(evaluation.overall.samples) / evaluation.predictionSeconds;
   fmt::print("  training throughput: {:.0f} samples/s; {} samples to convergence (end of the schedule) in {:.1f} s\n",
              summary.samplesPerSecond, 3 * options.samples, summary.seconds);
-  fmt::print("  inference: {:.0f} scenes/s batched", inference_rate);
+  fmt::print("  inference: {:.0f} scenes/s batched (most likely future)", inference_rate);
   if (simulation_rate > 0.0) {
     fmt::print(" = {:.1f}x the simulation throughput of `vsd-sumo run` ({:.0f} scenarios/s, acc_lk)",
                inference_rate / simulation_rate, simulation_rate);
   }
   fmt::print("\n");
+  const model::Predictor predictor(work / ("all" + suffix), options.threads);
+  if (predictor.probabilistic() && options.draws > 0) {
+    std::vector<fs::path> tests;
+    for (const std::string label : {"acc", "lk", "acc_lk"}) tests.push_back(work / ("test_" + label));
+    fmt::print("  inference with {} sampled futures per scene: {:.0f} scenes/s\n", options.draws,
+               samplingRate(predictor, tests, options.draws));
+  }
   return 0;
 }
 
@@ -250,6 +287,10 @@ void addBenchCommand(CLI::App& app, CommandContext& context) {
       ->capture_default_str();
   modeling->add_flag("--singles", model_options->singles, "Also train one model per functional scenario");
   modeling->add_option("--threads", model_options->threads, "libtorch threads")->capture_default_str();
+  modeling->add_option("--decoder", model_options->decoder, "Decoder of the trained models")->capture_default_str();
+  modeling->add_option("--frame", model_options->frame, "Model frame (ego, lane)")->capture_default_str();
+  modeling->add_option("--draws", model_options->draws, "Sampled futures per scene in the inference benchmark")
+      ->capture_default_str();
   modeling->callback([model_options, &context] {
     context.action = [model_options] { return runModelBench(*model_options); };
   });

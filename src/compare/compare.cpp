@@ -135,20 +135,82 @@ struct Futures {
 };
 using SceneSource = std::function<vector::VectorizedScene(std::size_t)>;
 
-/// Predictions of scenes[i] for i in `which`, a bounded chunk at a time (no full copy).
-std::vector<Polyline> predictInChunks(const model::Predictor& predictor, const std::vector<vector::VectorizedScene>& scenes,
-                                      const std::vector<std::size_t>& which) {
-  std::vector<Polyline> predictions;
+/// Predictions (with the options' sampled futures) of scenes[i] for i in `which`, a
+/// bounded chunk at a time (no full copy).
+std::vector<model::Prediction> predictInChunks(const model::Predictor& predictor,
+                                               const std::vector<vector::VectorizedScene>& scenes,
+                                               const std::vector<std::size_t>& which, const model::PredictOptions& options) {
+  std::vector<model::Prediction> predictions;
   predictions.reserve(which.size());
   for (std::size_t first = 0; first < which.size(); first += kPredictChunk) {
     throwIfInterrupted();
     std::vector<vector::VectorizedScene> chunk;
     for (std::size_t i = first; i < std::min(which.size(), first + kPredictChunk); ++i) chunk.push_back(scenes[which[i]]);
-    auto part = predictor.predict(chunk);
+    auto part = predictor.predictDistribution(chunk, options);
     for (auto& prediction : part) predictions.push_back(std::move(prediction));
   }
   return predictions;
 }
+
+model::PredictOptions drawOptions(const CompareOptions& options, const model::Predictor& predictor) {
+  model::PredictOptions predict;
+  predict.samples = predictor.probabilistic() ? options.draws : 0;
+  predict.seed = options.drawSeed;
+  return predict;
+}
+
+/// Scores a prediction against the row's reference (set before): the metrics of the most
+/// likely future, and for sampled futures the metric intervals and the share of futures
+/// failing each criterion. Every future goes through the same metric code.
+class PredictionScorer {
+ public:
+  PredictionScorer(const metrics::MetricSet& metric_set, const Criteria& criteria, double ego_length,
+                   double other_length)
+      : metricSet_(metric_set), criteria_(criteria), egoLength_(ego_length), otherLength_(other_length) {}
+
+  std::vector<double> metricsOf(const vector::VectorizedScene& scene, const model::Trajectory& future) const {
+    if (future.states.empty()) return pipeline::metricsOfFuture(metricSet_, scene, future.positions, egoLength_, otherLength_);
+    return pipeline::metricsOfFuture(metricSet_, scene, future.states, egoLength_, otherLength_);
+  }
+
+  void score(report::ComparedScenario& row, const vector::VectorizedScene& scene, const model::Prediction& prediction) const {
+    const auto errors = model::displacementErrors(prediction.mostLikely.positions, scene);
+    row.ade = errors.ade;
+    row.fde = errors.fde;
+    row.predicted = metricsOf(scene, prediction.mostLikely);
+    row.predictedFails = criteria_.evaluate(row.predicted);
+    row.referenceFails = criteria_.evaluate(row.reference);
+    if (prediction.samples.empty()) return;
+    const std::size_t metrics = row.predicted.size();
+    std::vector<std::vector<double>> draws(metrics);
+    std::vector<std::size_t> failing(row.predictedFails.size(), 0);
+    std::vector<std::size_t> defined(row.predictedFails.size(), 0);
+    for (const auto& future : prediction.samples) {
+      const auto values = metricsOf(scene, future);
+      for (std::size_t m = 0; m < metrics; ++m) draws[m].push_back(values[m]);
+      const auto fails = criteria_.evaluate(values);
+      for (std::size_t c = 0; c < fails.size(); ++c) {
+        defined[c] += fails[c] >= 0 ? 1 : 0;
+        failing[c] += fails[c] == 1 ? 1 : 0;
+      }
+    }
+    for (std::size_t m = 0; m < metrics; ++m) {
+      const auto interval = model::intervalOf(draws[m]);
+      row.intervals.push_back({interval.draws, interval.p05, interval.p25, interval.median, interval.p75, interval.p95,
+                               model::quantilePosition(draws[m], row.reference.at(m))});
+    }
+    for (std::size_t c = 0; c < failing.size(); ++c) {
+      row.failShare.push_back(defined[c] == 0 ? std::nan("")
+                                              : static_cast<double>(failing[c]) / static_cast<double>(defined[c]));
+    }
+  }
+
+ private:
+  const metrics::MetricSet& metricSet_;
+  const Criteria& criteria_;
+  double egoLength_;
+  double otherLength_;
+};
 
 std::string metricCaption(const report::Comparison& comparison, const report::ComparedScenario& row) {
   std::string caption;
@@ -244,8 +306,9 @@ Run compareScenario(const CompareOptions& options, const model::Predictor& predi
     predicted_index[i] = to_predict.size();
     to_predict.push_back(i);
   }
-  const auto predictions = predictInChunks(predictor, planned, to_predict);
+  const auto predictions = predictInChunks(predictor, planned, to_predict, drawOptions(options, predictor));
   comparison.timings.push_back({"predict", secondsSince(start)});
+  const PredictionScorer scorer(metric_set, criteria, ego_length, other_length);
   spdlog::info("predicted the Ego in {} scenarios", predictions.size());
 
   // 3. Simulation of the same concrete scenarios, compared as they arrive.
@@ -291,15 +354,10 @@ Run compareScenario(const CompareOptions& options, const model::Predictor& predi
     vector::VectorizedScene scored = scene;
     scored.target = simulated.target;
     scored.targetValid = simulated.targetValid;
-    const auto errors = model::displacementErrors(prediction, scored);
-    row.ade = errors.ade;
-    row.fde = errors.fde;
-    row.predicted = pipeline::metricsOfFuture(metric_set, scored, prediction, ego_length, other_length);
     row.reference = outcome.metrics;
     row.fromReferencePositions = pipeline::metricsOfFuture(metric_set, scored, simulated.target, ego_length, other_length);
-    row.predictedFails = criteria.evaluate(row.predicted);
-    row.referenceFails = criteria.evaluate(row.reference);
-    futures[outcome.index] = Futures{prediction, simulated.target, simulated.targetValid};
+    scorer.score(row, scored, prediction);
+    futures[outcome.index] = Futures{prediction.mostLikely.positions, simulated.target, simulated.targetValid};
   });
   comparison.timings.push_back({"simulate", secondsSince(start)});
   comparison.notes.push_back(fmt::format(
@@ -347,6 +405,8 @@ Run compareDatasets(const CompareOptions& options, const model::Predictor& predi
     where.push_back("--criterion '" + text + "'");
   }
   const Criteria criteria(comparison.criteria, where, comparison.metricNames);
+  const PredictionScorer scorer(metric_set, criteria, options.egoLength, options.otherLength);
+  const auto predict_options = drawOptions(options, predictor);
 
   double read_seconds = 0.0;
   double predict_seconds = 0.0;
@@ -361,7 +421,7 @@ Run compareDatasets(const CompareOptions& options, const model::Predictor& predi
     stage = std::chrono::steady_clock::now();
     std::vector<std::size_t> all(scenes.size());
     std::iota(all.begin(), all.end(), std::size_t{0});
-    const auto predictions = predictInChunks(predictor, scenes, all);
+    const auto predictions = predictInChunks(predictor, scenes, all, predict_options);
     predict_seconds += secondsSince(stage);
     for (std::size_t j = 0; j < scenes.size(); ++j) {
       const auto& scene = scenes[j];
@@ -372,14 +432,9 @@ Run compareDatasets(const CompareOptions& options, const model::Predictor& predi
         row.failure = "no recorded future (the Ego left the map at once)";
         continue;
       }
-      const auto errors = model::displacementErrors(predictions[j], scene);
-      row.ade = errors.ade;
-      row.fde = errors.fde;
-      row.predicted = pipeline::metricsOfFuture(metric_set, scene, predictions[j], options.egoLength, options.otherLength);
       row.reference = pipeline::metricsOfFuture(metric_set, scene, scene.target, options.egoLength, options.otherLength);
-      row.predictedFails = criteria.evaluate(row.predicted);
-      row.referenceFails = criteria.evaluate(row.reference);
-      futures[first + j] = Futures{predictions[j], scene.target, scene.targetValid};
+      scorer.score(row, scene, predictions[j]);
+      futures[first + j] = Futures{predictions[j].mostLikely.positions, scene.target, scene.targetValid};
     }
   }
   comparison.timings.push_back({"read", read_seconds});
@@ -410,6 +465,10 @@ void CompareOptions::validate() const {
   if (jobs < 1 || jobs > 256) throw ConfigError::field("command line", "--jobs", std::to_string(jobs), "1 .. 256");
   if (threads < 1 || threads > 256) throw ConfigError::field("command line", "--threads", std::to_string(threads), "1 .. 256");
   if (worst < 0 || worst > 50) throw ConfigError::field("command line", "--worst", std::to_string(worst), "0 .. 50");
+  if (draws < 0 || draws > 10000) throw ConfigError::field("command line", "--draws", std::to_string(draws), "0 .. 10000");
+  if (!(confidence >= 0.5 && confidence <= 1.0)) {
+    throw ConfigError::field("command line", "--confidence", formatValue(confidence), "0.5 .. 1");
+  }
   if (!(egoLength > 0.0) || !(otherLength > 0.0)) {
     throw ConfigError::field("command line", "--ego-length/--other-length",
                              fmt::format("{}/{}", egoLength, otherLength), "> 0 m");
@@ -429,7 +488,8 @@ CompareSummary runComparison(const CompareOptions& options_in) {
     options.output = fs::path("reports") / (options.scenarioFile.empty() ? vector::resolveDatasetPath(options.data.front()).stem()
                                                                           : options.scenarioFile.stem());
   }
-  if (!fs::is_regular_file(options.model)) {
+  const bool builtin = model::Predictor::isBuiltin(options.model);  // cv, ca: no file
+  if (!builtin && !fs::is_regular_file(options.model)) {
     throw ModelError(fmt::format("--model {}: no such file", options.model.string()));
   }
   const model::Predictor predictor(options.model, options.threads);
@@ -437,13 +497,22 @@ CompareSummary runComparison(const CompareOptions& options_in) {
 
   Run run = options.scenarioFile.empty() ? compareDatasets(options, predictor) : compareScenario(options, predictor);
   auto& comparison = run.comparison;
+  comparison.draws = drawOptions(options, predictor).samples;
+  comparison.confidence = options.confidence;
   const auto& info = predictor.info();
   comparison.provenance.insert(
       comparison.provenance.begin(),
       {{"model file", options.model.string()},
-       {"model SHA-256", sha256OfFile(options.model)},
-       {"model", fmt::format("trained on {} (labels {}), seed {}, epoch {}, validation ADE {:.3f} m", info.mix,
-                             fmt::join(info.labels, ", "), info.seed, info.epoch, info.validationAde)}});
+       {"model SHA-256", builtin ? std::string("-") : sha256OfFile(options.model)},
+       {"model", info.trained ? fmt::format("{} decoder, trained on {} (labels {}), seed {}, epoch {}, validation ADE "
+                                            "{:.3f} m",
+                                            predictor.name(), info.mix, fmt::join(info.labels, ", "), info.seed,
+                                            info.epoch, info.validationAde)
+                              : fmt::format("{} (no training)", predictor.name())}});
+  if (comparison.draws > 0) {
+    comparison.provenance.push_back({"sampled futures", fmt::format("{} per scenario, seed {}", comparison.draws,
+                                                                    options.drawSeed)});
+  }
   comparison.provenance.push_back({"vsd-sumo", toolVersion()});
   comparison.provenance.push_back({"libtorch threads", std::to_string(options.threads)});
   comparison.provenance.push_back({"command line", options.commandLine});

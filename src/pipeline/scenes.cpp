@@ -88,4 +88,16 @@ std::vector<double> metricsOfFuture(const metrics::MetricSet& metric_set, const 
   return metric_set.evaluate(vector::sceneTrace(scene, future, ego_length, other_length), vector::egoLaneCentre(scene));
 }
 
+std::vector<double> metricsOfFuture(const metrics::MetricSet& metric_set, const vector::VectorizedScene& scene,
+                                    const std::vector<VehicleState>& future, double ego_length, double other_length) {
+  Polyline positions;
+  positions.reserve(future.size());
+  for (const auto& state : future) positions.push_back(state.position());
+  Trace trace = vector::sceneTrace(scene, positions, ego_length, other_length);
+  auto& ego = trace.vehicles.front().states;
+  for (std::size_t k = 0; k < future.size() && k + 1 < ego.size(); ++k) ego[k + 1] = future[k];
+  if (!future.empty()) ego[0].accel = future.front().accel;  // a_0 = a_1, as for every recorded track
+  return metric_set.evaluate(trace, vector::egoLaneCentre(scene));
+}
+
 }  // namespace vsd::pipeline

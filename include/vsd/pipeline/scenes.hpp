@@ -47,4 +47,11 @@ vector::VectorizedScene plannedScene(const scenario::ConcreteScenario& concrete)
 std::vector<double> metricsOfFuture(const metrics::MetricSet& metric_set, const vector::VectorizedScene& scene,
                                     const Polyline& future, double ego_length, double other_length);
 
+/// The same for a future that carries its own states at t_1..t_F (heading, speed and
+/// acceleration, e.g. from the kinematic decoder): they are used as they are, nothing is
+/// reconstructed from positions - a_min of such a prediction is the minimum of its
+/// predicted accelerations.
+std::vector<double> metricsOfFuture(const metrics::MetricSet& metric_set, const vector::VectorizedScene& scene,
+                                    const std::vector<VehicleState>& future, double ego_length, double other_length);
+
 }  // namespace vsd::pipeline
