@@ -82,12 +82,6 @@ report::CriterionSpec parseCriterion(const std::string& text) {
   return spec;
 }
 
-std::vector<std::string> unitsOf(const std::vector<std::string>& names) {
-  std::vector<std::string> units;
-  for (const auto& name : names) units.push_back(metrics::findMetric(name)->unit);
-  return units;
-}
-
 /// The output folder is built under a temporary name next to it and renamed into place.
 class OutputFolder {
  public:
@@ -164,13 +158,12 @@ model::PredictOptions drawOptions(const CompareOptions& options, const model::Pr
 /// failing each criterion. Every future goes through the same metric code.
 class PredictionScorer {
  public:
-  PredictionScorer(const metrics::MetricSet& metric_set, const Criteria& criteria, double ego_length,
-                   double other_length)
-      : metricSet_(metric_set), criteria_(criteria), egoLength_(ego_length), otherLength_(other_length) {}
+  PredictionScorer(const metrics::MetricSet& metric_set, const Criteria& criteria)
+      : metricSet_(metric_set), criteria_(criteria) {}
 
   std::vector<double> metricsOf(const vector::VectorizedScene& scene, const model::Trajectory& future) const {
-    if (future.states.empty()) return pipeline::metricsOfFuture(metricSet_, scene, future.positions, egoLength_, otherLength_);
-    return pipeline::metricsOfFuture(metricSet_, scene, future.states, egoLength_, otherLength_);
+    if (future.states.empty()) return pipeline::metricsOfFuture(metricSet_, scene, future.positions);
+    return pipeline::metricsOfFuture(metricSet_, scene, future.states);
   }
 
   void score(report::ComparedScenario& row, const vector::VectorizedScene& scene, const model::Prediction& prediction) const {
@@ -208,8 +201,6 @@ class PredictionScorer {
  private:
   const metrics::MetricSet& metricSet_;
   const Criteria& criteria_;
-  double egoLength_;
-  double otherLength_;
 };
 
 std::string metricCaption(const report::Comparison& comparison, const report::ComparedScenario& row) {
@@ -261,7 +252,7 @@ Run compareScenario(const CompareOptions& options, const model::Predictor& predi
   header.step = logical->step;
   header.horizon = logical->steps();
   predictor.checkCompatible(header, options.scenarioFile.string());
-  const metrics::MetricSet metric_set(logical->metrics, !logical->others.empty(),
+  const metrics::MetricSet metric_set(logical->metrics, pipeline::scenarioAvailability(*logical),
                                       logical->sourceFile.string() + ": metrics");
   Run run;
   auto& comparison = run.comparison;
@@ -269,15 +260,13 @@ Run compareScenario(const CompareOptions& options, const model::Predictor& predi
   comparison.referenceName = "simulated";
   comparison.inputNames = logical->inputNames();
   comparison.metricNames = metric_set.names();
-  comparison.metricUnits = unitsOf(comparison.metricNames);
+  comparison.metricUnits = metric_set.units();
   std::vector<std::string> where;
   for (const auto& criterion : logical->criteria) {
     comparison.criteria.push_back({criterion.name, criterion.expression});
     where.push_back(criterion.where);
   }
   const Criteria criteria(comparison.criteria, where, comparison.metricNames);
-  const double ego_length = logical->ego.length;
-  const double other_length = logical->others.empty() ? 5.0 : logical->others.front().length;
 
   // 1. Scenes before simulation.
   auto start = std::chrono::steady_clock::now();
@@ -308,7 +297,7 @@ Run compareScenario(const CompareOptions& options, const model::Predictor& predi
   }
   const auto predictions = predictInChunks(predictor, planned, to_predict, drawOptions(options, predictor));
   comparison.timings.push_back({"predict", secondsSince(start)});
-  const PredictionScorer scorer(metric_set, criteria, ego_length, other_length);
+  const PredictionScorer scorer(metric_set, criteria);
   spdlog::info("predicted the Ego in {} scenarios", predictions.size());
 
   // 3. Simulation of the same concrete scenarios, compared as they arrive.
@@ -355,7 +344,7 @@ Run compareScenario(const CompareOptions& options, const model::Predictor& predi
     scored.target = simulated.target;
     scored.targetValid = simulated.targetValid;
     row.reference = outcome.metrics;
-    row.fromReferencePositions = pipeline::metricsOfFuture(metric_set, scored, simulated.target, ego_length, other_length);
+    row.fromReferencePositions = pipeline::metricsOfFuture(metric_set, scored, simulated.target);
     scorer.score(row, scored, prediction);
     futures[outcome.index] = Futures{prediction.mostLikely.positions, simulated.target, simulated.targetValid};
   });
@@ -385,11 +374,8 @@ Run compareDatasets(const CompareOptions& options, const model::Predictor& predi
 
   const auto& first_header = collection.reader(0).header();
   std::vector<std::string> names = options.metrics;
-  if (names.empty()) {
-    names = first_header.kind == "generated" ? first_header.metricNames
-                                              : std::vector<std::string>{"a_min", "d_min", "ttc_min", "thw_min"};
-  }
-  const metrics::MetricSet metric_set(names, /*has_other_vehicles=*/true, "--metrics");
+  if (names.empty() && first_header.kind == "generated") names = first_header.metricNames;
+  const metrics::MetricSet metric_set(names, pipeline::sceneAvailability(first_header.kind), "--metrics");
 
   Run run;
   auto& comparison = run.comparison;
@@ -398,14 +384,14 @@ Run compareDatasets(const CompareOptions& options, const model::Predictor& predi
   comparison.title = fmt::format("{} samples of {}", refs.size(), files);
   comparison.referenceName = "recorded";
   comparison.metricNames = metric_set.names();
-  comparison.metricUnits = unitsOf(comparison.metricNames);
+  comparison.metricUnits = metric_set.units();
   std::vector<std::string> where;
   for (const auto& text : options.criteria) {
     comparison.criteria.push_back(parseCriterion(text));
     where.push_back("--criterion '" + text + "'");
   }
   const Criteria criteria(comparison.criteria, where, comparison.metricNames);
-  const PredictionScorer scorer(metric_set, criteria, options.egoLength, options.otherLength);
+  const PredictionScorer scorer(metric_set, criteria);
   const auto predict_options = drawOptions(options, predictor);
 
   double read_seconds = 0.0;
@@ -432,7 +418,7 @@ Run compareDatasets(const CompareOptions& options, const model::Predictor& predi
         row.failure = "no recorded future (the Ego left the map at once)";
         continue;
       }
-      row.reference = pipeline::metricsOfFuture(metric_set, scene, scene.target, options.egoLength, options.otherLength);
+      row.reference = pipeline::metricsOfFuture(metric_set, scene, scene.target);
       scorer.score(row, scene, predictions[j]);
       futures[first + j] = Futures{predictions[j].mostLikely.positions, scene.target, scene.targetValid};
     }
@@ -440,10 +426,17 @@ Run compareDatasets(const CompareOptions& options, const model::Predictor& predi
   comparison.timings.push_back({"read", read_seconds});
   comparison.timings.push_back({"predict", predict_seconds});
   comparison.timings.push_back({"compare", secondsSince(start) - read_seconds - predict_seconds});
-  comparison.notes.push_back(fmt::format(
+  comparison.notes.push_back(
       "Both sides go through the same metric code: the recorded and the predicted Ego positions, speeds and "
-      "accelerations reconstructed from positions; vehicle lengths {} m (Ego) and {} m (others).",
-      options.egoLength, options.otherLength));
+      "accelerations reconstructed from positions; vehicle sizes as the dataset stores them.");
+  for (std::size_t f = 0; f < collection.files(); ++f) {
+    if (collection.reader(f).header().vehicleSizesAssumed) {
+      comparison.notes.push_back(fmt::format("{} is a {} file without vehicle sizes: every vehicle was assumed "
+                                             "{} m x {} m.",
+                                             collection.reader(f).path().string(), vector::kDatasetSchemaVersion1,
+                                             vector::kAssumedVehicleLength, vector::kAssumedVehicleWidth));
+    }
+  }
   for (std::size_t f = 0; f < collection.files(); ++f) {
     const auto& path = collection.reader(f).path();
     comparison.provenance.push_back({"dataset", path.string()});
@@ -468,10 +461,6 @@ void CompareOptions::validate() const {
   if (draws < 0 || draws > 10000) throw ConfigError::field("command line", "--draws", std::to_string(draws), "0 .. 10000");
   if (!(confidence >= 0.5 && confidence <= 1.0)) {
     throw ConfigError::field("command line", "--confidence", formatValue(confidence), "0.5 .. 1");
-  }
-  if (!(egoLength > 0.0) || !(otherLength > 0.0)) {
-    throw ConfigError::field("command line", "--ego-length/--other-length",
-                             fmt::format("{}/{}", egoLength, otherLength), "> 0 m");
   }
   if (!scenarioFile.empty() && (!metrics.empty() || !criteria.empty())) {
     throw ConfigError("compare: --metrics and --criterion are for datasets; a scenario file defines its own "

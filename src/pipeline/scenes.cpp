@@ -84,20 +84,33 @@ vector::VectorizedScene plannedScene(const scenario::ConcreteScenario& concrete)
 }
 
 std::vector<double> metricsOfFuture(const metrics::MetricSet& metric_set, const vector::VectorizedScene& scene,
-                                    const Polyline& future, double ego_length, double other_length) {
-  return metric_set.evaluate(vector::sceneTrace(scene, future, ego_length, other_length), vector::egoLaneCentre(scene));
+                                    const Polyline& future) {
+  const Trace trace = vector::sceneTrace(scene, future);
+  const Polyline lane = vector::egoLaneCentre(scene);
+  return metric_set.evaluate({trace, lane});
+}
+
+metrics::Availability sceneAvailability(const std::string& dataset_kind) {
+  // Other vehicles may or may not be in a given scene; metrics that need them yield NaN there.
+  const bool generated = dataset_kind == "generated";
+  return {/*otherVehicles=*/true, /*egoLane=*/generated, /*scenarioFrame=*/generated};
+}
+
+metrics::Availability scenarioAvailability(const scenario::LogicalScenario& logical) {
+  return {/*otherVehicles=*/!logical.others.empty(), /*egoLane=*/true, /*scenarioFrame=*/true};
 }
 
 std::vector<double> metricsOfFuture(const metrics::MetricSet& metric_set, const vector::VectorizedScene& scene,
-                                    const std::vector<VehicleState>& future, double ego_length, double other_length) {
+                                    const std::vector<VehicleState>& future) {
   Polyline positions;
   positions.reserve(future.size());
   for (const auto& state : future) positions.push_back(state.position());
-  Trace trace = vector::sceneTrace(scene, positions, ego_length, other_length);
+  Trace trace = vector::sceneTrace(scene, positions);
   auto& ego = trace.vehicles.front().states;
   for (std::size_t k = 0; k < future.size() && k + 1 < ego.size(); ++k) ego[k + 1] = future[k];
   if (!future.empty()) ego[0].accel = future.front().accel;  // a_0 = a_1, as for every recorded track
-  return metric_set.evaluate(trace, vector::egoLaneCentre(scene));
+  const Polyline lane = vector::egoLaneCentre(scene);
+  return metric_set.evaluate({trace, lane});
 }
 
 }  // namespace vsd::pipeline

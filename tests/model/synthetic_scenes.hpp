@@ -25,7 +25,11 @@ inline vector::VectorizedScene syntheticScene(std::uint64_t i, const std::string
   Trace trace;
   trace.step = 0.2;
   VehicleTrack ego;
+  ego.length = 5.0;
+  ego.width = 1.8;
   VehicleTrack leader;
+  leader.length = 4.5;
+  leader.width = 1.8;
   double ego_speed = speed;
   Vec2 p = origin;
   for (int k = 0; k < 26; ++k) {
@@ -51,6 +55,7 @@ inline vector::VectorizedScene syntheticScene(std::uint64_t i, const std::string
 inline fs::path writeDataset(const fs::path& path, std::size_t count, const std::string& label = "acc",
                       int horizon = 25) {
   vector::DatasetHeader header;
+  header.step = 0.2;
   header.horizon = horizon;
   vector::DatasetWriter writer(path, header);
   for (std::size_t i = 0; i < count; ++i) {

@@ -222,6 +222,7 @@ TEST(ModelFiles, CorruptForeignAndOtherSchemaModelsAreRejected) {
   // A dataset with another horizon than the model's.
   const Predictor predictor(options.output);
   vector::DatasetHeader other;
+  other.step = 0.2;
   other.horizon = 10;
   EXPECT_THROW(predictor.checkCompatible(other, "other.h5"), ModelError);
 }
