@@ -37,9 +37,12 @@ class ExtraTrees {
   /// x [n, d], y [n, outputs]; throws ConfigError for empty or mismatched data.
   void fit(const Matrix& x, const Matrix& y);
   Matrix predict(const Matrix& x) const;
+  /// One [n, outputs] prediction per tree (their mean is predict()): the forest's spread.
+  std::vector<Matrix> predictPerTree(const Matrix& x) const;
   std::size_t nodes() const;
 
  private:
+  void checkPredictable(const Matrix& x) const;
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };
@@ -111,6 +114,8 @@ std::vector<double> meanAbsoluteError(const Matrix& predicted, const Matrix& tru
 namespace vsd::baseline {
 
 /// `vsd-sumo baseline`: fit a metamodel on one run's concrete.csv, evaluate it on another's.
+/// Extra trees are fitted per target (one forest per metric, as scikit-learn's single-output
+/// ExtraTreesRegressor on each column); the BNN standardises its targets and fits them jointly.
 struct BaselineOptions {
   std::filesystem::path train;             ///< concrete.csv or run folder
   std::filesystem::path test;              ///< concrete.csv or run folder of the same functional scenario

@@ -27,7 +27,9 @@ enum class RandomStream : std::uint64_t {
   DataSplit = 5,
   Training = 6,
   EgoSelection = 7,
-  PredictionSamples = 8,
+  OtherHeadingNoise = 8,
+  SearchSelection = 9,  ///< `search`: importance draws from a round's candidate pool
+  PredictionSamples = 10,  ///< `predict --samples`, compare's drawn futures
 };
 
 class Rng {
