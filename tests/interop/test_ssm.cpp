@@ -7,6 +7,7 @@
 #include <libsumo/libsumo.h>
 #include <pugixml.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <map>
 #include <sstream>
@@ -148,9 +149,10 @@ TEST(SsmCrossCheck, FollowingOnCurvedRoadsMatchesSsmAtEveryInstant) {
       if (!std::isnan(drac)) {
         EXPECT_NEAR(ours.at("drac_max_lane")[k], drac, 0.01) << where;
       }
-      // The straight gap between centres is a chord of the lane: never longer, and
-      // within 0.25 m where the vehicles are close (<= 10 m).
-      EXPECT_LE(ours.at("d_min")[k], sgap + 0.01) << where;
+      // The straight gap between centres is nearly a chord of the lane: longer only by what
+      // lateral offsets on the outside of a bend add (<= 0.1 m), and within 0.25 m where the
+      // vehicles are close (<= 10 m).
+      EXPECT_LE(ours.at("d_min")[k], sgap + 0.1) << where;
       if (sgap <= 10.0) {
         EXPECT_NEAR(ours.at("d_min")[k], sgap, 0.25) << where;
       }
@@ -167,6 +169,7 @@ TEST(SsmCrossCheck, StraightLineMeasuresAgreeWithSsmOnStraightRoads) {
   runAndReplay("acc", 20, work.path(), replayed);
   const std::vector<std::string> names = {"d_min", "ttc_min", "drac_max"};
   const metrics::MetricSet set(names, {true, true, true}, "test");
+  std::vector<double> ttc_differences;
   for (const auto& outcome : replayed.outcomes) {
     const auto ssm = ssmSeries(replayed.ssm, fmt::format("s{}.ego", outcome.index), fmt::format("s{}.co", outcome.index));
     const auto values = set.evaluate({outcome.trace, outcome.lanes.at(0).centre});
@@ -178,11 +181,15 @@ TEST(SsmCrossCheck, StraightLineMeasuresAgreeWithSsmOnStraightRoads) {
     for (const auto& [time, value] : ssm.at("DRAC")) max_drac = std::isnan(value) ? max_drac : std::max(max_drac, value);
     const std::string where = fmt::format("sample {}", outcome.index);
     EXPECT_NEAR(values[0], min_sgap, 0.25) << where;
-    if (min_ttc < 10.0) {
-      EXPECT_NEAR(values[1], min_ttc, 0.15) << where;
+    if (min_ttc < 10.0) {  // projected vs scalar speeds: a relative difference
+      EXPECT_NEAR(values[1], min_ttc, 0.12 * min_ttc) << where;
+      ttc_differences.push_back(std::abs(values[1] - min_ttc));
     }
     EXPECT_NEAR(values[2], max_drac, 0.05) << where;
   }
+  ASSERT_GT(ttc_differences.size(), 5u);
+  std::nth_element(ttc_differences.begin(), ttc_differences.begin() + ttc_differences.size() / 2, ttc_differences.end());
+  EXPECT_LE(ttc_differences[ttc_differences.size() / 2], 0.1) << "median TTC difference";
 }
 
 namespace {
