@@ -131,6 +131,15 @@ void recoverLocked(const fs::path& folder) {
   for (const auto& commit : commits) rollForward(folder, commit);
 }
 
+/// Whether `folder` holds anything but hidden entries (leftovers of this mechanism, a lock).
+bool holdsVisibleEntries(const fs::path& folder) {
+  std::error_code ec;
+  for (fs::directory_iterator it(folder, ec), end; !ec && it != end; it.increment(ec)) {
+    if (it->path().filename().string().front() != '.') return true;
+  }
+  return false;
+}
+
 std::set<std::string> listedOutputs(const fs::path& folder) {
   std::set<std::string> names;
   try {
@@ -158,9 +167,9 @@ OutputFolder::OutputFolder(fs::path folder, const Options& options) : folder_(fo
   }
   try {
     recoverLocked(folder_);
-    if (options.refuseExisting && fs::exists(folder_ / kManifest)) {
-      throw ConfigError(fmt::format("{} {}: the folder holds earlier outputs; choose another or pass {} to replace them",
-                                    options.flag, folder_.string(), options.forceFlag));
+    if (options.refuseExisting && holdsVisibleEntries(folder_)) {
+      throw ConfigError(fmt::format("{} {}: the folder exists; choose another or pass {} to replace it", options.flag,
+                                    folder_.string(), options.forceFlag));
     }
     staging_ = folder_ / (kStagingPrefix + std::to_string(::getpid()));
     fs::remove_all(staging_);

@@ -170,6 +170,10 @@ TEST(OutputFolder, OneWriterAtATimeAndAnOptionallyRefusedEarlierSet) {
   OutputFolder::Options refuse;
   refuse.refuseExisting = true;
   EXPECT_THROW(OutputFolder(folder, refuse), ConfigError);
+  test::writeFile(dir.path() / "foreign" / "notes.txt", "mine");  // no manifest, but not ours to mix into
+  EXPECT_THROW(OutputFolder(dir.path() / "foreign", refuse), ConfigError);
+  fs::create_directories(dir.path() / "empty");
+  EXPECT_NO_THROW(OutputFolder(dir.path() / "empty", refuse));
   OutputFolder writer(folder);
   EXPECT_THROW(OutputFolder{folder}, IoError);  // locked by `writer`
   test::writeFile(dir.path() / "file", "x");

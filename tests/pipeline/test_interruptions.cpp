@@ -3,7 +3,8 @@
 // parent alone) in every phase, with one and two jobs. Whatever happens, the
 // output folder holds its old set or its new one — never a mix, never a file
 // that looks complete but is not — and a signal stops the workers and keeps the
-// old outputs. Each case runs in a forked copy of this test process (no
+// old outputs. `export` keeps the old dataset file when killed or signalled
+// while finishing it. Each case runs in a forked copy of this test process (no
 // start-up cost), with the fault-injection hooks of vsd/core/fault.hpp.
 
 #include <gtest/gtest.h>
@@ -22,6 +23,7 @@
 #include "vsd/core/fault.hpp"
 #include "vsd/core/interrupt.hpp"
 #include "vsd/core/progress.hpp"
+#include "vsd/pipeline/export.hpp"
 #include "vsd/pipeline/run.hpp"
 #include "vsd/vector/dataset.hpp"
 
@@ -35,17 +37,17 @@ RunOptions smallRun(const fs::path& out, std::uint64_t seed, int jobs) {
   RunOptions options;
   options.scenarioFile = test::scenarioFile("acc.yaml");
   options.outputDir = out;
-  options.samples = 8;
-  options.batch = 4;
+  options.samples = 2;  // two batches: the parent writes twice before it commits
+  options.batch = 1;
   options.seed = seed;
   options.jobs = jobs;
   return options;
 }
 
-/// Runs `options` in a forked child with VSD_FAULT / VSD_FAULT_TRACE set and
+/// Runs `work` in a forked child with VSD_FAULT / VSD_FAULT_TRACE set and
 /// signals handled as by the CLI. The child exits 0 on success, 128 + signal when
 /// interrupted (also after completing), 1 on an error. Returns the wait status.
-int runInChild(const RunOptions& options, const std::string& fault, const fs::path& trace = {}) {
+int inChild(const std::function<void()>& work, const std::string& fault, const fs::path& trace = {}) {
   const pid_t pid = ::fork();
   if (pid == 0) {
     ::setenv("VSD_FAULT", fault.c_str(), 1);
@@ -55,7 +57,7 @@ int runInChild(const RunOptions& options, const std::string& fault, const fs::pa
     installInterruptHandlers();
     int code = 0;
     try {
-      runScenarios(options);
+      work();
       if (interrupted()) code = 128 + interruptSignal();
     } catch (const InterruptedError& error) {
       code = error.exitCode();
@@ -67,6 +69,10 @@ int runInChild(const RunOptions& options, const std::string& fault, const fs::pa
   int status = 0;
   ::waitpid(pid, &status, 0);
   return status;
+}
+
+int runInChild(const RunOptions& options, const std::string& fault, const fs::path& trace = {}) {
+  return inChild([&options] { runScenarios(options); }, fault, trace);
 }
 
 struct TracedPoint {
@@ -173,4 +179,31 @@ TEST_F(RunInterruptions, ASignalInAnyPhaseStopsTheWorkersAndKeepsTheOldOutputs) 
       for (const long worker : workers) EXPECT_FALSE(alive(worker)) << fault << ": worker " << worker << " survived";
     }
   }
+}
+
+TEST(ExportInterruptions, TheOldDatasetIsKeptWhenKilledOrSignalledWhileFinishing) {
+  TemporaryDirectory dir;
+  const fs::path map = test::sourceDir() / "sumo_nets" / "opendrive_curve";
+  auto exporting = [&](std::uint64_t seed) {
+    ExportOptions options;
+    options.openDrive = map / "curve.xodr";
+    options.source.routes = {map / "curve.rou.xml"};
+    options.output = dir.path() / "od.h5";
+    options.end = 20.0;
+    options.seed = seed;
+    return [options] { exportMap(options); };
+  };
+  ASSERT_EQ(inChild(exporting(1), ""), 0);
+  const auto old_hash = sha256OfFile(dir.path() / "od.h5");
+  // Killed just before the finished file gets its name; signalled while it is
+  // flushed (the last moment to keep the old one).
+  const int killed = inChild(exporting(2), "kill@atomic.rename:od.h5");
+  EXPECT_TRUE(WIFSIGNALED(killed) && WTERMSIG(killed) == SIGKILL);
+  const int signalled = inChild(exporting(2), "term@atomic.fsync:od.h5");
+  EXPECT_TRUE(WIFEXITED(signalled) && WEXITSTATUS(signalled) == 143);
+  EXPECT_EQ(sha256OfFile(dir.path() / "od.h5"), old_hash);
+  ASSERT_EQ(inChild(exporting(2), ""), 0);
+  EXPECT_NE(sha256OfFile(dir.path() / "od.h5"), old_hash);
+  // The parts the killed and the signalled export left are gone.
+  EXPECT_TRUE(test::hiddenEntries(dir.path()).empty()) << test::hiddenEntries(dir.path()).front();
 }

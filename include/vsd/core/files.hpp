@@ -85,8 +85,10 @@ class AtomicOutput {
 class OutputFolder {
  public:
   struct Options {
-    /// Refuse (ConfigError) a folder that already holds a complete set (a
-    /// manifest), naming `flag` and `forceFlag` (e.g. "--out", "--force").
+    /// Refuse (ConfigError) a folder that already holds files (other than
+    /// hidden ones), naming `flag` and `forceFlag` (e.g. "--out", "--force").
+    /// Without it (--force) the new set replaces the old one; files that no
+    /// manifest listed are kept all the same.
     bool refuseExisting = false;
     std::string flag = "--out";
     std::string forceFlag = "--force";
