@@ -49,6 +49,7 @@ int main(int argc, char** argv) {
   vsd::cli::addCompareCommand(app, context);
   vsd::cli::addBenchCommand(app, context);
   vsd::cli::addScenarioCommand(app, context);
+  vsd::cli::addSearchCommand(app, context);
 
   try {
     app.parse(argc, argv);
