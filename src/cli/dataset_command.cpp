@@ -77,7 +77,7 @@ void addDatasetCommand(CLI::App& app, CommandContext& context) {
     context.action = [validate_paths] {
       int status = 0;
       for (const auto& path : *validate_paths) {
-        const auto result = vector::validateDataset(vector::resolveDatasetPath(path));
+        const auto result = vector::validateDataset(path);  // a run folder: its manifest too
         if (result.ok()) {
           fmt::print("{}: valid ({} samples)\n", result.path.string(), result.samples);
           continue;

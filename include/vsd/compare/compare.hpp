@@ -41,7 +41,7 @@ struct CompareOptions {
   std::uint64_t drawSeed = 1;                  ///< seed of the drawn futures
   double confidence = 0.9;                     ///< a verdict is confident when this share of futures agrees, 0.5 .. 1
   /// Dataset mode: metrics to compare (default: the dataset's metrics for generated data,
-  /// else a_min, d_min, ttc_min, thw_min) and criteria "name: expression" (scenario mode
+  /// else every metric that applies to a map, metrics::defaultMetrics) and criteria "name: expression" (scenario mode
   /// takes both from the scenario file).
   std::vector<std::string> metrics;
   std::vector<std::string> criteria;
