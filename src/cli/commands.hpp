@@ -26,5 +26,6 @@ void addBaselineCommand(CLI::App& app, CommandContext& context);
 void addExperimentCommand(CLI::App& app, CommandContext& context);
 void addCompareCommand(CLI::App& app, CommandContext& context);
 void addBenchCommand(CLI::App& app, CommandContext& context);
+void addMergeCommand(CLI::App& app, CommandContext& context);
 
 }  // namespace vsd::cli

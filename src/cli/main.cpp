@@ -9,6 +9,7 @@
 #include "vsd/core/error.hpp"
 #include "vsd/core/interrupt.hpp"
 #include "vsd/core/log.hpp"
+#include "vsd/pipeline/cluster.hpp"
 
 namespace {
 
@@ -28,6 +29,9 @@ int main(int argc, char** argv) {
   CLI::App app{"vsd-sumo: scenario-based testing of automated vehicles with SUMO, vectorized scenario descriptions "
                "and VectorNet motion prediction"};
   app.set_version_flag("--version", vsd::toolVersion());
+  const std::string mpi = vsd::pipeline::mpiLibraryVersion();
+  app.footer(mpi.empty() ? "MPI: not in this build (install libopenmpi-dev and rebuild for mpirun -n N vsd-sumo run)"
+                         : "MPI: " + mpi + " (mpirun -n N vsd-sumo run|export: the work is split over the ranks)");
   app.require_subcommand(1);
   bool quiet = false;
   bool verbose = false;
@@ -45,6 +49,7 @@ int main(int argc, char** argv) {
   vsd::cli::addBaselineCommand(app, context);
   vsd::cli::addExperimentCommand(app, context);
   vsd::cli::addCompareCommand(app, context);
+  vsd::cli::addMergeCommand(app, context);
   vsd::cli::addBenchCommand(app, context);
 
   try {

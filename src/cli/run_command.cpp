@@ -3,6 +3,8 @@
 #include <memory>
 
 #include "commands.hpp"
+#include "vsd/core/error.hpp"
+#include "vsd/pipeline/cluster.hpp"
 #include "vsd/pipeline/run.hpp"
 
 namespace vsd::cli {
@@ -28,9 +30,29 @@ void addRunCommand(CLI::App& app, CommandContext& context) {
   run->add_flag("--keep-nets", options->keepNets, "Keep the generated networks in <out>/nets (open with sumo-gui)");
   run->add_flag("--fcd", options->fcd,
                 "Write SUMO FCD XML per batch to <out>/fcd (replay: tools/replay_fcd.py); implies --keep-nets");
-  run->callback([options, &context] {
-    context.action = [options, &context] {
+  auto shard = std::make_shared<std::string>();
+  run->add_option("--shard", *shard,
+                  "Run only shard K/N of the sweep (K = 0 .. N-1) into <out>/shards/shard-K-of-N; finished shards "
+                  "are skipped, so re-running resumes. Join with `vsd-sumo merge <out>`");
+  auto merge = std::make_shared<bool>(false);
+  run->add_flag("--merge", *merge, "Under mpirun: rank 0 joins the shards into one run folder at the end");
+  auto net_writer = std::make_shared<std::string>();
+  run->add_option("--net-writer", *net_writer,
+                  "How networks are built: direct (written by vsd-sumo) or netconvert; default: direct unless the "
+                  "scenario gives sumo.netconvert_options")
+      ->check(CLI::IsMember({"direct", "netconvert"}));
+  run->callback([options, net_writer, shard, merge, &context] {
+    context.action = [options, net_writer, shard, merge, &context] {
       options->commandLine = context.commandLine;
+      if (!net_writer->empty()) options->netWriter = road::parseNetWriter(*net_writer, "command line: --net-writer");
+      if (!shard->empty()) options->shard = ShardId::parse(*shard, "command line");
+      if (pipeline::launchedAsMpiRank()) {
+        const auto communicator = pipeline::joinMpiJob();
+        const auto result = pipeline::runOnCluster(*options, *merge, *communicator);
+        fmt::print("{}", result.report);
+        return result.exitCode;
+      }
+      if (*merge) throw ConfigError("--merge is for mpirun; join shards with `vsd-sumo merge <out>`");
       const auto summary = pipeline::runScenarios(*options);
       fmt::print("{}", summary.report());
       return 0;

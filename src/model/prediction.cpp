@@ -115,14 +115,16 @@ void accumulate(LabelErrors& total, const LabelErrors& one) {
 Evaluation evaluate(const Predictor& predictor, const std::vector<fs::path>& data) {
   if (data.empty()) throw ConfigError("--data: no dataset given");
   Evaluation evaluation;
-  for (const auto& path : data) {
-    const vector::DatasetReader reader(vector::resolveDatasetPath(path));
-    predictDataset(predictor, reader, evaluation.predictionSeconds,
-                   [&](std::size_t, const vector::VectorizedScene& scene, const Polyline& prediction) {
-                     const auto errors = displacementErrors(prediction, scene);
-                     accumulate(evaluation.perLabel[scene.label], errors);
-                     accumulate(evaluation.overall, errors);
-                   });
+  for (const auto& given : data) {
+    for (const auto& path : vector::datasetFiles(given)) {  // a sharded sweep: every shard
+      const vector::DatasetReader reader(path);
+      predictDataset(predictor, reader, evaluation.predictionSeconds,
+                     [&](std::size_t, const vector::VectorizedScene& scene, const Polyline& prediction) {
+                       const auto errors = displacementErrors(prediction, scene);
+                       accumulate(evaluation.perLabel[scene.label], errors);
+                       accumulate(evaluation.overall, errors);
+                     });
+    }
   }
   return evaluation;
 }

@@ -6,10 +6,13 @@
 #include <cmath>
 #include <deque>
 #include <functional>
+#include <memory>
+#include <optional>
 #include <unordered_map>
 #include <unordered_set>
 
 #include "vsd/core/error.hpp"
+#include "vsd/pipeline/cluster.hpp"
 #include "vsd/core/files.hpp"
 #include "vsd/core/interrupt.hpp"
 #include "vsd/core/log.hpp"
@@ -128,9 +131,10 @@ struct History {
 
 class Exporter {
  public:
-  Exporter(const ExportOptions& options, const vector::LaneIndex& lanes, vector::DatasetWriter& writer,
-           vector::Provenance provenance, std::string label)
+  Exporter(const ExportOptions& options, const WindowShare& share, const vector::LaneIndex& lanes,
+           vector::DatasetWriter& writer, vector::Provenance provenance, std::string label)
       : options_(options),
+        share_(share),
         lanes_(lanes),
         writer_(writer),
         provenance_(std::move(provenance)),
@@ -218,6 +222,11 @@ class Exporter {
   }
 
   void emitWindow(const std::string& ego_id, History& ego, std::int64_t step, double time) {
+    if (!share_.mine(samples_)) {  // another rank's window: counted, not built
+      ++samples_;
+      ++ego.samples;
+      return;
+    }
     const std::int64_t first = step - historySteps_ - horizonSteps_;
     const std::int64_t t0 = step - horizonSteps_;
     const std::size_t instants = static_cast<std::size_t>(historySteps_ + horizonSteps_ + 1);
@@ -274,6 +283,7 @@ class Exporter {
   }
 
   const ExportOptions& options_;
+  WindowShare share_;
   const vector::LaneIndex& lanes_;
   vector::DatasetWriter& writer_;
   vector::Provenance provenance_;
@@ -290,7 +300,16 @@ class Exporter {
 
 }  // namespace
 
-ExportSummary exportMap(const ExportOptions& options) {
+namespace {
+
+/// What one process's export produced: the windows of its share in `target`.
+struct ExportPart {
+  ExportSummary summary;           ///< counts over all windows (every rank counts them all)
+  vector::DatasetHeader header;
+  std::vector<vector::Feature> lanePool;
+};
+
+ExportPart exportWindows(const ExportOptions& options, const WindowShare& share, const fs::path& target) {
   options.validate();
   const auto start = std::chrono::steady_clock::now();
   const EgoSelection selection = EgoSelection::parse(options.egos);
@@ -344,8 +363,6 @@ ExportSummary exportMap(const ExportOptions& options) {
     sim::makeController(registry, options.controller, options.controllerLibrary, fs::current_path(), params);
   }
 
-  if (!options.output.parent_path().empty()) ensureDirectory(options.output.parent_path());
-  AtomicOutput output(options.output);
   vector::DatasetHeader header;
   header.kind = "map";
   header.step = options.step;
@@ -353,10 +370,10 @@ ExportSummary exportMap(const ExportOptions& options) {
   header.history = stepsOf(options.history, options.step);
   header.compression = options.compression;
   std::optional<vector::DatasetWriter> writer;
-  writer.emplace(output.tempPath(), header);
+  writer.emplace(target, header);
   writer->setSharedVectors(lanes.pool());
   const vector::Provenance provenance{map_file.string(), sha256OfFile(map_file), "", 0.0};
-  Exporter exporter(options, lanes, *writer, provenance, label);
+  Exporter exporter(options, share, lanes, *writer, provenance, label);
 
   std::unordered_set<std::string> seen_egos;
   std::unordered_set<std::string> seen_types;
@@ -416,9 +433,11 @@ ExportSummary exportMap(const ExportOptions& options) {
   }
   writer->close();
   writer.reset();
-  output.commit();
 
-  ExportSummary summary;
+  ExportPart part;
+  part.header = header;
+  part.lanePool = lanes.pool();
+  ExportSummary& summary = part.summary;
   summary.output = options.output;
   summary.label = label;
   summary.samples = exporter.samples();
@@ -428,10 +447,89 @@ ExportSummary exportMap(const ExportOptions& options) {
   summary.laneVectors = lanes.vectors();
   summary.simulatedSeconds = simulation.time() - begin;
   summary.seconds = secondsSince(start);
-  summary.samplesPerSecond = static_cast<double>(summary.samples) / std::max(summary.seconds, 1e-9);
-  summary.bytesPerSample = static_cast<double>(fs::file_size(options.output)) / static_cast<double>(summary.samples);
   summary.closedLoop = options.closedLoop;
-  return summary;
+  return part;
+}
+
+void finishSummary(ExportSummary& summary, const fs::path& output, std::chrono::steady_clock::time_point start) {
+  summary.seconds = secondsSince(start);
+  summary.samplesPerSecond = static_cast<double>(summary.samples) / std::max(summary.seconds, 1e-9);
+  summary.bytesPerSample = static_cast<double>(fs::file_size(output)) / static_cast<double>(summary.samples);
+}
+
+/// <output's folder>/.<output name>.parts/part-K-of-N.h5: where rank K writes its windows.
+fs::path partPath(const fs::path& output, int rank, int ranks) {
+  return output.parent_path() / ("." + output.filename().string() + ".parts") /
+         fmt::format("part-{}-of-{}.h5", rank, ranks);
+}
+
+/// Rank 0: the ranks' parts joined in window order (window w is sample w / N of part
+/// w % N), copied bit for bit: the file a one-process export writes.
+void joinParts(const ExportOptions& options, const ExportPart& part, int ranks, const fs::path& target) {
+  std::vector<std::unique_ptr<vector::DatasetReader>> parts;
+  for (int r = 0; r < ranks; ++r) {
+    parts.push_back(std::make_unique<vector::DatasetReader>(partPath(options.output, r, ranks)));
+  }
+  vector::DatasetHeader header = part.header;
+  header.compression = options.compression;
+  vector::DatasetWriter writer(target, header);
+  writer.setSharedVectors(part.lanePool);
+  const auto n = static_cast<std::uint64_t>(ranks);
+  for (std::uint64_t w = 0; w < part.summary.samples; ++w) writer.appendCopy(*parts[w % n], w / n);
+  writer.close();
+}
+
+}  // namespace
+
+ExportSummary exportMap(const ExportOptions& options) {
+  const auto start = std::chrono::steady_clock::now();
+  if (!options.output.parent_path().empty()) ensureDirectory(options.output.parent_path());
+  AtomicOutput output(options.output);
+  ExportPart part = exportWindows(options, WindowShare{}, output.tempPath());
+  output.commit();
+  finishSummary(part.summary, options.output, start);
+  return part.summary;
+}
+
+ClusterExportResult exportOnCluster(const ExportOptions& options, Communicator& communicator) {
+  const auto start = std::chrono::steady_clock::now();
+  const int rank = communicator.rank();
+  const int ranks = communicator.size();
+  const fs::path mine = partPath(options.output, rank, ranks);
+  std::optional<ExportPart> part;
+  std::string failure;
+  try {
+    ensureDirectory(mine.parent_path());
+    // Parts are read once, by rank 0: not compressed (the joined file is).
+    ExportOptions part_options = options;
+    part_options.compression = 0;
+    part = exportWindows(part_options,
+                         WindowShare{static_cast<std::uint64_t>(rank), static_cast<std::uint64_t>(ranks)}, mine);
+  } catch (const Error& error) {
+    failure = error.what();
+  }
+  // Every rank simulates the whole map, so faults of the map or the options occur on
+  // every rank alike: rank 0 reports the first one, once.
+  if (!checkOnEveryRank(communicator, [&] {
+        if (!failure.empty()) throw ConfigError(failure);
+      })) {
+    std::error_code ignored;
+    fs::remove(mine, ignored);
+    return {1, {}};
+  }
+  ClusterExportResult result;
+  if (rank != 0) return result;
+  AtomicOutput output(options.output);
+  workOrEndJob(communicator, "joining the parts", [&] { joinParts(options, *part, ranks, output.tempPath()); });
+  output.commit();
+  std::error_code ignored;
+  fs::remove_all(mine.parent_path(), ignored);
+  finishSummary(part->summary, options.output, start);
+  result.report = fmt::format("{} MPI ranks, windows spread over them (window w on rank w mod {}); parts joined by "
+                              "rank 0\n",
+                              ranks, ranks) +
+                  part->summary.report();
+  return result;
 }
 
 std::string ExportSummary::report() const {
