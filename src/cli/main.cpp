@@ -51,6 +51,7 @@ int main(int argc, char** argv) {
   vsd::cli::addCompareCommand(app, context);
   vsd::cli::addMergeCommand(app, context);
   vsd::cli::addBenchCommand(app, context);
+  vsd::cli::addScenarioCommand(app, context);
 
   try {
     app.parse(argc, argv);

@@ -1,9 +1,12 @@
 #include <fmt/format.h>
 
 #include <memory>
+#include <string>
+#include <vector>
 
 #include "commands.hpp"
 #include "vsd/core/error.hpp"
+#include "vsd/interop/run_openscenario.hpp"
 #include "vsd/pipeline/cluster.hpp"
 #include "vsd/pipeline/run.hpp"
 
@@ -14,7 +17,8 @@ void addRunCommand(CLI::App& app, CommandContext& context) {
   CLI::App* run = app.add_subcommand(
       "run", "Sample concrete scenarios from a logical scenario, simulate them with SUMO and write concrete.csv, "
              "traces.h5 and manifest.json");
-  run->add_option("scenario", options->scenarioFile, "Logical scenario (YAML), e.g. scenarios/acc_lk.yaml")
+  run->add_option("scenario", options->scenarioFile,
+                  "Logical scenario (YAML), e.g. scenarios/acc_lk.yaml, or a concrete scenario (OpenSCENARIO .xosc)")
       ->required()
       ->check(CLI::ExistingFile);
   run->add_option("-n,--samples", options->samples, "Number of concrete scenarios")->capture_default_str();
@@ -41,11 +45,28 @@ void addRunCommand(CLI::App& app, CommandContext& context) {
                   "How networks are built: direct (written by vsd-sumo) or netconvert; default: direct unless the "
                   "scenario gives sumo.netconvert_options")
       ->check(CLI::IsMember({"direct", "netconvert"}));
-  run->callback([options, net_writer, shard, merge, &context] {
-    context.action = [options, net_writer, shard, merge, &context] {
+  auto import = std::make_shared<interop::ImportOptions>();
+  auto step = std::make_shared<double>(0.0);
+  CLI::Option* step_option =
+      run->add_option("--step", *step, "OpenSCENARIO input: simulation step (s) if the file does not set one");
+  run->callback([options, &context, run, import, step, step_option, net_writer, shard, merge] {
+    context.action = [options, &context, run, import, step, step_option, net_writer, shard, merge] {
       options->commandLine = context.commandLine;
       if (!net_writer->empty()) options->netWriter = road::parseNetWriter(*net_writer, "command line: --net-writer");
       if (!shard->empty()) options->shard = ShardId::parse(*shard, "command line");
+      if (options->scenarioFile.extension() == ".xosc") {
+        if (step_option->count() > 0) import->step = *step;
+        std::vector<std::string> fixed_by_file;
+        for (const char* flag : {"--samples", "--seed", "--first-sample"}) {
+          if (run->count(flag) > 0) fixed_by_file.push_back(flag);
+        }
+        fmt::print("{}", interop::runOpenScenario(*options, *import, fixed_by_file).report());
+        return 0;
+      }
+      if (step_option->count() > 0) {
+        throw ConfigError::field("command line", "--step", options->scenarioFile.string(),
+                                 "an OpenSCENARIO file (a logical scenario sets its step in time.step)");
+      }
       if (pipeline::launchedAsMpiRank()) {
         const auto communicator = pipeline::joinMpiJob();
         const auto result = pipeline::runOnCluster(*options, *merge, *communicator);

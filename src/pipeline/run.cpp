@@ -70,6 +70,14 @@ struct PreparedBatch {
 
 std::vector<std::string> netconvertOptions(const Context& context) { return context.logical->sumo.netconvertOptions; }
 
+ScenarioWithRoad concreteScenario(const std::shared_ptr<const scenario::LogicalScenario>& logical,
+                                  const RunOptions& options, std::uint64_t index) {
+  if (options.source) return options.source(index);
+  auto concrete = scenario::sampleConcreteScenario(logical, options.seed, index);
+  auto road = road::buildRoadGeometry(concrete);
+  return {std::move(concrete), std::move(road)};
+}
+
 /// Prepares, converts and simulates batches; one per process.
 class BatchProcessor {
  public:
@@ -85,8 +93,9 @@ class BatchProcessor {
         std::min(context_.options.firstSample + context_.options.samples, first + context_.options.batch);
     road::NetworkBuilder builder;
     for (std::uint64_t index = first; index < last; ++index) {
-      batch.scenarios.push_back(scenario::sampleConcreteScenario(context_.logical, context_.options.seed, index));
-      batch.roads.push_back(road::buildRoadGeometry(batch.scenarios.back()));
+      auto [concrete, road] = concreteScenario(context_.logical, context_.options, index);
+      batch.scenarios.push_back(std::move(concrete));
+      batch.roads.push_back(std::move(road));
       std::string failure;
       if (!context_.layout.fits(batch.roads.back())) {
         const auto [lo, hi] = batch.roads.back().bounds();
@@ -592,7 +601,7 @@ RunSummary runRange(const std::shared_ptr<const scenario::LogicalScenario>& logi
   // Fail fast on problems every scenario would hit (unknown controller, bad
   // parameters, bad expressions) before any process or file is created.
   {
-    auto probe = scenario::sampleConcreteScenario(logical, options.seed, options.firstSample);
+    auto probe = concreteScenario(logical, options, options.firstSample).concrete;
     auto registry = sim::ControllerRegistry::withBuiltins();
     sim::makeController(registry, logical->ego.controller.name, logical->ego.controller.library,
                         logical->sourceFile.parent_path(),

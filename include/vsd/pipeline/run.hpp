@@ -22,10 +22,20 @@
 #include "vsd/core/shards.hpp"
 #include "vsd/core/trace.hpp"
 #include "vsd/road/network.hpp"
+#include "vsd/road/road_geometry.hpp"
+#include "vsd/scenario/concrete_scenario.hpp"
 #include "vsd/scenario/logical_scenario.hpp"
 #include "vsd/sim/sumo_session.hpp"
 
 namespace vsd::pipeline {
+
+/// A concrete scenario with the road it is simulated on.
+struct ScenarioWithRoad {
+  scenario::ConcreteScenario concrete;
+  road::RoadGeometry road;
+};
+/// Supplies concrete scenario `index` (its `index` field must equal the argument).
+using ScenarioSource = std::function<ScenarioWithRoad(std::uint64_t index)>;
 
 struct RunOptions {
   static constexpr std::size_t kDefaultBatch = 250;
@@ -49,6 +59,9 @@ struct RunOptions {
   /// already (same sweep) is not run again: re-running a sweep resumes it.
   std::optional<ShardId> shard;
   std::string commandLine;          ///< recorded in the manifest
+  /// Empty: scenarios are sampled from the logical scenario (seed, index) and their roads
+  /// generated. Set for scenarios read from elsewhere (`vsd-sumo run FILE.xosc`).
+  ScenarioSource source;
 
   /// Throws ConfigError naming the flag and the accepted range.
   void validate() const;
