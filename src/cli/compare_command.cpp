@@ -30,9 +30,6 @@ void addCompareCommand(CLI::App& app, CommandContext& context) {
   command->add_option("--metrics", options->metrics, "Datasets: metrics to compare, e.g. a_min,d_min")->delimiter(',');
   command->add_option("--criterion", options->criteria, "Datasets: pass/fail criterion 'name: expression', e.g. "
                                                         "'close: d_min < 2' (repeatable)");
-  command->add_option("--ego-length", options->egoLength, "Datasets: Ego length (m)")->capture_default_str();
-  command->add_option("--other-length", options->otherLength, "Datasets: other vehicles' length (m)")
-      ->capture_default_str();
   command->callback([=, &context] {
     context.action = [=, &context] {
       options->commandLine = context.commandLine;

@@ -145,7 +145,7 @@ class BatchProcessor {
       }
       const auto lane = static_cast<std::size_t>(outcome.egoLane);
       const Polyline lane_centre = lane < outcome.lanes.size() ? outcome.lanes[lane].centre : Polyline{};
-      outcome.metrics = context_.metricSet->evaluate(outcome.trace, lane_centre);
+      outcome.metrics = context_.metricSet->evaluate({outcome.trace, lane_centre});
     }
     if (!context_.keepBatchFiles) removeBatchFiles(batch.stem);
     spdlog::debug("batch {}: waited {:.3f} s for netconvert, simulated {:.3f} s, metrics {:.3f} s", batch.number,
@@ -253,19 +253,20 @@ std::string failureKind(const std::string& failure) {
 
 class SummaryBuilder {
  public:
-  SummaryBuilder(RunSummary& summary, const std::vector<std::string>& metric_names) : summary_(summary) {
-    summary_.metricNames = metric_names;
-    for (const auto& name : metric_names) {
+  SummaryBuilder(RunSummary& summary, const metrics::MetricSet& metric_set)
+      : summary_(summary), metricSet_(metric_set) {
+    summary_.metricNames = metric_set.names();
+    summary_.collisionRule = metric_set.collisionRule();
+    const auto units = metric_set.units();
+    for (std::size_t m = 0; m < units.size(); ++m) {
       MetricSummary metric;
-      metric.name = name;
-      if (const auto info = metrics::findMetric(name)) metric.unit = info->unit;
+      metric.name = summary_.metricNames[m];
+      metric.unit = units[m];
       metric.min = std::numeric_limits<double>::infinity();
       metric.max = -std::numeric_limits<double>::infinity();
       summary_.metrics.push_back(metric);
     }
-    sums_.assign(metric_names.size(), 0.0);
-    const auto it = std::find(metric_names.begin(), metric_names.end(), "d_min");
-    if (it != metric_names.end()) dMinIndex_ = static_cast<std::size_t>(std::distance(metric_names.begin(), it));
+    sums_.assign(units.size(), 0.0);
   }
 
   void add(const ScenarioOutcome& outcome) {
@@ -289,7 +290,7 @@ class SummaryBuilder {
         sums_[m] += value;
       }
     }
-    if (dMinIndex_ && outcome.metrics[*dMinIndex_] <= 0.0) ++summary_.collisions;
+    if (metricSet_.collision(outcome.metrics)) ++summary_.collisions;
   }
 
   void finish() {
@@ -305,8 +306,8 @@ class SummaryBuilder {
 
  private:
   RunSummary& summary_;
+  const metrics::MetricSet& metricSet_;
   std::vector<double> sums_;
-  std::optional<std::size_t> dMinIndex_;
 };
 
 /// concrete.csv + traces.h5 + dataset.h5, written under temporary names.
@@ -592,7 +593,8 @@ RunSummary runRange(const std::shared_ptr<const scenario::LogicalScenario>& logi
   context.options.jobs = static_cast<int>(std::min<std::uint64_t>(
       static_cast<std::uint64_t>(options.jobs), (options.samples + options.batch - 1) / options.batch));
   context.metricSet = std::make_unique<metrics::MetricSet>(
-      logical->metrics, !logical->others.empty(), logical->sourceFile.string() + ": metrics");
+      logical->metrics, scenarioAvailability(*logical),
+      logical->sourceFile.string() + ": metrics");
   context.batches = static_cast<std::size_t>((options.samples + options.batch - 1) / options.batch);
   context.keepBatchFiles = context.options.keepNets;
   context.layout = road::BatchLayout(road::BatchLayout::cellSizeFor(logical->road));
@@ -636,7 +638,7 @@ RunSummary runRange(const std::shared_ptr<const scenario::LogicalScenario>& logi
   summary.jobs = context.options.jobs;
   summary.batch = options.batch;
   summary.inputNames = logical->inputNames();
-  SummaryBuilder summary_builder(summary, context.metricSet->names());
+  SummaryBuilder summary_builder(summary, *context.metricSet);
 
   std::optional<RunFiles> files;
   if (options.writeFiles) files.emplace(context, out, context.metricSet->names());
@@ -704,9 +706,7 @@ std::string RunSummary::report() const {
                                  functionalScenario, samples, seed, seconds, scenariosPerSecond, jobs,
                                  jobs == 1 ? "" : "s", batch);
   text += fmt::format("  completed {}, failed {}", ok, failed);
-  if (std::find(metricNames.begin(), metricNames.end(), "d_min") != metricNames.end()) {
-    text += fmt::format(", collisions (d_min <= 0) {}", collisions);
-  }
+  if (!collisionRule.empty()) text += fmt::format(", collisions ({}) {}", collisionRule, collisions);
   text += "\n";
   for (const auto& [kind, count] : failureReasons) {
     text += fmt::format("    {} x {}\n", count, count == 1 ? failureExamples.at(kind) : kind);

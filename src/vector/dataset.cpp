@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <tuple>
 #include <unordered_map>
 
 #include "vsd/core/error.hpp"
@@ -55,6 +56,8 @@ struct StoredSample {
   std::vector<std::uint8_t> polylineShared;
   std::vector<std::int64_t> sharedStart;  ///< per polyline; used where shared
   std::vector<std::int32_t> polylineVectorCount;
+  std::vector<double> polylineLength;     ///< m, per polyline (0 for lanes)
+  std::vector<double> polylineWidth;
   std::vector<float> vectors;             ///< inline vectors, kFeatures per vector
   std::vector<std::uint8_t> vectorValid;
   std::string label;
@@ -82,6 +85,8 @@ StoredSample storedSample(const VectorizedScene& scene, bool share) {
     stored.polylineShared.push_back(shared ? 1 : 0);
     stored.sharedStart.push_back(shared ? polyline.sharedStart : -1);
     stored.polylineVectorCount.push_back(static_cast<std::int32_t>(polyline.vectors.size()));
+    stored.polylineLength.push_back(polyline.length);
+    stored.polylineWidth.push_back(polyline.width);
     if (shared) continue;
     for (std::size_t v = 0; v < polyline.vectors.size(); ++v) {
       const auto& f = polyline.vectors[v];
@@ -128,6 +133,8 @@ struct DatasetWriter::Impl {
   h5::Appendable<std::uint8_t> polylineShared;
   h5::Appendable<std::int64_t> polylineVectorStart;
   h5::Appendable<std::int32_t> polylineVectorCount;
+  h5::Appendable<double> polylineLength;
+  h5::Appendable<double> polylineWidth;
   h5::Appendable<std::int64_t> samplePolylineStart;
   h5::Appendable<std::int32_t> samplePolylineCount;
   h5::Appendable<std::int32_t> sampleEgoPolyline;
@@ -157,6 +164,8 @@ struct DatasetWriter::Impl {
     for (std::size_t p = 0; p < stored.polylineType.size(); ++p) {
       polylineType.push(stored.polylineType[p]);
       polylineVectorCount.push(stored.polylineVectorCount[p]);
+      polylineLength.push(stored.polylineLength[p]);
+      polylineWidth.push(stored.polylineWidth[p]);
       polylineShared.push(stored.polylineShared[p]);
       if (stored.polylineShared[p]) {
         polylineVectorStart.push(stored.sharedStart[p]);
@@ -185,8 +194,8 @@ struct DatasetWriter::Impl {
 
   void flush() {
     h5::flushAll(vectors, vectorValid, polylineType, polylineShared, polylineVectorStart, polylineVectorCount,
-                 samplePolylineStart, samplePolylineCount, sampleEgoPolyline, sampleOrigin, sampleLabel, sampleIndex,
-                 sampleSource, sampleEgo, sampleT0, targets, targetValid);
+                 polylineLength, polylineWidth, samplePolylineStart, samplePolylineCount, sampleEgoPolyline,
+                 sampleOrigin, sampleLabel, sampleIndex, sampleSource, sampleEgo, sampleT0, targets, targetValid);
     if (inputs) inputs->flush();
     if (metrics) metrics->flush();
     buffered = 0;
@@ -197,6 +206,9 @@ DatasetWriter::DatasetWriter(const fs::path& path, DatasetHeader header) : impl_
   h5::silenceErrorStack();
   impl_->header = std::move(header);
   const auto& h = impl_->header;
+  if (!(h.step > 0.0) || !std::isfinite(h.step) || h.horizon < 1) {
+    throw Error(fmt::format("internal: dataset header with step {} s and horizon {} steps", h.step, h.horizon));
+  }
   if (h.compression < 0 || h.compression > 9) {
     throw ConfigError::field("command line", "--compression", std::to_string(h.compression), "a deflate level 0..9");
   }
@@ -221,6 +233,8 @@ DatasetWriter::DatasetWriter(const fs::path& path, DatasetHeader header) : impl_
     impl_->polylineShared = h5::Appendable<std::uint8_t>(root, "polyline_shared", {}, kChunkVectors, kDeflate);
     impl_->polylineVectorStart = h5::Appendable<std::int64_t>(root, "polyline_vector_start", {}, kChunkVectors, kDeflate);
     impl_->polylineVectorCount = h5::Appendable<std::int32_t>(root, "polyline_vector_count", {}, kChunkVectors, kDeflate);
+    impl_->polylineLength = h5::Appendable<double>(root, "polyline_length", {}, kChunkVectors, kDeflate);
+    impl_->polylineWidth = h5::Appendable<double>(root, "polyline_width", {}, kChunkVectors, kDeflate);
     impl_->samplePolylineStart = h5::Appendable<std::int64_t>(root, "sample_polyline_start", {}, kChunkSamples, kDeflate);
     impl_->samplePolylineCount = h5::Appendable<std::int32_t>(root, "sample_polyline_count", {}, kChunkSamples, kDeflate);
     impl_->sampleEgoPolyline = h5::Appendable<std::int32_t>(root, "sample_ego_polyline", {}, kChunkSamples, kDeflate);
@@ -322,11 +336,30 @@ struct DatasetReader::Impl {
   // Read per sample.
   H5::DataSet vectors, vectorValid, polylineType, polylineShared, polylineVectorStart, polylineVectorCount, targets,
       targetValid;
+  std::optional<H5::DataSet> polylineLength, polylineWidth;  ///< absent in version-1 files
   std::vector<double> sharedVectors;  ///< the map's lane vectors (read eagerly: small)
   std::optional<H5::DataSet> inputs, metrics;
 
   [[noreturn]] void fail(const std::string& problem) const {
     throw DatasetError(fmt::format("{}: {}", path.string(), problem));
+  }
+
+  /// Lengths and widths of polylines [first, first + count) (m): stored in version 2,
+  /// assumed for the vehicles of version-1 files.
+  std::pair<std::vector<double>, std::vector<double>> polylineSizes(const std::vector<std::int8_t>& types,
+                                                                    hsize_t first, hsize_t count) const {
+    std::pair<std::vector<double>, std::vector<double>> sizes;
+    if (polylineLength) {
+      sizes.first = h5::readRows<double>(*polylineLength, first, count);
+      sizes.second = h5::readRows<double>(*polylineWidth, first, count);
+      return sizes;
+    }
+    for (auto type : types) {
+      const bool vehicle = type != static_cast<std::int8_t>(ObjectType::LaneBoundary);
+      sizes.first.push_back(vehicle ? kAssumedVehicleLength : 0.0);
+      sizes.second.push_back(vehicle ? kAssumedVehicleWidth : 0.0);
+    }
+    return sizes;
   }
 
   /// Sample `i` exactly as stored.
@@ -343,6 +376,8 @@ StoredSample DatasetReader::Impl::stored(std::size_t i) const {
     stored.polylineShared = h5::readRows<std::uint8_t>(polylineShared, first_polyline, polylines);
     stored.sharedStart = h5::readRows<std::int64_t>(polylineVectorStart, first_polyline, polylines);
     stored.polylineVectorCount = h5::readRows<std::int32_t>(polylineVectorCount, first_polyline, polylines);
+    std::tie(stored.polylineLength, stored.polylineWidth) =
+        polylineSizes(stored.polylineType, first_polyline, polylines);
     hsize_t first_vector = 0;
     hsize_t vector_count = 0;
     bool any_inline = false;
@@ -410,9 +445,11 @@ DatasetReader::DatasetReader(const fs::path& path) : impl_(std::make_unique<Impl
     H5::Group root = d.file.openGroup("/");
     if (!h5::hasAttribute(root, "schema")) d.fail("not a vsd-sumo dataset (no 'schema' attribute)");
     const auto schema = h5::readStringAttribute(root, "schema");
-    if (schema != kDatasetSchema) {
-      d.fail(fmt::format("dataset schema '{}' is not supported by this version (expected '{}')", schema, kDatasetSchema));
+    if (schema != kDatasetSchema && schema != kDatasetSchemaVersion1) {
+      d.fail(fmt::format("dataset schema '{}' is not supported by this version (expected '{}' or '{}')", schema,
+                         kDatasetSchema, kDatasetSchemaVersion1));
     }
+    d.header.vehicleSizesAssumed = schema == kDatasetSchemaVersion1;
     const auto features = h5::readIntAttribute(root, "feature_version");
     if (features != kFeatureVersion) {
       d.fail(fmt::format("feature version {} is not supported (expected {})", features, kFeatureVersion));
@@ -444,6 +481,10 @@ DatasetReader::DatasetReader(const fs::path& path) : impl_(std::make_unique<Impl
     d.sharedVectors = h5::readAll<double>(root.openDataSet("shared_vectors"));
     d.polylineVectorStart = root.openDataSet("polyline_vector_start");
     d.polylineVectorCount = root.openDataSet("polyline_vector_count");
+    if (!d.header.vehicleSizesAssumed) {
+      d.polylineLength = root.openDataSet("polyline_length");
+      d.polylineWidth = root.openDataSet("polyline_width");
+    }
     d.targets = root.openDataSet("targets");
     d.targetValid = root.openDataSet("target_valid");
     if (root.nameExists("inputs")) d.inputs = root.openDataSet("inputs");
@@ -458,6 +499,10 @@ DatasetReader::DatasetReader(const fs::path& path) : impl_(std::make_unique<Impl
   if (d.samplePolylineCount.size() != n || d.sampleEgoPolyline.size() != n || d.sampleOrigin.size() != 2 * n ||
       d.sampleSource.size() != n || d.sampleEgo.size() != n || d.sampleT0.size() != n) {
     d.fail("per-sample arrays have different lengths (damaged file)");
+  }
+  if (d.header.vehicleSizesAssumed) {
+    spdlog::warn("{}: a {} file stores no vehicle sizes; assuming {} m x {} m for every vehicle", path.string(),
+                 kDatasetSchemaVersion1, kAssumedVehicleLength, kAssumedVehicleWidth);
   }
   for (std::size_t i = 0; i < n; ++i) {
     if (d.sampleLabel[i] < 0 || static_cast<std::size_t>(d.sampleLabel[i]) >= d.labels.size()) {
@@ -496,6 +541,7 @@ VectorizedScene DatasetReader::scene(std::size_t sample) const {
     const auto shared = h5::readRows<std::uint8_t>(d.polylineShared, first_polyline, polylines);
     const auto starts = h5::readRows<std::int64_t>(d.polylineVectorStart, first_polyline, polylines);
     const auto counts = h5::readRows<std::int32_t>(d.polylineVectorCount, first_polyline, polylines);
+    const auto sizes = d.polylineSizes(types, first_polyline, polylines);
     // The sample's own (inline) vectors are contiguous in /vectors.
     hsize_t first_vector = 0;
     hsize_t vector_count = 0;
@@ -515,6 +561,8 @@ VectorizedScene DatasetReader::scene(std::size_t sample) const {
     for (hsize_t p = 0; p < polylines; ++p) {
       ScenePolyline polyline;
       polyline.type = static_cast<ObjectType>(types[p]);
+      polyline.length = sizes.first[p];
+      polyline.width = sizes.second[p];
       if (shared[p]) {
         const auto start = static_cast<std::size_t>(starts[p]);
         const auto count = static_cast<std::size_t>(counts[p]);
@@ -586,6 +634,11 @@ void checkScene(const VectorizedScene& scene, std::size_t sample, const DatasetH
     if (type < 1 || type > 3) problem(fmt::format("polyline {} has object type {}", p, type));
     if (polyline.type == ObjectType::Ego) ++egos;
     if (polyline.vectors.empty()) problem(fmt::format("polyline {} has no vectors", p));
+    const bool vehicle = polyline.type != ObjectType::LaneBoundary;
+    if (vehicle && !(polyline.length > 0.0 && polyline.width > 0.0 && polyline.length < 100.0 && polyline.width < 20.0)) {
+      problem(fmt::format("vehicle polyline {}: size {} m x {} m (expected 0 < length < 100, 0 < width < 20)", p,
+                          polyline.length, polyline.width));
+    }
     for (std::size_t v = 0; v < polyline.vectors.size(); ++v) {
       const auto& f = polyline.vectors[v];
       if (static_cast<int>(f[4]) != type) problem(fmt::format("polyline {} vector {}: object_type {}", p, v, f[4]));
@@ -635,7 +688,7 @@ DatasetSummary summarizeDataset(const fs::path& path) {
   const DatasetReader reader(path);
   DatasetSummary summary;
   summary.path = path;
-  summary.schema = kDatasetSchema;
+  summary.schema = reader.header().vehicleSizesAssumed ? kDatasetSchemaVersion1 : kDatasetSchema;
   summary.header = reader.header();
   summary.samples = reader.size();
   summary.bytes = fs::file_size(path);

@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 
 #include "test_support.hpp"
 #include "vsd/core/csv.hpp"
@@ -181,4 +182,31 @@ TEST(ScenarioCli, RunRefusesOpenScenarioFilesItCannotSimulate) {
   expectOneLineError(errorsOf({"run", xosc.string(), "--samples", "5"}, dir.path()), "--samples");
   EXPECT_FALSE(fs::exists(dir.path() / "o1"));
   EXPECT_FALSE(fs::exists(dir.path() / "o2"));
+}
+
+// The ASAM schemas are not redistributed here; point VSD_ASAM_SCHEMA_DIR at a copy (e.g.
+// esmini's resources/schema) to validate exported files with xmllint.
+TEST(ScenarioCli, ExportsValidateAgainstTheAsamSchemas) {
+  const char* schemas = std::getenv("VSD_ASAM_SCHEMA_DIR");
+  if (schemas == nullptr || *schemas == '\0') GTEST_SKIP() << "VSD_ASAM_SCHEMA_DIR is not set";
+  TemporaryDirectory dir("vsd-asam");
+  const auto out = dir.path() / "xosc";
+  ASSERT_EQ(vsdSumo({"scenario", "export", test::scenarioFile("acc_lk.yaml").string(), "--samples", "2", "--out",
+                     out.string()},
+                    dir.path())
+                .exitCode,
+            0);
+  ASSERT_EQ(vsdSumo({"scenario", "distribution", test::scenarioFile("acc_lk.yaml").string(), "--out",
+                     (out / "dist.xosc").string()},
+                    dir.path())
+                .exitCode,
+            0);
+  for (const auto& entry : fs::directory_iterator(out)) {
+    const auto extension = entry.path().extension();
+    if (extension != ".xosc" && extension != ".xodr") continue;
+    const fs::path schema = fs::path(schemas) / (extension == ".xosc" ? "OpenSCENARIOv1.2.xsd"
+                                                                       : "OpenDRIVE_1.6/opendrive_16_core.xsd");
+    const auto result = test::run({"xmllint", "--noout", "--schema", schema.string(), entry.path().string()}, dir.path());
+    EXPECT_EQ(result.exitCode, 0) << result.output;
+  }
 }

@@ -96,7 +96,8 @@ struct RunSummary {
   std::uint64_t seed = 0;
   std::uint64_t ok = 0;
   std::uint64_t failed = 0;
-  std::uint64_t collisions = 0;  ///< completed runs with d_min <= 0
+  std::uint64_t collisions = 0;  ///< completed runs that meet the metrics' collision rule
+  std::string collisionRule;     ///< e.g. "d_min <= 0"; empty when no metric of the run defines one
   std::map<std::string, std::uint64_t> failureReasons;  ///< reason (numbers replaced by #) -> count
   std::map<std::string, std::string> failureExamples;   ///< reason (numbers replaced by #) -> first message
   std::vector<std::string> inputNames;
