@@ -146,3 +146,37 @@ TEST(Mpi, ExportOnTwoRanksGivesTheDatasetOfOneProcess) {
   EXPECT_FALSE(fs::exists(dir.path() / ".two.h5.parts"));  // the ranks' parts are gone
 
 }
+
+TEST(Slurm, ArrayScriptRunsOneShardPerTaskAndTheShardsMergeIntoOneRun) {
+  TemporaryDirectory dir;
+  const auto one = [&] {
+    std::vector<std::string> argv = {test::vsdSumo().string(), "--quiet"};
+    const auto args = runArgs(dir.path() / "one");
+    argv.insert(argv.end(), args.begin(), args.end());
+    return test::run(argv, dir.path());
+  }();
+  ASSERT_EQ(one.exitCode, 0) << one.output;
+  const std::string script = (test::sourceDir() / "tools/slurm/run_shard.sh").string();
+  auto task = [&](int id, int count, int max) {
+    return test::run({"env", "VSD_SUMO=" + test::vsdSumo().string(), "SLURM_ARRAY_TASK_ID=" + std::to_string(id),
+                      "SLURM_ARRAY_TASK_COUNT=" + std::to_string(count), "SLURM_ARRAY_TASK_MIN=0",
+                      "SLURM_ARRAY_TASK_MAX=" + std::to_string(max), "bash", script,
+                      test::scenarioFile("acc_lk.yaml").string(), (dir.path() / "sweep").string(), "--samples", "40",
+                      "--batch", "10", "--seed", "3"},
+                     dir.path());
+  };
+  for (int id : {1, 0}) {
+    const auto result = task(id, 2, 1);
+    ASSERT_EQ(result.exitCode, 0) << result.output;
+  }
+  const auto stepped = task(0, 2, 2);  // --array=0-2:2 has 2 tasks but would name shard 2/2
+  EXPECT_EQ(stepped.exitCode, 2) << stepped.output;
+  EXPECT_NE(stepped.output.find("the array must be 0-<N-1> without steps"), std::string::npos) << stepped.output;
+
+  const auto merged = test::run({test::vsdSumo().string(), "--quiet", "merge", (dir.path() / "sweep").string()},
+                                dir.path());
+  ASSERT_EQ(merged.exitCode, 0) << merged.output;
+  for (const char* file : {"concrete.csv", "traces.h5", "dataset.h5"}) {
+    EXPECT_EQ(sha256OfFile(dir.path() / "sweep" / file), sha256OfFile(dir.path() / "one" / file)) << file;
+  }
+}
