@@ -355,6 +355,7 @@ void addBenchCommand(CLI::App& app, CommandContext& context) {
   });
 
   addInteropBench(*bench, context);
+  addSearchBench(*bench, context);
 }
 
 }  // namespace vsd::cli

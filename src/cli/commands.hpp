@@ -17,7 +17,7 @@ struct CommandContext {
 };
 
 /// The commands that train or run models (libtorch): train, predict, evaluate,
-/// baseline, experiment, compare, bench. Loading libtorch costs a process about a
+/// baseline, experiment, compare, bench, search. Loading libtorch costs a process about a
 /// second of CPU before main() (relocations and operator registrations), so these
 /// live in a second executable, vsd-sumo-ml, built and installed next to vsd-sumo.
 /// vsd-sumo hands every command line that is not one of its own commands (and
@@ -42,7 +42,10 @@ void addCompareCommand(CLI::App& app, CommandContext& context);
 void addBenchCommand(CLI::App& app, CommandContext& context);
 void addMergeCommand(CLI::App& app, CommandContext& context);
 void addScenarioCommand(CLI::App& app, CommandContext& context);
+void addSearchCommand(CLI::App& app, CommandContext& context);
 /// `bench interop` (bench_interop.cpp), a subcommand of `bench`.
 void addInteropBench(CLI::App& bench, CommandContext& context);
+/// `bench search` (bench_search.cpp), a subcommand of `bench`.
+void addSearchBench(CLI::App& bench, CommandContext& context);
 
 }  // namespace vsd::cli

@@ -60,7 +60,7 @@ int handOverToModelExecutable(char** argv) {
   const std::string target = vsd::cli::siblingExecutable("vsd-sumo-ml");
   ::execv(target.c_str(), argv);
   std::fprintf(stderr, "vsd-sumo: error: %s: cannot start it (%s); it holds the commands train, predict, evaluate, "
-               "baseline, experiment, compare and bench and is built next to vsd-sumo\n",
+               "baseline, experiment, compare, bench and search and is built next to vsd-sumo\n",
                target.c_str(), std::strerror(errno));
   return 1;
 }

@@ -12,6 +12,7 @@ bool addModelCommands(CLI::App& app, CommandContext& context) {
   addExperimentCommand(app, context);
   addCompareCommand(app, context);
   addBenchCommand(app, context);
+  addSearchCommand(app, context);
   return true;
 }
 

@@ -36,7 +36,7 @@ struct CompareOptions {
   int threads = 2;                             ///< libtorch threads
   int worst = 6;                               ///< scenarios drawn in the report (largest ADE), 0..50
   /// Dataset mode: metrics to compare (default: the dataset's metrics for generated data,
-  /// else a_min, d_min, ttc_min, thw_min) and criteria "name: expression" (scenario mode
+  /// else every metric that applies to a map, metrics::defaultMetrics) and criteria "name: expression" (scenario mode
   /// takes both from the scenario file).
   std::vector<std::string> metrics;
   std::vector<std::string> criteria;

@@ -28,6 +28,7 @@ enum class RandomStream : std::uint64_t {
   Training = 6,
   EgoSelection = 7,
   OtherHeadingNoise = 8,
+  SearchSelection = 9,  ///< `search`: importance draws from a round's candidate pool
 };
 
 class Rng {
