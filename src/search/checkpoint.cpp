@@ -70,8 +70,6 @@ Execution parseExecution(const nlohmann::json& item) {
   execution.metrics = parseNumbers(item.at("metrics"));
   execution.draws = item.at("draws").get<std::uint64_t>();
   execution.weight = parseNumber(item.at("weight").get<std::string>());
-  execution.control = parseNumber(item.at("control").get<std::string>());
-  execution.poolMean = parseNumber(item.at("pool_mean").get<std::string>());
   return execution;
 }
 
@@ -131,9 +129,7 @@ void writeCheckpoint(const SearchContext& context, const SearchState& state) {
                           {"inputs", numbers(e.inputs)},
                           {"metrics", numbers(e.metrics)},
                           {"draws", e.draws},
-                          {"weight", formatNumber(e.weight)},
-                          {"control", formatNumber(e.control)},
-                          {"pool_mean", formatNumber(e.poolMean)}});
+                          {"weight", formatNumber(e.weight)}});
   }
   json["executions"] = std::move(executions);
   writeTextFileAtomically(checkpointPath(context), json.dump() + "\n");

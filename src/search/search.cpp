@@ -98,7 +98,7 @@ std::uint64_t randomStreamUsed(const std::vector<Execution>& executions) {
       std::count_if(executions.begin(), executions.end(), [](const Execution& e) { return e.fromRandomStream(); }));
 }
 
-/// Draws of the logical scenario's distribution itself: weight 1, no control variate.
+/// Draws of the logical scenario's distribution itself: weight 1.
 void addRandomStream(RoundPlan& plan, std::uint64_t next, std::uint64_t count, const std::string& origin) {
   for (std::uint64_t i = 0; i < count; ++i) {
     Execution execution;
@@ -112,22 +112,24 @@ void addRandomStream(RoundPlan& plan, std::uint64_t next, std::uint64_t count, c
   }
 }
 
-/// Share of the importance proposal spread evenly over the pool: bounds every weight by 1 / share.
-constexpr double kDefensiveShare = 0.2;
-
-/// Importance proposal over the pool: q_i = (1 - a) s_i / sum(s) + a / N, s_i = sqrt(p_i (1 - p_i)),
-/// the standard deviation of a verdict predicted with probability p_i.
-std::vector<double> importanceProposal(const std::vector<double>& probability) {
-  std::vector<double> spread;
+/// Importance proposal over the pool candidates not acquired this round (the stratum B):
+/// q_i = (1 - a) p_i^2 / sum_B(p^2) + a / N_B, 0 for acquired ones. Squaring concentrates
+/// the draws where the surrogate is confident; the even share a keeps every weight
+/// 1 / (N q_i) below 1 / a.
+std::vector<double> importanceProposal(const std::vector<double>& probability, const std::vector<bool>& acquired) {
   double total = 0.0;
-  for (const double p : probability) {
-    spread.push_back(std::sqrt(std::clamp(p, 0.0, 1.0) * (1.0 - std::clamp(p, 0.0, 1.0))));
-    total += spread.back();
+  double stratum = 0.0;
+  for (std::size_t i = 0; i < probability.size(); ++i) {
+    if (acquired[i]) continue;
+    total += probability[i] * probability[i];
+    stratum += 1.0;
   }
-  const double n = static_cast<double>(probability.size());
-  std::vector<double> proposal;
-  for (const double s : spread) {
-    proposal.push_back(total > 0.0 ? (1.0 - kDefensiveShare) * s / total + kDefensiveShare / n : 1.0 / n);
+  std::vector<double> proposal(probability.size(), 0.0);
+  for (std::size_t i = 0; i < probability.size(); ++i) {
+    if (acquired[i]) continue;
+    const double p = probability[i];
+    proposal[i] = total > 0.0 ? (1.0 - detail::kDefensiveShare) * p * p / total + detail::kDefensiveShare / stratum
+                              : 1.0 / stratum;
   }
   return proposal;
 }
@@ -225,30 +227,24 @@ void addAcquired(const SearchContext& context, const SearchState& state, const S
   }
 }
 
-/// Importance draws for the rate estimate; a candidate already acquired this round is not
-/// simulated again, its execution just counts as drawn.
+/// Importance draws for the rate estimate from the candidates not acquired this round (a
+/// candidate drawn twice is simulated once and counts twice).
 void addImportanceDraws(const SearchContext& context, const SearchState& state, const ScoredPool& pool,
                         RoundPlan& plan, std::uint64_t count) {
-  const auto proposal = importanceProposal(pool.probability);
-  const double pool_mean =
-      std::accumulate(pool.probability.begin(), pool.probability.end(), 0.0) / static_cast<double>(proposal.size());
+  std::vector<bool> acquired(pool.probability.size(), false);
+  for (const auto& execution : plan.chosen) acquired[execution.sample - pool.firstSample] = true;
+  if (count == 0 || std::all_of(acquired.begin(), acquired.end(), [](bool a) { return a; })) return;
+  const auto proposal = importanceProposal(pool.probability, acquired);
   Rng rng = Rng::derive(context.options.seed, state.rounds, RandomStream::SearchSelection);
   for (const auto& [position, times] : drawFromPool(proposal, count, rng)) {
-    const std::uint64_t sample = pool.firstSample + position;
-    auto same = std::find_if(plan.chosen.begin(), plan.chosen.end(), [&](const Execution& e) { return e.sample == sample; });
-    if (same == plan.chosen.end()) {
-      Execution execution;
-      execution.origin = "importance";
-      execution.sample = sample;
-      execution.acquisition = std::numeric_limits<double>::quiet_NaN();
-      execution.predicted = pool.probability[position];
-      plan.chosen.push_back(execution);
-      same = plan.chosen.end() - 1;
-    }
-    same->draws = times;
-    same->weight = 1.0 / (static_cast<double>(proposal.size()) * proposal[position]);
-    same->control = pool.probability[position];
-    same->poolMean = pool_mean;
+    Execution execution;
+    execution.origin = "importance";
+    execution.sample = pool.firstSample + position;
+    execution.acquisition = std::numeric_limits<double>::quiet_NaN();
+    execution.predicted = pool.probability[position];
+    execution.draws = times;
+    execution.weight = 1.0 / (static_cast<double>(proposal.size()) * proposal[position]);
+    plan.chosen.push_back(execution);
   }
 }
 

@@ -22,6 +22,8 @@ constexpr std::uint64_t kPoolBase = std::uint64_t{1} << 40;
 constexpr std::uint64_t kPoolStride = std::uint64_t{1} << 28;
 constexpr std::uint64_t kEstimateBase = std::uint64_t{1} << 50;
 constexpr std::uint64_t kMaxPool = kPoolStride;
+/// Share of the importance proposal spread evenly over the pool: bounds every weight by 1 / share.
+constexpr double kDefensiveShare = 0.2;
 /// Inputs sampled to fix the normalisation of every input to [0, 1].
 constexpr std::uint64_t kNormalisationSamples = 2000;
 

@@ -11,21 +11,15 @@
 //             probability of meeting the criterion, d in [0, 1] the normalised distance to
 //             the nearest critical scenario found or candidate already chosen; the best
 //             (1 - estimateShare) of the round are "acquired"; the rest are "importance" draws
-//             from the pool with probability q_i = 0.8 * s_i / sum(s) + 0.2 / N,
-//             s_i = sqrt(p_i (1 - p_i)) (with replacement; a candidate drawn twice is simulated
-//             once). Everything is simulated by the pipeline's batch simulation (the code `run`
-//             uses);
+//             from the other candidates with probability q_i = 0.8 p_i^2 / sum(p^2) + 0.2 / N_B
+//             (with replacement; a candidate drawn twice is simulated once). Everything is
+//             simulated by the pipeline's batch simulation (the code `run` uses);
 //   until     `budget` executions. A re-run with the same --out resumes after the last
 //             finished round without repeating an execution; same seed, same choices.
 //
 // Rate estimate of P(criterion) under the logical scenario's distribution (unbiased):
-// round 0 contributes its verdicts y; every importance draw j of round r contributes
-// z_j = mean_pool(p) + (y_j - p_j) / (N q_j) (importance sampling with the surrogate as
-// control variate; E[z | pool] = mean_pool(y), the pool being draws from the distribution).
-// theta = mean of all contributions; its variance adds each round's sample variance and the
-// pools' own sampling variance. The defensive share 0.2 / N bounds every weight by 5, so a
-// surrogate that misses a critical region costs variance, never bias. The random surrogate
-// is plain Monte Carlo: every execution is a draw with weight 1.
+// stratified importance sampling over the rounds' pools, see src/search/estimate.cpp. The
+// random surrogate is plain Monte Carlo with a Wilson interval.
 //
 // Outputs in <out>: concrete.csv (every execution), failures.csv, learning_curve.csv,
 // estimate.json, checkpoint.json, manifest.json (last, with every file's hash).
@@ -71,15 +65,13 @@ struct Execution {
   std::vector<double> metrics;
   // Its part in the rate estimate (draws == 0: none, e.g. acquired and never drawn):
   std::uint64_t draws = 0;        ///< times drawn for the estimate (importance draws may repeat)
-  double weight = 0.0;            ///< 1 / (N q): importance weight; 1 for random-stream draws
-  double control = 0.0;           ///< surrogate's probability p when drawn (0 for the random stream)
-  double poolMean = 0.0;          ///< mean of p over the round's pool (0 for the random stream)
+  double weight = 0.0;            ///< 1 / (N q): importance weight (N = pool); 1 for random-stream draws
   bool fromRandomStream() const { return origin == "initial" || origin == "random"; }
 };
 
 /// P(criterion) under the logical scenario's distribution.
 struct RateEstimate {
-  std::string method;             ///< "monte-carlo" or "importance+control-variate"
+  std::string method;             ///< "monte-carlo" or "importance-sampling"
   double estimate = 0.0;
   double low = 0.0;               ///< 95 % interval
   double high = 0.0;
