@@ -6,6 +6,7 @@
 #include "commands.hpp"
 #include "vsd/core/error.hpp"
 #include "vsd/core/files.hpp"
+#include "vsd/core/shards.hpp"
 #include "vsd/vector/dataset.hpp"
 #include "vsd/vector/scene_svg.hpp"
 
@@ -112,7 +113,9 @@ void addDatasetCommand(CLI::App& app, CommandContext& context) {
     context.action = [validate_paths] {
       int status = 0;
       for (const auto& given : *validate_paths) {
-        for (const auto& path : vector::datasetFiles(given)) {  // a sharded sweep: every shard
+        // A sharded sweep: every shard's dataset; otherwise the file or run folder as given.
+        const auto paths = hasShards(given) ? vector::datasetFiles(given) : std::vector<std::filesystem::path>{given};
+        for (const auto& path : paths) {
           const auto result = vector::validateDataset(path);
           if (result.ok()) {
             fmt::print("{}: valid ({} samples)\n", result.path.string(), result.samples);

@@ -60,6 +60,10 @@ void addExportCommand(CLI::App& app, CommandContext& context) {
       ->capture_default_str();
   command->add_option("--compression", options->compression, "Deflate level of the vectors: 0 (none, fastest) .. 9")
       ->capture_default_str();
+  command->add_option("--step-timeout", options->watchdog.stepTimeout,
+                      "Watchdog: longest Ego controller call or libsumo step (s); a closed-loop Ego exceeding it is "
+                      "taken out")
+      ->capture_default_str();
   command->add_flag("--closed-loop", options->closedLoop, "Drive every Ego with an Ego controller instead of SUMO");
   command->add_option("--controller", options->controller, "Controller for --closed-loop")->capture_default_str();
   command->add_option("--controller-library", options->controllerLibrary, "Plugin library holding --controller");

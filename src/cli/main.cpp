@@ -110,10 +110,18 @@ int main(int argc, char** argv) {
   vsd::configureLogging(quiet ? vsd::Verbosity::Quiet : verbose ? vsd::Verbosity::Verbose : vsd::Verbosity::Normal);
   vsd::installInterruptHandlers();
   try {
-    return context.action ? context.action() : 0;
+    const int status = context.action ? context.action() : 0;
+    if (vsd::interrupted()) {
+      // The signal came after the point of no return (the outputs were already
+      // being put in place): they are complete, but the signal is still reported.
+      std::fprintf(stderr, "vsd-sumo: interrupted by signal %d after the outputs were complete\n",
+                   vsd::interruptSignal());
+      return 128 + vsd::interruptSignal();
+    }
+    return status;
   } catch (const vsd::InterruptedError& error) {
     std::fprintf(stderr, "vsd-sumo: %s\n", error.what());
-    return 130;
+    return error.exitCode();
   } catch (const vsd::Error& error) {
     std::fprintf(stderr, "vsd-sumo: error: %s\n", error.what());
     return 1;

@@ -31,6 +31,9 @@ void addRunCommand(CLI::App& app, CommandContext& context) {
       ->capture_default_str();
   run->add_option("--compression", options->compression, "Deflate level of dataset.h5's vectors: 0 (none) .. 9")
       ->capture_default_str();
+  run->add_option("--step-timeout", options->watchdog.stepTimeout,
+                  "Watchdog: longest Ego controller call or libsumo step (s); a scenario exceeding it fails")
+      ->capture_default_str();
   run->add_flag("--keep-nets", options->keepNets, "Keep the generated networks in <out>/nets (open with sumo-gui)");
   run->add_flag("--fcd", options->fcd,
                 "Write SUMO FCD XML per batch to <out>/fcd (replay: tools/replay_fcd.py); implies --keep-nets");

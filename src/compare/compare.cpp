@@ -1,6 +1,7 @@
 #include "vsd/compare/compare.hpp"
 
 #include <fmt/format.h>
+#include <nlohmann/json.hpp>
 #include <unistd.h>
 
 #include <algorithm>
@@ -83,44 +84,6 @@ report::CriterionSpec parseCriterion(const std::string& text) {
   return spec;
 }
 
-/// The output folder is built under a temporary name next to it and renamed into place.
-class OutputFolder {
- public:
-  OutputFolder(const fs::path& final_path, bool force) : final_(final_path.lexically_normal()) {
-    if (final_.filename().empty()) final_ = final_.parent_path();  // "reports/acc_lk/"
-    if (fs::exists(final_) && !force) {
-      throw ConfigError(fmt::format("--out {}: the folder exists; choose another or pass --force to replace it",
-                                    final_.string()));
-    }
-    const fs::path parent = final_.has_parent_path() ? final_.parent_path() : fs::path(".");
-    ensureDirectory(parent);
-    temp_ = parent / fmt::format(".{}.partial-{}", final_.filename().string(), ::getpid());
-    std::error_code error;
-    fs::remove_all(temp_, error);
-    if (!fs::create_directories(temp_, error) || error) {
-      throw IoError(fmt::format("{}: cannot create the output folder: {}", temp_.string(), error.message()));
-    }
-  }
-  OutputFolder(const OutputFolder&) = delete;
-  OutputFolder& operator=(const OutputFolder&) = delete;
-  ~OutputFolder() {
-    std::error_code ignored;
-    if (!committed_) fs::remove_all(temp_, ignored);
-  }
-  const fs::path& temp() const { return temp_; }
-  void commit() {
-    std::error_code error;
-    fs::remove_all(final_, error);  // exists only with --force
-    if (!error) fs::rename(temp_, final_, error);
-    if (error) throw IoError(fmt::format("{}: cannot move the report into place: {}", final_.string(), error.message()));
-    committed_ = true;
-  }
-
- private:
-  fs::path final_;
-  fs::path temp_;
-  bool committed_ = false;
-};
 
 /// The two futures of a compared scenario; its scene is fetched again only to draw it.
 struct Futures {
@@ -427,7 +390,9 @@ CompareSummary runComparison(const CompareOptions& options_in) {
     throw ModelError(fmt::format("--model {}: no such file", options.model.string()));
   }
   const model::Predictor predictor(options.model, options.threads);
-  OutputFolder folder(options.output, options.force);  // refuses an existing folder before any work
+  OutputFolder::Options folder_options;
+  folder_options.refuseExisting = !options.force;  // before any work
+  OutputFolder folder(options.output, folder_options);
 
   Run run = options.scenarioFile.empty() ? compareDatasets(options, predictor) : compareScenario(options, predictor);
   auto& comparison = run.comparison;
@@ -449,9 +414,14 @@ CompareSummary runComparison(const CompareOptions& options_in) {
     throw Error(fmt::format("compare: no scenario could be compared ({} failed); first reason: {}",
                                 summary.statistics.failed, comparison.scenarios.front().failure));
   }
-  report::writeComparisonCsv(comparison, folder.temp() / "comparison.csv");
-  writeTextFileAtomically(folder.temp() / "index.html", report::renderHtmlReport(comparison, summary.statistics, run.worst));
-  folder.commit();
+  report::writeComparisonCsv(comparison, folder.stage("comparison.csv"));
+  folder.staged("comparison.csv");
+  folder.stageText("index.html", report::renderHtmlReport(comparison, summary.statistics, run.worst));
+  nlohmann::json manifest;
+  manifest["tool"] = "vsd-sumo";
+  manifest["kind"] = "comparison";
+  for (const auto& [key, value] : comparison.provenance) manifest["provenance"][key] = value;
+  folder.commit(manifest);
 
   summary.output = options.output;
   summary.files = {options.output / "index.html", options.output / "comparison.csv"};

@@ -208,7 +208,7 @@ std::size_t writePredictions(const Predictor& predictor, const fs::path& model_f
   } catch (const H5::Exception& error) {
     throw IoError(fmt::format("{}: cannot write predictions: {}", output_path.string(), error.getDetailMsg()));
   }
-  output.commit();
+  output.commitUnlessInterrupted();
   return count;
 }
 

@@ -669,11 +669,45 @@ void checkScene(const VectorizedScene& scene, std::size_t sample, const DatasetH
 
 }  // namespace
 
+namespace {
+
+/// A run folder: its manifest (sizes and SHA-256) first. A file inside a folder
+/// whose manifest lists it: that entry.
+std::vector<std::string> outputFolderProblems(const fs::path& path) {
+  if (fs::is_directory(path)) {
+    auto problems = checkOutputFolder(path, /*hashes=*/true);
+    if (problems.empty() && !readManifestOutputs(path).count("dataset.h5")) {
+      problems.push_back(fmt::format("{}: the folder's manifest lists no dataset.h5 (not a run folder)", path.string()));
+    }
+    return problems;
+  }
+  const fs::path folder = path.parent_path().empty() ? fs::path(".") : path.parent_path();
+  if (!fs::exists(folder / "manifest.json")) return {};
+  std::map<std::string, ManifestEntry> entries;
+  try {
+    entries = readManifestOutputs(folder);
+  } catch (const DatasetError&) {
+    return {};  // a manifest of something else (not an output folder of ours)
+  }
+  const auto entry = entries.find(path.filename().string());
+  if (entry == entries.end()) return {};
+  std::error_code ec;
+  if (fs::file_size(path, ec) != entry->second.bytes || sha256OfFile(path) != entry->second.sha256) {
+    return {fmt::format("{}: size or SHA-256 differs from {} (changed or truncated after it was written)",
+                        path.string(), (folder / "manifest.json").string())};
+  }
+  return {};
+}
+
+}  // namespace
+
 DatasetValidation validateDataset(const fs::path& path) {
   DatasetValidation result;
-  result.path = path;
+  result.path = fs::is_directory(path) ? path / "dataset.h5" : path;
+  result.problems = outputFolderProblems(path);
+  if (!result.problems.empty()) return result;
   try {
-    const DatasetReader reader(path);
+    const DatasetReader reader(result.path);
     result.samples = reader.size();
     for (std::size_t i = 0; i < reader.size(); ++i) {
       checkScene(reader.scene(i), i, reader.header(), result.problems);
@@ -747,8 +781,13 @@ std::string DatasetSummary::report() const {
 // --- collections -------------------------------------------------------------------------------
 
 fs::path resolveDatasetPath(const fs::path& path) {
-  if (fs::is_directory(path)) return path / "dataset.h5";
-  return path;
+  if (!fs::is_directory(path)) return path;
+  // A run folder is one unit: only a complete one (its manifest and sizes agree) is read.
+  requireCompleteOutputFolder(path, /*hashes=*/false);
+  if (!readManifestOutputs(path).count("dataset.h5")) {
+    throw DatasetError(fmt::format("{}: the folder's manifest lists no dataset.h5 (not a run folder)", path.string()));
+  }
+  return path / "dataset.h5";
 }
 
 std::vector<fs::path> datasetFiles(const fs::path& path) {

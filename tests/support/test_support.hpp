@@ -3,6 +3,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -46,6 +47,23 @@ with zipfile.ZipFile(src) as zin, zipfile.ZipFile(dst, "w", zipfile.ZIP_STORED) 
         zout.writestr(item, zin.read(item.filename).replace(b'"feature_version":1', b'"feature_version":2'))
 )");
   return run({python(), script.string(), model.string(), copy.string()}, work).exitCode == 0;
+}
+
+/// The files an output folder's manifest lists (relative path -> SHA-256); empty without a manifest.
+inline std::map<std::string, std::string> listedOutputs(const std::filesystem::path& folder) {
+  std::map<std::string, std::string> set;
+  if (!std::filesystem::exists(folder / "manifest.json")) return set;
+  for (const auto& [name, entry] : readManifestOutputs(folder)) set[name] = entry.sha256;
+  return set;
+}
+
+/// Entries of `folder` whose name starts with '.' (staging or commit folders, temporary parts).
+inline std::vector<std::string> hiddenEntries(const std::filesystem::path& folder) {
+  std::vector<std::string> names;
+  for (const auto& entry : std::filesystem::directory_iterator(folder)) {
+    if (entry.path().filename().string().front() == '.') names.push_back(entry.path().filename().string());
+  }
+  return names;
 }
 
 /// Reads a scenario file and replaces `from` by `to` (to derive variants of the paper's scenarios).

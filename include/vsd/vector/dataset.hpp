@@ -121,6 +121,8 @@ struct DatasetValidation {
 /// polyline per sample whose last vector is its initial vector, object types and
 /// polyline ids as documented, finite valid vectors and targets, timestamps within
 /// [-history, horizon] steps, string tables in range. Unreadable files yield one problem.
+/// A run folder (or a file its manifest lists) is first checked against its
+/// manifest: present, complete, every file's size and SHA-256 as listed.
 DatasetValidation validateDataset(const std::filesystem::path& path);
 
 /// What `vsd-sumo dataset info` prints.
@@ -165,7 +167,9 @@ class DatasetCollection {
   std::vector<std::unique_ptr<DatasetReader>> readers_;
 };
 
-/// `path` if it is a file; `path/dataset.h5` if it is a run's output folder.
+/// `path` if it is a file; `path/dataset.h5` if it is a run's output folder —
+/// after checking that the folder is complete (its manifest lists dataset.h5 and
+/// every listed file has its size). Throws DatasetError naming the folder.
 std::filesystem::path resolveDatasetPath(const std::filesystem::path& path);
 
 /// The dataset files `path` stands for: a file; a run folder's dataset.h5; or, for a
