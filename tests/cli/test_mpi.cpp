@@ -107,7 +107,7 @@ TEST(Mpi, AFailingRankEndsTheJobWithItsMessage) {
   EXPECT_NE(job.exitCode, 0) << job.output;
   EXPECT_NE(job.exitCode, 124) << "the job hung:\n" << job.output;
   EXPECT_NE(job.output.find("vsd-sumo: error: rank 1 of 2 (shard 1 of 2): "), std::string::npos) << job.output;
-  EXPECT_NE(job.output.find("shard-0001-of-0002: cannot create directory"), std::string::npos) << job.output;
+  EXPECT_NE(job.output.find("shard-0001-of-0002: exists and is not a folder"), std::string::npos) << job.output;
   EXPECT_FALSE(fs::exists(dir.path() / "sweep" / "shards" / "shard-0000-of-0002" / "manifest.json"));
 }
 
