@@ -334,7 +334,7 @@ void runRounds(const SearchContext& context, SearchState& state, SearchSummary& 
     ++state.rounds;
     detail::writeCheckpoint(context, state);
     progress.advance(plan.chosen.size());
-    if (state.rounds == 1 && countCritical(state.executions) == 0) {
+    if (context.guides && state.rounds == 1 && countCritical(state.executions) == 0) {
       spdlog::warn("search: '{}' was met by none of the {} initial executions; the search goes on, guided by the "
                    "predicted metrics",
                    context.criterion->name(), state.executions.size());

@@ -117,7 +117,9 @@ TEST(SearchLoop, ResumesWithoutRepeatingAndMakesTheSameChoicesAsAnUninterruptedS
   const auto samples = column(resumed / "concrete.csv", "sample");
   EXPECT_EQ(std::set<std::string>(samples.begin(), samples.end()).size(), samples.size()) << "an execution repeated";
 
-  runSearch(smallSearch(work.path() / "straight", "extra-trees", 100));
+  auto straight = smallSearch(work.path() / "straight", "extra-trees", 100);
+  straight.jobs = 2;  // same choices whatever the number of simulation workers
+  runSearch(straight);
   EXPECT_EQ(readTextFile(resumed / "concrete.csv"), readTextFile(work.path() / "straight" / "concrete.csv"));
   const auto origins = column(resumed / "concrete.csv", "origin");
   EXPECT_EQ(std::count(origins.begin(), origins.end(), "acquired"), 48);  // 3 rounds of 20, 4 importance draws each
@@ -142,12 +144,49 @@ TEST(SearchLoop, ExtraTreesFindMoreCriticalScenariosThanRandomSampling) {
   EXPECT_EQ(column(work.path() / "trees" / "failures.csv", "critical").size(), trees.critical);
 }
 
+TEST(SearchLoop, ACriterionNeverMetInTheInitialDesignDoesNotStopTheSearch) {
+  TemporaryDirectory work("vsd-test-search");
+  auto options = smallSearch(work.path() / "never", "extra-trees", 60);
+  options.criterion = "d_min < -1000";
+  const auto summary = runSearch(options);
+  EXPECT_EQ(summary.executions, 60u);
+  EXPECT_EQ(summary.critical, 0u);
+  EXPECT_FALSE(summary.criterionSeenInInitialDesign);
+  EXPECT_THAT(summary.report(), HasSubstr("not met in the initial design"));
+  // No critical draw: the interval still has room above 0 (rule of three on the weights).
+  EXPECT_EQ(summary.estimate.estimate, 0.0);
+  EXPECT_GT(summary.estimate.high, 0.0);
+}
+
 TEST(SearchEstimate, WilsonIntervalMatchesTheReference) {
   // scipy.stats.binomtest(8, 1000).proportion_ci(method="wilson") = (0.0040591958, 0.0157063345)
   const auto [low, high] = wilsonInterval(8, 1000);
   EXPECT_NEAR(low, 0.0040591958, 1e-9);
   EXPECT_NEAR(high, 0.0157063345, 1e-9);
   EXPECT_EQ(wilsonInterval(0, 0), (std::pair<double, double>(0.0, 1.0)));
+}
+
+}  // namespace
+}  // namespace vsd::search
+
+namespace vsd::search {
+namespace {
+
+TEST(SearchCli, BadInputIsOneLineWithExitCodeOneAndNoFolder) {
+  TemporaryDirectory work("vsd-test-search-cli");
+  const auto out = work.path() / "out";
+  const std::string scenario = test::scenarioFile("acc_lk.yaml").string();
+  for (const std::vector<std::string>& flags :
+       {std::vector<std::string>{"--criterion", "dmin < 2"}, {"--criterion", "d_min < 2", "--budget", "50"},
+        {"--criterion", "d_min < 2", "--surrogate", "vectornet"}, {"--criterion", "d_min < 2", "--pool", "0"}}) {
+    std::vector<std::string> argv = {test::vsdSumo().string(), "-q", "search", scenario, "--out", out.string()};
+    argv.insert(argv.end(), flags.begin(), flags.end());
+    const auto result = test::run(argv, work.path());
+    EXPECT_EQ(result.exitCode, 1) << result.output;
+    EXPECT_THAT(result.output, HasSubstr("vsd-sumo: error: "));
+    EXPECT_EQ(std::count(result.output.begin(), result.output.end(), '\n'), 1) << result.output;
+    EXPECT_FALSE(fs::exists(out));
+  }
 }
 
 }  // namespace
