@@ -4,6 +4,7 @@
 
 #include "commands.hpp"
 #include "vsd/core/error.hpp"
+#include "vsd/pipeline/cluster.hpp"
 #include "vsd/pipeline/export.hpp"
 
 namespace vsd::cli {
@@ -74,6 +75,12 @@ void addExportCommand(CLI::App& app, CommandContext& context) {
       if (*begin >= 0.0) options->begin = *begin;
       if (*end >= 0.0) options->end = *end;
       for (const auto& param : *params) options->controllerParams.push_back(parseParam(param));
+      if (pipeline::launchedAsMpiRank()) {
+        const auto communicator = pipeline::joinMpiJob();
+        const auto result = pipeline::exportOnCluster(*options, *communicator);
+        fmt::print("{}", result.report);
+        return result.exitCode;
+      }
       const auto summary = pipeline::exportMap(*options);
       fmt::print("{}", summary.report());
       return 0;

@@ -114,20 +114,22 @@ Evaluation evaluate(const Predictor& predictor, const std::vector<fs::path>& dat
   if (data.empty()) throw ConfigError("--data: no dataset given");
   Evaluation evaluation;
   evaluation.predictor = predictor.name();
-  for (const auto& path : data) {
-    const vector::DatasetReader reader(vector::resolveDatasetPath(path));
-    predictor.checkCompatible(reader.header(), reader.path().string());
-    for (std::size_t first = 0; first < reader.size(); first += kReadChunk) {
-      throwIfInterrupted();
-      std::vector<vector::VectorizedScene> scenes;
-      for (std::size_t i = first; i < std::min(reader.size(), first + kReadChunk); ++i) scenes.push_back(reader.scene(i));
-      const auto start = std::chrono::steady_clock::now();
-      const auto predictions = predictor.predictDistribution(scenes, PredictOptions{});
-      evaluation.predictionSeconds += secondsSince(start);
-      for (std::size_t i = 0; i < scenes.size(); ++i) {
-        const auto errors = predictionErrors(predictions[i], scenes[i]);
-        evaluation.perLabel[scenes[i].label].add(errors);
-        evaluation.overall.add(errors);
+  for (const auto& given : data) {
+    for (const auto& path : vector::datasetFiles(given)) {  // a sharded sweep: every shard
+      const vector::DatasetReader reader(path);
+      predictor.checkCompatible(reader.header(), reader.path().string());
+      for (std::size_t first = 0; first < reader.size(); first += kReadChunk) {
+        throwIfInterrupted();
+        std::vector<vector::VectorizedScene> scenes;
+        for (std::size_t i = first; i < std::min(reader.size(), first + kReadChunk); ++i) scenes.push_back(reader.scene(i));
+        const auto start = std::chrono::steady_clock::now();
+        const auto predictions = predictor.predictDistribution(scenes, PredictOptions{});
+        evaluation.predictionSeconds += secondsSince(start);
+        for (std::size_t i = 0; i < scenes.size(); ++i) {
+          const auto errors = predictionErrors(predictions[i], scenes[i]);
+          evaluation.perLabel[scenes[i].label].add(errors);
+          evaluation.overall.add(errors);
+        }
       }
     }
   }

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <deque>
 #include <functional>
+#include <memory>
 #include <optional>
 #include <unordered_map>
 #include <unordered_set>
@@ -13,6 +14,7 @@
 #include "vsd/core/activity.hpp"
 #include "vsd/core/bytes.hpp"
 #include "vsd/core/error.hpp"
+#include "vsd/pipeline/cluster.hpp"
 #include "vsd/core/fault.hpp"
 #include "vsd/core/files.hpp"
 #include "vsd/core/interrupt.hpp"
@@ -134,9 +136,10 @@ struct History {
 
 class Exporter {
  public:
-  Exporter(const ExportOptions& options, const vector::LaneIndex& lanes, vector::DatasetWriter& writer,
-           vector::Provenance provenance, std::string label)
+  Exporter(const ExportOptions& options, const WindowShare& share, const vector::LaneIndex& lanes,
+           vector::DatasetWriter& writer, vector::Provenance provenance, std::string label)
       : options_(options),
+        share_(share),
         lanes_(lanes),
         writer_(writer),
         provenance_(std::move(provenance)),
@@ -224,6 +227,11 @@ class Exporter {
   }
 
   void emitWindow(const std::string& ego_id, History& ego, std::int64_t step, double time) {
+    if (!share_.mine(samples_)) {  // another rank's window: counted, not built
+      ++samples_;
+      ++ego.samples;
+      return;
+    }
     const std::int64_t first = step - historySteps_ - horizonSteps_;
     const std::int64_t t0 = step - horizonSteps_;
     const std::size_t instants = static_cast<std::size_t>(historySteps_ + horizonSteps_ + 1);
@@ -280,6 +288,7 @@ class Exporter {
   }
 
   const ExportOptions& options_;
+  WindowShare share_;
   const vector::LaneIndex& lanes_;
   vector::DatasetWriter& writer_;
   vector::Provenance provenance_;
@@ -293,6 +302,10 @@ class Exporter {
   std::uint64_t egosWithSamples_ = 0;
   std::uint64_t vehiclesSeen_ = 0;
 };
+
+}  // namespace
+
+namespace {
 
 /// Which vehicles random:K and id lists make Egos (empty for all / vtype:).
 std::unordered_set<std::string> chooseEgos(const EgoSelection& selection, const ExportOptions& options,
@@ -325,6 +338,7 @@ struct ExportJob {
   std::string label;
   fs::path datasetPath;                        ///< the temporary file to write
   std::vector<sim::EgoFailure> plannedFailures;  ///< controller faults found by earlier attempts
+  WindowShare share;                           ///< the windows this process writes (MPI: its rank's)
 };
 
 /// Fails with one line if the Egos asked for never showed up.
@@ -356,7 +370,9 @@ void checkSelectionWasSeen(const EgoSelection& selection, const ExportJob& job, 
 /// Simulates the map and writes the dataset to job.datasetPath (in a worker
 /// process: libsumo and the controllers run here). `progress` gets the
 /// simulated seconds so far and the seconds to simulate (0 if unknown).
-ExportSummary simulateAndWrite(const ExportJob& job, const std::function<void(double, double)>& progress) {
+/// `lane_pool`, if given, receives the map's shared lane vectors (to join MPI parts).
+ExportSummary simulateAndWrite(const ExportJob& job, const std::function<void(double, double)>& progress,
+                               std::vector<vector::Feature>* lane_pool = nullptr) {
   const ExportOptions& options = job.options;
   const EgoSelection selection = EgoSelection::parse(options.egos);
   auto registry = sim::ControllerRegistry::withBuiltins();
@@ -385,8 +401,9 @@ ExportSummary simulateAndWrite(const ExportJob& job, const std::function<void(do
   header.compression = options.compression;
   vector::DatasetWriter writer(job.datasetPath, header);
   writer.setSharedVectors(lanes.pool());
+  if (lane_pool) *lane_pool = lanes.pool();
   const vector::Provenance provenance{job.mapFile.string(), sha256OfFile(job.mapFile), "", 0.0};
-  Exporter exporter(options, lanes, writer, provenance, job.label);
+  Exporter exporter(options, job.share, lanes, writer, provenance, job.label);
 
   std::unordered_set<std::string> seen_egos;
   std::unordered_set<std::string> seen_types;
@@ -536,14 +553,9 @@ ExportSummary exportInWorker(ExportJob& job) {
   }
 }
 
-}  // namespace
-
-ExportSummary exportMap(const ExportOptions& options) {
-  options.validate();
-  const auto start = std::chrono::steady_clock::now();
-
-  TemporaryDirectory work("vsd-export");
-  ExportJob job{options, {}, options.source.mainFile(), "", "", {}};
+/// The job of exporting `options` (the OpenDRIVE map converted into `work`).
+ExportJob makeJob(const ExportOptions& options, const TemporaryDirectory& work) {
+  ExportJob job{options, {}, options.source.mainFile(), "", "", {}, WindowShare{}};
   job.simulation.source = options.source;
   job.simulation.step = options.step;
   job.simulation.begin = options.begin;
@@ -556,20 +568,108 @@ ExportSummary exportMap(const ExportOptions& options) {
     job.mapFile = options.openDrive;
   }
   job.label = options.label.empty() ? job.mapFile.stem().string() : options.label;
+  return job;
+}
 
+/// Output, label, time and rates of a finished export of `options` (its output written).
+void finishSummary(ExportSummary& summary, const ExportOptions& options, const std::string& label,
+                   std::chrono::steady_clock::time_point start) {
+  summary.output = options.output;
+  summary.label = label;
+  summary.closedLoop = options.closedLoop;
+  summary.seconds = secondsSince(start);
+  summary.samplesPerSecond = static_cast<double>(summary.samples) / std::max(summary.seconds, 1e-9);
+  summary.bytesPerSample = static_cast<double>(fs::file_size(options.output)) /
+                           static_cast<double>(std::max<std::uint64_t>(summary.samples, 1));
+}
+
+/// <output's folder>/.<output name>.parts/part-K-of-N.h5: where rank K writes its windows.
+fs::path partPath(const fs::path& output, int rank, int ranks) {
+  return output.parent_path() / ("." + output.filename().string() + ".parts") /
+         fmt::format("part-{}-of-{}.h5", rank, ranks);
+}
+
+/// Rank 0: the ranks' parts joined in window order (window w is sample w / N of part
+/// w % N), copied bit for bit: the file a one-process export writes.
+void joinParts(const ExportOptions& options, const std::vector<vector::Feature>& lane_pool, std::uint64_t samples,
+               int ranks, const fs::path& target) {
+  std::vector<std::unique_ptr<vector::DatasetReader>> parts;
+  for (int r = 0; r < ranks; ++r) {
+    parts.push_back(std::make_unique<vector::DatasetReader>(partPath(options.output, r, ranks)));
+  }
+  vector::DatasetHeader header = parts.front()->header();
+  header.compression = options.compression;
+  vector::DatasetWriter writer(target, header);
+  writer.setSharedVectors(lane_pool);
+  const auto n = static_cast<std::uint64_t>(ranks);
+  for (std::uint64_t w = 0; w < samples; ++w) writer.appendCopy(*parts[w % n], w / n);
+  writer.close();
+}
+
+}  // namespace
+
+ExportSummary exportMap(const ExportOptions& options) {
+  options.validate();
+  const auto start = std::chrono::steady_clock::now();
+  TemporaryDirectory work("vsd-export");
+  ExportJob job = makeJob(options, work);
   if (!options.output.parent_path().empty()) ensureDirectory(options.output.parent_path());
   AtomicOutput output(options.output);
   job.datasetPath = output.tempPath();
   ExportSummary summary = exportInWorker(job);
   output.commitUnlessInterrupted();
-
-  summary.output = options.output;
-  summary.label = job.label;
-  summary.seconds = secondsSince(start);
-  summary.samplesPerSecond = static_cast<double>(summary.samples) / std::max(summary.seconds, 1e-9);
-  summary.bytesPerSample = static_cast<double>(fs::file_size(options.output)) / static_cast<double>(summary.samples);
-  summary.closedLoop = options.closedLoop;
+  finishSummary(summary, options, job.label, start);
   return summary;
+}
+
+ClusterExportResult exportOnCluster(const ExportOptions& options, Communicator& communicator) {
+  const auto start = std::chrono::steady_clock::now();
+  const int rank = communicator.rank();
+  const int ranks = communicator.size();
+  const fs::path mine = partPath(options.output, rank, ranks);
+  // Parts are read once, by rank 0: not compressed (the joined file is).
+  ExportOptions part_options = options;
+  part_options.compression = 0;
+  std::optional<TemporaryDirectory> work;
+  std::optional<ExportJob> job;
+  ExportSummary summary;
+  std::vector<vector::Feature> lane_pool;
+  std::string failure;
+  try {
+    options.validate();
+    ensureDirectory(mine.parent_path());
+    work.emplace("vsd-export");
+    job.emplace(makeJob(part_options, *work));
+    job->share = WindowShare{static_cast<std::uint64_t>(rank), static_cast<std::uint64_t>(ranks)};
+    job->datasetPath = mine;
+    // In this process (a rank is its own process already): the lane pool is needed to join.
+    summary = simulateAndWrite(*job, [](double, double) {}, &lane_pool);
+  } catch (const Error& error) {
+    failure = error.what();
+  }
+  // Every rank simulates the whole map, so faults of the map or the options occur on
+  // every rank alike: rank 0 reports the first one, once.
+  if (!checkOnEveryRank(communicator, [&] {
+        if (!failure.empty()) throw ConfigError(failure);
+      })) {
+    std::error_code ignored;
+    fs::remove(mine, ignored);
+    return {1, {}};
+  }
+  ClusterExportResult result;
+  if (rank != 0) return result;
+  AtomicOutput output(options.output);
+  workOrEndJob(communicator, "joining the parts",
+               [&] { joinParts(options, lane_pool, summary.samples, ranks, output.tempPath()); });
+  output.commit();
+  std::error_code ignored;
+  fs::remove_all(mine.parent_path(), ignored);
+  finishSummary(summary, options, job->label, start);
+  result.report = fmt::format("{} MPI ranks, windows spread over them (window w on rank w mod {}); parts joined by "
+                              "rank 0\n",
+                              ranks, ranks) +
+                  summary.report();
+  return result;
 }
 
 std::string ExportSummary::report() const {

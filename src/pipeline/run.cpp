@@ -59,6 +59,8 @@ struct Context {
   fs::path workDir;
   std::size_t batches = 0;
   bool keepBatchFiles = false;
+  road::NetWriter netWriter = road::NetWriter::Direct;
+  std::optional<ShardInfo> shard;
 
   std::uint64_t firstIndexOf(std::size_t batch) const { return options.firstSample + batch * options.batch; }
   std::uint64_t endIndexOf(std::size_t batch) const {
@@ -149,12 +151,20 @@ class BatchProcessor {
     if (plan_.netReady.count(number) && fs::exists(ready)) {
       batch.readyNet = ready;
     } else if (!builder.empty()) {
-      builder.writePlainXml(batch.stem);
-      batch.pending = road::PendingNetwork::start(batch.stem, netconvertOptions(context_));
+      batch.pending = buildNetwork(builder, batch.stem);
     }
     spdlog::debug("batch {}: sampled and wrote {} roads in {:.3f} s", number, batch.scenarios.size(),
                   secondsSince(t_start));
     return batch;
+  }
+
+  road::PendingNetwork buildNetwork(const road::NetworkBuilder& builder, const fs::path& stem) const {
+    if (context_.netWriter == road::NetWriter::Direct && builder.directlyWritable()) {
+      if (context_.keepBatchFiles) builder.writePlainXml(stem);  // for netedit users
+      return road::PendingNetwork::ready(builder.writeSumoNet(stem));
+    }
+    builder.writePlainXml(stem);
+    return road::PendingNetwork::start(stem, netconvertOptions(context_));
   }
 
   /// Simulates the batch, sending each group's outcomes as it completes, then the rest.
@@ -621,6 +631,7 @@ nlohmann::json runManifest(const Context& context, const RunSummary& summary, co
   manifest["ok"] = summary.ok;
   manifest["failed"] = summary.failed;
   manifest["collisions"] = summary.collisions;
+  if (context.shard) manifest["shard"] = nlohmann::json::parse(context.shard->toJson());
   manifest["worker_restarts"] = summary.workerRestarts;
   manifest["inputs"] = summary.inputNames;
   manifest["metrics"] = summary.metricNames;
@@ -670,6 +681,17 @@ void probeController(const std::shared_ptr<const scenario::LogicalScenario>& log
   }
 }
 
+road::NetWriter chooseNetWriter(const scenario::LogicalScenario& logical, const RunOptions& options) {
+  const bool needs_netconvert = !logical.sumo.netconvertOptions.empty();
+  if (!options.netWriter) return needs_netconvert ? road::NetWriter::Netconvert : road::NetWriter::Direct;
+  if (*options.netWriter == road::NetWriter::Direct && needs_netconvert) {
+    throw ConfigError(fmt::format("{}: sumo.netconvert_options need netconvert: use --net-writer netconvert "
+                                  "(or leave --net-writer unset)",
+                                  logical.sourceFile.string()));
+  }
+  return *options.netWriter;
+}
+
 }  // namespace
 
 RunSummary runScenarios(const RunOptions& options, const OutcomeCallback& on_outcome) {
@@ -677,6 +699,65 @@ RunSummary runScenarios(const RunOptions& options, const OutcomeCallback& on_out
 }
 
 namespace {
+
+RunSummary runRange(const std::shared_ptr<const scenario::LogicalScenario>& logical, const RunOptions& options,
+                    const std::optional<ShardInfo>& shard, const OutcomeCallback& on_outcome);
+
+fs::path outputFolder(const scenario::LogicalScenario& logical, const RunOptions& options) {
+  return options.outputDir.empty() ? fs::path("out") / logical.name : options.outputDir;
+}
+
+/// True if `folder` holds a finished shard of the same sweep whose files are all there.
+bool finishedShard(const ShardInfo& wanted) {
+  if (!fs::exists(wanted.folder / "manifest.json")) return false;
+  const ShardInfo found = readShardManifest(wanted.folder);
+  if (!found.sameSweep(wanted) || found.id.index != wanted.id.index || found.firstSample != wanted.firstSample ||
+      found.samples != wanted.samples) {
+    throw ConfigError(fmt::format("{}: holds {} of another sweep (scenario {}, seed {}, samples {}+{}): remove it or "
+                                  "choose another --out",
+                                  wanted.folder.string(), found.id.label(), found.functionalScenario, found.seed,
+                                  found.sweepFirstSample, found.sweepSamples));
+  }
+  const auto manifest = nlohmann::json::parse(readTextFile(wanted.folder / "manifest.json"));
+  for (const auto& [file, entry] : manifest.at("outputs").items()) {
+    std::error_code ec;
+    const auto bytes = fs::file_size(wanted.folder / file, ec);
+    if (ec || bytes != entry.at("bytes").get<std::uintmax_t>()) return false;
+  }
+  return true;
+}
+
+RunSummary runShard(const std::shared_ptr<const scenario::LogicalScenario>& logical, const RunOptions& options,
+                    const OutcomeCallback& on_outcome) {
+  const ShardId id = *options.shard;
+  const auto range = shardRange(options.firstSample, options.samples, options.batch, id);
+  ShardInfo info;
+  info.id = id;
+  info.folder = shardsFolder(outputFolder(*logical, options)) / id.folderName();
+  info.firstSample = range.first;
+  info.samples = range.samples;
+  info.sweepFirstSample = options.firstSample;
+  info.sweepSamples = options.samples;
+  info.seed = options.seed;
+  info.functionalScenario = logical->name;
+  info.scenarioSha256 = sha256OfFile(logical->sourceFile);
+  info.batch = options.batch;
+  info.compression = options.compression;
+  if (options.writeFiles && finishedShard(info)) {
+    spdlog::info("{} ({}) is finished already: skipped", id.label(), info.folder.string());
+    RunSummary summary = readRunManifest(info.folder);
+    summary.resumed = true;
+    return summary;
+  }
+  RunOptions part = options;
+  part.firstSample = range.first;
+  part.samples = range.samples;
+  part.outputDir = info.folder;
+  part.shard.reset();
+  RunSummary summary = runRange(logical, part, info, on_outcome);
+  summary.shard = id;
+  return summary;
+}
 
 /// Runs every batch in worker processes and hands the outcomes, in sample order, to `consume`.
 int simulateAll(const Context& context, const std::function<void(const std::vector<ScenarioOutcome>&)>& consume) {
@@ -705,12 +786,48 @@ int simulateAll(const Context& context, const std::function<void(const std::vect
 RunSummary runScenarios(const std::shared_ptr<const scenario::LogicalScenario>& logical, const RunOptions& options,
                         const OutcomeCallback& on_outcome) {
   options.validate();
+  if (options.shard) return runShard(logical, options, on_outcome);
+  return runRange(logical, options, std::nullopt, on_outcome);
+}
+
+RunSummary readRunManifest(const fs::path& run_folder) {
+  const fs::path path = run_folder / "manifest.json";
+  RunSummary summary;
+  try {
+    const auto manifest = nlohmann::json::parse(readTextFile(path));
+    summary.functionalScenario = manifest.at("functional_scenario").get<std::string>();
+    summary.outputDir = run_folder;
+    summary.samples = manifest.at("samples").get<std::uint64_t>();
+    summary.firstSample = manifest.at("first_sample").get<std::uint64_t>();
+    summary.seed = manifest.at("seed").get<std::uint64_t>();
+    summary.ok = manifest.at("ok").get<std::uint64_t>();
+    summary.failed = manifest.at("failed").get<std::uint64_t>();
+    summary.collisions = manifest.at("collisions").get<std::uint64_t>();
+    summary.seconds = manifest.at("seconds").get<double>();
+    summary.jobs = manifest.at("jobs").get<int>();
+    summary.batch = manifest.at("batch").get<std::size_t>();
+    summary.inputNames = manifest.at("inputs").get<std::vector<std::string>>();
+    summary.metricNames = manifest.at("metrics").get<std::vector<std::string>>();
+    if (manifest.contains("shard")) summary.shard = readShardManifest(run_folder).id;
+    for (const auto& [file, entry] : manifest.at("outputs").items()) summary.outputs.push_back(run_folder / file);
+  } catch (const nlohmann::json::exception& error) {
+    throw DatasetError(fmt::format("{}: not a run manifest ({})", path.string(), error.what()));
+  }
+  summary.scenariosPerSecond = static_cast<double>(summary.samples) / std::max(summary.seconds, 1e-9);
+  return summary;
+}
+
+namespace {
+
+RunSummary runRange(const std::shared_ptr<const scenario::LogicalScenario>& logical, const RunOptions& options,
+                    const std::optional<ShardInfo>& shard, const OutcomeCallback& on_outcome) {
   const auto start = std::chrono::steady_clock::now();
   const std::string started = utcTimestamp();
 
   Context context;
   context.logical = logical;
   context.options = options;
+  context.shard = shard;
   if (context.options.fcd) context.options.keepNets = true;
   context.options.jobs = static_cast<int>(std::min<std::uint64_t>(
       static_cast<std::uint64_t>(options.jobs), (options.samples + options.batch - 1) / options.batch));
@@ -720,10 +837,11 @@ RunSummary runScenarios(const std::shared_ptr<const scenario::LogicalScenario>& 
   context.batches = static_cast<std::size_t>((options.samples + options.batch - 1) / options.batch);
   context.keepBatchFiles = context.options.keepNets;
   context.layout = road::BatchLayout(road::BatchLayout::cellSizeFor(logical->road));
+  context.netWriter = chooseNetWriter(*logical, options);
 
   probeController(logical, options);
 
-  const fs::path out = options.outputDir.empty() ? fs::path("out") / logical->name : options.outputDir;
+  const fs::path out = outputFolder(*logical, options);
   std::optional<OutputFolder> folder;
   std::optional<TemporaryDirectory> temporary_work;
   if (options.writeFiles) folder.emplace(out);
@@ -740,6 +858,7 @@ RunSummary runScenarios(const std::shared_ptr<const scenario::LogicalScenario>& 
   summary.outputDir = out;
   summary.samples = options.samples;
   summary.seed = options.seed;
+  summary.firstSample = options.firstSample;
   summary.jobs = context.options.jobs;
   summary.batch = options.batch;
   summary.inputNames = logical->inputNames();
@@ -782,8 +901,15 @@ RunSummary runScenarios(const std::shared_ptr<const scenario::LogicalScenario>& 
   return summary;
 }
 
+}  // namespace
+
 std::string RunSummary::report() const {
-  std::string text = fmt::format("{}: {} concrete scenarios (seed {}) in {:.2f} s = {:.0f} scenarios/s ({} job{}, batch {})\n",
+  std::string text;
+  if (shard) {
+    text += fmt::format("{} of the sweep: samples {} .. {}{}\n", shard->label(), firstSample, firstSample + samples - 1,
+                        resumed ? fmt::format(" — finished already in {}, not run again", outputDir.string()) : "");
+  }
+  text += fmt::format("{}: {} concrete scenarios (seed {}) in {:.2f} s = {:.0f} scenarios/s ({} job{}, batch {})\n",
                                  functionalScenario, samples, seed, seconds, scenariosPerSecond, jobs,
                                  jobs == 1 ? "" : "s", batch);
   text += fmt::format("  completed {}, failed {}", ok, failed);

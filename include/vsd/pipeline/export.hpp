@@ -92,4 +92,28 @@ struct ExportSummary {
 /// created (or an older one is kept).
 ExportSummary exportMap(const ExportOptions& options);
 
+/// Which windows a process builds: window w (in the order a one-process export emits
+/// them) belongs to rank w mod ranks.
+struct WindowShare {
+  std::uint64_t rank = 0;
+  std::uint64_t ranks = 1;
+  bool mine(std::uint64_t window) const { return window % ranks == rank; }
+};
+
+class Communicator;
+
+/// What `mpirun -n N vsd-sumo export` ends with on this rank.
+struct ClusterExportResult {
+  int exitCode = 0;
+  std::string report;  ///< rank 0: the export's summary; other ranks: empty
+};
+
+/// `export` on an MPI job: every rank simulates the whole map (SUMO is deterministic,
+/// and closed-loop Egos interact with the traffic, so no rank can skip any of it) but
+/// builds and writes only its share of the windows (WindowShare) to a part file next
+/// to the output; rank 0 then joins the parts in window order, bit for bit, into the
+/// one dataset a one-process export writes. Faults of the map or options are reported
+/// once by rank 0 (exit code 1 on every rank).
+ClusterExportResult exportOnCluster(const ExportOptions& options, Communicator& communicator);
+
 }  // namespace vsd::pipeline
