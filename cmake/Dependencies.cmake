@@ -36,3 +36,15 @@ target_link_libraries(vsd_torch INTERFACE ${TORCH_LIBRARIES})
 # Executables used at run time and by tests.
 find_program(VSD_NETCONVERT netconvert REQUIRED)
 find_program(VSD_SYSTEM_PYTHON python3 PATHS /usr/bin NO_DEFAULT_PATH)
+
+# MPI is optional: with it, `mpirun -n N vsd-sumo run|export` splits the work over
+# ranks; without it the tool runs as one process and refuses to be started by mpirun.
+option(VSD_WITH_MPI "Use MPI when it is installed (Debian: libopenmpi-dev openmpi-bin)" ON)
+if(VSD_WITH_MPI)
+  find_package(MPI COMPONENTS C)
+endif()
+if(MPI_C_FOUND)
+  message(STATUS "MPI: version ${MPI_C_VERSION} (mpiexec: ${MPIEXEC_EXECUTABLE})")
+else()
+  message(STATUS "MPI: not found, building without it")
+endif()

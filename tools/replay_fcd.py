@@ -46,6 +46,19 @@ def read_fcd(path):
     return steps
 
 
+def config_step_length(config):
+    """The step length (s) `vsd-sumo run` wrote into the batch's .sumocfg: the run's own step."""
+    element = ElementTree.parse(config).getroot().find("time/step-length")
+    value = element.get("value") if element is not None else None
+    try:
+        step_length = float(value)
+    except (TypeError, ValueError):
+        sys.exit("replay_fcd.py: %s: time/step-length: expected a number of seconds, found %r" % (config, value))
+    if not step_length > 0.0:
+        sys.exit("replay_fcd.py: %s: time/step-length: expected > 0, found %s" % (config, value))
+    return step_length
+
+
 def ensure_type(type_id, known_types):
     """Recreates a vsd-sumo vehicle type (length x width, no minimum gap) the first time it is seen."""
     if not type_id or type_id in known_types:
@@ -86,9 +99,12 @@ def sumo_command(args, config, step_length, begin):
 
 
 def replay(steps, times, check):
-    """Drives every vehicle through its recorded states; returns (vehicles, worst position, worst speed difference)."""
+    """Drives every vehicle through its recorded states.
+
+    Returns (vehicles, worst position difference, worst and mean speed difference) over the checked states."""
     known, known_types = set(), set()
-    worst_position = worst_speed = 0.0
+    worst_position = worst_speed = total_speed = 0.0
+    checked = 0
     for time in times:
         for vehicle, type_id, lane, x, y, angle, speed in steps[time]:
             edge = lane.rsplit("_", 1)[0] if lane else ""
@@ -110,8 +126,11 @@ def replay(steps, times, check):
                 if vehicle in present:
                     px, py = traci.vehicle.getPosition(vehicle)
                     worst_position = max(worst_position, abs(px - x), abs(py - y))
-                    worst_speed = max(worst_speed, abs(traci.vehicle.getSpeed(vehicle) - speed))
-    return known, worst_position, worst_speed
+                    speed_difference = abs(traci.vehicle.getSpeed(vehicle) - speed)
+                    worst_speed = max(worst_speed, speed_difference)
+                    total_speed += speed_difference
+                    checked += 1
+    return known, worst_position, worst_speed, total_speed / checked if checked else 0.0
 
 
 def main():
@@ -127,16 +146,16 @@ def main():
     times = sorted(time for time, vehicles in steps.items() if vehicles)
     if not times:
         sys.exit("replay_fcd.py: %s holds no time steps" % fcd)
-    step_length = round(times[1] - times[0], 6) if len(times) > 1 else 0.2
+    step_length = config_step_length(config)
     begin = max(0.0, round(times[0] - step_length, 6))
     traci.start(sumo_command(args, config, step_length, begin), numRetries=5)
     try:
-        known, worst_position, worst_speed = replay(steps, times, args.check)
+        known, worst_position, worst_speed, mean_speed = replay(steps, times, args.check)
     finally:
         traci.close()
     if args.check:
-        print("replayed %d vehicles over %d steps; largest position difference %.4f m, speed difference %.4f m/s"
-              % (len(known), len(times), worst_position, worst_speed))
+        print("replayed %d vehicles over %d steps; largest position difference %.4f m, speed difference %.4f m/s "
+              "(mean %.4f m/s)" % (len(known), len(times), worst_position, worst_speed, mean_speed))
         return 0 if worst_position <= TOLERANCE and worst_speed <= TOLERANCE else 1
     return 0
 

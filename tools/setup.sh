@@ -14,6 +14,9 @@ packages=(
   sumo sumo-tools
   # model: libtorch (CPU) with OpenBLAS instead of the reference BLAS (~10x faster products)
   libtorch-dev libopenblas0-pthread
+  # distribution: MPI for run/export sweeps (optional at build time, installed so tests use it),
+  # Gloo's headers for torch.distributed's c10d ProcessGroupGloo (data-parallel training)
+  libopenmpi-dev openmpi-bin libgloo-dev
   # libraries
   libeigen3-dev libyaml-cpp-dev libhdf5-dev libcli11-dev libspdlog-dev libfmt-dev libmuparser-dev
   nlohmann-json3-dev libssl-dev libpugixml-dev

@@ -194,26 +194,49 @@ void ExtraTrees::fit(const Matrix& x, const Matrix& y) {
   }
 }
 
-Matrix ExtraTrees::predict(const Matrix& x) const {
+namespace {
+
+/// The leaf of `tree` that input row `r` of x falls into.
+std::size_t leafOf(const Tree& tree, const Matrix& x, Eigen::Index r) {
+  int node = 0;
+  while (tree.feature[static_cast<std::size_t>(node)] >= 0) {
+    const auto n = static_cast<std::size_t>(node);
+    node = x(r, tree.feature[n]) <= tree.threshold[n] ? tree.left[n] : tree.right[n];
+  }
+  return static_cast<std::size_t>(node);
+}
+
+}  // namespace
+
+void ExtraTrees::checkPredictable(const Matrix& x) const {
   if (impl_->trees.empty()) throw Error("extra trees: predict() before fit()");
   if (x.cols() != impl_->features) {
     throw ConfigError(fmt::format("extra trees: fitted on {} inputs, asked with {}", impl_->features, x.cols()));
   }
+}
+
+Matrix ExtraTrees::predict(const Matrix& x) const {
   Matrix result = Matrix::Zero(x.rows(), impl_->outputs);
+  for (const auto& tree_prediction : predictPerTree(x)) result += tree_prediction;
+  return result / static_cast<double>(impl_->trees.size());
+}
+
+std::vector<Matrix> ExtraTrees::predictPerTree(const Matrix& x) const {
+  checkPredictable(x);
+  const auto outputs = static_cast<std::size_t>(impl_->outputs);
+  std::vector<Matrix> predictions;
+  predictions.reserve(impl_->trees.size());
   for (const auto& tree : impl_->trees) {
+    Matrix prediction(x.rows(), impl_->outputs);
     for (Eigen::Index r = 0; r < x.rows(); ++r) {
-      int node = 0;
-      while (tree.feature[static_cast<std::size_t>(node)] >= 0) {
-        const auto n = static_cast<std::size_t>(node);
-        node = x(r, tree.feature[n]) <= tree.threshold[n] ? tree.left[n] : tree.right[n];
-      }
-      for (int o = 0; o < impl_->outputs; ++o) {
-        result(r, o) += tree.value[static_cast<std::size_t>(node) * static_cast<std::size_t>(impl_->outputs) +
-                                   static_cast<std::size_t>(o)];
+      const std::size_t leaf = leafOf(tree, x, r);
+      for (std::size_t o = 0; o < outputs; ++o) {
+        prediction(r, static_cast<Eigen::Index>(o)) = tree.value[leaf * outputs + o];
       }
     }
+    predictions.push_back(std::move(prediction));
   }
-  return result / static_cast<double>(impl_->trees.size());
+  return predictions;
 }
 
 std::size_t ExtraTrees::nodes() const {

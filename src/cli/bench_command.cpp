@@ -1,11 +1,16 @@
-// `vsd-sumo bench run`: end-to-end throughput of `vsd-sumo run` (default batch
-// vs. one network + one simulation per scenario, side by side) and peak memory
-// as --samples grows. Each measurement is a separate `vsd-sumo run` process, so
-// start-up, scenario loading and file writing are included and peak RSS is the
-// run's own.
+// `vsd-sumo bench run`: end-to-end throughput and CPU time per scenario of
+// `vsd-sumo run` (default batch with the direct network writer and with
+// netconvert, vs. one network + one simulation per scenario, side by side), peak
+// memory as --samples grows, and 2 MPI ranks vs 1. Each measurement is a separate
+// `vsd-sumo run` process (the executable users start, without libtorch), so
+// start-up, scenario loading and file writing are included, peak RSS is the run's
+// own and CPU time counts every process of the run (workers, netconvert).
 
 #include <fmt/format.h>
+#include <sys/resource.h>
+#include <unistd.h>
 
+#include <chrono>
 #include <filesystem>
 #include <memory>
 #include <optional>
@@ -14,8 +19,10 @@
 #include "commands.hpp"
 #include "vsd/core/error.hpp"
 #include "vsd/core/files.hpp"
+#include "vsd/core/progress.hpp"
 #include "vsd/core/process.hpp"
 #include "vsd/model/model.hpp"
+#include "vsd/pipeline/cluster.hpp"
 #include "vsd/pipeline/run.hpp"
 #include "vsd/vector/dataset.hpp"
 
@@ -32,36 +39,110 @@ struct BenchOptions {
   std::vector<std::uint64_t> memorySamples = {2000, 20000};
   std::size_t batch = pipeline::RunOptions::kDefaultBatch;
   int jobs = 1;
+  std::uint64_t mpiSamples = 4000;
 };
 
 struct Measurement {
   std::uint64_t samples = 0;
   std::size_t batch = 0;
   double seconds = 0.0;
+  double cpuSeconds = 0.0;
   long maxRssKiB = 0;
   double rate() const { return static_cast<double>(samples) / seconds; }
+  double cpuMillisecondsPerSample() const { return 1000.0 * cpuSeconds / static_cast<double>(samples); }
 };
 
-/// Runs this executable with `args` as a separate process (start-up and file writing included).
-ProcessResult runSelf(const std::vector<std::string>& args, const fs::path& work) {
-  std::vector<std::string> argv = {fs::read_symlink("/proc/self/exe").string(), "--quiet"};
-  argv.insert(argv.end(), args.begin(), args.end());
+/// User + system CPU time of every child process this process has waited for, and
+/// of their descendants they waited for (s).
+double childrenCpuSeconds() {
+  struct rusage usage {};
+  ::getrusage(RUSAGE_CHILDREN, &usage);
+  const auto seconds = [](const timeval& time) {
+    return static_cast<double>(time.tv_sec) + 1e-6 * static_cast<double>(time.tv_usec);
+  };
+  return seconds(usage.ru_utime) + seconds(usage.ru_stime);
+}
+
+struct CheckedRun {
+  ProcessResult result;
+  double cpuSeconds = 0.0;  ///< of the process and every process it started
+};
+
+/// Runs `argv` to completion; throws Error if it fails.
+CheckedRun runChecked(const std::vector<std::string>& argv, const fs::path& work) {
+  const double cpu_before = childrenCpuSeconds();
   const auto result = runProcess(argv, work / "bench.log");
+  const double cpu_seconds = childrenCpuSeconds() - cpu_before;
   if (result.exitCode != 0) {
     throw Error(fmt::format("benchmark process failed (exit {}): {}", result.exitCode, firstErrorLine(result.output)));
   }
-  return result;
+  return {result, cpu_seconds};
 }
 
-Measurement measureRun(const BenchOptions& options, std::uint64_t samples, std::size_t batch, const fs::path& work) {
+/// Runs vsd-sumo (the executable users start) with `args` as a separate process.
+CheckedRun runVsdSumo(const std::vector<std::string>& args, const fs::path& work) {
+  std::vector<std::string> argv = {siblingExecutable("vsd-sumo"), "--quiet"};
+  argv.insert(argv.end(), args.begin(), args.end());
+  return runChecked(argv, work);
+}
+
+ProcessResult runSelf(const std::vector<std::string>& args, const fs::path& work) {
+  return runVsdSumo(args, work).result;
+}
+
+std::vector<std::string> runArguments(const BenchOptions& options, std::uint64_t samples, std::size_t batch,
+                                      const fs::path& out) {
+  return {"run", options.scenario.string(), "--samples", std::to_string(samples), "--batch", std::to_string(batch),
+          "--jobs", std::to_string(options.jobs), "--seed", "1", "--out", out.string()};
+}
+
+Measurement measureRun(const BenchOptions& options, std::uint64_t samples, std::size_t batch, const fs::path& work,
+                       const std::vector<std::string>& extra = {}) {
   const fs::path out = work / fmt::format("run_{}_{}", samples, batch);
-  const auto result = runSelf({"run", options.scenario.string(), "--samples", std::to_string(samples), "--batch",
-                               std::to_string(batch), "--jobs", std::to_string(options.jobs), "--seed", "1", "--out",
-                               out.string()},
-                              work);
+  auto args = runArguments(options, samples, batch, out);
+  args.insert(args.end(), extra.begin(), extra.end());
+  const auto [result, cpu_seconds] = runVsdSumo(args, work);
   std::error_code ignored;
   fs::remove_all(out, ignored);
-  return {samples, batch, result.seconds, result.maxRssKiB};
+  return {samples, batch, result.seconds, cpu_seconds, result.maxRssKiB};
+}
+
+/// `mpirun -n <ranks> vsd-sumo run ...` (one core per rank, nothing oversubscribed).
+Measurement measureMpiRun(const BenchOptions& options, int ranks, const fs::path& out, const fs::path& work) {
+  std::vector<std::string> argv = {"mpirun", "-n", std::to_string(ranks)};
+  if (::geteuid() == 0) argv.emplace_back("--allow-run-as-root");
+  argv.insert(argv.end(), {siblingExecutable("vsd-sumo"), "--quiet"});
+  const auto args = runArguments(options, options.mpiSamples, options.batch, out);
+  argv.insert(argv.end(), args.begin(), args.end());
+  const auto [result, cpu_seconds] = runChecked(argv, work);
+  return {options.mpiSamples, options.batch, result.seconds, cpu_seconds, result.maxRssKiB};
+}
+
+/// True if the run folders `a` and `b` hold the same bytes in every output file.
+bool sameOutputs(const fs::path& a, const fs::path& b) {
+  for (const char* file : {"concrete.csv", "traces.h5", "dataset.h5"}) {
+    if (sha256OfFile(a / file) != sha256OfFile(b / file)) return false;
+  }
+  return true;
+}
+
+/// 2 MPI ranks vs 1 (each rank one process on its own core), and whether the merged
+/// outputs of both equal a one-process run's bytes.
+void printMpiBench(const BenchOptions& options, const fs::path& work) {
+  if (pipeline::mpiLibraryVersion().empty()) {
+    fmt::print("  MPI: not in this build (no rank comparison)\n");
+    return;
+  }
+  const fs::path plain = work / "mpi_plain";
+  runSelf(runArguments(options, options.mpiSamples, options.batch, plain), work);
+  const Measurement one = measureMpiRun(options, 1, work / "mpi_1", work);
+  const Measurement two = measureMpiRun(options, 2, work / "mpi_2", work);
+  runSelf({"merge", (work / "mpi_1").string()}, work);
+  const auto merge = runSelf({"merge", (work / "mpi_2").string()}, work);
+  fmt::print("  mpirun -n 1 vs -n 2 (--samples {}): {:.1f} vs {:.1f} scenarios/s = {:.2f}x; merging the 2 shards "
+             "{:.2f} s; merged outputs byte-identical to one process: {}\n",
+             options.mpiSamples, one.rate(), two.rate(), two.rate() / one.rate(), merge.seconds,
+             sameOutputs(plain, work / "mpi_1") && sameOutputs(plain, work / "mpi_2") ? "yes" : "NO");
 }
 
 int runBench(const BenchOptions& options) {
@@ -69,19 +150,26 @@ int runBench(const BenchOptions& options) {
   fmt::print("vsd-sumo bench run: {} (jobs {}), end to end: sample -> net -> simulate -> metrics -> files\n",
              options.scenario.string(), options.jobs);
   const Measurement batched = measureRun(options, options.samples, options.batch, work.path());
+  const Measurement netconvert =
+      measureRun(options, options.samples, options.batch, work.path(), {"--net-writer", "netconvert"});
   const Measurement single = measureRun(options, options.batchOneSamples, 1, work.path());
-  fmt::print("  {:<28} {:>8} {:>10} {:>14}\n", "mode", "samples", "seconds", "scenarios/s");
-  fmt::print("  {:<28} {:>8} {:>10.2f} {:>14.1f}\n", fmt::format("batch {}", batched.batch), batched.samples,
-             batched.seconds, batched.rate());
-  fmt::print("  {:<28} {:>8} {:>10.2f} {:>14.1f}\n", "batch 1 (net + sim each)", single.samples, single.seconds,
-             single.rate());
-  fmt::print("  speed-up of batching: {:.0f}x\n", batched.rate() / single.rate());
+  fmt::print("  {:<36} {:>8} {:>10} {:>14} {:>16}\n", "mode", "samples", "seconds", "scenarios/s", "CPU ms/scenario");
+  auto print_row = [](const std::string& mode, const Measurement& measurement) {
+    fmt::print("  {:<36} {:>8} {:>10.2f} {:>14.1f} {:>16.3f}\n", mode, measurement.samples, measurement.seconds,
+               measurement.rate(), measurement.cpuMillisecondsPerSample());
+  };
+  print_row(fmt::format("batch {}", batched.batch), batched);
+  print_row(fmt::format("batch {}, --net-writer netconvert", netconvert.batch), netconvert);
+  print_row("batch 1 (net + sim each)", single);
+  fmt::print("  speed-up of batching: {:.0f}x; CPU time per scenario counts every process of the run\n",
+             batched.rate() / single.rate());
   fmt::print("  peak memory (RSS) as --samples grows:\n");
   for (const auto samples : options.memorySamples) {
     const Measurement memory = measureRun(options, samples, options.batch, work.path());
     fmt::print("    --samples {:>7}: {:>7.1f} MiB ({:.0f} scenarios/s)\n", samples,
                static_cast<double>(memory.maxRssKiB) / 1024.0, memory.rate());
   }
+  printMpiBench(options, work.path());
   return 0;
 }
 
@@ -123,7 +211,30 @@ struct ModelBenchOptions {
   std::uint64_t testSamples = 2000;
   bool singles = false;
   int threads = 2;
+  std::string decoder = "kinematic";
+  std::string frame = "ego";
+  int draws = 32;              ///< sampled futures per scene for the inference benchmark
 };
+
+/// Scenes per second of predicting the most likely future and `draws` sampled futures of
+/// every test scene (read once, predicted in chunks as `evaluate` does).
+double samplingRate(const model::Predictor& predictor, const std::vector<fs::path>& tests, int draws) {
+  std::vector<vector::VectorizedScene> scenes;
+  for (const auto& path : tests) {
+    const vector::DatasetReader reader(vector::resolveDatasetPath(path));
+    for (std::size_t i = 0; i < reader.size(); ++i) scenes.push_back(reader.scene(i));
+  }
+  model::PredictOptions options;
+  options.samples = draws;
+  const auto start = std::chrono::steady_clock::now();
+  std::size_t predicted = 0;
+  for (std::size_t first = 0; first < scenes.size(); first += 4096) {
+    const std::vector<vector::VectorizedScene> chunk(scenes.begin() + static_cast<std::ptrdiff_t>(first),
+                                                     scenes.begin() + static_cast<std::ptrdiff_t>(std::min(scenes.size(), first + 4096)));
+    predicted += predictor.predictDistribution(chunk, options).size();
+  }
+  return static_cast<double>(predicted) / secondsSince(start);
+}
 
 int runModelBench(const ModelBenchOptions& options) {
   std::optional<TemporaryDirectory> temporary;
@@ -155,6 +266,8 @@ int runModelBench(const ModelBenchOptions& options) {
     train_options.mix = model::Mix::parse(mix);
     train_options.output = work / model_name;
     train_options.threads = options.threads;
+    train_options.config.decoder = options.decoder;
+    train_options.config.frame = options.frame;
     const auto summary = model::train(train_options);
     const model::Predictor predictor(train_options.output, options.threads);
     std::vector<fs::path> tests;
@@ -164,24 +277,34 @@ int runModelBench(const ModelBenchOptions& options) {
                summary.plannedEpochs, summary.samplesPerSecond);
     for (const auto& [label, errors] : evaluation.perLabel) fmt::print(" {} {:.3f}", label, errors.ade);
     fmt::print("\n");
+    if (evaluation.overall.scored > 0) fmt::print("{}", evaluation.table());
     return std::pair{summary, evaluation};
   };
+  fmt::print("  decoder {}, frame {}\n", options.decoder, options.frame);
+  const std::string suffix = fmt::format("_{}_{}.pt", options.decoder, options.frame);
   const auto [summary, evaluation] = train_and_evaluate(
-      fmt::format("acc={0},lk={0},acc_lk={0}", options.samples), {"acc", "lk", "acc_lk"}, "all.pt");
+      fmt::format("acc={0},lk={0},acc_lk={0}", options.samples), {"acc", "lk", "acc_lk"}, "all" + suffix);
   if (options.singles) {
     for (const std::string label : {"acc", "lk", "acc_lk"}) {
-      train_and_evaluate(fmt::format("{}={}", label, options.samples), {label}, label + ".pt");
+      train_and_evaluate(fmt::format("{}={}", label, options.samples), {label}, label + suffix);
     }
   }
   const double inference_rate = static_cast<double>(evaluation.overall.samples) / evaluation.predictionSeconds;
   fmt::print("  training throughput: {:.0f} samples/s; {} samples to convergence (end of the schedule) in {:.1f} s\n",
              summary.samplesPerSecond, 3 * options.samples, summary.seconds);
-  fmt::print("  inference: {:.0f} scenes/s batched", inference_rate);
+  fmt::print("  inference: {:.0f} scenes/s batched (most likely future)", inference_rate);
   if (simulation_rate > 0.0) {
     fmt::print(" = {:.1f}x the simulation throughput of `vsd-sumo run` ({:.0f} scenarios/s, acc_lk)",
                inference_rate / simulation_rate, simulation_rate);
   }
   fmt::print("\n");
+  const model::Predictor predictor(work / ("all" + suffix), options.threads);
+  if (predictor.probabilistic() && options.draws > 0) {
+    std::vector<fs::path> tests;
+    for (const std::string label : {"acc", "lk", "acc_lk"}) tests.push_back(work / ("test_" + label));
+    fmt::print("  inference with {} sampled futures per scene: {:.0f} scenes/s\n", options.draws,
+               samplingRate(predictor, tests, options.draws));
+  }
   return 0;
 }
 
@@ -228,6 +351,8 @@ void addBenchCommand(CLI::App& app, CommandContext& context) {
       ->capture_default_str();
   run->add_option("--batch", options->batch, "Batch size of the batched runs")->capture_default_str();
   run->add_option("--jobs", options->jobs, "Worker processes")->capture_default_str();
+  run->add_option("--mpi-samples", options->mpiSamples, "Samples for the MPI runs (1 rank vs 2)")
+      ->capture_default_str();
   run->callback([options, &context] { context.action = [options] { return runBench(*options); }; });
 
   auto export_options = std::make_shared<ExportBenchOptions>();
@@ -250,6 +375,10 @@ void addBenchCommand(CLI::App& app, CommandContext& context) {
       ->capture_default_str();
   modeling->add_flag("--singles", model_options->singles, "Also train one model per functional scenario");
   modeling->add_option("--threads", model_options->threads, "libtorch threads")->capture_default_str();
+  modeling->add_option("--decoder", model_options->decoder, "Decoder of the trained models")->capture_default_str();
+  modeling->add_option("--frame", model_options->frame, "Model frame (ego, lane)")->capture_default_str();
+  modeling->add_option("--draws", model_options->draws, "Sampled futures per scene in the inference benchmark")
+      ->capture_default_str();
   modeling->callback([model_options, &context] {
     context.action = [model_options] { return runModelBench(*model_options); };
   });
@@ -267,6 +396,7 @@ void addBenchCommand(CLI::App& app, CommandContext& context) {
   });
 
   addInteropBench(*bench, context);
+  addSearchBench(*bench, context);
 }
 
 }  // namespace vsd::cli

@@ -16,6 +16,20 @@ struct CommandContext {
   Action action;            ///< set by the chosen subcommand
 };
 
+/// The commands that train or run models (libtorch): train, predict, evaluate,
+/// baseline, experiment, compare, bench, search. Loading libtorch costs a process about a
+/// second of CPU before main() (relocations and operator registrations), so these
+/// live in a second executable, vsd-sumo-ml, built and installed next to vsd-sumo.
+/// vsd-sumo hands every command line that is not one of its own commands (and
+/// top-level --help) to vsd-sumo-ml unchanged (exec, same process), so users see
+/// one tool and a scenario sweep never pays for libtorch.
+/// Registers them and returns true in vsd-sumo-ml (model_command_set.cpp); returns
+/// false in vsd-sumo (sweep_command_set.cpp).
+bool addModelCommands(CLI::App& app, CommandContext& context);
+
+/// Path of the sibling executable `name` (in the folder of the running executable).
+std::string siblingExecutable(const std::string& name);
+
 void addRunCommand(CLI::App& app, CommandContext& context);
 void addExportCommand(CLI::App& app, CommandContext& context);
 void addDatasetCommand(CLI::App& app, CommandContext& context);
@@ -26,8 +40,12 @@ void addBaselineCommand(CLI::App& app, CommandContext& context);
 void addExperimentCommand(CLI::App& app, CommandContext& context);
 void addCompareCommand(CLI::App& app, CommandContext& context);
 void addBenchCommand(CLI::App& app, CommandContext& context);
+void addMergeCommand(CLI::App& app, CommandContext& context);
 void addScenarioCommand(CLI::App& app, CommandContext& context);
+void addSearchCommand(CLI::App& app, CommandContext& context);
 /// `bench interop` (bench_interop.cpp), a subcommand of `bench`.
 void addInteropBench(CLI::App& bench, CommandContext& context);
+/// `bench search` (bench_search.cpp), a subcommand of `bench`.
+void addSearchBench(CLI::App& bench, CommandContext& context);
 
 }  // namespace vsd::cli

@@ -15,7 +15,8 @@ void addCompareCommand(CLI::App& app, CommandContext& context) {
                  "write an HTML report and comparison.csv of predicted vs simulated (or recorded) behaviour");
   command->add_option("scenario", options->scenarioFile, "Logical scenario (YAML), e.g. scenarios/acc_lk.yaml")
       ->check(CLI::ExistingFile);
-  command->add_option("-m,--model", options->model, "VectorNet model file (vsd-sumo train)")->required();
+  command->add_option("-m,--model", options->model, "VectorNet model file (vsd-sumo train), or cv / ca (no training)")
+      ->required();
   command->add_option("-d,--data", options->data, "Instead of a scenario: dataset files or run folders (predicted "
                                                   "vs recorded)");
   command->add_option("-o,--out", options->output, "Report folder (default: reports/<scenario or dataset name>)");
@@ -26,6 +27,14 @@ void addCompareCommand(CLI::App& app, CommandContext& context) {
   command->add_option("-j,--jobs", options->jobs, "SUMO worker processes")->capture_default_str();
   command->add_option("--threads", options->threads, "libtorch threads")->capture_default_str();
   command->add_option("--worst", options->worst, "Scenarios with the largest ADE drawn in the report")
+      ->capture_default_str();
+  command->add_option("--draws", options->draws,
+                      "Futures drawn per scenario from a probabilistic model: metric intervals, calibration, confident "
+                      "verdicts (0: none)")
+      ->capture_default_str();
+  command->add_option("--draw-seed", options->drawSeed, "Seed of the drawn futures")->capture_default_str();
+  command->add_option("--confidence", options->confidence,
+                      "A criterion's verdict is confident when this share of the drawn futures agrees")
       ->capture_default_str();
   command->add_flag("--allow-dirty", options->allowDirty,
                     "Write into the repository's results/ even though this binary was built from uncommitted changes");

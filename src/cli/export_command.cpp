@@ -4,6 +4,7 @@
 
 #include "commands.hpp"
 #include "vsd/core/error.hpp"
+#include "vsd/pipeline/cluster.hpp"
 #include "vsd/pipeline/export.hpp"
 
 namespace vsd::cli {
@@ -59,6 +60,10 @@ void addExportCommand(CLI::App& app, CommandContext& context) {
       ->capture_default_str();
   command->add_option("--compression", options->compression, "Deflate level of the vectors: 0 (none, fastest) .. 9")
       ->capture_default_str();
+  command->add_option("--step-timeout", options->watchdog.stepTimeout,
+                      "Watchdog: longest Ego controller call or libsumo step (s); a closed-loop Ego exceeding it is "
+                      "taken out")
+      ->capture_default_str();
   command->add_flag("--closed-loop", options->closedLoop, "Drive every Ego with an Ego controller instead of SUMO");
   command->add_option("--controller", options->controller, "Controller for --closed-loop")->capture_default_str();
   command->add_option("--controller-library", options->controllerLibrary, "Plugin library holding --controller");
@@ -70,6 +75,12 @@ void addExportCommand(CLI::App& app, CommandContext& context) {
       if (*begin >= 0.0) options->begin = *begin;
       if (*end >= 0.0) options->end = *end;
       for (const auto& param : *params) options->controllerParams.push_back(parseParam(param));
+      if (pipeline::launchedAsMpiRank()) {
+        const auto communicator = pipeline::joinMpiJob();
+        const auto result = pipeline::exportOnCluster(*options, *communicator);
+        fmt::print("{}", result.report);
+        return result.exitCode;
+      }
       const auto summary = pipeline::exportMap(*options);
       fmt::print("{}", summary.report());
       return 0;

@@ -1,6 +1,7 @@
 // train / predict / evaluate: VectorNet on datasets.
 #include <fmt/format.h>
 
+#include <cmath>
 #include <memory>
 
 #include "commands.hpp"
@@ -17,11 +18,19 @@ std::string duration(double seconds) {
   return fmt::format("{:.0f} s", seconds);
 }
 
+/// "offsets, kinematic" for help texts.
+std::string decoderNames() {
+  std::vector<std::string> names;
+  for (const auto& info : model::availableDecoders()) names.push_back(info.name);
+  return fmt::format("{}", fmt::join(names, ", "));
+}
+
 }  // namespace
 
 void addTrainCommand(CLI::App& app, CommandContext& context) {
   auto options = std::make_shared<model::TrainOptions>();
   auto mix = std::make_shared<std::string>();
+  auto decoder_options = std::make_shared<std::vector<std::string>>();
   CLI::App* command = app.add_subcommand("train", "Train VectorNet on datasets mixed from functional scenarios and maps");
   command->add_option("-d,--data", options->data, "Dataset files or run folders")->required();
   command->add_option("--mix", *mix, "Samples per label, e.g. acc=2000,lk=2000,acc_lk=200 (default: all)");
@@ -43,15 +52,23 @@ void addTrainCommand(CLI::App& app, CommandContext& context) {
   command->add_option("--global-width", options->config.globalWidth, "Attention width")->capture_default_str();
   command->add_option("--heads", options->config.heads, "Attention heads")->capture_default_str();
   command->add_option("--decoder-hidden", options->config.decoderHidden, "Decoder width")->capture_default_str();
+  command->add_option("--decoder", options->config.decoder, "Decoder: " + decoderNames())->capture_default_str();
+  command->add_option("--decoder-option", *decoder_options,
+                      "A decoder option name=value (repeatable; README \"Decoders\" lists them)");
+  command->add_option("--frame", options->config.frame, "Model frame: ego or lane")->capture_default_str();
   command->add_flag("--resume", options->resume, "Continue an interrupted training from <out>.last");
   command->callback([=, &context] {
     context.action = [=] {
       options->mix = model::Mix::parse(*mix);
+      model::findDecoder(options->config.decoder, "--decoder");
+      options->config.decoderOptions = model::parseDecoderOptions(*decoder_options);
       const auto summary = model::train(*options, [&](const model::EpochRecord& record) {
         const int planned = record.plannedEpochs;
-        fmt::print("epoch {:>3}/{}: train loss {:.3f} m, validation ADE {:.3f} m (FDE {:.3f} m), lr {:.2e}, "
+        const std::string nll =
+            std::isnan(record.validationNll) ? "" : fmt::format(", NLL {:.3f}", record.validationNll);
+        fmt::print("epoch {:>3}/{}: train loss {:.3f}, validation ADE {:.3f} m (FDE {:.3f} m{}), lr {:.2e}, "
                    "{:.0f} samples/s, {:.1f} s{}, at most {} left\n",
-                   record.epoch, planned, record.trainLoss, record.validationAde, record.validationFde,
+                   record.epoch, planned, record.trainLoss, record.validationAde, record.validationFde, nll,
                    record.learningRate, record.samplesPerSecond, record.seconds, record.best ? " *best*" : "",
                    duration(record.seconds * (planned - record.epoch)));
         std::fflush(stdout);
@@ -67,15 +84,21 @@ void addPredictCommand(CLI::App& app, CommandContext& context) {
   auto data = std::make_shared<std::filesystem::path>();
   auto out = std::make_shared<std::filesystem::path>();
   auto threads = std::make_shared<int>(2);
-  CLI::App* command = app.add_subcommand("predict", "Predict the Ego of every sample of a dataset (vsd-predictions/1)");
-  command->add_option("-m,--model", *model_file, "Model file")->required();
+  auto file_options = std::make_shared<model::PredictionFileOptions>();
+  CLI::App* command = app.add_subcommand("predict", "Predict the Ego of every sample of a dataset (vsd-predictions/2)");
+  command->add_option("-m,--model", *model_file, "Model file, or cv / ca (no training)")->required();
   command->add_option("-d,--data", *data, "Dataset file or run folder")->required();
   command->add_option("-o,--out", *out, "Predictions file (.h5)")->required();
+  command->add_option("--samples", file_options->predict.samples,
+                      "Futures to draw per scene from a probabilistic model (0: the most likely only)")
+      ->capture_default_str();
+  command->add_option("--sample-seed", file_options->predict.seed, "Seed of the drawn futures")->capture_default_str();
   command->add_option("--threads", *threads, "libtorch threads")->capture_default_str();
   command->callback([=, &context] {
     context.action = [=] {
+      file_options->predict.validate();
       const model::Predictor predictor(*model_file, *threads);
-      const auto count = model::writePredictions(predictor, *model_file, *data, *out);
+      const auto count = model::writePredictions(predictor, *model_file, *data, *out, *file_options);
       fmt::print("predicted {} samples of {} with {} -> {}\n", count, data->string(), model_file->string(),
                  out->string());
       return 0;
@@ -88,8 +111,8 @@ void addEvaluateCommand(CLI::App& app, CommandContext& context) {
   auto data = std::make_shared<std::vector<std::filesystem::path>>();
   auto csv = std::make_shared<std::filesystem::path>();
   auto threads = std::make_shared<int>(2);
-  CLI::App* command = app.add_subcommand("evaluate", "ADE and FDE of a model per functional scenario");
-  command->add_option("-m,--model", *model_file, "Model file")->required();
+  CLI::App* command = app.add_subcommand("evaluate", "ADE/FDE (and NLL and calibration) of a model per functional scenario");
+  command->add_option("-m,--model", *model_file, "Model file, or cv / ca (no training)")->required();
   command->add_option("-d,--data", *data, "Dataset files or run folders")->required();
   command->add_option("--csv", *csv, "Also write the table as CSV");
   command->add_option("--threads", *threads, "libtorch threads")->capture_default_str();
@@ -97,8 +120,12 @@ void addEvaluateCommand(CLI::App& app, CommandContext& context) {
     context.action = [=] {
       const model::Predictor predictor(*model_file, *threads);
       const auto evaluation = model::evaluate(predictor, *data);
-      fmt::print("{} (trained on {}, validation ADE {:.3f} m):\n{}", model_file->string(), predictor.info().mix,
-                 predictor.info().validationAde, evaluation.table());
+      if (predictor.info().trained) {
+        fmt::print("{} ({} decoder, trained on {}, validation ADE {:.3f} m):\n{}", model_file->string(),
+                   predictor.name(), predictor.info().mix, predictor.info().validationAde, evaluation.table());
+      } else {
+        fmt::print("{} (no training):\n{}", predictor.name(), evaluation.table());
+      }
       if (!csv->empty()) evaluation.writeCsv(*csv);
       return 0;
     };

@@ -7,6 +7,7 @@
 #include "commands.hpp"
 #include "vsd/core/error.hpp"
 #include "vsd/interop/run_openscenario.hpp"
+#include "vsd/pipeline/cluster.hpp"
 #include "vsd/pipeline/run.hpp"
 
 namespace vsd::cli {
@@ -30,16 +31,32 @@ void addRunCommand(CLI::App& app, CommandContext& context) {
       ->capture_default_str();
   run->add_option("--compression", options->compression, "Deflate level of dataset.h5's vectors: 0 (none) .. 9")
       ->capture_default_str();
+  run->add_option("--step-timeout", options->watchdog.stepTimeout,
+                  "Watchdog: longest Ego controller call or libsumo step (s); a scenario exceeding it fails")
+      ->capture_default_str();
   run->add_flag("--keep-nets", options->keepNets, "Keep the generated networks in <out>/nets (open with sumo-gui)");
   run->add_flag("--fcd", options->fcd,
                 "Write SUMO FCD XML per batch to <out>/fcd (replay: tools/replay_fcd.py); implies --keep-nets");
+  auto shard = std::make_shared<std::string>();
+  run->add_option("--shard", *shard,
+                  "Run only shard K/N of the sweep (K = 0 .. N-1) into <out>/shards/shard-K-of-N; finished shards "
+                  "are skipped, so re-running resumes. Join with `vsd-sumo merge <out>`");
+  auto merge = std::make_shared<bool>(false);
+  run->add_flag("--merge", *merge, "Under mpirun: rank 0 joins the shards into one run folder at the end");
+  auto net_writer = std::make_shared<std::string>();
+  run->add_option("--net-writer", *net_writer,
+                  "How networks are built: direct (written by vsd-sumo) or netconvert; default: direct unless the "
+                  "scenario gives sumo.netconvert_options")
+      ->check(CLI::IsMember({"direct", "netconvert"}));
   auto import = std::make_shared<interop::ImportOptions>();
   auto step = std::make_shared<double>(0.0);
   CLI::Option* step_option =
       run->add_option("--step", *step, "OpenSCENARIO input: simulation step (s) if the file does not set one");
-  run->callback([options, &context, run, import, step, step_option] {
-    context.action = [options, &context, run, import, step, step_option] {
+  run->callback([options, &context, run, import, step, step_option, net_writer, shard, merge] {
+    context.action = [options, &context, run, import, step, step_option, net_writer, shard, merge] {
       options->commandLine = context.commandLine;
+      if (!net_writer->empty()) options->netWriter = road::parseNetWriter(*net_writer, "command line: --net-writer");
+      if (!shard->empty()) options->shard = ShardId::parse(*shard, "command line");
       if (options->scenarioFile.extension() == ".xosc") {
         if (step_option->count() > 0) import->step = *step;
         std::vector<std::string> fixed_by_file;
@@ -53,6 +70,13 @@ void addRunCommand(CLI::App& app, CommandContext& context) {
         throw ConfigError::field("command line", "--step", options->scenarioFile.string(),
                                  "an OpenSCENARIO file (a logical scenario sets its step in time.step)");
       }
+      if (pipeline::launchedAsMpiRank()) {
+        const auto communicator = pipeline::joinMpiJob();
+        const auto result = pipeline::runOnCluster(*options, *merge, *communicator);
+        fmt::print("{}", result.report);
+        return result.exitCode;
+      }
+      if (*merge) throw ConfigError("--merge is for mpirun; join shards with `vsd-sumo merge <out>`");
       const auto summary = pipeline::runScenarios(*options);
       fmt::print("{}", summary.report());
       return 0;

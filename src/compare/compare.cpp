@@ -1,6 +1,7 @@
 #include "vsd/compare/compare.hpp"
 
 #include <fmt/format.h>
+#include <nlohmann/json.hpp>
 #include <unistd.h>
 
 #include <algorithm>
@@ -83,44 +84,6 @@ report::CriterionSpec parseCriterion(const std::string& text) {
   return spec;
 }
 
-/// The output folder is built under a temporary name next to it and renamed into place.
-class OutputFolder {
- public:
-  OutputFolder(const fs::path& final_path, bool force) : final_(final_path.lexically_normal()) {
-    if (final_.filename().empty()) final_ = final_.parent_path();  // "reports/acc_lk/"
-    if (fs::exists(final_) && !force) {
-      throw ConfigError(fmt::format("--out {}: the folder exists; choose another or pass --force to replace it",
-                                    final_.string()));
-    }
-    const fs::path parent = final_.has_parent_path() ? final_.parent_path() : fs::path(".");
-    ensureDirectory(parent);
-    temp_ = parent / fmt::format(".{}.partial-{}", final_.filename().string(), ::getpid());
-    std::error_code error;
-    fs::remove_all(temp_, error);
-    if (!fs::create_directories(temp_, error) || error) {
-      throw IoError(fmt::format("{}: cannot create the output folder: {}", temp_.string(), error.message()));
-    }
-  }
-  OutputFolder(const OutputFolder&) = delete;
-  OutputFolder& operator=(const OutputFolder&) = delete;
-  ~OutputFolder() {
-    std::error_code ignored;
-    if (!committed_) fs::remove_all(temp_, ignored);
-  }
-  const fs::path& temp() const { return temp_; }
-  void commit() {
-    std::error_code error;
-    fs::remove_all(final_, error);  // exists only with --force
-    if (!error) fs::rename(temp_, final_, error);
-    if (error) throw IoError(fmt::format("{}: cannot move the report into place: {}", final_.string(), error.message()));
-    committed_ = true;
-  }
-
- private:
-  fs::path final_;
-  fs::path temp_;
-  bool committed_ = false;
-};
 
 /// The two futures of a compared scenario; its scene is fetched again only to draw it.
 struct Futures {
@@ -130,20 +93,79 @@ struct Futures {
 };
 using SceneSource = std::function<vector::VectorizedScene(std::size_t)>;
 
-/// Predictions of scenes[i] for i in `which`, a bounded chunk at a time (no full copy).
-std::vector<Polyline> predictInChunks(const model::Predictor& predictor, const std::vector<vector::VectorizedScene>& scenes,
-                                      const std::vector<std::size_t>& which) {
-  std::vector<Polyline> predictions;
+/// Predictions (with the options' sampled futures) of scenes[i] for i in `which`, a
+/// bounded chunk at a time (no full copy).
+std::vector<model::Prediction> predictInChunks(const model::Predictor& predictor,
+                                               const std::vector<vector::VectorizedScene>& scenes,
+                                               const std::vector<std::size_t>& which, const model::PredictOptions& options) {
+  std::vector<model::Prediction> predictions;
   predictions.reserve(which.size());
   for (std::size_t first = 0; first < which.size(); first += kPredictChunk) {
     throwIfInterrupted();
     std::vector<vector::VectorizedScene> chunk;
     for (std::size_t i = first; i < std::min(which.size(), first + kPredictChunk); ++i) chunk.push_back(scenes[which[i]]);
-    auto part = predictor.predict(chunk);
+    auto part = predictor.predictDistribution(chunk, options);
     for (auto& prediction : part) predictions.push_back(std::move(prediction));
   }
   return predictions;
 }
+
+model::PredictOptions drawOptions(const CompareOptions& options, const model::Predictor& predictor) {
+  model::PredictOptions predict;
+  predict.samples = predictor.probabilistic() ? options.draws : 0;
+  predict.seed = options.drawSeed;
+  return predict;
+}
+
+/// Scores a prediction against the row's reference (set before): the metrics of the most
+/// likely future, and for sampled futures the metric intervals and the share of futures
+/// failing each criterion. Every future goes through the same metric code.
+class PredictionScorer {
+ public:
+  PredictionScorer(const metrics::MetricSet& metric_set, const Criteria& criteria)
+      : metricSet_(metric_set), criteria_(criteria) {}
+
+  std::vector<double> metricsOf(const vector::VectorizedScene& scene, const model::Trajectory& future) const {
+    if (future.states.empty()) return pipeline::metricsOfFuture(metricSet_, scene, future.positions);
+    return pipeline::metricsOfFuture(metricSet_, scene, future.states);
+  }
+
+  void score(report::ComparedScenario& row, const vector::VectorizedScene& scene, const model::Prediction& prediction) const {
+    const auto errors = model::displacementErrors(prediction.mostLikely.positions, scene);
+    row.ade = errors.ade;
+    row.fde = errors.fde;
+    row.predicted = metricsOf(scene, prediction.mostLikely);
+    row.predictedFails = criteria_.evaluate(row.predicted);
+    row.referenceFails = criteria_.evaluate(row.reference);
+    if (prediction.samples.empty()) return;
+    const std::size_t metrics = row.predicted.size();
+    std::vector<std::vector<double>> draws(metrics);
+    std::vector<std::size_t> failing(row.predictedFails.size(), 0);
+    std::vector<std::size_t> defined(row.predictedFails.size(), 0);
+    for (const auto& future : prediction.samples) {
+      const auto values = metricsOf(scene, future);
+      for (std::size_t m = 0; m < metrics; ++m) draws[m].push_back(values[m]);
+      const auto fails = criteria_.evaluate(values);
+      for (std::size_t c = 0; c < fails.size(); ++c) {
+        defined[c] += fails[c] >= 0 ? 1 : 0;
+        failing[c] += fails[c] == 1 ? 1 : 0;
+      }
+    }
+    for (std::size_t m = 0; m < metrics; ++m) {
+      const auto interval = model::intervalOf(draws[m]);
+      row.intervals.push_back({interval.draws, interval.p05, interval.p25, interval.median, interval.p75, interval.p95,
+                               model::quantilePosition(draws[m], row.reference.at(m))});
+    }
+    for (std::size_t c = 0; c < failing.size(); ++c) {
+      row.failShare.push_back(defined[c] == 0 ? std::nan("")
+                                              : static_cast<double>(failing[c]) / static_cast<double>(defined[c]));
+    }
+  }
+
+ private:
+  const metrics::MetricSet& metricSet_;
+  const Criteria& criteria_;
+};
 
 std::string metricCaption(const report::Comparison& comparison, const report::ComparedScenario& row) {
   std::string caption;
@@ -237,8 +259,9 @@ Run compareScenario(const CompareOptions& options, const model::Predictor& predi
     predicted_index[i] = to_predict.size();
     to_predict.push_back(i);
   }
-  const auto predictions = predictInChunks(predictor, planned, to_predict);
+  const auto predictions = predictInChunks(predictor, planned, to_predict, drawOptions(options, predictor));
   comparison.timings.push_back({"predict", secondsSince(start)});
+  const PredictionScorer scorer(metric_set, criteria);
   spdlog::info("predicted the Ego in {} scenarios", predictions.size());
 
   // 3. Simulation of the same concrete scenarios, compared as they arrive.
@@ -284,15 +307,10 @@ Run compareScenario(const CompareOptions& options, const model::Predictor& predi
     vector::VectorizedScene scored = scene;
     scored.target = simulated.target;
     scored.targetValid = simulated.targetValid;
-    const auto errors = model::displacementErrors(prediction, scored);
-    row.ade = errors.ade;
-    row.fde = errors.fde;
-    row.predicted = pipeline::metricsOfFuture(metric_set, scored, prediction);
     row.reference = outcome.metrics;
     row.fromReferencePositions = pipeline::metricsOfFuture(metric_set, scored, simulated.target);
-    row.predictedFails = criteria.evaluate(row.predicted);
-    row.referenceFails = criteria.evaluate(row.reference);
-    futures[outcome.index] = Futures{prediction, simulated.target, simulated.targetValid};
+    scorer.score(row, scored, prediction);
+    futures[outcome.index] = Futures{prediction.mostLikely.positions, simulated.target, simulated.targetValid};
   });
   comparison.timings.push_back({"simulate", secondsSince(start)});
   comparison.notes.push_back(fmt::format(
@@ -337,6 +355,8 @@ Run compareDatasets(const CompareOptions& options, const model::Predictor& predi
     where.push_back("--criterion '" + text + "'");
   }
   const Criteria criteria(comparison.criteria, where, comparison.metricNames);
+  const PredictionScorer scorer(metric_set, criteria);
+  const auto predict_options = drawOptions(options, predictor);
 
   double read_seconds = 0.0;
   double predict_seconds = 0.0;
@@ -351,7 +371,7 @@ Run compareDatasets(const CompareOptions& options, const model::Predictor& predi
     stage = std::chrono::steady_clock::now();
     std::vector<std::size_t> all(scenes.size());
     std::iota(all.begin(), all.end(), std::size_t{0});
-    const auto predictions = predictInChunks(predictor, scenes, all);
+    const auto predictions = predictInChunks(predictor, scenes, all, predict_options);
     predict_seconds += secondsSince(stage);
     for (std::size_t j = 0; j < scenes.size(); ++j) {
       const auto& scene = scenes[j];
@@ -362,14 +382,9 @@ Run compareDatasets(const CompareOptions& options, const model::Predictor& predi
         row.failure = "no recorded future (the Ego left the map at once)";
         continue;
       }
-      const auto errors = model::displacementErrors(predictions[j], scene);
-      row.ade = errors.ade;
-      row.fde = errors.fde;
-      row.predicted = pipeline::metricsOfFuture(metric_set, scene, predictions[j]);
       row.reference = pipeline::metricsOfFuture(metric_set, scene, scene.target);
-      row.predictedFails = criteria.evaluate(row.predicted);
-      row.referenceFails = criteria.evaluate(row.reference);
-      futures[first + j] = Futures{predictions[j], scene.target, scene.targetValid};
+      scorer.score(row, scene, predictions[j]);
+      futures[first + j] = Futures{predictions[j].mostLikely.positions, scene.target, scene.targetValid};
     }
   }
   comparison.timings.push_back({"read", read_seconds});
@@ -407,6 +422,10 @@ void CompareOptions::validate() const {
   if (jobs < 1 || jobs > 256) throw ConfigError::field("command line", "--jobs", std::to_string(jobs), "1 .. 256");
   if (threads < 1 || threads > 256) throw ConfigError::field("command line", "--threads", std::to_string(threads), "1 .. 256");
   if (worst < 0 || worst > 50) throw ConfigError::field("command line", "--worst", std::to_string(worst), "0 .. 50");
+  if (draws < 0 || draws > 10000) throw ConfigError::field("command line", "--draws", std::to_string(draws), "0 .. 10000");
+  if (!(confidence >= 0.5 && confidence <= 1.0)) {
+    throw ConfigError::field("command line", "--confidence", formatValue(confidence), "0.5 .. 1");
+  }
   if (!scenarioFile.empty() && (!metrics.empty() || !criteria.empty())) {
     throw ConfigError("compare: --metrics and --criterion are for datasets; a scenario file defines its own "
                       "'metrics' and 'criteria'");
@@ -423,21 +442,33 @@ CompareSummary runComparison(const CompareOptions& options_in) {
                                                                           : options.scenarioFile.stem());
   }
   refuseDirtyCommittedResults(options.output, options.allowDirty, "--allow-dirty");
-  if (!fs::is_regular_file(options.model)) {
+  const bool builtin = model::Predictor::isBuiltin(options.model);  // cv, ca: no file
+  if (!builtin && !fs::is_regular_file(options.model)) {
     throw ModelError(fmt::format("--model {}: no such file", options.model.string()));
   }
   const model::Predictor predictor(options.model, options.threads);
-  OutputFolder folder(options.output, options.force);  // refuses an existing folder before any work
+  OutputFolder::Options folder_options;
+  folder_options.refuseExisting = !options.force;  // before any work
+  OutputFolder folder(options.output, folder_options);
 
   Run run = options.scenarioFile.empty() ? compareDatasets(options, predictor) : compareScenario(options, predictor);
   auto& comparison = run.comparison;
+  comparison.draws = drawOptions(options, predictor).samples;
+  comparison.confidence = options.confidence;
   const auto& info = predictor.info();
   comparison.provenance.insert(
       comparison.provenance.begin(),
       {{"model file", options.model.string()},
-       {"model SHA-256", sha256OfFile(options.model)},
-       {"model", fmt::format("trained on {} (labels {}), seed {}, epoch {}, validation ADE {:.3f} m", info.mix,
-                             fmt::join(info.labels, ", "), info.seed, info.epoch, info.validationAde)}});
+       {"model SHA-256", builtin ? std::string("-") : sha256OfFile(options.model)},
+       {"model", info.trained ? fmt::format("{} decoder, trained on {} (labels {}), seed {}, epoch {}, validation ADE "
+                                            "{:.3f} m",
+                                            predictor.name(), info.mix, fmt::join(info.labels, ", "), info.seed,
+                                            info.epoch, info.validationAde)
+                              : fmt::format("{} (no training)", predictor.name())}});
+  if (comparison.draws > 0) {
+    comparison.provenance.push_back({"sampled futures", fmt::format("{} per scenario, seed {}", comparison.draws,
+                                                                    options.drawSeed)});
+  }
   comparison.provenance.push_back({"vsd-sumo", toolVersion()});
   comparison.provenance.push_back({"libtorch threads", std::to_string(options.threads)});
   comparison.provenance.push_back({"command line", options.commandLine});
@@ -449,9 +480,14 @@ CompareSummary runComparison(const CompareOptions& options_in) {
     throw Error(fmt::format("compare: no scenario could be compared ({} failed); first reason: {}",
                                 summary.statistics.failed, comparison.scenarios.front().failure));
   }
-  report::writeComparisonCsv(comparison, folder.temp() / "comparison.csv");
-  writeTextFileAtomically(folder.temp() / "index.html", report::renderHtmlReport(comparison, summary.statistics, run.worst));
-  folder.commit();
+  report::writeComparisonCsv(comparison, folder.stage("comparison.csv"));
+  folder.staged("comparison.csv");
+  folder.stageText("index.html", report::renderHtmlReport(comparison, summary.statistics, run.worst));
+  nlohmann::json manifest;
+  manifest["tool"] = "vsd-sumo";
+  manifest["kind"] = "comparison";
+  for (const auto& [key, value] : comparison.provenance) manifest["provenance"][key] = value;
+  folder.commit(manifest);
 
   summary.output = options.output;
   summary.files = {options.output / "index.html", options.output / "comparison.csv"};

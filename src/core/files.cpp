@@ -1,25 +1,74 @@
 #include "vsd/core/files.hpp"
 
+#include <fcntl.h>
+#include <fmt/format.h>
 #include <openssl/evp.h>
+#include <signal.h>
 #include <unistd.h>
 
 #include <array>
+#include <cerrno>
 #include <cstdlib>
+#include <cstring>
 #include <fstream>
 #include <memory>
 #include <sstream>
 
 #include "vsd/core/error.hpp"
+#include "vsd/core/fault.hpp"
+#include "vsd/core/interrupt.hpp"
 
 namespace fs = std::filesystem;
 
 namespace vsd {
+
+namespace {
+
+/// Writes `contents` to `path` (truncating) and closes it; errors name `shown`.
+void writeWholeFile(const fs::path& path, const std::string& contents, const fs::path& shown) {
+  std::ofstream stream(path, std::ios::binary | std::ios::trunc);
+  if (!stream) throw IoError(shown.string() + ": cannot open for writing");
+  stream << contents;
+  stream.close();
+  if (!stream) throw IoError(shown.string() + ": write failed (disk full?)");
+}
+
+bool processAlive(long pid) { return pid > 0 && (::kill(static_cast<pid_t>(pid), 0) == 0 || errno == EPERM); }
+
+/// The pid in "<prefix><pid><suffix>", or -1 if `name` does not have that form.
+long pidIn(const std::string& name, const std::string& prefix, const std::string& suffix) {
+  if (name.size() <= prefix.size() + suffix.size() || name.compare(0, prefix.size(), prefix) != 0 ||
+      name.compare(name.size() - suffix.size(), suffix.size(), suffix) != 0) {
+    return -1;
+  }
+  const std::string digits = name.substr(prefix.size(), name.size() - prefix.size() - suffix.size());
+  if (digits.find_first_not_of("0123456789") != std::string::npos) return -1;
+  return std::strtol(digits.c_str(), nullptr, 10);
+}
+
+/// Removes ".<name>.<pid>.part" files of processes that no longer exist.
+void removeStaleParts(const fs::path& final_path) {
+  const fs::path dir = final_path.parent_path().empty() ? fs::path(".") : final_path.parent_path();
+  const std::string prefix = "." + final_path.filename().string() + ".";
+  std::error_code ec;
+  for (fs::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec)) {
+    const std::string name = it->path().filename().string();
+    const long pid = pidIn(name, prefix, ".part");
+    if (pid > 0 && !processAlive(pid)) {
+      std::error_code ignored;
+      fs::remove(it->path(), ignored);
+    }
+  }
+}
+
+}  // namespace
 
 AtomicOutput::AtomicOutput(fs::path final_path) : finalPath_(std::move(final_path)) {
   // Same directory as the final file so that rename() never crosses file systems;
   // a leading dot and the ".part" suffix make an abandoned file obviously unfinished.
   tempPath_ = finalPath_.parent_path() /
               ("." + finalPath_.filename().string() + "." + std::to_string(::getpid()) + ".part");
+  removeStaleParts(finalPath_);
 }
 
 AtomicOutput::AtomicOutput(AtomicOutput&& other) noexcept
@@ -40,12 +89,22 @@ AtomicOutput& AtomicOutput::operator=(AtomicOutput&& other) noexcept {
 
 AtomicOutput::~AtomicOutput() { abandon(); }
 
-void AtomicOutput::commit() {
+void AtomicOutput::commit() { commitFile(/*honour_interruption=*/false); }
+
+void AtomicOutput::commitUnlessInterrupted() { commitFile(/*honour_interruption=*/true); }
+
+void AtomicOutput::commitFile(bool honour_interruption) {
   if (!active_) throw IoError("internal: commit() of an already finished output " + finalPath_.string());
+  const std::string name = finalPath_.filename().string();
+  faultPoint("atomic.fsync:" + name);
+  syncFile(tempPath_);
+  if (honour_interruption) throwIfInterrupted();  // the last moment at which the older file stays
+  faultPoint("atomic.rename:" + name);
   std::error_code ec;
   fs::rename(tempPath_, finalPath_, ec);
   if (ec) throw IoError(finalPath_.string() + ": cannot rename finished file into place: " + ec.message());
   active_ = false;
+  syncDirectory(finalPath_.parent_path().empty() ? fs::path(".") : finalPath_.parent_path());
 }
 
 void AtomicOutput::abandon() {
@@ -55,15 +114,25 @@ void AtomicOutput::abandon() {
   active_ = false;
 }
 
+void syncFile(const fs::path& path) {
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd < 0) throw IoError(fmt::format("{}: cannot open to flush it to disk: {}", path.string(), std::strerror(errno)));
+  const int status = ::fsync(fd);
+  const int error = errno;
+  ::close(fd);
+  if (status != 0) throw IoError(fmt::format("{}: cannot flush to disk: {}", path.string(), std::strerror(error)));
+}
+
+void syncDirectory(const fs::path& path) {
+  const int fd = ::open(path.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  if (fd < 0) return;
+  ::fsync(fd);  // some file systems refuse fsync on directories; renames are then as durable as they get
+  ::close(fd);
+}
+
 void writeTextFileAtomically(const fs::path& path, const std::string& contents) {
   AtomicOutput output(path);
-  {
-    std::ofstream stream(output.tempPath(), std::ios::binary | std::ios::trunc);
-    if (!stream) throw IoError(path.string() + ": cannot open for writing");
-    stream << contents;
-    stream.flush();
-    if (!stream) throw IoError(path.string() + ": write failed (disk full?)");
-  }
+  writeWholeFile(output.tempPath(), contents, path);
   output.commit();
 }
 

@@ -1,13 +1,21 @@
 #include "vsd/core/interrupt.hpp"
 
 #include <csignal>
+#include <string>
 
 namespace vsd {
 
 namespace {
-volatile std::sig_atomic_t g_interrupted = 0;
-extern "C" void onSignal(int /*signal*/) { g_interrupted = 1; }
+volatile std::sig_atomic_t g_signal = 0;
+extern "C" void onSignal(int signal) { g_signal = signal; }
+
+std::string describe(int signal) {
+  return std::string("interrupted by ") + (signal == SIGTERM ? "SIGTERM" : signal == SIGINT ? "SIGINT" : "a signal") +
+         "; workers stopped, unfinished outputs removed, earlier outputs kept";
+}
 }  // namespace
+
+InterruptedError::InterruptedError(int signal) : Error(describe(signal)), signal_(signal) {}
 
 void installInterruptHandlers() {
   struct sigaction action {};
@@ -18,12 +26,23 @@ void installInterruptHandlers() {
   sigaction(SIGTERM, &action, nullptr);
 }
 
-bool interrupted() { return g_interrupted != 0; }
+void restoreDefaultSignalActions() {
+  struct sigaction action {};
+  action.sa_handler = SIG_DFL;
+  sigemptyset(&action.sa_mask);
+  sigaction(SIGINT, &action, nullptr);
+  sigaction(SIGTERM, &action, nullptr);
+  g_signal = 0;
+}
 
-void clearInterruption() { g_interrupted = 0; }
+bool interrupted() { return g_signal != 0; }
+
+int interruptSignal() { return g_signal; }
+
+void clearInterruption() { g_signal = 0; }
 
 void throwIfInterrupted() {
-  if (interrupted()) throw InterruptedError();
+  if (const int signal = g_signal; signal != 0) throw InterruptedError(signal);
 }
 
 }  // namespace vsd

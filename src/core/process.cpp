@@ -3,7 +3,9 @@
 #include <fcntl.h>
 #include <signal.h>
 #include <spawn.h>
+#include <poll.h>
 #include <sys/resource.h>
+#include <sys/syscall.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -13,6 +15,7 @@
 #include <sstream>
 
 #include "vsd/core/error.hpp"
+#include "vsd/core/interrupt.hpp"
 
 extern char** environ;
 
@@ -68,9 +71,34 @@ void ChildProcess::killAndReap() {
   pid_ = -1;
 }
 
+namespace {
+
+/// Blocks until `pid` has exited (without reaping it), polling for SIGINT/SIGTERM
+/// at least every 100 ms: the parent must never sit deaf in a wait.
+void waitUntilExited(pid_t pid) {
+  const int pidfd = static_cast<int>(::syscall(SYS_pidfd_open, pid, 0));
+  for (;;) {
+    throwIfInterrupted();
+    if (pidfd >= 0) {
+      struct pollfd entry {pidfd, POLLIN, 0};
+      const int ready = ::poll(&entry, 1, 100);
+      if (ready > 0) break;
+      continue;  // timeout or EINTR: check for a signal
+    }
+    siginfo_t info{};
+    info.si_pid = 0;
+    if (::waitid(P_PID, static_cast<id_t>(pid), &info, WEXITED | WNOHANG | WNOWAIT) == 0 && info.si_pid == pid) break;
+    ::usleep(10'000);  // kernels without pidfd_open
+  }
+  if (pidfd >= 0) ::close(pidfd);
+}
+
+}  // namespace
+
 ProcessResult ChildProcess::wait() {
   ProcessResult result;
   if (pid_ <= 0) throw Error("internal: wait() on a process that is not running");
+  waitUntilExited(pid_);  // throws InterruptedError; the destructor then kills the child
   int status = 0;
   pid_t waited = -1;
   struct rusage usage {};

@@ -79,10 +79,9 @@ class ExperimentRunner {
   ExperimentSummary run() {
     const auto start = std::chrono::steady_clock::now();
     const auto logical_scenarios = checkSources();
-    ensureDirectory(output_);
-    // The manifest marks a complete result set: gone until this run completes.
-    std::error_code ignored;
-    fs::remove(output_ / "manifest.json", ignored);
+    // The result files change as one set, at the end; the cache inside the
+    // folder is not part of the set (each artefact is its own unit).
+    folder_.emplace(output_);
 
     prepareData(logical_scenarios);
     trainModels();
@@ -92,7 +91,7 @@ class ExperimentRunner {
     summary_.output = output_;
     summary_.findings = checkFindings(summary_.ade);
     summary_.seconds = secondsSince(start);
-    writeResults(spec_, options_, summary_, artefacts_);
+    writeResults(spec_, options_, summary_, artefacts_, *folder_);
     return summary_;
   }
 
@@ -478,7 +477,6 @@ class ExperimentRunner {
   // --- figures ----------------------------------------------------------------------
   void drawFigures() {
     if (spec_.figures.empty()) return;
-    ensureDirectory(output_ / "figures");
     for (const auto& figure : spec_.figures) {
       const model::Predictor predictor(models_.at(figure.row).file, spec_.threads);
       std::vector<std::string> panels;
@@ -491,17 +489,18 @@ class ExperimentRunner {
             scene, {{"VectorNet prediction", prediction, "#d62728", true}},
             fmt::format("{}: test sample {} (median ADE {:.2f} m)", source.label, scene.sample, ade), 560));
       }
-      const auto path = output_ / "figures" / (figure.name + ".svg");
+      const auto relative = fs::path("figures") / (figure.name + ".svg");
       const std::string title = fmt::format("{} (row {}; test scenes of median ADE)",
                                             figure.title.empty() ? figure.name : figure.title, figure.row);
-      writeTextFileAtomically(path, composeSvgRow(panels, title));
-      summary_.files.push_back(path);
+      folder_->stageText(relative, composeSvgRow(panels, title));
+      summary_.files.push_back(output_ / relative);
     }
   }
 
   const ExperimentOptions& options_;
   Spec spec_;
   fs::path output_;
+  std::optional<OutputFolder> folder_;
   ArtefactCache cache_;
   ExperimentSummary summary_;
   std::vector<ArtefactRecord> artefacts_;

@@ -185,11 +185,11 @@ std::vector<Finding> checkFindings(const std::vector<AdeRow>& rows) {
 }
 
 void writeResults(const Spec& spec, const ExperimentOptions& options, ExperimentSummary& summary,
-                  const std::vector<ArtefactRecord>& artefacts) {
+                  const std::vector<ArtefactRecord>& artefacts, OutputFolder& folder) {
   const auto& out = summary.output;
   const auto labels = labelsOf(spec);
   auto keep = [&](const fs::path& path, const std::string& contents) {
-    writeTextFileAtomically(path, contents);
+    folder.stageText(fs::relative(path, out), contents);
     summary.files.push_back(path);
   };
 
@@ -258,7 +258,7 @@ void writeResults(const Spec& spec, const ExperimentOptions& options, Experiment
     keep(out / "findings.md", md);
   }
 
-  // The manifest last: its presence marks a complete result set.
+  // The manifest last (the output folder adds "outputs": every file's SHA-256 and size).
   nlohmann::json manifest;
   manifest["schema"] = "vsd-experiment-results/1";
   manifest["name"] = spec.name;
@@ -277,12 +277,8 @@ void writeResults(const Spec& spec, const ExperimentOptions& options, Experiment
   for (const auto& artefact : artefacts) {
     manifest["artefacts"].push_back({{"path", artefact.path}, {"key_sha256", artefact.keyDigest}, {"reused", artefact.reused}});
   }
-  for (const auto& file : summary.files) {
-    manifest["files"].push_back({{"path", fs::relative(file, out).string()}, {"sha256", sha256OfFile(file)}});
-  }
-  const auto manifest_path = out / "manifest.json";
-  writeTextFileAtomically(manifest_path, manifest.dump(2) + "\n");
-  summary.files.push_back(manifest_path);
+  folder.commit(manifest);
+  summary.files.push_back(out / "manifest.json");
 }
 
 std::string ExperimentSummary::report() const {

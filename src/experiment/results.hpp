@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "spec.hpp"
+#include "vsd/core/files.hpp"
 #include "vsd/experiment/experiment.hpp"
 
 namespace vsd::experiment {
@@ -28,8 +29,9 @@ inline constexpr double kFailsFactor = 5.0;         ///< ... and at least this t
 /// its table (rows missing or with another mix give "not checked").
 std::vector<Finding> checkFindings(const std::vector<AdeRow>& rows);
 
-/// Writes ade.md/.csv, mae.md/.csv, findings.md and, last, manifest.json.
+/// Stages ade.md/.csv, mae.md/.csv, findings.md in `folder` and commits it with
+/// the manifest (written last, with every result file's hash and size).
 void writeResults(const Spec& spec, const ExperimentOptions& options, ExperimentSummary& summary,
-                  const std::vector<ArtefactRecord>& artefacts);
+                  const std::vector<ArtefactRecord>& artefacts, OutputFolder& folder);
 
 }  // namespace vsd::experiment

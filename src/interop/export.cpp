@@ -2,7 +2,6 @@
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
-#include <unistd.h>
 
 #include <chrono>
 #include <cmath>
@@ -123,45 +122,7 @@ Plan planFromRunFolder(const ScenarioExportOptions& options) {
   return plan;
 }
 
-/// The output folder, built under a temporary name next to it and renamed into place.
-class StagedFolder {
- public:
-  StagedFolder(const fs::path& final_path, bool force) : final_(final_path.lexically_normal()) {
-    if (final_.filename().empty()) final_ = final_.parent_path();
-    if (fs::exists(final_) && !force) {
-      throw ConfigError(fmt::format("--out {}: the folder exists; choose another or pass --force to replace it",
-                                    final_.string()));
-    }
-    const fs::path parent = final_.has_parent_path() ? final_.parent_path() : fs::path(".");
-    ensureDirectory(parent);
-    temp_ = parent / fmt::format(".{}.partial-{}", final_.filename().string(), ::getpid());
-    std::error_code ignored;
-    fs::remove_all(temp_, ignored);
-    ensureDirectory(temp_);
-  }
-  StagedFolder(const StagedFolder&) = delete;
-  StagedFolder& operator=(const StagedFolder&) = delete;
-  ~StagedFolder() {
-    std::error_code ignored;
-    if (!committed_) fs::remove_all(temp_, ignored);
-  }
-  const fs::path& temp() const { return temp_; }
-  const fs::path& final() const { return final_; }
-  void commit() {
-    std::error_code error;
-    fs::remove_all(final_, error);  // exists only with --force
-    if (!error) fs::rename(temp_, final_, error);
-    if (error) throw IoError(fmt::format("{}: cannot move the export into place: {}", final_.string(), error.message()));
-    committed_ = true;
-  }
-
- private:
-  fs::path final_;
-  fs::path temp_;
-  bool committed_ = false;
-};
-
-void writeExportManifest(const ScenarioExportOptions& options, const Plan& plan, const fs::path& folder) {
+nlohmann::json exportManifest(const ScenarioExportOptions& options, const Plan& plan) {
   nlohmann::json manifest;
   manifest["tool"] = "vsd-sumo";
   manifest["tool_version"] = toolVersion();
@@ -172,12 +133,7 @@ void writeExportManifest(const ScenarioExportOptions& options, const Plan& plan,
   manifest["functional_scenario"] = plan.logical->name;
   manifest["format"] = options.format;
   manifest["exported"] = plan.selected.size();
-  nlohmann::json files = nlohmann::json::object();
-  for (const auto& entry : fs::directory_iterator(folder)) {
-    files[entry.path().filename().string()] = {{"sha256", sha256OfFile(entry.path())}, {"bytes", fs::file_size(entry.path())}};
-  }
-  manifest["outputs"] = files;
-  writeTextFileAtomically(folder / "manifest.json", manifest.dump(2) + "\n");
+  return manifest;  // OutputFolder::commit adds every file's SHA-256 and size
 }
 
 }  // namespace
@@ -198,22 +154,23 @@ ScenarioExportSummary exportScenarios(const ScenarioExportOptions& options) {
   options.validate();
   const auto start = std::chrono::steady_clock::now();
   const Plan plan = fs::is_directory(options.input) ? planFromRunFolder(options) : planFromLogicalScenario(options);
-  StagedFolder folder(options.outputDir, options.force);
+  OutputFolder::Options folder_options;
+  folder_options.refuseExisting = !options.force;
+  OutputFolder folder(options.outputDir, folder_options);
   const ExportHeader header{fileDate(plan.logical->sourceFile), sha256OfFile(plan.logical->sourceFile)};
-  writeTextFileAtomically(folder.temp() / kControllerCatalogFile,
-                          controllerCatalogText(sim::ControllerRegistry::withBuiltins().available(), header.date));
+  folder.stageText(kControllerCatalogFile,
+                   controllerCatalogText(sim::ControllerRegistry::withBuiltins().available(), header.date));
   Progress progress(fmt::format("export {}", plan.logical->name), plan.selected.size(), "scenarios");
   for (const auto& [seed, index] : plan.selected) {
     const auto concrete = scenario::sampleConcreteScenario(plan.logical, seed, index);
-    exportConcreteScenario(concrete, folder.temp(), fmt::format("{}_{:06}", plan.logical->name, index), header);
+    exportConcreteScenario(concrete, folder.stagingPath(), fmt::format("{}_{:06}", plan.logical->name, index), header);
     progress.advance(1);
   }
   progress.finish();
-  writeExportManifest(options, plan, folder.temp());
-  folder.commit();
+  folder.commit(exportManifest(options, plan));
 
   ScenarioExportSummary summary;
-  summary.outputDir = folder.final();
+  summary.outputDir = folder.path();
   summary.functionalScenario = plan.logical->name;
   summary.considered = plan.considered;
   summary.exported = plan.selected.size();

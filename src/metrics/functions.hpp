@@ -17,4 +17,12 @@ double minGap(const MetricContext& context);
 double minTimeToCollision(const MetricContext& context);
 double minTimeHeadway(const MetricContext& context);
 
+// The measures SUMO's SSM device reports (criticality_metrics.cpp)
+double minPostEncroachmentTime(const MetricContext& context);
+double maxDecelerationToAvoidCrash(const MetricContext& context);
+double minLaneGap(const MetricContext& context);
+double minLaneTimeToCollision(const MetricContext& context);
+double minLaneTimeHeadway(const MetricContext& context);
+double maxLaneDecelerationToAvoidCrash(const MetricContext& context);
+
 }  // namespace vsd::metrics::detail

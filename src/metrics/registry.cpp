@@ -36,6 +36,30 @@ std::vector<MetricDefinition> buildRegistry() {
                    any_frame, true, false, false, std::nullopt, minTimeHeadway});
   table.push_back({"lane_offset_max", "m", "Ego's maximum distance (centre) from the centre line of its starting lane",
                    ego_lane, false, true, false, std::nullopt, egoMaxAbsLaneOffset});
+  // The measures of SUMO's SSM device (README "Criticality measures and SUMO's SSM device").
+  table.push_back({"pet_min", "s",
+                   "minimum post-encroachment time where the Ego's centre path crosses another vehicle's: the second "
+                   "one's entry into the other's body strip minus the first one's exit; +inf if no crossing",
+                   any_frame, true, false, false, std::nullopt, minPostEncroachmentTime});
+  table.push_back({"drac_max", "m/s^2",
+                   "maximum deceleration rate to avoid a crash with a vehicle ahead: closing speed^2 / (2 gap), gap and "
+                   "closing speed as for ttc_min; 0 if never closing",
+                   any_frame, true, false, false, std::nullopt, maxDecelerationToAvoidCrash});
+  table.push_back({"gap_min_lane", "m",
+                   "minimum bumper gap to a vehicle ahead measured along the Ego's lane (SSM's SGAP); +inf if none ahead",
+                   ego_lane, true, true, false, std::nullopt, minLaneGap});
+  table.push_back({"ttc_min_lane", "s",
+                   "minimum time to collision along the Ego's lane: lane gap / (v_Ego - v_leader) (SSM's TTC); +inf if "
+                   "never closing",
+                   ego_lane, true, true, false, std::nullopt, minLaneTimeToCollision});
+  table.push_back({"thw_min_lane", "s",
+                   "minimum time headway along the Ego's lane: lane gap / Ego speed (Ego > 0.1 m/s; SSM's TGAP); +inf "
+                   "if never",
+                   ego_lane, true, true, false, std::nullopt, minLaneTimeHeadway});
+  table.push_back({"drac_max_lane", "m/s^2",
+                   "maximum deceleration rate to avoid a crash along the Ego's lane: (v_Ego - v_leader)^2 / (2 lane "
+                   "gap) (SSM's DRAC); 0 if never closing",
+                   ego_lane, true, true, false, std::nullopt, maxLaneDecelerationToAvoidCrash});
   return table;
 }
 

@@ -11,6 +11,10 @@ namespace fs = std::filesystem;
 namespace vsd::model {
 
 namespace {
+/// vsd-model/1: before decoders had names - always the offsets decoder with the
+/// constant-velocity residual, in the Ego frame. vsd-model/2 names decoder, options, frame.
+constexpr const char* kModelFormat = "vsd-model/2";
+constexpr const char* kLegacyModelFormat = "vsd-model/1";
 constexpr const char* kInfoKey = "vsd_model_info";
 constexpr const char* kStateKey = "vsd_training_state";
 constexpr const char* kOptimizerKey = "optimizer";
@@ -19,7 +23,7 @@ constexpr const char* kOptimizerKey = "optimizer";
 std::string infoToJson(const ModelInfo& info) {
   const auto& c = info.config;
   nlohmann::json json = {
-      {"format", "vsd-model/1"},
+      {"format", kModelFormat},
       {"architecture", "VectorNet"},
       {"config",
        {{"hidden", c.hidden},
@@ -30,6 +34,8 @@ std::string infoToJson(const ModelInfo& info) {
         {"horizon", c.horizon},
         {"step", c.step},
         {"coordinate_scale", c.coordinateScale}}},
+      {"decoder", {{"name", c.decoder}, {"options", c.decoderOptions}}},
+      {"frame", c.frame},
       {"feature_version", info.featureVersion},
       {"dataset_schema", info.datasetSchema},
       {"mix", info.mix},
@@ -46,9 +52,10 @@ ModelInfo infoFromJson(const std::string& text, const fs::path& file) {
   ModelInfo info;
   try {
     const auto json = nlohmann::json::parse(text);
-    if (json.value("format", "") != "vsd-model/1") {
-      throw ModelError(fmt::format("{}: model format '{}' is not supported (expected vsd-model/1)", file.string(),
-                                   json.value("format", "")));
+    const std::string format = json.value("format", "");
+    if (format != kModelFormat && format != kLegacyModelFormat) {
+      throw ModelError(fmt::format("{}: model format '{}' is not supported (expected {} or {})", file.string(), format,
+                                   kModelFormat, kLegacyModelFormat));
     }
     const auto& c = json.at("config");
     info.config.hidden = c.at("hidden");
@@ -59,6 +66,15 @@ ModelInfo infoFromJson(const std::string& text, const fs::path& file) {
     info.config.horizon = c.at("horizon");
     info.config.step = c.at("step");
     info.config.coordinateScale = c.at("coordinate_scale");
+    if (format == kLegacyModelFormat) {
+      info.config.decoder = "offsets";
+      info.config.decoderOptions = {{"residual", 1.0}};
+      info.config.frame = "ego";
+    } else {
+      info.config.decoder = json.at("decoder").at("name");
+      info.config.decoderOptions = json.at("decoder").at("options").get<std::map<std::string, double>>();
+      info.config.frame = json.at("frame");
+    }
     info.featureVersion = json.at("feature_version");
     info.datasetSchema = json.at("dataset_schema");
     info.mix = json.at("mix");
@@ -96,9 +112,9 @@ void openArchive(const fs::path& path, torch::serialize::InputArchive& archive) 
 
 }  // namespace
 
-void saveModel(const fs::path& path, VectorNet& network, const ModelInfo& info) {
+void saveModel(const fs::path& path, const Model& model, const ModelInfo& info) {
   torch::serialize::OutputArchive archive;
-  network->save(archive);
+  model.network->save(archive);
   archive.write(kInfoKey, c10::IValue(infoToJson(info)));
   writeArchive(archive, path);
 }
@@ -114,28 +130,35 @@ ModelInfo readModelInfo(const fs::path& path, torch::serialize::InputArchive& ar
     throw ModelError(fmt::format("{}: the model was trained on feature schema v{}, this vsd-sumo uses v{}",
                                  path.string(), info.featureVersion, vector::kFeatureVersion));
   }
+  try {
+    info.config.validate();
+  } catch (const ConfigError& error) {
+    throw ModelError(fmt::format("{}: this vsd-sumo cannot use the model: {}", path.string(), error.what()));
+  }
+  if (info.config.horizon < 1 || !(info.config.step > 0.0)) {
+    throw ModelError(fmt::format("{}: the model description has no horizon/step", path.string()));
+  }
   return info;
 }
 
-VectorNet loadModel(const fs::path& path, ModelInfo& info) {
+Model loadModel(const fs::path& path, ModelInfo& info) {
   torch::serialize::InputArchive archive;
   info = readModelInfo(path, archive);
-  info.config.validate();
-  VectorNet network(info.config);
+  Model model = Model::create(info.config);
   try {
-    network->load(archive);
+    model.network->load(archive);
   } catch (const c10::Error& error) {
     throw ModelError(fmt::format("{}: parameters do not match the described architecture: {}", path.string(),
                                  error.what_without_backtrace()));
   }
-  network->eval();
-  return network;
+  model.network->eval();
+  return model;
 }
 
-void saveCheckpoint(const fs::path& path, VectorNet& network, torch::optim::Optimizer& optimizer,
+void saveCheckpoint(const fs::path& path, const Model& model, torch::optim::Optimizer& optimizer,
                     const ModelInfo& info, const std::string& state_json) {
   torch::serialize::OutputArchive archive;
-  network->save(archive);
+  model.network->save(archive);
   torch::serialize::OutputArchive optimizer_archive;
   optimizer.save(optimizer_archive);
   archive.write(kOptimizerKey, optimizer_archive);
@@ -144,7 +167,7 @@ void saveCheckpoint(const fs::path& path, VectorNet& network, torch::optim::Opti
   writeArchive(archive, path);
 }
 
-std::string loadCheckpoint(const fs::path& path, VectorNet& network, torch::optim::Optimizer& optimizer) {
+std::string loadCheckpoint(const fs::path& path, Model& model, torch::optim::Optimizer& optimizer) {
   torch::serialize::InputArchive archive;
   readModelInfo(path, archive);
   c10::IValue state;
@@ -152,7 +175,7 @@ std::string loadCheckpoint(const fs::path& path, VectorNet& network, torch::opti
     throw ModelError(fmt::format("{}: not a training checkpoint (no training state)", path.string()));
   }
   try {
-    network->load(archive);
+    model.network->load(archive);
     torch::serialize::InputArchive optimizer_archive;
     archive.read(kOptimizerKey, optimizer_archive);
     optimizer.load(optimizer_archive);

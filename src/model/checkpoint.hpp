@@ -9,6 +9,7 @@
 #include <string>
 
 #include "network.hpp"
+#include "vsd/model/predictor.hpp"
 
 namespace vsd::model {
 
@@ -16,19 +17,19 @@ std::string infoToJson(const ModelInfo& info);
 ModelInfo infoFromJson(const std::string& text, const std::filesystem::path& file);
 
 /// Writes a model file (temporary name, then rename).
-void saveModel(const std::filesystem::path& path, VectorNet& network, const ModelInfo& info);
+void saveModel(const std::filesystem::path& path, const Model& model, const ModelInfo& info);
 
 /// Reads a model file's description without building the network. Throws ModelError.
 ModelInfo readModelInfo(const std::filesystem::path& path, torch::serialize::InputArchive& archive);
 
-/// Loads a model file into a new network. Throws ModelError naming the file for a
-/// missing, corrupt or foreign file or another feature schema.
-VectorNet loadModel(const std::filesystem::path& path, ModelInfo& info);
+/// Loads a model file into a new model (network + decoder). Throws ModelError naming the
+/// file for a missing, corrupt or foreign file, another feature schema or an unknown decoder.
+Model loadModel(const std::filesystem::path& path, ModelInfo& info);
 
 /// Training checkpoint: network, optimizer and the training loop's state (JSON).
-void saveCheckpoint(const std::filesystem::path& path, VectorNet& network, torch::optim::Optimizer& optimizer,
+void saveCheckpoint(const std::filesystem::path& path, const Model& model, torch::optim::Optimizer& optimizer,
                     const ModelInfo& info, const std::string& state_json);
 /// Restores a checkpoint into `network` and `optimizer`; returns the state JSON.
-std::string loadCheckpoint(const std::filesystem::path& path, VectorNet& network, torch::optim::Optimizer& optimizer);
+std::string loadCheckpoint(const std::filesystem::path& path, Model& model, torch::optim::Optimizer& optimizer);
 
 }  // namespace vsd::model

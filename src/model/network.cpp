@@ -58,7 +58,7 @@ std::pair<torch::Tensor, torch::Tensor> SubgraphLayerImpl::forward(const torch::
   return {encoded, maskedMax(encoded, mask)};
 }
 
-VectorNetImpl::VectorNetImpl(const VectorNetConfig& config) : config_(config) {
+VectorNetImpl::VectorNetImpl(const VectorNetConfig& config, std::int64_t output_width) : config_(config) {
   subgraph_ = register_module("subgraph", torch::nn::ModuleList());
   for (int layer = 0; layer < config.subgraphLayers; ++layer) {
     subgraph_->push_back(SubgraphLayer(layer == 0 ? kInputFeatures : config.hidden, layer == 0 ? 0 : config.hidden,
@@ -76,7 +76,7 @@ VectorNetImpl::VectorNetImpl(const VectorNetConfig& config) : config_(config) {
                             torch::nn::Linear(config.decoderHidden, config.decoderHidden),
                             torch::nn::LayerNorm(torch::nn::LayerNormOptions({config.decoderHidden})),
                             torch::nn::ReLU(),
-                            torch::nn::Linear(config.decoderHidden, 2 * config.horizon)));
+                            torch::nn::Linear(config.decoderHidden, output_width)));
 }
 
 torch::Tensor VectorNetImpl::encodePolylines(const torch::Tensor& features, const torch::Tensor& vector_mask) {
@@ -107,10 +107,15 @@ torch::Tensor VectorNetImpl::forward(const SceneTensors& scenes) {
   scores = scores.masked_fill(present.logical_not().view({batch, 1, 1, -1}), -std::numeric_limits<float>::infinity());
   const auto attended = torch::matmul(torch::softmax(scores, -1), v).reshape({batch, -1});    // [B, G]
 
-  const auto deviation = decoder_->forward(torch::cat({attended, ego}, -1)).view({-1, config_.horizon, 2});
-  return deviation + scenes.egoStep.unsqueeze(1);
+  return decoder_->forward(torch::cat({attended, ego}, -1));
 }
 
-torch::Tensor VectorNetImpl::positions(const SceneTensors& scenes) { return forward(scenes).cumsum(/*dim=*/1); }
+Model Model::create(const VectorNetConfig& config) {
+  Model model;
+  model.config = config;
+  model.decoder = makeDecoder(config);
+  model.network = VectorNet(config, model.decoder->outputWidth());
+  return model;
+}
 
 }  // namespace vsd::model

@@ -3,6 +3,7 @@
 
 #include <torch/torch.h>
 
+#include "decoder.hpp"
 #include "tensors.hpp"
 #include "vsd/model/model.hpp"
 
@@ -30,23 +31,20 @@ class SubgraphLayerImpl : public torch::nn::Module {
 };
 TORCH_MODULE(SubgraphLayer);
 
+/// Encoder (subgraph + global attention) and the decoder's MLP. The MLP is registered as
+/// "decoder" whatever the decoder is, so model files of every decoder share parameter names.
 class VectorNetImpl : public torch::nn::Module {
  public:
-  explicit VectorNetImpl(const VectorNetConfig& config);
+  /// `output_width`: raw outputs the decoder interprets (Decoder::outputWidth()).
+  VectorNetImpl(const VectorNetConfig& config, std::int64_t output_width);
 
-  /// Per-step offsets of the Ego [B, F, 2] (metres, Ego frame): the constant-velocity
-  /// step plus what the decoder predicts on top of it.
+  /// Raw decoder inputs [B, output_width] for a batch of scenes.
   torch::Tensor forward(const SceneTensors& scenes);
-  /// Positions [B, F, 2]: the offsets summed up.
-  torch::Tensor positions(const SceneTensors& scenes);
 
  private:
   /// Subgraph of polylines [B, P, V, 8] -> L2-normalised polyline features [B, P, H].
   torch::Tensor encodePolylines(const torch::Tensor& features, const torch::Tensor& mask);
 
- public:
-
- private:
   VectorNetConfig config_;
   torch::nn::ModuleList subgraph_;
   torch::nn::Linear query_{nullptr};
@@ -55,6 +53,17 @@ class VectorNetImpl : public torch::nn::Module {
   torch::nn::Sequential decoder_{nullptr};
 };
 TORCH_MODULE(VectorNet);
+
+/// A network and the decoder that reads its output.
+struct Model {
+  VectorNetConfig config;
+  std::unique_ptr<Decoder> decoder;
+  VectorNet network{nullptr};
+
+  /// A new, randomly initialised model of a validated configuration (horizon and step set).
+  static Model create(const VectorNetConfig& config);
+  Decoded decode(const SceneTensors& scenes) { return decoder->decode(network->forward(scenes), scenes.start); }
+};
 
 /// Max over the vectors (dim 2) of non-negative node features where `mask` (float 0/1,
 /// [B, P, V]) is 1; 0 for polylines without a valid vector. Multiplying by the mask

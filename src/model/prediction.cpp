@@ -1,19 +1,16 @@
+// Predictor: a trained model (any decoder) or a predictor without training (cv, ca).
 #include <fmt/format.h>
 
-#include <chrono>
-#include <fstream>
+#include <cmath>
+#include <cstring>
 
 #include "checkpoint.hpp"
+#include "kinematics.hpp"
 #include "network.hpp"
 #include "tensors.hpp"
-#include "vsd/core/csv.hpp"
 #include "vsd/core/error.hpp"
-#include "vsd/core/files.hpp"
-#include "vsd/core/hdf5.hpp"
-#include "vsd/core/interrupt.hpp"
-#include "vsd/core/log.hpp"
-#include "vsd/core/progress.hpp"
-#include "vsd/model/model.hpp"
+#include "vsd/core/random.hpp"
+#include "vsd/model/predictor.hpp"
 
 namespace fs = std::filesystem;
 
@@ -23,191 +20,307 @@ namespace {
 // Scenes per forward pass: large enough to keep the matrix products efficient, small
 // enough that activations (~6 MB) stay below glibc's mmap threshold and are recycled
 // instead of being mapped and zeroed by the kernel for every operation.
-constexpr std::int64_t kPredictBatch = 512;
-constexpr std::size_t kReadChunk = 4096;
+constexpr std::size_t kPredictBatch = 512;
+constexpr int kMaxSamples = 100000;
 }  // namespace
 
-struct Predictor::Impl {
-  fs::path path;
-  ModelInfo info;
-  mutable VectorNet network{nullptr};
-};
-
-Predictor::Predictor(const fs::path& model, int threads) : impl_(std::make_unique<Impl>()) {
-  configureThreads(std::max(1, threads));
-  impl_->path = model;
-  impl_->network = loadModel(model, impl_->info);
-}
-
-Predictor::~Predictor() = default;
-
-const ModelInfo& Predictor::info() const { return impl_->info; }
-
-void Predictor::checkCompatible(const vector::DatasetHeader& header, const std::string& what) const {
-  const auto& config = impl_->info.config;
-  if (header.horizon != config.horizon || std::abs(header.step - config.step) > 1e-9) {
-    throw ModelError(fmt::format("{}: {} steps of {} s, but the model {} predicts {} steps of {} s", what,
-                                 header.horizon, header.step, impl_->path.string(), config.horizon, config.step));
+void PredictOptions::validate() const {
+  if (samples < 0 || samples > kMaxSamples) {
+    throw ConfigError::field("command line", "--samples", std::to_string(samples),
+                             fmt::format("0 .. {} futures per scene", kMaxSamples));
   }
 }
 
-std::vector<Polyline> Predictor::predict(const std::vector<vector::VectorizedScene>& scenes) const {
-  std::vector<Polyline> result;
-  result.reserve(scenes.size());
-  c10::InferenceMode inference;
-  impl_->network->eval();
-  for (std::size_t first = 0; first < scenes.size(); first += static_cast<std::size_t>(kPredictBatch)) {
-    const std::size_t last = std::min(scenes.size(), first + static_cast<std::size_t>(kPredictBatch));
-    const auto tensors = buildTensors(scenes, impl_->info.config, first, last);
-    const auto positions = impl_->network->positions(tensors);
-    for (std::int64_t i = 0; i < positions.size(0); ++i) {
-      result.push_back(toSceneFrame(positions[i], tensors.origins[static_cast<std::size_t>(i)],
-                                    tensors.headings[static_cast<std::size_t>(i)]));
+class Predictor::Backend {
+ public:
+  virtual ~Backend() = default;
+  virtual const ModelInfo& info() const = 0;
+  virtual bool probabilistic() const = 0;
+  virtual bool predictsMotion() const = 0;
+  virtual void checkCompatible(const vector::DatasetHeader& header, const std::string& what) const = 0;
+  /// Predictions of scenes[first, last).
+  virtual std::vector<Prediction> predict(const std::vector<vector::VectorizedScene>& scenes, std::size_t first,
+                                          std::size_t last, const PredictOptions& options) const = 0;
+};
+
+namespace {
+
+/// A stable 64-bit identity of a scene (label, sample index, Ego, t0): its draws do not
+/// depend on which other scenes share its batch.
+std::uint64_t sceneIdentity(const vector::VectorizedScene& scene) {
+  std::uint64_t hash = 0xCBF29CE484222325ULL;  // FNV-1a
+  const auto feed = [&hash](const void* data, std::size_t size) {
+    const auto* bytes = static_cast<const unsigned char*>(data);
+    for (std::size_t i = 0; i < size; ++i) hash = (hash ^ bytes[i]) * 0x100000001B3ULL;
+  };
+  feed(scene.label.data(), scene.label.size());
+  feed(&scene.sample, sizeof(scene.sample));
+  feed(scene.provenance.egoId.data(), scene.provenance.egoId.size());
+  feed(&scene.provenance.t0, sizeof(scene.provenance.t0));
+  return mix64(hash);
+}
+
+/// Standard-normal draws [B, S, width] for scenes[first, last), each scene from its own stream.
+torch::Tensor samplingNoise(const std::vector<vector::VectorizedScene>& scenes, std::size_t first, std::size_t last,
+                            const PredictOptions& options, std::int64_t width) {
+  const auto n = static_cast<std::int64_t>(last - first);
+  auto noise = torch::empty({n, options.samples, width});
+  auto* data = noise.data_ptr<float>();
+  const auto per_scene = static_cast<std::size_t>(options.samples) * static_cast<std::size_t>(width);
+  for (std::int64_t i = 0; i < n; ++i) {
+    Rng rng = Rng::derive(options.seed, sceneIdentity(scenes[first + static_cast<std::size_t>(i)]),
+                          RandomStream::PredictionSamples);
+    float* out = data + static_cast<std::size_t>(i) * per_scene;
+    for (std::size_t j = 0; j < per_scene; ++j) out[j] = static_cast<float>(rng.normal(0.0, 1.0));
+  }
+  return noise;
+}
+
+/// One future from model-frame tensors [F, 2] (+ [F] kinematics when defined) into the scene frame.
+class TrajectoryConverter {
+ public:
+  TrajectoryConverter(const SceneFrame& frame, const VehicleState& initial, double step)
+      : frame_(frame), initial_(initial), step_(step) {}
+
+  Trajectory operator()(const float* positions, const float* headings, const float* speeds, std::int64_t steps) const {
+    Trajectory trajectory;
+    trajectory.positions.reserve(static_cast<std::size_t>(steps));
+    for (std::int64_t k = 0; k < steps; ++k) {
+      trajectory.positions.push_back(frame_.toScene({positions[2 * k], positions[2 * k + 1]}));
+    }
+    if (headings == nullptr) return trajectory;
+    trajectory.states.reserve(static_cast<std::size_t>(steps));
+    double previous_speed = initial_.speed;
+    for (std::int64_t k = 0; k < steps; ++k) {
+      const Vec2 model_point(positions[2 * k], positions[2 * k + 1]);
+      const double model_heading = headings[k];
+      // A speed along the model-frame heading becomes |J u| times it in the scene (1 in the ego frame).
+      const Vec2 direction = frame_.jacobian(model_point) * headingVector(model_heading);
+      VehicleState state;
+      state.x = trajectory.positions[static_cast<std::size_t>(k)].x();
+      state.y = trajectory.positions[static_cast<std::size_t>(k)].y();
+      state.heading = frame_.headingToScene(model_point, model_heading);
+      state.speed = static_cast<double>(speeds[k]) * direction.norm();
+      state.accel = (state.speed - previous_speed) / step_;
+      previous_speed = state.speed;
+      trajectory.states.push_back(state);
+    }
+    return trajectory;
+  }
+
+ private:
+  const SceneFrame& frame_;
+  VehicleState initial_;
+  double step_;
+};
+
+/// Pointer to row `index` of a contiguous float tensor (or nullptr if undefined).
+const float* rowOf(const torch::Tensor& tensor, std::int64_t index) {
+  if (!tensor.defined()) return nullptr;
+  return tensor.data_ptr<float>() + index * (tensor.numel() / tensor.size(0));
+}
+
+torch::Tensor contiguousOrUndefined(const torch::Tensor& tensor) {
+  return tensor.defined() ? tensor.contiguous() : tensor;
+}
+
+/// Decoded tensors of a batch -> Predictions in each scene's frame.
+std::vector<Prediction> toPredictions(const std::vector<vector::VectorizedScene>& scenes, std::size_t first,
+                                      const SceneTensors& tensors, const Decoded& decoded, const Sampled& sampled,
+                                      double step) {
+  const auto positions = decoded.positions.contiguous();
+  const auto headings = contiguousOrUndefined(decoded.headings);
+  const auto speeds = contiguousOrUndefined(decoded.speeds);
+  const auto covariance = contiguousOrUndefined(decoded.covariance);
+  const auto sample_positions = contiguousOrUndefined(sampled.positions);
+  const auto sample_headings = contiguousOrUndefined(sampled.headings);
+  const auto sample_speeds = contiguousOrUndefined(sampled.speeds);
+  const std::int64_t steps = positions.size(1);
+  const std::int64_t draws = sample_positions.defined() ? sample_positions.size(1) : 0;
+  std::vector<Prediction> result(static_cast<std::size_t>(positions.size(0)));
+  for (std::int64_t i = 0; i < positions.size(0); ++i) {
+    const auto& frame = *tensors.frames[static_cast<std::size_t>(i)];
+    const TrajectoryConverter convert(frame, scenes[first + static_cast<std::size_t>(i)].egoInitialState(), step);
+    auto& prediction = result[static_cast<std::size_t>(i)];
+    prediction.mostLikely = convert(rowOf(positions, i), rowOf(headings, i), rowOf(speeds, i), steps);
+    if (covariance.defined()) {
+      const float* c = rowOf(covariance, i);
+      for (std::int64_t k = 0; k < steps; ++k) {
+        Eigen::Matrix2d model_covariance;
+        model_covariance << c[4 * k], c[4 * k + 1], c[4 * k + 2], c[4 * k + 3];
+        const float* p = rowOf(positions, i) + 2 * k;
+        const Eigen::Matrix2d j = frame.jacobian({p[0], p[1]});
+        prediction.positionCovariance.push_back(j * model_covariance * j.transpose());
+      }
+    }
+    for (std::int64_t s = 0; s < draws; ++s) {
+      const std::int64_t row = i * draws + s;  // [B, S, ...] rows in order
+      const auto at = [&](const torch::Tensor& t) -> const float* {
+        return t.defined() ? t.data_ptr<float>() + row * (t.numel() / (t.size(0) * t.size(1))) : nullptr;
+      };
+      prediction.samples.push_back(convert(at(sample_positions), at(sample_headings), at(sample_speeds), steps));
     }
   }
   return result;
 }
 
-LabelErrors displacementErrors(const Polyline& prediction, const vector::VectorizedScene& scene) {
-  LabelErrors errors;
-  double sum = 0.0;
-  std::size_t valid = 0;
-  for (std::size_t k = 0; k < scene.target.size() && k < prediction.size(); ++k) {
-    if (!scene.targetValid[k]) continue;
-    const double distance = (prediction[k] - scene.target[k]).norm();
-    sum += distance;
-    errors.fde = distance;
-    ++valid;
+/// A trained VectorNet read from a model file.
+class NetworkBackend final : public Predictor::Backend {
+ public:
+  explicit NetworkBackend(const fs::path& path) : path_(path) { model_ = loadModel(path, info_); }
+
+  const ModelInfo& info() const override { return info_; }
+  bool probabilistic() const override { return model_.decoder->noiseWidth() > 0; }
+  bool predictsMotion() const override { return findDecoder(info_.config.decoder, path_.string()).kinematic; }
+
+  void checkCompatible(const vector::DatasetHeader& header, const std::string& what) const override {
+    const auto& config = info_.config;
+    if (header.horizon != config.horizon || std::abs(header.step - config.step) > 1e-9) {
+      throw ModelError(fmt::format("{}: {} steps of {} s, but the model {} predicts {} steps of {} s", what,
+                                   header.horizon, header.step, path_.string(), config.horizon, config.step));
+    }
   }
-  errors.samples = valid > 0 ? 1 : 0;
-  errors.ade = valid > 0 ? sum / static_cast<double>(valid) : 0.0;
-  return errors;
-}
 
-namespace {
-
-/// Reads a dataset in chunks and hands (scene, prediction) pairs to `visit`.
-template <typename Visit>
-void predictDataset(const Predictor& predictor, const vector::DatasetReader& reader, double& prediction_seconds,
-                    Visit&& visit) {
-  predictor.checkCompatible(reader.header(), reader.path().string());
-  for (std::size_t first = 0; first < reader.size(); first += kReadChunk) {
-    throwIfInterrupted();
-    std::vector<vector::VectorizedScene> scenes;
-    for (std::size_t i = first; i < std::min(reader.size(), first + kReadChunk); ++i) scenes.push_back(reader.scene(i));
-    const auto start = std::chrono::steady_clock::now();
-    const auto predictions = predictor.predict(scenes);
-    prediction_seconds += secondsSince(start);
-    for (std::size_t i = 0; i < scenes.size(); ++i) visit(first + i, scenes[i], predictions[i]);
+  std::vector<Prediction> predict(const std::vector<vector::VectorizedScene>& scenes, std::size_t first,
+                                  std::size_t last, const PredictOptions& options) const override {
+    c10::InferenceMode inference;
+    model_.network->eval();
+    const auto tensors = buildTensors(scenes, info_.config, first, last);
+    const auto decoded = model_.decode(tensors);
+    Sampled sampled;
+    if (options.samples > 0 && probabilistic()) {
+      const auto noise = samplingNoise(scenes, first, last, options, model_.decoder->noiseWidth());
+      sampled = model_.decoder->sample(decoded, tensors.start, noise);
+    }
+    return toPredictions(scenes, first, tensors, decoded, sampled, info_.config.step);
   }
-}
 
-void accumulate(LabelErrors& total, const LabelErrors& one) {
-  if (one.samples == 0) return;
-  const auto n = static_cast<double>(total.samples);
-  total.ade = (total.ade * n + one.ade) / (n + 1.0);
-  total.fde = (total.fde * n + one.fde) / (n + 1.0);
-  ++total.samples;
-}
+ private:
+  fs::path path_;
+  ModelInfo info_;
+  mutable Model model_;  // inference only: forward() is not const in libtorch
+};
+
+/// Constant velocity ("cv") and constant acceleration ("ca") along the initial heading,
+/// rolled out through the same kinematic model as the kinematic decoder (no reversing).
+/// ca's acceleration at t0 comes from the Ego's history (README "Predictors without training").
+class MotionModelBackend final : public Predictor::Backend {
+ public:
+  explicit MotionModelBackend(std::string name) {
+    info_.config.decoder = std::move(name);
+    info_.config.horizon = 0;
+    info_.config.step = 0.0;
+    info_.mix = "none (no training)";
+    info_.trained = false;
+  }
+
+  const ModelInfo& info() const override { return info_; }
+  bool probabilistic() const override { return false; }
+  bool predictsMotion() const override { return true; }
+  void checkCompatible(const vector::DatasetHeader&, const std::string&) const override {}
+
+  std::vector<Prediction> predict(const std::vector<vector::VectorizedScene>& scenes, std::size_t first,
+                                  std::size_t last, const PredictOptions&) const override {
+    std::vector<Prediction> result;
+    result.reserve(last - first);
+    // One rollout per run of scenes sharing step and horizon (a dataset's scenes all do).
+    for (std::size_t begin = first; begin < last;) {
+      std::size_t end = begin + 1;
+      while (end < last && scenes[end].step == scenes[begin].step &&
+             scenes[end].target.size() == scenes[begin].target.size()) {
+        ++end;
+      }
+      auto part = predictRun(scenes, begin, end);
+      for (auto& prediction : part) result.push_back(std::move(prediction));
+      begin = end;
+    }
+    return result;
+  }
+
+ private:
+  std::vector<Prediction> predictRun(const std::vector<vector::VectorizedScene>& scenes, std::size_t first,
+                                     std::size_t last) const {
+    const auto n = static_cast<std::int64_t>(last - first);
+    const auto steps = static_cast<std::int64_t>(scenes[first].target.size());
+    const double step = scenes[first].step;
+    auto speed = torch::empty({n});
+    auto accel = torch::empty({n, 1});
+    SceneTensors frames;
+    for (std::int64_t i = 0; i < n; ++i) {
+      const auto& scene = scenes[first + static_cast<std::size_t>(i)];
+      speed[i] = scene.egoInitialState().speed;
+      accel[i][0] = info_.config.decoder == "ca" ? initialAcceleration(scene) : 0.0;
+      frames.frames.push_back(makeFrame("ego", scene));
+    }
+    const auto path = rollout(torch::zeros({n, 2}), torch::zeros({n}), speed, accel.expand({n, steps}),
+                              torch::zeros({n, steps}), step);
+    Decoded decoded;
+    decoded.positions = path.positions;
+    decoded.headings = path.headings;
+    decoded.speeds = path.speeds;
+    return toPredictions(scenes, first, frames, decoded, Sampled{}, step);
+  }
+
+ public:
+  /// ca: the acceleration over the last history step, from the speed over that step
+  /// (|p_0 - p_-1| / dt, the speed at its middle) and the speed at t0 (initial vector):
+  /// a = 2 (v_0 - u_-1/2) / dt, exact for constant acceleration within the step. 0 without
+  /// a valid history step ending at t0 (then ca predicts what cv does).
+  static double initialAcceleration(const vector::VectorizedScene& scene) {
+    const auto& ego = scene.polylines.at(scene.egoPolyline);
+    if (ego.vectors.size() < 2) return 0.0;
+    const std::size_t last = ego.vectors.size() - 2;
+    const auto& f = ego.vectors[last];
+    if (!ego.valid[last] || std::abs(f[6]) > 1e-6) return 0.0;
+    const double through_last_step = std::hypot(f[2] - f[0], f[3] - f[1]) / scene.step;
+    return 2.0 * (scene.egoInitialState().speed - through_last_step) / scene.step;
+  }
+
+ private:
+  ModelInfo info_;
+};
 
 }  // namespace
 
-Evaluation evaluate(const Predictor& predictor, const std::vector<fs::path>& data) {
-  if (data.empty()) throw ConfigError("--data: no dataset given");
-  Evaluation evaluation;
-  for (const auto& path : data) {
-    const vector::DatasetReader reader(vector::resolveDatasetPath(path));
-    predictDataset(predictor, reader, evaluation.predictionSeconds,
-                   [&](std::size_t, const vector::VectorizedScene& scene, const Polyline& prediction) {
-                     const auto errors = displacementErrors(prediction, scene);
-                     accumulate(evaluation.perLabel[scene.label], errors);
-                     accumulate(evaluation.overall, errors);
-                   });
-  }
-  return evaluation;
+bool Predictor::isBuiltin(const fs::path& model) { return model == "cv" || model == "ca"; }
+
+Predictor::Predictor(const fs::path& model, int threads) {
+  configureThreads(std::max(1, threads));
+  if (isBuiltin(model)) backend_ = std::make_unique<MotionModelBackend>(model.string());
+  else backend_ = std::make_unique<NetworkBackend>(model);
 }
 
-std::string Evaluation::table() const {
-  std::string text = fmt::format("  {:<20} {:>9} {:>9} {:>9}\n", "functional scenario", "samples", "ADE [m]", "FDE [m]");
-  for (const auto& [label, errors] : perLabel) {
-    text += fmt::format("  {:<20} {:>9} {:>9.3f} {:>9.3f}\n", label, errors.samples, errors.ade, errors.fde);
-  }
-  text += fmt::format("  {:<20} {:>9} {:>9.3f} {:>9.3f}\n", "all", overall.samples, overall.ade, overall.fde);
-  if (predictionSeconds > 0.0) {
-    text += fmt::format("  prediction: {:.0f} scenes/s\n", static_cast<double>(overall.samples) / predictionSeconds);
-  }
-  return text;
+Predictor::~Predictor() = default;
+
+const ModelInfo& Predictor::info() const { return backend_->info(); }
+const std::string& Predictor::name() const { return backend_->info().config.decoder; }
+bool Predictor::probabilistic() const { return backend_->probabilistic(); }
+bool Predictor::predictsMotion() const { return backend_->predictsMotion(); }
+
+void Predictor::checkCompatible(const vector::DatasetHeader& header, const std::string& what) const {
+  backend_->checkCompatible(header, what);
 }
 
-void Evaluation::writeCsv(const fs::path& path) const {
-  AtomicOutput output(path);
-  {
-    std::ofstream stream(output.tempPath());
-    CsvWriter csv(stream);
-    csv.writeRow({"label", "samples", "ade_m", "fde_m"});
-    for (const auto& [label, errors] : perLabel) {
-      csv.writeRow({label, std::to_string(errors.samples), formatNumber(errors.ade), formatNumber(errors.fde)});
-    }
-    csv.writeRow({"all", std::to_string(overall.samples), formatNumber(overall.ade), formatNumber(overall.fde)});
-    if (!stream) throw IoError(path.string() + ": write failed");
+std::vector<Polyline> Predictor::predict(const std::vector<vector::VectorizedScene>& scenes) const {
+  std::vector<Polyline> positions;
+  positions.reserve(scenes.size());
+  for (auto& prediction : predictDistribution(scenes, PredictOptions{})) {
+    positions.push_back(std::move(prediction.mostLikely.positions));
   }
-  output.commit();
+  return positions;
 }
 
-std::size_t writePredictions(const Predictor& predictor, const fs::path& model_file, const fs::path& dataset,
-                             const fs::path& output_path) {
-  const fs::path dataset_file = vector::resolveDatasetPath(dataset);
-  const vector::DatasetReader reader(dataset_file);
-  const auto horizon = static_cast<hsize_t>(reader.header().horizon);
-  if (!output_path.parent_path().empty()) ensureDirectory(output_path.parent_path());
-  AtomicOutput output(output_path);
-  h5::silenceErrorStack();
-  std::size_t count = 0;
-  double seconds = 0.0;
-  try {
-    H5::H5File file(output.tempPath().string(), H5F_ACC_TRUNC);
-    H5::Group root = file.openGroup("/");
-    h5::writeAttribute(root, "schema", std::string("vsd-predictions/1"));
-    h5::writeAttribute(root, "model", model_file.string());
-    h5::writeAttribute(root, "model_sha256", sha256OfFile(model_file));
-    h5::writeAttribute(root, "dataset", dataset_file.string());
-    h5::writeAttribute(root, "dataset_sha256", sha256OfFile(dataset_file));
-    h5::writeAttribute(root, "step", reader.header().step);
-    h5::writeAttribute(root, "horizon", static_cast<std::int64_t>(horizon));
-    h5::writeAttribute(root, "tool_version", toolVersion());
-    h5::writeStrings(root, "labels", reader.labels());
-    h5::Appendable<std::int64_t> row(root, "dataset_row", {}, 4096, 4);
-    h5::Appendable<std::int64_t> sample_index(root, "sample_index", {}, 4096, 4);
-    h5::Appendable<std::int32_t> label(root, "sample_label", {}, 4096, 4);
-    h5::Appendable<double> predictions(root, "predictions", {horizon, 2}, 1024, 1);
-    h5::Appendable<double> targets(root, "targets", {horizon, 2}, 1024, 1);
-    h5::Appendable<std::uint8_t> target_valid(root, "target_valid", {horizon}, 1024, 1);
-    h5::Appendable<double> ade(root, "ade", {}, 4096, 1);
-    h5::Appendable<double> fde(root, "fde", {}, 4096, 1);
-    std::map<std::string, std::int32_t> label_index;
-    for (std::size_t l = 0; l < reader.labels().size(); ++l) label_index[reader.labels()[l]] = static_cast<std::int32_t>(l);
-    predictDataset(predictor, reader, seconds,
-                   [&](std::size_t i, const vector::VectorizedScene& scene, const Polyline& prediction) {
-                     row.push(static_cast<std::int64_t>(i));
-                     sample_index.push(static_cast<std::int64_t>(scene.sample));
-                     label.push(label_index[scene.label]);
-                     for (std::size_t k = 0; k < prediction.size(); ++k) {
-                       predictions.push({prediction[k].x(), prediction[k].y()});
-                       targets.push({scene.target[k].x(), scene.target[k].y()});
-                       target_valid.push(scene.targetValid[k]);
-                     }
-                     const auto errors = displacementErrors(prediction, scene);
-                     ade.push(errors.ade);
-                     fde.push(errors.fde);
-                     if (++count % 4096 == 0) h5::flushAll(row, sample_index, label, predictions, targets, target_valid, ade, fde);
-                   });
-    h5::flushAll(row, sample_index, label, predictions, targets, target_valid, ade, fde);
-    file.close();
-  } catch (const H5::Exception& error) {
-    throw IoError(fmt::format("{}: cannot write predictions: {}", output_path.string(), error.getDetailMsg()));
+std::vector<Prediction> Predictor::predictDistribution(const std::vector<vector::VectorizedScene>& scenes,
+                                                       const PredictOptions& options) const {
+  options.validate();
+  std::vector<Prediction> result;
+  result.reserve(scenes.size());
+  for (std::size_t first = 0; first < scenes.size(); first += kPredictBatch) {
+    const std::size_t last = std::min(scenes.size(), first + kPredictBatch);
+    auto part = backend_->predict(scenes, first, last, options);
+    for (auto& prediction : part) result.push_back(std::move(prediction));
   }
-  output.commit();
-  return count;
+  return result;
 }
 
 }  // namespace vsd::model

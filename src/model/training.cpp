@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <set>
 
 #include "checkpoint.hpp"
@@ -20,81 +21,6 @@
 namespace fs = std::filesystem;
 
 namespace vsd::model {
-
-namespace {
-void require(bool ok, const char* field, double value, const char* constraint) {
-  if (!ok) throw ConfigError::field("model configuration", field, formatValue(value), constraint);
-}
-}  // namespace
-
-void VectorNetConfig::validate() const {
-  validateArchitecture();
-  require(horizon >= 1, "horizon", horizon, ">= 1 step");
-  require(step > 0.0, "step", step, "> 0 s");
-}
-
-void VectorNetConfig::validateArchitecture() const {
-  require(hidden >= 1 && hidden <= 4096, "hidden", hidden, "1 .. 4096");
-  require(subgraphLayers >= 1 && subgraphLayers <= 16, "subgraph_layers", subgraphLayers, "1 .. 16");
-  require(globalWidth >= 1 && globalWidth <= 4096, "global_width", globalWidth, "1 .. 4096");
-  require(heads >= 1 && globalWidth % heads == 0, "heads", heads, "a divisor of global_width");
-  require(decoderHidden >= 1 && decoderHidden <= 8192, "decoder_hidden", decoderHidden, "1 .. 8192");
-  require(coordinateScale > 0.0, "coordinate_scale", coordinateScale, "> 0 m");
-}
-
-Mix Mix::parse(const std::string& text) {
-  Mix mix;
-  if (text.empty()) return mix;
-  std::size_t start = 0;
-  std::set<std::string> seen;
-  while (start <= text.size()) {
-    const std::size_t comma = text.find(',', start);
-    const std::string item = text.substr(start, comma == std::string::npos ? std::string::npos : comma - start);
-    const std::size_t equals = item.find('=');
-    char* end = nullptr;
-    const std::string count = equals == std::string::npos ? "" : item.substr(equals + 1);
-    const long long value = std::strtoll(count.c_str(), &end, 10);
-    if (equals == std::string::npos || equals == 0 || count.empty() || *end != '\0' || value < 0) {
-      throw ConfigError::field("command line", "--mix", text, "label=count[,label=count...] with counts >= 0");
-    }
-    const std::string label = item.substr(0, equals);
-    if (!seen.insert(label).second) {
-      throw ConfigError::field("command line", "--mix", text, "each label at most once (" + label + " repeats)");
-    }
-    mix.counts.emplace_back(label, static_cast<std::size_t>(value));
-    if (comma == std::string::npos) break;
-    start = comma + 1;
-  }
-  return mix;
-}
-
-std::size_t Mix::total() const {
-  std::size_t sum = 0;
-  for (const auto& [label, count] : counts) sum += count;
-  return sum;
-}
-
-std::string Mix::str() const {
-  std::string text;
-  for (const auto& [label, count] : counts) text += fmt::format("{}{}={}", text.empty() ? "" : ",", label, count);
-  return text.empty() ? "all" : text;
-}
-
-void TrainOptions::validate() const {
-  const std::string where = "command line";
-  if (data.empty()) throw ConfigError("--data: no dataset given (dataset files or run folders)");
-  if (output.empty()) throw ConfigError("--out: no model file given");
-  if (threads < 1 || threads > 256) throw ConfigError::field(where, "--threads", std::to_string(threads), "1 .. 256");
-  if (steps < 1) throw ConfigError::field(where, "--steps", std::to_string(steps), ">= 1");
-  if (patience < 1) throw ConfigError::field(where, "--patience", std::to_string(patience), ">= 1");
-  if (batchSize < 1) throw ConfigError::field(where, "--batch", std::to_string(batchSize), ">= 1");
-  if (!(learningRate > 0.0)) throw ConfigError::field(where, "--lr", formatValue(learningRate), "> 0");
-  if (weightDecay < 0.0) throw ConfigError::field(where, "--weight-decay", formatValue(weightDecay), ">= 0");
-  if (!(validationFraction > 0.0 && validationFraction < 1.0)) {
-    throw ConfigError::field(where, "--validation-fraction", formatValue(validationFraction), "in (0, 1)");
-  }
-  config.validateArchitecture();
-}
 
 namespace {
 
@@ -168,33 +94,50 @@ Selection selectSamples(const TrainOptions& options) {
   return selection;
 }
 
-/// Mean displacement of a batch as the loss (it is the ADE the model is judged by).
-torch::Tensor adeLoss(const torch::Tensor& predicted, const SceneTensors& batch) {
-  const auto [mean, final_distance] = displacement(predicted, batch.targets, batch.targetMask);
-  return mean.mean();
-}
-
 struct ValidationResult {
   double ade = 0.0;
   double fde = 0.0;
+  double nll = std::numeric_limits<double>::quiet_NaN();  ///< nats per valid position (probabilistic decoders)
 };
 
-ValidationResult validate(VectorNet& network, const SceneTensors& tensors, int batch_size) {
+ValidationResult validate(Model& model, const SceneTensors& tensors, int batch_size) {
   torch::NoGradGuard no_grad;
-  network->eval();
+  model.network->eval();
   double ade_sum = 0.0;
   double fde_sum = 0.0;
+  double nll_sum = 0.0;
+  double nll_count = 0.0;
   for (std::int64_t first = 0; first < tensors.size(); first += batch_size) {
     const auto last = std::min<std::int64_t>(first + batch_size, tensors.size());
     const auto batch = tensors.select(torch::arange(first, last, torch::kInt64));
-    const auto predicted = network->positions(batch);
-    const auto [mean, final_distance] = displacement(predicted, batch.targets, batch.targetMask);
+    const auto decoded = model.decode(batch);
+    const auto [mean, final_distance] = displacement(decoded.positions, batch.targets, batch.targetMask);
     ade_sum += mean.sum().item<double>();
     fde_sum += final_distance.sum().item<double>();
+    if (decoded.covariance.defined()) {
+      const auto weights = batch.targetMask.to(torch::kFloat32);
+      nll_sum += (gaussianNll(decoded.positions, decoded.covariance, batch.targets) * weights).sum().item<double>();
+      nll_count += weights.sum().item<double>();
+    }
   }
-  network->train();
+  model.network->train();
   const auto n = static_cast<double>(std::max<std::int64_t>(tensors.size(), 1));
-  return {ade_sum / n, fde_sum / n};
+  ValidationResult result{ade_sum / n, fde_sum / n};
+  if (nll_count > 0.0) result.nll = nll_sum / nll_count;
+  return result;
+}
+
+/// The configuration a training writes: step and horizon of the data, every decoder
+/// option explicit (a later change of a default does not change what a model file means).
+VectorNetConfig trainedConfig(const TrainOptions& options, const vector::DatasetHeader& header) {
+  VectorNetConfig config = options.config;
+  config.horizon = header.horizon;
+  config.step = header.step;
+  for (const auto& option : findDecoder(config.decoder, "--decoder").options) {
+    config.decoderOptions[option.name] = config.decoderOption(option.name);
+  }
+  config.validate();
+  return config;
 }
 
 /// Linear warm-up over the first steps, then cosine decay to 2 % of the peak at the
@@ -207,9 +150,24 @@ double learningRateAt(const TrainOptions& options, std::int64_t step) {
   return options.learningRate * (0.02 + 0.98 * 0.5 * (1.0 + std::cos(kPi * std::min(progress, 1.0))));
 }
 
+/// The error a diverged training stops with: where it happened and what was kept.
+ModelError divergence(const TrainOptions& options, const TrainSummary& summary, std::int64_t step, int epoch,
+                      std::int64_t batch, std::int64_t batches, bool has_variance) {
+  const std::string kept =
+      summary.bestEpoch > 0
+          ? fmt::format("{} keeps the last good model (epoch {}, validation ADE {:.3f} m)", options.output.string(),
+                        summary.bestEpoch, summary.bestValidationAde)
+          : fmt::format("no model was written to {}", options.output.string());
+  return ModelError(fmt::format("training diverged at optimizer step {} (epoch {}, batch {} of {}): the {} is not finite; "
+                                "{}; try a smaller --lr",
+                                step, epoch, batch, batches, has_variance ? "predicted variance or the loss" : "loss",
+                                kept));
+}
+
 nlohmann::json recordToJson(const EpochRecord& r) {
   return {{"epoch", r.epoch}, {"planned_epochs", r.plannedEpochs}, {"train_loss", r.trainLoss}, {"validation_ade", r.validationAde},
-          {"validation_fde", r.validationFde}, {"learning_rate", r.learningRate},
+          {"validation_fde", r.validationFde}, {"validation_nll", std::isnan(r.validationNll) ? nlohmann::json() : nlohmann::json(r.validationNll)},
+          {"learning_rate", r.learningRate},
           {"samples_per_second", r.samplesPerSecond}, {"seconds", r.seconds}, {"best", r.best}};
 }
 
@@ -220,6 +178,8 @@ EpochRecord recordFromJson(const nlohmann::json& j) {
   r.trainLoss = j.at("train_loss");
   r.validationAde = j.at("validation_ade");
   r.validationFde = j.at("validation_fde");
+  const auto nll = j.find("validation_nll");
+  r.validationNll = nll == j.end() || nll->is_null() ? std::numeric_limits<double>::quiet_NaN() : nll->get<double>();
   r.learningRate = j.at("learning_rate");
   r.samplesPerSecond = j.at("samples_per_second");
   r.seconds = j.at("seconds");
@@ -229,157 +189,201 @@ EpochRecord recordFromJson(const nlohmann::json& j) {
 
 }  // namespace
 
-TrainSummary train(const TrainOptions& options, const std::function<void(const EpochRecord&)>& on_epoch) {
-  options.validate();
-  const auto start = std::chrono::steady_clock::now();
-  configureThreads(options.threads);
-  torch::manual_seed(options.seed);
+namespace {
 
-  Selection selection = selectSamples(options);
-  VectorNetConfig config = options.config;
-  config.horizon = selection.header.horizon;
-  config.step = selection.header.step;
-  config.validate();
-  const SceneTensors train_tensors = buildTensors(selection.train, config);
-  const SceneTensors validation_tensors = buildTensors(selection.validation, config);
-  selection.train.clear();
-  selection.validation.clear();
-
-  VectorNet network(config);
-  torch::optim::AdamW optimizer(network->parameters(),
-                                torch::optim::AdamWOptions(options.learningRate).weight_decay(options.weightDecay));
-
-  ModelInfo info;
-  info.config = config;
-  info.datasetSchema = vector::kDatasetSchema;
-  info.mix = options.mix.str();
-  info.seed = options.seed;
-  info.labels = selection.labels;
-  info.toolVersion = toolVersion();
-
-  TrainSummary summary;
-  summary.output = options.output;
-  summary.trainSamples = selection.trainCounts;
-  summary.validationSamples = selection.validationCounts;
-  if (!options.output.parent_path().empty()) ensureDirectory(options.output.parent_path());
-  const fs::path last_checkpoint = options.output.string() + ".last";
-  int first_epoch = 0;
-  int since_best = 0;
-  summary.bestValidationAde = std::numeric_limits<double>::infinity();
-  if (options.resume) {
-    if (!fs::exists(last_checkpoint)) {
-      throw ConfigError(fmt::format("--resume: no checkpoint {} to resume from", last_checkpoint.string()));
-    }
-    const auto state = nlohmann::json::parse(loadCheckpoint(last_checkpoint, network, optimizer));
-    first_epoch = state.at("next_epoch");
-    since_best = state.at("since_best");
-    summary.bestEpoch = state.at("best_epoch");
-    summary.bestValidationAde = state.at("best_validation_ade");
-    for (const auto& record : state.at("history")) summary.epochs.push_back(recordFromJson(record));
-    spdlog::info("resuming {} at epoch {} (best validation ADE {:.3f} m at epoch {})", options.output.string(),
-                 first_epoch + 1, summary.bestValidationAde, summary.bestEpoch);
+/// One training run: the data as tensors, the model, the optimizer and the bookkeeping
+/// that lets an interrupted run resume exactly.
+class Trainer {
+ public:
+  explicit Trainer(const TrainOptions& options)
+      : options_(options),
+        selection_(selectSamples(options)),
+        config_(trainedConfig(options, selection_.header)),
+        train_(buildTensors(selection_.train, config_)),
+        validation_(buildTensors(selection_.validation, config_)),
+        model_(Model::create(config_)),
+        optimizer_(model_.network->parameters(),
+                   torch::optim::AdamWOptions(options.learningRate).weight_decay(options.weightDecay)),
+        lastCheckpoint_(options.output.string() + ".last") {
+    selection_.train.clear();
+    selection_.validation.clear();
+    info_.config = config_;
+    info_.datasetSchema = vector::kDatasetSchema;
+    info_.mix = options.mix.str();
+    info_.seed = options.seed;
+    info_.labels = selection_.labels;
+    info_.toolVersion = toolVersion();
+    summary_.output = options.output;
+    summary_.decoder = config_.decoder;
+    summary_.trainSamples = selection_.trainCounts;
+    summary_.validationSamples = selection_.validationCounts;
+    summary_.bestValidationAde = std::numeric_limits<double>::infinity();
+    summary_.stopReason = "end of the schedule";
+    stepsPerEpoch_ = (train_.size() + options.batchSize - 1) / options.batchSize;
+    summary_.plannedEpochs = static_cast<int>((options.steps + stepsPerEpoch_ - 1) / stepsPerEpoch_);
+    if (!options.output.parent_path().empty()) ensureDirectory(options.output.parent_path());
   }
 
-  const std::int64_t n = train_tensors.size();
-  const std::int64_t steps_per_epoch = (n + options.batchSize - 1) / options.batchSize;
-  const int epochs = static_cast<int>((options.steps + steps_per_epoch - 1) / steps_per_epoch);
-  summary.plannedEpochs = epochs;
-  double trained_samples = 0.0;
-  double training_seconds = 0.0;
-  summary.stopReason = "end of the schedule";
-  int next_epoch = first_epoch;
-  auto last_saved = std::chrono::steady_clock::now();
-  const auto save_last = [&] {
-    nlohmann::json state = {{"next_epoch", next_epoch},
-                            {"since_best", since_best},
-                            {"best_epoch", summary.bestEpoch},
-                            {"best_validation_ade", summary.bestValidationAde},
-                            {"history", nlohmann::json::array()}};
-    for (const auto& past : summary.epochs) state["history"].push_back(recordToJson(past));
-    saveCheckpoint(last_checkpoint, network, optimizer, info, state.dump());
-  };
-  try {
-  for (int epoch = first_epoch; epoch < epochs; ++epoch) {
+  TrainSummary run(const std::function<void(const EpochRecord&)>& on_epoch) {
+    if (options_.resume) resume();
+    auto last_saved = std::chrono::steady_clock::now();
+    try {
+      for (int epoch = nextEpoch_; epoch < summary_.plannedEpochs; ++epoch) {
+        EpochRecord record = trainEpoch(epoch);
+        validateEpoch(record);
+        summary_.epochs.push_back(record);
+        nextEpoch_ = epoch + 1;
+        // The resume checkpoint costs a write: at most every 10 s (and when stopping).
+        if (secondsSince(last_saved) >= 10.0 || nextEpoch_ == summary_.plannedEpochs) {
+          saveLast();
+          last_saved = std::chrono::steady_clock::now();
+        }
+        if (on_epoch) on_epoch(record);
+        if (sinceBest_ >= options_.patience) {
+          summary_.stopReason = fmt::format("early stopping (no better validation ADE for {} epochs)", options_.patience);
+          saveLast();
+          break;
+        }
+      }
+    } catch (const InterruptedError&) {
+      saveLast();  // complete epochs so far; --resume continues after them
+      throw;
+    }
+    summary_.seconds = secondsSince(start_);
+    summary_.samplesPerSecond = trainingSeconds_ > 0.0 ? trainedSamples_ / trainingSeconds_ : 0.0;
+    return summary_;
+  }
+
+ private:
+  void resume() {
+    if (!fs::exists(lastCheckpoint_)) {
+      throw ConfigError(fmt::format("--resume: no checkpoint {} to resume from", lastCheckpoint_.string()));
+    }
+    const auto state = nlohmann::json::parse(loadCheckpoint(lastCheckpoint_, model_, optimizer_));
+    nextEpoch_ = state.at("next_epoch");
+    sinceBest_ = state.at("since_best");
+    summary_.bestEpoch = state.at("best_epoch");
+    summary_.bestValidationAde = state.at("best_validation_ade");
+    for (const auto& record : state.at("history")) summary_.epochs.push_back(recordFromJson(record));
+    spdlog::info("resuming {} at epoch {} (best validation ADE {:.3f} m at epoch {})", options_.output.string(),
+                 nextEpoch_ + 1, summary_.bestValidationAde, summary_.bestEpoch);
+  }
+
+  /// One pass over the training samples in the order of (seed, epoch).
+  EpochRecord trainEpoch(int epoch) {
     const auto epoch_start = std::chrono::steady_clock::now();
-    double learning_rate = 0.0;
+    const std::int64_t n = train_.size();
     // The order of an epoch depends only on (seed, epoch): a resumed training repeats it.
-    Rng rng = Rng::derive(options.seed, static_cast<std::uint64_t>(epoch), RandomStream::Training);
+    Rng rng = Rng::derive(options_.seed, static_cast<std::uint64_t>(epoch), RandomStream::Training);
     const auto order = rng.permutation(static_cast<std::size_t>(n));
     const auto order_tensor = torch::tensor(std::vector<std::int64_t>(order.begin(), order.end()), torch::kInt64);
-    double loss_sum = 0.0;
-    network->train();
-    for (std::int64_t first = 0; first < n; first += options.batchSize) {
-      throwIfInterrupted();
-      const auto last = std::min<std::int64_t>(first + options.batchSize, n);
-      const auto batch = train_tensors.select(order_tensor.slice(0, first, last));
-      learning_rate = learningRateAt(options, epoch * steps_per_epoch + first / options.batchSize);
-      for (auto& group : optimizer.param_groups()) {
-        static_cast<torch::optim::AdamWOptions&>(group.options()).lr(learning_rate);
-      }
-      optimizer.zero_grad();
-      const auto predicted = network->positions(batch);
-      const auto loss = adeLoss(predicted, batch);
-      loss.backward();
-      torch::nn::utils::clip_grad_norm_(network->parameters(), 5.0);
-      optimizer.step();
-      loss_sum += loss.item<double>() * static_cast<double>(last - first);
-    }
-    const double train_seconds = secondsSince(epoch_start);
-    trained_samples += static_cast<double>(n);
-    training_seconds += train_seconds;
-
-    const auto result = validate(network, validation_tensors, 1024);
     EpochRecord record;
     record.epoch = epoch + 1;
-    record.plannedEpochs = epochs;
+    record.plannedEpochs = summary_.plannedEpochs;
+    double loss_sum = 0.0;
+    model_.network->train();
+    for (std::int64_t first = 0; first < n; first += options_.batchSize) {
+      throwIfInterrupted();
+      const auto last = std::min<std::int64_t>(first + options_.batchSize, n);
+      const std::int64_t batch_index = first / options_.batchSize;
+      record.learningRate = learningRateAt(options_, epoch * stepsPerEpoch_ + batch_index);
+      loss_sum += optimizerStep(train_.select(order_tensor.slice(0, first, last)), record.learningRate, epoch,
+                                batch_index) *
+                  static_cast<double>(last - first);
+    }
+    const double seconds = secondsSince(epoch_start);
+    trainedSamples_ += static_cast<double>(n);
+    trainingSeconds_ += seconds;
     record.trainLoss = loss_sum / static_cast<double>(n);
+    record.samplesPerSecond = static_cast<double>(n) / seconds;
+    record.seconds = seconds;
+    return record;
+  }
+
+  /// Returns the batch's loss. A non-finite loss or predicted variance stops the training
+  /// before the optimizer takes it in: the model file and <out>.last keep their last good state.
+  double optimizerStep(const SceneTensors& batch, double learning_rate, int epoch, std::int64_t batch_index) {
+    for (auto& group : optimizer_.param_groups()) {
+      static_cast<torch::optim::AdamWOptions&>(group.options()).lr(learning_rate);
+    }
+    optimizer_.zero_grad();
+    const auto decoded = model_.decode(batch);
+    const auto loss = model_.decoder->loss(decoded, batch.targets, batch.targetMask);
+    const double value = loss.item<double>();
+    if (!std::isfinite(value) || (decoded.covariance.defined() && !decoded.covariance.isfinite().all().item<bool>())) {
+      throw divergence(options_, summary_, epoch * stepsPerEpoch_ + batch_index + 1, epoch + 1, batch_index + 1,
+                       stepsPerEpoch_, decoded.covariance.defined());
+    }
+    loss.backward();
+    torch::nn::utils::clip_grad_norm_(model_.network->parameters(), 5.0);
+    optimizer_.step();
+    return value;
+  }
+
+  /// Validation errors of the epoch; the model file is replaced when the ADE improves.
+  void validateEpoch(EpochRecord& record) {
+    const auto epoch_start = std::chrono::steady_clock::now();
+    const auto result = validate(model_, validation_, 1024);
     record.validationAde = result.ade;
     record.validationFde = result.fde;
-    record.learningRate = learning_rate;
-    record.samplesPerSecond = static_cast<double>(n) / train_seconds;
-    if (!std::isfinite(record.trainLoss)) {
-      throw ModelError(fmt::format("training diverged at epoch {} (loss {}); try a smaller --lr", record.epoch,
-                                   record.trainLoss));
-    }
-    if (result.ade < summary.bestValidationAde) {
-      summary.bestValidationAde = result.ade;
-      summary.bestEpoch = record.epoch;
-      since_best = 0;
+    record.validationNll = result.nll;
+    if (result.ade < summary_.bestValidationAde) {
+      summary_.bestValidationAde = result.ade;
+      summary_.bestEpoch = record.epoch;
+      sinceBest_ = 0;
       record.best = true;
-      info.epoch = record.epoch;
-      info.validationAde = result.ade;
-      saveModel(options.output, network, info);  // atomic: an interruption keeps the previous best
+      info_.epoch = record.epoch;
+      info_.validationAde = result.ade;
+      saveModel(options_.output, model_, info_);  // atomic: an interruption keeps the previous best
     } else {
-      ++since_best;
+      ++sinceBest_;
     }
-    record.seconds = secondsSince(epoch_start);
-    summary.epochs.push_back(record);
-    next_epoch = epoch + 1;
-    // The resume checkpoint costs a write: at most every 10 s (and when stopping).
-    if (secondsSince(last_saved) >= 10.0 || next_epoch == epochs) {
-      save_last();
-      last_saved = std::chrono::steady_clock::now();
-    }
-    if (on_epoch) on_epoch(record);
-    if (since_best >= options.patience) {
-      summary.stopReason = fmt::format("early stopping (no better validation ADE for {} epochs)", options.patience);
-      save_last();
-      break;
-    }
+    record.seconds += secondsSince(epoch_start);
   }
-  } catch (const InterruptedError&) {
-    save_last();  // complete epochs so far; --resume continues after them
-    throw;
+
+  void saveLast() {
+    nlohmann::json state = {{"next_epoch", nextEpoch_},
+                            {"since_best", sinceBest_},
+                            {"best_epoch", summary_.bestEpoch},
+                            {"best_validation_ade", summary_.bestValidationAde},
+                            {"history", nlohmann::json::array()}};
+    for (const auto& past : summary_.epochs) state["history"].push_back(recordToJson(past));
+    saveCheckpoint(lastCheckpoint_, model_, optimizer_, info_, state.dump());
   }
-  summary.seconds = secondsSince(start);
-  summary.samplesPerSecond = training_seconds > 0.0 ? trained_samples / training_seconds : 0.0;
-  return summary;
+
+  const TrainOptions& options_;
+  std::chrono::steady_clock::time_point start_ = std::chrono::steady_clock::now();
+  Selection selection_;
+  VectorNetConfig config_;
+  SceneTensors train_;
+  SceneTensors validation_;
+  Model model_;
+  torch::optim::AdamW optimizer_;
+  fs::path lastCheckpoint_;
+  ModelInfo info_;
+  TrainSummary summary_;
+  std::int64_t stepsPerEpoch_ = 1;
+  int nextEpoch_ = 0;
+  int sinceBest_ = 0;
+  double trainedSamples_ = 0.0;
+  double trainingSeconds_ = 0.0;
+};
+
+}  // namespace
+
+TrainSummary train(const TrainOptions& options, const std::function<void(const EpochRecord&)>& on_epoch) {
+  options.validate();
+  configureThreads(options.threads);
+  torch::manual_seed(options.seed);  // before the model is initialised
+  Trainer trainer(options);
+  return trainer.run(on_epoch);
 }
 
 std::string TrainSummary::report() const {
-  std::string text = fmt::format("trained VectorNet: best validation ADE {:.3f} m at epoch {} of {} ({}), {:.1f} s, "
-                                 "{:.0f} training samples/s\n",
-                                 bestValidationAde, bestEpoch, plannedEpochs, stopReason, seconds, samplesPerSecond);
+  std::string text = fmt::format("trained VectorNet ({} decoder): best validation ADE {:.3f} m at epoch {} of {} ({}), "
+                                 "{:.1f} s, {:.0f} training samples/s\n",
+                                 decoder, bestValidationAde, bestEpoch, plannedEpochs, stopReason, seconds,
+                                 samplesPerSecond);
   text += "  samples (train / validation):";
   for (const auto& [label, count] : trainSamples) {
     const auto it = validationSamples.find(label);

@@ -6,10 +6,16 @@
 #include <cmath>
 #include <deque>
 #include <functional>
+#include <memory>
+#include <optional>
 #include <unordered_map>
 #include <unordered_set>
 
+#include "vsd/core/activity.hpp"
+#include "vsd/core/bytes.hpp"
 #include "vsd/core/error.hpp"
+#include "vsd/pipeline/cluster.hpp"
+#include "vsd/core/fault.hpp"
 #include "vsd/core/files.hpp"
 #include "vsd/core/interrupt.hpp"
 #include "vsd/core/log.hpp"
@@ -18,6 +24,7 @@
 #include "vsd/road/network.hpp"
 #include "vsd/sim/controller.hpp"
 #include "vsd/vector/dataset.hpp"
+#include "vsd/pipeline/worker_pool.hpp"
 #include "vsd/vector/vectorize.hpp"
 
 namespace fs = std::filesystem;
@@ -99,6 +106,7 @@ void ExportOptions::validate() const {
     throw ConfigError::field(where, "--end", formatValue(*end), "an end time after --begin");
   }
   EgoSelection::parse(egos);
+  watchdog.validate();
 }
 
 namespace {
@@ -128,9 +136,10 @@ struct History {
 
 class Exporter {
  public:
-  Exporter(const ExportOptions& options, const vector::LaneIndex& lanes, vector::DatasetWriter& writer,
-           vector::Provenance provenance, std::string label)
+  Exporter(const ExportOptions& options, const WindowShare& share, const vector::LaneIndex& lanes,
+           vector::DatasetWriter& writer, vector::Provenance provenance, std::string label)
       : options_(options),
+        share_(share),
         lanes_(lanes),
         writer_(writer),
         provenance_(std::move(provenance)),
@@ -218,6 +227,11 @@ class Exporter {
   }
 
   void emitWindow(const std::string& ego_id, History& ego, std::int64_t step, double time) {
+    if (!share_.mine(samples_)) {  // another rank's window: counted, not built
+      ++samples_;
+      ++ego.samples;
+      return;
+    }
     const std::int64_t first = step - historySteps_ - horizonSteps_;
     const std::int64_t t0 = step - horizonSteps_;
     const std::size_t instants = static_cast<std::size_t>(historySteps_ + horizonSteps_ + 1);
@@ -274,6 +288,7 @@ class Exporter {
   }
 
   const ExportOptions& options_;
+  WindowShare share_;
   const vector::LaneIndex& lanes_;
   vector::DatasetWriter& writer_;
   vector::Provenance provenance_;
@@ -290,30 +305,15 @@ class Exporter {
 
 }  // namespace
 
-ExportSummary exportMap(const ExportOptions& options) {
-  options.validate();
-  const auto start = std::chrono::steady_clock::now();
-  const EgoSelection selection = EgoSelection::parse(options.egos);
+namespace {
 
-  TemporaryDirectory work("vsd-export");
-  sim::MapSimulationOptions simulation_options;
-  simulation_options.source = options.source;
-  simulation_options.step = options.step;
-  simulation_options.begin = options.begin;
-  simulation_options.end = options.end;
-  simulation_options.seed = options.seed;
-  simulation_options.laneChangeDuration = options.laneChangeDuration;
-  fs::path map_file = options.source.mainFile();
-  if (!options.openDrive.empty()) {
-    simulation_options.source.net = work.path() / "opendrive.net.xml";
-    road::convertOpenDrive(options.openDrive, simulation_options.source.net);
-    map_file = options.openDrive;
-  }
-  const std::string label = options.label.empty() ? map_file.stem().string() : options.label;
-
-  // Ego choice. random:K needs every vehicle that will depart: a SUMO-only first run lists them.
+/// Which vehicles random:K and id lists make Egos (empty for all / vtype:).
+std::unordered_set<std::string> chooseEgos(const EgoSelection& selection, const ExportOptions& options,
+                                           const sim::MapSimulationOptions& simulation_options,
+                                           const fs::path& map_file) {
   std::unordered_set<std::string> chosen;
   if (selection.kind == EgoSelection::Kind::Random) {
+    // random:K needs every vehicle that will depart: a SUMO-only first run lists them.
     spdlog::info("listing the vehicles of {} (a first, SUMO-only run) to draw {} Egos", map_file.string(),
                  selection.count);
     const auto departed = sim::MapSimulation::listDepartures(simulation_options);
@@ -327,8 +327,63 @@ ExportSummary exportMap(const ExportOptions& options) {
   } else if (selection.kind == EgoSelection::Kind::Ids) {
     chosen.insert(selection.ids.begin(), selection.ids.end());
   }
+  return chosen;
+}
 
-  sim::MapSimulation simulation(simulation_options);
+/// What a map export needs besides its options (decided in the parent).
+struct ExportJob {
+  const ExportOptions& options;
+  sim::MapSimulationOptions simulation;
+  fs::path mapFile;
+  std::string label;
+  fs::path datasetPath;                        ///< the temporary file to write
+  std::vector<sim::EgoFailure> plannedFailures;  ///< controller faults found by earlier attempts
+  WindowShare share;                           ///< the windows this process writes (MPI: its rank's)
+};
+
+/// Fails with one line if the Egos asked for never showed up.
+void checkSelectionWasSeen(const EgoSelection& selection, const ExportJob& job, const Exporter& exporter,
+                           const std::unordered_set<std::string>& seen_egos,
+                           const std::unordered_set<std::string>& seen_types, double begin, double end) {
+  if (selection.kind == EgoSelection::Kind::Ids) {
+    for (const auto& id : selection.ids) {
+      if (!seen_egos.count(id)) {
+        throw ConfigError(fmt::format("--egos: vehicle '{}' never appears in {} (between t = {} and {} s)", id,
+                                      job.mapFile.string(), begin, end));
+      }
+    }
+  }
+  if (selection.kind == EgoSelection::Kind::VehicleType && exporter.vehiclesSeen() > 0 &&
+      !seen_types.count(selection.vehicleType)) {
+    std::vector<std::string> types(seen_types.begin(), seen_types.end());
+    std::sort(types.begin(), types.end());
+    throw ConfigError(fmt::format("--egos vtype:{}: no vehicle of that type in {} (types: {})", selection.vehicleType,
+                                  job.mapFile.string(), fmt::join(types, ", ")));
+  }
+  if (exporter.samples() == 0) {
+    throw ConfigError(fmt::format("no complete window in {}: no Ego stayed {} s (history + horizon) in the network "
+                                  "between t = {} and {} s",
+                                  job.mapFile.string(), job.options.history + job.options.horizon, begin, end));
+  }
+}
+
+/// Simulates the map and writes the dataset to job.datasetPath (in a worker
+/// process: libsumo and the controllers run here). `progress` gets the
+/// simulated seconds so far and the seconds to simulate (0 if unknown).
+/// `lane_pool`, if given, receives the map's shared lane vectors (to join MPI parts).
+ExportSummary simulateAndWrite(const ExportJob& job, const std::function<void(double, double)>& progress,
+                               std::vector<vector::Feature>* lane_pool = nullptr) {
+  const ExportOptions& options = job.options;
+  const EgoSelection selection = EgoSelection::parse(options.egos);
+  auto registry = sim::ControllerRegistry::withBuiltins();
+  const sim::ControllerParams params(options.controllerParams, "command line: --controller-param");
+  if (options.closedLoop) {  // fail fast on an unknown controller or bad parameters
+    sim::makeController(registry, options.controller, options.controllerLibrary, fs::current_path(), params);
+  }
+  const auto chosen = chooseEgos(selection, options, job.simulation, job.mapFile);
+
+  sim::MapSimulation simulation(job.simulation);
+  for (const auto& failure : job.plannedFailures) simulation.scheduleFailure(failure.id, failure.time, failure.reason);
   const double begin = simulation.time();
   const double window_seconds = options.history + options.horizon;
   if (const auto end = simulation.endTime(); end && *end - begin < window_seconds) {
@@ -338,25 +393,17 @@ ExportSummary exportMap(const ExportOptions& options) {
   }
   const vector::LaneIndex lanes(simulation.lanes(), options.maxVectorLength);
 
-  auto registry = sim::ControllerRegistry::withBuiltins();
-  const sim::ControllerParams params(options.controllerParams, "command line: --controller-param");
-  if (options.closedLoop) {  // fail fast on an unknown controller or bad parameters
-    sim::makeController(registry, options.controller, options.controllerLibrary, fs::current_path(), params);
-  }
-
-  if (!options.output.parent_path().empty()) ensureDirectory(options.output.parent_path());
-  AtomicOutput output(options.output);
   vector::DatasetHeader header;
   header.kind = "map";
   header.step = options.step;
   header.horizon = stepsOf(options.horizon, options.step);
   header.history = stepsOf(options.history, options.step);
   header.compression = options.compression;
-  std::optional<vector::DatasetWriter> writer;
-  writer.emplace(output.tempPath(), header);
-  writer->setSharedVectors(lanes.pool());
-  const vector::Provenance provenance{map_file.string(), sha256OfFile(map_file), "", 0.0};
-  Exporter exporter(options, lanes, *writer, provenance, label);
+  vector::DatasetWriter writer(job.datasetPath, header);
+  writer.setSharedVectors(lanes.pool());
+  if (lane_pool) *lane_pool = lanes.pool();
+  const vector::Provenance provenance{job.mapFile.string(), sha256OfFile(job.mapFile), "", 0.0};
+  Exporter exporter(options, job.share, lanes, writer, provenance, job.label);
 
   std::unordered_set<std::string> seen_egos;
   std::unordered_set<std::string> seen_types;
@@ -369,79 +416,275 @@ ExportSummary exportMap(const ExportOptions& options) {
     }
   };
 
-  const auto end = simulation.endTime();
-  Progress progress(fmt::format("export {}", label), end ? static_cast<std::size_t>(*end - begin) : 0,
-                    "s simulated");
+  const double total = simulation.endTime() ? *simulation.endTime() - begin : 0.0;
+  progress(0.0, total);
   std::int64_t step = 0;
   double reported = begin;
+  std::uint64_t written = 0;
   while (simulation.step()) {
-    throwIfInterrupted();
     ++step;
     for (const auto& id : exporter.record(step, simulation.vehicles(), is_ego)) {
       seen_egos.insert(id);
-      if (options.closedLoop) {
+      if (!options.closedLoop) continue;
+      reportSimulationTime(simulation.time());
+      reportSubject(-1, id);
+      if (const auto reason = simulation.scheduledFailure(id)) {
+        simulation.failEgo(id, *reason);
+      } else {
         simulation.takeOver(id, sim::makeController(registry, options.controller, options.controllerLibrary,
                                                      fs::current_path(), params));
       }
     }
     exporter.emit(step, simulation.time());
     if (simulation.time() - reported >= 1.0) {
-      progress.advance(static_cast<std::size_t>(simulation.time() - reported));
-      reported += std::floor(simulation.time() - reported);
+      reported = simulation.time();
+      progress(reported - begin, total);
     }
+    if (exporter.samples() / 1000 > written / 1000) faultPoint("export.write");
+    written = exporter.samples();
     if (options.maxSamples > 0 && exporter.samples() >= options.maxSamples) break;
   }
-  progress.finish();
   exporter.finish();
-
-  if (selection.kind == EgoSelection::Kind::Ids) {
-    for (const auto& id : selection.ids) {
-      if (!seen_egos.count(id)) {
-        throw ConfigError(fmt::format("--egos: vehicle '{}' never appears in {} (between t = {} and {} s)", id,
-                                      map_file.string(), begin, simulation.time()));
-      }
-    }
-  }
-  if (selection.kind == EgoSelection::Kind::VehicleType && exporter.vehiclesSeen() > 0 &&
-      !seen_types.count(selection.vehicleType)) {
-    std::vector<std::string> types(seen_types.begin(), seen_types.end());
-    std::sort(types.begin(), types.end());
-    throw ConfigError(fmt::format("--egos vtype:{}: no vehicle of that type in {} (types: {})", selection.vehicleType,
-                                  map_file.string(), fmt::join(types, ", ")));
-  }
-  if (exporter.samples() == 0) {
-    throw ConfigError(fmt::format("no complete window in {}: no Ego stayed {} s (history + horizon) in the network "
-                                  "between t = {} and {} s",
-                                  map_file.string(), window_seconds, begin, simulation.time()));
-  }
-  writer->close();
-  writer.reset();
-  output.commit();
+  checkSelectionWasSeen(selection, job, exporter, seen_egos, seen_types, begin, simulation.time());
+  writer.close();
 
   ExportSummary summary;
-  summary.output = options.output;
-  summary.label = label;
   summary.samples = exporter.samples();
   summary.egos = exporter.egos();
   summary.windowsSkipped = exporter.skipped();
   summary.vehiclesSeen = exporter.vehiclesSeen();
   summary.laneVectors = lanes.vectors();
   summary.simulatedSeconds = simulation.time() - begin;
-  summary.seconds = secondsSince(start);
-  summary.samplesPerSecond = static_cast<double>(summary.samples) / std::max(summary.seconds, 1e-9);
-  summary.bytesPerSample = static_cast<double>(fs::file_size(options.output)) / static_cast<double>(summary.samples);
-  summary.closedLoop = options.closedLoop;
+  summary.failedEgos = simulation.failures();
   return summary;
 }
 
+enum class ExportMessage : char { Progress = 'P', Summary = 'S' };
+
+std::vector<char> encodeSummary(const ExportSummary& summary) {
+  ByteWriter writer;
+  writer.put<char>(static_cast<char>(ExportMessage::Summary));
+  writer.put(summary.samples);
+  writer.put(summary.egos);
+  writer.put(summary.windowsSkipped);
+  writer.put(summary.vehiclesSeen);
+  writer.put(summary.laneVectors);
+  writer.put(summary.simulatedSeconds);
+  writer.put<std::uint64_t>(summary.failedEgos.size());
+  for (const auto& failure : summary.failedEgos) {
+    writer.putString(failure.id);
+    writer.put(failure.time);
+    writer.putString(failure.reason);
+  }
+  return writer.bytes();
+}
+
+ExportSummary decodeSummary(ByteReader& reader) {
+  ExportSummary summary;
+  summary.samples = reader.get<std::uint64_t>();
+  summary.egos = reader.get<std::uint64_t>();
+  summary.windowsSkipped = reader.get<std::uint64_t>();
+  summary.vehiclesSeen = reader.get<std::uint64_t>();
+  summary.laneVectors = reader.get<std::uint64_t>();
+  summary.simulatedSeconds = reader.get<double>();
+  const auto failures = reader.get<std::uint64_t>();
+  for (std::uint64_t i = 0; i < failures; ++i) {
+    sim::EgoFailure failure;
+    failure.id = reader.getString();
+    failure.time = reader.get<double>();
+    failure.reason = reader.getString();
+    summary.failedEgos.push_back(std::move(failure));
+  }
+  return summary;
+}
+
+/// Runs simulateAndWrite in a worker process. A crash, exit() or hang of an
+/// Ego's controller fails that Ego: the export starts again (deterministically)
+/// with the Ego taken out when the fault happened. A fault of libsumo itself
+/// ends the export with one line.
+ExportSummary exportInWorker(ExportJob& job) {
+  std::optional<Progress> progress;
+  double shown = 0.0;
+  for (;;) {
+    WorkerPool pool(1, [&job](int, WorkerChannel& channel) {
+      const auto summary = simulateAndWrite(job, [&](double seconds, double total) {
+        ByteWriter message;
+        message.put<char>(static_cast<char>(ExportMessage::Progress));
+        message.put(seconds);
+        message.put(total);
+        channel.send(message.bytes());
+      });
+      channel.send(encodeSummary(summary));
+    }, job.options.watchdog);
+    try {
+      for (;;) {
+        const auto message = pool.receive(0);
+        ByteReader reader(message);
+        if (static_cast<ExportMessage>(reader.get<char>()) == ExportMessage::Summary) {
+          auto summary = decodeSummary(reader);
+          pool.finish();
+          if (progress) progress->finish();
+          return summary;
+        }
+        const double seconds = reader.get<double>();
+        const double total = reader.get<double>();
+        if (!progress) progress.emplace(fmt::format("export {}", job.label), static_cast<std::size_t>(total), "s simulated");
+        if (seconds > shown) {  // an attempt after a fault repeats what was shown
+          progress->advance(static_cast<std::size_t>(seconds) - static_cast<std::size_t>(shown));
+          shown = seconds;
+        }
+      }
+    } catch (const WorkerLost& lost) {
+      const auto& fault = lost.fault();
+      const auto& activity = fault.activity;
+      const bool ego_fault = activity.activity == Activity::Controller || activity.activity == Activity::SumoVehicles;
+      if (!ego_fault || activity.label.empty()) {
+        throw SumoError(fmt::format("{}: {} during {} at t = {:.1f} s", job.mapFile.string(),
+                                    activity.activity == Activity::Idle ? "the export's worker process " + fault.what()
+                                                                        : "libsumo " + fault.what(),
+                                    activityName(activity.activity), activity.time));
+      }
+      const std::string who = activity.activity == Activity::Controller ? "Ego controller" : "libsumo";
+      job.plannedFailures.push_back(
+          {activity.label, activity.time, fmt::format("{} {} at t = {:.1f} s", who, fault.what(), activity.time)});
+      spdlog::warn("Ego '{}': {}; exporting again without it from t = {:.1f} s", activity.label, fault.what(),
+                   activity.time);
+    }
+  }
+}
+
+/// The job of exporting `options` (the OpenDRIVE map converted into `work`).
+ExportJob makeJob(const ExportOptions& options, const TemporaryDirectory& work) {
+  ExportJob job{options, {}, options.source.mainFile(), "", "", {}, WindowShare{}};
+  job.simulation.source = options.source;
+  job.simulation.step = options.step;
+  job.simulation.begin = options.begin;
+  job.simulation.end = options.end;
+  job.simulation.seed = options.seed;
+  job.simulation.laneChangeDuration = options.laneChangeDuration;
+  if (!options.openDrive.empty()) {
+    job.simulation.source.net = work.path() / "opendrive.net.xml";
+    road::convertOpenDrive(options.openDrive, job.simulation.source.net);
+    job.mapFile = options.openDrive;
+  }
+  job.label = options.label.empty() ? job.mapFile.stem().string() : options.label;
+  return job;
+}
+
+/// Output, label, time and rates of a finished export of `options` (its output written).
+void finishSummary(ExportSummary& summary, const ExportOptions& options, const std::string& label,
+                   std::chrono::steady_clock::time_point start) {
+  summary.output = options.output;
+  summary.label = label;
+  summary.closedLoop = options.closedLoop;
+  summary.seconds = secondsSince(start);
+  summary.samplesPerSecond = static_cast<double>(summary.samples) / std::max(summary.seconds, 1e-9);
+  summary.bytesPerSample = static_cast<double>(fs::file_size(options.output)) /
+                           static_cast<double>(std::max<std::uint64_t>(summary.samples, 1));
+}
+
+/// <output's folder>/.<output name>.parts/part-K-of-N.h5: where rank K writes its windows.
+fs::path partPath(const fs::path& output, int rank, int ranks) {
+  return output.parent_path() / ("." + output.filename().string() + ".parts") /
+         fmt::format("part-{}-of-{}.h5", rank, ranks);
+}
+
+/// Rank 0: the ranks' parts joined in window order (window w is sample w / N of part
+/// w % N), copied bit for bit: the file a one-process export writes.
+void joinParts(const ExportOptions& options, const std::vector<vector::Feature>& lane_pool, std::uint64_t samples,
+               int ranks, const fs::path& target) {
+  std::vector<std::unique_ptr<vector::DatasetReader>> parts;
+  for (int r = 0; r < ranks; ++r) {
+    parts.push_back(std::make_unique<vector::DatasetReader>(partPath(options.output, r, ranks)));
+  }
+  vector::DatasetHeader header = parts.front()->header();
+  header.compression = options.compression;
+  vector::DatasetWriter writer(target, header);
+  writer.setSharedVectors(lane_pool);
+  const auto n = static_cast<std::uint64_t>(ranks);
+  for (std::uint64_t w = 0; w < samples; ++w) writer.appendCopy(*parts[w % n], w / n);
+  writer.close();
+}
+
+}  // namespace
+
+ExportSummary exportMap(const ExportOptions& options) {
+  options.validate();
+  const auto start = std::chrono::steady_clock::now();
+  TemporaryDirectory work("vsd-export");
+  ExportJob job = makeJob(options, work);
+  if (!options.output.parent_path().empty()) ensureDirectory(options.output.parent_path());
+  AtomicOutput output(options.output);
+  job.datasetPath = output.tempPath();
+  ExportSummary summary = exportInWorker(job);
+  output.commitUnlessInterrupted();
+  finishSummary(summary, options, job.label, start);
+  return summary;
+}
+
+ClusterExportResult exportOnCluster(const ExportOptions& options, Communicator& communicator) {
+  const auto start = std::chrono::steady_clock::now();
+  const int rank = communicator.rank();
+  const int ranks = communicator.size();
+  const fs::path mine = partPath(options.output, rank, ranks);
+  // Parts are read once, by rank 0: not compressed (the joined file is).
+  ExportOptions part_options = options;
+  part_options.compression = 0;
+  std::optional<TemporaryDirectory> work;
+  std::optional<ExportJob> job;
+  ExportSummary summary;
+  std::vector<vector::Feature> lane_pool;
+  std::string failure;
+  try {
+    options.validate();
+    ensureDirectory(mine.parent_path());
+    work.emplace("vsd-export");
+    job.emplace(makeJob(part_options, *work));
+    job->share = WindowShare{static_cast<std::uint64_t>(rank), static_cast<std::uint64_t>(ranks)};
+    job->datasetPath = mine;
+    // In this process (a rank is its own process already): the lane pool is needed to join.
+    summary = simulateAndWrite(*job, [](double, double) {}, &lane_pool);
+  } catch (const Error& error) {
+    failure = error.what();
+  }
+  // Every rank simulates the whole map, so faults of the map or the options occur on
+  // every rank alike: rank 0 reports the first one, once.
+  if (!checkOnEveryRank(communicator, [&] {
+        if (!failure.empty()) throw ConfigError(failure);
+      })) {
+    std::error_code ignored;
+    fs::remove(mine, ignored);
+    return {1, {}};
+  }
+  ClusterExportResult result;
+  if (rank != 0) return result;
+  AtomicOutput output(options.output);
+  workOrEndJob(communicator, "joining the parts",
+               [&] { joinParts(options, lane_pool, summary.samples, ranks, output.tempPath()); });
+  output.commit();
+  std::error_code ignored;
+  fs::remove_all(mine.parent_path(), ignored);
+  finishSummary(summary, options, job->label, start);
+  result.report = fmt::format("{} MPI ranks, windows spread over them (window w on rank w mod {}); parts joined by "
+                              "rank 0\n",
+                              ranks, ranks) +
+                  summary.report();
+  return result;
+}
+
 std::string ExportSummary::report() const {
-  return fmt::format(
+  std::string text = fmt::format(
       "{}: {} samples from {} Egos{} ({} vehicles seen, {:.0f} s simulated) in {:.2f} s = {:.0f} samples/s\n"
       "  windows skipped (Ego left the network before the window ended): {}\n"
-      "  lane-boundary vectors in the network: {}\n"
-      "  {} ({:.0f} bytes per sample)\n",
+      "  lane-boundary vectors in the network: {}\n",
       label, samples, egos, closedLoop ? " driven by the controller (closed loop)" : "", vehiclesSeen,
-      simulatedSeconds, seconds, samplesPerSecond, windowsSkipped, laneVectors, output.string(), bytesPerSample);
+      simulatedSeconds, seconds, samplesPerSecond, windowsSkipped, laneVectors);
+  if (!failedEgos.empty()) {
+    text += fmt::format("  Egos taken out because their controller failed: {}\n", failedEgos.size());
+    for (const auto& failure : failedEgos) text += fmt::format("    {}: {}\n", failure.id, failure.reason);
+  }
+  text += fmt::format("  {} ({:.0f} bytes per sample)\n", output.string(), bytesPerSample);
+  return text;
 }
 
 }  // namespace vsd::pipeline

@@ -12,9 +12,12 @@
 #include <fstream>
 #include <optional>
 #include <regex>
+#include <set>
 
+#include "vsd/core/activity.hpp"
 #include "vsd/core/csv.hpp"
 #include "vsd/core/error.hpp"
+#include "vsd/core/fault.hpp"
 #include "vsd/core/files.hpp"
 #include "vsd/core/interrupt.hpp"
 #include "vsd/core/log.hpp"
@@ -38,6 +41,7 @@ void RunOptions::validate() const {
     throw ConfigError::field("command line", "--samples", std::to_string(samples), "1 .. 100000000");
   }
   if (jobs < 1 || jobs > 256) throw ConfigError::field("command line", "--jobs", std::to_string(jobs), "1 .. 256");
+  watchdog.validate();
   if (batch < 1 || batch > road::BatchLayout::kMaxBatch) {
     throw ConfigError::field("command line", "--batch", std::to_string(batch),
                              fmt::format("1 .. {}", road::BatchLayout::kMaxBatch));
@@ -55,6 +59,40 @@ struct Context {
   fs::path workDir;
   std::size_t batches = 0;
   bool keepBatchFiles = false;
+  road::NetWriter netWriter = road::NetWriter::Direct;
+  std::optional<ShardInfo> shard;
+
+  std::uint64_t firstIndexOf(std::size_t batch) const { return options.firstSample + batch * options.batch; }
+  std::uint64_t endIndexOf(std::size_t batch) const {
+    return std::min(options.firstSample + options.samples, firstIndexOf(batch) + options.batch);
+  }
+};
+
+/// What the parent has learnt from workers that died or hung. Only the parent
+/// changes it; a worker started afterwards is a fork and reads its copy to
+/// resume where its predecessor stopped, without the scenario that brought it down.
+struct RecoveryPlan {
+  /// Scenarios failed by a fault of their controller or of libsumo: index -> reason.
+  std::map<std::uint64_t, std::string> failed;
+  /// Scenarios whose outcome the parent already holds (sent before a later fault).
+  std::set<std::uint64_t> done;
+  /// batch -> groups of scenarios simulated in separate libsumo sessions (absent: one group).
+  /// A fault inside a shared simulation step splits its group, until it is isolated.
+  std::map<std::size_t, std::vector<std::vector<std::uint64_t>>> groups;
+  /// Batches whose network netconvert finished: a restarted worker reuses it.
+  std::set<std::size_t> netReady;
+  /// batch -> faults that could not be attributed (a retry, then the run stops).
+  std::map<std::size_t, int> unattributed;
+  /// Per worker: the batch the worker (re)starts with.
+  std::vector<std::size_t> resumeAt;
+
+  std::vector<std::vector<std::uint64_t>> groupsOf(const Context& context, std::size_t batch) const {
+    const auto it = groups.find(batch);
+    if (it != groups.end()) return it->second;
+    std::vector<std::uint64_t> all;
+    for (auto index = context.firstIndexOf(batch); index < context.endIndexOf(batch); ++index) all.push_back(index);
+    return {all};
+  }
 };
 
 struct PreparedBatch {
@@ -64,9 +102,14 @@ struct PreparedBatch {
   std::vector<road::RoadGeometry> roads;
   std::vector<std::string> preFailure;  ///< per scenario: why it cannot be simulated (empty: fine)
   std::optional<road::PendingNetwork> pending;
+  fs::path readyNet;  ///< a network a previous worker finished for this batch
 };
 
 std::vector<std::string> netconvertOptions(const Context& context) { return context.logical->sumo.netconvertOptions; }
+
+/// Outcomes of one group of a batch ('G'), or the batch's remaining outcomes
+/// that needed no simulation ('B', the batch's last message).
+enum class Part : char { Group = 'G', BatchEnd = 'B' };
 
 ScenarioWithRoad concreteScenario(const std::shared_ptr<const scenario::LogicalScenario>& logical,
                                   const RunOptions& options, std::uint64_t index) {
@@ -76,21 +119,21 @@ ScenarioWithRoad concreteScenario(const std::shared_ptr<const scenario::LogicalS
   return {std::move(concrete), std::move(road)};
 }
 
-/// Prepares, converts and simulates batches; one per process.
+/// Prepares, converts and simulates batches; one per worker process.
 class BatchProcessor {
  public:
-  explicit BatchProcessor(const Context& context) : context_(context), registry_(sim::ControllerRegistry::withBuiltins()) {}
+  using Send = std::function<void(Part, const std::vector<ScenarioOutcome>&)>;
+
+  BatchProcessor(const Context& context, const RecoveryPlan& plan)
+      : context_(context), plan_(plan), registry_(sim::ControllerRegistry::withBuiltins()) {}
 
   PreparedBatch prepare(std::size_t number) {
     const auto t_start = std::chrono::steady_clock::now();
     PreparedBatch batch;
     batch.number = number;
     batch.stem = context_.workDir / fmt::format("batch_{:05}", number);
-    const std::uint64_t first = context_.options.firstSample + number * context_.options.batch;
-    const std::uint64_t last =
-        std::min(context_.options.firstSample + context_.options.samples, first + context_.options.batch);
     road::NetworkBuilder builder;
-    for (std::uint64_t index = first; index < last; ++index) {
+    for (std::uint64_t index = context_.firstIndexOf(number); index < context_.endIndexOf(number); ++index) {
       auto [concrete, road] = concreteScenario(context_.logical, context_.options, index);
       batch.scenarios.push_back(std::move(concrete));
       batch.roads.push_back(std::move(road));
@@ -104,16 +147,28 @@ class BatchProcessor {
       }
       batch.preFailure.push_back(failure);
     }
-    if (!builder.empty()) {
-      builder.writePlainXml(batch.stem);
-      batch.pending = road::PendingNetwork::start(batch.stem, netconvertOptions(context_));
+    const fs::path ready = batch.stem.string() + ".net.xml";
+    if (plan_.netReady.count(number) && fs::exists(ready)) {
+      batch.readyNet = ready;
+    } else if (!builder.empty()) {
+      batch.pending = buildNetwork(builder, batch.stem);
     }
     spdlog::debug("batch {}: sampled and wrote {} roads in {:.3f} s", number, batch.scenarios.size(),
                   secondsSince(t_start));
     return batch;
   }
 
-  std::vector<ScenarioOutcome> finish(PreparedBatch& batch) {
+  road::PendingNetwork buildNetwork(const road::NetworkBuilder& builder, const fs::path& stem) const {
+    if (context_.netWriter == road::NetWriter::Direct && builder.directlyWritable()) {
+      if (context_.keepBatchFiles) builder.writePlainXml(stem);  // for netedit users
+      return road::PendingNetwork::ready(builder.writeSumoNet(stem));
+    }
+    builder.writePlainXml(stem);
+    return road::PendingNetwork::start(stem, netconvertOptions(context_));
+  }
+
+  /// Simulates the batch, sending each group's outcomes as it completes, then the rest.
+  void finish(PreparedBatch& batch, const Send& send) {
     const auto t_start = std::chrono::steady_clock::now();
     std::vector<ScenarioOutcome> outcomes(batch.scenarios.size());
     for (std::size_t i = 0; i < batch.scenarios.size(); ++i) {
@@ -121,37 +176,50 @@ class BatchProcessor {
       outcomes[i].inputs = batch.scenarios[i].inputs;
       outcomes[i].failure = batch.preFailure[i];
       outcomes[i].egoLane = batch.scenarios[i].ego.lane;
+      const auto failed = plan_.failed.find(outcomes[i].index);
+      if (failed != plan_.failed.end()) outcomes[i].failure = failed->second;
     }
     double wait_seconds = 0.0;
-    if (batch.pending) {
-      const fs::path net = convertIsolatingFailures(batch, outcomes);
+    std::vector<bool> sent(outcomes.size(), false);
+    if (batch.pending || !batch.readyNet.empty()) {
+      fs::path net = batch.readyNet;
+      if (net.empty()) net = convertIsolatingFailures(batch, outcomes);
+      else reportMarker(static_cast<std::int64_t>(batch.number));
       wait_seconds = secondsSince(t_start);
-      simulate(batch, net, outcomes);
+      simulateGroups(batch, net, outcomes, sent, send);
     }
-    const double simulate_seconds = secondsSince(t_start) - wait_seconds;
-    const std::size_t metric_count = context_.metricSet->names().size();
-    for (auto& outcome : outcomes) {
-      if (!outcome.ok()) {
-        outcome.metrics.assign(metric_count, std::numeric_limits<double>::quiet_NaN());
-        continue;
-      }
-      const auto lane = static_cast<std::size_t>(outcome.egoLane);
-      const Polyline lane_centre = lane < outcome.lanes.size() ? outcome.lanes[lane].centre : Polyline{};
-      outcome.metrics = context_.metricSet->evaluate({outcome.trace, lane_centre});
+    std::vector<ScenarioOutcome> rest;
+    for (std::size_t i = 0; i < outcomes.size(); ++i) {
+      if (!sent[i] && !plan_.done.count(outcomes[i].index)) rest.push_back(withMetrics(std::move(outcomes[i])));
     }
+    send(Part::BatchEnd, rest);
     if (!context_.keepBatchFiles) removeBatchFiles(batch.stem);
-    spdlog::debug("batch {}: waited {:.3f} s for netconvert, simulated {:.3f} s, metrics {:.3f} s", batch.number,
-                  wait_seconds, simulate_seconds, secondsSince(t_start) - wait_seconds - simulate_seconds);
-    return outcomes;
+    spdlog::debug("batch {}: waited {:.3f} s for netconvert, simulated and computed metrics in {:.3f} s", batch.number,
+                  wait_seconds, secondsSince(t_start) - wait_seconds);
   }
 
  private:
+  ScenarioOutcome withMetrics(ScenarioOutcome outcome) const {
+    if (!outcome.ok()) {
+      outcome.metrics.assign(context_.metricSet->names().size(), std::numeric_limits<double>::quiet_NaN());
+      return outcome;
+    }
+    const auto lane = static_cast<std::size_t>(outcome.egoLane);
+    const Polyline lane_centre = lane < outcome.lanes.size() ? outcome.lanes[lane].centre : Polyline{};
+    outcome.metrics = context_.metricSet->evaluate({outcome.trace, lane_centre});
+    return outcome;
+  }
+
   /// Converts the batch's network. If netconvert fails, each scenario is
   /// converted alone to find the culprits, which fail; if every scenario fails
   /// alone too, the fault is systemic and the run stops.
   fs::path convertIsolatingFailures(PreparedBatch& batch, std::vector<ScenarioOutcome>& outcomes) {
+    const ActivityScope converting(Activity::Netconvert);
+    faultPoint("netconvert.wait");
     try {
-      return batch.pending->wait();
+      fs::path net = batch.pending->wait();
+      reportMarker(static_cast<std::int64_t>(batch.number));  // reusable by a restarted worker
+      return net;
     } catch (const SumoError& batch_error) {
       std::size_t succeeded = 0;
       road::NetworkBuilder good;
@@ -177,26 +245,50 @@ class BatchProcessor {
     }
   }
 
-  void simulate(const PreparedBatch& batch, const fs::path& net, std::vector<ScenarioOutcome>& outcomes) {
+  /// Each group is one libsumo session; scenarios done or failed before are skipped.
+  void simulateGroups(const PreparedBatch& batch, const fs::path& net, std::vector<ScenarioOutcome>& outcomes,
+                      std::vector<bool>& sent, const Send& send) {
+    std::map<std::uint64_t, std::size_t> position;
+    for (std::size_t i = 0; i < batch.scenarios.size(); ++i) position[batch.scenarios[i].index] = i;
+    const auto groups = plan_.groupsOf(context_, batch.number);
+    for (std::size_t g = 0; g < groups.size(); ++g) {
+      std::vector<std::size_t> members;
+      for (const auto index : groups[g]) {
+        const std::size_t i = position.at(index);
+        if (outcomes[i].failure.empty() && !plan_.done.count(index)) members.push_back(i);
+      }
+      if (members.empty()) continue;
+      reportUnit(static_cast<std::int64_t>(g));
+      const fs::path fcd = groups.size() == 1 ? batch.stem.string() + ".fcd.xml"
+                                              : batch.stem.string() + fmt::format(".group{}.fcd.xml", g);
+      simulate(batch, net, members, fcd, outcomes);
+      std::vector<ScenarioOutcome> part;
+      for (const auto i : members) {
+        part.push_back(withMetrics(std::move(outcomes[i])));
+        sent[i] = true;
+      }
+      send(Part::Group, part);
+    }
+    reportUnit(-1);
+  }
+
+  void simulate(const PreparedBatch& batch, const fs::path& net, const std::vector<std::size_t>& members,
+                const fs::path& fcd, std::vector<ScenarioOutcome>& outcomes) {
     std::vector<sim::ScenarioRun> runs;
-    std::vector<std::size_t> positions;
-    for (std::size_t i = 0; i < batch.scenarios.size(); ++i) {
-      if (!outcomes[i].failure.empty()) continue;
+    for (const auto i : members) {
       const auto index = batch.scenarios[i].index;
       runs.push_back({&batch.scenarios[i], &batch.roads[i], context_.layout.offsetFor(index)});
-      positions.push_back(i);
     }
-    if (runs.empty()) return;
     sim::BatchOptions options;
     options.step = context_.logical->step;
     options.steps = context_.logical->steps();
     options.collisionAction = context_.logical->sumo.collisionAction;
     options.sumoOptions = context_.logical->sumo.sumoOptions;
     options.scenarioDir = context_.logical->sourceFile.parent_path();
-    if (context_.options.fcd) options.fcdOutput = batch.stem.string() + ".fcd.xml";
+    if (context_.options.fcd) options.fcdOutput = fcd;
     auto results = sim::simulateBatch(net, runs, registry_, options);
     for (std::size_t r = 0; r < results.size(); ++r) {
-      auto& outcome = outcomes[positions[r]];
+      auto& outcome = outcomes[members[r]];
       outcome.failure = std::move(results[r].failure);
       outcome.trace = std::move(results[r].trace);
       outcome.lanes = std::move(results[r].lanes);
@@ -211,14 +303,15 @@ class BatchProcessor {
   }
 
   const Context& context_;
+  const RecoveryPlan& plan_;
   sim::ControllerRegistry registry_;
 };
 
 /// Processes batches first, first + stride, ... with netconvert for the next
 /// batch running while the current one is simulated.
-template <typename Deliver>
-void processBatches(const Context& context, std::size_t first, std::size_t stride, Deliver&& deliver) {
-  BatchProcessor processor(context);
+void processBatches(const Context& context, const RecoveryPlan& plan, std::size_t first, std::size_t stride,
+                    const BatchProcessor::Send& send) {
+  BatchProcessor processor(context, plan);
   std::deque<PreparedBatch> ahead;
   std::size_t next = first;
   auto prepare_next = [&] {
@@ -229,13 +322,136 @@ void processBatches(const Context& context, std::size_t first, std::size_t strid
   };
   prepare_next();
   while (!ahead.empty()) {
-    throwIfInterrupted();
     prepare_next();  // starts netconvert for the following batch before simulating this one
     PreparedBatch batch = std::move(ahead.front());
     ahead.pop_front();
-    deliver(batch.number, processor.finish(batch));
+    processor.finish(batch, send);
   }
 }
+
+/// Why a scenario failed, from the fault of the worker that simulated it.
+std::string faultReason(const WorkerFault& fault) {
+  const auto& activity = fault.activity;
+  switch (activity.activity) {
+    case Activity::Controller:
+      return fmt::format("Ego controller {} at t = {:.1f} s", fault.what(), activity.time);
+    case Activity::SumoVehicles:
+      return fmt::format("libsumo {} handling the scenario's vehicles at t = {:.1f} s", fault.what(), activity.time);
+    case Activity::SumoStep:
+      return fmt::format("libsumo {} in a simulation step at t = {:.1f} s (isolated to this scenario)", fault.what(),
+                         activity.time);
+    case Activity::SumoLoad: return fmt::format("libsumo {} loading the network", fault.what());
+    case Activity::Netconvert: return fmt::format("netconvert {}", fault.what());
+    case Activity::Idle: break;
+  }
+  return fmt::format("worker process {}", fault.what());
+}
+
+/// Receives the outcomes of each batch from its worker, in sample order, and
+/// turns worker faults into failed scenarios: the worker is restarted where it
+/// stopped, without the scenario (or group) that brought it down.
+class BatchCollector {
+ public:
+  BatchCollector(const Context& context, RecoveryPlan& plan, WorkerPool& pool)
+      : context_(context), plan_(plan), pool_(pool) {}
+
+  std::vector<ScenarioOutcome> collect(std::size_t batch) {
+    const int worker = static_cast<int>(batch % static_cast<std::size_t>(pool_.size()));
+    std::map<std::uint64_t, ScenarioOutcome> received;
+    for (;;) {
+      std::vector<char> message;
+      try {
+        message = pool_.receive(worker);
+      } catch (const WorkerLost& lost) {
+        recordLoss(batch, lost);
+        plan_.resumeAt[static_cast<std::size_t>(worker)] = batch;
+        pool_.restart(worker);
+        continue;
+      }
+      const auto part = static_cast<Part>(message.back());
+      message.pop_back();
+      for (auto& outcome : decodeOutcomes(message)) {
+        plan_.done.insert(outcome.index);
+        received[outcome.index] = std::move(outcome);
+      }
+      if (part == Part::BatchEnd) break;
+    }
+    forget(batch);
+    std::vector<ScenarioOutcome> outcomes;
+    for (auto& [index, outcome] : received) outcomes.push_back(std::move(outcome));
+    if (outcomes.size() != context_.endIndexOf(batch) - context_.firstIndexOf(batch)) {
+      throw Error(fmt::format("internal: batch {} came back with {} of {} scenarios", batch, outcomes.size(),
+                              context_.endIndexOf(batch) - context_.firstIndexOf(batch)));
+    }
+    return outcomes;
+  }
+
+ private:
+  void recordLoss(std::size_t batch, const WorkerLost& lost) {
+    const auto& fault = lost.fault();
+    const auto& activity = fault.activity;
+    spdlog::debug("batch {}: {}", batch, lost.what());
+    if (activity.marker == static_cast<std::int64_t>(batch)) plan_.netReady.insert(batch);
+    const bool per_scenario = activity.activity == Activity::Controller || activity.activity == Activity::SumoVehicles;
+    if (per_scenario && activity.subject >= 0) {
+      plan_.failed[static_cast<std::uint64_t>(activity.subject)] = faultReason(fault);
+      return;
+    }
+    if (activity.activity == Activity::Netconvert) {
+      failAll(batch, plan_.groupsOf(context_, batch), faultReason(fault));
+      return;
+    }
+    if ((activity.activity == Activity::SumoStep || activity.activity == Activity::SumoLoad) && activity.unit >= 0) {
+      isolate(batch, static_cast<std::size_t>(activity.unit), fault);
+      return;
+    }
+    if (++plan_.unattributed[batch] > 1) {
+      throw SumoError(fmt::format("{} twice while simulating batch {} (outside any controller or libsumo call)",
+                                  lost.what(), batch));
+    }
+  }
+
+  /// A fault of a whole libsumo session: a network that cannot load fails its
+  /// group; a step splits the group in halves until one scenario is left.
+  void isolate(std::size_t batch, std::size_t unit, const WorkerFault& fault) {
+    auto groups = plan_.groupsOf(context_, batch);
+    if (unit >= groups.size()) throw Error(fmt::format("internal: batch {} has no group {}", batch, unit));
+    std::vector<std::uint64_t> pending;
+    for (const auto index : groups[unit]) {
+      if (!plan_.failed.count(index) && !plan_.done.count(index)) pending.push_back(index);
+    }
+    if (fault.activity.activity == Activity::SumoLoad || pending.size() <= 1) {
+      failAll(batch, {pending}, faultReason(fault));
+      return;
+    }
+    const auto half = pending.begin() + static_cast<std::ptrdiff_t>(pending.size() / 2);
+    groups[unit] = std::vector<std::uint64_t>(pending.begin(), half);
+    groups.insert(groups.begin() + static_cast<std::ptrdiff_t>(unit) + 1, std::vector<std::uint64_t>(half, pending.end()));
+    plan_.groups[batch] = groups;
+  }
+
+  /// A completed batch needs no recovery state any more (it would grow with the run).
+  void forget(std::size_t batch) {
+    plan_.done.clear();  // only the batch being collected has entries
+    plan_.failed.erase(plan_.failed.lower_bound(context_.firstIndexOf(batch)),
+                       plan_.failed.lower_bound(context_.endIndexOf(batch)));
+    plan_.groups.erase(batch);
+    plan_.netReady.erase(batch);
+    plan_.unattributed.erase(batch);
+  }
+
+  void failAll(std::size_t, const std::vector<std::vector<std::uint64_t>>& groups, const std::string& reason) {
+    for (const auto& group : groups) {
+      for (const auto index : group) {
+        if (!plan_.done.count(index)) plan_.failed[index] = reason;
+      }
+    }
+  }
+
+  const Context& context_;
+  RecoveryPlan& plan_;
+  WorkerPool& pool_;
+};
 
 /// Groups failure messages that differ only in numbers ("at t = 3.4 s").
 std::string failureKind(const std::string& failure) {
@@ -302,15 +518,14 @@ class SummaryBuilder {
   std::vector<double> sums_;
 };
 
-/// concrete.csv + traces.h5 + dataset.h5, written under temporary names.
+/// concrete.csv + traces.h5 + dataset.h5, staged in the output folder.
 class RunFiles {
  public:
-  RunFiles(const Context& context, const fs::path& out, const std::vector<std::string>& metric_names)
-      : csvOutput_(out / "concrete.csv"), traceOutput_(out / "traces.h5"), datasetOutput_(out / "dataset.h5"),
-        logical_(*context.logical), seed_(context.options.seed),
+  RunFiles(const Context& context, const OutputFolder& folder, const std::vector<std::string>& metric_names)
+      : folder_(folder), logical_(*context.logical), seed_(context.options.seed),
         scenarioSha256_(sha256OfFile(context.logical->sourceFile)) {
-    csvStream_.open(csvOutput_.tempPath(), std::ios::binary | std::ios::trunc);
-    if (!csvStream_) throw IoError(csvOutput_.finalPath().string() + ": cannot open for writing");
+    csvStream_.open(folder_.stage(kCsv), std::ios::binary | std::ios::trunc);
+    if (!csvStream_) throw IoError((folder_.path() / kCsv).string() + ": cannot open for writing");
     csv_.emplace(csvStream_);
     std::vector<std::string> header = {"functional_scenario", "sample", "seed", "status", "failure"};
     for (const auto& input : logical_.inputs) header.push_back(input.name);
@@ -325,7 +540,7 @@ class RunFiles {
       lengths.push_back(other.length);
       widths.push_back(other.width);
     }
-    traces_.emplace(traceOutput_.tempPath(), logical_.name, logical_.step,
+    traces_.emplace(folder_.stage(kTraces), logical_.name, logical_.step,
                     static_cast<std::size_t>(logical_.steps()) + 1, ids, lengths, widths);
     vector::DatasetHeader dataset_header;
     dataset_header.kind = "generated";
@@ -334,7 +549,7 @@ class RunFiles {
     dataset_header.inputNames = logical_.inputNames();
     dataset_header.metricNames = metric_names;
     dataset_header.compression = context.options.compression;
-    dataset_.emplace(datasetOutput_.tempPath(), dataset_header);
+    dataset_.emplace(folder_.stage(kDataset), dataset_header);
     emptyTrace_.step = logical_.step;
     for (std::size_t v = 0; v < ids.size(); ++v) {
       VehicleTrack track;
@@ -363,23 +578,25 @@ class RunFiles {
     return scene;
   }
 
-  /// Finishes both files and renames them into place.
-  std::vector<fs::path> commit() {
-    csvStream_.flush();
-    if (!csvStream_) throw IoError(csvOutput_.finalPath().string() + ": write failed (disk full?)");
+  /// Completes and closes the three files (still staged).
+  void close() {
     csvStream_.close();
+    if (!csvStream_) throw IoError((folder_.path() / kCsv).string() + ": write failed (disk full?)");
+    folder_.staged(kCsv);
     traces_->close();
+    traces_.reset();
+    folder_.staged(kTraces);
     dataset_->close();
-    csvOutput_.commit();
-    traceOutput_.commit();
-    datasetOutput_.commit();
-    return {csvOutput_.finalPath(), traceOutput_.finalPath(), datasetOutput_.finalPath()};
+    dataset_.reset();
+    folder_.staged(kDataset);
   }
 
  private:
-  AtomicOutput csvOutput_;
-  AtomicOutput traceOutput_;
-  AtomicOutput datasetOutput_;
+  static constexpr const char* kCsv = "concrete.csv";
+  static constexpr const char* kTraces = "traces.h5";
+  static constexpr const char* kDataset = "dataset.h5";
+
+  const OutputFolder& folder_;
   const scenario::LogicalScenario& logical_;
   std::uint64_t seed_;
   std::string scenarioSha256_;
@@ -390,9 +607,10 @@ class RunFiles {
   Trace emptyTrace_;
 };
 
-
-void writeManifest(const Context& context, const RunSummary& summary, const fs::path& out,
-                   const std::vector<fs::path>& outputs, const std::string& started) {
+/// The run's description; the output folder adds every file's hash and size and
+/// writes it last. `first_sample` and `samples` say which concrete scenarios the
+/// folder holds (a shard of a larger sweep, to be merged).
+nlohmann::json runManifest(const Context& context, const RunSummary& summary, const std::string& started) {
   nlohmann::json manifest;
   manifest["tool"] = "vsd-sumo";
   manifest["tool_version"] = toolVersion();
@@ -406,53 +624,72 @@ void writeManifest(const Context& context, const RunSummary& summary, const fs::
   manifest["samples"] = context.options.samples;
   manifest["batch"] = context.options.batch;
   manifest["jobs"] = context.options.jobs;
+  manifest["step_timeout"] = context.options.watchdog.stepTimeout;
   manifest["started"] = started;
   manifest["finished"] = utcTimestamp();
   manifest["seconds"] = summary.seconds;
   manifest["ok"] = summary.ok;
   manifest["failed"] = summary.failed;
   manifest["collisions"] = summary.collisions;
+  if (context.shard) manifest["shard"] = nlohmann::json::parse(context.shard->toJson());
+  manifest["worker_restarts"] = summary.workerRestarts;
   manifest["inputs"] = summary.inputNames;
   manifest["metrics"] = summary.metricNames;
-  nlohmann::json files = nlohmann::json::object();
-  for (const auto& path : outputs) {
-    if (fs::is_regular_file(path)) files[fs::relative(path, out).string()] = {{"sha256", sha256OfFile(path)},
-                                                                             {"bytes", fs::file_size(path)}};
-  }
-  manifest["outputs"] = files;
-  writeTextFileAtomically(out / "manifest.json", manifest.dump(2) + "\n");
+  return manifest;
 }
 
-/// Moves kept nets / FCD files from the work directory into <out>/nets and <out>/fcd.
-std::vector<fs::path> publishBatchFiles(const Context& context, const fs::path& out) {
-  std::vector<fs::path> published;
-  const fs::path nets = out / "nets";
-  const fs::path fcd = out / "fcd";
-  std::error_code ignored;
-  fs::remove_all(nets, ignored);
-  fs::remove_all(fcd, ignored);
-  ensureDirectory(nets);
-  if (context.options.fcd) ensureDirectory(fcd);
+/// Moves kept nets / FCD files from the work directory into the staged nets/ and fcd/.
+void stageBatchFiles(const Context& context, const OutputFolder& folder) {
   for (std::size_t b = 0; b < context.batches; ++b) {
     const std::string stem = fmt::format("batch_{:05}", b);
     for (const char* suffix : {".nod.xml", ".edg.xml", ".net.xml"}) {
       const fs::path source = context.workDir / (stem + suffix);
-      if (fs::exists(source)) fs::rename(source, nets / (stem + suffix));
+      if (fs::exists(source)) fs::rename(source, folder.stage(fs::path("nets") / (stem + suffix)));
     }
-    if (fs::exists(nets / (stem + ".net.xml"))) {
-      writeTextFileAtomically(nets / (stem + ".sumocfg"),
-                              fmt::format("<configuration>\n  <input>\n    <net-file value=\"{}.net.xml\"/>\n  </input>\n"
-                                          "  <time>\n    <step-length value=\"{}\"/>\n  </time>\n</configuration>\n",
-                                          stem, context.logical->step));
-      published.push_back(nets / (stem + ".net.xml"));
-    }
-    const fs::path fcd_source = context.workDir / (stem + ".fcd.xml");
-    if (context.options.fcd && fs::exists(fcd_source)) {
-      fs::rename(fcd_source, fcd / (stem + ".fcd.xml"));
-      published.push_back(fcd / (stem + ".fcd.xml"));
+    if (fs::exists(folder.stagingPath() / "nets" / (stem + ".net.xml"))) {
+      folder.stageText(fs::path("nets") / (stem + ".sumocfg"),
+                       fmt::format("<configuration>\n  <input>\n    <net-file value=\"{}.net.xml\"/>\n  </input>\n"
+                                   "  <time>\n    <step-length value=\"{}\"/>\n  </time>\n</configuration>\n",
+                                   stem, context.logical->step));
     }
   }
-  return published;
+  if (!context.options.fcd) return;
+  for (const auto& entry : fs::directory_iterator(context.workDir)) {
+    const std::string name = entry.path().filename().string();
+    if (name.rfind("batch_", 0) == 0 && name.size() > 8 && name.compare(name.size() - 8, 8, ".fcd.xml") == 0) {
+      fs::rename(entry.path(), folder.stage(fs::path("fcd") / name));
+    }
+  }
+}
+
+/// Fails fast on problems every scenario would hit (unknown controller, bad
+/// parameters, a plugin that cannot be loaded) before any output is created.
+/// The probe runs the controller's code, so it runs in a worker: a probe that
+/// crashes or hangs proves nothing about the run (its scenario will record it).
+void probeController(const std::shared_ptr<const scenario::LogicalScenario>& logical, const RunOptions& options) {
+  WorkerPool probe(1, [&](int, WorkerChannel&) {
+    auto concrete = concreteScenario(logical, options, options.firstSample).concrete;
+    auto registry = sim::ControllerRegistry::withBuiltins();
+    sim::makeController(registry, logical->ego.controller.name, logical->ego.controller.library,
+                        logical->sourceFile.parent_path(),
+                        sim::ControllerParams(concrete.controllerParams, logical->ego.controller.where));
+  }, options.watchdog);
+  try {
+    probe.finish();
+  } catch (const WorkerLost& lost) {
+    spdlog::debug("controller probe: {}", lost.what());
+  }
+}
+
+road::NetWriter chooseNetWriter(const scenario::LogicalScenario& logical, const RunOptions& options) {
+  const bool needs_netconvert = !logical.sumo.netconvertOptions.empty();
+  if (!options.netWriter) return needs_netconvert ? road::NetWriter::Netconvert : road::NetWriter::Direct;
+  if (*options.netWriter == road::NetWriter::Direct && needs_netconvert) {
+    throw ConfigError(fmt::format("{}: sumo.netconvert_options need netconvert: use --net-writer netconvert "
+                                  "(or leave --net-writer unset)",
+                                  logical.sourceFile.string()));
+  }
+  return *options.netWriter;
 }
 
 }  // namespace
@@ -461,15 +698,136 @@ RunSummary runScenarios(const RunOptions& options, const OutcomeCallback& on_out
   return runScenarios(scenario::loadLogicalScenario(options.scenarioFile), options, on_outcome);
 }
 
+namespace {
+
+RunSummary runRange(const std::shared_ptr<const scenario::LogicalScenario>& logical, const RunOptions& options,
+                    const std::optional<ShardInfo>& shard, const OutcomeCallback& on_outcome);
+
+fs::path outputFolder(const scenario::LogicalScenario& logical, const RunOptions& options) {
+  return options.outputDir.empty() ? fs::path("out") / logical.name : options.outputDir;
+}
+
+/// True if `folder` holds a finished shard of the same sweep whose files are all there.
+bool finishedShard(const ShardInfo& wanted) {
+  if (!fs::exists(wanted.folder / "manifest.json")) return false;
+  const ShardInfo found = readShardManifest(wanted.folder);
+  if (!found.sameSweep(wanted) || found.id.index != wanted.id.index || found.firstSample != wanted.firstSample ||
+      found.samples != wanted.samples) {
+    throw ConfigError(fmt::format("{}: holds {} of another sweep (scenario {}, seed {}, samples {}+{}): remove it or "
+                                  "choose another --out",
+                                  wanted.folder.string(), found.id.label(), found.functionalScenario, found.seed,
+                                  found.sweepFirstSample, found.sweepSamples));
+  }
+  const auto manifest = nlohmann::json::parse(readTextFile(wanted.folder / "manifest.json"));
+  for (const auto& [file, entry] : manifest.at("outputs").items()) {
+    std::error_code ec;
+    const auto bytes = fs::file_size(wanted.folder / file, ec);
+    if (ec || bytes != entry.at("bytes").get<std::uintmax_t>()) return false;
+  }
+  return true;
+}
+
+RunSummary runShard(const std::shared_ptr<const scenario::LogicalScenario>& logical, const RunOptions& options,
+                    const OutcomeCallback& on_outcome) {
+  const ShardId id = *options.shard;
+  const auto range = shardRange(options.firstSample, options.samples, options.batch, id);
+  ShardInfo info;
+  info.id = id;
+  info.folder = shardsFolder(outputFolder(*logical, options)) / id.folderName();
+  info.firstSample = range.first;
+  info.samples = range.samples;
+  info.sweepFirstSample = options.firstSample;
+  info.sweepSamples = options.samples;
+  info.seed = options.seed;
+  info.functionalScenario = logical->name;
+  info.scenarioSha256 = sha256OfFile(logical->sourceFile);
+  info.batch = options.batch;
+  info.compression = options.compression;
+  if (options.writeFiles && finishedShard(info)) {
+    spdlog::info("{} ({}) is finished already: skipped", id.label(), info.folder.string());
+    RunSummary summary = readRunManifest(info.folder);
+    summary.resumed = true;
+    return summary;
+  }
+  RunOptions part = options;
+  part.firstSample = range.first;
+  part.samples = range.samples;
+  part.outputDir = info.folder;
+  part.shard.reset();
+  RunSummary summary = runRange(logical, part, info, on_outcome);
+  summary.shard = id;
+  return summary;
+}
+
+/// Runs every batch in worker processes and hands the outcomes, in sample order, to `consume`.
+int simulateAll(const Context& context, const std::function<void(const std::vector<ScenarioOutcome>&)>& consume) {
+  const int jobs = context.options.jobs;
+  RecoveryPlan plan;
+  for (int w = 0; w < jobs; ++w) plan.resumeAt.push_back(static_cast<std::size_t>(w));
+  WorkerPool pool(
+      jobs,
+      [&context, &plan, jobs](int worker, WorkerChannel& channel) {
+        processBatches(context, plan, plan.resumeAt[static_cast<std::size_t>(worker)], static_cast<std::size_t>(jobs),
+                       [&](Part part, const std::vector<ScenarioOutcome>& outcomes) {
+                         auto message = encodeOutcomes(outcomes);
+                         message.push_back(static_cast<char>(part));
+                         channel.send(message);
+                       });
+      },
+      context.options.watchdog);
+  BatchCollector collector(context, plan, pool);
+  for (std::size_t b = 0; b < context.batches; ++b) consume(collector.collect(b));
+  pool.finish();
+  return pool.restarts();
+}
+
+}  // namespace
+
 RunSummary runScenarios(const std::shared_ptr<const scenario::LogicalScenario>& logical, const RunOptions& options,
                         const OutcomeCallback& on_outcome) {
   options.validate();
+  if (options.shard) return runShard(logical, options, on_outcome);
+  return runRange(logical, options, std::nullopt, on_outcome);
+}
+
+RunSummary readRunManifest(const fs::path& run_folder) {
+  const fs::path path = run_folder / "manifest.json";
+  RunSummary summary;
+  try {
+    const auto manifest = nlohmann::json::parse(readTextFile(path));
+    summary.functionalScenario = manifest.at("functional_scenario").get<std::string>();
+    summary.outputDir = run_folder;
+    summary.samples = manifest.at("samples").get<std::uint64_t>();
+    summary.firstSample = manifest.at("first_sample").get<std::uint64_t>();
+    summary.seed = manifest.at("seed").get<std::uint64_t>();
+    summary.ok = manifest.at("ok").get<std::uint64_t>();
+    summary.failed = manifest.at("failed").get<std::uint64_t>();
+    summary.collisions = manifest.at("collisions").get<std::uint64_t>();
+    summary.seconds = manifest.at("seconds").get<double>();
+    summary.jobs = manifest.at("jobs").get<int>();
+    summary.batch = manifest.at("batch").get<std::size_t>();
+    summary.inputNames = manifest.at("inputs").get<std::vector<std::string>>();
+    summary.metricNames = manifest.at("metrics").get<std::vector<std::string>>();
+    if (manifest.contains("shard")) summary.shard = readShardManifest(run_folder).id;
+    for (const auto& [file, entry] : manifest.at("outputs").items()) summary.outputs.push_back(run_folder / file);
+  } catch (const nlohmann::json::exception& error) {
+    throw DatasetError(fmt::format("{}: not a run manifest ({})", path.string(), error.what()));
+  }
+  summary.scenariosPerSecond = static_cast<double>(summary.samples) / std::max(summary.seconds, 1e-9);
+  return summary;
+}
+
+namespace {
+
+RunSummary runRange(const std::shared_ptr<const scenario::LogicalScenario>& logical, const RunOptions& options,
+                    const std::optional<ShardInfo>& shard, const OutcomeCallback& on_outcome) {
   const auto start = std::chrono::steady_clock::now();
   const std::string started = utcTimestamp();
 
   Context context;
   context.logical = logical;
   context.options = options;
+  context.shard = shard;
   if (context.options.fcd) context.options.keepNets = true;
   context.options.jobs = static_cast<int>(std::min<std::uint64_t>(
       static_cast<std::uint64_t>(options.jobs), (options.samples + options.batch - 1) / options.batch));
@@ -479,31 +837,17 @@ RunSummary runScenarios(const std::shared_ptr<const scenario::LogicalScenario>& 
   context.batches = static_cast<std::size_t>((options.samples + options.batch - 1) / options.batch);
   context.keepBatchFiles = context.options.keepNets;
   context.layout = road::BatchLayout(road::BatchLayout::cellSizeFor(logical->road));
+  context.netWriter = chooseNetWriter(*logical, options);
 
-  // Fail fast on problems every scenario would hit (unknown controller, bad
-  // parameters, bad expressions) before any process or file is created.
-  {
-    auto probe = concreteScenario(logical, options, options.firstSample).concrete;
-    auto registry = sim::ControllerRegistry::withBuiltins();
-    sim::makeController(registry, logical->ego.controller.name, logical->ego.controller.library,
-                        logical->sourceFile.parent_path(),
-                        sim::ControllerParams(probe.controllerParams, logical->ego.controller.where));
-  }
+  probeController(logical, options);
 
-  const fs::path out = options.outputDir.empty() ? fs::path("out") / logical->name : options.outputDir;
+  const fs::path out = outputFolder(*logical, options);
+  std::optional<OutputFolder> folder;
   std::optional<TemporaryDirectory> temporary_work;
-  struct WorkDirGuard {
-    fs::path path;
-    ~WorkDirGuard() {
-      std::error_code ignored;
-      if (!path.empty()) fs::remove_all(path, ignored);
-    }
-  } work_guard;
-  if (options.writeFiles) ensureDirectory(out);
-  if (context.options.keepNets && options.writeFiles) {
-    context.workDir = out / fmt::format(".work-{}", ::getpid());
+  if (options.writeFiles) folder.emplace(out);
+  if (context.options.keepNets && folder) {
+    context.workDir = folder->stagingPath() / ".work";  // scratch inside the staging folder, not an output
     ensureDirectory(context.workDir);
-    work_guard.path = context.workDir;
   } else {
     temporary_work.emplace("vsd-run");
     context.workDir = temporary_work->path();
@@ -514,67 +858,58 @@ RunSummary runScenarios(const std::shared_ptr<const scenario::LogicalScenario>& 
   summary.outputDir = out;
   summary.samples = options.samples;
   summary.seed = options.seed;
+  summary.firstSample = options.firstSample;
   summary.jobs = context.options.jobs;
   summary.batch = options.batch;
   summary.inputNames = logical->inputNames();
   SummaryBuilder summary_builder(summary, *context.metricSet);
 
   std::optional<RunFiles> files;
-  if (options.writeFiles) files.emplace(context, out, context.metricSet->names());
+  if (folder) files.emplace(context, *folder, context.metricSet->names());
 
   Progress progress(fmt::format("run {}", logical->name), options.samples, "scenarios");
-  auto consume = [&](const std::vector<ScenarioOutcome>& outcomes) {
+  summary.workerRestarts = simulateAll(context, [&](const std::vector<ScenarioOutcome>& outcomes) {
     for (const auto& outcome : outcomes) {
       summary_builder.add(outcome);
       if (files) files->write(outcome);
       if (on_outcome) on_outcome(outcome);
     }
     progress.advance(outcomes.size());
-  };
-
-  if (context.options.jobs == 1) {
-    processBatches(context, 0, 1, [&](std::size_t, std::vector<ScenarioOutcome> outcomes) { consume(outcomes); });
-  } else {
-    const int jobs = context.options.jobs;
-    WorkerPool pool(jobs, [&context, jobs](int worker, WorkerChannel& channel) {
-      processBatches(context, static_cast<std::size_t>(worker), static_cast<std::size_t>(jobs),
-                     [&](std::size_t, const std::vector<ScenarioOutcome>& outcomes) {
-                       channel.send(encodeOutcomes(outcomes));
-                     });
-    });
-    for (std::size_t b = 0; b < context.batches; ++b) {
-      consume(decodeOutcomes(pool.receive(static_cast<int>(b % static_cast<std::size_t>(jobs)))));
-    }
-    pool.finish();
-  }
+    faultPoint("run.write");
+    throwIfInterrupted();
+  });
   progress.finish();
   summary_builder.finish();
-
-  if (options.writeFiles) {
-    summary.outputs = files->commit();
-    files.reset();
-    if (context.options.keepNets) {
-      const auto published = publishBatchFiles(context, out);
-      summary.outputs.insert(summary.outputs.end(), published.begin(), published.end());
-    }
-  }
   summary.seconds = secondsSince(start);
   summary.scenariosPerSecond = static_cast<double>(summary.samples) / std::max(summary.seconds, 1e-9);
-  if (options.writeFiles) {
-    writeManifest(context, summary, out, summary.outputs, started);
-    summary.outputs.push_back(out / "manifest.json");
-  }
+
   if (summary.ok == 0) {
     const std::string reason =
         summary.failureExamples.empty() ? "unknown" : summary.failureExamples.begin()->second;
-    throw SumoError(fmt::format("every concrete scenario failed (e.g. {}); see {}", reason,
-                                options.writeFiles ? (out / "concrete.csv").string() : std::string("the outcomes")));
+    throw SumoError(fmt::format("every concrete scenario failed (e.g. {}); nothing was written to {}", reason,
+                                options.writeFiles ? out.string() : std::string("the outcomes")));
+  }
+  if (folder) {
+    files->close();
+    files.reset();
+    if (context.options.keepNets) stageBatchFiles(context, *folder);
+    if (temporary_work) temporary_work.reset();
+    std::error_code ignored;
+    fs::remove_all(folder->stagingPath() / ".work", ignored);
+    summary.outputs = folder->commit(runManifest(context, summary, started));
   }
   return summary;
 }
 
+}  // namespace
+
 std::string RunSummary::report() const {
-  std::string text = fmt::format("{}: {} concrete scenarios (seed {}) in {:.2f} s = {:.0f} scenarios/s ({} job{}, batch {})\n",
+  std::string text;
+  if (shard) {
+    text += fmt::format("{} of the sweep: samples {} .. {}{}\n", shard->label(), firstSample, firstSample + samples - 1,
+                        resumed ? fmt::format(" — finished already in {}, not run again", outputDir.string()) : "");
+  }
+  text += fmt::format("{}: {} concrete scenarios (seed {}) in {:.2f} s = {:.0f} scenarios/s ({} job{}, batch {})\n",
                                  functionalScenario, samples, seed, seconds, scenariosPerSecond, jobs,
                                  jobs == 1 ? "" : "s", batch);
   text += fmt::format("  completed {}, failed {}", ok, failed);
@@ -582,6 +917,9 @@ std::string RunSummary::report() const {
   text += "\n";
   for (const auto& [kind, count] : failureReasons) {
     text += fmt::format("    {} x {}\n", count, count == 1 ? failureExamples.at(kind) : kind);
+  }
+  if (workerRestarts > 0) {
+    text += fmt::format("  worker processes restarted after a crash, exit or hang: {}\n", workerRestarts);
   }
   if (!metrics.empty()) {
     text += fmt::format("  {:<16} {:>10} {:>10} {:>10}  {}\n", "metric", "min", "mean", "max", "unit");

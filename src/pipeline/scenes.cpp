@@ -90,4 +90,17 @@ metrics::Availability scenarioAvailability(const scenario::LogicalScenario& logi
   return {/*otherVehicles=*/!logical.others.empty(), /*egoLane=*/true, /*scenarioFrame=*/true};
 }
 
+std::vector<double> metricsOfFuture(const metrics::MetricSet& metric_set, const vector::VectorizedScene& scene,
+                                    const std::vector<VehicleState>& future) {
+  Polyline positions;
+  positions.reserve(future.size());
+  for (const auto& state : future) positions.push_back(state.position());
+  Trace trace = vector::sceneTrace(scene, positions);
+  auto& ego = trace.vehicles.front().states;
+  for (std::size_t k = 0; k < future.size() && k + 1 < ego.size(); ++k) ego[k + 1] = future[k];
+  if (!future.empty()) ego[0].accel = future.front().accel;  // a_0 = a_1, as for every recorded track
+  const Polyline lane = vector::egoLaneCentre(scene);
+  return metric_set.evaluate({trace, lane});
+}
+
 }  // namespace vsd::pipeline

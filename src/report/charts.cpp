@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iterator>
 
 #include "vsd/core/svg.hpp"
 
@@ -148,6 +149,28 @@ std::string histogramSvg(const std::vector<double>& values, const std::string& t
   if (beyond > 0) {
     canvas.textPx(kWidth - 6, 41, fmt::format("{} beyond the 1st..99th percentile, in the edge bins", beyond), 9,
                   kAxisColour, "end");
+  }
+  return canvas.str();
+}
+
+std::string reliabilitySvg(const std::vector<double>& levels,
+                           const std::vector<std::pair<std::string, std::vector<double>>>& curves,
+                           const std::string& title) {
+  static const char* const kColours[] = {"#1f78b4", "#e31a1c", "#33a02c", "#ff7f00", "#6a3d9a", "#b15928"};
+  if (curves.empty()) return emptyChart(title, "no interval to score");
+  SvgCanvas canvas(Vec2(0.0, 0.0), Vec2(1.0, 1.0), kWidth, kHeight, false, kMargin);
+  drawAxes(canvas, Vec2(0.0, 0.0), Vec2(1.0, 1.0), title, "nominal coverage of the central interval",
+           "observed coverage");
+  canvas.line(Vec2(0.0, 0.0), Vec2(1.0, 1.0), "#888888", 1.0, /*dashed=*/true);
+  for (std::size_t c = 0; c < curves.size(); ++c) {
+    const std::string colour = kColours[c % std::size(kColours)];
+    Polyline points;
+    for (std::size_t l = 0; l < levels.size() && l < curves[c].second.size(); ++l) {
+      if (std::isfinite(curves[c].second[l])) points.emplace_back(levels[l], curves[c].second[l]);
+    }
+    canvas.polyline(points, colour, 1.6);
+    for (const auto& p : points) canvas.circle(p, 2.5, colour);
+    canvas.textPx(kMargin + 8, 34 + 12.0 * static_cast<double>(c), curves[c].first, 10, colour, "start");
   }
   return canvas.str();
 }

@@ -3,6 +3,7 @@
 
 #include <limits>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace vsd::report {
@@ -20,5 +21,12 @@ std::string scatterSvg(const std::vector<double>& reference, const std::vector<d
 /// (e.g. 0 for errors) when it lies inside the range.
 std::string histogramSvg(const std::vector<double>& values, const std::string& title, const std::string& x_label,
                          int bins = 30, double marker = std::numeric_limits<double>::quiet_NaN());
+
+/// Reliability diagram: observed against nominal coverage of central intervals, one line
+/// per named curve (values in [0, 1], one per level; NaN points are skipped), with the
+/// diagonal of perfect calibration.
+std::string reliabilitySvg(const std::vector<double>& levels,
+                           const std::vector<std::pair<std::string, std::vector<double>>>& curves,
+                           const std::string& title);
 
 }  // namespace vsd::report

@@ -31,6 +31,14 @@ double ratio(std::size_t numerator, std::size_t denominator) {
 }
 
 std::string failCell(int fails) { return fails < 0 ? "" : std::to_string(fails); }
+
+void intervalCells(std::vector<std::string>& row, const MetricInterval* interval) {
+  for (const double value : {interval ? interval->p05 : kNaN, interval ? interval->p25 : kNaN,
+                             interval ? interval->median : kNaN, interval ? interval->p75 : kNaN,
+                             interval ? interval->p95 : kNaN}) {
+    row.push_back(interval && interval->draws > 0 ? formatNumber(value) : "");
+  }
+}
 }  // namespace
 
 Distribution describe(std::vector<double> values) {
@@ -50,6 +58,52 @@ Distribution describe(std::vector<double> values) {
   d.max = values.back();
   return d;
 }
+
+namespace {
+
+/// Coverage of the sampled futures' intervals for metric m (probabilistic models).
+void calibrate(MetricStatistics& stats, const Comparison& comparison, std::size_t m) {
+  std::vector<std::size_t> inside(kReliabilityLevels.size(), 0);
+  double width_sum = 0.0;
+  std::size_t inside50 = 0;
+  std::size_t inside90 = 0;
+  for (const auto& scenario : comparison.scenarios) {
+    if (!scenario.ok() || m >= scenario.intervals.size()) continue;
+    const auto& interval = scenario.intervals[m];
+    if (interval.draws == 0 || std::isnan(interval.quantilePosition)) continue;
+    ++stats.intervalPairs;
+    const double level = std::abs(2.0 * interval.quantilePosition - 1.0);  // smallest central level holding it
+    for (std::size_t l = 0; l < kReliabilityLevels.size(); ++l) inside[l] += level <= kReliabilityLevels[l] ? 1 : 0;
+    inside50 += level <= 0.5 ? 1 : 0;
+    inside90 += level <= 0.9 ? 1 : 0;
+    if (std::isfinite(interval.p95 - interval.p05)) width_sum += interval.p95 - interval.p05;
+  }
+  if (stats.intervalPairs == 0) return;
+  const auto n = static_cast<double>(stats.intervalPairs);
+  stats.coverage50 = static_cast<double>(inside50) / n;
+  stats.coverage90 = static_cast<double>(inside90) / n;
+  stats.meanWidth90 = width_sum / n;
+  for (const auto count : inside) stats.reliability.push_back(static_cast<double>(count) / n);
+}
+
+/// Which verdicts of criterion c the sampled futures agree on, and how often they are right.
+void judgeConfidence(CriterionStatistics& stats, const Comparison& comparison, std::size_t c) {
+  for (const auto& scenario : comparison.scenarios) {
+    if (!scenario.ok() || c >= scenario.failShare.size()) continue;
+    const double share = scenario.failShare[c];
+    const int reference = scenario.referenceFails.at(c);
+    if (std::isnan(share) || reference < 0) continue;
+    if (share >= comparison.confidence || share <= 1.0 - comparison.confidence) {
+      ++stats.confident;
+      stats.confidentWrong += (share >= comparison.confidence) != (reference == 1) ? 1 : 0;
+    } else {
+      ++stats.uncertain;
+      stats.uncertainPointWrong += scenario.predictedFails.at(c) >= 0 && scenario.predictedFails.at(c) != reference ? 1 : 0;
+    }
+  }
+}
+
+}  // namespace
 
 double CriterionStatistics::agreement() const { return ratio(bothFail + bothPass, bothFail + bothPass + falseAlarm + missed); }
 double CriterionStatistics::recall() const { return ratio(bothFail, bothFail + missed); }
@@ -108,6 +162,7 @@ ComparisonStatistics computeStatistics(const Comparison& comparison) {
       stats.mae = stats.bias = stats.medianAbsoluteError = stats.p90AbsoluteError = kNaN;
     }
     if (floor_pairs > 0) stats.floorMae = floor_sum / static_cast<double>(floor_pairs);
+    calibrate(stats, comparison, m);
     s.metrics.push_back(stats);
   }
 
@@ -131,6 +186,7 @@ ComparisonStatistics computeStatistics(const Comparison& comparison) {
         ++stats.bothPass;
       }
     }
+    judgeConfidence(stats, comparison, c);
     s.criteria.push_back(stats);
   }
   return s;
@@ -145,14 +201,18 @@ void writeComparisonCsv(const Comparison& comparison, const std::filesystem::pat
     std::vector<std::string> header = {"sample", "label", "status", "failure"};
     for (const auto& name : comparison.inputNames) header.push_back(name);
     header.insert(header.end(), {"ade_m", "fde_m"});
+    const bool intervals = comparison.draws > 0;
     for (const auto& name : comparison.metricNames) {
       header.push_back(name + "_predicted");
       header.push_back(name + "_" + comparison.referenceName);
       header.push_back(name + "_error");
+      if (!intervals) continue;
+      for (const char* q : {"_p05", "_p25", "_median", "_p75", "_p95"}) header.push_back(name + q);
     }
     for (const auto& criterion : comparison.criteria) {
       header.push_back(criterion.name + "_predicted_fail");
       header.push_back(criterion.name + "_" + comparison.referenceName + "_fail");
+      if (intervals) header.push_back(criterion.name + "_fail_share");
     }
     csv.writeRow(header);
     for (const auto& scenario : comparison.scenarios) {
@@ -170,10 +230,15 @@ void writeComparisonCsv(const Comparison& comparison, const std::filesystem::pat
         row.push_back(formatNumber(predicted));
         row.push_back(formatNumber(reference));
         row.push_back(std::isfinite(predicted) && std::isfinite(reference) ? formatNumber(predicted - reference) : "");
+        if (intervals) intervalCells(row, ok && m < scenario.intervals.size() ? &scenario.intervals[m] : nullptr);
       }
       for (std::size_t c = 0; c < comparison.criteria.size(); ++c) {
         row.push_back(ok ? failCell(scenario.predictedFails.at(c)) : "");
         row.push_back(ok ? failCell(scenario.referenceFails.at(c)) : "");
+        if (intervals) {
+          const bool known = ok && c < scenario.failShare.size() && !std::isnan(scenario.failShare[c]);
+          row.push_back(known ? formatNumber(scenario.failShare[c]) : "");
+        }
       }
       csv.writeRow(row);
     }
@@ -198,12 +263,24 @@ std::string textSummary(const Comparison& comparison, const ComparisonStatistics
     if (m.finitenessMismatch) out << fmt::format(", {} finite on one side only", m.finitenessMismatch);
     if (m.floorMae) out << fmt::format("; from {} positions {:.3f} {}", comparison.referenceName, *m.floorMae, m.unit);
     out << ")\n";
+    if (m.intervalPairs > 0) {
+      out << fmt::format("  {:<16} intervals of {} sampled futures: {} value in the 50 % interval {:.1f} %, in the "
+                         "90 % interval {:.1f} % (mean width {:.3f} {})\n",
+                         "", comparison.draws, comparison.referenceName, 100.0 * m.coverage50, 100.0 * m.coverage90,
+                         m.meanWidth90, m.unit);
+    }
   }
   for (const auto& c : s.criteria) {
     out << fmt::format("  criterion {} ({}): both fail {}, false alarms {}, missed {}, both pass {}", c.name,
                        c.expression, c.bothFail, c.falseAlarm, c.missed, c.bothPass);
     if (c.undefined) out << fmt::format(", undefined {}", c.undefined);
     out << fmt::format(" -> agreement {:.1f} %\n", 100.0 * c.agreement());
+    if (c.confident + c.uncertain > 0) {
+      out << fmt::format("  {:<16} confident verdicts (>= {:.0f} % of the futures agree) {}, of them wrong {}; "
+                         "uncertain {} (the most likely future wrong in {})\n",
+                         "", 100.0 * comparison.confidence, c.confident, c.confidentWrong, c.uncertain,
+                         c.uncertainPointWrong);
+    }
   }
   if (!comparison.timings.empty()) {
     out << "  time:";

@@ -215,6 +215,45 @@ void chartSections(std::ostringstream& out, const Comparison& comparison) {
   out << "</div></section>\n";
 }
 
+/// Intervals of the sampled futures: coverage per metric, the reliability diagram, and
+/// which criterion verdicts the futures agree on.
+void calibrationSection(std::ostringstream& out, const Comparison& comparison, const ComparisonStatistics& s) {
+  if (comparison.draws <= 0) return;
+  const std::string& ref = comparison.referenceName;
+  out << fmt::format("<section id=\"calibration\"><h2>Uncertainty: {} sampled futures per scenario</h2>\n"
+                     "<p class=\"muted\">Every metric is computed on every sampled future by the same code as the "
+                     "prediction; the intervals are quantiles of those values. A well calibrated model has the {} "
+                     "value inside its 50&nbsp;% interval in half of the scenarios and inside its 90&nbsp;% interval "
+                     "in nine of ten.</p>\n<table>\n<tr><th>metric</th><th>unit</th><th>scenarios</th>"
+                     "<th>in 50&nbsp;% interval</th><th>in 90&nbsp;% interval</th><th>mean width of the 90&nbsp;% "
+                     "interval</th></tr>\n",
+                     comparison.draws, html(ref));
+  std::vector<std::pair<std::string, std::vector<double>>> curves;
+  for (const auto& m : s.metrics) {
+    if (m.intervalPairs == 0) continue;
+    out << fmt::format("<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr>\n", html(m.name),
+                       html(m.unit), m.intervalPairs, percent(m.coverage50), percent(m.coverage90),
+                       number(m.meanWidth90));
+    curves.emplace_back(m.name, m.reliability);
+  }
+  out << "</table>\n<div class=\"grid\">\n"
+      << reliabilitySvg(kReliabilityLevels, curves, "Reliability of the metric intervals") << "</div>\n";
+  if (!s.criteria.empty()) {
+    out << fmt::format("<table>\n<tr><th>criterion</th><th>confident verdicts (&ge;&nbsp;{0:.0f}&nbsp;% of the futures "
+                       "agree)</th><th>of them wrong</th><th>uncertain verdicts</th><th>of them wrong for the most "
+                       "likely future</th></tr>\n",
+                       100.0 * comparison.confidence);
+    for (const auto& c : s.criteria) {
+      out << fmt::format("<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr>\n", html(c.name),
+                         c.confident, c.confidentWrong, c.uncertain, c.uncertainPointWrong);
+    }
+    out << fmt::format("</table>\n<p class=\"muted\">Uncertain verdicts are the scenarios worth simulating; "
+                       "<code>comparison.csv</code> lists each scenario's share of failing futures "
+                       "(<code>&lt;criterion&gt;_fail_share</code>).</p>\n");
+  }
+  out << "</section>\n";
+}
+
 void worstSection(std::ostringstream& out, const std::vector<SceneDrawing>& worst) {
   if (worst.empty()) return;
   out << fmt::format("<section id=\"worst\"><h2>The {} scenarios with the largest ADE</h2>\n<div class=\"grid\">\n",
@@ -290,6 +329,7 @@ std::string renderHtmlReport(const Comparison& comparison, const ComparisonStati
   out << fmt::format("<header><h1>Predicted vs {}: {}</h1>\n<p class=\"lead\">{}</p></header>\n",
                      html(comparison.referenceName), html(comparison.title), leadSentence(comparison, statistics));
   summarySection(out, comparison, statistics);
+  calibrationSection(out, comparison, statistics);
   chartSections(out, comparison);
   worstSection(out, worst);
   failureSection(out, comparison);

@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <charconv>
 #include <cmath>
 #include <cstdlib>
 #include <fstream>
@@ -48,6 +49,32 @@ void NetworkBuilder::add(std::uint64_t index, const RoadGeometry& road, const Ve
   roads_.push_back({index, road, offset});
 }
 
+NetWriter parseNetWriter(const std::string& text, const std::string& where) {
+  if (text == "direct") return NetWriter::Direct;
+  if (text == "netconvert") return NetWriter::Netconvert;
+  throw ConfigError::field(where, "net writer", text, "direct or netconvert");
+}
+
+std::string netWriterName(NetWriter writer) { return writer == NetWriter::Direct ? "direct" : "netconvert"; }
+
+Polyline NetworkBuilder::edgeShape(const PlacedRoad& placed) {
+  // Exactly the decimal text of the plain XML, parsed back.
+  auto as_plain_xml = [](double value) {
+    char text[64];
+    const auto end = fmt::format_to_n(text, sizeof(text), "{:.6f}", value).out;
+    double parsed = 0.0;
+    std::from_chars(text, end, parsed);
+    return parsed;
+  };
+  Polyline shape;
+  shape.reserve(placed.road.centre.size());
+  for (const Vec2& point : placed.road.centre) {
+    const Vec2 net = point + placed.offset;
+    shape.emplace_back(as_plain_xml(net.x()), as_plain_xml(net.y()));
+  }
+  return shape;
+}
+
 void NetworkBuilder::writePlainXml(const fs::path& stem) const {
   fmt::memory_buffer nodes;
   fmt::memory_buffer edges;
@@ -55,8 +82,9 @@ void NetworkBuilder::writePlainXml(const fs::path& stem) const {
   fmt::format_to(std::back_inserter(edges), "<edges>\n");
   for (const auto& placed : roads_) {
     const std::string id = edgeIdFor(placed.index);
-    const Vec2 first = placed.road.centre.front() + placed.offset;
-    const Vec2 last = placed.road.centre.back() + placed.offset;
+    const Polyline shape = edgeShape(placed);
+    const Vec2& first = shape.front();
+    const Vec2& last = shape.back();
     fmt::format_to(std::back_inserter(nodes), "  <node id=\"{0}_a\" x=\"{1:.6f}\" y=\"{2:.6f}\" type=\"dead_end\"/>\n", id,
                    first.x(), first.y());
     fmt::format_to(std::back_inserter(nodes), "  <node id=\"{0}_b\" x=\"{1:.6f}\" y=\"{2:.6f}\" type=\"dead_end\"/>\n", id,
@@ -65,9 +93,8 @@ void NetworkBuilder::writePlainXml(const fs::path& stem) const {
                    "  <edge id=\"{0}\" from=\"{0}_a\" to=\"{0}_b\" numLanes=\"{1}\" width=\"{2:.6f}\" speed=\"{3:.3f}\" "
                    "spreadType=\"center\" shape=\"",
                    id, placed.road.lanes, placed.road.laneWidth, placed.road.speedLimit);
-    for (std::size_t i = 0; i < placed.road.centre.size(); ++i) {
-      const Vec2 p = placed.road.centre[i] + placed.offset;
-      fmt::format_to(std::back_inserter(edges), "{}{:.6f},{:.6f}", i == 0 ? "" : " ", p.x(), p.y());
+    for (std::size_t i = 0; i < shape.size(); ++i) {
+      fmt::format_to(std::back_inserter(edges), "{}{:.6f},{:.6f}", i == 0 ? "" : " ", shape[i].x(), shape[i].y());
     }
     fmt::format_to(std::back_inserter(edges), "\"/>\n");
   }
@@ -119,17 +146,20 @@ PendingNetwork PendingNetwork::start(const fs::path& stem, const std::vector<std
   const fs::path log = stem.string() + ".netconvert.log";
   std::error_code ignored;
   fs::remove(log, ignored);
-  return PendingNetwork(ChildProcess::spawn(argv, log), stem);
+  return PendingNetwork(ChildProcess::spawn(argv, log), stem, stem.string() + ".net.xml");
 }
 
+PendingNetwork PendingNetwork::ready(const fs::path& net) { return PendingNetwork(std::nullopt, {}, net); }
+
 fs::path PendingNetwork::wait() {
-  const auto result = process_.wait();
-  const fs::path net = stem_.string() + ".net.xml";
-  if (result.exitCode != 0 || !fs::exists(net)) {
+  if (!process_) return net_;
+  const auto result = process_->wait();
+  process_.reset();
+  if (result.exitCode != 0 || !fs::exists(net_)) {
     throw SumoError(fmt::format("netconvert failed (exit code {}) on {}.nod.xml/.edg.xml: {}", result.exitCode,
                                 stem_.string(), firstErrorLine(result.output)));
   }
-  return net;
+  return net_;
 }
 
 }  // namespace vsd::road

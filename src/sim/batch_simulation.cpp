@@ -10,7 +10,9 @@
 #include <unordered_map>
 #include <unordered_set>
 
+#include "vsd/core/activity.hpp"
 #include "vsd/core/error.hpp"
+#include "vsd/core/fault.hpp"
 #include "vsd/core/log.hpp"
 #include "vsd/core/progress.hpp"
 #include "vsd/road/network.hpp"
@@ -116,6 +118,10 @@ std::vector<SimulatedScenario> simulateBatch(const std::filesystem::path& net, c
     throw Error(fmt::format("internal: batch simulation with step {} s and {} steps", options.step, options.steps));
   }
   const auto t_start = std::chrono::steady_clock::now();
+  // Outside the per-scenario parts below, faults belong to the simulation as a whole.
+  reportSubject(-1);
+  reportSimulationTime(0.0);
+  const ActivityScope whole_batch(Activity::SumoStep);
   SumoSession session(sessionArguments(net, options));
   const double load_seconds = secondsSince(t_start);
   const std::size_t instants = static_cast<std::size_t>(options.steps) + 1;
@@ -134,6 +140,8 @@ std::vector<SimulatedScenario> simulateBatch(const std::filesystem::path& net, c
     const auto& spec = *concrete.logical;
     member.run = &run;
     member.result.index = concrete.index;
+    reportSubject(static_cast<std::int64_t>(concrete.index));
+    const ActivityScope adding(Activity::SumoVehicles);
     member.result.trace.step = dt;
     member.edge = road::edgeIdFor(concrete.index);
     const std::string route = "r" + member.edge;
@@ -190,6 +198,8 @@ std::vector<SimulatedScenario> simulateBatch(const std::filesystem::path& net, c
   auto record = [&](std::size_t k) {
     for (auto& member : members) {
       if (!member.active) continue;
+      reportSubject(static_cast<std::int64_t>(member.result.index));
+      const ActivityScope reading(Activity::SumoVehicles);
       auto& trace = member.result.trace;
       trace.vehicles[0].states[k] = member.ego->state();
       trace.vehicles[0].valid[k] = 1;
@@ -242,8 +252,15 @@ std::vector<SimulatedScenario> simulateBatch(const std::filesystem::path& net, c
 
   for (int k = 0; k < options.steps; ++k) {
     const double time = k * dt;
+    reportSimulationTime(time);
     for (auto& member : members) {
       if (!member.active) continue;
+      reportSubject(static_cast<std::int64_t>(member.result.index));
+      const ActivityScope driving(Activity::SumoVehicles);
+      if (faultInjectionActive()) {
+        const ActivityScope in_controller(Activity::Controller);
+        faultPoint(fmt::format("controller.step:{}", member.result.index));
+      }
       try {
         member.ego->step(time, dt, member.run->scenario->ego.headingNoise[static_cast<std::size_t>(k)], lanes);
       } catch (const ConfigError&) {
@@ -262,6 +279,12 @@ std::vector<SimulatedScenario> simulateBatch(const std::filesystem::path& net, c
         placeInSumo(member.otherIds[o], member.otherPaths[o][next], others[o].length, member.run->offset);
       }
     }
+    if (faultInjectionActive()) {
+      for (const auto& member : members) {
+        if (member.active) faultPoint(fmt::format("sumo.step-with:{}", member.result.index));
+      }
+    }
+    reportSubject(-1);
     session.step();
     checkRemovals(time + dt);
     record(static_cast<std::size_t>(k) + 1);
@@ -273,6 +296,8 @@ std::vector<SimulatedScenario> simulateBatch(const std::filesystem::path& net, c
   std::vector<SimulatedScenario> results;
   results.reserve(members.size());
   for (auto& member : members) {
+    reportSubject(static_cast<std::int64_t>(member.result.index));
+    member.ego.reset();  // a plugin's destroy() runs here, attributed to its scenario
     for (auto& track : member.result.trace.vehicles) fillAccelerationFromSpeed(track, dt);
     results.push_back(std::move(member.result));
   }

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "vsd/core/activity.hpp"
 #include "vsd/core/error.hpp"
 #include "vsd/sim/builtin_controllers.hpp"
 
@@ -143,6 +144,7 @@ class PluginController final : public EgoController {
 
  private:
   void destroy() {
+    const ActivityScope in_controller(Activity::Controller);
     if (instance_ != nullptr && api_->destroy != nullptr) api_->destroy(instance_);
     instance_ = nullptr;
   }
@@ -199,6 +201,8 @@ void ControllerRegistry::loadLibrary(const fs::path& library) {
 std::unique_ptr<EgoController> makeController(ControllerRegistry& registry, const std::string& name,
                                               const fs::path& library, const fs::path& scenario_dir,
                                               const ControllerParams& params) {
+  // Loading a plugin, creating and resetting its controller all run its code.
+  const ActivityScope in_controller(Activity::Controller);
   if (!library.empty() && !registry.contains(name)) {
     registry.loadLibrary(library.is_absolute() ? library : scenario_dir / library);
   }

@@ -4,6 +4,7 @@
 
 #include <cmath>
 
+#include "vsd/core/activity.hpp"
 #include "vsd/core/error.hpp"
 
 namespace vsd::sim {
@@ -118,7 +119,11 @@ MeasuredPolyline EgoDriver::routeAhead(const std::string& lane_id, LaneCache& la
 
 void EgoDriver::step(double time, double dt, double heading_noise, LaneCache& lanes) {
   const Observation observation = observe(time, lanes);
-  const Command command = controller_->step(observation, dt);
+  Command command;
+  {
+    const ActivityScope in_controller(Activity::Controller);
+    command = controller_->step(observation, dt);
+  }
   if (!std::isfinite(command.accel) || !std::isfinite(command.curvature)) {
     throw Error("controller returned a non-finite command");
   }

@@ -3,9 +3,13 @@
 #include <fmt/format.h>
 #include <libsumo/libsumo.h>
 
+#include <algorithm>
+#include <cmath>
 #include <unordered_set>
 
+#include "vsd/core/activity.hpp"
 #include "vsd/core/error.hpp"
+#include "vsd/core/fault.hpp"
 #include "vsd/sim/ego_driver.hpp"
 #include "vsd/sim/sumo_session.hpp"
 
@@ -96,12 +100,64 @@ void MapSimulation::takeOver(const std::string& id, std::unique_ptr<EgoControlle
   throw Error(fmt::format("internal: takeOver of vehicle '{}', which is not in the network", id));
 }
 
+void MapSimulation::failEgo(const std::string& id, const std::string& reason) {
+  reportSubject(-1, id);
+  const ActivityScope removing(Activity::SumoVehicles);
+  failures_.push_back({id, time(), reason});
+  drivers_.erase(id);  // a plugin's destroy() runs here
+  for (const auto& present : libsumo::Vehicle::getIDList()) {
+    if (present == id) libsumo::Vehicle::remove(id);
+  }
+}
+
+void MapSimulation::scheduleFailure(const std::string& id, double time, std::string reason) {
+  scheduled_.push_back({id, time, std::move(reason)});
+}
+
+std::optional<std::string> MapSimulation::scheduledFailure(const std::string& id) const {
+  const double now = time();
+  for (const auto& failure : scheduled_) {
+    if (failure.id == id && std::abs(failure.time - now) < 1e-6) return failure.reason;
+  }
+  return std::nullopt;
+}
+
+void MapSimulation::driveEgos(double now) {
+  reportSimulationTime(now);
+  std::vector<std::pair<std::string, std::string>> failed;
+  for (auto& [id, driver] : drivers_) {
+    if (auto reason = scheduledFailure(id)) {
+      failed.emplace_back(id, *reason);
+      continue;
+    }
+    reportSubject(-1, id);
+    const ActivityScope driving(Activity::SumoVehicles);
+    if (faultInjectionActive()) {
+      const ActivityScope in_controller(Activity::Controller);
+      faultPoint("controller.step:" + id);
+    }
+    try {
+      driver->step(now, impl_->step, 0.0, impl_->lanes);
+    } catch (const ConfigError&) {
+      throw;
+    } catch (const Error& error) {
+      failed.emplace_back(id, fmt::format("Ego controller failed at t = {:.1f} s: {}", now, error.what()));
+    }
+  }
+  // In id order: the same failures are recorded in the same order however the map iterates.
+  std::sort(failed.begin(), failed.end());
+  for (const auto& [id, reason] : failed) failEgo(id, reason);
+  reportSubject(-1);
+}
+
 bool MapSimulation::step() {
   const double now = time();
   if (impl_->end && now + 0.5 * impl_->step >= *impl_->end) return false;
   if (libsumo::Simulation::getMinExpectedNumber() <= 0) return false;
+  // libsumo's work of the whole step is watched, with the Egos' parts attributed to them.
+  const ActivityScope stepping(Activity::SumoStep);
   // Closed-loop Egos decide before SUMO moves everybody else.
-  for (auto& [id, driver] : drivers_) driver->step(now, impl_->step, 0.0, impl_->lanes);
+  driveEgos(now);
   impl_->session.step();
   releaseFinishedDrivers();
 

@@ -3,7 +3,9 @@
 #include <fmt/format.h>
 #include <libsumo/libsumo.h>
 
+#include "vsd/core/activity.hpp"
 #include "vsd/core/error.hpp"
+#include "vsd/core/fault.hpp"
 #include "vsd/road/network.hpp"
 
 namespace vsd::sim {
@@ -19,6 +21,8 @@ SumoSession::SumoSession(const std::vector<std::string>& arguments) {
   std::vector<std::string> args = {"--no-step-log", "true", "--duration-log.disable", "true", "--no-warnings", "true",
                                    "--verbose", "false"};
   args.insert(args.end(), arguments.begin(), arguments.end());
+  faultPoint("sumo.load");
+  const ActivityScope loading(Activity::SumoLoad);
   try {
     libsumo::Simulation::load(args);
   } catch (const std::exception& error) {
@@ -42,6 +46,8 @@ SumoSession::~SumoSession() {
 }
 
 void SumoSession::step() {
+  faultPoint("sumo.step");
+  const ActivityScope stepping(Activity::SumoStep);
   try {
     libsumo::Simulation::step();
   } catch (const std::exception& error) {

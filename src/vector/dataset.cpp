@@ -5,9 +5,11 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <tuple>
 #include <unordered_map>
 
 #include "vsd/core/error.hpp"
+#include "vsd/core/shards.hpp"
 #include "vsd/core/files.hpp"
 #include "vsd/core/hdf5.hpp"
 #include "vsd/core/log.hpp"
@@ -42,6 +44,74 @@ class StringTable {
   std::unordered_map<std::string, std::int32_t> lookup_;
   std::vector<std::string> values_;
 };
+
+/// One sample as a dataset stores it: inline vectors and targets as float32 relative to
+/// the origin. Writing goes through this form, so a sample copied from another file
+/// (DatasetWriter::appendCopy) is stored bit for bit as it was.
+struct StoredSample {
+  double originX = 0.0;
+  double originY = 0.0;
+  std::int32_t egoPolyline = 0;
+  std::vector<std::int8_t> polylineType;
+  std::vector<std::uint8_t> polylineShared;
+  std::vector<std::int64_t> sharedStart;  ///< per polyline; used where shared
+  std::vector<std::int32_t> polylineVectorCount;
+  std::vector<double> polylineLength;     ///< m, per polyline (0 for lanes)
+  std::vector<double> polylineWidth;
+  std::vector<float> vectors;             ///< inline vectors, kFeatures per vector
+  std::vector<std::uint8_t> vectorValid;
+  std::string label;
+  std::int64_t index = 0;
+  std::string source;
+  std::string sourceSha256;
+  std::string egoId;
+  double t0 = 0.0;
+  std::vector<float> targets;             ///< 2 per step
+  std::vector<std::uint8_t> targetValid;
+  std::vector<double> inputs;
+  std::vector<double> metrics;
+};
+
+/// `scene` in stored form; `share` = the file has a shared lane pool.
+StoredSample storedSample(const VectorizedScene& scene, bool share) {
+  StoredSample stored;
+  const Vec2 origin = scene.egoInitialState().position();
+  stored.originX = origin.x();
+  stored.originY = origin.y();
+  stored.egoPolyline = static_cast<std::int32_t>(scene.egoPolyline);
+  for (const auto& polyline : scene.polylines) {
+    const bool shared = polyline.sharedStart >= 0 && share;
+    stored.polylineType.push_back(static_cast<std::int8_t>(polyline.type));
+    stored.polylineShared.push_back(shared ? 1 : 0);
+    stored.sharedStart.push_back(shared ? polyline.sharedStart : -1);
+    stored.polylineVectorCount.push_back(static_cast<std::int32_t>(polyline.vectors.size()));
+    stored.polylineLength.push_back(polyline.length);
+    stored.polylineWidth.push_back(polyline.width);
+    if (shared) continue;
+    for (std::size_t v = 0; v < polyline.vectors.size(); ++v) {
+      const auto& f = polyline.vectors[v];
+      stored.vectors.insert(stored.vectors.end(),
+                            {static_cast<float>(f[0] - origin.x()), static_cast<float>(f[1] - origin.y()),
+                             static_cast<float>(f[2] - origin.x()), static_cast<float>(f[3] - origin.y()),
+                             static_cast<float>(f[4]), static_cast<float>(f[5]), static_cast<float>(f[6])});
+      stored.vectorValid.push_back(polyline.valid[v]);
+    }
+  }
+  stored.label = scene.label;
+  stored.index = static_cast<std::int64_t>(scene.sample);
+  stored.source = scene.provenance.source;
+  stored.sourceSha256 = scene.provenance.sourceSha256;
+  stored.egoId = scene.provenance.egoId;
+  stored.t0 = scene.provenance.t0;
+  for (std::size_t k = 0; k < scene.target.size(); ++k) {
+    stored.targets.push_back(static_cast<float>(scene.target[k].x() - origin.x()));
+    stored.targets.push_back(static_cast<float>(scene.target[k].y() - origin.y()));
+    stored.targetValid.push_back(scene.targetValid[k]);
+  }
+  stored.inputs = scene.inputs;
+  stored.metrics = scene.metrics;
+  return stored;
+}
 
 }  // namespace
 
@@ -86,10 +156,46 @@ struct DatasetWriter::Impl {
   std::unordered_map<std::int32_t, std::string> sourceSha;
   StringTable egoIds;
 
+  void push(const StoredSample& stored) {
+    samplePolylineStart.push(polylinesWritten);
+    samplePolylineCount.push(static_cast<std::int32_t>(stored.polylineType.size()));
+    sampleEgoPolyline.push(stored.egoPolyline);
+    sampleOrigin.push({stored.originX, stored.originY});
+    for (std::size_t p = 0; p < stored.polylineType.size(); ++p) {
+      polylineType.push(stored.polylineType[p]);
+      polylineVectorCount.push(stored.polylineVectorCount[p]);
+      polylineLength.push(stored.polylineLength[p]);
+      polylineWidth.push(stored.polylineWidth[p]);
+      polylineShared.push(stored.polylineShared[p]);
+      if (stored.polylineShared[p]) {
+        polylineVectorStart.push(stored.sharedStart[p]);
+      } else {
+        polylineVectorStart.push(vectorsWritten);
+        vectorsWritten += stored.polylineVectorCount[p];
+      }
+    }
+    polylinesWritten += static_cast<std::int64_t>(stored.polylineType.size());
+    vectors.push(stored.vectors.begin(), stored.vectors.end());
+    vectorValid.push(stored.vectorValid.begin(), stored.vectorValid.end());
+    sampleLabel.push(labels.index(stored.label));
+    sampleIndex.push(stored.index);
+    const std::int32_t source = sources.index(stored.source);
+    sourceSha.emplace(source, stored.sourceSha256);
+    sampleSource.push(source);
+    sampleEgo.push(egoIds.index(stored.egoId));
+    sampleT0.push(stored.t0);
+    targets.push(stored.targets.begin(), stored.targets.end());
+    targetValid.push(stored.targetValid.begin(), stored.targetValid.end());
+    if (inputs) inputs->push(stored.inputs.begin(), stored.inputs.end());
+    if (metrics) metrics->push(stored.metrics.begin(), stored.metrics.end());
+    ++samples;
+    if (++buffered >= kChunkSamples) flush();
+  }
+
   void flush() {
     h5::flushAll(vectors, vectorValid, polylineType, polylineShared, polylineVectorStart, polylineVectorCount,
-                 polylineLength, polylineWidth, samplePolylineStart, samplePolylineCount, sampleEgoPolyline, sampleOrigin, sampleLabel, sampleIndex,
-                 sampleSource, sampleEgo, sampleT0, targets, targetValid);
+                 polylineLength, polylineWidth, samplePolylineStart, samplePolylineCount, sampleEgoPolyline,
+                 sampleOrigin, sampleLabel, sampleIndex, sampleSource, sampleEgo, sampleT0, targets, targetValid);
     if (inputs) inputs->flush();
     if (metrics) metrics->flush();
     buffered = 0;
@@ -184,49 +290,7 @@ void DatasetWriter::append(const VectorizedScene& scene) {
   if (scene.inputs.size() != d.header.inputNames.size() || scene.metrics.size() != d.header.metricNames.size()) {
     throw Error("internal: scene inputs/metrics do not match the dataset's columns");
   }
-  const Vec2 origin = scene.egoInitialState().position();
-  d.samplePolylineStart.push(d.polylinesWritten);
-  d.samplePolylineCount.push(static_cast<std::int32_t>(scene.polylines.size()));
-  d.sampleEgoPolyline.push(static_cast<std::int32_t>(scene.egoPolyline));
-  d.sampleOrigin.push({origin.x(), origin.y()});
-  for (const auto& polyline : scene.polylines) {
-    d.polylineType.push(static_cast<std::int8_t>(polyline.type));
-    d.polylineVectorCount.push(static_cast<std::int32_t>(polyline.vectors.size()));
-    d.polylineLength.push(polyline.length);
-    d.polylineWidth.push(polyline.width);
-    const bool shared = polyline.sharedStart >= 0 && d.sharedSize > 0;
-    d.polylineShared.push(shared ? 1 : 0);
-    ++d.polylinesWritten;
-    if (shared) {
-      d.polylineVectorStart.push(polyline.sharedStart);
-      continue;
-    }
-    d.polylineVectorStart.push(d.vectorsWritten);
-    for (std::size_t v = 0; v < polyline.vectors.size(); ++v) {
-      const auto& f = polyline.vectors[v];
-      d.vectors.push({static_cast<float>(f[0] - origin.x()), static_cast<float>(f[1] - origin.y()),
-                      static_cast<float>(f[2] - origin.x()), static_cast<float>(f[3] - origin.y()),
-                      static_cast<float>(f[4]), static_cast<float>(f[5]), static_cast<float>(f[6])});
-      d.vectorValid.push(polyline.valid[v]);
-    }
-    d.vectorsWritten += static_cast<std::int64_t>(polyline.vectors.size());
-  }
-  d.sampleLabel.push(d.labels.index(scene.label));
-  d.sampleIndex.push(static_cast<std::int64_t>(scene.sample));
-  const std::int32_t source = d.sources.index(scene.provenance.source);
-  d.sourceSha.emplace(source, scene.provenance.sourceSha256);
-  d.sampleSource.push(source);
-  d.sampleEgo.push(d.egoIds.index(scene.provenance.egoId));
-  d.sampleT0.push(scene.provenance.t0);
-  for (std::size_t k = 0; k < scene.target.size(); ++k) {
-    d.targets.push({static_cast<float>(scene.target[k].x() - origin.x()),
-                    static_cast<float>(scene.target[k].y() - origin.y())});
-    d.targetValid.push(scene.targetValid[k]);
-  }
-  if (d.inputs) d.inputs->push(scene.inputs.begin(), scene.inputs.end());
-  if (d.metrics) d.metrics->push(scene.metrics.begin(), scene.metrics.end());
-  ++d.samples;
-  if (++d.buffered >= kChunkSamples) d.flush();
+  d.push(storedSample(scene, d.sharedSize > 0));
 }
 
 void DatasetWriter::close() {
@@ -297,7 +361,74 @@ struct DatasetReader::Impl {
     }
     return sizes;
   }
+
+  /// Sample `i` exactly as stored.
+  StoredSample stored(std::size_t i) const;
 };
+
+StoredSample DatasetReader::Impl::stored(std::size_t i) const {
+  if (i >= sampleLabel.size()) fail(fmt::format("sample {} out of range (the dataset has {})", i, sampleLabel.size()));
+  StoredSample stored;
+  try {
+    const auto first_polyline = static_cast<hsize_t>(samplePolylineStart[i]);
+    const auto polylines = static_cast<hsize_t>(samplePolylineCount[i]);
+    stored.polylineType = h5::readRows<std::int8_t>(polylineType, first_polyline, polylines);
+    stored.polylineShared = h5::readRows<std::uint8_t>(polylineShared, first_polyline, polylines);
+    stored.sharedStart = h5::readRows<std::int64_t>(polylineVectorStart, first_polyline, polylines);
+    stored.polylineVectorCount = h5::readRows<std::int32_t>(polylineVectorCount, first_polyline, polylines);
+    std::tie(stored.polylineLength, stored.polylineWidth) =
+        polylineSizes(stored.polylineType, first_polyline, polylines);
+    hsize_t first_vector = 0;
+    hsize_t vector_count = 0;
+    bool any_inline = false;
+    for (hsize_t p = 0; p < polylines; ++p) {
+      if (stored.polylineShared[p]) continue;
+      if (!any_inline) first_vector = static_cast<hsize_t>(stored.sharedStart[p]);
+      any_inline = true;
+      vector_count += static_cast<hsize_t>(stored.polylineVectorCount[p]);
+    }
+    stored.vectors = h5::readRows<float>(vectors, first_vector, vector_count);
+    stored.vectorValid = h5::readRows<std::uint8_t>(vectorValid, first_vector, vector_count);
+    stored.targets = h5::readRows<float>(targets, i, 1);
+    stored.targetValid = h5::readRows<std::uint8_t>(targetValid, i, 1);
+    if (inputs) stored.inputs = h5::readRows<double>(*inputs, i, 1);
+    if (metrics) stored.metrics = h5::readRows<double>(*metrics, i, 1);
+  } catch (const H5::Exception& error) {
+    fail(fmt::format("cannot read sample {}: {}", i, error.getDetailMsg()));
+  }
+  stored.originX = sampleOrigin[2 * i];
+  stored.originY = sampleOrigin[2 * i + 1];
+  stored.egoPolyline = sampleEgoPolyline[i];
+  stored.label = labels.at(static_cast<std::size_t>(sampleLabel[i]));
+  stored.index = sampleIndex[i];
+  const auto source = static_cast<std::size_t>(sampleSource[i]);
+  if (source < sources.size()) {
+    stored.source = sources[source];
+    stored.sourceSha256 = source < sourceSha.size() ? sourceSha[source] : "";
+  }
+  const auto ego = static_cast<std::size_t>(sampleEgo[i]);
+  if (ego < egoIds.size()) stored.egoId = egoIds[ego];
+  stored.t0 = sampleT0[i];
+  return stored;
+}
+
+void DatasetWriter::appendCopy(const DatasetReader& source, std::size_t sample) {
+  auto& d = *impl_;
+  if (!d.open) throw Error("internal: appendCopy() to a closed dataset");
+  const auto& header = source.header();
+  if (header.kind != d.header.kind || header.step != d.header.step || header.horizon != d.header.horizon ||
+      header.history != d.header.history || header.inputNames != d.header.inputNames ||
+      header.metricNames != d.header.metricNames) {
+    throw DatasetError(fmt::format("{}: its header (kind, step, horizon, history, inputs, metrics) differs from the "
+                                   "dataset being written",
+                                   source.path().string()));
+  }
+  if (source.impl_->sharedVectors.size() != d.sharedSize * kFeatures) {
+    throw DatasetError(fmt::format("{}: its shared lane vectors differ from the dataset being written",
+                                   source.path().string()));
+  }
+  d.push(source.impl_->stored(sample));
+}
 
 DatasetReader::DatasetReader(const fs::path& path) : impl_(std::make_unique<Impl>()) {
   h5::silenceErrorStack();
@@ -538,11 +669,45 @@ void checkScene(const VectorizedScene& scene, std::size_t sample, const DatasetH
 
 }  // namespace
 
+namespace {
+
+/// A run folder: its manifest (sizes and SHA-256) first. A file inside a folder
+/// whose manifest lists it: that entry.
+std::vector<std::string> outputFolderProblems(const fs::path& path) {
+  if (fs::is_directory(path)) {
+    auto problems = checkOutputFolder(path, /*hashes=*/true);
+    if (problems.empty() && !readManifestOutputs(path).count("dataset.h5")) {
+      problems.push_back(fmt::format("{}: the folder's manifest lists no dataset.h5 (not a run folder)", path.string()));
+    }
+    return problems;
+  }
+  const fs::path folder = path.parent_path().empty() ? fs::path(".") : path.parent_path();
+  if (!fs::exists(folder / "manifest.json")) return {};
+  std::map<std::string, ManifestEntry> entries;
+  try {
+    entries = readManifestOutputs(folder);
+  } catch (const DatasetError&) {
+    return {};  // a manifest of something else (not an output folder of ours)
+  }
+  const auto entry = entries.find(path.filename().string());
+  if (entry == entries.end()) return {};
+  std::error_code ec;
+  if (fs::file_size(path, ec) != entry->second.bytes || sha256OfFile(path) != entry->second.sha256) {
+    return {fmt::format("{}: size or SHA-256 differs from {} (changed or truncated after it was written)",
+                        path.string(), (folder / "manifest.json").string())};
+  }
+  return {};
+}
+
+}  // namespace
+
 DatasetValidation validateDataset(const fs::path& path) {
   DatasetValidation result;
-  result.path = path;
+  result.path = fs::is_directory(path) ? path / "dataset.h5" : path;
+  result.problems = outputFolderProblems(path);
+  if (!result.problems.empty()) return result;
   try {
-    const DatasetReader reader(path);
+    const DatasetReader reader(result.path);
     result.samples = reader.size();
     for (std::size_t i = 0; i < reader.size(); ++i) {
       checkScene(reader.scene(i), i, reader.header(), result.problems);
@@ -616,12 +781,24 @@ std::string DatasetSummary::report() const {
 // --- collections -------------------------------------------------------------------------------
 
 fs::path resolveDatasetPath(const fs::path& path) {
-  if (fs::is_directory(path)) return path / "dataset.h5";
-  return path;
+  if (!fs::is_directory(path)) return path;
+  // A run folder is one unit: only a complete one (its manifest and sizes agree) is read.
+  requireCompleteOutputFolder(path, /*hashes=*/false);
+  if (!readManifestOutputs(path).count("dataset.h5")) {
+    throw DatasetError(fmt::format("{}: the folder's manifest lists no dataset.h5 (not a run folder)", path.string()));
+  }
+  return path / "dataset.h5";
+}
+
+std::vector<fs::path> datasetFiles(const fs::path& path) {
+  if (!fs::is_directory(path) || fs::exists(path / "dataset.h5") || !hasShards(path)) return {resolveDatasetPath(path)};
+  std::vector<fs::path> files;
+  for (const auto& shard : readShardSet(path)) files.push_back(shard.folder / "dataset.h5");
+  return files;
 }
 
 void DatasetCollection::add(const fs::path& path_or_run_folder) {
-  readers_.push_back(std::make_unique<DatasetReader>(resolveDatasetPath(path_or_run_folder)));
+  for (const auto& file : datasetFiles(path_or_run_folder)) readers_.push_back(std::make_unique<DatasetReader>(file));
 }
 
 std::vector<DatasetCollection::SampleRef> DatasetCollection::all() const {

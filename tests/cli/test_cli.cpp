@@ -243,12 +243,15 @@ TEST(Cli, TrainPredictEvaluate) {
   const auto model = dir.path() / "models" / "m.pt";
   const auto trained = test::run({test::vsdSumo().string(), "train", "--data", data.string(), "--mix", "acc=30", "--out",
                                   model.string(), "--steps", "30", "--batch", "8", "--hidden", "8", "--global-width",
-                                  "8", "--decoder-hidden", "16"},
+                                  "8", "--decoder-hidden", "16", "--decoder", "kinematic", "--decoder-option",
+                                  "max_decel=8"},
                                  dir.path());
   ASSERT_EQ(trained.exitCode, 0) << trained.output;
   EXPECT_NE(trained.output.find("epoch   1/8: train loss"), std::string::npos) << trained.output;
+  EXPECT_NE(trained.output.find("NLL"), std::string::npos) << trained.output;
   EXPECT_NE(trained.output.find("samples/s"), std::string::npos);
-  EXPECT_NE(trained.output.find("trained VectorNet: best validation ADE"), std::string::npos) << trained.output;
+  EXPECT_NE(trained.output.find("trained VectorNet (kinematic decoder): best validation ADE"), std::string::npos)
+      << trained.output;
   EXPECT_NE(trained.output.find("acc 27/3"), std::string::npos) << trained.output;  // 90 % / 10 %
 
   const auto csv = dir.path() / "eval.csv";
@@ -257,27 +260,54 @@ TEST(Cli, TrainPredictEvaluate) {
       dir.path());
   ASSERT_EQ(evaluated.exitCode, 0) << evaluated.output;
   EXPECT_NE(evaluated.output.find("ADE [m]"), std::string::npos);
+  EXPECT_NE(evaluated.output.find("NLL [nats]"), std::string::npos);
+  EXPECT_NE(evaluated.output.find("share inside the predicted 50 % / 90 % region"), std::string::npos) << evaluated.output;
   EXPECT_NE(evaluated.output.find("scenes/s"), std::string::npos);
-  EXPECT_EQ(readTextFile(csv).rfind("label,samples,ade_m,fde_m\nacc,30,", 0), 0u) << readTextFile(csv);
+  EXPECT_EQ(readTextFile(csv).rfind("label,samples,ade_m,fde_m,nll,nll_1s,nll_3s,nll_5s,coverage50_1s,coverage90_1s,", 0),
+            0u)
+      << readTextFile(csv);
+  // The constant-velocity predictor needs no model file.
+  const auto cv = test::run({test::vsdSumo().string(), "evaluate", "--model", "cv", "--data", data.string()}, dir.path());
+  ASSERT_EQ(cv.exitCode, 0) << cv.output;
+  EXPECT_NE(cv.output.find("cv (no training)"), std::string::npos) << cv.output;
 
   const auto predictions = dir.path() / "pred.h5";
-  const auto predicted = test::run(
-      {test::vsdSumo().string(), "predict", "--model", model.string(), "--data", data.string(), "--out", predictions.string()},
-      dir.path());
+  const auto predicted = test::run({test::vsdSumo().string(), "predict", "--model", model.string(), "--data",
+                                    data.string(), "--out", predictions.string(), "--samples", "4"},
+                                   dir.path());
   ASSERT_EQ(predicted.exitCode, 0) << predicted.output;
   const auto check = test::writeFile(dir.path() / "check.py", R"(
 import sys, h5py, numpy as np
 with h5py.File(sys.argv[1], "r") as f:
-    assert f.attrs["schema"] == "vsd-predictions/1"
+    assert f.attrs["schema"] == "vsd-predictions/2"
+    assert f.attrs["predictor"] == "kinematic" and f.attrs["samples"] == 4
     p, t, v = f["predictions"][:], f["targets"][:], f["target_valid"][:]
     assert p.shape == (30, 25, 2) and t.shape == (30, 25, 2) and v.all()
     ade = np.linalg.norm(p - t, axis=-1).mean(axis=1)
     assert np.allclose(ade, f["ade"][:], atol=1e-9)
     assert list(f["labels"].asstr()[:]) == ["acc"]
+    assert f["sample_positions"].shape == (30, 4, 25, 2)
+    assert f["position_covariance"].shape == (30, 25, 2, 2)
+    speed, accel = f["predicted_speed"][:], f["predicted_accel"][:]
+    assert (speed >= 0).all() and (accel >= -8 - 1e-3).all()
 print("ok")
 )");
   const auto read = test::run({test::python(), check.string(), predictions.string()}, dir.path());
   EXPECT_EQ(read.exitCode, 0) << read.output;
+  const auto no_samples = runForErrors({"predict", "--model", model.string(), "--data", data.string(), "--out",
+                                        (dir.path() / "p.h5").string(), "--samples", "-2"},
+                                       dir.path());
+  EXPECT_EQ(no_samples.exitCode, 1);
+  EXPECT_EQ(lineCount(no_samples.output), 1u) << no_samples.output;
+  EXPECT_NE(no_samples.output.find("--samples"), std::string::npos) << no_samples.output;
+  EXPECT_FALSE(fs::exists(dir.path() / "p.h5"));
+  const auto no_decoder = runForErrors({"train", "--data", data.string(), "--out", (dir.path() / "x.pt").string(),
+                                        "--decoder", "lstm"},
+                                       dir.path());
+  EXPECT_EQ(no_decoder.exitCode, 1);
+  EXPECT_EQ(lineCount(no_decoder.output), 1u) << no_decoder.output;
+  EXPECT_NE(no_decoder.output.find("unknown decoder 'lstm' (known: offsets, kinematic)"), std::string::npos)
+      << no_decoder.output;
 
   // Bad input: one line, exit 1.
   const auto empty_mix = runForErrors({"train", "--data", data.string(), "--mix", "acc=0", "--out",

@@ -186,7 +186,8 @@ TEST_F(CompareTest, DatasetModeWorksOnAnExportedRealMap) {
   options.criteria = {"close: d_min < 2"};
   const auto summary = runComparison(options);
   EXPECT_GT(summary.statistics.compared, 20u);
-  EXPECT_EQ(summary.comparison.metricNames, (std::vector<std::string>{"a_min", "d_min", "ttc_min", "thw_min"}));
+  EXPECT_EQ(summary.comparison.metricNames,
+            (std::vector<std::string>{"a_min", "d_min", "ttc_min", "thw_min", "pet_min", "drac_max"}));
   EXPECT_TRUE(std::isfinite(summary.statistics.ade.mean));
   const auto html = readTextFile(work_.path() / "map_report" / "index.html");
   EXPECT_NE(html.find("Predicted vs recorded"), std::string::npos);
@@ -204,7 +205,7 @@ TEST_F(CompareTest, BadInputGetsOneClearErrorAndLeavesNothingBehind) {
   auto forced = scenarioOptions(existing, 5);
   forced.force = true;
   runComparison(forced);
-  EXPECT_FALSE(fs::exists(existing / "keep.txt"));
+  EXPECT_TRUE(fs::exists(existing / "keep.txt"));  // the report's files replaced; a file it never wrote is kept
   EXPECT_TRUE(fs::exists(existing / "index.html"));
 
   // A model for another step/horizon than the scenario's.

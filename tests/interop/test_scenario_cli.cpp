@@ -133,7 +133,7 @@ TEST(ScenarioCli, BadInputIsOneLineAndLeavesNothingBehind) {
   EXPECT_FALSE(fs::exists(out));
 
   // An existing output folder is not replaced without --force.
-  fs::create_directories(out);
+  test::writeFile(out / "notes.txt", "mine");
   expectOneLineError(errorsOf({"scenario", "export", run.string(), "--out", out.string()}, dir.path()),
                      "the folder exists");
   fs::remove_all(out);

@@ -7,6 +7,7 @@
 #include <libsumo/libsumo.h>
 #include <pugixml.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <map>
 #include <sstream>
@@ -141,13 +142,20 @@ TEST(SsmCrossCheck, FollowingOnCurvedRoadsMatchesSsmAtEveryInstant) {
         EXPECT_NEAR(ours.at("thw_min_lane")[k], ssmAt(ssm, "TGAP", time), 0.01) << where;
       }
       const double ttc = ssmAt(ssm, "TTC", time);
-      if (!std::isnan(ttc) && ttc < 10.0) EXPECT_NEAR(ours.at("ttc_min_lane")[k], ttc, 0.01) << where;
+      if (!std::isnan(ttc) && ttc < 10.0) {
+        EXPECT_NEAR(ours.at("ttc_min_lane")[k], ttc, 0.01) << where;
+      }
       const double drac = ssmAt(ssm, "DRAC", time);
-      if (!std::isnan(drac)) EXPECT_NEAR(ours.at("drac_max_lane")[k], drac, 0.01) << where;
-      // The straight gap between centres is a chord of the lane: never longer, and
-      // within 0.25 m where the vehicles are close (<= 10 m).
-      EXPECT_LE(ours.at("d_min")[k], sgap + 0.01) << where;
-      if (sgap <= 10.0) EXPECT_NEAR(ours.at("d_min")[k], sgap, 0.25) << where;
+      if (!std::isnan(drac)) {
+        EXPECT_NEAR(ours.at("drac_max_lane")[k], drac, 0.01) << where;
+      }
+      // The straight gap between centres is nearly a chord of the lane: longer only by what
+      // lateral offsets on the outside of a bend add (<= 0.1 m), and within 0.25 m where the
+      // vehicles are close (<= 10 m).
+      EXPECT_LE(ours.at("d_min")[k], sgap + 0.1) << where;
+      if (sgap <= 10.0) {
+        EXPECT_NEAR(ours.at("d_min")[k], sgap, 0.25) << where;
+      }
     }
   }
   EXPECT_GT(compared, 400u);
@@ -161,20 +169,27 @@ TEST(SsmCrossCheck, StraightLineMeasuresAgreeWithSsmOnStraightRoads) {
   runAndReplay("acc", 20, work.path(), replayed);
   const std::vector<std::string> names = {"d_min", "ttc_min", "drac_max"};
   const metrics::MetricSet set(names, {true, true, true}, "test");
+  std::vector<double> ttc_differences;
   for (const auto& outcome : replayed.outcomes) {
     const auto ssm = ssmSeries(replayed.ssm, fmt::format("s{}.ego", outcome.index), fmt::format("s{}.co", outcome.index));
     const auto values = set.evaluate({outcome.trace, outcome.lanes.at(0).centre});
     double min_sgap = std::numeric_limits<double>::infinity();
     double min_ttc = std::numeric_limits<double>::infinity();
     double max_drac = 0.0;
-    for (const auto& [time, value] : ssm.at("SGAP")) if (!std::isnan(value)) min_sgap = std::min(min_sgap, value);
-    for (const auto& [time, value] : ssm.at("TTC")) if (!std::isnan(value)) min_ttc = std::min(min_ttc, value);
-    for (const auto& [time, value] : ssm.at("DRAC")) if (!std::isnan(value)) max_drac = std::max(max_drac, value);
+    for (const auto& [time, value] : ssm.at("SGAP")) min_sgap = std::isnan(value) ? min_sgap : std::min(min_sgap, value);
+    for (const auto& [time, value] : ssm.at("TTC")) min_ttc = std::isnan(value) ? min_ttc : std::min(min_ttc, value);
+    for (const auto& [time, value] : ssm.at("DRAC")) max_drac = std::isnan(value) ? max_drac : std::max(max_drac, value);
     const std::string where = fmt::format("sample {}", outcome.index);
     EXPECT_NEAR(values[0], min_sgap, 0.25) << where;
-    if (min_ttc < 10.0) EXPECT_NEAR(values[1], min_ttc, 0.15) << where;
+    if (min_ttc < 10.0) {  // projected vs scalar speeds: a relative difference
+      EXPECT_NEAR(values[1], min_ttc, 0.12 * min_ttc) << where;
+      ttc_differences.push_back(std::abs(values[1] - min_ttc));
+    }
     EXPECT_NEAR(values[2], max_drac, 0.05) << where;
   }
+  ASSERT_GT(ttc_differences.size(), 5u);
+  std::nth_element(ttc_differences.begin(), ttc_differences.begin() + ttc_differences.size() / 2, ttc_differences.end());
+  EXPECT_LE(ttc_differences[ttc_differences.size() / 2], 0.1) << "median TTC difference";
 }
 
 namespace {
@@ -217,7 +232,9 @@ struct Crossing {
 
 /// SSM's PET and the trace of A (Ego) and B crossing the junction at constant speeds.
 std::pair<double, Trace> simulateCrossing(const fs::path& net, const Crossing& crossing, const fs::path& work) {
-  const fs::path log = work / "ssm_pet.xml";
+  // One log per simulation: SUMO keeps its output devices by file name for the whole process.
+  static int simulations = 0;
+  const fs::path log = work / fmt::format("ssm_pet_{}.xml", simulations++);
   constexpr double kStep = 0.2;
   constexpr std::size_t kInstants = 101;
   Trace trace;
@@ -273,12 +290,13 @@ TEST(SsmCrossCheck, PostEncroachmentTimeOnACrossingMatchesSsm) {
   const fs::path net = crossingNetwork(work.path());
   const metrics::MetricSet set({"pet_min"}, {true, false, false}, "test");
   const Polyline no_lane;
-  for (const Crossing& crossing : {Crossing{10.0, 10.0, 140.0}, Crossing{12.0, 8.0, 150.0}, Crossing{9.0, 14.0, 100.0}}) {
+  for (const Crossing& crossing :
+       {Crossing{12.0, 8.0, 150.0}, Crossing{9.0, 14.0, 100.0}, Crossing{10.0, 10.0, 120.0}, Crossing{15.0, 5.0, 170.0}}) {
     const auto [ssm_pet, trace] = simulateCrossing(net, crossing, work.path());
     const double pet = set.evaluate({trace, no_lane})[0];
     const std::string where = fmt::format("speeds {} / {} m/s, B from {} m", crossing.speedA, crossing.speedB, crossing.startB);
     ASSERT_TRUE(std::isfinite(ssm_pet)) << where;
     EXPECT_GT(ssm_pet, 0.2) << where;
-    EXPECT_NEAR(pet, ssm_pet, 0.05) << where;
+    EXPECT_NEAR(pet, ssm_pet, 0.01) << where;
   }
 }

@@ -148,7 +148,8 @@ TEST(MetricSet, DefaultsFollowWhatTheSourceProvides) {
   EXPECT_EQ(MetricSet({}, ego_alone, "w").names(),
             (std::vector<std::string>{"a_min", "p_lat_max", "y_max", "lane_offset_max"}));
   EXPECT_EQ(MetricSet({}, generated, "w").names(), metricNames());
-  EXPECT_EQ(MetricSet({}, map, "w").names(), (std::vector<std::string>{"a_min", "d_min", "ttc_min", "thw_min"}));
+  EXPECT_EQ(MetricSet({}, map, "w").names(),
+            (std::vector<std::string>{"a_min", "d_min", "ttc_min", "thw_min", "pet_min", "drac_max"}));
   EXPECT_THROW(MetricSet({"y_max"}, map, "--metrics"), ConfigError);
   EXPECT_THROW(MetricSet({"d_min"}, ego_alone, "lk.yaml: metrics"), ConfigError);
   EXPECT_THROW(MetricSet({"lane_offset_max"}, map, "--metrics"), ConfigError);

@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "../../src/model/tensors.hpp"
+#include "synthetic_scenes.hpp"
 #include "test_support.hpp"
 #include "vsd/core/error.hpp"
 #include "vsd/core/interrupt.hpp"
@@ -13,84 +14,10 @@
 
 using namespace vsd;
 using namespace vsd::model;
+using namespace vsd::test;
 namespace fs = std::filesystem;
 
 namespace {
-
-/// A scene like the paper's ACC: one lane, a leader, the Ego. Everything is a function of
-/// (speed, gap, leader speed, heading, position), so a model can learn it.
-vector::VectorizedScene syntheticScene(std::uint64_t i, const std::string& label = "acc") {
-  const double speed = 8.0 + static_cast<double>(i % 9);
-  const double leader_speed = speed - 2.0 + static_cast<double>(i % 5);
-  const double heading = 0.3 * std::sin(static_cast<double>(i));
-  const Vec2 origin(100.0 * static_cast<double>(i % 7), -40.0 * static_cast<double>(i % 3));
-  const Vec2 u = headingVector(heading);
-  Trace trace;
-  trace.step = 0.2;
-  VehicleTrack ego;
-  ego.length = 5.0;
-  ego.width = 1.8;
-  VehicleTrack leader;
-  leader.length = 4.5;
-  leader.width = 1.8;
-  double ego_speed = speed;
-  Vec2 p = origin;
-  for (int k = 0; k < 26; ++k) {
-    const double t = 0.2 * k;
-    const Vec2 lead = origin + (20.0 + leader_speed * t) * u;
-    ego.states.push_back({p.x(), p.y(), heading, ego_speed, 0.0});
-    leader.states.push_back({lead.x(), lead.y(), heading, leader_speed, 0.0});
-    ego.valid.push_back(1);
-    leader.valid.push_back(1);
-    ego_speed = std::max(0.0, ego_speed + 0.2 * 0.5 * (leader_speed - ego_speed));
-    p += 0.2 * ego_speed * u;
-  }
-  trace.vehicles = {ego, leader};
-  LaneGeometry lane;
-  lane.id = "l";
-  lane.width = 3.5;
-  lane.centre = {origin - 60.0 * u, origin + 120.0 * u};
-  auto scene = vector::buildScene(label, trace, 0, vector::regionLanePolylines({lane}, -1e9, 1e9));
-  scene.sample = i;
-  return scene;
-}
-
-/// The paper's time base (0.2 s, 25 steps): a network configuration passes it on explicitly.
-VectorNetConfig paperConfig() {
-  VectorNetConfig config;
-  config.step = 0.2;
-  config.horizon = 25;
-  return config;
-}
-
-fs::path writeDataset(const fs::path& path, std::size_t count, const std::string& label = "acc",
-                      int horizon = 25) {
-  vector::DatasetHeader header;
-  header.step = 0.2;
-  header.horizon = horizon;
-  vector::DatasetWriter writer(path, header);
-  for (std::size_t i = 0; i < count; ++i) {
-    auto scene = syntheticScene(i, label);
-    scene.target.resize(static_cast<std::size_t>(horizon));
-    scene.targetValid.resize(static_cast<std::size_t>(horizon));
-    writer.append(scene);
-  }
-  writer.close();
-  return path;
-}
-
-TrainOptions tinyTraining(const fs::path& data, const fs::path& out) {
-  TrainOptions options;
-  options.data = {data};
-  options.output = out;
-  options.config.hidden = 16;
-  options.config.globalWidth = 16;
-  options.config.decoderHidden = 32;
-  options.steps = 60;
-  options.batchSize = 8;
-  options.seed = 5;
-  return options;
-}
 
 double maxDifference(const std::vector<Polyline>& a, const std::vector<Polyline>& b) {
   double worst = 0.0;
@@ -115,6 +42,14 @@ class ModelTest : public ::testing::Test {
 
 }  // namespace
 
+/// The configuration of paper-sized data (what training takes from a dataset header).
+VectorNetConfig paperConfig() {
+  VectorNetConfig config;
+  config.horizon = 25;
+  config.step = 0.2;
+  return config;
+}
+
 TEST(ModelTensors, ShapesMasksAndTheEgoFrame) {
   const VectorNetConfig config = paperConfig();
   std::vector<vector::VectorizedScene> scenes = {syntheticScene(1), syntheticScene(2)};
@@ -134,7 +69,10 @@ TEST(ModelTensors, ShapesMasksAndTheEgoFrame) {
   EXPECT_NEAR(static_cast<double>(ego[2].item<float>()) * config.coordinateScale, 9.0 * 0.2, 1e-4);
   EXPECT_NEAR(ego[3].item<float>(), 0.0, 1e-5);
   EXPECT_EQ(ego[6].item<float>(), 1.0F);  // one-hot: Ego
-  EXPECT_NEAR(tensors.egoStep[0][0].item<float>(), 9.0 * 0.2, 1e-5);
+  // The Ego starts at the frame's origin, heading along +x, with its speed.
+  EXPECT_NEAR(tensors.start.position.abs().max().item<float>(), 0.0, 1e-6);
+  EXPECT_NEAR(tensors.start.heading[0].item<float>(), 0.0, 1e-6);
+  EXPECT_NEAR(tensors.start.speed[0].item<float>(), 9.0, 1e-5);
 }
 
 TEST(ModelTensors, EgoFrameRoundTrip) {
@@ -142,8 +80,12 @@ TEST(ModelTensors, EgoFrameRoundTrip) {
   const std::vector<vector::VectorizedScene> scenes = {syntheticScene(3), syntheticScene(11)};
   const auto tensors = buildTensors(scenes, config);
   for (std::size_t i = 0; i < scenes.size(); ++i) {
-    const auto back = toSceneFrame(tensors.targets[static_cast<std::int64_t>(i)], tensors.origins[i], tensors.headings[i]);
-    for (std::size_t k = 0; k < back.size(); ++k) EXPECT_LT((back[k] - scenes[i].target[k]).norm(), 1e-4);
+    const auto targets = tensors.targets[static_cast<std::int64_t>(i)];
+    for (std::size_t k = 0; k < scenes[i].target.size(); ++k) {
+      const auto model_point = targets[static_cast<std::int64_t>(k)];
+      const Vec2 back = tensors.frames[i]->toScene({model_point[0].item<float>(), model_point[1].item<float>()});
+      EXPECT_LT((back - scenes[i].target[k]).norm(), 1e-4);
+    }
   }
 }
 

@@ -3,6 +3,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -34,18 +35,41 @@ inline ProcessResult run(const std::vector<std::string>& argv, const std::filesy
   return runProcess(argv, log);
 }
 
-/// Copies a model file as if a future vsd-sumo had written it for feature schema v2
-/// (the JSON description inside the torch archive edited); true on success.
-inline bool writeModelForFeatureSchemaV2(const std::filesystem::path& model, const std::filesystem::path& copy) {
+/// Copies a model file with `from` replaced by `to` in its JSON description (inside the
+/// torch archive); true on success.
+inline bool rewriteModelDescription(const std::filesystem::path& model, const std::filesystem::path& copy,
+                                    const std::string& from, const std::string& to) {
   const auto work = copy.parent_path();
-  const auto script = writeFile(work / "feature_schema_v2.py", R"(
+  const auto script = writeFile(work / "rewrite_model.py", R"(
 import sys, zipfile
-src, dst = sys.argv[1], sys.argv[2]
+src, dst, old, new = sys.argv[1], sys.argv[2], sys.argv[3].encode(), sys.argv[4].encode()
 with zipfile.ZipFile(src) as zin, zipfile.ZipFile(dst, "w", zipfile.ZIP_STORED) as zout:
     for item in zin.infolist():
-        zout.writestr(item, zin.read(item.filename).replace(b'"feature_version":1', b'"feature_version":2'))
+        zout.writestr(item, zin.read(item.filename).replace(old, new))
 )");
-  return run({python(), script.string(), model.string(), copy.string()}, work).exitCode == 0;
+  return run({python(), script.string(), model.string(), copy.string(), from, to}, work).exitCode == 0;
+}
+
+/// Copies a model file as if a future vsd-sumo had written it for feature schema v2.
+inline bool writeModelForFeatureSchemaV2(const std::filesystem::path& model, const std::filesystem::path& copy) {
+  return rewriteModelDescription(model, copy, R"("feature_version":1)", R"("feature_version":2)");
+}
+
+/// The files an output folder's manifest lists (relative path -> SHA-256); empty without a manifest.
+inline std::map<std::string, std::string> listedOutputs(const std::filesystem::path& folder) {
+  std::map<std::string, std::string> set;
+  if (!std::filesystem::exists(folder / "manifest.json")) return set;
+  for (const auto& [name, entry] : readManifestOutputs(folder)) set[name] = entry.sha256;
+  return set;
+}
+
+/// Entries of `folder` whose name starts with '.' (staging or commit folders, temporary parts).
+inline std::vector<std::string> hiddenEntries(const std::filesystem::path& folder) {
+  std::vector<std::string> names;
+  for (const auto& entry : std::filesystem::directory_iterator(folder)) {
+    if (entry.path().filename().string().front() == '.') names.push_back(entry.path().filename().string());
+  }
+  return names;
 }
 
 /// Reads a scenario file and replaces `from` by `to` (to derive variants of the paper's scenarios).

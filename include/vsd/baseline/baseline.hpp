@@ -37,9 +37,12 @@ class ExtraTrees {
   /// x [n, d], y [n, outputs]; throws ConfigError for empty or mismatched data.
   void fit(const Matrix& x, const Matrix& y);
   Matrix predict(const Matrix& x) const;
+  /// One [n, outputs] prediction per tree (their mean is predict()): the forest's spread.
+  std::vector<Matrix> predictPerTree(const Matrix& x) const;
   std::size_t nodes() const;
 
  private:
+  void checkPredictable(const Matrix& x) const;
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };

@@ -35,8 +35,13 @@ struct CompareOptions {
   std::size_t batch = 250;                     ///< scenario mode: scenarios per SUMO network
   int threads = 2;                             ///< libtorch threads
   int worst = 6;                               ///< scenarios drawn in the report (largest ADE), 0..50
+  /// Futures drawn per scenario from a probabilistic model for metric intervals and
+  /// confident verdicts (0: none; ignored for deterministic models), 0 .. 10000.
+  int draws = 32;
+  std::uint64_t drawSeed = 1;                  ///< seed of the drawn futures
+  double confidence = 0.9;                     ///< a verdict is confident when this share of futures agrees, 0.5 .. 1
   /// Dataset mode: metrics to compare (default: the dataset's metrics for generated data,
-  /// else a_min, d_min, ttc_min, thw_min) and criteria "name: expression" (scenario mode
+  /// else every metric that applies to a map, metrics::defaultMetrics) and criteria "name: expression" (scenario mode
   /// takes both from the scenario file).
   std::vector<std::string> metrics;
   std::vector<std::string> criteria;

@@ -1,17 +1,31 @@
 #pragma once
-// File helpers that uphold the project's output rule: a file is written under a
-// temporary name and renamed when complete, so an interrupted run never leaves
-// a file that looks finished.
+// Files and folders that change as a whole or not at all.
+//
+// A single output file is written under a temporary name next to it, closed,
+// flushed to disk and only then renamed (AtomicOutput). A folder of outputs
+// (a run, a report, experiment results) is one unit (OutputFolder): its files
+// are staged, flushed, listed with their SHA-256 and size in a manifest, and
+// swapped in as one set; readers check the manifest (checkOutputFolder), and
+// the next writer finishes or removes what an interrupted one left behind.
+//
+// Fault-injection points along the way are listed in vsd/core/fault.hpp.
 
+#include <nlohmann/json_fwd.hpp>
+
+#include <cstdint>
 #include <filesystem>
+#include <map>
 #include <string>
 #include <vector>
 
 namespace vsd {
 
-/// A file being written. Write to tempPath(); commit() renames it to the final
-/// path. If the object is destroyed without commit() (error, exception), the
-/// temporary file is removed.
+/// A file being written. Write to tempPath() and close it; commit() flushes it
+/// to disk and renames it to the final path. If the object is destroyed without
+/// commit() (error, exception, interruption) the temporary file is removed.
+/// Temporary files a killed process left next to the final path
+/// (".<name>.<pid>.part" of a process that no longer exists) are removed when
+/// the next AtomicOutput for that path is created.
 class AtomicOutput {
  public:
   explicit AtomicOutput(std::filesystem::path final_path);
@@ -23,16 +37,122 @@ class AtomicOutput {
 
   const std::filesystem::path& tempPath() const { return tempPath_; }
   const std::filesystem::path& finalPath() const { return finalPath_; }
-  /// Renames the temporary file to the final path (replacing an older file atomically).
+  /// Flushes the (closed) temporary file to disk and renames it to the final
+  /// path, replacing an older file atomically. Throws IoError naming the path.
   void commit();
+  /// Like commit(), but throws InterruptedError before the rename if SIGINT or
+  /// SIGTERM arrived (the older file stays): for the one output of a command
+  /// the user is stopping. (commit() serves deliberate saves on the way out,
+  /// e.g. a training's resume state.)
+  void commitUnlessInterrupted();
   /// Removes the temporary file now.
   void abandon();
 
  private:
+  void commitFile(bool honour_interruption);
+
   std::filesystem::path finalPath_;
   std::filesystem::path tempPath_;
   bool active_ = true;
 };
+
+/// An output folder that changes as a whole or not at all.
+///
+///   OutputFolder folder("out/acc_lk");     // locks it; finishes or removes leftovers
+///   write folder.stage("traces.h5"), close it, ...
+///   folder.commit(manifest);              // the staged files become the folder's set
+///
+/// Staged files live in <folder>/.staging-<pid>/ (same file system: renames are
+/// atomic). commit():
+///   1. flushes every staged file to disk and records its SHA-256 and size,
+///   2. writes the manifest (the caller's JSON object plus "outputs":
+///      {relative path: {"sha256", "bytes"}}) into the staging folder, with the
+///      list of files of the old set that the new one lacks,
+///   3. renames the staging folder to .commit-<pid> — the decision: from here on
+///      the new set wins, even if the process dies,
+///   4. removes the old manifest, then the old files the new set lacks, renames
+///      every staged file into place, and renames the manifest last.
+/// A folder therefore holds either a complete set described by its manifest,
+/// or no manifest (readers refuse it). The next OutputFolder (or reader) on the
+/// folder completes an interrupted step 4 and removes staging folders of
+/// processes that died before step 3. Files not listed in any manifest (a
+/// user's notes, an experiment's cache/) are never touched. Names starting with
+/// '.' inside the staging folder are scratch space, not part of the set.
+///
+/// One writer at a time: the folder is locked (flock on the directory) for the
+/// object's lifetime; a second writer gets IoError. Forked workers inherit the
+/// lock; they die with the parent.
+class OutputFolder {
+ public:
+  struct Options {
+    /// Refuse (ConfigError) a folder that already holds files (other than
+    /// hidden ones), naming `flag` and `forceFlag` (e.g. "--out", "--force").
+    /// Without it (--force) the new set replaces the old one; files that no
+    /// manifest listed are kept all the same.
+    bool refuseExisting = false;
+    std::string flag = "--out";
+    std::string forceFlag = "--force";
+  };
+
+  /// Creates the folder if needed. Throws IoError if it cannot be created or is
+  /// locked by another process, ConfigError as described in Options.
+  explicit OutputFolder(std::filesystem::path folder, const Options& options);
+  explicit OutputFolder(std::filesystem::path folder) : OutputFolder(std::move(folder), Options{}) {}
+  OutputFolder(const OutputFolder&) = delete;
+  OutputFolder& operator=(const OutputFolder&) = delete;
+  /// Without commit(): removes the staged files (and the folder, if this object
+  /// created it and it is empty).
+  ~OutputFolder();
+
+  const std::filesystem::path& path() const { return folder_; }
+  const std::filesystem::path& stagingPath() const { return staging_; }
+  /// Where to write the output `relative` (e.g. "traces.h5", "nets/b.net.xml");
+  /// its parent folders are created.
+  std::filesystem::path stage(const std::filesystem::path& relative) const;
+  /// Stages a whole text file.
+  void stageText(const std::filesystem::path& relative, const std::string& contents) const;
+  /// Declares the staged file `relative` complete and closed (a fault-injection
+  /// point; throws IoError if it does not exist).
+  void staged(const std::filesystem::path& relative) const;
+  /// Makes the staged files the folder's contents (see above). `manifest` must
+  /// be a JSON object; "outputs" is added. Returns the final paths of the
+  /// outputs in sorted order, then the manifest. Throws InterruptedError before
+  /// the decision if a signal arrived (the old set stays), IoError on failure.
+  std::vector<std::filesystem::path> commit(const nlohmann::json& manifest);
+
+ private:
+  std::filesystem::path folder_;
+  std::filesystem::path staging_;
+  int lockFd_ = -1;
+  bool createdFolder_ = false;
+  bool committed_ = false;
+};
+
+/// A file of an output folder as its manifest lists it.
+struct ManifestEntry {
+  std::string sha256;
+  std::uintmax_t bytes = 0;
+};
+
+/// The "outputs" of <folder>/manifest.json. Throws DatasetError naming the folder
+/// if the manifest is missing or damaged.
+std::map<std::string, ManifestEntry> readManifestOutputs(const std::filesystem::path& folder);
+
+/// Problems of an output folder, one line each (empty: complete): no manifest
+/// (an interrupted or foreign folder), a listed file missing or of another size,
+/// with `hashes` also another SHA-256. An interrupted commit is completed first
+/// if no process is writing to the folder.
+std::vector<std::string> checkOutputFolder(const std::filesystem::path& folder, bool hashes);
+/// Throws DatasetError with the first problem of checkOutputFolder().
+void requireCompleteOutputFolder(const std::filesystem::path& folder, bool hashes);
+/// Completes an interrupted commit and removes staging folders of dead writers,
+/// unless another process holds the folder's lock. Never throws.
+void recoverOutputFolder(const std::filesystem::path& folder);
+
+/// Flushes a closed file's data to disk (fsync); throws IoError naming it.
+void syncFile(const std::filesystem::path& path);
+/// Flushes a directory's entries (renames) to disk; best effort.
+void syncDirectory(const std::filesystem::path& path);
 
 /// Writes a whole text file atomically.
 void writeTextFileAtomically(const std::filesystem::path& path, const std::string& contents);

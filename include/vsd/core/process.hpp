@@ -31,9 +31,13 @@ class ChildProcess {
   ChildProcess& operator=(const ChildProcess&) = delete;
   ~ChildProcess();
 
-  /// Waits for the process and returns its exit code and output.
+  /// Waits for the process and returns its exit code and output. Throws
+  /// InterruptedError (within 100 ms) if SIGINT/SIGTERM arrives meanwhile; the
+  /// process is then killed when this object is destroyed.
   ProcessResult wait();
   bool running() const { return pid_ > 0; }
+  /// The process id (-1 once waited for).
+  pid_t pid() const { return pid_; }
 
  private:
   ChildProcess(pid_t pid, std::filesystem::path output_file)

@@ -28,6 +28,8 @@ enum class RandomStream : std::uint64_t {
   Training = 6,
   EgoSelection = 7,
   OtherHeadingNoise = 8,
+  SearchSelection = 9,  ///< `search`: importance draws from a round's candidate pool
+  PredictionSamples = 10,  ///< `predict --samples`, compare's drawn futures
 };
 
 class Rng {

@@ -20,6 +20,7 @@
 #include <utility>
 #include <vector>
 
+#include "vsd/pipeline/worker_pool.hpp"
 #include "vsd/sim/map_simulation.hpp"
 
 namespace vsd::pipeline {
@@ -57,6 +58,7 @@ struct ExportOptions {
   std::string controller = "paper_ego";
   std::filesystem::path controllerLibrary;
   std::vector<std::pair<std::string, double>> controllerParams;
+  WatchdogOptions watchdog;              ///< per-step time limit of controllers and libsumo (--step-timeout)
 
   /// Throws ConfigError naming the flag, the value and the constraint.
   void validate() const;
@@ -75,12 +77,43 @@ struct ExportSummary {
   double samplesPerSecond = 0.0;
   double bytesPerSample = 0.0;
   bool closedLoop = false;
+  std::vector<sim::EgoFailure> failedEgos;  ///< closed-loop Egos taken out: controller error, crash, exit or hang
   std::string report() const;
 };
 
-/// Runs the export. Throws ConfigError / SumoError for a map SUMO or netconvert
-/// rejects, an Ego id that never appears, an empty selection, a window longer than
-/// the simulation; the output file is then not created (or an older one is kept).
+/// Runs the export. libsumo and the controllers run in a worker process under
+/// the watchdog: a closed-loop Ego whose controller throws, crashes, exits or
+/// hangs is taken out at that moment and listed in failedEgos (the export is
+/// repeated without it — deterministically — if the fault took the worker
+/// down); a crash or hang of libsumo itself ends the export with SumoError.
+/// Throws ConfigError / SumoError for a map SUMO or netconvert rejects, an Ego
+/// id that never appears, an empty selection, a window longer than the
+/// simulation, InterruptedError on SIGINT/SIGTERM; the output file is then not
+/// created (or an older one is kept).
 ExportSummary exportMap(const ExportOptions& options);
+
+/// Which windows a process builds: window w (in the order a one-process export emits
+/// them) belongs to rank w mod ranks.
+struct WindowShare {
+  std::uint64_t rank = 0;
+  std::uint64_t ranks = 1;
+  bool mine(std::uint64_t window) const { return window % ranks == rank; }
+};
+
+class Communicator;
+
+/// What `mpirun -n N vsd-sumo export` ends with on this rank.
+struct ClusterExportResult {
+  int exitCode = 0;
+  std::string report;  ///< rank 0: the export's summary; other ranks: empty
+};
+
+/// `export` on an MPI job: every rank simulates the whole map (SUMO is deterministic,
+/// and closed-loop Egos interact with the traffic, so no rank can skip any of it) but
+/// builds and writes only its share of the windows (WindowShare) to a part file next
+/// to the output; rank 0 then joins the parts in window order, bit for bit, into the
+/// one dataset a one-process export writes. Faults of the map or options are reported
+/// once by rank 0 (exit code 1 on every rank).
+ClusterExportResult exportOnCluster(const ExportOptions& options, Communicator& communicator);
 
 }  // namespace vsd::pipeline

@@ -5,8 +5,14 @@
 //
 //   <out>/concrete.csv   one row per concrete scenario (inputs, metrics, status)
 //   <out>/traces.h5      full traces of every vehicle (schema vsd-traces/1)
+//   <out>/dataset.h5     the vectorized scene of every completed run
 //   <out>/manifest.json  tool and SUMO versions, scenario hash, seed, command line, output hashes
 //   <out>/nets/, <out>/fcd/   with --keep-nets / --fcd
+//
+// The folder changes as a whole (vsd/core/files.hpp: OutputFolder). Netconvert,
+// libsumo and the Ego controllers run in worker processes (--jobs of them, at
+// least one) under a watchdog; a crash, exit() or hang there fails the scenario
+// it happened in and the run goes on (see worker_pool.hpp).
 //
 // Results are identical for the same seed whatever --jobs and --batch are.
 
@@ -15,10 +21,14 @@
 #include <functional>
 #include <map>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
+#include "vsd/core/shards.hpp"
 #include "vsd/core/trace.hpp"
+#include "vsd/road/network.hpp"
+#include "vsd/pipeline/worker_pool.hpp"
 #include "vsd/road/road_geometry.hpp"
 #include "vsd/scenario/concrete_scenario.hpp"
 #include "vsd/scenario/logical_scenario.hpp"
@@ -48,6 +58,14 @@ struct RunOptions {
   bool fcd = false;                 ///< write <out>/fcd/batch_*.fcd.xml (implies keepNets)
   bool writeFiles = true;           ///< false: only call the outcome callback (used by compare)
   int compression = 1;              ///< deflate level of dataset.h5's vectors (0 = none)
+  /// How batch networks are built; unset: written directly, unless the scenario gives
+  /// netconvert options (sumo.netconvert_options), which need netconvert.
+  std::optional<road::NetWriter> netWriter;
+  /// Run only shard K of N of the sweep [firstSample, firstSample + samples) into
+  /// <out>/shards/shard-K-of-N/ (see vsd/core/shards.hpp). A shard that is finished
+  /// already (same sweep) is not run again: re-running a sweep resumes it.
+  std::optional<ShardId> shard;
+  WatchdogOptions watchdog;         ///< per-step time limit of controllers and libsumo (--step-timeout)
   std::string commandLine;          ///< recorded in the manifest
   /// Empty: scenarios are sampled from the logical scenario (seed, index) and their roads
   /// generated. Set for scenarios read from elsewhere (`vsd-sumo run FILE.xosc`).
@@ -97,7 +115,11 @@ struct RunSummary {
   double scenariosPerSecond = 0.0;
   int jobs = 1;
   std::size_t batch = 0;
+  int workerRestarts = 0;  ///< worker processes started again after a crash, exit or hang
   std::vector<std::filesystem::path> outputs;
+  std::optional<ShardId> shard;  ///< set for a shard of a sweep
+  std::uint64_t firstSample = 0;
+  bool resumed = false;          ///< the shard was finished already: nothing was run
 
   /// Multi-line human-readable report (what the CLI prints).
   std::string report() const;
@@ -107,9 +129,15 @@ struct RunSummary {
 using OutcomeCallback = std::function<void(const ScenarioOutcome&)>;
 
 /// Runs the logical scenario. Throws ConfigError / SumoError / IoError for
-/// faults of the whole run (nothing is left behind that looks complete);
-/// per-scenario faults are recorded in the outcomes and concrete.csv.
+/// faults of the whole run — including "every concrete scenario failed" —
+/// and InterruptedError on SIGINT/SIGTERM; then the output folder keeps its
+/// earlier contents. Per-scenario faults (also crashes, exit() and hangs of the
+/// controller or libsumo) are recorded in the outcomes and concrete.csv.
 RunSummary runScenarios(const RunOptions& options, const OutcomeCallback& on_outcome = {});
+
+/// Reads what a finished run's manifest.json says (counts, sample range, seed, shard);
+/// metric statistics are not in it. Throws DatasetError naming the file.
+RunSummary readRunManifest(const std::filesystem::path& run_folder);
 
 /// Same, with an already loaded logical scenario.
 RunSummary runScenarios(const std::shared_ptr<const scenario::LogicalScenario>& logical, const RunOptions& options,

@@ -46,6 +46,13 @@ vector::VectorizedScene plannedScene(const scenario::ConcreteScenario& concrete)
 std::vector<double> metricsOfFuture(const metrics::MetricSet& metric_set, const vector::VectorizedScene& scene,
                                     const Polyline& future);
 
+/// The same for a future that carries its own states at t_1..t_F (heading, speed and
+/// acceleration, e.g. from the kinematic decoder): they are used as they are, nothing is
+/// reconstructed from positions - a_min of such a prediction is the minimum of its
+/// predicted accelerations.
+std::vector<double> metricsOfFuture(const metrics::MetricSet& metric_set, const vector::VectorizedScene& scene,
+                                    const std::vector<VehicleState>& future);
+
 /// What metrics can rely on in scenes of a dataset of this kind ("generated" or "map").
 metrics::Availability sceneAvailability(const std::string& dataset_kind);
 /// What metrics can rely on in runs of a logical scenario (generated roads, its vehicles).

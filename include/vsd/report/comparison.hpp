@@ -22,6 +22,21 @@ struct CriterionSpec {
   std::string expression;
 };
 
+/// What the sampled futures of a probabilistic prediction say about one metric of one
+/// scenario: quantiles over the draws (vsd::model::intervalOf) and where the reference
+/// value lies among them (vsd::model::quantilePosition).
+struct MetricInterval {
+  std::size_t draws = 0;  ///< sampled futures with a value (0: no interval)
+  double p05 = 0.0;
+  double p25 = 0.0;
+  double median = 0.0;
+  double p75 = 0.0;
+  double p95 = 0.0;
+  /// q in [0, 1]: the reference lies in the central interval of level L exactly when
+  /// |2q - 1| <= L (NaN: no reference value).
+  double quantilePosition = 0.0;
+};
+
 /// One compared scenario.
 struct ComparedScenario {
   std::uint64_t sample = 0;      ///< sample index (scenario mode) or dataset row (dataset mode)
@@ -39,6 +54,10 @@ struct ComparedScenario {
   /// Per criterion: 1 fails, 0 passes, -1 undefined (a metric it uses is NaN).
   std::vector<int> predictedFails;
   std::vector<int> referenceFails;
+  /// Probabilistic models only (empty otherwise): per metric, the interval of its sampled
+  /// futures; per criterion, the share of sampled futures that fail it (NaN: undefined).
+  std::vector<MetricInterval> intervals;
+  std::vector<double> failShare;
   bool ok() const { return failure.empty(); }
 };
 
@@ -57,6 +76,10 @@ struct Comparison {
   std::vector<std::pair<std::string, std::string>> provenance;
   /// Notes shown under the summary (e.g. how far planned scenes deviate from simulated ones).
   std::vector<std::string> notes;
+  /// Sampled futures per scenario (0: a deterministic model, no intervals).
+  int draws = 0;
+  /// A criterion's verdict is confident when at least this share of the sampled futures agree.
+  double confidence = 0.9;
 };
 
 /// Summary statistics of a sample of values (finite values only).
@@ -80,7 +103,18 @@ struct MetricStatistics {
   double medianAbsoluteError = 0.0;  ///< robust against a few huge errors (e.g. ttc_min near zero closing speed)
   double p90AbsoluteError = 0.0;
   std::optional<double> floorMae;   ///< MAE of fromReferencePositions vs reference, if given
+  /// Calibration (probabilistic models): scenarios with an interval and a reference value,
+  /// the share of them whose reference lies in the central 50 % / 90 % interval, the mean
+  /// width of the 90 % interval, and the observed coverage at each kReliabilityLevels level.
+  std::size_t intervalPairs = 0;
+  double coverage50 = 0.0;
+  double coverage90 = 0.0;
+  double meanWidth90 = 0.0;
+  std::vector<double> reliability;
 };
+
+/// Nominal levels of the reliability diagram (central intervals).
+inline const std::vector<double> kReliabilityLevels = {0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9, 0.98};
 
 struct CriterionStatistics {
   std::string name;
@@ -90,6 +124,13 @@ struct CriterionStatistics {
   std::size_t missed = 0;          ///< predicted pass, reference fail (critical scenario missed)
   std::size_t bothPass = 0;
   std::size_t undefined = 0;       ///< either side undefined
+  /// Probabilistic models: verdicts at least Comparison::confidence of the sampled futures
+  /// agree on, how many of them the reference contradicts, the other (uncertain) verdicts,
+  /// and how many of those the most likely future got wrong.
+  std::size_t confident = 0;
+  std::size_t confidentWrong = 0;
+  std::size_t uncertain = 0;
+  std::size_t uncertainPointWrong = 0;
   double agreement() const;        ///< (bothFail + bothPass) / defined; NaN if none defined
   double recall() const;           ///< bothFail / (bothFail + missed); NaN if no reference failure
 };
@@ -105,9 +146,10 @@ struct ComparisonStatistics {
 ComparisonStatistics computeStatistics(const Comparison& comparison);
 
 /// One row per scenario: sample, label, status, failure, inputs, ade_m, fde_m, then per
-/// metric <name>_predicted, <name>_<referenceName>, <name>_error, then per criterion
-/// <name>_predicted_fail, <name>_<referenceName>_fail (1/0, empty when undefined).
-/// Written atomically.
+/// metric <name>_predicted, <name>_<referenceName>, <name>_error (and with intervals
+/// <name>_p05, _p25, _median, _p75, _p95), then per criterion <name>_predicted_fail,
+/// <name>_<referenceName>_fail (1/0, empty when undefined) (and with intervals
+/// <name>_fail_share). Written atomically.
 void writeComparisonCsv(const Comparison& comparison, const std::filesystem::path& path);
 
 /// A scene drawing for the "worst scenarios" section (an <svg> element).

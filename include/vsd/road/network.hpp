@@ -9,6 +9,7 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -48,6 +49,15 @@ std::string edgeIdFor(std::uint64_t index);
 /// XML schemas, OpenDRIVE type maps).
 void ensureSumoHome();
 
+/// How the SUMO network of generated roads is built.
+enum class NetWriter {
+  Direct,      ///< vsd-sumo writes the .net.xml itself (NetworkBuilder::writeSumoNet): no extra process
+  Netconvert,  ///< plain XML + a netconvert process (needed for extra netconvert options)
+};
+/// "direct" or "netconvert"; throws ConfigError naming `where`, the value and both names.
+NetWriter parseNetWriter(const std::string& text, const std::string& where);
+std::string netWriterName(NetWriter writer);
+
 /// Roads collected for one network.
 class NetworkBuilder {
  public:
@@ -56,6 +66,16 @@ class NetworkBuilder {
   bool empty() const { return roads_.empty(); }
   /// Writes `<stem>.nod.xml` and `<stem>.edg.xml` (netconvert plain XML).
   void writePlainXml(const std::filesystem::path& stem) const;
+  /// Writes `<stem>.net.xml` directly and returns its path: the network netconvert
+  /// builds from writePlainXml's files with baseNetconvertOptions() — the same edges,
+  /// lanes (shapes offset from the edge shape with SUMO's mitre rule, 0.01 m
+  /// precision), widths, speeds, lengths and dead-end junctions; no connections
+  /// (the roads are disjoint). Tested against netconvert's output. Throws IoError.
+  std::filesystem::path writeSumoNet(const std::filesystem::path& stem) const;
+  /// False if some lane's shape folds (a bend too sharp for its segment lengths and
+  /// offset from the centre), where netconvert cuts lanes at the junctions in ways
+  /// writeSumoNet does not reproduce: such networks need netconvert.
+  bool directlyWritable() const;
 
  private:
   struct PlacedRoad {
@@ -63,23 +83,30 @@ class NetworkBuilder {
     RoadGeometry road;
     Vec2 offset;
   };
+  /// The road centre in net coordinates as netconvert reads it from the plain XML
+  /// (6 decimals), so both writers start from the same numbers.
+  static Polyline edgeShape(const PlacedRoad& placed);
   std::vector<PlacedRoad> roads_;
 };
 
-/// netconvert running in the background on `<stem>.nod.xml` + `<stem>.edg.xml`.
+/// A batch's network: being built by netconvert in the background, or already written.
 class PendingNetwork {
  public:
-  /// Starts netconvert; `extra_options` are appended to the command line.
+  /// Starts netconvert on `<stem>.nod.xml` + `<stem>.edg.xml`; `extra_options` are
+  /// appended to the command line.
   static PendingNetwork start(const std::filesystem::path& stem, const std::vector<std::string>& extra_options);
-  /// Waits for netconvert; returns `<stem>.net.xml`. Throws SumoError naming the
+  /// A network that is complete already (written by NetworkBuilder::writeSumoNet).
+  static PendingNetwork ready(const std::filesystem::path& net);
+  /// Waits for netconvert (if any); returns the .net.xml. Throws SumoError naming the
   /// input files and netconvert's first error line.
   std::filesystem::path wait();
 
  private:
-  PendingNetwork(ChildProcess process, std::filesystem::path stem)
-      : process_(std::move(process)), stem_(std::move(stem)) {}
-  ChildProcess process_;
+  PendingNetwork(std::optional<ChildProcess> process, std::filesystem::path stem, std::filesystem::path net)
+      : process_(std::move(process)), stem_(std::move(stem)), net_(std::move(net)) {}
+  std::optional<ChildProcess> process_;
   std::filesystem::path stem_;
+  std::filesystem::path net_;
 };
 
 /// Converts an OpenDRIVE map to a SUMO network with netconvert. Throws SumoError

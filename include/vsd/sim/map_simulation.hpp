@@ -37,6 +37,13 @@ struct VehicleSnapshot {
   std::string type;
 };
 
+/// A closed-loop Ego taken out of the simulation because its controller failed.
+struct EgoFailure {
+  std::string id;
+  double time = 0.0;   ///< s, simulation time of the failure
+  std::string reason;  ///< e.g. "Ego controller crashed (signal 11, Segmentation fault) at t = 12.4 s"
+};
+
 struct MapSimulationOptions {
   MapSource source;
   double step = 0.0;             ///< s (> 0); no default: from the export options
@@ -69,6 +76,18 @@ class MapSimulation {
   const std::vector<VehicleSnapshot>& vehicles() const { return vehicles_; }
   /// From the next step on, `id` (present now) is driven by `controller`.
   void takeOver(const std::string& id, std::unique_ptr<EgoController> controller);
+  /// Takes a closed-loop (or about to be taken over) Ego out of the simulation
+  /// now and records why (failures()).
+  void failEgo(const std::string& id, const std::string& reason);
+  /// Replays a fault found in an earlier attempt of the same simulation: when
+  /// `id`'s controller would next run at simulation time `time`, the Ego fails
+  /// with `reason` instead (the controller is not called).
+  void scheduleFailure(const std::string& id, double time, std::string reason);
+  /// The reason scheduled for `id` at the current time, if any.
+  std::optional<std::string> scheduledFailure(const std::string& id) const;
+  /// Ego failures so far, in the order they happened. A controller that throws
+  /// vsd::Error (other than ConfigError) fails its Ego; the simulation goes on.
+  const std::vector<EgoFailure>& failures() const { return failures_; }
   bool controlled(const std::string& id) const { return drivers_.count(id) > 0; }
 
   /// Ids of every vehicle that departs, in departure order (a separate, SUMO-only run).
@@ -76,11 +95,15 @@ class MapSimulation {
 
  private:
   void releaseFinishedDrivers();
+  /// Steps every closed-loop Ego's controller; failed ones are taken out.
+  void driveEgos(double now);
 
   struct Impl;
   std::unique_ptr<Impl> impl_;
   std::vector<VehicleSnapshot> vehicles_;
   std::unordered_map<std::string, std::unique_ptr<class EgoDriver>> drivers_;
+  std::vector<EgoFailure> scheduled_;
+  std::vector<EgoFailure> failures_;
 };
 
 /// The SUMO command line (without the program) for a map simulation.

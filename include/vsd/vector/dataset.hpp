@@ -53,6 +53,8 @@ struct DatasetHeader {
   bool vehicleSizesAssumed = false;
 };
 
+class DatasetReader;
+
 class DatasetWriter {
  public:
   /// Creates the file at `path` (callers write to a temporary path and rename when complete).
@@ -66,6 +68,11 @@ class DatasetWriter {
   void setSharedVectors(const std::vector<Feature>& pool);
   /// Appends one scene (its target length must equal the horizon). Buffered.
   void append(const VectorizedScene& scene);
+  /// Appends sample `sample` of `source` exactly as stored there (its float32 vectors
+  /// and targets are copied, not recomputed from absolute coordinates), so joining
+  /// files sample by sample gives the bytes of writing them in one go. `source` must
+  /// have the same header and shared lane vectors; throws DatasetError otherwise.
+  void appendCopy(const DatasetReader& source, std::size_t sample);
   std::size_t size() const;
   /// Flushes and writes the string tables; the file is complete afterwards.
   void close();
@@ -97,6 +104,7 @@ class DatasetReader {
   std::vector<std::size_t> samplesWithLabel(const std::string& label) const;
 
  private:
+  friend class DatasetWriter;  // appendCopy reads samples in stored form
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };
@@ -113,6 +121,8 @@ struct DatasetValidation {
 /// polyline per sample whose last vector is its initial vector, object types and
 /// polyline ids as documented, finite valid vectors and targets, timestamps within
 /// [-history, horizon] steps, string tables in range. Unreadable files yield one problem.
+/// A run folder (or a file its manifest lists) is first checked against its
+/// manifest: present, complete, every file's size and SHA-256 as listed.
 DatasetValidation validateDataset(const std::filesystem::path& path);
 
 /// What `vsd-sumo dataset info` prints.
@@ -140,7 +150,8 @@ class DatasetCollection {
     std::size_t file = 0;
     std::size_t index = 0;
   };
-  /// Opens a file, or the dataset.h5 inside a run's output folder.
+  /// Opens a file, the dataset.h5 inside a run's output folder, or every shard's
+  /// dataset.h5 of a sharded sweep's folder (see datasetFiles).
   void add(const std::filesystem::path& path_or_run_folder);
   std::size_t files() const { return readers_.size(); }
   const DatasetReader& reader(std::size_t file) const { return *readers_.at(file); }
@@ -156,7 +167,15 @@ class DatasetCollection {
   std::vector<std::unique_ptr<DatasetReader>> readers_;
 };
 
-/// `path` if it is a file; `path/dataset.h5` if it is a run's output folder.
+/// `path` if it is a file; `path/dataset.h5` if it is a run's output folder —
+/// after checking that the folder is complete (its manifest lists dataset.h5 and
+/// every listed file has its size). Throws DatasetError naming the folder.
 std::filesystem::path resolveDatasetPath(const std::filesystem::path& path);
+
+/// The dataset files `path` stands for: a file; a run folder's dataset.h5; or, for a
+/// sweep folder with shards/ and no merged dataset.h5, every shard's dataset.h5 in
+/// sample order — after checking that the shards form one complete sweep (throws
+/// DatasetError naming a missing, unfinished or foreign shard).
+std::vector<std::filesystem::path> datasetFiles(const std::filesystem::path& path);
 
 }  // namespace vsd::vector

@@ -1,0 +1,117 @@
+#pragma once
+// `vsd-sumo search`: find the concrete scenarios of a logical scenario that meet a
+// criterion (e.g. `d_min < 2`) with few executions, and estimate how often they occur.
+//
+// The loop (one checkpoint per round, <out>/checkpoint.json, written atomically):
+//   round 0   the initial design: the first `initial` concrete scenarios of the logical
+//             scenario's random stream (sample indices 0, 1, ..., as `run` with the same seed);
+//   round r   fit the surrogate on every executed scenario (normalised inputs -> the
+//             criterion's metrics); sample a pool of `pool` candidates (own sample indices,
+//             never simulated); acquisition = p * (1 + diversity * d), p the predicted
+//             probability of meeting the criterion, d in [0, 1] the normalised distance to
+//             the nearest critical scenario found or candidate already chosen; the best
+//             (1 - estimateShare) of the round are "acquired"; the rest are "importance" draws
+//             from the other candidates with probability q_i = 0.8 p_i^2 / sum(p^2) + 0.2 / N_B
+//             (with replacement; a candidate drawn twice is simulated once). Everything is
+//             simulated by the pipeline's batch simulation (the code `run` uses);
+//   until     `budget` executions. A re-run with the same --out resumes after the last
+//             finished round without repeating an execution; same seed, same choices.
+//
+// Rate estimate of P(criterion) under the logical scenario's distribution (unbiased):
+// stratified importance sampling over the rounds' pools, see src/search/estimate.cpp. The
+// random surrogate is plain Monte Carlo with a Wilson interval.
+//
+// Outputs in <out>: concrete.csv (every execution), failures.csv, learning_curve.csv,
+// estimate.json, checkpoint.json, manifest.json (last, with every file's hash).
+
+#include <cstdint>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+namespace vsd::search {
+
+struct SearchOptions {
+  std::filesystem::path scenarioFile;
+  std::filesystem::path outputDir;    ///< required
+  std::string criterion;              ///< expression over metrics or a criterion name of the scenario
+  std::string surrogate = "extra-trees";
+  std::uint64_t budget = 2000;        ///< executions in total, initial design included
+  std::uint64_t initial = 200;        ///< executions of the initial design (random stream)
+  std::uint64_t roundSize = 100;      ///< executions per later round
+  double estimateShare = 0.2;         ///< share of each later round drawn by importance sampling (0..1)
+  std::uint64_t pool = 20000;         ///< candidates scored per round (and for the rate estimate)
+  double diversity = 1.0;             ///< weight of the distance term in the acquisition (>= 0)
+  int trees = 50;                     ///< extra-trees surrogate: trees per metric
+  int bnnEpochs = 200;                ///< bnn surrogate: epochs per fit
+  std::uint64_t seed = 1;
+  int jobs = 1;                       ///< worker processes for the simulations
+  int threads = 2;                    ///< libtorch threads (bnn)
+  std::string commandLine;            ///< recorded in the manifest
+  /// Throws ConfigError naming the flag and the accepted range (e.g. budget < initial).
+  void validate() const;
+};
+
+/// One executed concrete scenario.
+struct Execution {
+  std::uint64_t round = 0;
+  std::string origin;             ///< "initial", "random" (random stream), "acquired" or "importance"
+  std::uint64_t sample = 0;       ///< sample index: the scenario is sampleConcreteScenario(seed, sample)
+  double acquisition = 0.0;       ///< NaN unless acquired
+  double predicted = 0.0;         ///< surrogate's probability when chosen; NaN in round 0 / for random
+  std::string failure;            ///< why the simulation failed; empty when it completed
+  int verdict = -1;               ///< 1 critical, 0 not, -1 unknown (failed run or NaN metric)
+  std::vector<double> inputs;
+  std::vector<double> metrics;
+  // Its part in the rate estimate (draws == 0: none, e.g. acquired and never drawn):
+  std::uint64_t draws = 0;        ///< times drawn for the estimate (importance draws may repeat)
+  double weight = 0.0;            ///< 1 / (N q): importance weight (N = pool); 1 for random-stream draws
+  bool fromRandomStream() const { return origin == "initial" || origin == "random"; }
+};
+
+/// P(criterion) under the logical scenario's distribution.
+struct RateEstimate {
+  std::string method;             ///< "monte-carlo" or "importance-sampling"
+  double estimate = 0.0;
+  double low = 0.0;               ///< 95 % interval
+  double high = 0.0;
+  std::uint64_t draws = 0;        ///< contributions the estimate averages
+  std::uint64_t randomExecutions = 0;  ///< random-stream executions (round 0 and random rounds)
+  std::uint64_t randomCritical = 0;
+  double randomEstimate = 0.0;    ///< critical share of the random-stream executions alone
+  double randomLow = 0.0;         ///< its Wilson 95 % interval
+  double randomHigh = 0.0;
+  /// Width of plain random sampling's Wilson interval with the whole budget, at this estimate.
+  double sameBudgetRandomWidth = 0.0;
+};
+
+struct SearchSummary {
+  std::string functionalScenario;
+  std::string criterion;          ///< name
+  std::string expression;
+  std::string surrogate;
+  std::uint64_t executions = 0;
+  std::uint64_t critical = 0;     ///< executions meeting the criterion
+  std::uint64_t failedRuns = 0;   ///< simulations that did not complete
+  std::uint64_t resumedFrom = 0;  ///< executions already in the checkpoint when started
+  std::uint64_t rounds = 0;
+  std::size_t coverageCells = 0;  ///< distinct cells (3 per normalised input) holding a critical scenario
+  bool criterionSeenInInitialDesign = false;
+  RateEstimate estimate;
+  double seconds = 0.0;
+  double surrogateSeconds = 0.0;  ///< fitting + candidate sampling + scoring, all rounds
+  double simulationSeconds = 0.0;
+  std::vector<Execution> executionsList;
+  std::vector<std::filesystem::path> outputs;
+  std::string report() const;
+};
+
+/// Runs (or resumes) a search. Throws ConfigError for bad options, an unknown criterion,
+/// metric or surrogate, or a checkpoint made with other options; SumoError when a round's
+/// simulations all fail (the checkpoint keeps every finished round).
+SearchSummary runSearch(const SearchOptions& options);
+
+/// Wilson score interval (95 %) of `successes` out of `trials`; {0, 1} when trials == 0.
+std::pair<double, double> wilsonInterval(std::uint64_t successes, std::uint64_t trials);
+
+}  // namespace vsd::search

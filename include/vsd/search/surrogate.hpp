@@ -1,0 +1,61 @@
+#pragma once
+// Surrogates of `vsd-sumo search`: models fitted on the executed concrete scenarios
+// (normalised inputs -> the metrics a criterion reads) that predict, for candidates
+// not yet simulated, the probability of meeting the criterion. One registry entry
+// per surrogate (name, description, factory); an unknown name lists the known ones.
+
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "vsd/search/criterion.hpp"
+
+namespace vsd::search {
+
+using Matrix = Eigen::MatrixXd;  ///< rows = concrete scenarios
+
+/// Settings shared by every surrogate; each takes what applies to it.
+struct SurrogateOptions {
+  std::uint64_t seed = 1;  ///< derived per round by the loop, so a resumed search refits identically
+  int trees = 50;          ///< extra-trees: forest size per target metric
+  int bnnEpochs = 200;     ///< bnn: training epochs per fit
+  int threads = 2;         ///< bnn: libtorch threads
+};
+
+class Surrogate {
+ public:
+  virtual ~Surrogate() = default;
+  /// False for plain Monte Carlo: the loop then executes the random stream only.
+  virtual bool guidesSelection() const = 0;
+  /// x [n, inputs] normalised to about [0, 1]; y [n, criterion.usedMetrics()] finite.
+  virtual void fit(const Matrix& x, const Matrix& y) = 0;
+  /// Predicted probability (0..1) that each row of x meets the criterion.
+  virtual std::vector<double> probability(const Matrix& x, const Criterion& criterion) const = 0;
+};
+
+struct SurrogateEntry {
+  std::string name;
+  std::string description;  ///< one line: what it fits and where its probability comes from
+  std::function<std::unique_ptr<Surrogate>(const SurrogateOptions&)> make;
+};
+
+/// Every surrogate, in a fixed order.
+const std::vector<SurrogateEntry>& surrogateRegistry();
+/// Throws ConfigError "--surrogate 'x': unknown (known: random, extra-trees, bnn)".
+const SurrogateEntry& findSurrogate(const std::string& name);
+
+// Factories, one per file (surrogate_*.cpp); listed in surrogateRegistry().
+std::unique_ptr<Surrogate> makeRandomSurrogate(const SurrogateOptions& options);
+std::unique_ptr<Surrogate> makeExtraTreesSurrogate(const SurrogateOptions& options);
+std::unique_ptr<Surrogate> makeBnnSurrogate(const SurrogateOptions& options);
+
+/// Fraction of the shifted predictions `centre + z * spread` (z from `shifts`) that meet
+/// the criterion: the spread-based probability both model surrogates use.
+double shiftedProbability(const std::vector<double>& centre, const std::vector<double>& spread,
+                          const std::vector<double>& shifts, const Criterion& criterion);
+
+}  // namespace vsd::search

@@ -1,0 +1,121 @@
+// `vsd-sumo bench search`: the surrogates of `vsd-sumo search` side by side with the
+// same budget, criterion and seeds: critical scenarios found, failure-region coverage,
+// rate estimate and interval width, and the surrogate's overhead per round.
+
+#include <fmt/format.h>
+
+#include <memory>
+#include <sstream>
+
+#include "commands.hpp"
+#include "vsd/core/files.hpp"
+#include "vsd/search/search.hpp"
+
+namespace fs = std::filesystem;
+
+namespace vsd::cli {
+
+namespace {
+
+struct SearchBenchOptions {
+  search::SearchOptions search;
+  std::vector<std::string> surrogates = {"random", "extra-trees"};
+  std::uint64_t seeds = 1;
+};
+
+struct SurrogateTotals {
+  double critical = 0.0;
+  double coverage = 0.0;
+  double estimate = 0.0;
+  double width = 0.0;
+  double randomWidth = 0.0;
+  double seconds = 0.0;
+  double surrogateSecondsPerRound = 0.0;
+};
+
+std::string loadAverage() {
+  std::istringstream text(readTextFile("/proc/loadavg"));
+  std::string one, five, fifteen;
+  text >> one >> five >> fifteen;
+  return fmt::format("{} {} {}", one, five, fifteen);
+}
+
+SurrogateTotals benchSurrogate(const SearchBenchOptions& options, const std::string& surrogate, const fs::path& work) {
+  SurrogateTotals totals;
+  for (std::uint64_t seed = 1; seed <= options.seeds; ++seed) {
+    search::SearchOptions run = options.search;
+    run.surrogate = surrogate;
+    run.seed = seed;
+    run.outputDir = work / fmt::format("{}_{}", surrogate, seed);
+    const auto summary = search::runSearch(run);
+    const auto& e = summary.estimate;
+    fmt::print("    {:<12} seed {:>3}: {:>5} critical / {} executions, {:>4} cells, P = {:.4f} % [{:.4f}, {:.4f}] "
+               "({}), {:.1f} s (surrogate {:.1f} s)\n",
+               surrogate, seed, summary.critical, summary.executions, summary.coverageCells, 100 * e.estimate,
+               100 * e.low, 100 * e.high, e.method, summary.seconds, summary.surrogateSeconds);
+    totals.critical += static_cast<double>(summary.critical);
+    totals.coverage += static_cast<double>(summary.coverageCells);
+    totals.estimate += e.estimate;
+    totals.width += e.high - e.low;
+    totals.randomWidth += e.sameBudgetRandomWidth;
+    totals.seconds += summary.seconds;
+    totals.surrogateSecondsPerRound +=
+        summary.rounds > 1 ? summary.surrogateSeconds / static_cast<double>(summary.rounds - 1) : 0.0;
+  }
+  const double n = static_cast<double>(options.seeds);
+  for (double* value : {&totals.critical, &totals.coverage, &totals.estimate, &totals.width, &totals.randomWidth,
+                        &totals.seconds, &totals.surrogateSecondsPerRound}) {
+    *value /= n;
+  }
+  return totals;
+}
+
+}  // namespace
+
+void addSearchBench(CLI::App& bench, CommandContext& context) {
+  auto options = std::make_shared<SearchBenchOptions>();
+  options->search.scenarioFile = "scenarios/acc_lk.yaml";
+  options->search.criterion = "d_min < 2";
+  CLI::App* command = bench.add_subcommand("search", "Surrogates of `vsd-sumo search` side by side (same budget, seeds)");
+  command->add_option("scenario", options->search.scenarioFile, "Logical scenario")
+      ->check(CLI::ExistingFile)
+      ->capture_default_str();
+  command->add_option("--criterion", options->search.criterion, "Criterion")->capture_default_str();
+  command->add_option("--surrogates", options->surrogates, "Surrogates to compare")->delimiter(',')->capture_default_str();
+  command->add_option("--budget", options->search.budget, "Executions per search")->capture_default_str();
+  command->add_option("--initial", options->search.initial, "Initial design")->capture_default_str();
+  command->add_option("--round", options->search.roundSize, "Executions per round")->capture_default_str();
+  command->add_option("--pool", options->search.pool, "Candidates per round")->capture_default_str();
+  command->add_option("--seeds", options->seeds, "Searches per surrogate (seeds 1..N)")->capture_default_str();
+  command->add_option("-j,--jobs", options->search.jobs, "Worker processes for the simulations")->capture_default_str();
+  command->callback([options, &context] {
+    context.action = [options] {
+      TemporaryDirectory work("vsd-bench-search");
+      const auto& s = options->search;
+      fmt::print("{}: '{}', budget {} (initial {}, rounds of {}, pool {}), {} seed(s); load average {}\n",
+                 s.scenarioFile.string(), s.criterion, s.budget, s.initial, s.roundSize, s.pool, options->seeds,
+                 loadAverage());
+      std::vector<std::pair<std::string, SurrogateTotals>> results;
+      for (const auto& surrogate : options->surrogates) {
+        results.emplace_back(surrogate, benchSurrogate(*options, surrogate, work.path()));
+      }
+      double random_critical = 0.0;
+      for (const auto& [name, totals] : results) {
+        if (name == "random") random_critical = totals.critical;
+      }
+      fmt::print("  mean over seeds:\n  {:<12} {:>9} {:>8} {:>7} {:>11} {:>11} {:>16} {:>9} {:>14}\n", "surrogate",
+                 "critical", "x random", "cells", "P est. %", "CI width %", "random CI width %", "seconds",
+                 "surrogate s/rnd");
+      for (const auto& [name, t] : results) {
+        fmt::print("  {:<12} {:>9.1f} {:>8} {:>7.1f} {:>11.4f} {:>11.4f} {:>16.4f} {:>9.1f} {:>14.2f}\n", name,
+                   t.critical, random_critical > 0 ? fmt::format("{:.1f}", t.critical / random_critical) : "-",
+                   t.coverage, 100 * t.estimate, 100 * t.width, 100 * t.randomWidth, t.seconds,
+                   t.surrogateSecondsPerRound);
+      }
+      fmt::print("  load average after: {}\n", loadAverage());
+      return 0;
+    };
+  });
+}
+
+}  // namespace vsd::cli

@@ -1,0 +1,62 @@
+#include <fmt/format.h>
+
+#include <memory>
+#include <string>
+
+#include "commands.hpp"
+#include "vsd/search/search.hpp"
+#include "vsd/search/surrogate.hpp"
+
+namespace vsd::cli {
+
+namespace {
+
+std::string surrogateHelp() {
+  std::string text = "Surrogate that selects the executions:";
+  for (const auto& entry : search::surrogateRegistry()) text += fmt::format("\n  {}: {}", entry.name, entry.description);
+  return text;
+}
+
+}  // namespace
+
+void addSearchCommand(CLI::App& app, CommandContext& context) {
+  auto options = std::make_shared<search::SearchOptions>();
+  CLI::App* command = app.add_subcommand(
+      "search", "Find the concrete scenarios that meet a criterion with few executions: a surrogate picks which to "
+                "simulate; estimates how often the criterion occurs");
+  command->add_option("scenario", options->scenarioFile, "Logical scenario (YAML), e.g. scenarios/acc_lk.yaml")
+      ->required()
+      ->check(CLI::ExistingFile);
+  command->add_option("-c,--criterion", options->criterion,
+                      "Critical if true: an expression over the scenario's metrics (\"d_min < 2\", "
+                      "\"ttc_min < 1 || d_min < 0.5\") or a criterion name from the scenario's `criteria:`")
+      ->required();
+  command->add_option("-o,--out", options->outputDir, "Output folder; re-running with it resumes the search")
+      ->required();
+  command->add_option("--surrogate", options->surrogate, surrogateHelp())->capture_default_str();
+  command->add_option("--budget", options->budget, "Executions (SUMO simulations) in total")->capture_default_str();
+  command->add_option("--initial", options->initial, "Executions of the initial random design")->capture_default_str();
+  command->add_option("--round", options->roundSize, "Executions per later round")->capture_default_str();
+  command->add_option("--estimate-share", options->estimateShare,
+                      "Share of each later round drawn by importance sampling from the candidates (feeds the unbiased "
+                      "rate estimate; the rest is chosen by the acquisition)")
+      ->capture_default_str();
+  command->add_option("--pool", options->pool, "Candidate concrete scenarios scored per round")->capture_default_str();
+  command->add_option("--diversity", options->diversity,
+                      "Weight of the distance to critical scenarios already found in the acquisition")
+      ->capture_default_str();
+  command->add_option("--trees", options->trees, "extra-trees: trees per criterion metric")->capture_default_str();
+  command->add_option("--bnn-epochs", options->bnnEpochs, "bnn: training epochs per round")->capture_default_str();
+  command->add_option("-s,--seed", options->seed, "Random seed; same seed, same choices")->capture_default_str();
+  command->add_option("-j,--jobs", options->jobs, "Worker processes for the simulations")->capture_default_str();
+  command->add_option("--threads", options->threads, "libtorch threads (bnn)")->capture_default_str();
+  command->callback([options, &context] {
+    context.action = [options, &context] {
+      options->commandLine = context.commandLine;
+      fmt::print("{}", search::runSearch(*options).report());
+      return 0;
+    };
+  });
+}
+
+}  // namespace vsd::cli

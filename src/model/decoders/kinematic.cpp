@@ -1,0 +1,152 @@
+// `kinematic`: the network predicts the Ego's controls - a longitudinal acceleration and a
+// path curvature per step - bounded to physical limits and integrated through the
+// simulator's kinematic vehicle model (kinematics.hpp) from the Ego's initial position,
+// heading and speed. Every prediction is drivable, and its speeds and accelerations are
+// the model's own.
+//
+// Predictive distribution: the controls are Gaussian around the predicted ones - an
+// independent deviation per step (sigma_a,k, sigma_kappa,k) plus one deviation shared by
+// all steps of a future (sigma_a,bias, sigma_kappa,bias: a systematic "brakes harder",
+// "cuts the curve"); all standard deviations are outputs of the network. Linearised
+// through the vehicle model this gives a Gaussian per position (plus a floor of
+// kPositionNoise for float32 storage of the targets), and the loss is its negative
+// log-likelihood of the true positions. Samples draw the controls and roll them out
+// exactly (clamped to the limits, no reversing).
+#include "kinematic.hpp"
+
+#include "../kinematics.hpp"
+
+namespace vsd::model {
+
+namespace {
+
+constexpr double kAccelUnit = 1.0;        ///< m/s^2 per unit of network output
+constexpr double kCurvatureUnit = 0.01;   ///< 1/m per unit of network output
+constexpr double kPositionNoise = 0.02;   ///< m, floor of every position's standard deviation
+
+class KinematicDecoder final : public Decoder {
+ public:
+  KinematicDecoder(const VectorNetConfig& config)
+      : horizon_(config.horizon),
+        step_(config.step),
+        limits_{config.decoderOption("max_accel"), config.decoderOption("max_decel"),
+                config.decoderOption("max_curvature")},
+        probabilistic_(config.decoderOption("nll") != 0.0),
+        adeWeight_(config.decoderOption("ade_weight")) {}
+
+  std::int64_t outputWidth() const override { return 4 * horizon_ + 2; }
+
+  Decoded decode(const torch::Tensor& raw, const EgoStart& start) const override {
+    const auto accel = boundAccel(raw.narrow(1, 0, horizon_) * kAccelUnit);
+    const auto curvature = boundCurvature(raw.narrow(1, horizon_, horizon_) * kCurvatureUnit);
+    const auto path = rollout(start.position, start.heading, start.speed, accel, curvature, step_);
+    Decoded decoded;
+    decoded.positions = path.positions;
+    decoded.headings = path.headings;
+    decoded.speeds = path.speeds;
+    decoded.accels = path.accels;
+    if (!probabilistic_) return decoded;
+
+    const auto sigma_accel = standardDeviation(raw.narrow(1, 2 * horizon_, horizon_), kAccelUnit);
+    const auto sigma_curvature = standardDeviation(raw.narrow(1, 3 * horizon_, horizon_), kCurvatureUnit);
+    const auto sigma_accel_bias = standardDeviation(raw.select(1, 4 * horizon_), kAccelUnit);
+    const auto sigma_curvature_bias = standardDeviation(raw.select(1, 4 * horizon_ + 1), kCurvatureUnit);
+    decoded.covariance = positionCovariance(path, sigma_accel, sigma_curvature, sigma_accel_bias, sigma_curvature_bias);
+    decoded.parameters = {accel, curvature, sigma_accel, sigma_curvature, sigma_accel_bias, sigma_curvature_bias};
+    return decoded;
+  }
+
+  torch::Tensor loss(const Decoded& decoded, const torch::Tensor& targets, const torch::Tensor& mask) const override {
+    const auto ade = adeLoss(decoded.positions, targets, mask);
+    if (!probabilistic_) return ade;
+    const auto weights = mask.to(torch::kFloat32);
+    const auto nll = gaussianNll(decoded.positions, decoded.covariance, targets);
+    const auto per_sample = (nll * weights).sum(1) / weights.sum(1).clamp_min(1.0);
+    return per_sample.mean() + adeWeight_ * ade;
+  }
+
+  std::int64_t noiseWidth() const override { return probabilistic_ ? 2 * horizon_ + 2 : 0; }
+
+  Sampled sample(const Decoded& decoded, const EgoStart& start, const torch::Tensor& noise) const override {
+    const auto& p = decoded.parameters;  // accel, curvature, their sigmas, the bias sigmas
+    const auto draws = noise.size(1);
+    auto accel = p[0].unsqueeze(1) + p[2].unsqueeze(1) * noise.narrow(2, 0, horizon_) +
+                 (p[4].unsqueeze(1) * noise.select(2, 2 * horizon_)).unsqueeze(-1);
+    auto curvature = p[1].unsqueeze(1) + p[3].unsqueeze(1) * noise.narrow(2, horizon_, horizon_) +
+                     (p[5].unsqueeze(1) * noise.select(2, 2 * horizon_ + 1)).unsqueeze(-1);
+    accel = accel.clamp(-limits_.maxDecel, limits_.maxAccel);
+    curvature = curvature.clamp(-limits_.maxCurvature, limits_.maxCurvature);
+    const auto expand = [draws](const torch::Tensor& t) {
+      auto sizes = t.sizes().vec();
+      sizes.insert(sizes.begin() + 1, draws);
+      return t.unsqueeze(1).expand(sizes);
+    };
+    const auto path = rollout(expand(start.position), expand(start.heading), expand(start.speed), accel, curvature, step_);
+    Sampled sampled;
+    sampled.positions = path.positions;
+    sampled.headings = path.headings;
+    sampled.speeds = path.speeds;
+    sampled.accels = path.accels;
+    return sampled;
+  }
+
+ private:
+  /// Identity near 0 (slope 1), saturating smoothly at -max_decel and +max_accel.
+  torch::Tensor boundAccel(const torch::Tensor& raw) const {
+    return torch::where(raw >= 0, limits_.maxAccel * torch::tanh(raw / limits_.maxAccel),
+                        limits_.maxDecel * torch::tanh(raw / limits_.maxDecel));
+  }
+  torch::Tensor boundCurvature(const torch::Tensor& raw) const {
+    return limits_.maxCurvature * torch::tanh(raw / limits_.maxCurvature);
+  }
+  /// Positive, about 0.3 units for a raw output of 0, never below 0.1 % of a unit.
+  static torch::Tensor standardDeviation(const torch::Tensor& raw, double unit) {
+    return unit * (torch::nn::functional::softplus(raw - 1.0) + 1e-3);
+  }
+
+  torch::Tensor positionCovariance(const Rollout& path, const torch::Tensor& sigma_accel,
+                                   const torch::Tensor& sigma_curvature, const torch::Tensor& sigma_accel_bias,
+                                   const torch::Tensor& sigma_curvature_bias) const {
+    const auto sens = sensitivities(path, step_);
+    const auto per_step_accel = sens.accel * sigma_accel.view({-1, 1, horizon_, 1});
+    const auto per_step_curvature = sens.curvature * sigma_curvature.view({-1, 1, horizon_, 1});
+    const auto bias_accel = sens.accel.sum(2) * sigma_accel_bias.view({-1, 1, 1});
+    const auto bias_curvature = sens.curvature.sum(2) * sigma_curvature_bias.view({-1, 1, 1});
+    auto covariance = torch::einsum("bkjx,bkjy->bkxy", {per_step_accel, per_step_accel}) +
+                      torch::einsum("bkjx,bkjy->bkxy", {per_step_curvature, per_step_curvature}) +
+                      bias_accel.unsqueeze(-1) * bias_accel.unsqueeze(-2) +
+                      bias_curvature.unsqueeze(-1) * bias_curvature.unsqueeze(-2);
+    return covariance + kPositionNoise * kPositionNoise * torch::eye(2, covariance.options());
+  }
+
+  std::int64_t horizon_;
+  double step_;
+  ControlLimits limits_;
+  bool probabilistic_;
+  double adeWeight_;
+};
+
+}  // namespace
+
+DecoderEntry kinematicDecoderEntry() {
+  DecoderEntry entry;
+  entry.info.name = "kinematic";
+  entry.info.description =
+      "per-step acceleration and curvature, bounded and integrated through the kinematic vehicle model; "
+      "Gaussian controls (per step + per future) trained by the NLL of the positions";
+  entry.info.probabilistic = true;
+  entry.info.kinematic = true;
+  entry.info.options = {
+      {"max_accel", 4.0, 0.1, 20.0, "m/s^2, largest acceleration (the simulated Ego's limit)"},
+      {"max_decel", 9.0, 0.1, 20.0, "m/s^2, largest deceleration (the simulated Ego's limit)"},
+      {"max_curvature", 0.25, 0.001, 2.0, "1/m, largest path curvature (the simulated Ego's limit)"},
+      {"nll", 1.0, 0.0, 1.0, "1: predictive distribution trained by NLL; 0: most likely future only, trained on ADE"},
+      {"ade_weight", 0.0, 0.0, 100.0, "weight of the ADE of the most likely future added to the NLL"},
+  };
+  entry.create = [](const VectorNetConfig& config) -> std::unique_ptr<Decoder> {
+    return std::make_unique<KinematicDecoder>(config);
+  };
+  return entry;
+}
+
+}  // namespace vsd::model

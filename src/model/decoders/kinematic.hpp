@@ -1,0 +1,7 @@
+#pragma once
+#include "../decoder.hpp"
+
+namespace vsd::model {
+/// Registry entry of the `kinematic` decoder.
+DecoderEntry kinematicDecoderEntry();
+}  // namespace vsd::model

@@ -1,0 +1,215 @@
+// ADE/FDE of every predictor; NLL and coverage of positions for probabilistic ones.
+#include <fmt/format.h>
+
+#include <Eigen/LU>
+
+#include <chrono>
+#include <cmath>
+#include <fstream>
+
+#include "vsd/core/csv.hpp"
+#include "vsd/core/error.hpp"
+#include "vsd/core/files.hpp"
+#include "vsd/core/interrupt.hpp"
+#include "vsd/core/progress.hpp"
+#include "vsd/model/evaluation.hpp"
+
+namespace fs = std::filesystem;
+
+namespace vsd::model {
+
+namespace {
+
+constexpr std::size_t kReadChunk = 4096;
+
+/// Adds `value` to a running mean over `count` earlier values.
+void addToMean(double& mean, std::size_t count, double value) {
+  mean += (value - mean) / static_cast<double>(count + 1);
+}
+
+struct GaussianScore {
+  double nll = 0.0;          ///< nats
+  double mahalanobis2 = 0.0;  ///< r' S^-1 r
+};
+
+GaussianScore scorePosition(const Vec2& truth, const Vec2& mean, const Eigen::Matrix2d& covariance) {
+  const Vec2 r = truth - mean;
+  const double determinant = covariance.determinant();
+  GaussianScore score;
+  score.mahalanobis2 = r.dot(covariance.inverse() * r);
+  score.nll = 0.5 * score.mahalanobis2 + 0.5 * std::log(determinant) + std::log(2.0 * kPi);
+  return score;
+}
+
+/// Index of the step at `seconds` after t0 (t_1 is index 0), if within the horizon.
+std::optional<std::size_t> stepAt(double seconds, double step, std::size_t steps) {
+  const long index = std::lround(seconds / step) - 1;
+  if (index < 0 || static_cast<std::size_t>(index) >= steps) return std::nullopt;
+  return static_cast<std::size_t>(index);
+}
+
+}  // namespace
+
+void LabelErrors::add(const LabelErrors& one) {
+  if (one.samples == 0) return;
+  addToMean(ade, samples, one.ade);
+  addToMean(fde, samples, one.fde);
+  ++samples;
+  if (one.scored > 0) {
+    addToMean(nll, scored, one.nll);
+    ++scored;
+  }
+  for (std::size_t t = 0; t < kCalibrationTimes.size(); ++t) {
+    if (one.countAt[t] == 0) continue;
+    addToMean(nllAt[t], countAt[t], one.nllAt[t]);
+    for (std::size_t l = 0; l < kCoverageLevels.size(); ++l) addToMean(coverageAt[t][l], countAt[t], one.coverageAt[t][l]);
+    ++countAt[t];
+  }
+}
+
+LabelErrors displacementErrors(const Polyline& prediction, const vector::VectorizedScene& scene) {
+  LabelErrors errors;
+  double sum = 0.0;
+  std::size_t valid = 0;
+  for (std::size_t k = 0; k < scene.target.size() && k < prediction.size(); ++k) {
+    if (!scene.targetValid[k]) continue;
+    const double distance = (prediction[k] - scene.target[k]).norm();
+    sum += distance;
+    errors.fde = distance;
+    ++valid;
+  }
+  errors.samples = valid > 0 ? 1 : 0;
+  errors.ade = valid > 0 ? sum / static_cast<double>(valid) : 0.0;
+  return errors;
+}
+
+LabelErrors predictionErrors(const Prediction& prediction, const vector::VectorizedScene& scene) {
+  LabelErrors errors = displacementErrors(prediction.mostLikely.positions, scene);
+  if (errors.samples == 0 || !prediction.probabilistic()) return errors;
+  const auto& mean = prediction.mostLikely.positions;
+  double sum = 0.0;
+  std::size_t valid = 0;
+  for (std::size_t k = 0; k < scene.target.size() && k < mean.size(); ++k) {
+    if (!scene.targetValid[k]) continue;
+    sum += scorePosition(scene.target[k], mean[k], prediction.positionCovariance[k]).nll;
+    ++valid;
+  }
+  errors.scored = 1;
+  errors.nll = sum / static_cast<double>(valid);
+  for (std::size_t t = 0; t < kCalibrationTimes.size(); ++t) {
+    const auto k = stepAt(kCalibrationTimes[t], scene.step, mean.size());
+    if (!k || !scene.targetValid[*k]) continue;
+    const auto score = scorePosition(scene.target[*k], mean[*k], prediction.positionCovariance[*k]);
+    errors.countAt[t] = 1;
+    errors.nllAt[t] = score.nll;
+    for (std::size_t l = 0; l < kCoverageLevels.size(); ++l) {
+      // The 2-D Gaussian's central region of probability p: r' S^-1 r <= -2 ln(1 - p).
+      errors.coverageAt[t][l] = score.mahalanobis2 <= -2.0 * std::log(1.0 - kCoverageLevels[l]) ? 1.0 : 0.0;
+    }
+  }
+  return errors;
+}
+
+Evaluation evaluate(const Predictor& predictor, const std::vector<fs::path>& data) {
+  if (data.empty()) throw ConfigError("--data: no dataset given");
+  Evaluation evaluation;
+  evaluation.predictor = predictor.name();
+  for (const auto& given : data) {
+    for (const auto& path : vector::datasetFiles(given)) {  // a sharded sweep: every shard
+      const vector::DatasetReader reader(path);
+      predictor.checkCompatible(reader.header(), reader.path().string());
+      for (std::size_t first = 0; first < reader.size(); first += kReadChunk) {
+        throwIfInterrupted();
+        std::vector<vector::VectorizedScene> scenes;
+        for (std::size_t i = first; i < std::min(reader.size(), first + kReadChunk); ++i) scenes.push_back(reader.scene(i));
+        const auto start = std::chrono::steady_clock::now();
+        const auto predictions = predictor.predictDistribution(scenes, PredictOptions{});
+        evaluation.predictionSeconds += secondsSince(start);
+        for (std::size_t i = 0; i < scenes.size(); ++i) {
+          const auto errors = predictionErrors(predictions[i], scenes[i]);
+          evaluation.perLabel[scenes[i].label].add(errors);
+          evaluation.overall.add(errors);
+        }
+      }
+    }
+  }
+  return evaluation;
+}
+
+namespace {
+
+std::string timeName(double seconds) { return fmt::format("{:g}s", seconds); }
+
+std::string calibrationTable(const Evaluation& evaluation) {
+  std::string text = fmt::format(
+      "  positions: NLL [nats] and share inside the predicted {:.0f} % / {:.0f} % region\n  {:<20}",
+      100.0 * kCoverageLevels[0], 100.0 * kCoverageLevels[1], "functional scenario");
+  for (const double t : kCalibrationTimes) text += fmt::format(" {:>22}", "at " + timeName(t));
+  text += "\n";
+  auto row = [&](const std::string& label, const LabelErrors& errors) {
+    text += fmt::format("  {:<20}", label);
+    for (std::size_t t = 0; t < kCalibrationTimes.size(); ++t) {
+      if (errors.countAt[t] == 0) {
+        text += fmt::format(" {:>22}", "-");
+        continue;
+      }
+      text += fmt::format(" {:>8.2f} {:>6.2f} / {:>4.2f}", errors.nllAt[t], errors.coverageAt[t][0], errors.coverageAt[t][1]);
+    }
+    text += "\n";
+  };
+  for (const auto& [label, errors] : evaluation.perLabel) row(label, errors);
+  row("all", evaluation.overall);
+  return text;
+}
+
+}  // namespace
+
+std::string Evaluation::table() const {
+  const bool probabilistic = overall.scored > 0;
+  std::string text = fmt::format("  {:<20} {:>9} {:>9} {:>9}{}\n", "functional scenario", "samples", "ADE [m]", "FDE [m]",
+                                 probabilistic ? fmt::format(" {:>12}", "NLL [nats]") : "");
+  auto row = [&](const std::string& label, const LabelErrors& errors) {
+    text += fmt::format("  {:<20} {:>9} {:>9.3f} {:>9.3f}{}\n", label, errors.samples, errors.ade, errors.fde,
+                        probabilistic ? fmt::format(" {:>12.3f}", errors.nll) : "");
+  };
+  for (const auto& [label, errors] : perLabel) row(label, errors);
+  row("all", overall);
+  if (probabilistic) text += calibrationTable(*this);
+  if (predictionSeconds > 0.0) {
+    text += fmt::format("  prediction: {:.0f} scenes/s\n", static_cast<double>(overall.samples) / predictionSeconds);
+  }
+  return text;
+}
+
+void Evaluation::writeCsv(const fs::path& path) const {
+  AtomicOutput output(path);
+  {
+    std::ofstream stream(output.tempPath());
+    CsvWriter csv(stream);
+    std::vector<std::string> header = {"label", "samples", "ade_m", "fde_m", "nll"};
+    for (const double t : kCalibrationTimes) header.push_back("nll_" + timeName(t));
+    for (const double t : kCalibrationTimes) {
+      for (const double level : kCoverageLevels) header.push_back(fmt::format("coverage{:.0f}_{}", 100.0 * level, timeName(t)));
+    }
+    csv.writeRow(header);
+    auto row = [&](const std::string& label, const LabelErrors& errors) {
+      std::vector<std::string> cells = {label, std::to_string(errors.samples), formatNumber(errors.ade),
+                                        formatNumber(errors.fde), errors.scored > 0 ? formatNumber(errors.nll) : ""};
+      for (std::size_t t = 0; t < kCalibrationTimes.size(); ++t) {
+        cells.push_back(errors.countAt[t] > 0 ? formatNumber(errors.nllAt[t]) : "");
+      }
+      for (std::size_t t = 0; t < kCalibrationTimes.size(); ++t) {
+        for (std::size_t l = 0; l < kCoverageLevels.size(); ++l) {
+          cells.push_back(errors.countAt[t] > 0 ? formatNumber(errors.coverageAt[t][l]) : "");
+        }
+      }
+      csv.writeRow(cells);
+    };
+    for (const auto& [label, errors] : perLabel) row(label, errors);
+    row("all", overall);
+    if (!stream) throw IoError(path.string() + ": write failed");
+  }
+  output.commit();
+}
+
+}  // namespace vsd::model

@@ -1,0 +1,409 @@
+#include "vsd/search/search.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <map>
+#include <numeric>
+#include <set>
+
+#include "search_internal.hpp"
+#include "vsd/core/error.hpp"
+#include "vsd/core/files.hpp"
+#include "vsd/core/interrupt.hpp"
+#include "vsd/core/log.hpp"
+#include "vsd/core/progress.hpp"
+#include "vsd/core/random.hpp"
+#include "vsd/metrics/metrics.hpp"
+#include "vsd/pipeline/run.hpp"
+#include "vsd/pipeline/scenes.hpp"
+#include "vsd/road/road_geometry.hpp"
+#include "vsd/scenario/concrete_scenario.hpp"
+
+namespace fs = std::filesystem;
+
+namespace vsd::search {
+
+using detail::SearchContext;
+using detail::SearchState;
+
+void SearchOptions::validate() const {
+  const std::string where = "command line";
+  if (outputDir.empty()) throw ConfigError::field(where, "--out", "''", "an output folder");
+  if (initial < 2) throw ConfigError::field(where, "--initial", std::to_string(initial), ">= 2");
+  if (budget < initial) {
+    throw ConfigError::field(where, "--budget", std::to_string(budget),
+                             fmt::format(">= --initial ({}): the initial design alone needs that many executions",
+                                         initial));
+  }
+  if (budget > 10'000'000) throw ConfigError::field(where, "--budget", std::to_string(budget), "<= 10000000");
+  if (roundSize < 1 || roundSize > 100'000) {
+    throw ConfigError::field(where, "--round", std::to_string(roundSize), "1 .. 100000");
+  }
+  if (!(estimateShare >= 0.0 && estimateShare <= 1.0)) {
+    throw ConfigError::field(where, "--estimate-share", fmt::format("{}", estimateShare), "0 .. 1");
+  }
+  if (pool < 1 || pool > detail::kMaxPool) {
+    throw ConfigError::field(where, "--pool", std::to_string(pool), fmt::format("1 .. {}", detail::kMaxPool));
+  }
+  if (!(diversity >= 0.0 && std::isfinite(diversity))) {
+    throw ConfigError::field(where, "--diversity", fmt::format("{}", diversity), "a finite number >= 0");
+  }
+  if (trees < 1 || trees > 10'000) throw ConfigError::field(where, "--trees", std::to_string(trees), "1 .. 10000");
+  if (bnnEpochs < 1) throw ConfigError::field(where, "--bnn-epochs", std::to_string(bnnEpochs), ">= 1");
+  if (jobs < 1 || jobs > 256) throw ConfigError::field(where, "--jobs", std::to_string(jobs), "1 .. 256");
+  if (threads < 1 || threads > 256) throw ConfigError::field(where, "--threads", std::to_string(threads), "1 .. 256");
+}
+
+std::pair<double, double> wilsonInterval(std::uint64_t successes, std::uint64_t trials) {
+  if (trials == 0) return {0.0, 1.0};
+  constexpr double z = 1.959963984540054;
+  const double n = static_cast<double>(trials);
+  const double p = static_cast<double>(successes) / n;
+  const double denominator = 1.0 + z * z / n;
+  const double centre = (p + z * z / (2.0 * n)) / denominator;
+  const double half = z * std::sqrt(p * (1.0 - p) / n + z * z / (4.0 * n * n)) / denominator;
+  return {std::max(0.0, centre - half), std::min(1.0, centre + half)};
+}
+
+namespace {
+
+SearchContext makeContext(const SearchOptions& options) {
+  options.validate();
+  SearchContext context;
+  context.options = options;
+  context.surrogate = &findSurrogate(options.surrogate);
+  context.guides = context.surrogate->make(SurrogateOptions{})->guidesSelection();
+  context.logical = scenario::loadLogicalScenario(options.scenarioFile);
+  const metrics::MetricSet metric_set(context.logical->metrics, pipeline::scenarioAvailability(*context.logical),
+                                      context.logical->sourceFile.string() + ": metrics");
+  context.metricNames = metric_set.names();
+  context.criterion = std::make_unique<Criterion>(options.criterion, *context.logical, context.metricNames);
+  context.scenarioSha256 = sha256OfFile(context.logical->sourceFile);
+  context.normaliser =
+      detail::Normaliser(detail::sampleInputs(context, detail::kEstimateBase, detail::kNormalisationSamples));
+  return context;
+}
+
+/// What one round executes.
+struct RoundPlan {
+  std::vector<Execution> chosen;  ///< sample, origin, acquisition, predicted set; results not yet
+};
+
+std::uint64_t randomStreamUsed(const std::vector<Execution>& executions) {
+  return static_cast<std::uint64_t>(
+      std::count_if(executions.begin(), executions.end(), [](const Execution& e) { return e.fromRandomStream(); }));
+}
+
+/// Draws of the logical scenario's distribution itself: weight 1.
+void addRandomStream(RoundPlan& plan, std::uint64_t next, std::uint64_t count, const std::string& origin) {
+  for (std::uint64_t i = 0; i < count; ++i) {
+    Execution execution;
+    execution.origin = origin;
+    execution.sample = next + i;
+    execution.acquisition = std::numeric_limits<double>::quiet_NaN();
+    execution.predicted = std::numeric_limits<double>::quiet_NaN();
+    execution.draws = 1;
+    execution.weight = 1.0;
+    plan.chosen.push_back(execution);
+  }
+}
+
+/// Importance proposal over the pool candidates not acquired this round (the stratum B):
+/// q_i = (1 - a) p_i^2 / sum_B(p^2) + a / N_B, 0 for acquired ones. Squaring concentrates
+/// the draws where the surrogate is confident; the even share a keeps every weight
+/// 1 / (N q_i) below 1 / a.
+std::vector<double> importanceProposal(const std::vector<double>& probability, const std::vector<bool>& acquired) {
+  double total = 0.0;
+  double stratum = 0.0;
+  for (std::size_t i = 0; i < probability.size(); ++i) {
+    if (acquired[i]) continue;
+    total += probability[i] * probability[i];
+    stratum += 1.0;
+  }
+  std::vector<double> proposal(probability.size(), 0.0);
+  for (std::size_t i = 0; i < probability.size(); ++i) {
+    if (acquired[i]) continue;
+    const double p = probability[i];
+    proposal[i] = total > 0.0 ? (1.0 - detail::kDefensiveShare) * p * p / total + detail::kDefensiveShare / stratum
+                              : 1.0 / stratum;
+  }
+  return proposal;
+}
+
+/// `count` draws with replacement from the proposal; returns pool position -> times drawn.
+std::map<std::size_t, std::uint64_t> drawFromPool(const std::vector<double>& proposal, std::uint64_t count, Rng& rng) {
+  std::vector<double> cumulative(proposal.size());
+  std::partial_sum(proposal.begin(), proposal.end(), cumulative.begin());
+  std::map<std::size_t, std::uint64_t> drawn;
+  for (std::uint64_t k = 0; k < count; ++k) {
+    const double u = rng.uniform01() * cumulative.back();
+    const auto at = std::upper_bound(cumulative.begin(), cumulative.end(), u) - cumulative.begin();
+    ++drawn[std::min(static_cast<std::size_t>(at), proposal.size() - 1)];
+  }
+  return drawn;
+}
+
+/// Distance (normalised inputs) below which a candidate counts as close to a chosen point.
+double diversityLength(std::size_t inputs) { return 0.25 * std::sqrt(static_cast<double>(inputs)); }
+
+/// Greedy batch selection: acquisition = p * (1 + w * d) (+ a tiny d so that, where every
+/// p is 0, the most distant candidates come first); d = min(distance to the nearest critical
+/// scenario found or candidate chosen this round / length, 1).
+std::vector<std::size_t> selectCandidates(const Matrix& normalised_pool, const std::vector<double>& probability,
+                                          const std::vector<std::vector<double>>& critical_found, std::uint64_t count,
+                                          double weight, std::vector<double>& acquisition_out) {
+  const auto rows = static_cast<std::size_t>(normalised_pool.rows());
+  const double length = diversityLength(static_cast<std::size_t>(normalised_pool.cols()));
+  std::vector<double> nearest(rows, std::numeric_limits<double>::infinity());
+  auto update_nearest = [&](const Eigen::RowVectorXd& point) {
+    for (std::size_t i = 0; i < rows; ++i) {
+      nearest[i] = std::min(nearest[i], (normalised_pool.row(static_cast<Eigen::Index>(i)) - point).norm());
+    }
+  };
+  for (const auto& found : critical_found) {
+    update_nearest(Eigen::Map<const Eigen::RowVectorXd>(found.data(), static_cast<Eigen::Index>(found.size())));
+  }
+  std::vector<bool> taken(rows, false);
+  std::vector<std::size_t> chosen;
+  for (std::uint64_t k = 0; k < count && k < rows; ++k) {
+    std::size_t best = rows;
+    double best_value = -1.0;
+    for (std::size_t i = 0; i < rows; ++i) {
+      if (taken[i]) continue;
+      const double d = std::min(nearest[i] / length, 1.0);
+      const double value = probability[i] * (1.0 + weight * d) + 1e-9 * d;
+      if (value > best_value) {
+        best_value = value;
+        best = i;
+      }
+    }
+    taken[best] = true;
+    chosen.push_back(best);
+    acquisition_out.push_back(best_value);
+    update_nearest(normalised_pool.row(static_cast<Eigen::Index>(best)));
+  }
+  return chosen;
+}
+
+/// The surrogate's view of one round's candidate pool.
+struct ScoredPool {
+  std::uint64_t firstSample = 0;
+  Matrix normalised;
+  std::vector<double> probability;
+};
+
+ScoredPool scorePool(const SearchContext& context, const SearchState& state) {
+  std::vector<const Execution*> rows;
+  for (const auto& execution : state.executions) rows.push_back(&execution);
+  const auto surrogate = detail::fitSurrogate(context, rows, state.rounds);
+  ScoredPool pool;
+  pool.firstSample = detail::kPoolBase + state.rounds * detail::kPoolStride;
+  pool.normalised = context.normaliser.apply(detail::sampleInputs(context, pool.firstSample, context.options.pool));
+  pool.probability = surrogate ? surrogate->probability(pool.normalised, *context.criterion)
+                               : std::vector<double>(static_cast<std::size_t>(pool.normalised.rows()), 0.0);
+  return pool;
+}
+
+void addAcquired(const SearchContext& context, const SearchState& state, const ScoredPool& pool, RoundPlan& plan,
+                 std::uint64_t count) {
+  std::vector<std::vector<double>> critical_found;
+  for (const auto& execution : state.executions) {
+    if (execution.verdict == 1) critical_found.push_back(context.normaliser.apply(execution.inputs));
+  }
+  std::vector<double> acquisition;
+  const auto chosen = selectCandidates(pool.normalised, pool.probability, critical_found, count,
+                                       context.options.diversity, acquisition);
+  for (std::size_t c = 0; c < chosen.size(); ++c) {
+    Execution execution;
+    execution.origin = "acquired";
+    execution.sample = pool.firstSample + chosen[c];
+    execution.acquisition = acquisition[c];
+    execution.predicted = pool.probability[chosen[c]];
+    plan.chosen.push_back(execution);
+  }
+}
+
+/// Importance draws for the rate estimate from the candidates not acquired this round (a
+/// candidate drawn twice is simulated once and counts twice).
+void addImportanceDraws(const SearchContext& context, const SearchState& state, const ScoredPool& pool,
+                        RoundPlan& plan, std::uint64_t count) {
+  std::vector<bool> acquired(pool.probability.size(), false);
+  for (const auto& execution : plan.chosen) acquired[execution.sample - pool.firstSample] = true;
+  if (count == 0 || std::all_of(acquired.begin(), acquired.end(), [](bool a) { return a; })) return;
+  const auto proposal = importanceProposal(pool.probability, acquired);
+  Rng rng = Rng::derive(context.options.seed, state.rounds, RandomStream::SearchSelection);
+  for (const auto& [position, times] : drawFromPool(proposal, count, rng)) {
+    Execution execution;
+    execution.origin = "importance";
+    execution.sample = pool.firstSample + position;
+    execution.acquisition = std::numeric_limits<double>::quiet_NaN();
+    execution.predicted = pool.probability[position];
+    execution.draws = times;
+    execution.weight = 1.0 / (static_cast<double>(proposal.size()) * proposal[position]);
+    plan.chosen.push_back(execution);
+  }
+}
+
+RoundPlan planRound(const SearchContext& context, const SearchState& state, double& surrogate_seconds) {
+  RoundPlan plan;
+  const std::uint64_t done = state.executions.size();
+  const std::uint64_t next_random = randomStreamUsed(state.executions);
+  if (state.rounds == 0) {
+    addRandomStream(plan, next_random, context.options.initial, "initial");
+    return plan;
+  }
+  const std::uint64_t size = std::min(context.options.roundSize, context.options.budget - done);
+  if (!context.guides) {
+    addRandomStream(plan, next_random, size, "random");
+    return plan;
+  }
+  const auto importance =
+      static_cast<std::uint64_t>(std::llround(context.options.estimateShare * static_cast<double>(size)));
+  const auto start = std::chrono::steady_clock::now();
+  const ScoredPool pool = scorePool(context, state);
+  addAcquired(context, state, pool, plan, size - importance);
+  addImportanceDraws(context, state, pool, plan, importance);
+  surrogate_seconds += secondsSince(start);
+  return plan;
+}
+
+/// Simulates the plan's scenarios with the pipeline's batch simulation (as `run` does) and
+/// fills in their results.
+void executePlan(const SearchContext& context, RoundPlan& plan) {
+  pipeline::RunOptions run;
+  run.samples = plan.chosen.size();
+  run.seed = context.options.seed;
+  run.jobs = context.options.jobs;
+  run.writeFiles = false;
+  const auto logical = context.logical;
+  const std::uint64_t seed = context.options.seed;
+  std::vector<std::uint64_t> samples;
+  for (const auto& execution : plan.chosen) samples.push_back(execution.sample);
+  // The batch places scenario i in layout cell i; its draws come from its own sample index.
+  run.source = [logical, seed, samples](std::uint64_t i) {
+    auto concrete = scenario::sampleConcreteScenario(logical, seed, samples[i]);
+    concrete.index = i;
+    auto road = road::buildRoadGeometry(concrete);
+    return pipeline::ScenarioWithRoad{std::move(concrete), std::move(road)};
+  };
+  pipeline::runScenarios(logical, run, [&](const pipeline::ScenarioOutcome& outcome) {
+    auto& execution = plan.chosen[outcome.index];
+    execution.inputs = outcome.inputs;
+    execution.metrics = outcome.metrics;
+    execution.failure = outcome.failure;
+    const auto verdict = outcome.ok() ? context.criterion->verdict(outcome.metrics) : std::nullopt;
+    execution.verdict = verdict ? (*verdict ? 1 : 0) : -1;
+  });
+}
+
+std::size_t coverageCells(const SearchContext& context, const std::vector<Execution>& executions) {
+  std::set<std::vector<int>> cells;
+  for (const auto& execution : executions) {
+    if (execution.verdict != 1) continue;
+    std::vector<int> cell;
+    for (const double u : context.normaliser.apply(execution.inputs)) {
+      cell.push_back(std::clamp(static_cast<int>(std::floor(3.0 * u)), 0, 2));
+    }
+    cells.insert(cell);
+  }
+  return cells.size();
+}
+
+std::uint64_t countCritical(const std::vector<Execution>& executions) {
+  return static_cast<std::uint64_t>(
+      std::count_if(executions.begin(), executions.end(), [](const Execution& e) { return e.verdict == 1; }));
+}
+
+void runRounds(const SearchContext& context, SearchState& state, SearchSummary& summary) {
+  Progress progress(fmt::format("search {}", context.logical->name), context.options.budget, "executions");
+  progress.advance(state.executions.size());
+  while (state.executions.size() < context.options.budget) {
+    throwIfInterrupted();
+    RoundPlan plan = planRound(context, state, summary.surrogateSeconds);
+    const auto start = std::chrono::steady_clock::now();
+    executePlan(context, plan);
+    summary.simulationSeconds += secondsSince(start);
+    for (auto& execution : plan.chosen) {
+      execution.round = state.rounds;
+      state.executions.push_back(std::move(execution));
+    }
+    ++state.rounds;
+    detail::writeCheckpoint(context, state);
+    progress.advance(plan.chosen.size());
+    if (context.guides && state.rounds == 1 && countCritical(state.executions) == 0) {
+      spdlog::warn("search: '{}' was met by none of the {} initial executions; the search goes on, guided by the "
+                   "predicted metrics",
+                   context.criterion->name(), state.executions.size());
+    }
+    spdlog::debug("search round {}: {} executions, {} critical", state.rounds - 1, state.executions.size(),
+                  countCritical(state.executions));
+  }
+  progress.finish();
+}
+
+}  // namespace
+
+SearchSummary runSearch(const SearchOptions& options) {
+  const auto start = std::chrono::steady_clock::now();
+  const std::string started = utcTimestamp();
+  const SearchContext context = makeContext(options);
+  ensureDirectory(options.outputDir);
+  SearchState state = detail::readCheckpoint(context).value_or(SearchState{});
+
+  SearchSummary summary;
+  summary.functionalScenario = context.logical->name;
+  summary.criterion = context.criterion->name();
+  summary.expression = context.criterion->expression();
+  summary.surrogate = options.surrogate;
+  summary.resumedFrom = state.executions.size();
+  std::error_code ignored;
+  fs::remove(options.outputDir / "manifest.json", ignored);  // the folder is incomplete until the new one is written
+  runRounds(context, state, summary);
+
+  summary.executions = state.executions.size();
+  summary.rounds = state.rounds;
+  summary.critical = countCritical(state.executions);
+  summary.failedRuns = static_cast<std::uint64_t>(std::count_if(
+      state.executions.begin(), state.executions.end(), [](const Execution& e) { return !e.failure.empty(); }));
+  summary.criterionSeenInInitialDesign = std::any_of(state.executions.begin(), state.executions.end(), [](const Execution& e) {
+    return e.round == 0 && e.verdict == 1;
+  });
+  summary.coverageCells = coverageCells(context, state.executions);
+  const auto estimate_start = std::chrono::steady_clock::now();
+  summary.estimate = detail::estimateRate(context, state.executions);
+  summary.surrogateSeconds += secondsSince(estimate_start);
+  summary.executionsList = std::move(state.executions);
+  summary.seconds = secondsSince(start);
+  summary.outputs = detail::writeSearchFiles(context, summary);
+  detail::writeSearchManifest(context, summary, started);
+  summary.outputs.push_back(options.outputDir / "manifest.json");
+  return summary;
+}
+
+std::string SearchSummary::report() const {
+  std::string text = fmt::format("{}: search for '{}'{} with surrogate {}: {} executions in {} rounds, {:.1f} s "
+                                 "(simulation {:.1f} s, surrogate {:.1f} s)\n",
+                                 functionalScenario, criterion, criterion == expression ? "" : " (" + expression + ")",
+                                 surrogate, executions, rounds, seconds, simulationSeconds, surrogateSeconds);
+  if (resumedFrom > 0) text += fmt::format("  resumed after {} executions of an earlier run\n", resumedFrom);
+  text += fmt::format("  critical: {} ({:.2f} % of executions), in {} input cells; failed simulations: {}\n", critical,
+                      executions == 0 ? 0.0 : 100.0 * static_cast<double>(critical) / static_cast<double>(executions),
+                      coverageCells, failedRuns);
+  if (!criterionSeenInInitialDesign) text += "  note: the criterion was not met in the initial design\n";
+  const auto& e = estimate;
+  text += fmt::format("  P(criterion) = {:.4f} % [{:.4f}, {:.4f}] % (95 %, {}); random stream alone: {}/{} = {:.4f} % "
+                      "[{:.4f}, {:.4f}] %; plain random sampling of the whole budget: interval width ~{:.4f} %\n",
+                      100 * e.estimate, 100 * e.low, 100 * e.high, fmt::format("{}, {} draws", e.method, e.draws), e.randomCritical, e.randomExecutions,
+                      100 * e.randomEstimate, 100 * e.randomLow, 100 * e.randomHigh, 100 * e.sameBudgetRandomWidth);
+  if (!outputs.empty()) {
+    text += "  outputs:\n";
+    for (const auto& path : outputs) text += fmt::format("    {}\n", path.string());
+  }
+  return text;
+}
+
+}  // namespace vsd::search

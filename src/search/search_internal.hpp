@@ -1,0 +1,79 @@
+#pragma once
+// Pieces of the search loop shared by its source files (not a public header).
+
+#include <cstdint>
+#include <filesystem>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "vsd/scenario/logical_scenario.hpp"
+#include "vsd/search/criterion.hpp"
+#include "vsd/search/search.hpp"
+#include "vsd/search/surrogate.hpp"
+
+namespace vsd::search::detail {
+
+/// Sample-index ranges of the streams (disjoint, so no concrete scenario is drawn twice):
+/// the random stream starts at 0; round r's candidates at kPoolBase + r * kPoolStride;
+/// the rate estimate's pool (and the input normalisation) at kEstimateBase.
+constexpr std::uint64_t kPoolBase = std::uint64_t{1} << 40;
+constexpr std::uint64_t kPoolStride = std::uint64_t{1} << 28;
+constexpr std::uint64_t kEstimateBase = std::uint64_t{1} << 50;
+constexpr std::uint64_t kMaxPool = kPoolStride;
+/// Share of the importance proposal spread evenly over the pool: bounds every weight by 1 / share.
+constexpr double kDefensiveShare = 0.2;
+/// Inputs sampled to fix the normalisation of every input to [0, 1].
+constexpr std::uint64_t kNormalisationSamples = 2000;
+
+/// Maps the logical scenario's inputs to about [0, 1] (min/max of a fixed sample).
+class Normaliser {
+ public:
+  Normaliser() = default;
+  explicit Normaliser(const Matrix& raw);
+  Matrix apply(const Matrix& raw) const;
+  std::vector<double> apply(const std::vector<double>& raw) const;
+
+ private:
+  Eigen::RowVectorXd low_;
+  Eigen::RowVectorXd scale_;
+};
+
+/// What every step of one search reads.
+struct SearchContext {
+  SearchOptions options;
+  std::shared_ptr<const scenario::LogicalScenario> logical;
+  std::vector<std::string> metricNames;
+  std::unique_ptr<Criterion> criterion;
+  const SurrogateEntry* surrogate = nullptr;
+  bool guides = false;  ///< the surrogate selects (false: Monte Carlo)
+  std::string scenarioSha256;
+  Normaliser normaliser;
+};
+
+/// Inputs of concrete scenarios first, first + 1, ..., first + count - 1 (not simulated).
+Matrix sampleInputs(const SearchContext& context, std::uint64_t first, std::uint64_t count);
+
+/// A fresh surrogate for `round`, fitted on the executions (rows with the criterion's
+/// metrics computable); nullptr when fewer than 2 such rows exist.
+std::unique_ptr<Surrogate> fitSurrogate(const SearchContext& context, const std::vector<const Execution*>& rows,
+                                        std::uint64_t round);
+
+/// Checkpoint state: every execution of the finished rounds.
+struct SearchState {
+  std::uint64_t rounds = 0;
+  std::vector<Execution> executions;
+};
+/// Reads <out>/checkpoint.json if present; throws ConfigError if it was made with other
+/// options (naming the option and both values), DatasetError if it is unreadable.
+std::optional<SearchState> readCheckpoint(const SearchContext& context);
+void writeCheckpoint(const SearchContext& context, const SearchState& state);
+
+RateEstimate estimateRate(const SearchContext& context, const std::vector<Execution>& executions);
+
+/// concrete.csv, failures.csv, learning_curve.csv, estimate.json; returns their paths.
+std::vector<std::filesystem::path> writeSearchFiles(const SearchContext& context, const SearchSummary& summary);
+void writeSearchManifest(const SearchContext& context, const SearchSummary& summary, const std::string& started);
+
+}  // namespace vsd::search::detail

@@ -1,0 +1,393 @@
+// Decoders: the registry, the kinematic vehicle model in libtorch, the kinematic decoder's
+// distribution, predictors without training, sampling, intervals and calibration scores.
+#include <gtest/gtest.h>
+
+#include <Eigen/LU>
+
+#include <csignal>
+#include <cmath>
+#include <random>
+
+#include "../../src/model/decoder.hpp"
+#include "../../src/model/kinematics.hpp"
+#include "../../src/model/network.hpp"
+#include "synthetic_scenes.hpp"
+#include "test_support.hpp"
+#include "vsd/core/error.hpp"
+#include "vsd/core/hdf5.hpp"
+#include "vsd/core/interrupt.hpp"
+#include "vsd/core/random.hpp"
+#include "vsd/model/model.hpp"
+#include "vsd/sim/vehicle_model.hpp"
+
+using namespace vsd;
+using namespace vsd::model;
+using namespace vsd::test;
+namespace fs = std::filesystem;
+
+namespace {
+
+std::string errorOf(const std::function<void()>& action) {
+  try {
+    action();
+  } catch (const Error& error) {
+    return error.what();
+  }
+  return "";
+}
+
+VectorNetConfig kinematicConfig() {
+  VectorNetConfig config;
+  config.decoder = "kinematic";
+  config.horizon = 25;
+  config.step = 0.2;
+  return config;
+}
+
+}  // namespace
+
+TEST(DecoderRegistry, UnknownDecodersAndOptionsAreRejectedWithWhatExists) {
+  VectorNetConfig config = kinematicConfig();
+  config.decoder = "transformer";
+  const auto error = errorOf([&] { config.validate(); });
+  EXPECT_NE(error.find("unknown decoder 'transformer' (known: offsets, kinematic)"), std::string::npos) << error;
+  config.decoder = "offsets";
+  config.decoderOptions = {{"max_accel", 3.0}};
+  EXPECT_NE(errorOf([&] { config.validate(); }).find("decoder 'offsets' has no option 'max_accel' (its options: residual)"),
+            std::string::npos);
+  config.decoderOptions = {{"residual", 2.0}};
+  EXPECT_NE(errorOf([&] { config.validate(); }).find("residual"), std::string::npos);
+  EXPECT_THROW(parseDecoderOptions({"residual"}), ConfigError);
+  EXPECT_THROW(parseDecoderOptions({"residual=maybe"}), ConfigError);
+  EXPECT_EQ(parseDecoderOptions({"residual=false", "nll=1"}), (std::map<std::string, double>{{"nll", 1.0}, {"residual", 0.0}}));
+}
+
+TEST(Kinematics, RolloutIsTheSimulatorsVehicleModel) {
+  // Random controls, including braking to a standstill and restarting; the simulator's
+  // update (sim/vehicle_model.cpp) in double precision is the reference.
+  std::mt19937 engine(7);
+  std::uniform_real_distribution<double> accel(-9.0, 4.0);
+  std::uniform_real_distribution<double> curvature(-0.05, 0.05);
+  const int steps = 25;
+  const double dt = 0.2;
+  for (const double initial_speed : {0.0, 3.0, 15.0}) {
+    std::vector<float> a(steps);
+    std::vector<float> k(steps);
+    for (int i = 0; i < steps; ++i) {
+      a[static_cast<std::size_t>(i)] = static_cast<float>(accel(engine));
+      k[static_cast<std::size_t>(i)] = static_cast<float>(curvature(engine));
+    }
+    const auto path = rollout(torch::tensor({{1.0F, -2.0F}}), torch::tensor({0.3F}),
+                              torch::tensor({static_cast<float>(initial_speed)}), torch::tensor(a).view({1, steps}),
+                              torch::tensor(k).view({1, steps}), dt);
+    VehicleState state{1.0, -2.0, 0.3, initial_speed, 0.0};
+    for (int i = 0; i < steps; ++i) {
+      state = sim::advanceKinematic(state, {a[static_cast<std::size_t>(i)], k[static_cast<std::size_t>(i)]}, dt, 0.0);
+      EXPECT_NEAR(path.positions[0][i][0].item<float>(), state.x, 2e-4);
+      EXPECT_NEAR(path.positions[0][i][1].item<float>(), state.y, 2e-4);
+      EXPECT_NEAR(path.speeds[0][i].item<float>(), state.speed, 1e-4);
+      EXPECT_NEAR(path.accels[0][i].item<float>(), state.accel, 1e-3);
+      EXPECT_NEAR(path.headings[0][i].item<float>(), state.heading, 1e-4);
+    }
+  }
+}
+
+TEST(Kinematics, SensitivitiesMatchFiniteDifferences) {
+  const int steps = 12;
+  const double dt = 0.2;
+  auto accel = torch::linspace(-1.0, 1.0, steps, torch::kFloat64).view({1, steps});
+  auto curvature = torch::linspace(0.02, -0.01, steps, torch::kFloat64).view({1, steps});
+  const auto position = torch::zeros({1, 2}, torch::kFloat64);
+  const auto heading = torch::full({1}, 0.4, torch::kFloat64);
+  const auto speed = torch::full({1}, 10.0, torch::kFloat64);
+  const auto base = rollout(position, heading, speed, accel, curvature, dt);
+  const auto sens = sensitivities(base, dt);
+  const double h = 1e-5;
+  for (const int j : {0, 5, 11}) {
+    auto a = accel.clone();
+    a[0][j] += h;
+    const auto da = (rollout(position, heading, speed, a, curvature, dt).positions - base.positions) / h;
+    auto c = curvature.clone();
+    c[0][j] += h;
+    const auto dc = (rollout(position, heading, speed, accel, c, dt).positions - base.positions) / h;
+    for (int k = 0; k < steps; ++k) {
+      for (int x = 0; x < 2; ++x) {
+        const double numeric_a = da[0][k][x].item<double>();
+        const double numeric_c = dc[0][k][x].item<double>();
+        EXPECT_NEAR(sens.accel[0][k][j][x].item<double>(), numeric_a, 1e-4 * (1.0 + std::abs(numeric_a))) << k << j;
+        EXPECT_NEAR(sens.curvature[0][k][j][x].item<double>(), numeric_c, 1e-4 * (1.0 + std::abs(numeric_c))) << k << j;
+      }
+    }
+  }
+}
+
+TEST(KinematicDecoder, ControlsAreBoundedAndTheCovarianceIsThatOfItsSamples) {
+  const auto config = kinematicConfig();
+  const auto decoder = makeDecoder(config);
+  ASSERT_EQ(decoder->outputWidth(), 4 * 25 + 2);
+  EgoStart start{torch::zeros({2, 2}), torch::zeros({2}), torch::tensor({12.0F, 3.0F})};
+  // Absurd raw outputs: the controls saturate at the limits, the Ego never reverses.
+  auto raw = torch::zeros({2, decoder->outputWidth()});
+  raw.narrow(1, 0, 25).fill_(-1000.0);
+  raw.narrow(1, 25, 25).fill_(1000.0);
+  raw.narrow(1, 50, 52).fill_(-20.0);  // tiny standard deviations
+  const auto decoded = decoder->decode(raw, start);
+  EXPECT_GE(decoded.accels.min().item<float>(), -9.0F - 1e-3F);
+  EXPECT_GE(decoded.speeds.min().item<float>(), 0.0F);
+  // 12 m/s at -9 m/s^2 stops after 1.33 s, 8 m along a circle of radius 4 m (kappa 0.25 1/m).
+  const auto path = torch::cat({torch::zeros({1, 2}), decoded.positions[0]}, 0);
+  EXPECT_NEAR((path.narrow(0, 1, 25) - path.narrow(0, 0, 25)).norm(2, 1).sum().item<float>(), 12.0 * 12.0 / 18.0, 0.05);
+  EXPECT_NEAR(decoded.headings[0][24].item<float>(), 0.25 * 8.0, 0.02);
+
+  // Moderate noise: the linearised covariance equals the sample covariance of rollouts.
+  raw = torch::zeros({1, decoder->outputWidth()});
+  raw.narrow(1, 0, 25).fill_(-0.5);
+  raw.narrow(1, 25, 25).fill_(1.0);
+  raw.narrow(1, 50, 52).fill_(-2.5);
+  EgoStart one{torch::zeros({1, 2}), torch::zeros({1}), torch::tensor({10.0F})};
+  const auto distribution = decoder->decode(raw, one);
+  torch::manual_seed(3);
+  const auto samples = decoder->sample(distribution, one, torch::randn({1, 20000, decoder->noiseWidth()}));
+  for (const int k : {4, 14, 24}) {
+    const auto points = samples.positions[0].select(1, k);  // [S, 2]
+    const auto centred = points - points.mean(0);
+    const auto empirical = centred.t().mm(centred) / static_cast<double>(points.size(0) - 1);
+    // Less the floor every position's variance has (float32 targets), which samples do not draw.
+    const auto predicted = distribution.covariance[0][k] - 0.02 * 0.02 * torch::eye(2);
+    for (int r = 0; r < 2; ++r) {
+      for (int c = 0; c < 2; ++c) {
+        const double scale = std::sqrt(predicted[r][r].item<float>() * predicted[c][c].item<float>());
+        EXPECT_NEAR(empirical[r][c].item<float>(), predicted[r][c].item<float>(), 0.1 * scale) << k << " " << r << c;
+      }
+    }
+  }
+}
+
+TEST(GaussianNll, IsTheTwoDimensionalNormalDensity) {
+  const auto mean = torch::tensor({{{1.0F, 2.0F}}});
+  auto covariance = torch::tensor({{{{4.0F, 1.0F}, {1.0F, 2.0F}}}});
+  const auto target = torch::tensor({{{2.0F, 1.0F}}});
+  // r = (1, -1); S^-1 = [[2, -1], [-1, 4]] / 7; r' S^-1 r = (2 + 2 + 4) / 7.
+  const double expected = 0.5 * 8.0 / 7.0 + 0.5 * std::log(7.0) + std::log(2.0 * kPi);
+  EXPECT_NEAR(gaussianNll(mean, covariance, target).item<float>(), expected, 1e-5);
+}
+
+// --- model files ---------------------------------------------------------------------
+
+TEST(ModelFiles, ModelFilesFromBeforeDecodersLoadAsOffsetsWithTheResidual) {
+  // Written by vsd-sumo 44f90ac (format vsd-model/1): a tiny model, 8 acc scenes and what
+  // that version predicted for them.
+  const fs::path legacy = sourceDir() / "tests" / "model" / "data" / "legacy_v1";
+  const Predictor predictor(legacy / "model.pt");
+  EXPECT_EQ(predictor.name(), "offsets");
+  EXPECT_EQ(predictor.info().config.decoderOption("residual"), 1.0);
+  EXPECT_EQ(predictor.info().config.frame, "ego");
+  EXPECT_FALSE(predictor.probabilistic());
+  const vector::DatasetReader reader(legacy / "scenes.h5");
+  std::vector<vector::VectorizedScene> scenes;
+  for (std::size_t i = 0; i < reader.size(); ++i) scenes.push_back(reader.scene(i));
+  const auto predictions = predictor.predict(scenes);
+  H5::H5File file((legacy / "predictions.h5").string(), H5F_ACC_RDONLY);
+  const auto expected = h5::readAll<double>(file.openDataSet("predictions"));
+  ASSERT_EQ(expected.size(), scenes.size() * 25 * 2);
+  for (std::size_t i = 0; i < scenes.size(); ++i) {
+    for (std::size_t k = 0; k < 25; ++k) {
+      EXPECT_NEAR(predictions[i][k].x(), expected[(i * 25 + k) * 2], 1e-4);
+      EXPECT_NEAR(predictions[i][k].y(), expected[(i * 25 + k) * 2 + 1], 1e-4);
+    }
+  }
+}
+
+TEST(ModelFiles, AModelOfAnUnknownDecoderIsRefusedWithTheKnownOnes) {
+  TemporaryDirectory dir;
+  const fs::path legacy = sourceDir() / "tests" / "model" / "data" / "legacy_v1";
+  auto options = tinyTraining(legacy / "scenes.h5", dir.path() / "m.pt");
+  options.steps = 2;
+  train(options);
+  const auto foreign = dir.path() / "foreign.pt";
+  // The description is a length-prefixed string inside the archive: keep the length.
+  ASSERT_TRUE(rewriteModelDescription(options.output, foreign, R"("name":"offsets")", R"("name":"mystery")"));
+  const auto error = errorOf([&] { Predictor predictor(foreign); });
+  EXPECT_NE(error.find("foreign.pt"), std::string::npos) << error;
+  EXPECT_NE(error.find("unknown decoder 'mystery' (known: offsets, kinematic)"), std::string::npos) << error;
+}
+
+// --- predictors without training ---------------------------------------------------------
+
+namespace {
+
+/// An Ego braking at a constant 2 m/s^2 from 12 m/s, with `history` steps before t0.
+vector::VectorizedScene brakingScene(std::size_t history) {
+  Trace trace;
+  trace.step = 0.2;
+  VehicleTrack ego;
+  VehicleState state{3.0, 4.0, 0.5, 12.0, 0.0};
+  for (std::size_t k = 0; k < history + 26; ++k) {
+    ego.states.push_back(state);
+    ego.valid.push_back(1);
+    state = sim::advanceKinematic(state, {-2.0, 0.0}, 0.2, 0.0);
+  }
+  trace.vehicles = {ego};
+  return vector::buildScene("braking", trace, history, {});
+}
+
+}  // namespace
+
+TEST(Predictors, ConstantVelocityAndConstantAccelerationNeedNoTraining) {
+  const Predictor cv("cv");
+  const Predictor ca("ca");
+  EXPECT_FALSE(cv.info().trained);
+  EXPECT_TRUE(ca.predictsMotion());
+  EXPECT_TRUE(Predictor::isBuiltin("cv"));
+  EXPECT_FALSE(Predictor::isBuiltin("models/cv.pt"));
+  // With two steps of history, ca knows the deceleration and predicts the future exactly.
+  const auto with_history = brakingScene(2);
+  const auto exact = ca.predictDistribution({with_history}, {}).front();
+  for (std::size_t k = 0; k < 25; ++k) {
+    EXPECT_LT((exact.mostLikely.positions[k] - with_history.target[k]).norm(), 2e-3) << k;
+    EXPECT_NEAR(exact.mostLikely.states[k].accel, -2.0, 1e-3);
+  }
+  // cv keeps the initial speed along the initial heading.
+  const auto straight = cv.predictDistribution({with_history}, {}).front();
+  const auto initial = with_history.egoInitialState();
+  for (std::size_t k = 0; k < 25; ++k) {
+    const Vec2 expected = initial.position() + 0.2 * static_cast<double>(k + 1) * initial.speed * headingVector(initial.heading);
+    EXPECT_LT((straight.mostLikely.positions[k] - expected).norm(), 2e-3);
+    EXPECT_NEAR(straight.mostLikely.states[k].speed, initial.speed, 1e-4);
+  }
+  // Without history (generated scenes), ca has no acceleration to go on: it is cv.
+  const auto no_history = brakingScene(0);
+  const auto a = ca.predict({no_history}).front();
+  const auto c = cv.predict({no_history}).front();
+  for (std::size_t k = 0; k < 25; ++k) EXPECT_LT((a[k] - c[k]).norm(), 1e-9);
+}
+
+// --- sampling -----------------------------------------------------------------------------
+
+TEST(KinematicModel, PredictionsAreDrivableCarryTheirOwnKinematicsAndSampleReproducibly) {
+  TemporaryDirectory dir;
+  auto training = tinyTraining(writeDataset(dir.path() / "acc.h5", 40), dir.path() / "k.pt");
+  training.config.decoder = "kinematic";
+  train(training);
+  const Predictor predictor(training.output);
+  EXPECT_EQ(predictor.name(), "kinematic");
+  EXPECT_TRUE(predictor.probabilistic());
+  std::vector<vector::VectorizedScene> scenes;
+  for (std::uint64_t i = 0; i < 6; ++i) scenes.push_back(syntheticScene(i));
+  PredictOptions options;
+  options.samples = 16;
+  const auto predictions = predictor.predictDistribution(scenes, options);
+  for (std::size_t i = 0; i < scenes.size(); ++i) {
+    const auto& p = predictions[i];
+    ASSERT_EQ(p.mostLikely.states.size(), 25u);
+    ASSERT_EQ(p.samples.size(), 16u);
+    ASSERT_EQ(p.positionCovariance.size(), 25u);
+    double previous = scenes[i].egoInitialState().speed;
+    for (const auto& state : p.mostLikely.states) {
+      EXPECT_GE(state.speed, 0.0);
+      EXPECT_NEAR(state.accel, (state.speed - previous) / 0.2, 1e-3);
+      EXPECT_GE(state.accel, -9.0 - 1e-3);
+      EXPECT_LE(state.accel, 4.0 + 1e-3);
+      previous = state.speed;
+    }
+    for (const auto& sample : p.samples) {
+      for (const auto& state : sample.states) EXPECT_GE(state.speed, 0.0);
+    }
+    EXPECT_GT(p.positionCovariance.back().determinant(), 0.0);
+  }
+
+  // A scene's samples depend on the seed and the scene, not on the batch it is in.
+  options.samples = 8;
+  options.seed = 3;
+  const auto alone = predictor.predictDistribution({syntheticScene(7)}, options).front();
+  const auto batched = predictor.predictDistribution({syntheticScene(2), syntheticScene(7), syntheticScene(9)}, options)[1];
+  double largest = 0.0;
+  for (std::size_t s = 0; s < 8; ++s) {
+    for (std::size_t k = 0; k < 25; ++k) {
+      largest = std::max(largest, (alone.samples[s].positions[k] - batched.samples[s].positions[k]).norm());
+    }
+  }
+  EXPECT_LT(largest, 1e-4);
+  options.seed = 4;
+  const auto reseeded = predictor.predictDistribution({syntheticScene(7)}, options).front();
+  EXPECT_GT((reseeded.samples[0].positions.back() - alone.samples[0].positions.back()).norm(), 1e-4);
+  options.samples = -1;
+  EXPECT_NE(errorOf([&] { predictor.predictDistribution({syntheticScene(7)}, options); }).find("--samples"),
+            std::string::npos);
+}
+
+TEST(KinematicModel, ADivergingTrainingStopsWithTheStepAndKeepsTheLastGoodModel) {
+  TemporaryDirectory dir;
+  auto options = tinyTraining(writeDataset(dir.path() / "acc.h5", 40), dir.path() / "d.pt");
+  options.config.decoder = "kinematic";
+  options.steps = 50;
+  installInterruptHandlers();
+  int epochs_seen = 0;
+  EXPECT_THROW(train(options, [&](const EpochRecord&) {
+                 if (++epochs_seen == 3) std::raise(SIGINT);
+               }),
+               InterruptedError);
+  clearInterruption();
+  const std::string good_model = readTextFile(options.output);
+  const std::string good_state = readTextFile(options.output.string() + ".last");
+  options.resume = true;
+  options.learningRate = 1e9;  // the next steps blow the variances up
+  const auto error = errorOf([&] { train(options); });
+  EXPECT_NE(error.find("training diverged at optimizer step"), std::string::npos) << error;
+  EXPECT_NE(error.find("batch"), std::string::npos) << error;
+  EXPECT_NE(error.find("keeps the last good model"), std::string::npos) << error;
+  EXPECT_EQ(readTextFile(options.output), good_model);
+  EXPECT_EQ(readTextFile(options.output.string() + ".last"), good_state);
+}
+
+// --- intervals and scores ----------------------------------------------------------------
+
+TEST(Intervals, WeibullQuantilesCoverTheirNominalShareForFewDraws) {
+  EXPECT_DOUBLE_EQ(sampleQuantile({3, 1, 2, 5, 4, 7, 6, 9, 8}, 0.5), 5.0);
+  EXPECT_DOUBLE_EQ(sampleQuantile({3, 1, 2, 5, 4, 7, 6, 9, 8}, 0.25), 2.5);  // order 0.25 * 10
+  EXPECT_DOUBLE_EQ(sampleQuantile({3, 1, 2}, 0.01), 1.0);                     // clamped
+  EXPECT_TRUE(std::isnan(sampleQuantile({std::nan("")}, 0.5)));
+  // 32 draws and one more value from the same distribution, many times: the central 90 %
+  // and 50 % intervals hold the value 90 % and 50 % of the time.
+  std::mt19937 engine(11);
+  std::normal_distribution<double> normal;
+  std::size_t inside90 = 0;
+  std::size_t inside50 = 0;
+  const std::size_t trials = 20000;
+  for (std::size_t t = 0; t < trials; ++t) {
+    std::vector<double> draws(32);
+    for (auto& d : draws) d = normal(engine);
+    const double value = normal(engine);
+    const auto interval = intervalOf(draws);
+    const double q = quantilePosition(draws, value);
+    EXPECT_EQ(interval.contains(value, 0.9), std::abs(2.0 * q - 1.0) <= 0.9 + 1e-12);
+    EXPECT_EQ(interval.contains(value, 0.5), std::abs(2.0 * q - 1.0) <= 0.5 + 1e-12);
+    inside90 += interval.contains(value, 0.9) ? 1 : 0;
+    inside50 += interval.contains(value, 0.5) ? 1 : 0;
+  }
+  EXPECT_NEAR(static_cast<double>(inside90) / trials, 0.90, 0.01);
+  EXPECT_NEAR(static_cast<double>(inside50) / trials, 0.50, 0.015);
+}
+
+TEST(Calibration, NllAndCoverageOfAPredictedGaussian) {
+  auto scene = syntheticScene(3);
+  Prediction prediction;
+  const double sigma = 0.5;
+  for (std::size_t k = 0; k < 25; ++k) {
+    // The truth sits 0.3 m (0.6 sigma) beside the mean at every step, 1 m (2 sigma) at 5 s.
+    const double offset = k == 24 ? 1.0 : 0.3;
+    prediction.mostLikely.positions.push_back(scene.target[k] + Vec2(0.0, offset));
+    prediction.positionCovariance.push_back(sigma * sigma * Eigen::Matrix2d::Identity());
+  }
+  const auto errors = predictionErrors(prediction, scene);
+  ASSERT_EQ(errors.scored, 1u);
+  const auto nll = [&](double r) { return 0.5 * r * r / (sigma * sigma) + std::log(sigma * sigma) + std::log(2.0 * kPi); };
+  EXPECT_NEAR(errors.nll, (24 * nll(0.3) + nll(1.0)) / 25.0, 1e-9);
+  EXPECT_NEAR(errors.nllAt[0], nll(0.3), 1e-9);  // 1 s
+  EXPECT_NEAR(errors.nllAt[2], nll(1.0), 1e-9);  // 5 s
+  // Mahalanobis^2 0.36 at 1 s: inside both regions; 4.0 at 5 s: outside the 50 % region
+  // (r'S^-1 r <= 1.39) but inside the 90 % one (<= 4.61).
+  EXPECT_EQ(errors.coverageAt[0][0], 1.0);
+  EXPECT_EQ(errors.coverageAt[2][0], 0.0);
+  EXPECT_EQ(errors.coverageAt[2][1], 1.0);
+}

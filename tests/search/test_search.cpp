@@ -1,0 +1,193 @@
+// `vsd-sumo search`: criteria, the surrogate registry, option checks, resuming,
+// determinism and that a guiding surrogate beats Monte Carlo on a small budget.
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <filesystem>
+
+#include "test_support.hpp"
+#include "vsd/core/csv.hpp"
+#include "vsd/core/error.hpp"
+#include "vsd/core/files.hpp"
+#include "vsd/scenario/logical_scenario.hpp"
+#include "vsd/search/criterion.hpp"
+#include "vsd/search/search.hpp"
+#include "vsd/search/surrogate.hpp"
+
+namespace fs = std::filesystem;
+using testing::HasSubstr;
+
+namespace vsd::search {
+namespace {
+
+const std::vector<std::string> kMetrics = {"a_min", "d_min", "p_lat_max", "y_max", "ttc_min", "thw_min",
+                                           "lane_offset_max"};
+
+std::string errorOf(const std::function<void()>& action) {
+  try {
+    action();
+  } catch (const ConfigError& error) {
+    return error.what();
+  }
+  return "no ConfigError";
+}
+
+TEST(SearchCriterion, ExpressionReadsItsMetricsAndJudges) {
+  const auto logical = scenario::loadLogicalScenario(test::scenarioFile("acc_lk.yaml"));
+  const Criterion criterion("ttc_min < 1 || d_min < 0.5", *logical, kMetrics);
+  EXPECT_EQ(criterion.usedMetrics(), (std::vector<std::string>{"d_min", "ttc_min"}));
+  std::vector<double> values = {-3, 5.0, 0, 0, 0.8, 1, 0};
+  EXPECT_EQ(criterion.verdict(values), std::optional<bool>(true));
+  values[4] = 2.0;
+  EXPECT_EQ(criterion.verdict(values), std::optional<bool>(false));
+  values[1] = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_EQ(criterion.verdict(values), std::nullopt);  // a failed run has no verdict
+  EXPECT_TRUE(criterion.meetsUsed({0.4, 9.0}));
+}
+
+TEST(SearchCriterion, NamedCriterionComesFromTheScenario) {
+  const auto logical = scenario::loadLogicalScenario(test::scenarioFile("acc_lk.yaml"));
+  const Criterion criterion("close_approach", *logical, kMetrics);
+  EXPECT_EQ(criterion.expression(), "d_min < 2");
+  EXPECT_EQ(criterion.usedMetrics(), std::vector<std::string>{"d_min"});
+}
+
+TEST(SearchCriterion, BadCriteriaGetOneLineNamingWhatIsKnown) {
+  const auto logical = scenario::loadLogicalScenario(test::scenarioFile("acc_lk.yaml"));
+  const std::string unknown = errorOf([&] { Criterion("dmin < 2", *logical, kMetrics); });
+  EXPECT_THAT(unknown, HasSubstr("dmin"));
+  EXPECT_THAT(unknown, HasSubstr("ttc_min"));
+  EXPECT_THAT(unknown, HasSubstr("close_approach"));
+  EXPECT_EQ(unknown.find('\n'), std::string::npos);
+  // A registered metric the scenario does not compute is named as such.
+  const std::string not_computed = errorOf([&] { Criterion("ttc_min < 1", *logical, {"a_min", "d_min"}); });
+  EXPECT_THAT(not_computed, HasSubstr("'ttc_min' is not computed by this scenario"));
+  EXPECT_THAT(errorOf([&] { Criterion("d_min < (2", *logical, kMetrics); }), HasSubstr("d_min < (2"));
+  EXPECT_THAT(errorOf([&] { Criterion("1 < 2", *logical, kMetrics); }), HasSubstr("uses no metric"));
+}
+
+TEST(SearchSurrogates, UnknownNameListsTheKnownOnes) {
+  const std::string message = errorOf([] { findSurrogate("gaussian-process"); });
+  EXPECT_THAT(message, HasSubstr("random, extra-trees, bnn"));
+}
+
+SearchOptions smallSearch(const fs::path& out, const std::string& surrogate, std::uint64_t budget) {
+  SearchOptions options;
+  options.scenarioFile = test::scenarioFile("acc_lk.yaml");
+  options.outputDir = out;
+  options.criterion = "d_min < 8";
+  options.surrogate = surrogate;
+  options.budget = budget;
+  options.initial = 40;
+  options.roundSize = 20;
+  options.pool = 1000;
+  options.trees = 20;
+  return options;
+}
+
+TEST(SearchOptions, BudgetBelowTheInitialDesignIsRefusedBeforeAnythingIsWritten) {
+  TemporaryDirectory work("vsd-test-search");
+  auto options = smallSearch(work.path() / "out", "extra-trees", 30);
+  const std::string message = errorOf([&] { runSearch(options); });
+  EXPECT_THAT(message, HasSubstr("--budget"));
+  EXPECT_THAT(message, HasSubstr("--initial (40)"));
+  EXPECT_FALSE(fs::exists(work.path() / "out"));
+  options.budget = 100;
+  options.surrogate = "gp";
+  EXPECT_THAT(errorOf([&] { runSearch(options); }), HasSubstr("unknown surrogate"));
+  EXPECT_FALSE(fs::exists(work.path() / "out"));
+}
+
+std::vector<std::string> column(const fs::path& csv, const std::string& name) {
+  const auto table = CsvTable::read(csv);
+  std::vector<std::string> values;
+  for (std::size_t r = 0; r < table.rows(); ++r) values.push_back(table.cell(r, table.column(name)));
+  return values;
+}
+
+TEST(SearchLoop, ResumesWithoutRepeatingAndMakesTheSameChoicesAsAnUninterruptedSearch) {
+  TemporaryDirectory work("vsd-test-search");
+  const auto resumed = work.path() / "resumed";
+  runSearch(smallSearch(resumed, "extra-trees", 60));  // "interrupted" after 60 executions
+  fs::remove(resumed / "manifest.json");
+  const auto summary = runSearch(smallSearch(resumed, "extra-trees", 100));
+  EXPECT_EQ(summary.resumedFrom, 60u);
+  EXPECT_EQ(summary.executions, 100u);
+  const auto samples = column(resumed / "concrete.csv", "sample");
+  EXPECT_EQ(std::set<std::string>(samples.begin(), samples.end()).size(), samples.size()) << "an execution repeated";
+
+  auto straight = smallSearch(work.path() / "straight", "extra-trees", 100);
+  straight.jobs = 2;  // same choices whatever the number of simulation workers
+  runSearch(straight);
+  EXPECT_EQ(readTextFile(resumed / "concrete.csv"), readTextFile(work.path() / "straight" / "concrete.csv"));
+  const auto origins = column(resumed / "concrete.csv", "origin");
+  EXPECT_EQ(std::count(origins.begin(), origins.end(), "acquired"), 48);  // 3 rounds of 20, 4 importance draws each
+  EXPECT_TRUE(fs::exists(resumed / "manifest.json"));
+
+  auto other = smallSearch(resumed, "extra-trees", 120);
+  other.seed = 2;
+  EXPECT_THAT(errorOf([&] { runSearch(other); }), HasSubstr("seed"));
+}
+
+TEST(SearchLoop, ExtraTreesFindMoreCriticalScenariosThanRandomSampling) {
+  TemporaryDirectory work("vsd-test-search");
+  const auto random = runSearch(smallSearch(work.path() / "random", "random", 160));
+  const auto trees = runSearch(smallSearch(work.path() / "trees", "extra-trees", 160));
+  EXPECT_EQ(random.executions, 160u);
+  EXPECT_GT(trees.critical, random.critical + random.critical / 2) << random.critical << " vs " << trees.critical;
+  // Both estimates target the same rate; random's is the plain share.
+  EXPECT_EQ(random.estimate.method, "monte-carlo");
+  EXPECT_EQ(trees.estimate.method, "importance-sampling");
+  EXPECT_LE(trees.estimate.low, trees.estimate.estimate);
+  EXPECT_GE(trees.estimate.high, trees.estimate.estimate);
+  EXPECT_EQ(column(work.path() / "trees" / "failures.csv", "critical").size(), trees.critical);
+}
+
+TEST(SearchLoop, ACriterionNeverMetInTheInitialDesignDoesNotStopTheSearch) {
+  TemporaryDirectory work("vsd-test-search");
+  auto options = smallSearch(work.path() / "never", "extra-trees", 60);
+  options.criterion = "d_min < -1000";
+  const auto summary = runSearch(options);
+  EXPECT_EQ(summary.executions, 60u);
+  EXPECT_EQ(summary.critical, 0u);
+  EXPECT_FALSE(summary.criterionSeenInInitialDesign);
+  EXPECT_THAT(summary.report(), HasSubstr("not met in the initial design"));
+  // No critical draw: the interval still has room above 0 (rule of three on the weights).
+  EXPECT_EQ(summary.estimate.estimate, 0.0);
+  EXPECT_GT(summary.estimate.high, 0.0);
+}
+
+TEST(SearchEstimate, WilsonIntervalMatchesTheReference) {
+  // scipy.stats.binomtest(8, 1000).proportion_ci(method="wilson") = (0.0040591958, 0.0157063345)
+  const auto [low, high] = wilsonInterval(8, 1000);
+  EXPECT_NEAR(low, 0.0040591958, 1e-9);
+  EXPECT_NEAR(high, 0.0157063345, 1e-9);
+  EXPECT_EQ(wilsonInterval(0, 0), (std::pair<double, double>(0.0, 1.0)));
+}
+
+}  // namespace
+}  // namespace vsd::search
+
+namespace vsd::search {
+namespace {
+
+TEST(SearchCli, BadInputIsOneLineWithExitCodeOneAndNoFolder) {
+  TemporaryDirectory work("vsd-test-search-cli");
+  const auto out = work.path() / "out";
+  const std::string scenario = test::scenarioFile("acc_lk.yaml").string();
+  for (const std::vector<std::string>& flags :
+       {std::vector<std::string>{"--criterion", "dmin < 2"}, {"--criterion", "d_min < 2", "--budget", "50"},
+        {"--criterion", "d_min < 2", "--surrogate", "vectornet"}, {"--criterion", "d_min < 2", "--pool", "0"}}) {
+    std::vector<std::string> argv = {test::vsdSumo().string(), "-q", "search", scenario, "--out", out.string()};
+    argv.insert(argv.end(), flags.begin(), flags.end());
+    const auto result = test::run(argv, work.path());
+    EXPECT_EQ(result.exitCode, 1) << result.output;
+    EXPECT_THAT(result.output, HasSubstr("vsd-sumo: error: "));
+    EXPECT_EQ(std::count(result.output.begin(), result.output.end(), '\n'), 1) << result.output;
+    EXPECT_FALSE(fs::exists(out));
+  }
+}
+
+}  // namespace
+}  // namespace vsd::search
