@@ -52,10 +52,38 @@ struct LabelData {
   std::string testDigest;
 };
 
+double mean(double sum, std::size_t count) {
+  return count == 0 ? std::numeric_limits<double>::quiet_NaN() : sum / static_cast<double>(count);
+}
+
 struct RowModel {
   fs::path file;
   std::string digest;
 };
+
+/// One trained model: a row of one of the spec's models with one seed.
+struct TrainedRun {
+  std::string model;
+  int row = 0;
+  std::uint64_t seed = 0;
+  RowModel modelFile;
+  json training;  ///< training.json
+};
+
+double meanOf(const std::vector<double>& values) {
+  double sum = 0.0;
+  for (const double value : values) sum += value;
+  return mean(sum, values.size());
+}
+
+/// Sample standard deviation (n - 1); 0 for fewer than two values.
+double sampleStd(const std::vector<double>& values) {
+  if (values.size() < 2) return 0.0;
+  const double average = meanOf(values);
+  double squares = 0.0;
+  for (const double value : values) squares += (value - average) * (value - average);
+  return std::sqrt(squares / static_cast<double>(values.size() - 1));
+}
 
 json readJson(const fs::path& path) {
   try {
@@ -67,9 +95,6 @@ json readJson(const fs::path& path) {
 
 void writeJson(const fs::path& path, const json& value) { writeTextFileAtomically(path, value.dump(2) + "\n"); }
 
-double mean(double sum, std::size_t count) {
-  return count == 0 ? std::numeric_limits<double>::quiet_NaN() : sum / static_cast<double>(count);
-}
 
 class ExperimentRunner {
  public:
@@ -89,7 +114,11 @@ class ExperimentRunner {
     compareMetrics();
     drawFigures();
     summary_.output = output_;
-    summary_.findings = checkFindings(summary_.ade);
+    std::vector<AdeRow> main_rows;  // the findings are the main model's
+    for (const auto& row : summary_.ade) {
+      if (row.model == spec_.models.front().name) main_rows.push_back(row);
+    }
+    summary_.findings = checkFindings(main_rows);
     summary_.seconds = secondsSince(start);
     writeResults(spec_, options_, summary_, artefacts_, *folder_);
     return summary_;
@@ -109,10 +138,26 @@ class ExperimentRunner {
     return valid;
   }
 
-  CacheKey key(const std::string& kind) const {
+  /// A key naming the code an artefact is built by: the identities of the modules it
+  /// depends on (core/provenance.hpp), so a change elsewhere reuses it.
+  CacheKey key(const std::string& kind, const std::vector<std::string>& modules) const {
     CacheKey key(kind);
-    key.add("tool_version", toolVersion());
+    key.add("code", codeIdentity(modules));
     return key;
+  }
+
+  // The modules each kind of artefact depends on (src/CMakeLists.txt's link graph).
+  static const std::vector<std::string>& simulationModules() {
+    static const std::vector<std::string> modules = {"core", "scenario", "road", "sim", "metrics", "vector", "pipeline"};
+    return modules;
+  }
+  static const std::vector<std::string>& modelModules() {
+    static const std::vector<std::string> modules = {"core", "vector", "model"};
+    return modules;
+  }
+  static const std::vector<std::string>& maeModules() {
+    static const std::vector<std::string> modules = {"core", "vector", "model", "baseline", "metrics", "pipeline"};
+    return modules;
   }
 
   const LabelData& data(const std::string& label) const {
@@ -176,7 +221,7 @@ class ExperimentRunner {
           const auto samples = train ? spec_.trainSamples : spec_.testSamples;
           const auto seed = train ? spec_.trainSeed : spec_.testSeed;
           const auto folder = cache_.folder(fmt::format("data/{}_{}", source.label, train ? "train" : "test"));
-          auto run_key = key("run");
+          auto run_key = key("run", simulationModules());
           run_key.add("scenario_sha256", scenario_hash).add("samples", samples).add("seed", seed);
           const std::string what = fmt::format("{} {} data ({} scenarios, seed {})", source.label,
                                                train ? "training" : "test", samples, seed);
@@ -204,7 +249,7 @@ class ExperimentRunner {
         // Existing runs (of another tool version, say) are identified by their contents.
         for (const bool train : {true, false}) {
           const auto& run_folder = train ? source.trainRun : source.testRun;
-          auto run_key = key("existing run");
+          auto run_key = key("existing run", {"core", "vector"});
           run_key.add("dataset_sha256", sha256OfFile(vector::resolveDatasetPath(run_folder)))
               .add("concrete_sha256", sha256OfFile(run_folder / "concrete.csv"));
           (train ? label_data.trainRun : label_data.testRun) = run_folder;
@@ -216,42 +261,60 @@ class ExperimentRunner {
   }
 
   // --- models ------------------------------------------------------------------
-  void trainModels() {
-    for (const auto& row : spec_.ade) {
-      throwIfInterrupted();
-      model::Mix mix;
-      for (const auto& [label, count] : row.mix) {
-        if (count > 0) mix.counts.emplace_back(label, count);
-      }
-      if (mix.counts.empty()) {
-        throw ConfigError(fmt::format("{}: ade row {}: the mix holds no sample", spec_.file.string(), row.row));
-      }
-      const auto folder = cache_.folder(fmt::format("models/row{}", row.row));
-      auto model_key = key("model");
-      model_key.add("mix", mix.str());
-      for (const auto& [label, count] : mix.counts) model_key.add("data_" + label, data(label).trainDigest);
-      model_key.add("seed", spec_.seed)
-          .add("steps", spec_.steps)
-          .add("batch", spec_.batch)
-          .add("learning_rate", spec_.learningRate)
-          .add("threads", spec_.threads);
-      const std::string what = fmt::format("row {} model ({})", row.row, mix.str());
-      if (!reuse(folder, model_key, what)) train(row.row, folder, mix, model_key);
-      models_[row.row] = {folder / "model.pt", model_key.digest()};
+  /// The seeds a row of a model is trained with: several for the main model's `seeds.rows`.
+  std::vector<std::uint64_t> seedsOf(std::size_t model_index, int row) const {
+    const bool repeated = model_index == 0 &&
+                          std::find(spec_.seedRows.begin(), spec_.seedRows.end(), row) != spec_.seedRows.end();
+    std::vector<std::uint64_t> seeds;
+    for (int i = 0; i < (repeated ? spec_.seedCount : 1); ++i) seeds.push_back(spec_.seed + static_cast<std::uint64_t>(i));
+    return seeds;
+  }
 
-      const auto record = readJson(folder / "training.json");
-      AdeRow ade_row;
-      ade_row.row = row.row;
-      for (const auto& [label, count] : row.mix) ade_row.mix[label] = count;
-      ade_row.paper = row.paper;
-      ade_row.trainSeconds = record.at("seconds").get<double>();
-      ade_row.epochs = record.at("epochs").get<int>();
-      ade_row.stopReason = record.at("stop_reason").get<std::string>();
-      summary_.ade.push_back(ade_row);
+  static model::Mix mixOf(const AdeSpec& row) {
+    model::Mix mix;
+    for (const auto& [label, count] : row.mix) {
+      if (count > 0) mix.counts.emplace_back(label, count);
+    }
+    return mix;
+  }
+
+  void trainModels() {
+    for (std::size_t m = 0; m < spec_.models.size(); ++m) {
+      const auto& model_spec = spec_.models[m];
+      for (const auto& row : spec_.ade) {
+        if (!model_spec.trains(row.row)) continue;
+        const auto mix = mixOf(row);
+        if (mix.counts.empty()) {
+          throw ConfigError(fmt::format("{}: ade row {}: the mix holds no sample", spec_.file.string(), row.row));
+        }
+        for (const auto seed : seedsOf(m, row.row)) {
+          throwIfInterrupted();
+          trainOne(model_spec, row, mix, seed);
+        }
+      }
     }
   }
 
-  void train(int row, const fs::path& folder, const model::Mix& mix, const CacheKey& model_key) {
+  void trainOne(const ModelSpec& model_spec, const AdeSpec& row, const model::Mix& mix, std::uint64_t seed) {
+    const auto folder = cache_.folder(fmt::format("models/{}/row{}_seed{}", model_spec.name, row.row, seed));
+    auto model_key = key("model", modelModules());
+    model_key.add("mix", mix.str());
+    for (const auto& [label, count] : mix.counts) model_key.add("data_" + label, data(label).trainDigest);
+    model_key.add("decoder", model_spec.decoder);
+    for (const auto& [option, value] : model_spec.options) model_key.add("decoder_option_" + option, value);
+    model_key.add("seed", seed)
+        .add("steps", spec_.steps)
+        .add("batch", spec_.batch)
+        .add("learning_rate", spec_.learningRate)
+        .add("threads", spec_.threads);
+    const std::string what = fmt::format("{} row {} seed {} model ({})", model_spec.name, row.row, seed, mix.str());
+    if (!reuse(folder, model_key, what)) train(what, folder, model_spec, mix, seed, model_key);
+    runs_.push_back({model_spec.name, row.row, seed, {folder / "model.pt", model_key.digest()},
+                     readJson(folder / "training.json")});
+  }
+
+  void train(const std::string& what, const fs::path& folder, const ModelSpec& model_spec, const model::Mix& mix,
+             std::uint64_t seed, const CacheKey& model_key) {
     // A training interrupted earlier with the same key continues from its last state.
     const fs::path pending(folder.string() + ".pending");
     bool resume = false;
@@ -269,19 +332,21 @@ class ExperimentRunner {
     for (const auto& [label, count] : mix.counts) train_options.data.push_back(data(label).trainRun);
     train_options.mix = mix;
     train_options.output = folder / "model.pt";
-    train_options.seed = spec_.seed;
+    train_options.config.decoder = model_spec.decoder;
+    train_options.config.decoderOptions = model_spec.options;
+    train_options.seed = seed;
     train_options.threads = spec_.threads;
     train_options.steps = spec_.steps;
     train_options.batchSize = spec_.batch;
     train_options.learningRate = spec_.learningRate;
     train_options.resume = resume;
-    spdlog::info("row {} model ({}): training{}", row, mix.str(), resume ? " (resuming)" : "");
+    spdlog::info("{}: training{}", what, resume ? " (resuming)" : "");
     auto last_line = std::chrono::steady_clock::now();
     const auto trained = model::train(train_options, [&](const model::EpochRecord& record) {
       // One line every 20 s keeps logs short; the best epochs are what matters.
       if (secondsSince(last_line) < 20.0 && record.epoch != record.plannedEpochs) return;
       last_line = std::chrono::steady_clock::now();
-      spdlog::info("row {}: epoch {}/{}, train loss {:.3f} m, validation ADE {:.3f} m", row, record.epoch,
+      spdlog::info("{}: epoch {}/{}, train loss {:.3f} m, validation ADE {:.3f} m", what, record.epoch,
                    record.plannedEpochs, record.trainLoss, record.validationAde);
     });
     json record;
@@ -292,60 +357,117 @@ class ExperimentRunner {
     record["samples_per_second"] = trained.samplesPerSecond;
     record["stop_reason"] = trained.stopReason;
     writeJson(folder / "training.json", record);
-    spdlog::info("row {} model: best validation ADE {:.3f} m at epoch {} ({:.0f} s, {})", row,
-                 trained.bestValidationAde, trained.bestEpoch, trained.seconds, trained.stopReason);
+    spdlog::info("{}: best validation ADE {:.3f} m at epoch {} ({:.0f} s, {})", what, trained.bestValidationAde,
+                 trained.bestEpoch, trained.seconds, trained.stopReason);
     cache_.commit(folder, model_key);
     std::error_code ignored;
     fs::remove(pending, ignored);
   }
 
   // --- evaluation ----------------------------------------------------------------
+  /// ADE/FDE of every trained model and every predictor on every test set, then the
+  /// table's rows: per (model, row) the mean and spread over the seeds.
   void evaluateModels() {
-    for (auto& ade_row : summary_.ade) {
+    std::map<std::pair<std::string, int>, std::vector<json>> errors_by_row;
+    for (const auto& run : runs_) {
       throwIfInterrupted();
-      const auto& row_model = models_.at(ade_row.row);
-      const auto folder = cache_.folder(fmt::format("eval/row{}", ade_row.row));
-      auto eval_key = key("evaluation");
-      eval_key.add("model", row_model.digest);
-      for (const auto& source : spec_.sources) eval_key.add("test_" + source.label, data(source.label).testDigest);
-      if (!reuse(folder, eval_key, fmt::format("row {} evaluation", ade_row.row))) {
-        cache_.clear(folder);
-        const model::Predictor predictor(row_model.file, spec_.threads);
-        json errors;
+      const auto errors = evaluate(run.modelFile.file, run.modelFile.digest,
+                                   fmt::format("eval/{}/row{}_seed{}", run.model, run.row, run.seed),
+                                   fmt::format("{} row {} seed {}", run.model, run.row, run.seed));
+      errors_by_row[{run.model, run.row}].push_back(errors);
+      if (run.model == spec_.models.front().name && run.seed == spec_.seed) {
+        models_[run.row] = run.modelFile;
         for (const auto& source : spec_.sources) {
-          const auto& scenes = testScenes(source.label);
-          const auto predictions = predictor.predict(scenes);
-          std::vector<std::pair<double, std::size_t>> per_sample;
-          double ade_sum = 0.0;
-          double fde_sum = 0.0;
-          for (std::size_t i = 0; i < scenes.size(); ++i) {
-            const auto sample = model::displacementErrors(predictions[i], scenes[i]);
-            ade_sum += sample.ade;
-            fde_sum += sample.fde;
-            per_sample.emplace_back(sample.ade, i);
-          }
-          const auto median = per_sample.begin() + static_cast<std::ptrdiff_t>(per_sample.size() / 2);
-          std::nth_element(per_sample.begin(), median, per_sample.end());
-          errors[source.label] = {{"samples", scenes.size()},
-                                  {"ade", mean(ade_sum, scenes.size())},
-                                  {"fde", mean(fde_sum, scenes.size())},
-                                  {"median_ade", median->first},
-                                  {"median_sample", median->second}};
-          spdlog::info("row {} on {}: ADE {:.3f} m over {} scenes", ade_row.row, source.label,
-                       mean(ade_sum, scenes.size()), scenes.size());
+          const auto& entry = errors.at(source.label);
+          medianSample_[{run.row, source.label}] = {entry.at("median_sample").get<std::size_t>(),
+                                                    entry.at("median_ade").get<double>()};
         }
-        writeJson(folder / "errors.json", errors);
-        cache_.commit(folder, eval_key);
-      }
-      const auto errors = readJson(folder / "errors.json");
-      for (const auto& source : spec_.sources) {
-        const auto& entry = errors.at(source.label);
-        ade_row.ade[source.label] = entry.at("ade").get<double>();
-        ade_row.fde[source.label] = entry.at("fde").get<double>();
-        medianSample_[{ade_row.row, source.label}] = {entry.at("median_sample").get<std::size_t>(),
-                                                      entry.at("median_ade").get<double>()};
       }
     }
+    for (const auto& model_spec : spec_.models) {
+      for (const auto& row : spec_.ade) {
+        const auto found = errors_by_row.find({model_spec.name, row.row});
+        if (found != errors_by_row.end()) summary_.ade.push_back(adeRow(model_spec.name, row, found->second));
+      }
+    }
+    for (const auto& predictor : spec_.predictors) {
+      throwIfInterrupted();
+      AdeSpec no_training;
+      summary_.ade.push_back(adeRow(predictor, no_training, {evaluate(predictor, "", "eval/" + predictor, predictor)}));
+    }
+  }
+
+  /// errors.json of one model file or predictor ("cv", "ca") on every test set, cached.
+  json evaluate(const fs::path& model, const std::string& model_digest, const std::string& relative,
+                const std::string& what) {
+    const auto folder = cache_.folder(relative);
+    auto eval_key = key("evaluation", modelModules());
+    eval_key.add("model", model_digest.empty() ? model.string() : model_digest);
+    for (const auto& source : spec_.sources) eval_key.add("test_" + source.label, data(source.label).testDigest);
+    if (!reuse(folder, eval_key, what + " evaluation")) {
+      cache_.clear(folder);
+      const model::Predictor predictor(model, spec_.threads);
+      json errors;
+      for (const auto& source : spec_.sources) errors[source.label] = displacementSummary(predictor, source.label, what);
+      writeJson(folder / "errors.json", errors);
+      cache_.commit(folder, eval_key);
+    }
+    return readJson(folder / "errors.json");
+  }
+
+  json displacementSummary(const model::Predictor& predictor, const std::string& label, const std::string& what) {
+    const auto& scenes = testScenes(label);
+    const auto predictions = predictor.predict(scenes);
+    std::vector<std::pair<double, std::size_t>> per_sample;
+    double ade_sum = 0.0;
+    double fde_sum = 0.0;
+    for (std::size_t i = 0; i < scenes.size(); ++i) {
+      const auto sample = model::displacementErrors(predictions[i], scenes[i]);
+      ade_sum += sample.ade;
+      fde_sum += sample.fde;
+      per_sample.emplace_back(sample.ade, i);
+    }
+    const auto median = per_sample.begin() + static_cast<std::ptrdiff_t>(per_sample.size() / 2);
+    std::nth_element(per_sample.begin(), median, per_sample.end());
+    spdlog::info("{} on {}: ADE {:.3f} m over {} scenes", what, label, mean(ade_sum, scenes.size()), scenes.size());
+    return {{"samples", scenes.size()},
+            {"ade", mean(ade_sum, scenes.size())},
+            {"fde", mean(fde_sum, scenes.size())},
+            {"median_ade", median->first},
+            {"median_sample", median->second}};
+  }
+
+  /// A table row from the evaluations of its seeds (one for predictors).
+  AdeRow adeRow(const std::string& model_name, const AdeSpec& row, const std::vector<json>& evaluations) const {
+    AdeRow ade_row;
+    ade_row.row = row.row;
+    ade_row.model = model_name;
+    for (const auto& [label, count] : row.mix) ade_row.mix[label] = count;
+    ade_row.paper = row.paper;
+    for (const auto& source : spec_.sources) {
+      std::vector<double> ade;
+      std::vector<double> fde;
+      for (const auto& errors : evaluations) {
+        ade.push_back(errors.at(source.label).at("ade").get<double>());
+        fde.push_back(errors.at(source.label).at("fde").get<double>());
+      }
+      ade_row.ade[source.label] = meanOf(ade);
+      ade_row.fde[source.label] = meanOf(fde);
+      if (ade.size() > 1) ade_row.adeStd[source.label] = sampleStd(ade);
+    }
+    bool first = true;
+    for (const auto& run : runs_) {
+      if (run.model != model_name || run.row != row.row) continue;
+      ade_row.seeds.push_back(run.seed);
+      ade_row.trainSeconds += run.training.at("seconds").get<double>();
+      if (first) {
+        ade_row.epochs = run.training.at("epochs").get<int>();
+        ade_row.stopReason = run.training.at("stop_reason").get<std::string>();
+        first = false;
+      }
+    }
+    if (!ade_row.seeds.empty()) ade_row.trainSeconds /= static_cast<double>(ade_row.seeds.size());
+    return ade_row;
   }
 
   // --- metric MAE ------------------------------------------------------------------
@@ -364,7 +486,7 @@ class ExperimentRunner {
       const int vectornet_row = spec_.vectornetRows.at(label);
       const auto& row_model = models_.at(vectornet_row);
       const auto folder = cache_.folder("mae/" + label);
-      auto mae_key = key("metric mae");
+      auto mae_key = key("metric mae", maeModules());
       mae_key.add("metrics", fmt::format("{}", fmt::join(names, ",")))
           .add("train", label_data.trainDigest)
           .add("test", label_data.testDigest)
@@ -505,7 +627,8 @@ class ExperimentRunner {
   ExperimentSummary summary_;
   std::vector<ArtefactRecord> artefacts_;
   std::map<std::string, LabelData> data_;
-  std::map<int, RowModel> models_;
+  std::vector<TrainedRun> runs_;
+  std::map<int, RowModel> models_;  ///< the main model's first seed per row: MAE and figures
   std::map<std::string, std::vector<vector::VectorizedScene>> testScenes_;
   std::map<std::pair<int, std::string>, std::pair<std::size_t, double>> medianSample_;
 };

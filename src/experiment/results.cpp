@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <ctime>
@@ -60,6 +61,18 @@ const char* transferText(Transfer transfer) {
 
 std::string metres(double value) { return std::isfinite(value) ? fmt::format("{:.2f}", value) : "–"; }
 
+/// "0.57" or, over several seeds, "0.57 ± 0.03" (mean ± sample standard deviation).
+std::string adeText(const AdeRow& row, const std::string& label) {
+  const auto spread = row.adeStd.find(label);
+  if (spread == row.adeStd.end()) return metres(adeOf(row, label));
+  return fmt::format("{} ± {}", metres(adeOf(row, label)), metres(spread->second));
+}
+
+double stdOf(const AdeRow& row, const std::string& label) {
+  const auto spread = row.adeStd.find(label);
+  return spread == row.adeStd.end() ? 0.0 : spread->second;
+}
+
 std::string mixText(const AdeRow& row) {
   std::vector<std::string> parts;
   for (const auto& [label, count] : row.mix) {
@@ -87,12 +100,71 @@ std::vector<std::string> labelsOf(const Spec& spec) {
 }
 
 
+std::string seedsText(const Spec& spec) {
+  if (spec.seedCount < 2 || spec.seedRows.empty()) return "";
+  return fmt::format(" (rows {} of the main model: seeds {} to {}, mean ± standard deviation)",
+                     fmt::join(spec.seedRows, ", "), spec.seed, spec.seed + static_cast<std::uint64_t>(spec.seedCount) - 1);
+}
+
 std::string sizesLine(const Spec& spec) {
   return fmt::format(
       "Data per functional scenario: {} training scenarios (seed {}), {} test scenarios (seed {}). "
-      "VectorNet: {} optimizer steps, batch {}, peak learning rate {}, seed {}, {} threads.{}",
+      "VectorNet: {} optimizer steps, batch {}, peak learning rate {}, seed {}{}, {} threads.{}",
       spec.trainSamples, spec.trainSeed, spec.testSamples, spec.testSeed, spec.steps, spec.batch, spec.learningRate,
-      spec.seed, spec.threads, spec.quick ? " **--quick sizes: not comparable with the paper.**" : "");
+      spec.seed, seedsText(spec), spec.threads, spec.quick ? " **--quick sizes: not comparable with the paper.**" : "");
+}
+
+
+std::string adeTableHead(const std::vector<std::string>& labels, const std::string& first_columns,
+                         const std::string& last_column) {
+  std::string md = "| " + first_columns + " |";
+  for (const auto& label : labels) md += " " + label + " |";
+  md += " " + last_column + " |\n|";
+  const auto columns = std::count(first_columns.begin(), first_columns.end(), '|') + 2 + labels.size();
+  for (std::size_t i = 0; i < static_cast<std::size_t>(columns); ++i) md += "---|";
+  return md + "\n";
+}
+
+std::string modelDescription(const ModelSpec& model) {
+  std::vector<std::string> options;
+  for (const auto& [name, value] : model.options) options.push_back(fmt::format("{}={}", name, formatNumber(value)));
+  return options.empty() ? model.decoder : fmt::format("{} ({})", model.decoder, fmt::join(options, ", "));
+}
+
+/// ade.md: per model of the spec one table in the paper's layout (ours, the paper's in
+/// brackets; mean ± standard deviation over seeds where a row has several), then the
+/// predictors without training.
+std::string adeMarkdown(const Spec& spec, const std::vector<AdeRow>& rows) {
+  const auto labels = labelsOf(spec);
+  std::string md = "# ADE of the Ego's predicted trajectory (m): ours (paper's Table II)\n\n" + sizesLine(spec) + "\n";
+  for (std::size_t m = 0; m < spec.models.size(); ++m) {
+    const auto& model = spec.models[m];
+    md += fmt::format("\n## {}: decoder {}{}\n\n", model.name, modelDescription(model),
+                      m == 0 ? " — the main model (findings, MAE, figures)" : "");
+    md += adeTableHead(labels, "row | training mix", "seeds | training");
+    for (const auto& row : rows) {
+      if (row.model != model.name) continue;
+      md += fmt::format("| {} | {} |", row.row, mixText(row));
+      for (const auto& label : labels) {
+        const auto paper = row.paper.find(label);
+        md += " " + adeText(row, label) +
+              (paper == row.paper.end() ? std::string() : fmt::format(" ({:.2f})", paper->second)) + " |";
+      }
+      md += fmt::format(" {} | {:.0f} s, {} epochs |\n", row.seeds.size(), row.trainSeconds, row.epochs);
+    }
+  }
+  if (!spec.predictors.empty()) {
+    md += "\n## Predictors without training\n\ncv: constant velocity along the initial heading; ca: constant "
+          "acceleration (the last observed one) along it.\n\n";
+    md += adeTableHead(labels, "predictor", "");
+    for (const auto& row : rows) {
+      if (row.row != 0) continue;
+      md += "| " + row.model + " |";
+      for (const auto& label : labels) md += " " + adeText(row, label) + " |";
+      md += " |\n";
+    }
+  }
+  return md;
 }
 
 }  // namespace
@@ -120,8 +192,8 @@ std::vector<Finding> checkFindings(const std::vector<AdeRow>& rows) {
       bool good = true;
       for (const double value : values) good = good && value <= kGoodAde;
       finding.verdict = good ? "holds" : "does not hold";
-      finding.evidence = fmt::format("row 1 on acc {} m, row 2 on lk {} m, row 3 on acc_lk {} m", metres(values[0]),
-                                     metres(values[1]), metres(values[2]));
+      finding.evidence = fmt::format("row 1 on acc {} m, row 2 on lk {} m, row 3 on acc_lk {} m", adeText(*acc, "acc"),
+                                     adeText(*lk, "lk"), adeText(*acc_lk, "acc_lk"));
     }
     findings.push_back(finding);
   }
@@ -139,8 +211,8 @@ std::vector<Finding> checkFindings(const std::vector<AdeRow>& rows) {
       } else {
         finding.verdict = "inconclusive";
       }
-      finding.evidence = fmt::format("acc_lk {} m; acc {} m ({}); lk {} m ({})", metres(in), metres(adeOf(*row, "acc")),
-                                     transferText(to_acc), metres(adeOf(*row, "lk")), transferText(to_lk));
+      finding.evidence = fmt::format("acc_lk {} m; acc {} m ({}); lk {} m ({})", adeText(*row, "acc_lk"),
+                                     adeText(*row, "acc"), transferText(to_acc), adeText(*row, "lk"), transferText(to_lk));
     } else {
       finding.verdict = "not checked";
       finding.evidence = "row 3 missing or with another mix";
@@ -157,8 +229,8 @@ std::vector<Finding> checkFindings(const std::vector<AdeRow>& rows) {
       finding.verdict = to_acc_lk == Transfer::Fails         ? "holds"
                         : to_acc_lk == Transfer::Generalises ? "does not hold"
                                                              : "inconclusive";
-      finding.evidence = fmt::format("acc {} m, lk {} m; acc_lk {} m ({})", metres(adeOf(*row, "acc")),
-                                     metres(adeOf(*row, "lk")), metres(adeOf(*row, "acc_lk")), transferText(to_acc_lk));
+      finding.evidence = fmt::format("acc {} m, lk {} m; acc_lk {} m ({})", adeText(*row, "acc"), adeText(*row, "lk"),
+                                     adeText(*row, "acc_lk"), transferText(to_acc_lk));
     } else {
       finding.verdict = "not checked";
       finding.evidence = "row 4 missing or with another mix";
@@ -174,10 +246,38 @@ std::vector<Finding> checkFindings(const std::vector<AdeRow>& rows) {
       const double a = adeOf(*with, "acc_lk");
       const double b = adeOf(*alone, "acc_lk");
       finding.verdict = a < b ? "holds" : "does not hold";
-      finding.evidence = fmt::format("row 9 {} m vs row 10 {} m", metres(a), metres(b));
+      const double spread = std::max(stdOf(*with, "acc_lk"), stdOf(*alone, "acc_lk"));
+      finding.evidence = fmt::format("row 9 {} m vs row 10 {} m; margin {} m", adeText(*with, "acc_lk"),
+                                     adeText(*alone, "acc_lk"), metres(b - a)) +
+                         (spread > 0.0 ? fmt::format(" = {:.1f}x the larger seed spread", (b - a) / spread) : "");
     } else {
       finding.verdict = "not checked";
       finding.evidence = "rows 9 or 10 missing or with another mix";
+    }
+    findings.push_back(finding);
+  }
+  {
+    Finding finding{"e", "Combining LK and ACC&LK needs 3000 samples of each: with 2000 each (row 5) they are not "
+                         "predicted well, with 3000 each (row 6) they are.",
+                    fmt::format("holds if row 6's ADEs on lk and acc_lk are <= {0} m and one of row 5's is above {0} m; "
+                                "does not hold if row 5's are both <= {0} m (2000 each suffice)",
+                                kGoodAde),
+                    "", ""};
+    const AdeRow* two = paperRow(rows, 5, {"lk", "acc_lk"});
+    const AdeRow* three = paperRow(rows, 6, {"lk", "acc_lk"});
+    if (two && three) {
+      const bool two_good = adeOf(*two, "lk") <= kGoodAde && adeOf(*two, "acc_lk") <= kGoodAde;
+      const bool three_good = adeOf(*three, "lk") <= kGoodAde && adeOf(*three, "acc_lk") <= kGoodAde;
+      finding.verdict = two_good ? "does not hold" : three_good ? "holds" : "inconclusive";
+      finding.evidence = fmt::format(
+          "row 5 lk {} m, acc_lk {} m (acc {} m) vs row 6 lk {} m, acc_lk {} m (acc {} m); row 5's largest margin to "
+          "{} m: {} m",
+          adeText(*two, "lk"), adeText(*two, "acc_lk"), adeText(*two, "acc"), adeText(*three, "lk"),
+          adeText(*three, "acc_lk"), adeText(*three, "acc"), kGoodAde,
+          metres(std::max(adeOf(*two, "lk"), adeOf(*two, "acc_lk")) - kGoodAde));
+    } else {
+      finding.verdict = "not checked";
+      finding.evidence = "rows 5 or 6 missing or with another mix";
     }
     findings.push_back(finding);
   }
@@ -193,29 +293,23 @@ void writeResults(const Spec& spec, const ExperimentOptions& options, Experiment
     summary.files.push_back(path);
   };
 
-  {  // ade.csv (long format) and ade.md (the paper's layout)
+  {  // ade.csv (long format) and ade.md (the paper's layout, one table per model)
     std::ostringstream csv;
     CsvWriter writer(csv);
-    writer.writeRow({"row", "mix", "test_label", "ade_m", "fde_m", "paper_ade_m", "train_seconds", "epochs"});
-    std::string md = "# ADE of the Ego's predicted trajectory (m): ours (paper's Table II)\n\n" + sizesLine(spec) +
-                     "\n\n| row | training mix |";
-    for (const auto& label : labels) md += " " + label + " |";
-    md += " training |\n|---|---|";
-    for (std::size_t i = 0; i < labels.size(); ++i) md += "---|";
-    md += "---|\n";
+    writer.writeRow({"model", "row", "mix", "test_label", "ade_m", "ade_std_m", "seeds", "fde_m", "paper_ade_m",
+                     "train_seconds", "epochs"});
     for (const auto& row : summary.ade) {
-      md += fmt::format("| {} | {} |", row.row, mixText(row));
       for (const auto& label : labels) {
         const double ade = row.ade.count(label) ? row.ade.at(label) : kNaN;
         const double fde = row.fde.count(label) ? row.fde.at(label) : kNaN;
-        md += " " + withPaper(ade, row.paper, label) + " |";
-        writer.writeRow({std::to_string(row.row), mixText(row), label, formatNumber(ade), formatNumber(fde),
-                         paperValue(row.paper, label), formatNumber(row.trainSeconds), std::to_string(row.epochs)});
+        writer.writeRow({row.model, std::to_string(row.row), mixText(row), label, formatNumber(ade),
+                         row.adeStd.count(label) ? formatNumber(row.adeStd.at(label)) : "",
+                         std::to_string(row.seeds.size()), formatNumber(fde), paperValue(row.paper, label),
+                         formatNumber(row.trainSeconds), std::to_string(row.epochs)});
       }
-      md += fmt::format(" {:.0f} s, {} epochs |\n", row.trainSeconds, row.epochs);
     }
     keep(out / "ade.csv", csv.str());
-    keep(out / "ade.md", md);
+    keep(out / "ade.md", adeMarkdown(spec, summary.ade));
   }
 
   {  // mae.csv and mae.md
@@ -270,7 +364,16 @@ void writeResults(const Spec& spec, const ExperimentOptions& options, Experiment
   manifest["command_line"] = options.commandLine;
   manifest["finished_utc"] = utcTimestamp();
   manifest["seconds"] = summary.seconds;
-  manifest["seeds"] = {{"experiment", spec.seed}, {"train_data", spec.trainSeed}, {"test_data", spec.testSeed}};
+  manifest["seeds"] = {{"experiment", spec.seed},
+                       {"train_data", spec.trainSeed},
+                       {"test_data", spec.testSeed},
+                       {"count", spec.seedCount},
+                       {"rows", spec.seedRows}};
+  for (const auto& model : spec.models) {
+    manifest["models"].push_back(
+        {{"name", model.name}, {"decoder", model.decoder}, {"options", model.options}, {"rows", model.rows}});
+  }
+  manifest["predictors"] = spec.predictors;
   manifest["sizes"] = {{"train_samples", spec.trainSamples}, {"test_samples", spec.testSamples},
                        {"steps", spec.steps},                {"batch", spec.batch},
                        {"mae_train_rows", spec.maeSamples},  {"threads", spec.threads}};
@@ -286,8 +389,12 @@ std::string ExperimentSummary::report() const {
                                  output.string(), seconds, artefactsBuilt, artefactsReused);
   text += "\nADE (m), ours (paper):\n";
   for (const auto& row : ade) {
-    text += fmt::format("  row {:>2}  {:<34}", row.row, mixText(row));
-    for (const auto& [label, value] : row.ade) text += fmt::format("  {} {}", label, withPaper(value, row.paper, label));
+    text += fmt::format("  {:<12} row {:>2}  {:<34}", row.model, row.row, mixText(row));
+    for (const auto& [label, value] : row.ade) {
+      text += fmt::format("  {} {}", label, adeText(row, label));
+      const auto paper = row.paper.find(label);
+      if (paper != row.paper.end()) text += fmt::format(" ({:.2f})", paper->second);
+    }
     text += "\n";
   }
   if (!mae.empty()) {

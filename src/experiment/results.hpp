@@ -25,8 +25,9 @@ inline constexpr double kGeneralisesFactor = 3.0;   ///< ... and at most this ti
 inline constexpr double kFailsAde = 2.0;            ///< "does not generalise": at least this ...
 inline constexpr double kFailsFactor = 5.0;         ///< ... and at least this times the in-distribution ADE
 
-/// The paper's four findings (a)-(d), decided from the ADE rows 1-4, 9 and 10 of
-/// its table (rows missing or with another mix give "not checked").
+/// The paper's findings (a)-(d) and the claim of rows 5/6 (e), decided from the main
+/// model's ADE rows 1-6, 9 and 10 (means over seeds; rows missing or with another mix
+/// give "not checked").
 std::vector<Finding> checkFindings(const std::vector<AdeRow>& rows);
 
 /// Stages ade.md/.csv, mae.md/.csv, findings.md in `folder` and commits it with

@@ -6,9 +6,12 @@
 #include <cmath>
 #include <set>
 
+#include "vsd/core/csv.hpp"
 #include "vsd/core/error.hpp"
 #include "vsd/core/files.hpp"
 #include "vsd/metrics/metrics.hpp"
+#include "vsd/model/options.hpp"
+#include "vsd/model/predictor.hpp"
 #include "vsd/scenario/yaml_reader.hpp"
 
 namespace fs = std::filesystem;
@@ -22,12 +25,146 @@ const Source& Spec::source(const std::string& label) const {
   throw ConfigError(fmt::format("{}: no functional scenario '{}'", file.string(), label));
 }
 
+bool ModelSpec::trains(int row) const {
+  return rows.empty() || std::find(rows.begin(), rows.end(), row) != rows.end();
+}
+
 const AdeSpec& Spec::row(int number) const {
   for (const auto& row : ade) {
     if (row.row == number) return row;
   }
   throw ConfigError(fmt::format("{}: no ade row {}", file.string(), number));
 }
+
+namespace {
+
+/// A list of ade row numbers, each checked to exist.
+std::vector<int> rowList(const scenario::YamlReader& reader, const YAML::Node& node, const std::string& field,
+                         const Spec& spec) {
+  if (!node.IsSequence()) reader.fail(node, field, "expected a list of ade row numbers, e.g. [3, 4]");
+  std::vector<int> rows;
+  for (std::size_t i = 0; i < node.size(); ++i) {
+    const std::string item = fmt::format("{}[{}]", field, i);
+    const double value = reader.number(node[i], item);
+    const bool known = std::any_of(spec.ade.begin(), spec.ade.end(), [&](const AdeSpec& a) { return a.row == value; });
+    if (!known) reader.fail(node[i], item, fmt::format("no ade row {}", formatNumber(value)));
+    rows.push_back(static_cast<int>(value));
+  }
+  return rows;
+}
+
+std::vector<int> allRows(const Spec& spec) {
+  std::vector<int> rows;
+  for (const auto& row : spec.ade) rows.push_back(row.row);
+  return rows;
+}
+
+ModelSpec parseModel(const scenario::YamlReader& reader, const YAML::Node& node, const std::string& field,
+                     const Spec& spec) {
+  reader.checkKeys(node, field, {"name", "decoder", "options", "rows"});
+  ModelSpec model;
+  if (!node["name"]) reader.fail(node, field, "missing 'name' (names its rows and cache folders)");
+  model.name = reader.scalar(node["name"], field + ".name");
+  if (model.name.empty() || model.name.find_first_of("/\\ ") != std::string::npos ||
+      model::Predictor::isBuiltin(model.name)) {
+    reader.fail(node["name"], field + ".name",
+                fmt::format("'{}' is not a usable name (non-empty, no spaces or slashes, not cv/ca)", model.name));
+  }
+  if (node["decoder"]) model.decoder = reader.scalar(node["decoder"], field + ".decoder");
+  if (const auto options = node["options"]) {
+    reader.requireMap(options, field + ".options");
+    for (const auto& entry : options) {
+      const auto key = entry.first.as<std::string>();
+      model.options[key] = reader.number(entry.second, field + ".options." + key);
+    }
+  }
+  model::VectorNetConfig config;
+  config.decoder = model.decoder;
+  config.decoderOptions = model.options;
+  try {
+    config.validate();
+  } catch (const ConfigError& error) {
+    reader.fail(node, field, error.what());
+  }
+  model.rows = node["rows"] ? rowList(reader, node["rows"], field + ".rows", spec) : allRows(spec);
+  return model;
+}
+
+/// `models`, `seeds` and `predictors`: how each ade row is trained and what else is a row.
+void parseModels(const scenario::YamlReader& reader, const YAML::Node& root, Spec& spec) {
+  if (const auto models = root["models"]) {
+    if (!models.IsSequence() || models.size() == 0) reader.fail(models, "models", "expected a non-empty list of models");
+    for (std::size_t i = 0; i < models.size(); ++i) {
+      if (i == 0 && models[i]["rows"]) {
+        reader.fail(models[i]["rows"], "models[0].rows",
+                    "the first model is the main one and trains every row (findings, MAE and figures use it)");
+      }
+      auto model = parseModel(reader, models[i], fmt::format("models[{}]", i), spec);
+      for (const auto& other : spec.models) {
+        if (other.name == model.name) {
+          reader.fail(models[i]["name"], fmt::format("models[{}].name", i), fmt::format("'{}' appears twice", model.name));
+        }
+      }
+      spec.models.push_back(std::move(model));
+    }
+  } else {
+    spec.models.push_back(ModelSpec{"offsets", "offsets", {}, allRows(spec)});
+  }
+  if (const auto seeds = root["seeds"]) {
+    reader.checkKeys(seeds, "seeds", {"count", "rows"});
+    spec.seedCount = reader.integer(seeds, "count", "seeds.count", 1, 1);
+    spec.seedRows = seeds["rows"] ? rowList(reader, seeds["rows"], "seeds.rows", spec) : allRows(spec);
+  }
+  if (const auto predictors = root["predictors"]) {
+    if (!predictors.IsSequence()) reader.fail(predictors, "predictors", "expected a list, e.g. [cv, ca]");
+    for (std::size_t i = 0; i < predictors.size(); ++i) {
+      const std::string field = fmt::format("predictors[{}]", i);
+      const auto name = reader.scalar(predictors[i], field);
+      if (!model::Predictor::isBuiltin(name)) {
+        reader.fail(predictors[i], field, fmt::format("unknown predictor '{}' (known: cv, ca)", name));
+      }
+      spec.predictors.push_back(name);
+    }
+  }
+}
+
+/// In --quick, extra seeds and extra models train only the rows of `quick.repeat_rows`.
+void restrictRepeats(std::vector<int>& rows, const std::vector<int>& allowed, const std::vector<AdeSpec>& all_rows) {
+  if (rows.empty()) {
+    for (const auto& row : all_rows) rows.push_back(row.row);
+  }
+  rows.erase(std::remove_if(rows.begin(), rows.end(),
+                            [&](int row) { return std::find(allowed.begin(), allowed.end(), row) == allowed.end(); }),
+             rows.end());
+}
+
+void applyQuickSizes(const scenario::YamlReader& reader, const YAML::Node& root, Spec& spec) {
+  {
+    const auto q = root["quick"];
+    if (!q) reader.fail(root, "quick", "missing: --quick needs the spec's small sizes");
+    reader.checkKeys(q, "quick", {"train_samples", "test_samples", "mix_scale", "steps", "mae_samples", "bnn_epochs", "trees",
+                                  "repeat_rows"});
+    spec.trainSamples = static_cast<std::uint64_t>(reader.integer(q, "train_samples", "quick.train_samples", 300, 2));
+    spec.testSamples = static_cast<std::uint64_t>(reader.integer(q, "test_samples", "quick.test_samples", 300, 1));
+    const double scale = reader.number(q, "mix_scale", "quick.mix_scale", 0.1);
+    for (auto& row : spec.ade) {
+      for (auto& [label, count] : row.mix) {
+        if (count > 0) count = std::max<std::size_t>(10, static_cast<std::size_t>(std::lround(static_cast<double>(count) * scale)));
+        count = std::min<std::size_t>(count, spec.trainSamples);
+      }
+    }
+    spec.steps = reader.integer(q, "steps", "quick.steps", 500, 1);
+    spec.maeSamples = static_cast<std::size_t>(reader.integer(q, "mae_samples", "quick.mae_samples", 200, 2));
+    spec.bnn.epochs = reader.integer(q, "bnn_epochs", "quick.bnn_epochs", 80, 1);
+    spec.extraTrees.trees = reader.integer(q, "trees", "quick.trees", 30, 1);
+    std::vector<int> repeat_rows;
+    if (const auto rows = q["repeat_rows"]) repeat_rows = rowList(reader, rows, "quick.repeat_rows", spec);
+    restrictRepeats(spec.seedRows, repeat_rows, spec.ade);
+    for (std::size_t i = 1; i < spec.models.size(); ++i) restrictRepeats(spec.models[i].rows, repeat_rows, spec.ade);
+  }
+}
+
+}  // namespace
 
 Spec parseSpec(const fs::path& file, bool quick) {
   std::string text;
@@ -38,7 +175,8 @@ Spec parseSpec(const fs::path& file, bool quick) {
   }
   const scenario::YamlReader reader(file.string());
   const auto root = scenario::loadYaml(text, file.string());
-  reader.checkKeys(root, "", {"schema", "name", "seed", "scenarios", "data", "training", "ade", "mae", "figures", "quick"});
+  reader.checkKeys(root, "", {"schema", "name", "seed", "scenarios", "data", "training", "ade", "models", "seeds", "predictors", "mae",
+                          "figures", "quick"});
   Spec spec;
   spec.file = file;
   spec.quick = quick;
@@ -157,6 +295,8 @@ Spec parseSpec(const fs::path& file, bool quick) {
     spec.ade.push_back(row);
   }
 
+  parseModels(reader, root, spec);
+
   if (const auto mae = root["mae"]) {
     reader.checkKeys(mae, "mae", {"samples", "vectornet_rows", "metrics", "extra_trees", "bnn"});
     spec.maeSamples = static_cast<std::size_t>(reader.integer(mae, "samples", "mae.samples", 2000, 2));
@@ -214,24 +354,7 @@ Spec parseSpec(const fs::path& file, bool quick) {
     }
   }
 
-  if (quick) {
-    const auto q = root["quick"];
-    if (!q) reader.fail(root, "quick", "missing: --quick needs the spec's small sizes");
-    reader.checkKeys(q, "quick", {"train_samples", "test_samples", "mix_scale", "steps", "mae_samples", "bnn_epochs", "trees"});
-    spec.trainSamples = static_cast<std::uint64_t>(reader.integer(q, "train_samples", "quick.train_samples", 300, 2));
-    spec.testSamples = static_cast<std::uint64_t>(reader.integer(q, "test_samples", "quick.test_samples", 300, 1));
-    const double scale = reader.number(q, "mix_scale", "quick.mix_scale", 0.1);
-    for (auto& row : spec.ade) {
-      for (auto& [label, count] : row.mix) {
-        if (count > 0) count = std::max<std::size_t>(10, static_cast<std::size_t>(std::lround(static_cast<double>(count) * scale)));
-        count = std::min<std::size_t>(count, spec.trainSamples);
-      }
-    }
-    spec.steps = reader.integer(q, "steps", "quick.steps", 500, 1);
-    spec.maeSamples = static_cast<std::size_t>(reader.integer(q, "mae_samples", "quick.mae_samples", 200, 2));
-    spec.bnn.epochs = reader.integer(q, "bnn_epochs", "quick.bnn_epochs", 80, 1);
-    spec.extraTrees.trees = reader.integer(q, "trees", "quick.trees", 30, 1);
-  }
+  if (quick) applyQuickSizes(reader, root, spec);
   return spec;
 }
 

@@ -23,6 +23,16 @@ struct AdeSpec {
   std::map<std::string, double> paper;
 };
 
+/// A way of training every ADE row (README "experiment: models"). The first model of a
+/// spec is the main one: its rows decide the findings and predict in the MAE table and figures.
+struct ModelSpec {
+  std::string name;                        ///< names the rows in the tables and the cache folders
+  std::string decoder = "offsets";         ///< a name of model::availableDecoders()
+  std::map<std::string, double> options;   ///< decoder options (the rest take the decoder's defaults)
+  std::vector<int> rows;                   ///< ade rows trained this way; empty: all
+  bool trains(int row) const;
+};
+
 struct MaeMetricSpec {
   std::string label;
   std::string metric;
@@ -50,6 +60,10 @@ struct Spec {
   double learningRate = 2e-3;
   int threads = 2;
   std::vector<AdeSpec> ade;
+  std::vector<ModelSpec> models;           ///< never empty after parsing (default: one offsets model)
+  int seedCount = 1;                       ///< seeds seed .. seed + seedCount - 1 for `seedRows` of the main model
+  std::vector<int> seedRows;
+  std::vector<std::string> predictors;     ///< predictors without training ("cv", "ca") as extra rows
   std::size_t maeSamples = 2000;
   std::map<std::string, int> vectornetRows;
   std::vector<MaeMetricSpec> maeMetrics;

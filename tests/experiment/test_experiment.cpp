@@ -32,13 +32,13 @@ std::size_t builtCount(const std::string& output) {
   return std::stoul(match[1].str());
 }
 
-/// ade.csv as (row, label) -> ADE.
-std::map<std::pair<std::string, std::string>, double> adeValues(const fs::path& csv) {
+/// ade.csv as "model row label" -> ADE.
+std::map<std::string, double> adeValues(const fs::path& csv) {
   const auto table = CsvTable::read(csv);
-  std::map<std::pair<std::string, std::string>, double> values;
+  std::map<std::string, double> values;
   for (std::size_t r = 0; r < table.rows(); ++r) {
-    values[{table.cell(r, table.column("row")), table.cell(r, table.column("test_label"))}] =
-        table.number(r, table.column("ade_m"));
+    values[table.cell(r, table.column("model")) + " " + table.cell(r, table.column("row")) + " " +
+           table.cell(r, table.column("test_label"))] = table.number(r, table.column("ade_m"));
   }
   return values;
 }
@@ -60,17 +60,33 @@ TEST(Experiment, QuickRunProducesTheTablesFiguresAndManifestAndCachesArtefacts) 
   const auto first = runExperimentCli({spec.string(), "--quick", "--out", out.string()}, dir.path());
   ASSERT_EQ(first.exitCode, 0) << first.output;
 
-  // Ten rows x three test sets, every ADE finite and positive, the paper's values next to ours.
+  // Ten rows of the main model, row 3 (quick.repeat_rows) also with the residual, and the two
+  // predictors without training, each on three test sets: every ADE finite and positive.
   const auto ade = adeValues(out / "ade.csv");
-  ASSERT_EQ(ade.size(), 30u);
-  for (const auto& [key, value] : ade) {
-    EXPECT_TRUE(std::isfinite(value) && value > 0.0) << key.first << " " << key.second;
-  }
+  ASSERT_EQ(ade.size(), (10u + 1u + 2u) * 3u);
+  for (const auto& [key, value] : ade) EXPECT_TRUE(std::isfinite(value) && value > 0.0) << key;
   const auto ade_table = CsvTable::read(out / "ade.csv");
   EXPECT_EQ(ade_table.cell(0, ade_table.column("paper_ade_m")), "0.37");
   // In-distribution beats out-of-distribution even at quick sizes: ACC-only on LK is far off.
-  EXPECT_LT(ade.at({"1", "acc"}), ade.at({"1", "lk"}));
-  EXPECT_LT(ade.at({"2", "lk"}), ade.at({"2", "acc"}));
+  EXPECT_LT(ade.at("no_residual 1 acc"), ade.at("no_residual 1 lk"));
+  EXPECT_LT(ade.at("no_residual 2 lk"), ade.at("no_residual 2 acc"));
+  EXPECT_TRUE(ade.count("residual 3 acc_lk") && ade.count("cv 0 lk") && ade.count("ca 0 acc"));
+  // Row 3 (a row carrying findings) over three seeds: mean with a spread; row 1 over one.
+  for (std::size_t r = 0; r < ade_table.rows(); ++r) {
+    const auto row = ade_table.cell(r, ade_table.column("row"));
+    if (ade_table.cell(r, ade_table.column("model")) != "no_residual" || (row != "3" && row != "1")) continue;
+    EXPECT_EQ(ade_table.cell(r, ade_table.column("seeds")), row == "3" ? "3" : "1");
+    const auto spread = ade_table.cell(r, ade_table.column("ade_std_m"));
+    if (row == "3") {
+      EXPECT_GT(std::stod(spread), 0.0) << "different seeds train different models";
+    } else {
+      EXPECT_EQ(spread, "");
+    }
+  }
+  const auto ade_md = readTextFile(out / "ade.md");
+  EXPECT_NE(ade_md.find("## residual: decoder offsets (residual=1)"), std::string::npos) << ade_md;
+  EXPECT_NE(ade_md.find(" ± "), std::string::npos) << ade_md;
+  EXPECT_NE(ade_md.find("| cv |"), std::string::npos) << ade_md;
 
   const auto mae = CsvTable::read(out / "mae.csv");
   ASSERT_EQ(mae.rows(), 6u);  // acc: a_min, d_min; lk: p_lat_max; acc_lk: all three
@@ -92,7 +108,7 @@ TEST(Experiment, QuickRunProducesTheTablesFiguresAndManifestAndCachesArtefacts) 
     EXPECT_EQ(std::count(svg.begin(), svg.end(), '\n') > 50, true) << figure;
   }
   const auto findings = readTextFile(out / "findings.md");
-  for (const char* id : {"(a)", "(b)", "(c)", "(d)"}) EXPECT_NE(findings.find(id), std::string::npos);
+  for (const char* id : {"(a)", "(b)", "(c)", "(d)", "(e)"}) EXPECT_NE(findings.find(id), std::string::npos);
   const auto manifest = readTextFile(out / "manifest.json");
   EXPECT_NE(manifest.find("\"quick\": true"), std::string::npos);
   EXPECT_NE(manifest.find("\"sumo_version\""), std::string::npos);
@@ -103,17 +119,18 @@ TEST(Experiment, QuickRunProducesTheTablesFiguresAndManifestAndCachesArtefacts) 
   EXPECT_EQ(builtCount(second.output), 0u) << second.output;
   EXPECT_EQ(adeValues(out / "ade.csv"), ade);
 
-  // Artefacts left half-written by an interrupted run (no key) are rebuilt: row 3's model and
-  // its evaluation. Downstream keys name what an artefact was built from (data, mix, seed),
-  // not its bytes, so nothing else is redone. Same seed and threads: the same ADEs again.
-  const auto row3_model = out / "cache" / "models" / "row3";
+  // Artefacts left half-written by an interrupted run (no key) are rebuilt: row 3's model of
+  // seed 2 and its evaluation. Downstream keys name what an artefact was built from (data,
+  // mix, decoder, seed), not its bytes, so nothing else is redone. Same seed and threads: the
+  // same ADEs again.
+  const auto row3_model = out / "cache" / "models" / "no_residual" / "row3_seed2";
   fs::remove(ArtefactCache::keyFile(row3_model));
   test::writeFile(row3_model / "model.pt", "truncated");
-  fs::remove(ArtefactCache::keyFile(out / "cache" / "eval" / "row3"));
+  fs::remove(ArtefactCache::keyFile(out / "cache" / "eval" / "no_residual" / "row3_seed2"));
   const auto third = runExperimentCli({spec.string(), "--quick", "--out", out.string()}, dir.path());
   ASSERT_EQ(third.exitCode, 0) << third.output;
   EXPECT_EQ(builtCount(third.output), 2u) << third.output;
-  EXPECT_NE(third.output.find("row 3 model"), std::string::npos) << third.output;
+  EXPECT_NE(third.output.find("no_residual row 3 seed 2 model"), std::string::npos) << third.output;
   EXPECT_EQ(adeValues(out / "ade.csv"), ade);
 
   // Existing run folders can stand in for simulated data, but must hold the right scenario.
@@ -163,6 +180,16 @@ TEST(Experiment, BadSpecsGiveOneLineNamingFileFieldAndValue) {
                    (scenarios / "lk.yaml").string()),
        "describes functional scenario 'lk', expected 'acc'"},
       {"no_quick", head + "ade:\n  - {row: 1, mix: {acc: 20}}\n", "quick: missing"},
+      {"unknown_predictor", head + "ade:\n  - {row: 1, mix: {acc: 20}}\npredictors: [cv, kalman]\n",
+       "predictors[1]: unknown predictor 'kalman' (known: cv, ca)"},
+      {"unknown_decoder_option",
+       head + "ade:\n  - {row: 1, mix: {acc: 20}}\nmodels:\n  - {name: m, decoder: offsets, options: {residul: 0}}\n",
+       "models[0]"},
+      {"main_model_rows",
+       head + "ade:\n  - {row: 1, mix: {acc: 20}}\nmodels:\n  - {name: m, rows: [1]}\n",
+       "models[0].rows: the first model is the main one and trains every row"},
+      {"unknown_seed_row", head + "ade:\n  - {row: 1, mix: {acc: 20}}\nseeds: {count: 3, rows: [1, 4]}\n",
+       "seeds.rows[1]: no ade row 4"},
   };
   for (const auto& c : cases) {
     const auto file = test::writeFile(dir.path() / (c.name + ".yaml"), c.yaml);
@@ -208,9 +235,11 @@ TEST(Experiment, FindingsFollowTheirThresholds) {
       row(4, {{"acc", 2000}, {"lk", 2000}}, {{"acc", 0.39}, {"lk", 0.41}, {"acc_lk", 4.69}}),
       row(9, {{"acc", 2000}, {"lk", 2000}, {"acc_lk", 200}}, {{"acc", 0.41}, {"lk", 0.42}, {"acc_lk", 0.83}}),
       row(10, {{"acc_lk", 200}}, {{"acc", 0.88}, {"lk", 9.95}, {"acc_lk", 1.13}}),
+      row(5, {{"lk", 2000}, {"acc_lk", 2000}}, {{"acc", 1.58}, {"lk", 0.97}, {"acc_lk", 1.73}}),
+      row(6, {{"lk", 3000}, {"acc_lk", 3000}}, {{"acc", 0.45}, {"lk", 0.46}, {"acc_lk", 0.54}}),
   };
   auto findings = checkFindings(paper);
-  ASSERT_EQ(findings.size(), 4u);
+  ASSERT_EQ(findings.size(), 5u);
   for (const auto& finding : findings) EXPECT_EQ(finding.verdict, "holds") << finding.id << ": " << finding.evidence;
 
   // An in-distribution ADE above 0.6 m: (a) does not hold.
@@ -228,4 +257,22 @@ TEST(Experiment, FindingsFollowTheirThresholds) {
   EXPECT_EQ(checkFindings(paper)[3].verdict, "does not hold");
   paper[5].mix = {{"acc", 200}};
   EXPECT_EQ(checkFindings(paper)[3].verdict, "not checked");
+  // With several seeds the evidence shows mean ± spread and the margin in spreads.
+  paper[4].ade["acc_lk"] = 0.57;
+  paper[4].adeStd["acc_lk"] = 0.05;
+  paper[5].mix = {{"acc_lk", 200}};
+  paper[5].adeStd["acc_lk"] = 0.1;
+  findings = checkFindings(paper);
+  EXPECT_EQ(findings[3].verdict, "holds");
+  EXPECT_NE(findings[3].evidence.find("0.57 ± 0.05"), std::string::npos) << findings[3].evidence;
+  EXPECT_NE(findings[3].evidence.find("margin 0.56 m = 5.6x the larger seed spread"), std::string::npos)
+      << findings[3].evidence;
+  // (e): 2000 samples each already good on lk and acc_lk: the claim does not hold.
+  paper[6].ade["lk"] = 0.5;
+  paper[6].ade["acc_lk"] = 0.55;
+  EXPECT_EQ(checkFindings(paper)[4].verdict, "does not hold");
+  // Neither 2000 nor 3000 each good: inconclusive.
+  paper[6].ade["lk"] = 0.9;
+  paper[7].ade["lk"] = 0.8;
+  EXPECT_EQ(checkFindings(paper)[4].verdict, "inconclusive");
 }

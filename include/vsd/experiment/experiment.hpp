@@ -7,6 +7,7 @@
 // written atomically, so a re-run only does what changed and an interrupted run
 // never leaves a corrupt artefact.
 
+#include <cstdint>
 #include <filesystem>
 #include <map>
 #include <string>
@@ -22,15 +23,20 @@ struct ExperimentOptions {
   std::string commandLine;
 };
 
+/// One row of the ADE table: a training mix trained one way (over one or more seeds), or a
+/// predictor without training (row 0, empty mix).
 struct AdeRow {
-  int row = 0;
+  int row = 0;                           ///< the paper's row number; 0 for a predictor without training
+  std::string model;                     ///< the spec's model name, or the predictor ("cv", "ca")
   std::map<std::string, std::size_t> mix;
-  std::map<std::string, double> ade;    ///< ours, per test label (m)
-  std::map<std::string, double> paper;  ///< the paper's, per test label (m)
-  std::map<std::string, double> fde;    ///< ours, per test label (m)
-  double trainSeconds = 0.0;
-  int epochs = 0;
-  std::string stopReason;
+  std::map<std::string, double> ade;     ///< ours, per test label (m): the mean over the seeds
+  std::map<std::string, double> adeStd;  ///< sample standard deviation over the seeds (m); empty with one seed
+  std::map<std::string, double> paper;   ///< the paper's, per test label (m)
+  std::map<std::string, double> fde;     ///< ours, per test label (m): the mean over the seeds
+  std::vector<std::uint64_t> seeds;      ///< training seeds (empty for predictors without training)
+  double trainSeconds = 0.0;             ///< mean over the seeds
+  int epochs = 0;                        ///< of the first seed
+  std::string stopReason;                ///< of the first seed
 };
 
 struct MaeRow {
@@ -63,7 +69,7 @@ struct Finding {
 
 struct ExperimentSummary {
   std::filesystem::path output;
-  std::vector<AdeRow> ade;
+  std::vector<AdeRow> ade;  ///< the main model's rows first, then other models', then predictors
   std::vector<MaeRow> mae;
   std::vector<Finding> findings;
   std::vector<std::filesystem::path> files;
