@@ -54,7 +54,9 @@ struct ExportedFiles {
   std::filesystem::path xosc;
   std::filesystem::path xodr;
 };
-/// Writes <dir>/<stem>.xodr and <dir>/<stem>.xosc (each atomically).
+/// Writes <dir>/<stem>.xodr and <dir>/<stem>.xosc as plain files: `dir` is meant to be an
+/// OutputFolder's staging folder (or a scratch folder), which makes the set durable and
+/// complete at once. Throws IoError if a write fails.
 ExportedFiles exportConcreteScenario(const scenario::ConcreteScenario& concrete, const std::filesystem::path& dir,
                                      const std::string& stem, const ExportHeader& header);
 
