@@ -7,6 +7,7 @@
 #include <limits>
 #include <set>
 
+#include "calibration.hpp"
 #include "checkpoint.hpp"
 #include "network.hpp"
 #include "tensors.hpp"
@@ -249,6 +250,7 @@ class Trainer {
       saveLast();  // complete epochs so far; --resume continues after them
       throw;
     }
+    if (config_.decoderOptions.count("calibrate") != 0 && config_.decoderOption("calibrate") != 0.0) calibrate();
     summary_.seconds = secondsSince(start_);
     summary_.samplesPerSecond = trainingSeconds_ > 0.0 ? trainedSamples_ / trainingSeconds_ : 0.0;
     return summary_;
@@ -339,6 +341,19 @@ class Trainer {
       ++sinceBest_;
     }
     record.seconds += secondsSince(epoch_start);
+  }
+
+  /// The decoder option `calibrate`: fits the best model's variance_scale on the
+  /// validation split and rewrites the model file with it.
+  void calibrate() {
+    ModelInfo info;
+    Model best = loadModel(options_.output, info);
+    const auto fitted = calibrateVariance(best, validation_);
+    info.config = best.config;
+    saveModel(options_.output, best, info);
+    spdlog::info("calibrated {}: variance scale {:.3f} fitted on the validation split, its positions inside their "
+                 "90 % regions {:.1f} % -> {:.1f} %",
+                 options_.output.string(), fitted.scale, 100.0 * fitted.coverageBefore, 100.0 * fitted.coverageAfter);
   }
 
   void saveLast() {
