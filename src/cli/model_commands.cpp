@@ -5,6 +5,7 @@
 #include <memory>
 
 #include "commands.hpp"
+#include "vsd/core/error.hpp"
 #include "vsd/core/progress.hpp"
 #include "vsd/model/model.hpp"
 
@@ -89,13 +90,17 @@ void addPredictCommand(CLI::App& app, CommandContext& context) {
   command->add_option("-m,--model", *model_file, "Model file, or cv / ca (no training)")->required();
   command->add_option("-d,--data", *data, "Dataset file or run folder")->required();
   command->add_option("-o,--out", *out, "Predictions file (.h5)")->required();
-  command->add_option("--samples", file_options->predict.samples,
-                      "Futures to draw per scene from a probabilistic model (0: the most likely only)")
-      ->capture_default_str();
+  CLI::Option* samples = command->add_option("--samples", file_options->predict.samples,
+                                              "Futures to draw per scene from a probabilistic model, >= 1 (without it: "
+                                              "the most likely future only)");
   command->add_option("--sample-seed", file_options->predict.seed, "Seed of the drawn futures")->capture_default_str();
   command->add_option("--threads", *threads, "libtorch threads")->capture_default_str();
   command->callback([=, &context] {
     context.action = [=] {
+      if (samples->count() > 0 && file_options->predict.samples < 1) {  // 0 would silently draw nothing
+        throw ConfigError::field("command line", "--samples", std::to_string(file_options->predict.samples),
+                                 ">= 1 futures per scene (leave it out for the most likely future only)");
+      }
       file_options->predict.validate();
       const model::Predictor predictor(*model_file, *threads);
       const auto count = model::writePredictions(predictor, *model_file, *data, *out, *file_options);
