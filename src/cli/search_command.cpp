@@ -50,6 +50,7 @@ void addSearchCommand(CLI::App& app, CommandContext& context) {
   command->add_option("-s,--seed", options->seed, "Random seed; same seed, same choices")->capture_default_str();
   command->add_option("-j,--jobs", options->jobs, "Worker processes for the simulations")->capture_default_str();
   command->add_option("--threads", options->threads, "libtorch threads (bnn)")->capture_default_str();
+  addEgoStepCostOption(*command, options->egoStepCost);
   command->callback([options, &context] {
     context.action = [options, &context] {
       options->commandLine = context.commandLine;
