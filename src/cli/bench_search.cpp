@@ -96,6 +96,10 @@ void addSearchBench(CLI::App& bench, CommandContext& context) {
   command->add_option("--initial", options->search.initial, "Initial design")->capture_default_str();
   command->add_option("--round", options->search.roundSize, "Executions per round")->capture_default_str();
   command->add_option("--pool", options->search.pool, "Candidates per round")->capture_default_str();
+  command->add_option("--probability", options->search.probability, "extra-trees: shifts or tail")
+      ->capture_default_str();
+  command->add_option("--diversity", options->search.diversity, "Weight of the distance term in the acquisition")
+      ->capture_default_str();
   command->add_option("--seeds", options->seeds, "Searches per surrogate (seeds 1..N)")->capture_default_str();
   command->add_option("--report", options->report,
                       "Write an HTML report (learning curves of every search, rate estimates) to this file");

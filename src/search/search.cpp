@@ -54,6 +54,9 @@ void SearchOptions::validate() const {
     throw ConfigError::field(where, "--diversity", fmt::format("{}", diversity), "a finite number >= 0");
   }
   if (trees < 1 || trees > 10'000) throw ConfigError::field(where, "--trees", std::to_string(trees), "1 .. 10000");
+  if (probability != "shifts" && probability != "tail") {
+    throw ConfigError::field(where, "--probability", probability, "shifts or tail");
+  }
   if (bnnEpochs < 1) throw ConfigError::field(where, "--bnn-epochs", std::to_string(bnnEpochs), ">= 1");
   if (jobs < 1 || jobs > 256) throw ConfigError::field(where, "--jobs", std::to_string(jobs), "1 .. 256");
   if (threads < 1 || threads > 256) throw ConfigError::field(where, "--threads", std::to_string(threads), "1 .. 256");

@@ -74,6 +74,18 @@ TEST(SearchSurrogates, UnknownNameListsTheKnownOnes) {
   EXPECT_THAT(message, HasSubstr("random, extra-trees, bnn"));
 }
 
+TEST(SearchSurrogates, TailProbabilityIsTheGaussianTailBeyondTheCriterion) {
+  const auto logical = scenario::loadLogicalScenario(test::scenarioFile("acc_lk.yaml"));
+  const Criterion criterion("ttc_min < 1", *logical, kMetrics);
+  // Two spreads above the threshold: Phi(-2); half a spread below it: Phi(0.5) (scipy.stats.norm.cdf).
+  EXPECT_NEAR(tailProbability({3.0}, {1.0}, criterion), 0.0227501319, 1e-6);
+  EXPECT_NEAR(tailProbability({0.5}, {1.0}, criterion), 0.6914624613, 1e-6);
+  EXPECT_GT(tailProbability({9.0}, {2.0}, criterion), 0.0);  // far, yet ranked
+  EXPECT_LT(tailProbability({9.0}, {2.0}, criterion), tailProbability({5.0}, {2.0}, criterion));
+  EXPECT_EQ(tailProbability({3.0}, {0.0}, criterion), 0.0);
+  EXPECT_EQ(tailProbability({0.5}, {0.0}, criterion), 1.0);
+}
+
 SearchOptions smallSearch(const fs::path& out, const std::string& surrogate, std::uint64_t budget) {
   SearchOptions options;
   options.scenarioFile = test::scenarioFile("acc_lk.yaml");
