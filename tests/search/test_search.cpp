@@ -209,7 +209,8 @@ TEST(SearchCli, BadInputIsOneLineWithExitCodeOneAndNoFolder) {
   const std::string scenario = test::scenarioFile("acc_lk.yaml").string();
   for (const std::vector<std::string>& flags :
        {std::vector<std::string>{"--criterion", "dmin < 2"}, {"--criterion", "d_min < 2", "--budget", "50"},
-        {"--criterion", "d_min < 2", "--surrogate", "vectornet"}, {"--criterion", "d_min < 2", "--pool", "0"}}) {
+        {"--criterion", "d_min < 2", "--surrogate", "vectornet"}, {"--criterion", "d_min < 2", "--pool", "0"},
+        {"--criterion", "d_min < 2", "--probability", "gauss"}, {"--criterion", "d_min < 2", "--ego-step-cost-ms", "-1"}}) {
     std::vector<std::string> argv = {test::vsdSumo().string(), "-q", "search", scenario, "--out", out.string()};
     argv.insert(argv.end(), flags.begin(), flags.end());
     const auto result = test::run(argv, work.path());
