@@ -42,6 +42,9 @@ void addCompareCommand(CLI::App& app, CommandContext& context);
 void addBenchCommand(CLI::App& app, CommandContext& context);
 void addMergeCommand(CLI::App& app, CommandContext& context);
 void addScenarioCommand(CLI::App& app, CommandContext& context);
+/// --ego-step-cost-ms: extra wall time per Ego step (stored in seconds in `seconds`).
+void addEgoStepCostOption(CLI::App& command, double& seconds);
+
 void addSearchCommand(CLI::App& app, CommandContext& context);
 /// `bench interop` (bench_interop.cpp), a subcommand of `bench`.
 void addInteropBench(CLI::App& bench, CommandContext& context);

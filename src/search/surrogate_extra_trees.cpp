@@ -3,6 +3,9 @@
 // fraction of predictions m_t(x) + z * s(x) that meet the criterion, s(x) being the
 // trees' standard deviation at x. The shifts keep the probability above 0 next to the
 // observed critical region (fully grown trees only predict values they have seen).
+// With SurrogateOptions::probability "tail": the Gaussian tail of the trees' mean and
+// spread (tailProbability), which is above 0 everywhere and so still ranks the
+// candidates when no tree comes near a rare criterion.
 
 #include <cmath>
 
@@ -41,6 +44,7 @@ class ExtraTreesSurrogate final : public Surrogate {
     std::vector<double> result(static_cast<std::size_t>(x.rows()));
     std::vector<double> values(targets);
     std::vector<double> spread(targets);
+    std::vector<double> centre(targets);
     for (Eigen::Index r = 0; r < x.rows(); ++r) {
       for (std::size_t m = 0; m < targets; ++m) {
         double sum = 0.0;
@@ -51,7 +55,12 @@ class ExtraTreesSurrogate final : public Surrogate {
           squares += value * value;
         }
         const double mean = sum / static_cast<double>(trees);
+        centre[m] = mean;
         spread[m] = std::sqrt(std::max(0.0, squares / static_cast<double>(trees) - mean * mean));
+      }
+      if (options_.probability == "tail") {
+        result[static_cast<std::size_t>(r)] = tailProbability(centre, spread, criterion);
+        continue;
       }
       double probability = 0.0;
       for (std::size_t t = 0; t < trees; ++t) {
