@@ -98,6 +98,7 @@ void addSearchBench(CLI::App& bench, CommandContext& context) {
   command->add_option("--pool", options->search.pool, "Candidates per round")->capture_default_str();
   command->add_option("--probability", options->search.probability, "extra-trees: shifts or tail")
       ->capture_default_str();
+  command->add_flag("--rank-targets", options->search.rankTargets, "extra-trees: fit metric ranks");
   command->add_option("--diversity", options->search.diversity, "Weight of the distance term in the acquisition")
       ->capture_default_str();
   command->add_option("--seeds", options->seeds, "Searches per surrogate (seeds 1..N)")->capture_default_str();

@@ -37,6 +37,7 @@ nlohmann::json identity(const SearchContext& context) {
           {"trees", o.trees},
           {"bnn_epochs", o.bnnEpochs}};
   if (o.probability != "shifts") json["probability"] = o.probability;  // checkpoints from before it stay valid
+  if (o.rankTargets) json["rank_targets"] = true;
   return json;
 }
 

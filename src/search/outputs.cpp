@@ -162,11 +162,11 @@ nlohmann::json searchManifest(const detail::SearchContext& context, const Search
   return manifest;
 }
 
-/// The rounds' trace and scene files, in round order; DatasetError if one is missing.
-std::vector<fs::path> roundFiles(const detail::SearchContext& context, const SearchSummary& summary,
-                                 const std::string& file) {
+}  // namespace
+
+std::vector<fs::path> detail::roundFiles(const SearchContext& context, std::uint64_t rounds, const std::string& file) {
   std::vector<fs::path> files;
-  for (std::uint64_t round = 0; round < summary.rounds; ++round) {
+  for (std::uint64_t round = 0; round < rounds; ++round) {
     files.push_back(detail::roundFile(context, round, file));
     if (!fs::exists(files.back())) {
       throw DatasetError(fmt::format("{}: missing: the checkpoint lists round {} but its executions' {} are gone "
@@ -177,10 +177,12 @@ std::vector<fs::path> roundFiles(const detail::SearchContext& context, const Sea
   return files;
 }
 
+namespace {
+
 void stageRoundData(const detail::SearchContext& context, OutputFolder& folder, const SearchSummary& summary) {
-  pipeline::concatenateTraces(roundFiles(context, summary, "traces.h5"), folder.stage("traces.h5"));
+  pipeline::concatenateTraces(detail::roundFiles(context, summary.rounds, "traces.h5"), folder.stage("traces.h5"));
   folder.staged("traces.h5");
-  pipeline::concatenateDatasets(roundFiles(context, summary, "dataset.h5"), folder.stage("dataset.h5"),
+  pipeline::concatenateDatasets(detail::roundFiles(context, summary.rounds, "dataset.h5"), folder.stage("dataset.h5"),
                                 pipeline::RunOptions{}.compression);
   folder.staged("dataset.h5");
 }

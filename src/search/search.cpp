@@ -380,6 +380,7 @@ SearchSummary runSearch(const SearchOptions& options) {
   const SearchContext context = makeContext(options);
   OutputFolder folder(options.outputDir);  // locked; its files change as one set at the end
   SearchState state = detail::readCheckpoint(context).value_or(SearchState{});
+  for (const char* file : {"traces.h5", "dataset.h5"}) detail::roundFiles(context, state.rounds, file);  // before any work
 
   SearchSummary summary;
   summary.functionalScenario = context.logical->name;

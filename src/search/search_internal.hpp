@@ -84,6 +84,11 @@ std::size_t coverageCells(const SearchContext& context, const std::vector<Execut
 /// (not part of the output set) until the search's files are assembled from them.
 std::filesystem::path roundFile(const SearchContext& context, std::uint64_t round, const std::string& file);
 
+/// The first `rounds` rounds' files `file`, in round order; DatasetError naming the first
+/// one missing (a folder from before .rounds/ existed, or files removed by hand).
+std::vector<std::filesystem::path> roundFiles(const SearchContext& context, std::uint64_t rounds,
+                                              const std::string& file);
+
 /// Stages concrete.csv, failures.csv, learning_curve.csv, coverage.csv, estimate.json,
 /// traces.h5, dataset.h5 (joined from the rounds' files) and report.html, and commits
 /// them with the manifest (core/files.hpp: OutputFolder). Returns the committed paths.

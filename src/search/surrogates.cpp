@@ -49,7 +49,7 @@ namespace {
 /// as the criterion's verdict: the first of the grid 0, 0.1, ..., 6 that does, refined by
 /// bisection from the grid point before it; infinity if none.
 double smallestMove(const std::vector<double>& centre, const std::vector<double>& spread, const Criterion& criterion,
-                    bool wanted) {
+                    const std::function<void(std::vector<double>&)>& to_metrics, bool wanted) {
   const std::size_t metrics = centre.size();
   // Every sign pattern for up to 3 metrics; beyond that all up or all down.
   const std::size_t patterns = metrics <= 3 ? (std::size_t{1} << metrics) : 2;
@@ -59,6 +59,7 @@ double smallestMove(const std::vector<double>& centre, const std::vector<double>
       const bool up = metrics <= 3 ? ((pattern >> m) & 1U) != 0 : pattern == 1;
       values[m] = centre[m] + (up ? z : -z) * spread[m];
     }
+    if (to_metrics) to_metrics(values);
     return criterion.meetsUsed(values) == wanted;
   };
   for (int step = 0; step <= 60; ++step) {
@@ -82,11 +83,13 @@ double standardNormalCdf(double z) { return 0.5 * std::erfc(-z / std::sqrt(2.0))
 }  // namespace
 
 double tailProbability(const std::vector<double>& centre, const std::vector<double>& spread,
-                       const Criterion& criterion) {
-  const bool meets = criterion.meetsUsed(centre);
+                       const Criterion& criterion, const std::function<void(std::vector<double>&)>& toMetrics) {
+  std::vector<double> values = centre;
+  if (toMetrics) toMetrics(values);
+  const bool meets = criterion.meetsUsed(values);
   if (std::all_of(spread.begin(), spread.end(), [](double s) { return !(s > 0.0); })) return meets ? 1.0 : 0.0;
-  if (meets) return standardNormalCdf(smallestMove(centre, spread, criterion, false));
-  return standardNormalCdf(-smallestMove(centre, spread, criterion, true));
+  if (meets) return standardNormalCdf(smallestMove(centre, spread, criterion, toMetrics, false));
+  return standardNormalCdf(-smallestMove(centre, spread, criterion, toMetrics, true));
 }
 
 }  // namespace vsd::search

@@ -86,6 +86,32 @@ TEST(SearchSurrogates, TailProbabilityIsTheGaussianTailBeyondTheCriterion) {
   EXPECT_EQ(tailProbability({0.5}, {0.0}, criterion), 1.0);
 }
 
+TEST(SearchSurrogates, RankTargetsMapBackToMetricValuesAndReachBelowTheObservedRange) {
+  const auto logical = scenario::loadLogicalScenario(test::scenarioFile("acc_lk.yaml"));
+  SurrogateOptions options;
+  options.trees = 20;
+  options.probability = "tail";
+  options.rankTargets = true;
+  const auto surrogate = makeExtraTreesSurrogate(options);
+  Matrix x(50, 1);
+  Matrix y(50, 1);
+  for (Eigen::Index i = 0; i < 50; ++i) {
+    x(i, 0) = static_cast<double>(i) / 49.0;
+    y(i, 0) = 0.5 + 2.0 * x(i, 0);  // d_min from 0.5 to 2.5 m
+  }
+  surrogate->fit(x, y);
+  Matrix candidates(3, 1);
+  candidates << 0.1, 0.9, 0.01;
+  // Inside the observed range: judged on metric values, not on ranks (d_min < 1.5 <=> x < 0.5).
+  const auto inside = surrogate->probability(candidates, Criterion("d_min < 1.5", *logical, kMetrics));
+  EXPECT_GT(inside[0], 0.5);
+  EXPECT_LT(inside[1], 0.5);
+  // Just below every observed value: still a probability, largest where d_min is smallest.
+  const auto below = surrogate->probability(candidates, Criterion("d_min < 0.49", *logical, kMetrics));
+  EXPECT_GT(below[2], 0.0);
+  EXPECT_GT(below[2], below[1]);
+}
+
 SearchOptions smallSearch(const fs::path& out, const std::string& surrogate, std::uint64_t budget) {
   SearchOptions options;
   options.scenarioFile = test::scenarioFile("acc_lk.yaml");
@@ -209,7 +235,8 @@ TEST(SearchCli, BadInputIsOneLineWithExitCodeOneAndNoFolder) {
   const std::string scenario = test::scenarioFile("acc_lk.yaml").string();
   for (const std::vector<std::string>& flags :
        {std::vector<std::string>{"--criterion", "dmin < 2"}, {"--criterion", "d_min < 2", "--budget", "50"},
-        {"--criterion", "d_min < 2", "--surrogate", "vectornet"}, {"--criterion", "d_min < 2", "--pool", "0"}}) {
+        {"--criterion", "d_min < 2", "--surrogate", "vectornet"}, {"--criterion", "d_min < 2", "--pool", "0"},
+        {"--criterion", "d_min < 2", "--probability", "gauss"}, {"--criterion", "d_min < 2", "--ego-step-cost-ms", "-1"}}) {
     std::vector<std::string> argv = {test::vsdSumo().string(), "-q", "search", scenario, "--out", out.string()};
     argv.insert(argv.end(), flags.begin(), flags.end());
     const auto result = test::run(argv, work.path());

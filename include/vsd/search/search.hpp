@@ -48,6 +48,7 @@ struct SearchOptions {
   double diversity = 1.0;             ///< weight of the distance term in the acquisition (>= 0)
   int trees = 50;                     ///< extra-trees surrogate: trees per metric
   std::string probability = "shifts"; ///< extra-trees: "shifts" or "tail" (SurrogateOptions::probability)
+  bool rankTargets = false;           ///< extra-trees: fit metric ranks (SurrogateOptions::rankTargets)
   int bnnEpochs = 200;                ///< bnn surrogate: epochs per fit
   std::uint64_t seed = 1;
   int jobs = 1;                       ///< worker processes for the simulations

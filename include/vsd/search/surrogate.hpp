@@ -28,6 +28,10 @@ struct SurrogateOptions {
   /// tree predictions shifted by -1, 0, +1 spreads that meet the criterion) or "tail"
   /// (tailProbability of the trees' mean and spread).
   std::string probability = "shifts";
+  /// extra-trees: fit each metric's empirical rank (0..1) instead of its value, and map
+  /// predictions back through the empirical quantiles, extrapolated linearly beyond the
+  /// observed range (so that a criterion below every observed value gets a probability).
+  bool rankTargets = false;
 };
 
 class Surrogate {
@@ -67,7 +71,10 @@ double shiftedProbability(const std::vector<double>& centre, const std::vector<d
 /// smallest number of spreads (up to 6; grid 0.1, then bisection) by which the centre must move, every
 /// metric up or down, to meet it; p = Phi(-z). A centre that meets it already gets
 /// Phi(z'), z' the smallest move that leaves it. Zero spread: 1 or 0.
+/// `toMetrics` (optional) maps values on the scale the model predicts on (e.g. ranks) to
+/// metric values in place before the criterion judges them.
 double tailProbability(const std::vector<double>& centre, const std::vector<double>& spread,
-                       const Criterion& criterion);
+                       const Criterion& criterion,
+                       const std::function<void(std::vector<double>&)>& toMetrics = {});
 
 }  // namespace vsd::search
