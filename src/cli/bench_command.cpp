@@ -397,6 +397,7 @@ void addBenchCommand(CLI::App& app, CommandContext& context) {
 
   addInteropBench(*bench, context);
   addSearchBench(*bench, context);
+  addTrainBench(*bench, context);
 }
 
 }  // namespace vsd::cli

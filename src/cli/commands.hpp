@@ -50,5 +50,7 @@ void addSearchCommand(CLI::App& app, CommandContext& context);
 void addInteropBench(CLI::App& bench, CommandContext& context);
 /// `bench search` (bench_search.cpp), a subcommand of `bench`.
 void addSearchBench(CLI::App& bench, CommandContext& context);
+/// `vsd-sumo bench train` (bench_train.cpp).
+void addTrainBench(CLI::App& bench, CommandContext& context);
 
 }  // namespace vsd::cli
