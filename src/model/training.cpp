@@ -255,7 +255,9 @@ class Trainer {
       saveLast();  // complete epochs so far; --resume continues after them
       throw;
     }
-    if (config_.decoderOptions.count("calibrate") != 0 && config_.decoderOption("calibrate") != 0.0) calibrate();
+    if (writes() && config_.decoderOptions.count("calibrate") != 0 && config_.decoderOption("calibrate") != 0.0) {
+      calibrate();  // rank 0 alone: it holds the validation split and writes the model file
+    }
     summary_.seconds = secondsSince(start_);
     summary_.samplesPerSecond = trainingSeconds_ > 0.0 ? trainedSamples_ / trainingSeconds_ : 0.0;
     summary_.allreduceShare = trainingSeconds_ > 0.0 ? summary_.allreduceSeconds / trainingSeconds_ : 0.0;
