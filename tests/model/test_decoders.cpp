@@ -20,6 +20,7 @@
 #include "vsd/core/interrupt.hpp"
 #include "vsd/core/random.hpp"
 #include "vsd/model/model.hpp"
+#include "vsd/pipeline/scenes.hpp"
 #include "vsd/sim/vehicle_model.hpp"
 
 using namespace vsd;
@@ -325,6 +326,7 @@ TEST(KinematicModel, PredictionsAreDrivableCarryTheirOwnKinematicsAndSampleRepro
   PredictOptions options;
   options.samples = 16;
   const auto predictions = predictor.predictDistribution(scenes, options);
+  const metrics::MetricSet a_min({"a_min"}, pipeline::sceneAvailability("generated"), "test");
   for (std::size_t i = 0; i < scenes.size(); ++i) {
     const auto& p = predictions[i];
     ASSERT_EQ(p.mostLikely.states.size(), 25u);
@@ -342,6 +344,10 @@ TEST(KinematicModel, PredictionsAreDrivableCarryTheirOwnKinematicsAndSampleRepro
       for (const auto& state : sample.states) EXPECT_GE(state.speed, 0.0);
     }
     EXPECT_GT(p.positionCovariance.back().determinant(), 0.0);
+    // a_min of the prediction is the minimum of its own accelerations (none reconstructed from positions).
+    double lowest = p.mostLikely.states.front().accel;
+    for (const auto& state : p.mostLikely.states) lowest = std::min(lowest, state.accel);
+    EXPECT_DOUBLE_EQ(pipeline::metricsOfFuture(a_min, scenes[i], p.mostLikely.states).front(), lowest);
   }
 
   // A scene's samples depend on the seed and the scene, not on the batch it is in.
