@@ -4,6 +4,7 @@
 #include <memory>
 
 #include "commands.hpp"
+#include "flags.hpp"
 #include "vsd/compare/compare.hpp"
 
 namespace vsd::cli {
@@ -20,18 +21,18 @@ void addCompareCommand(CLI::App& app, CommandContext& context) {
                                                   "vs recorded)");
   command->add_option("-o,--out", options->output, "Report folder (default: reports/<scenario or dataset name>)");
   command->add_flag("--force", options->force, "Replace an existing report folder");
-  command->add_option("-n,--samples", options->samples,
+  addNumber(command, "-n,--samples", options->samples,
                       "Scenarios to sample and simulate (default 500); datasets: the first N samples (default: all)");
-  command->add_option("-s,--seed", options->seed, "Sampling seed")->capture_default_str();
-  command->add_option("-j,--jobs", options->jobs, "SUMO worker processes")->capture_default_str();
-  command->add_option("--threads", options->threads, "libtorch threads")->capture_default_str();
-  command->add_option("--worst", options->worst, "Scenarios with the largest ADE drawn in the report")
+  addNumber(command, "-s,--seed", options->seed, "Sampling seed")->capture_default_str();
+  addNumber(command, "-j,--jobs", options->jobs, "SUMO worker processes")->capture_default_str();
+  addNumber(command, "--threads", options->threads, "libtorch threads")->capture_default_str();
+  addNumber(command, "--worst", options->worst, "Scenarios with the largest ADE drawn in the report")
       ->capture_default_str();
   command->add_option("--metrics", options->metrics, "Datasets: metrics to compare, e.g. a_min,d_min")->delimiter(',');
   command->add_option("--criterion", options->criteria, "Datasets: pass/fail criterion 'name: expression', e.g. "
                                                         "'close: d_min < 2' (repeatable)");
-  command->add_option("--ego-length", options->egoLength, "Datasets: Ego length (m)")->capture_default_str();
-  command->add_option("--other-length", options->otherLength, "Datasets: other vehicles' length (m)")
+  addNumber(command, "--ego-length", options->egoLength, "Datasets: Ego length (m)")->capture_default_str();
+  addNumber(command, "--other-length", options->otherLength, "Datasets: other vehicles' length (m)")
       ->capture_default_str();
   command->callback([=, &context] {
     context.action = [=, &context] {

@@ -3,6 +3,7 @@
 #include <memory>
 
 #include "commands.hpp"
+#include "flags.hpp"
 #include "vsd/core/error.hpp"
 #include "vsd/core/files.hpp"
 #include "vsd/vector/dataset.hpp"
@@ -13,6 +14,7 @@ namespace vsd::cli {
 namespace {
 
 int showSample(const std::filesystem::path& path, std::size_t sample, const std::filesystem::path& svg) {
+  if (!svg.empty()) requireFileOutputPath(svg, "--svg");
   const vector::DatasetReader reader(vector::resolveDatasetPath(path));
   if (sample >= reader.size()) {
     throw ConfigError::field("command line", "--sample", std::to_string(sample),
@@ -66,7 +68,7 @@ void addDatasetCommand(CLI::App& app, CommandContext& context) {
   auto svg = std::make_shared<std::filesystem::path>();
   CLI::App* show = dataset->add_subcommand("show", "Print one sample and optionally draw it as SVG");
   show->add_option("dataset", *show_path, "Dataset file or run folder")->required();
-  show->add_option("--sample", *sample, "Sample index")->capture_default_str();
+  addNumber(show, "--sample", *sample, "Sample index")->capture_default_str();
   show->add_option("--svg", *svg, "Write a drawing of the sample here");
   show->callback([=, &context] { context.action = [=] { return showSample(*show_path, *sample, *svg); }; });
 

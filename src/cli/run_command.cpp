@@ -3,6 +3,7 @@
 #include <memory>
 
 #include "commands.hpp"
+#include "flags.hpp"
 #include "vsd/pipeline/run.hpp"
 
 namespace vsd::cli {
@@ -15,15 +16,15 @@ void addRunCommand(CLI::App& app, CommandContext& context) {
   run->add_option("scenario", options->scenarioFile, "Logical scenario (YAML), e.g. scenarios/acc_lk.yaml")
       ->required()
       ->check(CLI::ExistingFile);
-  run->add_option("-n,--samples", options->samples, "Number of concrete scenarios")->capture_default_str();
-  run->add_option("-s,--seed", options->seed, "Random seed; same seed, same outputs")->capture_default_str();
+  addNumber(run, "-n,--samples", options->samples, "Number of concrete scenarios")->capture_default_str();
+  addNumber(run, "-s,--seed", options->seed, "Random seed; same seed, same outputs")->capture_default_str();
   run->add_option("-o,--out", options->outputDir, "Output folder (default: out/<functional scenario>)");
-  run->add_option("-j,--jobs", options->jobs, "Worker processes (one libsumo simulation each)")->capture_default_str();
-  run->add_option("-b,--batch", options->batch, "Concrete scenarios per SUMO network and simulation")
+  addNumber(run, "-j,--jobs", options->jobs, "Worker processes (one libsumo simulation each)")->capture_default_str();
+  addNumber(run, "-b,--batch", options->batch, "Concrete scenarios per SUMO network and simulation")
       ->capture_default_str();
-  run->add_option("--first-sample", options->firstSample, "Index of the first concrete scenario")
+  addNumber(run, "--first-sample", options->firstSample, "Index of the first concrete scenario")
       ->capture_default_str();
-  run->add_option("--compression", options->compression, "Deflate level of dataset.h5's vectors: 0 (none) .. 9")
+  addNumber(run, "--compression", options->compression, "Deflate level of dataset.h5's vectors: 0 (none) .. 9")
       ->capture_default_str();
   run->add_flag("--keep-nets", options->keepNets, "Keep the generated networks in <out>/nets (open with sumo-gui)");
   run->add_flag("--fcd", options->fcd,

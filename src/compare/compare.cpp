@@ -410,10 +410,11 @@ void CompareOptions::validate() const {
   if (jobs < 1 || jobs > 256) throw ConfigError::field("command line", "--jobs", std::to_string(jobs), "1 .. 256");
   if (threads < 1 || threads > 256) throw ConfigError::field("command line", "--threads", std::to_string(threads), "1 .. 256");
   if (worst < 0 || worst > 50) throw ConfigError::field("command line", "--worst", std::to_string(worst), "0 .. 50");
-  if (!(egoLength > 0.0) || !(otherLength > 0.0)) {
+  if (!(egoLength > 0.0 && egoLength <= 100.0) || !(otherLength > 0.0 && otherLength <= 100.0)) {
     throw ConfigError::field("command line", "--ego-length/--other-length",
-                             fmt::format("{}/{}", egoLength, otherLength), "> 0 m");
+                             fmt::format("{}/{}", egoLength, otherLength), "lengths in (0, 100] m");
   }
+  if (batch < 1 || batch > 4096) throw ConfigError::field("command line", "--batch", std::to_string(batch), "1 .. 4096");
   if (!scenarioFile.empty() && (!metrics.empty() || !criteria.empty())) {
     throw ConfigError("compare: --metrics and --criterion are for datasets; a scenario file defines its own "
                       "'metrics' and 'criteria'");

@@ -34,7 +34,10 @@ struct Predictor::Impl {
 };
 
 Predictor::Predictor(const fs::path& model, int threads) : impl_(std::make_unique<Impl>()) {
-  configureThreads(std::max(1, threads));
+  if (threads < 1 || threads > 256) {
+    throw ConfigError::field("command line", "--threads", std::to_string(threads), "1 .. 256");
+  }
+  configureThreads(threads);
   impl_->path = model;
   impl_->network = loadModel(model, impl_->info);
 }
@@ -91,6 +94,8 @@ template <typename Visit>
 void predictDataset(const Predictor& predictor, const vector::DatasetReader& reader, double& prediction_seconds,
                     Visit&& visit) {
   predictor.checkCompatible(reader.header(), reader.path().string());
+  // An ADE over nothing would print as 0.000 m: nothing to predict is an error.
+  if (reader.size() == 0) throw DatasetError(fmt::format("{}: the dataset holds no sample", reader.path().string()));
   for (std::size_t first = 0; first < reader.size(); first += kReadChunk) {
     throwIfInterrupted();
     std::vector<vector::VectorizedScene> scenes;
@@ -124,6 +129,10 @@ Evaluation evaluate(const Predictor& predictor, const std::vector<fs::path>& dat
                      accumulate(evaluation.overall, errors);
                    });
   }
+  if (evaluation.overall.samples == 0) {
+    throw DatasetError(fmt::format("no sample of {} has a valid target step: nothing to evaluate",
+                                   data.size() == 1 ? data.front().string() : "the datasets"));
+  }
   return evaluation;
 }
 
@@ -156,6 +165,7 @@ void Evaluation::writeCsv(const fs::path& path) const {
 
 std::size_t writePredictions(const Predictor& predictor, const fs::path& model_file, const fs::path& dataset,
                              const fs::path& output_path) {
+  requireFileOutputPath(output_path, "--out");
   const fs::path dataset_file = vector::resolveDatasetPath(dataset);
   const vector::DatasetReader reader(dataset_file);
   const auto horizon = static_cast<hsize_t>(reader.header().horizon);
@@ -204,7 +214,7 @@ std::size_t writePredictions(const Predictor& predictor, const fs::path& model_f
     h5::flushAll(row, sample_index, label, predictions, targets, target_valid, ade, fde);
     file.close();
   } catch (const H5::Exception& error) {
-    throw IoError(fmt::format("{}: cannot write predictions: {}", output_path.string(), error.getDetailMsg()));
+    throw IoError(fmt::format("{}: cannot write predictions: {}", output_path.string(), h5::errorCause(error)));
   }
   output.commit();
   return count;

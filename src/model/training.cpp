@@ -30,9 +30,11 @@ void VectorNetConfig::validate() const {
   require(globalWidth >= 1 && globalWidth <= 4096, "global_width", globalWidth, "1 .. 4096");
   require(heads >= 1 && globalWidth % heads == 0, "heads", heads, "a divisor of global_width");
   require(decoderHidden >= 1 && decoderHidden <= 8192, "decoder_hidden", decoderHidden, "1 .. 8192");
-  require(horizon >= 1, "horizon", horizon, ">= 1 step");
-  require(step > 0.0, "step", step, "> 0 s");
-  require(coordinateScale > 0.0, "coordinate_scale", coordinateScale, "> 0 m");
+  require(horizon >= 1 && horizon <= kMaxWindowSteps, "horizon", horizon,
+          fmt::format("1 .. {} steps", kMaxWindowSteps).c_str());
+  require(step >= kMinStep && step <= kMaxStep, "step", step,
+          fmt::format("{} .. {} s", kMinStep, kMaxStep).c_str());
+  require(coordinateScale >= 1e-3 && coordinateScale <= 1e6, "coordinate_scale", coordinateScale, "1e-3 .. 1e6 m");
 }
 
 Mix Mix::parse(const std::string& text) {
@@ -77,12 +79,17 @@ void TrainOptions::validate() const {
   const std::string where = "command line";
   if (data.empty()) throw ConfigError("--data: no dataset given (dataset files or run folders)");
   if (output.empty()) throw ConfigError("--out: no model file given");
+  requireFileOutputPath(output, "--out");
   if (threads < 1 || threads > 256) throw ConfigError::field(where, "--threads", std::to_string(threads), "1 .. 256");
-  if (steps < 1) throw ConfigError::field(where, "--steps", std::to_string(steps), ">= 1");
+  if (steps < 1 || steps > 100'000'000) throw ConfigError::field(where, "--steps", std::to_string(steps), "1 .. 100000000");
   if (patience < 1) throw ConfigError::field(where, "--patience", std::to_string(patience), ">= 1");
-  if (batchSize < 1) throw ConfigError::field(where, "--batch", std::to_string(batchSize), ">= 1");
-  if (!(learningRate > 0.0)) throw ConfigError::field(where, "--lr", formatValue(learningRate), "> 0");
-  if (weightDecay < 0.0) throw ConfigError::field(where, "--weight-decay", formatValue(weightDecay), ">= 0");
+  if (batchSize < 1 || batchSize > 65536) throw ConfigError::field(where, "--batch", std::to_string(batchSize), "1 .. 65536");
+  if (!(learningRate > 0.0 && learningRate <= 10.0)) {
+    throw ConfigError::field(where, "--lr", formatValue(learningRate), "a rate in (0, 10]");
+  }
+  if (!(weightDecay >= 0.0 && weightDecay <= 10.0)) {
+    throw ConfigError::field(where, "--weight-decay", formatValue(weightDecay), "0 .. 10");
+  }
   if (!(validationFraction > 0.0 && validationFraction < 1.0)) {
     throw ConfigError::field(where, "--validation-fraction", formatValue(validationFraction), "in (0, 1)");
   }
@@ -220,6 +227,56 @@ EpochRecord recordFromJson(const nlohmann::json& j) {
   return r;
 }
 
+/// What a resumed training must share with the interrupted one to repeat it
+/// exactly: the data (each file's SHA-256), the mix, the seed, the schedule and
+/// the architecture. (Threads are left out: they change results only in the last bits.)
+nlohmann::json resumeKey(const TrainOptions& options, const VectorNetConfig& config) {
+  ModelInfo architecture;
+  architecture.config = config;
+  nlohmann::json data = nlohmann::json::array();
+  for (const auto& path : options.data) {
+    const fs::path file = vector::resolveDatasetPath(path);
+    data.push_back({{"file", file.string()}, {"sha256", sha256OfFile(file)}});
+  }
+  return {{"data", data},
+          {"mix", options.mix.str()},
+          {"seed", options.seed},
+          {"steps", options.steps},
+          {"patience", options.patience},
+          {"batch", options.batchSize},
+          {"lr", options.learningRate},
+          {"weight_decay", options.weightDecay},
+          {"validation_fraction", options.validationFraction},
+          {"architecture", nlohmann::json::parse(infoToJson(architecture))["config"]}};
+}
+
+/// Throws ConfigError naming the first setting in which the checkpoint differs.
+void checkResumeKey(const nlohmann::json& state, const nlohmann::json& current, const fs::path& checkpoint) {
+  if (!state.contains("resume_key")) {
+    throw ConfigError(fmt::format("--resume: {} does not record what it was trained on (written by an older "
+                                  "vsd-sumo); start without --resume",
+                                  checkpoint.string()));
+  }
+  const auto& saved = state.at("resume_key");
+  std::vector<std::string> saved_sha;
+  std::vector<std::string> current_sha;
+  for (const auto& entry : saved.at("data")) saved_sha.push_back(entry.at("sha256"));
+  for (const auto& entry : current.at("data")) current_sha.push_back(entry.at("sha256"));
+  if (saved_sha != current_sha) {
+    std::vector<std::string> files;
+    for (const auto& entry : saved.at("data")) files.push_back(entry.at("file"));
+    throw ConfigError(fmt::format("--resume: {} was trained on other data ({}, SHA-256 differs from --data now): "
+                                  "start without --resume, or give the data it was trained on",
+                                  checkpoint.string(), fmt::join(files, ", ")));
+  }
+  for (const auto& [key, value] : current.items()) {
+    if (key == "data" || saved.value(key, nlohmann::json()) == value) continue;
+    throw ConfigError(fmt::format("--resume: {} was trained with {} {}, this training has {}: give the same settings "
+                                  "or start without --resume",
+                                  checkpoint.string(), key, saved.value(key, nlohmann::json()).dump(), value.dump()));
+  }
+}
+
 }  // namespace
 
 TrainSummary train(const TrainOptions& options, const std::function<void(const EpochRecord&)>& on_epoch) {
@@ -258,16 +315,27 @@ TrainSummary train(const TrainOptions& options, const std::function<void(const E
   int first_epoch = 0;
   int since_best = 0;
   summary.bestValidationAde = std::numeric_limits<double>::infinity();
+  const nlohmann::json resume_key = resumeKey(options, config);
   if (options.resume) {
     if (!fs::exists(last_checkpoint)) {
       throw ConfigError(fmt::format("--resume: no checkpoint {} to resume from", last_checkpoint.string()));
     }
-    const auto state = nlohmann::json::parse(loadCheckpoint(last_checkpoint, network, optimizer));
-    first_epoch = state.at("next_epoch");
-    since_best = state.at("since_best");
-    summary.bestEpoch = state.at("best_epoch");
-    summary.bestValidationAde = state.at("best_validation_ade");
-    for (const auto& record : state.at("history")) summary.epochs.push_back(recordFromJson(record));
+    try {
+      checkResumeKey(nlohmann::json::parse(readCheckpointState(last_checkpoint)), resume_key, last_checkpoint);
+      const auto state = nlohmann::json::parse(loadCheckpoint(last_checkpoint, network, optimizer));
+      first_epoch = state.at("next_epoch");
+      since_best = state.at("since_best");
+      summary.bestEpoch = state.at("best_epoch");
+      summary.bestValidationAde = state.at("best_validation_ade");
+      for (const auto& record : state.at("history")) summary.epochs.push_back(recordFromJson(record));
+      if (summary.bestEpoch > 0 && !fs::exists(options.output)) {
+        throw ConfigError(fmt::format("--resume: {} holds the state after epoch {}, but the best model of that "
+                                      "training ({}) is gone; start without --resume",
+                                      last_checkpoint.string(), first_epoch, options.output.string()));
+      }
+    } catch (const nlohmann::json::exception& error) {
+      throw ModelError(fmt::format("{}: damaged training state: {}", last_checkpoint.string(), error.what()));
+    }
     spdlog::info("resuming {} at epoch {} (best validation ADE {:.3f} m at epoch {})", options.output.string(),
                  first_epoch + 1, summary.bestValidationAde, summary.bestEpoch);
   }
@@ -282,7 +350,8 @@ TrainSummary train(const TrainOptions& options, const std::function<void(const E
   int next_epoch = first_epoch;
   auto last_saved = std::chrono::steady_clock::now();
   const auto save_last = [&] {
-    nlohmann::json state = {{"next_epoch", next_epoch},
+    nlohmann::json state = {{"resume_key", resume_key},
+                            {"next_epoch", next_epoch},
                             {"since_best", since_best},
                             {"best_epoch", summary.bestEpoch},
                             {"best_validation_ade", summary.bestValidationAde},
@@ -362,6 +431,12 @@ TrainSummary train(const TrainOptions& options, const std::function<void(const E
   } catch (const InterruptedError&) {
     save_last();  // complete epochs so far; --resume continues after them
     throw;
+  }
+  if (summary.bestEpoch == 0) {
+    // Nothing was written: exit 0 would promise a model file that does not exist.
+    throw ModelError(fmt::format("no epoch reached a finite validation ADE (last: {}); no model written to {}",
+                                 summary.epochs.empty() ? std::string("none") : formatValue(summary.epochs.back().validationAde),
+                                 options.output.string()));
   }
   summary.seconds = secondsSince(start);
   summary.samplesPerSecond = training_seconds > 0.0 ? trained_samples / training_seconds : 0.0;

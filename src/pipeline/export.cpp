@@ -78,22 +78,44 @@ void ExportOptions::validate() const {
     throw ConfigError("--routes is only used with --net or --opendrive (a .sumocfg names its own route files)");
   }
   if (output.empty()) throw ConfigError("--out is required (the dataset file to write)");
-  if (!(step > 0.0)) throw ConfigError::field(where, "--step", formatValue(step), "a step > 0 s");
-  if (!(horizon > 0.0) || !isMultipleOf(horizon, step)) {
-    throw ConfigError::field(where, "--horizon", formatValue(horizon), "a multiple of --step > 0 s");
+  requireFileOutputPath(output, "--out");
+  // Bounds keep the work finite: a window is at most kMaxWindowSteps steps, the
+  // lane query looks at most kMaxRadius around the Ego, a lane of 1 km is split into
+  // at most 10^4 vectors.
+  if (!(step >= kMinStep && step <= kMaxStep) || !isMultipleOf(step, kMinStep)) {
+    throw ConfigError::field(where, "--step", formatValue(step),
+                             fmt::format("a multiple of {0} s in {0} .. {1} s", kMinStep, kMaxStep));
   }
-  if (history < 0.0 || !isMultipleOf(history, step)) {
-    throw ConfigError::field(where, "--history", formatValue(history), "a multiple of --step >= 0 s");
+  if (!(horizon > 0.0) || !isMultipleOf(horizon, step) || horizon / step > kMaxWindowSteps + 0.5) {
+    throw ConfigError::field(where, "--horizon", formatValue(horizon),
+                             fmt::format("a multiple of --step > 0 s, at most {} steps", kMaxWindowSteps));
   }
-  if (!(stride >= step) || !isMultipleOf(stride, step)) {
-    throw ConfigError::field(where, "--stride", formatValue(stride), "a multiple of --step >= --step");
+  if (!(history >= 0.0) || !isMultipleOf(history, step) || history / step > kMaxWindowSteps + 0.5) {
+    throw ConfigError::field(where, "--history", formatValue(history),
+                             fmt::format("a multiple of --step >= 0 s, at most {} steps", kMaxWindowSteps));
   }
-  if (laneChangeDuration < 0.0) {
-    throw ConfigError::field(where, "--lane-change-duration", formatValue(laneChangeDuration), "a duration >= 0 s");
+  if (!(stride >= step) || !isMultipleOf(stride, step) || stride > kMaxStride) {
+    throw ConfigError::field(where, "--stride", formatValue(stride),
+                             fmt::format("a multiple of --step in --step .. {} s", kMaxStride));
   }
-  if (!(radius > 0.0)) throw ConfigError::field(where, "--radius", formatValue(radius), "a radius > 0 m");
-  if (!(maxVectorLength > 0.0)) {
-    throw ConfigError::field(where, "--max-vector-length", formatValue(maxVectorLength), "a length > 0 m");
+  if (!(laneChangeDuration >= 0.0 && laneChangeDuration <= kMaxLaneChangeDuration)) {
+    throw ConfigError::field(where, "--lane-change-duration", formatValue(laneChangeDuration),
+                             fmt::format("a duration in 0 .. {} s", kMaxLaneChangeDuration));
+  }
+  if (!(radius > 0.0 && radius <= kMaxRadius)) {
+    throw ConfigError::field(where, "--radius", formatValue(radius), fmt::format("a radius in (0, {}] m", kMaxRadius));
+  }
+  if (!(maxVectorLength >= kMinVectorLength && maxVectorLength <= kMaxVectorLength)) {
+    throw ConfigError::field(where, "--max-vector-length", formatValue(maxVectorLength),
+                             fmt::format("a length in {} .. {} m", kMinVectorLength, kMaxVectorLength));
+  }
+  for (const auto& [flag, time] : {std::pair{"--begin", begin}, std::pair{"--end", end}}) {
+    if (time && !(*time >= 0.0 && *time <= kMaxSimulationTime)) {
+      throw ConfigError::field(where, flag, formatValue(*time), fmt::format("a time in 0 .. {} s", kMaxSimulationTime));
+    }
+  }
+  if (compression < 0 || compression > 9) {
+    throw ConfigError::field(where, "--compression", std::to_string(compression), "a deflate level 0 .. 9");
   }
   if (begin && end && *end <= *begin) {
     throw ConfigError::field(where, "--end", formatValue(*end), "an end time after --begin");
@@ -353,7 +375,7 @@ ExportSummary exportMap(const ExportOptions& options) {
   header.history = stepsOf(options.history, options.step);
   header.compression = options.compression;
   std::optional<vector::DatasetWriter> writer;
-  writer.emplace(output.tempPath(), header);
+  writer.emplace(output.tempPath(), header, options.output);
   writer->setSharedVectors(lanes.pool());
   const vector::Provenance provenance{map_file.string(), sha256OfFile(map_file), "", 0.0};
   Exporter exporter(options, lanes, *writer, provenance, label);

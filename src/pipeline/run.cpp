@@ -42,6 +42,15 @@ void RunOptions::validate() const {
     throw ConfigError::field("command line", "--batch", std::to_string(batch),
                              fmt::format("1 .. {}", road::BatchLayout::kMaxBatch));
   }
+  // Sample indices are stored as int64 (datasets) and printed exactly (CSV): the
+  // last one must stay far below 2^63 and must not wrap around.
+  if (firstSample > kMaxSampleIndex - samples) {
+    throw ConfigError::field("command line", "--first-sample", std::to_string(firstSample),
+                             fmt::format("0 .. {} (minus --samples)", kMaxSampleIndex));
+  }
+  if (compression < 0 || compression > 9) {
+    throw ConfigError::field("command line", "--compression", std::to_string(compression), "a deflate level 0 .. 9");
+  }
 }
 
 namespace {
@@ -88,7 +97,7 @@ class BatchProcessor {
       std::string failure;
       if (!context_.layout.fits(batch.roads.back())) {
         const auto [lo, hi] = batch.roads.back().bounds();
-        failure = fmt::format("road extends beyond its {:.0f} m layout cell (x {:.0f}..{:.0f} m, y {:.0f}..{:.0f} m)",
+        failure = fmt::format("road extends beyond its {:.0f} m layout cell (x {:.4g}..{:.4g} m, y {:.4g}..{:.4g} m)",
                               context_.layout.cellSize(), lo.x(), hi.x(), lo.y(), hi.y());
       } else {
         builder.add(index, batch.roads.back(), context_.layout.offsetFor(index));
@@ -316,7 +325,7 @@ class RunFiles {
       widths.push_back(other.width);
     }
     traces_.emplace(traceOutput_.tempPath(), logical_.name, logical_.step,
-                    static_cast<std::size_t>(logical_.steps()) + 1, ids, lengths, widths);
+                    static_cast<std::size_t>(logical_.steps()) + 1, ids, lengths, widths, traceOutput_.finalPath());
     vector::DatasetHeader dataset_header;
     dataset_header.kind = "generated";
     dataset_header.step = logical_.step;
@@ -324,7 +333,7 @@ class RunFiles {
     dataset_header.inputNames = logical_.inputNames();
     dataset_header.metricNames = metric_names;
     dataset_header.compression = context.options.compression;
-    dataset_.emplace(datasetOutput_.tempPath(), dataset_header);
+    dataset_.emplace(datasetOutput_.tempPath(), dataset_header, datasetOutput_.finalPath());
     emptyTrace_.step = logical_.step;
     for (std::size_t v = 0; v < ids.size(); ++v) {
       VehicleTrack track;
@@ -539,6 +548,13 @@ RunSummary runScenarios(const std::shared_ptr<const scenario::LogicalScenario>& 
   progress.finish();
   summary_builder.finish();
 
+  if (summary.ok == 0) {
+    // A fault of the whole run: nothing is committed, an earlier run in the folder stays.
+    const std::string reason =
+        summary.failureExamples.empty() ? "unknown" : summary.failureExamples.begin()->second;
+    throw SumoError(fmt::format("every concrete scenario failed ({} reasons; e.g. {})", summary.failureReasons.size(),
+                                reason));
+  }
   if (options.writeFiles) {
     summary.outputs = files->commit();
     files.reset();
@@ -552,12 +568,6 @@ RunSummary runScenarios(const std::shared_ptr<const scenario::LogicalScenario>& 
   if (options.writeFiles) {
     writeManifest(context, summary, out, summary.outputs, started);
     summary.outputs.push_back(out / "manifest.json");
-  }
-  if (summary.ok == 0) {
-    const std::string reason =
-        summary.failureExamples.empty() ? "unknown" : summary.failureExamples.begin()->second;
-    throw SumoError(fmt::format("every concrete scenario failed (e.g. {}); see {}", reason,
-                                options.writeFiles ? (out / "concrete.csv").string() : std::string("the outcomes")));
   }
   return summary;
 }

@@ -34,6 +34,11 @@ class AtomicOutput {
   bool active_ = true;
 };
 
+/// Checks, before any work starts, that `path` can become a file: refuses (ConfigError
+/// naming `flag` and the path) an empty path, an existing directory, and a parent
+/// that exists but is not a directory. A missing parent is fine (it gets created).
+void requireFileOutputPath(const std::filesystem::path& path, const std::string& flag);
+
 /// Writes a whole text file atomically.
 void writeTextFileAtomically(const std::filesystem::path& path, const std::string& contents);
 
