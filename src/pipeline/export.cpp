@@ -167,6 +167,12 @@ class Exporter {
     std::vector<std::string> fresh;
     const std::int64_t window = historySteps_ + horizonSteps_;
     for (const auto& vehicle : vehicles) {
+      if (vehicle.parked) {
+        // Absent while parked: masked in other vehicles' polylines, and an Ego's
+        // window that overlaps parking is incomplete (skipped).
+        ++parkedSteps_;
+        continue;
+      }
       auto [it, inserted] = histories_.try_emplace(vehicle.id);
       History& history = it->second;
       if (inserted) {
@@ -228,6 +234,7 @@ class Exporter {
   std::uint64_t skipped() const { return skipped_; }
   std::uint64_t egos() const { return egosWithSamples_; }
   std::uint64_t vehiclesSeen() const { return vehiclesSeen_; }
+  std::uint64_t parkedSteps() const { return parkedSteps_; }
 
  private:
   bool completeWindow(const History& history, std::int64_t step) const {
@@ -308,6 +315,7 @@ class Exporter {
   std::uint64_t skipped_ = 0;
   std::uint64_t egosWithSamples_ = 0;
   std::uint64_t vehiclesSeen_ = 0;
+  std::uint64_t parkedSteps_ = 0;
 };
 
 }  // namespace
@@ -447,6 +455,7 @@ ExportSummary exportMap(const ExportOptions& options) {
   summary.egos = exporter.egos();
   summary.windowsSkipped = exporter.skipped();
   summary.vehiclesSeen = exporter.vehiclesSeen();
+  summary.parkedSteps = exporter.parkedSteps();
   summary.laneVectors = lanes.vectors();
   summary.simulatedSeconds = simulation.time() - begin;
   summary.seconds = secondsSince(start);
@@ -459,11 +468,13 @@ ExportSummary exportMap(const ExportOptions& options) {
 std::string ExportSummary::report() const {
   return fmt::format(
       "{}: {} samples from {} Egos{} ({} vehicles seen, {:.0f} s simulated) in {:.2f} s = {:.0f} samples/s\n"
-      "  windows skipped (Ego left the network before the window ended): {}\n"
+      "  windows skipped (Ego left the network or parked before the window ended): {}\n"
+      "  vehicle steps parked (off the lane, masked): {}\n"
       "  lane-boundary vectors in the network: {}\n"
       "  {} ({:.0f} bytes per sample)\n",
       label, samples, egos, closedLoop ? " driven by the controller (closed loop)" : "", vehiclesSeen,
-      simulatedSeconds, seconds, samplesPerSecond, windowsSkipped, laneVectors, output.string(), bytesPerSample);
+      simulatedSeconds, seconds, samplesPerSecond, windowsSkipped, parkedSteps, laneVectors, output.string(),
+      bytesPerSample);
 }
 
 }  // namespace vsd::pipeline

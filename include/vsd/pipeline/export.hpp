@@ -76,7 +76,8 @@ struct ExportSummary {
   std::string label;
   std::uint64_t samples = 0;
   std::uint64_t egos = 0;            ///< Egos with at least one sample
-  std::uint64_t windowsSkipped = 0;  ///< windows the Ego left before their end
+  std::uint64_t windowsSkipped = 0;  ///< windows the Ego left (or parked in) before their end
+  std::uint64_t parkedSteps = 0;     ///< vehicle steps spent parked (masked: off the lane)
   std::uint64_t vehiclesSeen = 0;
   std::uint64_t laneVectors = 0;     ///< lane-boundary vectors of the whole network
   double simulatedSeconds = 0.0;
