@@ -9,6 +9,7 @@ find_package(nlohmann_json 3 REQUIRED)
 find_package(OpenSSL REQUIRED)
 find_package(muparser REQUIRED)
 find_package(HDF5 REQUIRED COMPONENTS C CXX)
+find_package(pugixml REQUIRED)
 find_package(Torch REQUIRED)
 
 # libsumo ships headers and libsumocpp.so in Debian's `sumo` package, but no

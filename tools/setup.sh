@@ -16,9 +16,9 @@ packages=(
   libtorch-dev libopenblas0-pthread
   # libraries
   libeigen3-dev libyaml-cpp-dev libhdf5-dev libcli11-dev libspdlog-dev libfmt-dev libmuparser-dev
-  nlohmann-json3-dev libssl-dev
+  nlohmann-json3-dev libssl-dev libpugixml-dev
   # tests and benchmarks
-  libgtest-dev libgmock-dev libbenchmark-dev python3 python3-h5py python3-numpy python3-sklearn python3-pil chromium
+  libgtest-dev libgmock-dev libbenchmark-dev libxml2-utils python3 python3-h5py python3-numpy python3-sklearn python3-pil chromium
 )
 
 missing=()

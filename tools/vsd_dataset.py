@@ -1,11 +1,12 @@
 #!/usr/bin/python3
-"""Read vsd-sumo datasets (schema vsd-dataset/1) with h5py and numpy.
+"""Read vsd-sumo datasets (schema vsd-dataset/2, and /1) with h5py and numpy.
 
     from vsd_dataset import Dataset
     ds = Dataset("out/acc_lk/dataset.h5")
     s = ds.sample(17)
     s["polylines"][0]["vectors"]   # (n, 7): x_start, y_start, x_end, y_end, object_type, polyline_id, timestamp
     s["target"]                    # (25, 2): the Ego's future centre positions
+    s["polylines"][i]["length"]    # m, vehicle and Ego polylines (lane boundaries: 0)
 
 Command line (used by the tests):
     tools/vsd_dataset.py info out/acc_lk/dataset.h5
@@ -20,7 +21,9 @@ import sys
 import h5py
 import numpy as np
 
-SCHEMA = "vsd-dataset/1"
+SCHEMA = "vsd-dataset/2"
+SCHEMA_V1 = "vsd-dataset/1"  # no vehicle sizes: ASSUMED_SIZE is used for every vehicle
+ASSUMED_SIZE = (5.0, 1.8)
 FEATURES = ["x_start", "y_start", "x_end", "y_end", "object_type", "polyline_id", "timestamp"]
 LANE, VEHICLE, EGO = 1, 2, 3
 
@@ -32,8 +35,9 @@ class Dataset:
         self.path = path
         self.file = h5py.File(path, "r")
         schema = self.file.attrs.get("schema")
-        if schema != SCHEMA:
-            raise ValueError("%s: schema %r is not %r" % (path, schema, SCHEMA))
+        if schema not in (SCHEMA, SCHEMA_V1):
+            raise ValueError("%s: schema %r is not %r or %r" % (path, schema, SCHEMA, SCHEMA_V1))
+        self.schema = schema
         f = self.file
         self.step = float(f.attrs["step"])
         self.horizon = int(f.attrs["horizon"])
@@ -55,6 +59,13 @@ class Dataset:
         self.polyline_vector_start = f["polyline_vector_start"][:]
         self.polyline_vector_count = f["polyline_vector_count"][:]
         self.shared_vectors = f["shared_vectors"][:]
+        if schema == SCHEMA:
+            self.polyline_length = f["polyline_length"][:].astype(np.float64)
+            self.polyline_width = f["polyline_width"][:].astype(np.float64)
+        else:
+            vehicle = self.polyline_type != LANE
+            self.polyline_length = np.where(vehicle, ASSUMED_SIZE[0], 0.0)
+            self.polyline_width = np.where(vehicle, ASSUMED_SIZE[1], 0.0)
 
     def __len__(self):
         return len(self.label_index)
@@ -75,7 +86,8 @@ class Dataset:
             else:
                 vectors = f["vectors"][start:start + count].astype(np.float64) + shift
                 valid = f["vector_valid"][start:start + count].astype(bool)
-            polylines.append({"type": int(self.polyline_type[row]), "vectors": vectors, "valid": valid})
+            polylines.append({"type": int(self.polyline_type[row]), "vectors": vectors, "valid": valid,
+                              "length": float(self.polyline_length[row]), "width": float(self.polyline_width[row])})
         sample = {
             "label": self.labels[self.label_index[i]],
             "sample_index": int(f["sample_index"][i]),
@@ -115,6 +127,8 @@ class Dataset:
                     problems.append("sample %d polyline %d: non-finite coordinates" % (i, p))
                 if np.any(good[:, 6] < min_t) or np.any(good[:, 6] > max_t):
                     problems.append("sample %d polyline %d: timestamp out of range" % (i, p))
+                if poly["type"] != LANE and not (0 < poly["length"] < 100 and 0 < poly["width"] < 20):
+                    problems.append("sample %d polyline %d: vehicle size %g x %g m" % (i, p, poly["length"], poly["width"]))
                 if poly["type"] == LANE and np.any(v[:, 6] != 0):
                     problems.append("sample %d polyline %d: lane vector with timestamp != 0" % (i, p))
             if s["target"].shape != (self.horizon, 2):
@@ -135,7 +149,7 @@ def main():
         counts = {}
         for index in ds.label_index:
             counts[ds.labels[index]] = counts.get(ds.labels[index], 0) + 1
-        print(json.dumps({"samples": len(ds), "kind": ds.kind, "step": ds.step, "horizon": ds.horizon,
+        print(json.dumps({"samples": len(ds), "schema": ds.schema, "kind": ds.kind, "step": ds.step, "horizon": ds.horizon,
                           "history": ds.history, "labels": counts, "inputs": ds.input_names,
                           "metrics": ds.metric_names, "sources": ds.sources}, indent=2))
         return 0
@@ -146,8 +160,8 @@ def main():
         print("%s: %s (%d samples)" % (ds.path, "valid" if not problems else "INVALID", len(ds)))
         return 0 if not problems else 1
     s = ds.sample(args.sample)
-    s["polylines"] = [{"type": p["type"], "vectors": p["vectors"].tolist(), "valid": p["valid"].tolist()}
-                      for p in s["polylines"]]
+    s["polylines"] = [{"type": p["type"], "vectors": p["vectors"].tolist(), "valid": p["valid"].tolist(),
+                       "length": p["length"], "width": p["width"]} for p in s["polylines"]]
     s["target"] = s["target"].tolist()
     s["target_valid"] = s["target_valid"].tolist()
     print(json.dumps(s))

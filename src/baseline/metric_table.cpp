@@ -24,11 +24,7 @@ MetricTable readMetricTable(const fs::path& csv_or_run, const std::vector<std::s
   const auto csv = CsvTable::read(path);
   if (targets.empty()) throw ConfigError("--targets: no metric given");
   for (const auto& target : targets) {
-    if (!metrics::findMetric(target)) {
-      std::vector<std::string> known;
-      for (const auto& metric : metrics::allMetrics()) known.push_back(metric.name);
-      throw ConfigError(fmt::format("--targets: unknown metric '{}' (known: {})", target, fmt::join(known, ", ")));
-    }
+    metrics::metric(target, "--targets");  // throws for an unknown name, listing the known ones
     if (!csv.findColumn(target)) {
       throw DatasetError(fmt::format("{}: no column '{}' (the scenario did not compute this metric; columns: {})",
                                      path.string(), target, fmt::join(csv.header(), ", ")));

@@ -266,6 +266,8 @@ void addBenchCommand(CLI::App& app, CommandContext& context) {
   comparing->callback([compare_options, &context] {
     context.action = [compare_options] { return runCompareBench(*compare_options); };
   });
+
+  addInteropBench(*bench, context);
 }
 
 }  // namespace vsd::cli

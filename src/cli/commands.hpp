@@ -26,5 +26,8 @@ void addBaselineCommand(CLI::App& app, CommandContext& context);
 void addExperimentCommand(CLI::App& app, CommandContext& context);
 void addCompareCommand(CLI::App& app, CommandContext& context);
 void addBenchCommand(CLI::App& app, CommandContext& context);
+void addScenarioCommand(CLI::App& app, CommandContext& context);
+/// `bench interop` (bench_interop.cpp), a subcommand of `bench`.
+void addInteropBench(CLI::App& bench, CommandContext& context);
 
 }  // namespace vsd::cli

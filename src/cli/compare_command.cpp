@@ -31,9 +31,6 @@ void addCompareCommand(CLI::App& app, CommandContext& context) {
   command->add_option("--metrics", options->metrics, "Datasets: metrics to compare, e.g. a_min,d_min")->delimiter(',');
   command->add_option("--criterion", options->criteria, "Datasets: pass/fail criterion 'name: expression', e.g. "
                                                         "'close: d_min < 2' (repeatable)");
-  addNumber(command, "--ego-length", options->egoLength, "Datasets: Ego length (m)")->capture_default_str();
-  addNumber(command, "--other-length", options->otherLength, "Datasets: other vehicles' length (m)")
-      ->capture_default_str();
   command->callback([=, &context] {
     context.action = [=, &context] {
       options->commandLine = context.commandLine;

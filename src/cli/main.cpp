@@ -47,6 +47,7 @@ int main(int argc, char** argv) {
   vsd::cli::addExperimentCommand(app, context);
   vsd::cli::addCompareCommand(app, context);
   vsd::cli::addBenchCommand(app, context);
+  vsd::cli::addScenarioCommand(app, context);
 
   try {
     app.parse(argc, argv);

@@ -82,12 +82,6 @@ report::CriterionSpec parseCriterion(const std::string& text) {
   return spec;
 }
 
-std::vector<std::string> unitsOf(const std::vector<std::string>& names) {
-  std::vector<std::string> units;
-  for (const auto& name : names) units.push_back(metrics::findMetric(name)->unit);
-  return units;
-}
-
 /// The output folder is built under a temporary name next to it and renamed into place.
 class OutputFolder {
  public:
@@ -199,7 +193,7 @@ Run compareScenario(const CompareOptions& options, const model::Predictor& predi
   header.step = logical->step;
   header.horizon = logical->steps();
   predictor.checkCompatible(header, options.scenarioFile.string());
-  const metrics::MetricSet metric_set(logical->metrics, !logical->others.empty(),
+  const metrics::MetricSet metric_set(logical->metrics, pipeline::scenarioAvailability(*logical),
                                       logical->sourceFile.string() + ": metrics");
   Run run;
   auto& comparison = run.comparison;
@@ -207,15 +201,13 @@ Run compareScenario(const CompareOptions& options, const model::Predictor& predi
   comparison.referenceName = "simulated";
   comparison.inputNames = logical->inputNames();
   comparison.metricNames = metric_set.names();
-  comparison.metricUnits = unitsOf(comparison.metricNames);
+  comparison.metricUnits = metric_set.units();
   std::vector<std::string> where;
   for (const auto& criterion : logical->criteria) {
     comparison.criteria.push_back({criterion.name, criterion.expression});
     where.push_back(criterion.where);
   }
   const Criteria criteria(comparison.criteria, where, comparison.metricNames);
-  const double ego_length = logical->ego.length;
-  const double other_length = logical->others.empty() ? 5.0 : logical->others.front().length;
 
   // 1. Scenes before simulation.
   auto start = std::chrono::steady_clock::now();
@@ -294,9 +286,9 @@ Run compareScenario(const CompareOptions& options, const model::Predictor& predi
     const auto errors = model::displacementErrors(prediction, scored);
     row.ade = errors.ade;
     row.fde = errors.fde;
-    row.predicted = pipeline::metricsOfFuture(metric_set, scored, prediction, ego_length, other_length);
+    row.predicted = pipeline::metricsOfFuture(metric_set, scored, prediction);
     row.reference = outcome.metrics;
-    row.fromReferencePositions = pipeline::metricsOfFuture(metric_set, scored, simulated.target, ego_length, other_length);
+    row.fromReferencePositions = pipeline::metricsOfFuture(metric_set, scored, simulated.target);
     row.predictedFails = criteria.evaluate(row.predicted);
     row.referenceFails = criteria.evaluate(row.reference);
     futures[outcome.index] = Futures{prediction, simulated.target, simulated.targetValid};
@@ -327,11 +319,8 @@ Run compareDatasets(const CompareOptions& options, const model::Predictor& predi
 
   const auto& first_header = collection.reader(0).header();
   std::vector<std::string> names = options.metrics;
-  if (names.empty()) {
-    names = first_header.kind == "generated" ? first_header.metricNames
-                                              : std::vector<std::string>{"a_min", "d_min", "ttc_min", "thw_min"};
-  }
-  const metrics::MetricSet metric_set(names, /*has_other_vehicles=*/true, "--metrics");
+  if (names.empty() && first_header.kind == "generated") names = first_header.metricNames;
+  const metrics::MetricSet metric_set(names, pipeline::sceneAvailability(first_header.kind), "--metrics");
 
   Run run;
   auto& comparison = run.comparison;
@@ -340,7 +329,7 @@ Run compareDatasets(const CompareOptions& options, const model::Predictor& predi
   comparison.title = fmt::format("{} samples of {}", refs.size(), files);
   comparison.referenceName = "recorded";
   comparison.metricNames = metric_set.names();
-  comparison.metricUnits = unitsOf(comparison.metricNames);
+  comparison.metricUnits = metric_set.units();
   std::vector<std::string> where;
   for (const auto& text : options.criteria) {
     comparison.criteria.push_back(parseCriterion(text));
@@ -375,8 +364,8 @@ Run compareDatasets(const CompareOptions& options, const model::Predictor& predi
       const auto errors = model::displacementErrors(predictions[j], scene);
       row.ade = errors.ade;
       row.fde = errors.fde;
-      row.predicted = pipeline::metricsOfFuture(metric_set, scene, predictions[j], options.egoLength, options.otherLength);
-      row.reference = pipeline::metricsOfFuture(metric_set, scene, scene.target, options.egoLength, options.otherLength);
+      row.predicted = pipeline::metricsOfFuture(metric_set, scene, predictions[j]);
+      row.reference = pipeline::metricsOfFuture(metric_set, scene, scene.target);
       row.predictedFails = criteria.evaluate(row.predicted);
       row.referenceFails = criteria.evaluate(row.reference);
       futures[first + j] = Futures{predictions[j], scene.target, scene.targetValid};
@@ -385,10 +374,17 @@ Run compareDatasets(const CompareOptions& options, const model::Predictor& predi
   comparison.timings.push_back({"read", read_seconds});
   comparison.timings.push_back({"predict", predict_seconds});
   comparison.timings.push_back({"compare", secondsSince(start) - read_seconds - predict_seconds});
-  comparison.notes.push_back(fmt::format(
+  comparison.notes.push_back(
       "Both sides go through the same metric code: the recorded and the predicted Ego positions, speeds and "
-      "accelerations reconstructed from positions; vehicle lengths {} m (Ego) and {} m (others).",
-      options.egoLength, options.otherLength));
+      "accelerations reconstructed from positions; vehicle sizes as the dataset stores them.");
+  for (std::size_t f = 0; f < collection.files(); ++f) {
+    if (collection.reader(f).header().vehicleSizesAssumed) {
+      comparison.notes.push_back(fmt::format("{} is a {} file without vehicle sizes: every vehicle was assumed "
+                                             "{} m x {} m.",
+                                             collection.reader(f).path().string(), vector::kDatasetSchemaVersion1,
+                                             vector::kAssumedVehicleLength, vector::kAssumedVehicleWidth));
+    }
+  }
   for (std::size_t f = 0; f < collection.files(); ++f) {
     const auto& path = collection.reader(f).path();
     comparison.provenance.push_back({"dataset", path.string()});
@@ -410,10 +406,6 @@ void CompareOptions::validate() const {
   if (jobs < 1 || jobs > 256) throw ConfigError::field("command line", "--jobs", std::to_string(jobs), "1 .. 256");
   if (threads < 1 || threads > 256) throw ConfigError::field("command line", "--threads", std::to_string(threads), "1 .. 256");
   if (worst < 0 || worst > 50) throw ConfigError::field("command line", "--worst", std::to_string(worst), "0 .. 50");
-  if (!(egoLength > 0.0 && egoLength <= 100.0) || !(otherLength > 0.0 && otherLength <= 100.0)) {
-    throw ConfigError::field("command line", "--ego-length/--other-length",
-                             fmt::format("{}/{}", egoLength, otherLength), "lengths in (0, 100] m");
-  }
   if (batch < 1 || batch > 4096) throw ConfigError::field("command line", "--batch", std::to_string(batch), "1 .. 4096");
   if (!scenarioFile.empty() && (!metrics.empty() || !criteria.empty())) {
     throw ConfigError("compare: --metrics and --criterion are for datasets; a scenario file defines its own "

@@ -49,8 +49,6 @@ struct LabelData {
   fs::path testRun;
   std::string trainDigest;
   std::string testDigest;
-  double egoLength = 5.0;    ///< m (from the logical scenario; datasets do not store lengths)
-  double otherLength = 5.0;  ///< m
 };
 
 struct RowModel {
@@ -173,8 +171,6 @@ class ExperimentRunner {
       label_data.label = source.label;
       if (!source.scenario.empty()) {
         const auto& logical = logical_scenarios.at(source.label);
-        label_data.egoLength = logical->ego.length;
-        if (!logical->others.empty()) label_data.otherLength = logical->others.front().length;
         const std::string scenario_hash = sha256OfFile(source.scenario);
         for (const bool train : {true, false}) {
           const auto samples = train ? spec_.trainSamples : spec_.testSamples;
@@ -377,8 +373,7 @@ class ExperimentRunner {
                                  spec_.extraTrees.maxFeatures, spec_.extraTrees.minSamplesSplit, spec_.extraTrees.seed))
           .add("bnn", fmt::format("hidden {} layers {} epochs {} samples {} seed {}", spec_.bnn.hidden,
                                   spec_.bnn.layers, spec_.bnn.epochs, spec_.bnn.samples, spec_.bnn.seed))
-          .add("vectornet_model", row_model.digest)
-          .add("lengths", fmt::format("{} {}", label_data.egoLength, label_data.otherLength));
+          .add("vectornet_model", row_model.digest);
       if (!reuse(folder, mae_key, fmt::format("{} metric MAE", label))) {
         cache_.clear(folder);
         writeJson(folder / "mae.json", computeMae(label, names, row_model));
@@ -445,9 +440,8 @@ class ExperimentRunner {
       }
       stored_index.push_back(static_cast<std::size_t>(found - stored.begin()));
     }
-    const bool has_other = std::any_of(scenes.front().polylines.begin(), scenes.front().polylines.end(),
-                                       [](const auto& polyline) { return polyline.type == vector::ObjectType::Vehicle; });
-    const metrics::MetricSet metric_set(names, has_other, fmt::format("{}: mae.metrics.{}", spec_.file.string(), label));
+    const metrics::MetricSet metric_set(names, pipeline::sceneAvailability(reader.header().kind),
+                                        fmt::format("{}: mae.metrics.{}", spec_.file.string(), label));
     const model::Predictor predictor(row_model.file, spec_.threads);
     const auto predictions = predictor.predict(scenes);
 
@@ -456,10 +450,8 @@ class ExperimentRunner {
     std::vector<std::size_t> counted(names.size(), 0);
     for (std::size_t i = 0; i < scenes.size(); ++i) {
       const auto& scene = scenes[i];
-      const auto from_prediction =
-          pipeline::metricsOfFuture(metric_set, scene, predictions[i], label_data.egoLength, label_data.otherLength);
-      const auto from_truth =
-          pipeline::metricsOfFuture(metric_set, scene, scene.target, label_data.egoLength, label_data.otherLength);
+      const auto from_prediction = pipeline::metricsOfFuture(metric_set, scene, predictions[i]);
+      const auto from_truth = pipeline::metricsOfFuture(metric_set, scene, scene.target);
       for (std::size_t m = 0; m < names.size(); ++m) {
         const double simulated = scene.metrics.at(stored_index[m]);
         // Infinite values (e.g. ttc_min without closing in) and NaN have no error to average.

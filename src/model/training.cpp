@@ -21,19 +21,25 @@ namespace fs = std::filesystem;
 
 namespace vsd::model {
 
+namespace {
+void require(bool ok, const char* field, double value, const char* constraint) {
+  if (!ok) throw ConfigError::field("model configuration", field, formatValue(value), constraint);
+}
+}  // namespace
+
 void VectorNetConfig::validate() const {
-  auto require = [](bool ok, const char* field, double value, const char* constraint) {
-    if (!ok) throw ConfigError::field("model configuration", field, formatValue(value), constraint);
-  };
+  validateArchitecture();
+  require(horizon >= 1 && horizon <= kMaxWindowSteps, "horizon", horizon,
+          fmt::format("1 .. {} steps", kMaxWindowSteps).c_str());
+  require(step >= kMinStep && step <= kMaxStep, "step", step, fmt::format("{} .. {} s", kMinStep, kMaxStep).c_str());
+}
+
+void VectorNetConfig::validateArchitecture() const {
   require(hidden >= 1 && hidden <= 4096, "hidden", hidden, "1 .. 4096");
   require(subgraphLayers >= 1 && subgraphLayers <= 16, "subgraph_layers", subgraphLayers, "1 .. 16");
   require(globalWidth >= 1 && globalWidth <= 4096, "global_width", globalWidth, "1 .. 4096");
   require(heads >= 1 && globalWidth % heads == 0, "heads", heads, "a divisor of global_width");
   require(decoderHidden >= 1 && decoderHidden <= 8192, "decoder_hidden", decoderHidden, "1 .. 8192");
-  require(horizon >= 1 && horizon <= kMaxWindowSteps, "horizon", horizon,
-          fmt::format("1 .. {} steps", kMaxWindowSteps).c_str());
-  require(step >= kMinStep && step <= kMaxStep, "step", step,
-          fmt::format("{} .. {} s", kMinStep, kMaxStep).c_str());
   require(coordinateScale >= 1e-3 && coordinateScale <= 1e6, "coordinate_scale", coordinateScale, "1e-3 .. 1e6 m");
 }
 
@@ -93,7 +99,7 @@ void TrainOptions::validate() const {
   if (!(validationFraction > 0.0 && validationFraction < 1.0)) {
     throw ConfigError::field(where, "--validation-fraction", formatValue(validationFraction), "in (0, 1)");
   }
-  config.validate();
+  config.validateArchitecture();
 }
 
 namespace {
@@ -289,6 +295,7 @@ TrainSummary train(const TrainOptions& options, const std::function<void(const E
   VectorNetConfig config = options.config;
   config.horizon = selection.header.horizon;
   config.step = selection.header.step;
+  config.validate();
   const SceneTensors train_tensors = buildTensors(selection.train, config);
   const SceneTensors validation_tensors = buildTensors(selection.validation, config);
   selection.train.clear();

@@ -77,6 +77,14 @@ struct PreparedBatch {
 
 std::vector<std::string> netconvertOptions(const Context& context) { return context.logical->sumo.netconvertOptions; }
 
+ScenarioWithRoad concreteScenario(const std::shared_ptr<const scenario::LogicalScenario>& logical,
+                                  const RunOptions& options, std::uint64_t index) {
+  if (options.source) return options.source(index);
+  auto concrete = scenario::sampleConcreteScenario(logical, options.seed, index);
+  auto road = road::buildRoadGeometry(concrete);
+  return {std::move(concrete), std::move(road)};
+}
+
 /// Prepares, converts and simulates batches; one per process.
 class BatchProcessor {
  public:
@@ -92,8 +100,9 @@ class BatchProcessor {
         std::min(context_.options.firstSample + context_.options.samples, first + context_.options.batch);
     road::NetworkBuilder builder;
     for (std::uint64_t index = first; index < last; ++index) {
-      batch.scenarios.push_back(scenario::sampleConcreteScenario(context_.logical, context_.options.seed, index));
-      batch.roads.push_back(road::buildRoadGeometry(batch.scenarios.back()));
+      auto [concrete, road] = concreteScenario(context_.logical, context_.options, index);
+      batch.scenarios.push_back(std::move(concrete));
+      batch.roads.push_back(std::move(road));
       std::string failure;
       if (!context_.layout.fits(batch.roads.back())) {
         const auto [lo, hi] = batch.roads.back().bounds();
@@ -137,7 +146,7 @@ class BatchProcessor {
       }
       const auto lane = static_cast<std::size_t>(outcome.egoLane);
       const Polyline lane_centre = lane < outcome.lanes.size() ? outcome.lanes[lane].centre : Polyline{};
-      outcome.metrics = context_.metricSet->evaluate(outcome.trace, lane_centre);
+      outcome.metrics = context_.metricSet->evaluate({outcome.trace, lane_centre});
     }
     if (!context_.keepBatchFiles) removeBatchFiles(batch.stem);
     spdlog::debug("batch {}: waited {:.3f} s for netconvert, simulated {:.3f} s, metrics {:.3f} s", batch.number,
@@ -245,19 +254,20 @@ std::string failureKind(const std::string& failure) {
 
 class SummaryBuilder {
  public:
-  SummaryBuilder(RunSummary& summary, const std::vector<std::string>& metric_names) : summary_(summary) {
-    summary_.metricNames = metric_names;
-    for (const auto& name : metric_names) {
+  SummaryBuilder(RunSummary& summary, const metrics::MetricSet& metric_set)
+      : summary_(summary), metricSet_(metric_set) {
+    summary_.metricNames = metric_set.names();
+    summary_.collisionRule = metric_set.collisionRule();
+    const auto units = metric_set.units();
+    for (std::size_t m = 0; m < units.size(); ++m) {
       MetricSummary metric;
-      metric.name = name;
-      if (const auto info = metrics::findMetric(name)) metric.unit = info->unit;
+      metric.name = summary_.metricNames[m];
+      metric.unit = units[m];
       metric.min = std::numeric_limits<double>::infinity();
       metric.max = -std::numeric_limits<double>::infinity();
       summary_.metrics.push_back(metric);
     }
-    sums_.assign(metric_names.size(), 0.0);
-    const auto it = std::find(metric_names.begin(), metric_names.end(), "d_min");
-    if (it != metric_names.end()) dMinIndex_ = static_cast<std::size_t>(std::distance(metric_names.begin(), it));
+    sums_.assign(units.size(), 0.0);
   }
 
   void add(const ScenarioOutcome& outcome) {
@@ -281,7 +291,7 @@ class SummaryBuilder {
         sums_[m] += value;
       }
     }
-    if (dMinIndex_ && outcome.metrics[*dMinIndex_] <= 0.0) ++summary_.collisions;
+    if (metricSet_.collision(outcome.metrics)) ++summary_.collisions;
   }
 
   void finish() {
@@ -297,8 +307,8 @@ class SummaryBuilder {
 
  private:
   RunSummary& summary_;
+  const metrics::MetricSet& metricSet_;
   std::vector<double> sums_;
-  std::optional<std::size_t> dMinIndex_;
 };
 
 /// concrete.csv + traces.h5 + dataset.h5, written under temporary names.
@@ -473,7 +483,8 @@ RunSummary runScenarios(const std::shared_ptr<const scenario::LogicalScenario>& 
   context.options.jobs = static_cast<int>(std::min<std::uint64_t>(
       static_cast<std::uint64_t>(options.jobs), (options.samples + options.batch - 1) / options.batch));
   context.metricSet = std::make_unique<metrics::MetricSet>(
-      logical->metrics, !logical->others.empty(), logical->sourceFile.string() + ": metrics");
+      logical->metrics, scenarioAvailability(*logical),
+      logical->sourceFile.string() + ": metrics");
   context.batches = static_cast<std::size_t>((options.samples + options.batch - 1) / options.batch);
   context.keepBatchFiles = context.options.keepNets;
   context.layout = road::BatchLayout(road::BatchLayout::cellSizeFor(logical->road));
@@ -481,7 +492,7 @@ RunSummary runScenarios(const std::shared_ptr<const scenario::LogicalScenario>& 
   // Fail fast on problems every scenario would hit (unknown controller, bad
   // parameters, bad expressions) before any process or file is created.
   {
-    auto probe = scenario::sampleConcreteScenario(logical, options.seed, options.firstSample);
+    auto probe = concreteScenario(logical, options, options.firstSample).concrete;
     auto registry = sim::ControllerRegistry::withBuiltins();
     sim::makeController(registry, logical->ego.controller.name, logical->ego.controller.library,
                         logical->sourceFile.parent_path(),
@@ -515,7 +526,7 @@ RunSummary runScenarios(const std::shared_ptr<const scenario::LogicalScenario>& 
   summary.jobs = context.options.jobs;
   summary.batch = options.batch;
   summary.inputNames = logical->inputNames();
-  SummaryBuilder summary_builder(summary, context.metricSet->names());
+  SummaryBuilder summary_builder(summary, *context.metricSet);
 
   std::optional<RunFiles> files;
   if (options.writeFiles) files.emplace(context, out, context.metricSet->names());
@@ -577,9 +588,7 @@ std::string RunSummary::report() const {
                                  functionalScenario, samples, seed, seconds, scenariosPerSecond, jobs,
                                  jobs == 1 ? "" : "s", batch);
   text += fmt::format("  completed {}, failed {}", ok, failed);
-  if (std::find(metricNames.begin(), metricNames.end(), "d_min") != metricNames.end()) {
-    text += fmt::format(", collisions (d_min <= 0) {}", collisions);
-  }
+  if (!collisionRule.empty()) text += fmt::format(", collisions ({}) {}", collisionRule, collisions);
   text += "\n";
   for (const auto& [kind, count] : failureReasons) {
     text += fmt::format("    {} x {}\n", count, count == 1 ? failureExamples.at(kind) : kind);

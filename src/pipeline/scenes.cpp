@@ -84,8 +84,20 @@ vector::VectorizedScene plannedScene(const scenario::ConcreteScenario& concrete)
 }
 
 std::vector<double> metricsOfFuture(const metrics::MetricSet& metric_set, const vector::VectorizedScene& scene,
-                                    const Polyline& future, double ego_length, double other_length) {
-  return metric_set.evaluate(vector::sceneTrace(scene, future, ego_length, other_length), vector::egoLaneCentre(scene));
+                                    const Polyline& future) {
+  const Trace trace = vector::sceneTrace(scene, future);
+  const Polyline lane = vector::egoLaneCentre(scene);
+  return metric_set.evaluate({trace, lane});
+}
+
+metrics::Availability sceneAvailability(const std::string& dataset_kind) {
+  // Other vehicles may or may not be in a given scene; metrics that need them yield NaN there.
+  const bool generated = dataset_kind == "generated";
+  return {/*otherVehicles=*/true, /*egoLane=*/generated, /*scenarioFrame=*/generated};
+}
+
+metrics::Availability scenarioAvailability(const scenario::LogicalScenario& logical) {
+  return {/*otherVehicles=*/!logical.others.empty(), /*egoLane=*/true, /*scenarioFrame=*/true};
 }
 
 }  // namespace vsd::pipeline

@@ -110,6 +110,9 @@ std::unordered_set<std::string> asSet(const std::vector<std::string>& ids) { ret
 
 std::vector<SimulatedScenario> simulateBatch(const std::filesystem::path& net, const std::vector<ScenarioRun>& runs,
                                              ControllerRegistry& registry, const BatchOptions& options) {
+  if (!(options.step > 0.0) || options.steps < 1) {
+    throw Error(fmt::format("internal: batch simulation with step {} s and {} steps", options.step, options.steps));
+  }
   const auto t_start = std::chrono::steady_clock::now();
   SumoSession session(sessionArguments(net, options));
   const double load_seconds = secondsSince(t_start);

@@ -21,6 +21,7 @@ void requireFile(const fs::path& path, const std::string& what) {
 }  // namespace
 
 std::vector<std::string> mapSimulationArguments(const MapSimulationOptions& options) {
+  if (!(options.step > 0.0)) throw Error(fmt::format("internal: map simulation with step {} s", options.step));
   const auto& source = options.source;
   requireFile(source.config, "SUMO configuration");
   requireFile(source.net, "SUMO network");

@@ -64,6 +64,8 @@ struct DatasetWriter::Impl {
   h5::Appendable<std::uint8_t> polylineShared;
   h5::Appendable<std::int64_t> polylineVectorStart;
   h5::Appendable<std::int32_t> polylineVectorCount;
+  h5::Appendable<double> polylineLength;
+  h5::Appendable<double> polylineWidth;
   h5::Appendable<std::int64_t> samplePolylineStart;
   h5::Appendable<std::int32_t> samplePolylineCount;
   h5::Appendable<std::int32_t> sampleEgoPolyline;
@@ -92,7 +94,7 @@ struct DatasetWriter::Impl {
 
   void flush() {
     h5::flushAll(vectors, vectorValid, polylineType, polylineShared, polylineVectorStart, polylineVectorCount,
-                 samplePolylineStart, samplePolylineCount, sampleEgoPolyline, sampleOrigin, sampleLabel, sampleIndex,
+                 polylineLength, polylineWidth, samplePolylineStart, samplePolylineCount, sampleEgoPolyline, sampleOrigin, sampleLabel, sampleIndex,
                  sampleSource, sampleEgo, sampleT0, targets, targetValid);
     if (inputs) inputs->flush();
     if (metrics) metrics->flush();
@@ -106,6 +108,9 @@ DatasetWriter::DatasetWriter(const fs::path& path, DatasetHeader header, const f
   impl_->name = name_in_messages.empty() ? path : name_in_messages;
   impl_->header = std::move(header);
   const auto& h = impl_->header;
+  if (!(h.step > 0.0) || !std::isfinite(h.step) || h.horizon < 1) {
+    throw Error(fmt::format("internal: dataset header with step {} s and horizon {} steps", h.step, h.horizon));
+  }
   if (h.compression < 0 || h.compression > 9) {
     throw ConfigError::field("command line", "--compression", std::to_string(h.compression), "a deflate level 0..9");
   }
@@ -130,6 +135,8 @@ DatasetWriter::DatasetWriter(const fs::path& path, DatasetHeader header, const f
     impl_->polylineShared = h5::Appendable<std::uint8_t>(root, "polyline_shared", {}, kChunkVectors, kDeflate);
     impl_->polylineVectorStart = h5::Appendable<std::int64_t>(root, "polyline_vector_start", {}, kChunkVectors, kDeflate);
     impl_->polylineVectorCount = h5::Appendable<std::int32_t>(root, "polyline_vector_count", {}, kChunkVectors, kDeflate);
+    impl_->polylineLength = h5::Appendable<double>(root, "polyline_length", {}, kChunkVectors, kDeflate);
+    impl_->polylineWidth = h5::Appendable<double>(root, "polyline_width", {}, kChunkVectors, kDeflate);
     impl_->samplePolylineStart = h5::Appendable<std::int64_t>(root, "sample_polyline_start", {}, kChunkSamples, kDeflate);
     impl_->samplePolylineCount = h5::Appendable<std::int32_t>(root, "sample_polyline_count", {}, kChunkSamples, kDeflate);
     impl_->sampleEgoPolyline = h5::Appendable<std::int32_t>(root, "sample_ego_polyline", {}, kChunkSamples, kDeflate);
@@ -193,6 +200,8 @@ void DatasetWriter::append(const VectorizedScene& scene) {
   for (const auto& polyline : scene.polylines) {
     d.polylineType.push(static_cast<std::int8_t>(polyline.type));
     d.polylineVectorCount.push(static_cast<std::int32_t>(polyline.vectors.size()));
+    d.polylineLength.push(polyline.length);
+    d.polylineWidth.push(polyline.width);
     const bool shared = polyline.sharedStart >= 0 && d.sharedSize > 0;
     d.polylineShared.push(shared ? 1 : 0);
     ++d.polylinesWritten;
@@ -277,6 +286,7 @@ struct DatasetReader::Impl {
   // Read per sample.
   H5::DataSet vectors, vectorValid, polylineType, polylineShared, polylineVectorStart, polylineVectorCount, targets,
       targetValid;
+  std::optional<H5::DataSet> polylineLength, polylineWidth;  ///< absent in version-1 files
   std::vector<double> sharedVectors;  ///< the map's lane vectors (read eagerly: small)
   std::optional<H5::DataSet> inputs, metrics;
 
@@ -294,6 +304,23 @@ struct DatasetReader::Impl {
   std::pair<hsize_t, hsize_t> inlineVectorRange(std::size_t sample, const std::vector<std::uint8_t>& shared,
                                                 const std::vector<std::int64_t>& starts,
                                                 const std::vector<std::int32_t>& counts) const;
+  /// Lengths and widths of polylines [first, first + count) (m): stored in version 2,
+  /// assumed for the vehicles of version-1 files.
+  std::pair<std::vector<double>, std::vector<double>> polylineSizes(const std::vector<std::int8_t>& types,
+                                                                    hsize_t first, hsize_t count) const {
+    std::pair<std::vector<double>, std::vector<double>> sizes;
+    if (polylineLength) {
+      sizes.first = h5::readRows<double>(*polylineLength, first, count);
+      sizes.second = h5::readRows<double>(*polylineWidth, first, count);
+      return sizes;
+    }
+    for (auto type : types) {
+      const bool vehicle = type != static_cast<std::int8_t>(ObjectType::LaneBoundary);
+      sizes.first.push_back(vehicle ? kAssumedVehicleLength : 0.0);
+      sizes.second.push_back(vehicle ? kAssumedVehicleWidth : 0.0);
+    }
+    return sizes;
+  }
 };
 
 /// First row and count of a sample's own (inline) vectors in /vectors, which the
@@ -326,9 +353,11 @@ void DatasetReader::Impl::readHeader(const H5::Group& root) {
   reading = "attributes";
   if (!h5::hasAttribute(root, "schema")) fail("not a vsd-sumo dataset (no 'schema' attribute)");
   const auto schema = h5::readStringAttribute(root, "schema");
-  if (schema != kDatasetSchema) {
-    fail(fmt::format("dataset schema '{}' is not supported by this version (expected '{}')", schema, kDatasetSchema));
+  if (schema != kDatasetSchema && schema != kDatasetSchemaVersion1) {
+    fail(fmt::format("dataset schema '{}' is not supported by this version (expected '{}' or '{}')", schema,
+                     kDatasetSchema, kDatasetSchemaVersion1));
   }
+  header.vehicleSizesAssumed = schema == kDatasetSchemaVersion1;
   const auto features = h5::readIntAttribute(root, "feature_version");
   if (features != kFeatureVersion) {
     fail(fmt::format("feature version {} is not supported (expected {})", features, kFeatureVersion));
@@ -380,6 +409,9 @@ void DatasetReader::Impl::openArrays(const H5::Group& root) {
     for (const char* name : {"inputs", "metrics"}) {
       if (root.nameExists(name)) result.emplace(name, open(name));
     }
+    if (!header.vehicleSizesAssumed) {
+      for (const char* name : {"polyline_length", "polyline_width"}) result.emplace(name, open(name));
+    }
     return result;
   }();
   reading = "input_names";
@@ -399,8 +431,10 @@ void DatasetReader::Impl::openArrays(const H5::Group& root) {
       {"polyline_shared", {p}},       {"shared_vectors", {shared, kFeatures}},
       {"polyline_vector_start", {p}}, {"polyline_vector_count", {p}}, {"targets", {n, f, 2}},
       {"target_valid", {n, f}},       {"inputs", {n, header.inputNames.size()}},
-      {"metrics", {n, header.metricNames.size()}}};
+      {"metrics", {n, header.metricNames.size()}}, {"polyline_length", {p}}, {"polyline_width", {p}}};
   for (const auto& [name, shape] : expected) {
+    const bool sizes = name == "polyline_length" || name == "polyline_width";
+    if (sizes && header.vehicleSizesAssumed) continue;  // version 1 stores none
     const auto it = arrays.find(name);
     if (it == arrays.end()) {
       // inputs/metrics are left out when the header names none.
@@ -424,6 +458,10 @@ void DatasetReader::Impl::openArrays(const H5::Group& root) {
   targetValid = arrays.at("target_valid");
   if (arrays.count("inputs")) inputs = arrays.at("inputs");
   if (arrays.count("metrics")) metrics = arrays.at("metrics");
+  if (!header.vehicleSizesAssumed) {
+    polylineLength = arrays.at("polyline_length");
+    polylineWidth = arrays.at("polyline_width");
+  }
 }
 
 void DatasetReader::Impl::readIndex(const H5::Group& root) {
@@ -500,6 +538,10 @@ DatasetReader::DatasetReader(const fs::path& path) : impl_(std::make_unique<Impl
     d.fail(fmt::format("damaged dataset: cannot read '{}': {}", d.reading, h5::errorCause(error)));
   }
   d.checkIndex();
+  if (d.header.vehicleSizesAssumed) {
+    spdlog::warn("{}: a {} file stores no vehicle sizes; assuming {} m x {} m for every vehicle", path.string(),
+                 kDatasetSchemaVersion1, kAssumedVehicleLength, kAssumedVehicleWidth);
+  }
 }
 
 DatasetReader::~DatasetReader() = default;
@@ -532,6 +574,7 @@ VectorizedScene DatasetReader::scene(std::size_t sample) const {
     const auto shared = h5::readRows<std::uint8_t>(d.polylineShared, first_polyline, polylines);
     const auto starts = h5::readRows<std::int64_t>(d.polylineVectorStart, first_polyline, polylines);
     const auto counts = h5::readRows<std::int32_t>(d.polylineVectorCount, first_polyline, polylines);
+    const auto sizes = d.polylineSizes(types, first_polyline, polylines);
     const auto [first_vector, vector_count] = d.inlineVectorRange(sample, shared, starts, counts);
     const auto raw = h5::readRows<float>(d.vectors, first_vector, vector_count);
     const auto valid = h5::readRows<std::uint8_t>(d.vectorValid, first_vector, vector_count);
@@ -542,6 +585,8 @@ VectorizedScene DatasetReader::scene(std::size_t sample) const {
     for (hsize_t p = 0; p < polylines; ++p) {
       ScenePolyline polyline;
       polyline.type = static_cast<ObjectType>(types[p]);
+      polyline.length = sizes.first[p];
+      polyline.width = sizes.second[p];
       if (shared[p]) {
         const auto start = static_cast<std::size_t>(starts[p]);
         const auto count = static_cast<std::size_t>(counts[p]);
@@ -613,6 +658,11 @@ void checkScene(const VectorizedScene& scene, std::size_t sample, const DatasetH
     if (type < 1 || type > 3) problem(fmt::format("polyline {} has object type {}", p, type));
     if (polyline.type == ObjectType::Ego) ++egos;
     if (polyline.vectors.empty()) problem(fmt::format("polyline {} has no vectors", p));
+    const bool vehicle = polyline.type != ObjectType::LaneBoundary;
+    if (vehicle && !(polyline.length > 0.0 && polyline.width > 0.0 && polyline.length < 100.0 && polyline.width < 20.0)) {
+      problem(fmt::format("vehicle polyline {}: size {} m x {} m (expected 0 < length < 100, 0 < width < 20)", p,
+                          polyline.length, polyline.width));
+    }
     for (std::size_t v = 0; v < polyline.vectors.size(); ++v) {
       const auto& f = polyline.vectors[v];
       if (static_cast<int>(f[4]) != type) problem(fmt::format("polyline {} vector {}: object_type {}", p, v, f[4]));
@@ -662,7 +712,7 @@ DatasetSummary summarizeDataset(const fs::path& path) {
   const DatasetReader reader(path);
   DatasetSummary summary;
   summary.path = path;
-  summary.schema = kDatasetSchema;
+  summary.schema = reader.header().vehicleSizesAssumed ? kDatasetSchemaVersion1 : kDatasetSchema;
   summary.header = reader.header();
   summary.samples = reader.size();
   summary.bytes = fs::file_size(path);

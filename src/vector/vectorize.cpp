@@ -46,6 +46,7 @@ VectorizedScene buildScene(const std::string& label, const Trace& trace, std::si
   const VehicleTrack& ego = trace.ego();
   if (!ego.validAt(t0_index)) throw Error("internal: buildScene with an Ego absent at t0");
   const double dt = trace.step;
+  if (!(dt > 0.0)) throw Error("internal: buildScene with a trace without a step");
   VectorizedScene scene;
   scene.label = label;
   scene.step = dt;
@@ -55,6 +56,8 @@ VectorizedScene buildScene(const std::string& label, const Trace& trace, std::si
   auto motion = [&](const VehicleTrack& track, std::size_t first, std::size_t last, ObjectType type) {
     ScenePolyline polyline;
     polyline.type = type;
+    polyline.length = track.length;
+    polyline.width = track.width;
     for (std::size_t k = first + 1; k <= last && k < track.states.size(); ++k) {
       const auto& from = track.states[k - 1];
       const auto& to = track.states[k];
@@ -197,7 +200,7 @@ std::vector<ScenePolyline> LaneIndex::query(const Vec2& centre, double radius) c
 
 namespace vsd::vector {
 
-Trace sceneTrace(const VectorizedScene& scene, const Polyline& ego_future, double ego_length, double other_length) {
+Trace sceneTrace(const VectorizedScene& scene, const Polyline& ego_future) {
   const double dt = scene.step;
   const std::size_t instants = ego_future.size() + 1;
   Trace trace;
@@ -208,14 +211,16 @@ Trace sceneTrace(const VectorizedScene& scene, const Polyline& ego_future, doubl
   VehicleTrack ego = trackFromPositions(positions, dt, initial.speed, initial.heading);
   ego.id = "ego";
   ego.role = VehicleRole::Ego;
-  ego.length = ego_length;
+  ego.length = scene.polylines.at(scene.egoPolyline).length;
+  ego.width = scene.polylines.at(scene.egoPolyline).width;
   for (std::size_t k = 1; k < instants && k - 1 < scene.targetValid.size(); ++k) ego.valid[k] = scene.targetValid[k - 1];
   trace.vehicles.push_back(std::move(ego));
 
   for (const auto& polyline : scene.polylines) {
     if (polyline.type != ObjectType::Vehicle) continue;
     VehicleTrack track;
-    track.length = other_length;
+    track.length = polyline.length;
+    track.width = polyline.width;
     track.states.assign(instants, VehicleState{});
     track.valid.assign(instants, 0);
     for (std::size_t v = 0; v < polyline.vectors.size(); ++v) {

@@ -152,7 +152,7 @@ TEST(Cli, DatasetsFromRunAndExportValidateAndLoadInPython) {
 
   const auto info = test::run({test::vsdSumo().string(), "dataset", "info", map.string()}, dir.path());
   EXPECT_EQ(info.exitCode, 0);
-  for (const char* text : {"schema vsd-dataset/1", "kind map", "curve.xodr", "bytes per sample", "timestamp"}) {
+  for (const char* text : {"schema vsd-dataset/2", "kind map", "curve.xodr", "bytes per sample", "timestamp"}) {
     EXPECT_NE(info.output.find(text), std::string::npos) << text << "\n" << info.output;
   }
   const auto svg = dir.path() / "s3.svg";
@@ -178,13 +178,17 @@ ds = Dataset(sys.argv[2])
 s = ds.sample(3)
 ego = s["polylines"][s["ego_polyline"]]["vectors"][-1]
 print(json.dumps({"n": len(ds), "polylines": len(s["polylines"]), "vectors": sum(len(p["vectors"]) for p in s["polylines"]),
-                  "ego": [round(float(v), 4) for v in ego[:4]], "v_ego": s["inputs"]["v_ego"]}))
+                  "ego": [round(float(v), 4) for v in ego[:4]], "v_ego": s["inputs"]["v_ego"],
+                  "sizes": [[p["length"], p["width"]] for p in s["polylines"]]}))
 )");
   const auto py = test::run({test::python(), compare.string(), (test::sourceDir() / "tools").string(), run_out.string()},
                             dir.path());
   ASSERT_EQ(py.exitCode, 0) << py.output;
   EXPECT_NE(py.output.find("\"n\": 12, \"polylines\": 4, \"vectors\": 74"), std::string::npos) << py.output;
   EXPECT_NE(py.output.find("\"ego\": [-50.0,"), std::string::npos) << py.output;
+  // Lanes have no size; the Co and the Ego carry the scenario's 5 m x 1.8 m.
+  EXPECT_NE(py.output.find("\"sizes\": [[0.0, 0.0], [0.0, 0.0], [5.0, 1.8], [5.0, 1.8]]"),
+            std::string::npos) << py.output;
 }
 
 TEST(Cli, ExportAndDatasetBadInputGiveOneLine) {

@@ -160,8 +160,8 @@ TEST_F(CompareTest, DatasetModeComparesAgainstTheRecordedFuture) {
   EXPECT_NEAR(summary.statistics.ade.mean, evaluation.overall.ade, 1e-9);
   EXPECT_EQ(summary.comparison.referenceName, "recorded");
   // A generated dataset brings its scenario's metrics.
-  EXPECT_EQ(summary.comparison.metricNames, (std::vector<std::string>{"a_min", "d_min", "p_lat_max", "ttc_min",
-                                                                      "thw_min", "lane_offset_max"}));
+  EXPECT_EQ(summary.comparison.metricNames, (std::vector<std::string>{"a_min", "d_min", "p_lat_max", "y_max",
+                                                                      "ttc_min", "thw_min", "lane_offset_max"}));
   ASSERT_EQ(summary.statistics.criteria.size(), 2u);
   EXPECT_EQ(summary.statistics.criteria[1].name, "ttc_min < 1.5");
   const auto csv = CsvTable::read(work_.path() / "dataset_report" / "comparison.csv");

@@ -220,7 +220,7 @@ std::vector<BaseCommand> baseCommands(const Fixtures& f) {
       {"evaluate", {"evaluate", "--model", model, "--data", run, "--csv", "@e.csv"}, {"--threads"}, "e.csv"},
       {"compare",
        {"compare", "--model", model, "--data", run, "--out", "@report"},
-       {"--samples", "--seed", "--jobs", "--threads", "--worst", "--ego-length", "--other-length"},
+       {"--samples", "--seed", "--jobs", "--threads", "--worst"},
        "report"},
       {"compare-scenario",
        {"compare", (sourceDir() / "scenarios" / "acc.yaml").string(), "--model", model, "--samples", "4", "--out",

@@ -1,6 +1,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <set>
 
 #include "vsd/core/error.hpp"
 #include "vsd/metrics/metrics.hpp"
@@ -11,17 +12,24 @@ using namespace vsd::metrics;
 namespace {
 
 /// Ego at constant speed along +x from x = 0; leader `gap0` m (bumper to bumper)
-/// ahead at `leader_speed`; both 5 m long.
-Trace following(double ego_speed, double leader_speed, double gap0, int instants = 26, double dt = 0.2) {
+/// ahead at `leader_speed`; lengths as given (default: both 5 m).
+Trace following(double ego_speed, double leader_speed, double gap0, double ego_length = 5.0,
+                double leader_length = 5.0) {
+  const int instants = 26;
+  const double dt = 0.2;
   Trace trace;
   trace.step = dt;
   VehicleTrack ego;
   ego.role = VehicleRole::Ego;
+  ego.length = ego_length;
+  ego.width = 1.8;
   VehicleTrack leader;
+  leader.length = leader_length;
+  leader.width = 2.5;
   for (int k = 0; k < instants; ++k) {
     const double t = k * dt;
     ego.states.push_back({ego_speed * t, 0.0, 0.0, ego_speed, 0.0});
-    leader.states.push_back({gap0 + 5.0 + leader_speed * t, 0.0, 0.0, leader_speed, 0.0});
+    leader.states.push_back({gap0 + 0.5 * (ego_length + leader_length) + leader_speed * t, 0.0, 0.0, leader_speed, 0.0});
     ego.valid.push_back(1);
     leader.valid.push_back(1);
   }
@@ -29,64 +37,136 @@ Trace following(double ego_speed, double leader_speed, double gap0, int instants
   return trace;
 }
 
+double value(const std::string& name, const Trace& trace, const Polyline& lane = {}) {
+  return metric(name, "test").compute({trace, lane});
+}
+
 }  // namespace
 
 TEST(Metrics, DistanceTimeToCollisionAndHeadwayOnAClosingPair) {
   // Ego 15 m/s closes on a 10 m/s leader 30 m ahead: after 5 s the gap is 5 m.
   const Trace trace = following(15.0, 10.0, 30.0);
-  EXPECT_NEAR(dMin(trace), 5.0, 1e-9);
-  EXPECT_NEAR(ttcMin(trace), 5.0 / 5.0, 1e-9);   // gap 5 m at 5 m/s closing speed
-  EXPECT_NEAR(thwMin(trace), 5.0 / 15.0, 1e-9);  // gap / v_ego
+  EXPECT_NEAR(value("d_min", trace), 5.0, 1e-9);
+  EXPECT_NEAR(value("ttc_min", trace), 5.0 / 5.0, 1e-9);   // gap 5 m at 5 m/s closing speed
+  EXPECT_NEAR(value("thw_min", trace), 5.0 / 15.0, 1e-9);  // gap / v_ego
+}
+
+TEST(Metrics, GapsUseEachVehiclesOwnLength) {
+  // A 12 m truck ahead: the same bumper gaps as with a car, whatever the lengths.
+  const Trace truck = following(15.0, 10.0, 30.0, /*ego_length=*/4.5, /*leader_length=*/12.0);
+  EXPECT_NEAR(value("d_min", truck), 5.0, 1e-9);
+  EXPECT_NEAR(value("ttc_min", truck), 1.0, 1e-9);
+  // Assuming a 5 m leader for the truck would overstate the gap by 3.5 m.
+  Trace wrong = truck;
+  wrong.vehicles[1].length = 5.0;
+  EXPECT_NEAR(value("d_min", wrong), 5.0 + 3.5, 1e-9);
 }
 
 TEST(Metrics, TimeToCollisionIsInfiniteWhenNeverClosingIn) {
   const Trace trace = following(10.0, 12.0, 20.0);
-  EXPECT_TRUE(std::isinf(ttcMin(trace)));
-  EXPECT_NEAR(dMin(trace), 20.0, 1e-9);
-  EXPECT_NEAR(thwMin(trace), 2.0, 1e-9);
+  EXPECT_TRUE(std::isinf(value("ttc_min", trace)));
+  EXPECT_NEAR(value("d_min", trace), 20.0, 1e-9);
+  EXPECT_NEAR(value("thw_min", trace), 2.0, 1e-9);
 }
 
 TEST(Metrics, VehiclesBehindTheEgoAreNotLeaders) {
   Trace trace = following(10.0, 10.0, 20.0);
   for (auto& state : trace.vehicles[1].states) state.x -= 50.0;  // centre now 25 m behind
-  EXPECT_TRUE(std::isinf(thwMin(trace)));
-  EXPECT_TRUE(std::isinf(ttcMin(trace)));
-  EXPECT_NEAR(dMin(trace), 25.0 - 5.0, 1e-9);
+  EXPECT_TRUE(std::isinf(value("thw_min", trace)));
+  EXPECT_TRUE(std::isinf(value("ttc_min", trace)));
+  EXPECT_NEAR(value("d_min", trace), 25.0 - 5.0, 1e-9);
 }
 
-TEST(Metrics, EgoOnlyMetrics) {
+TEST(Metrics, EgoAccelerationAndScenarioFramePosition) {
+  Trace trace;
+  trace.step = 0.2;
   VehicleTrack ego;
   const double speeds[] = {10.0, 9.0, 7.0, 7.5};
   const double ys[] = {0.0, 0.4, 1.2, -0.3};
   for (int k = 0; k < 4; ++k) {
-    ego.states.push_back({2.0 * k, ys[k], 0.0, speeds[k], 0.0});
+    ego.states.push_back({2.0 * k, 100.0 + ys[k], 0.0, speeds[k], 0.0});
     ego.valid.push_back(1);
   }
   fillAccelerationFromSpeed(ego, 0.2);
-  EXPECT_NEAR(aMin(ego), -10.0, 1e-9);  // (7 - 9) / 0.2
-  EXPECT_NEAR(pLatMax(ego), 1.2, 1e-12);
-  EXPECT_NEAR(laneOffsetMax(ego, {{-10.0, 0.0}, {10.0, 0.0}}), 1.2, 1e-12);
-  EXPECT_NEAR(laneOffsetMax(ego, {{-10.0, 1.0}, {10.0, 1.0}}), 1.3, 1e-12);
+  trace.vehicles = {ego};
+  EXPECT_NEAR(value("a_min", trace), -10.0, 1e-9);  // (7 - 9) / 0.2
+  EXPECT_NEAR(value("y_max", trace), 101.2, 1e-12);
+}
+
+TEST(Metrics, LateralMetricsAreRelativeToTheEgosLane) {
+  // The lane runs 100 m up in the scenario frame; the Ego weaves around it.
+  Trace trace;
+  trace.step = 0.2;
+  VehicleTrack ego;
+  const double offsets[] = {0.0, 0.4, -1.3, 0.2};
+  for (int k = 0; k < 4; ++k) {
+    ego.states.push_back({2.0 * k, 100.0 + offsets[k], 0.0, 10.0, 0.0});
+    ego.valid.push_back(1);
+  }
+  trace.vehicles = {ego};
+  const Polyline lane = {{-10.0, 100.0}, {20.0, 100.0}};
+  EXPECT_NEAR(value("p_lat_max", trace, lane), 0.4, 1e-12);        // signed, left positive
+  EXPECT_NEAR(value("lane_offset_max", trace, lane), 1.3, 1e-12);  // unsigned
+  // Driving the lane the other way round flips the sign of the offsets.
+  const Polyline reversed = {{20.0, 100.0}, {-10.0, 100.0}};
+  EXPECT_NEAR(value("p_lat_max", trace, reversed), 1.3, 1e-12);
+  // Without a lane they cannot be computed.
+  EXPECT_TRUE(std::isnan(value("p_lat_max", trace)));
+  EXPECT_TRUE(std::isnan(value("lane_offset_max", trace)));
 }
 
 TEST(Metrics, InvalidInstantsAreIgnored) {
   Trace trace = following(15.0, 10.0, 30.0);
   trace.vehicles[1].valid[25] = 0;  // the leader vanished at the last instant
-  EXPECT_NEAR(dMin(trace), 30.0 - 5.0 * 4.8, 1e-9);
+  EXPECT_NEAR(value("d_min", trace), 30.0 - 5.0 * 4.8, 1e-9);
 }
 
-TEST(MetricSet, DefaultsDependOnOtherVehiclesAndNamesAreChecked) {
-  EXPECT_EQ(MetricSet({}, false, "w").names(), (std::vector<std::string>{"a_min", "p_lat_max", "lane_offset_max"}));
-  EXPECT_EQ(MetricSet({}, true, "w").names().size(), 6u);
+TEST(MetricRegistry, EveryEntryIsCompleteAndUnique) {
+  std::set<std::string> names;
+  for (const auto& definition : registry()) {
+    EXPECT_TRUE(names.insert(definition.name).second) << definition.name << " registered twice";
+    EXPECT_FALSE(definition.unit.empty()) << definition.name;
+    EXPECT_FALSE(definition.definition.empty()) << definition.name;
+    EXPECT_FALSE(definition.frame.empty()) << definition.name;
+    EXPECT_TRUE(static_cast<bool>(definition.compute)) << definition.name;
+  }
+  EXPECT_EQ(metricNames().size(), registry().size());
+  EXPECT_EQ(findMetric("no_such_metric"), nullptr);
   try {
-    MetricSet({"a_min", "dmin"}, true, "acc.yaml: metrics");
+    metric("dmin", "acc.yaml: metrics");
     FAIL();
   } catch (const ConfigError& error) {
-    EXPECT_NE(std::string(error.what()).find("unknown metric 'dmin'"), std::string::npos);
+    EXPECT_NE(std::string(error.what()).find("unknown metric 'dmin' (known: a_min, d_min"), std::string::npos)
+        << error.what();
   }
-  EXPECT_THROW(MetricSet({"d_min"}, false, "lk.yaml: metrics"), ConfigError);
+}
+
+TEST(MetricSet, DefaultsFollowWhatTheSourceProvides) {
+  const Availability ego_alone{/*otherVehicles=*/false, /*egoLane=*/true, /*scenarioFrame=*/true};
+  const Availability generated{/*otherVehicles=*/true, /*egoLane=*/true, /*scenarioFrame=*/true};
+  const Availability map{/*otherVehicles=*/true, /*egoLane=*/false, /*scenarioFrame=*/false};
+  EXPECT_EQ(MetricSet({}, ego_alone, "w").names(),
+            (std::vector<std::string>{"a_min", "p_lat_max", "y_max", "lane_offset_max"}));
+  EXPECT_EQ(MetricSet({}, generated, "w").names(), metricNames());
+  EXPECT_EQ(MetricSet({}, map, "w").names(), (std::vector<std::string>{"a_min", "d_min", "ttc_min", "thw_min"}));
+  EXPECT_THROW(MetricSet({"y_max"}, map, "--metrics"), ConfigError);
+  EXPECT_THROW(MetricSet({"d_min"}, ego_alone, "lk.yaml: metrics"), ConfigError);
+  EXPECT_THROW(MetricSet({"lane_offset_max"}, map, "--metrics"), ConfigError);
+  EXPECT_THROW(MetricSet({"a_min", "a_min"}, map, "--metrics"), ConfigError);
   const Trace trace = following(15.0, 10.0, 30.0);
-  const auto values = MetricSet({"d_min", "ttc_min"}, true, "w").evaluate(trace, {});
+  const auto values = MetricSet({"d_min", "ttc_min"}, generated, "w").evaluate({trace, {}});
   EXPECT_NEAR(values[0], 5.0, 1e-9);
   EXPECT_NEAR(values[1], 1.0, 1e-9);
+}
+
+TEST(MetricSet, CollisionRuleComesFromTheRegistry) {
+  const Availability generated{true, true, true};
+  const MetricSet with_gap({"a_min", "d_min"}, generated, "w");
+  EXPECT_EQ(with_gap.collisionRule(), "d_min <= 0");
+  EXPECT_TRUE(with_gap.collision({-3.0, -0.1}));
+  EXPECT_TRUE(with_gap.collision({-3.0, 0.0}));
+  EXPECT_FALSE(with_gap.collision({-3.0, 0.2}));
+  const MetricSet without_gap({"a_min", "ttc_min"}, generated, "w");
+  EXPECT_EQ(without_gap.collisionRule(), "");
+  EXPECT_FALSE(without_gap.collision({-3.0, 0.0}));
 }

@@ -29,7 +29,11 @@ vector::VectorizedScene syntheticScene(std::uint64_t i, const std::string& label
   Trace trace;
   trace.step = 0.2;
   VehicleTrack ego;
+  ego.length = 5.0;
+  ego.width = 1.8;
   VehicleTrack leader;
+  leader.length = 4.5;
+  leader.width = 1.8;
   double ego_speed = speed;
   Vec2 p = origin;
   for (int k = 0; k < 26; ++k) {
@@ -52,9 +56,18 @@ vector::VectorizedScene syntheticScene(std::uint64_t i, const std::string& label
   return scene;
 }
 
+/// The paper's time base (0.2 s, 25 steps): a network configuration passes it on explicitly.
+VectorNetConfig paperConfig() {
+  VectorNetConfig config;
+  config.step = 0.2;
+  config.horizon = 25;
+  return config;
+}
+
 fs::path writeDataset(const fs::path& path, std::size_t count, const std::string& label = "acc",
                       int horizon = 25) {
   vector::DatasetHeader header;
+  header.step = 0.2;
   header.horizon = horizon;
   vector::DatasetWriter writer(path, header);
   for (std::size_t i = 0; i < count; ++i) {
@@ -104,7 +117,7 @@ class ModelTest : public ::testing::Test {
 }  // namespace
 
 TEST(ModelTensors, ShapesMasksAndTheEgoFrame) {
-  VectorNetConfig config;
+  const VectorNetConfig config = paperConfig();
   std::vector<vector::VectorizedScene> scenes = {syntheticScene(1), syntheticScene(2)};
   scenes[1].polylines[2].valid[3] = 0;  // one masked leader vector
   const auto tensors = buildTensors(scenes, config);
@@ -126,7 +139,7 @@ TEST(ModelTensors, ShapesMasksAndTheEgoFrame) {
 }
 
 TEST(ModelTensors, EgoFrameRoundTrip) {
-  VectorNetConfig config;
+  const VectorNetConfig config = paperConfig();
   const std::vector<vector::VectorizedScene> scenes = {syntheticScene(3), syntheticScene(11)};
   const auto tensors = buildTensors(scenes, config);
   for (std::size_t i = 0; i < scenes.size(); ++i) {
@@ -139,7 +152,7 @@ TEST(ModelTensors, NonFiniteFeaturesAreRejectedWithTheSample) {
   auto scene = syntheticScene(4);
   scene.polylines[2].vectors[5][2] = std::nan("");
   try {
-    buildTensors({scene}, VectorNetConfig{});
+    buildTensors({scene}, paperConfig());
     FAIL();
   } catch (const DatasetError& error) {
     EXPECT_NE(std::string(error.what()).find("sample 4"), std::string::npos) << error.what();
@@ -268,6 +281,7 @@ TEST(ModelFiles, CorruptForeignAndOtherSchemaModelsAreRejected) {
   // A dataset with another horizon than the model's.
   const Predictor predictor(options.output);
   vector::DatasetHeader other;
+  other.step = 0.2;
   other.horizon = 10;
   EXPECT_THROW(predictor.checkCompatible(other, "other.h5"), ModelError);
 }

@@ -106,6 +106,24 @@ TEST(Export, OpenDriveMapWithHistoryAndClosedLoop) {
   EXPECT_TRUE(closed_summary.closedLoop);
   EXPECT_GT(closed_summary.samples, 0u);
   EXPECT_TRUE(vector::validateDataset(closed.output).ok());
+
+  // Every vehicle keeps the size of its vType (curve.rou.xml: cars 5 x 1.8 m, trucks 12 x 2.5 m),
+  // so gaps to and from the truck Egos are bumper to bumper.
+  const vector::DatasetReader trucks(closed.output);
+  std::set<std::pair<double, double>> other_sizes;
+  for (std::size_t i = 0; i < trucks.size(); ++i) {
+    const auto truck_scene = trucks.scene(i);
+    const auto& ego = truck_scene.polylines[truck_scene.egoPolyline];
+    EXPECT_EQ(ego.length, 12.0);
+    EXPECT_EQ(ego.width, 2.5);
+    for (const auto& polyline : truck_scene.polylines) {
+      if (polyline.type == vector::ObjectType::Vehicle) other_sizes.emplace(polyline.length, polyline.width);
+    }
+  }
+  EXPECT_TRUE(other_sizes.count({5.0, 1.8})) << "no car next to a truck Ego";
+  for (const auto& size : other_sizes) {
+    EXPECT_TRUE(size == std::make_pair(5.0, 1.8) || size == std::make_pair(12.0, 2.5)) << size.first << " x " << size.second;
+  }
 }
 
 TEST(Export, BadInputIsRejectedAndLeavesNoFile) {

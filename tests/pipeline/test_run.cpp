@@ -6,7 +6,10 @@
 #include "test_support.hpp"
 #include "vsd/core/csv.hpp"
 #include "vsd/core/error.hpp"
+#include "vsd/core/files.hpp"
+#include "vsd/metrics/metrics.hpp"
 #include "vsd/pipeline/run.hpp"
+#include "vsd/pipeline/scenes.hpp"
 #include "vsd/sim/trace_file.hpp"
 #include "vsd/vector/dataset.hpp"
 
@@ -50,7 +53,7 @@ TEST(Run, WritesConcreteCsvTracesAndManifest) {
   EXPECT_EQ(csv.rows(), 40u);
   const std::vector<std::string> expected_header = {
       "functional_scenario", "sample", "seed", "status", "failure", "a0", "a1", "a2", "a3", "v_ego", "x_co", "v_co",
-      "t_v_co", "a_co", "t_a_co", "a_min", "d_min", "p_lat_max", "ttc_min", "thw_min", "lane_offset_max"};
+      "t_v_co", "a_co", "t_a_co", "a_min", "d_min", "p_lat_max", "y_max", "ttc_min", "thw_min", "lane_offset_max"};
   EXPECT_EQ(csv.header(), expected_header);
   for (std::size_t row = 0; row < csv.rows(); ++row) {
     EXPECT_EQ(csv.cell(row, 0), "acc_lk");
@@ -248,5 +251,30 @@ TEST(Run, DatasetHoldsThePaperSceneOfEveryCompletedRun) {
     // Inputs and metrics travel with the sample.
     EXPECT_EQ(scene.inputs[0], csv.number(i, csv.column("v_ego")));
     EXPECT_EQ(scene.metrics[1], csv.number(i, csv.column("d_min")));
+  }
+}
+
+TEST(Run, VehicleSizesTravelIntoTheDatasetAndItsMetrics) {
+  TemporaryDirectory dir;
+  // acc with a 12 m truck as the Co.
+  std::string yaml = readTextFile(test::scenarioFile("acc.yaml"));
+  const std::string co = "- id: co\n";
+  ASSERT_NE(yaml.find(co), std::string::npos);
+  yaml.replace(yaml.find(co), co.size(), co + "      length: 12.0\n      width: 2.55\n");
+  const auto scenario = test::writeFile(dir.path() / "acc_truck.yaml", yaml);
+  runScenarios(options(scenario, dir.path() / "out", 10));
+  const vector::DatasetReader dataset(dir.path() / "out" / "dataset.h5");
+  EXPECT_FALSE(dataset.header().vehicleSizesAssumed);
+  const auto csv = CsvTable::read(dir.path() / "out" / "concrete.csv");
+  const metrics::MetricSet metric_set({"d_min", "ttc_min"}, pipeline::sceneAvailability("generated"), "test");
+  for (std::size_t i = 0; i < dataset.size(); ++i) {
+    const auto scene = dataset.scene(i);
+    EXPECT_EQ(scene.polylines[2].length, 12.0);
+    EXPECT_EQ(scene.polylines[2].width, 2.55);
+    EXPECT_EQ(scene.polylines[3].length, 5.0);
+    // The recorded future scored from the dataset alone gives the simulated d_min: the truck's
+    // length comes with the scene (assuming 5 m would add 3.5 m).
+    const auto values = pipeline::metricsOfFuture(metric_set, scene, scene.target);
+    EXPECT_NEAR(values[0], csv.number(i, csv.column("d_min")), 2e-3) << "sample " << i;
   }
 }

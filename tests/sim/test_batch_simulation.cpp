@@ -37,6 +37,7 @@ struct Batch {
     std::vector<ScenarioRun> runs;
     for (std::size_t i = 0; i < count; ++i) runs.push_back({&scenarios[i], &roads[i], layout.offsetFor(i)});
     BatchOptions options;
+    options.step = logical->step;
     options.steps = logical->steps();
     options.fcdOutput = fcd;
     results = simulateBatch(net, runs, registry, options);

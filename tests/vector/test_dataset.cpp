@@ -19,7 +19,11 @@ VectorizedScene sceneAt(const Vec2& origin, std::uint64_t sample, const std::str
   Trace trace;
   trace.step = 0.2;
   VehicleTrack ego;
+  ego.length = 4.6;
+  ego.width = 1.9;
   VehicleTrack other;
+  other.length = 12.0;  // a truck
+  other.width = 2.55;
   for (int k = 0; k < 26; ++k) {
     ego.states.push_back({origin.x() + 2.0 * k, origin.y(), 0.0, 10.0, 0.0});
     other.states.push_back({origin.x() + 20.0 + 1.6 * k, origin.y() + 3.5, 0.0, 8.0, 0.0});
@@ -41,6 +45,8 @@ VectorizedScene sceneAt(const Vec2& origin, std::uint64_t sample, const std::str
 
 DatasetHeader header() {
   DatasetHeader h;
+  h.step = 0.2;
+  h.horizon = 25;
   h.inputNames = {"a", "b"};
   h.metricNames = {"a_min"};
   return h;
@@ -53,6 +59,8 @@ void expectSame(const VectorizedScene& a, const VectorizedScene& b, double toler
     ASSERT_EQ(a.polylines[p].vectors.size(), b.polylines[p].vectors.size());
     EXPECT_EQ(a.polylines[p].valid, b.polylines[p].valid);
     EXPECT_EQ(a.polylines[p].type, b.polylines[p].type);
+    EXPECT_NEAR(a.polylines[p].length, b.polylines[p].length, 1e-6) << p;  // vehicle sizes survive (schema 2)
+    EXPECT_NEAR(a.polylines[p].width, b.polylines[p].width, 1e-6) << p;
     for (std::size_t v = 0; v < a.polylines[p].vectors.size(); ++v) {
       for (std::size_t f = 0; f < kFeatures; ++f) {
         EXPECT_NEAR(a.polylines[p].vectors[v][f], b.polylines[p].vectors[v][f], tolerance) << p << "/" << v << "/" << f;
@@ -105,6 +113,8 @@ TEST(Dataset, SharedLanePoolIsStoredOnceAndReadBack) {
   Trace trace;
   trace.step = 0.2;
   VehicleTrack ego;
+  ego.length = 5.0;
+  ego.width = 1.8;
   for (int k = 0; k < 26; ++k) {
     ego.states.push_back({100.0 + 2.0 * k, 0.0, 0.0, 10.0, 0.0});
     ego.valid.push_back(1);
@@ -113,6 +123,8 @@ TEST(Dataset, SharedLanePoolIsStoredOnceAndReadBack) {
   const auto scene = buildScene("map", trace, 0, index.query({100.0, 0.0}, 60.0));
   DatasetHeader map_header;
   map_header.kind = "map";
+  map_header.step = 0.2;
+  map_header.horizon = 25;
   const auto path = dir.path() / "map.h5";
   {
     DatasetWriter writer(path, map_header);
@@ -146,17 +158,43 @@ TEST(Dataset, ForeignCorruptAndUnknownFilesAreRejectedByName) {
   }
   const auto script = test::writeFile(dir.path() / "bump.py",
                                       "import h5py, sys\nwith h5py.File(sys.argv[1], 'a') as f:\n"
-                                      "    f.attrs['schema'] = 'vsd-dataset/2'\n");
+                                      "    f.attrs['schema'] = 'vsd-dataset/3'\n");
   ASSERT_EQ(test::run({test::python(), script.string(), path.string()}, dir.path()).exitCode, 0);
   try {
     DatasetReader reader(path);
     FAIL();
   } catch (const DatasetError& error) {
-    EXPECT_NE(std::string(error.what()).find("'vsd-dataset/2' is not supported"), std::string::npos) << error.what();
+    EXPECT_NE(std::string(error.what()).find("'vsd-dataset/3' is not supported"), std::string::npos) << error.what();
   }
   const auto validation = validateDataset(path);
   EXPECT_FALSE(validation.ok());
   ASSERT_EQ(validation.problems.size(), 1u);
+}
+
+TEST(Dataset, VersionOneFilesStillReadWithAssumedVehicleSizes) {
+  TemporaryDirectory dir;
+  const auto path = dir.path() / "old.h5";
+  {
+    DatasetWriter writer(path, header());
+    writer.append(sceneAt(Vec2(0, 0), 0, "acc"));
+    writer.close();
+  }
+  // What vsd-sumo wrote before vehicle sizes were stored.
+  const auto script = test::writeFile(dir.path() / "downgrade.py",
+                                      "import h5py, sys\nwith h5py.File(sys.argv[1], 'a') as f:\n"
+                                      "    f.attrs['schema'] = 'vsd-dataset/1'\n"
+                                      "    del f['polyline_length']\n    del f['polyline_width']\n");
+  ASSERT_EQ(test::run({test::python(), script.string(), path.string()}, dir.path()).exitCode, 0);
+  const DatasetReader reader(path);
+  EXPECT_TRUE(reader.header().vehicleSizesAssumed);
+  const auto scene = reader.scene(0);
+  for (const auto& polyline : scene.polylines) {
+    const bool vehicle = polyline.type != ObjectType::LaneBoundary;
+    EXPECT_EQ(polyline.length, vehicle ? kAssumedVehicleLength : 0.0);
+    EXPECT_EQ(polyline.width, vehicle ? kAssumedVehicleWidth : 0.0);
+  }
+  EXPECT_TRUE(validateDataset(path).ok());
+  EXPECT_NE(summarizeDataset(path).report().find("vsd-dataset/1"), std::string::npos);
 }
 
 TEST(Dataset, ValidationFindsBrokenInvariants) {

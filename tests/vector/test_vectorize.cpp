@@ -18,7 +18,11 @@ Trace followingTrace() {
   trace.step = 0.2;
   VehicleTrack ego;
   ego.role = VehicleRole::Ego;
+  ego.length = 4.5;
+  ego.width = 1.8;
   VehicleTrack co;
+  co.length = 5.5;
+  co.width = 2.0;
   for (int k = 0; k < 26; ++k) {
     const double t = 0.2 * k;
     ego.states.push_back({-50.0 + 10.0 * t, 1.0, 0.0, 10.0, 0.0});
@@ -157,14 +161,16 @@ TEST(SceneTrace, RebuildsTheTraceTheSceneCameFromAndTheEgosLane) {
   LaneGeometry other_lane = straightLane(-55.0, 55.0, 4.5, 25, 3.5);
   const auto scene = buildScene("acc", trace, 0, regionLanePolylines({other_lane, lane}, -55.0, 55.0));
 
-  const auto rebuilt = sceneTrace(scene, scene.target, 4.5, 5.5);
+  const auto rebuilt = sceneTrace(scene, scene.target);  // sizes travel with the scene
   ASSERT_EQ(rebuilt.vehicles.size(), 2u);
   EXPECT_EQ(rebuilt.step, 0.2);
   const auto& ego = rebuilt.vehicles[0];
   const auto& co = rebuilt.vehicles[1];
   EXPECT_EQ(ego.role, VehicleRole::Ego);
   EXPECT_EQ(ego.length, 4.5);
+  EXPECT_EQ(ego.width, 1.8);
   EXPECT_EQ(co.length, 5.5);
+  EXPECT_EQ(co.width, 2.0);
   ASSERT_EQ(ego.states.size(), 26u);
   ASSERT_EQ(co.states.size(), 26u);
   for (std::size_t k = 0; k < 26; ++k) {

@@ -39,8 +39,6 @@ struct CompareOptions {
   /// takes both from the scenario file).
   std::vector<std::string> metrics;
   std::vector<std::string> criteria;
-  double egoLength = 5.0;                      ///< dataset mode: m (datasets do not store lengths)
-  double otherLength = 5.0;                    ///< dataset mode: m
   std::string commandLine;                     ///< recorded in the report's provenance
 
   /// Throws ConfigError naming the flag and what is accepted.

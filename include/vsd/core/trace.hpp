@@ -38,8 +38,8 @@ enum class VehicleRole : std::uint8_t { Ego = 0, Other = 1 };
 struct VehicleTrack {
   std::string id;
   VehicleRole role = VehicleRole::Other;
-  double length = 5.0;  ///< m
-  double width = 1.8;   ///< m
+  double length = 0.0;  ///< m, bounding box; no default: from the scenario, the map or the dataset
+  double width = 0.0;   ///< m
   std::vector<VehicleState> states;
   std::vector<std::uint8_t> valid;  ///< 1 where the vehicle existed at t_k (same size as states)
 
@@ -48,7 +48,7 @@ struct VehicleTrack {
 
 /// All vehicles of one concrete scenario (or one map window). vehicles[0] is the Ego.
 struct Trace {
-  double step = 0.2;  ///< s between recorded instants
+  double step = 0.0;  ///< s between recorded instants; no default: from the scenario or the dataset
   std::vector<VehicleTrack> vehicles;
 
   std::size_t instants() const { return vehicles.empty() ? 0 : vehicles.front().states.size(); }

@@ -1,25 +1,21 @@
 #pragma once
-// Evaluation metrics of one run, computed from a Trace (simulated or
-// predicted) - never from SUMO state, so predicted trajectories are scored by
-// the same code.
+// Evaluation metrics of one run, computed from a Trace (simulated or predicted)
+// and its scene context - never from SUMO state, so predicted trajectories are
+// scored by the same code as simulated ones.
 //
-// Frame: the scenario frame. Reference point: the centre of each vehicle.
-// Instants: every recorded instant k = 0..K where the vehicles involved are valid.
-// gap_k(Ego, O) = |p_O,k - p_Ego,k| - (L_Ego + L_O) / 2   (m; <= 0 means the boxes touch)
+// Every metric is one entry of one table (the registry, src/metrics/registry.cpp):
+// name, unit, one-line definition, frame, what it needs, and the function that
+// computes it. Run, compare, experiment, baseline targets and criteria all read
+// that table; adding a metric touches the table, its function and its test.
 //
-//   a_min           min_{k>=1} a_Ego,k, a_k = (v_k - v_{k-1}) / dt                 [m/s^2]
-//   d_min           min_k min_O gap_k(Ego, O)                                      [m]
-//   p_lat_max       max_k y_Ego,k                                                  [m]
-//   ttc_min         min over k, O ahead and closing of gap_k / closing speed_k;    [s]
-//                   closing speed = (v_Ego u_Ego - v_O u_O) . n, n = unit(p_O - p_Ego),
-//                   u = heading unit vector; "ahead": (p_O - p_Ego) . u_Ego > 0;
-//                   +inf if the Ego never closes in
-//   thw_min         min over k, O ahead, v_Ego > 0.1 m/s of gap_k / v_Ego,k        [s]; +inf if never
-//   lane_offset_max max_k |signed distance of the Ego's centre from its lane's     [m]
-//                   centre line|
-//
-// d_min, ttc_min and thw_min need another vehicle; lane_offset_max needs the lane.
+// Conventions shared by all entries (README "Metrics"):
+//   frame:      the scenario frame (x along the road, y left) unless an entry says otherwise;
+//   reference:  the centre of each vehicle's bounding box;
+//   instants:   every recorded instant k = 0..K where the vehicles involved are valid;
+//   gap:        gap_k(Ego, O) = |p_O,k - p_Ego,k| - (L_Ego + L_O) / 2 with each vehicle's own
+//               length (m; <= 0 means the boxes touch).
 
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
@@ -28,40 +24,74 @@
 
 namespace vsd::metrics {
 
-struct MetricInfo {
-  std::string name;
-  std::string unit;
-  std::string description;
-  bool needsOtherVehicle = false;
-  bool needsLane = false;
+/// What a metric is computed from: one run's trace and the lane the Ego starts on.
+struct MetricContext {
+  const Trace& trace;            ///< vehicles[0] is the Ego; each track carries its length and width
+  const Polyline& egoLaneCentre; ///< centre line of the Ego's starting lane (scene frame); empty if unknown
 };
 
-/// Every metric this tool computes, in a fixed order.
-const std::vector<MetricInfo>& allMetrics();
-/// Looks a metric up by name.
-std::optional<MetricInfo> findMetric(const std::string& name);
+/// What a source of traces can provide to metrics.
+struct Availability {
+  bool otherVehicles = false;  ///< the trace holds vehicles besides the Ego
+  /// The centre line of the Ego's starting lane is known along its whole path (generated
+  /// roads). Map exports only know lanes near t0, so lane-relative metrics do not apply.
+  bool egoLane = false;
+  /// Coordinates are a generated scenario's frame (x along the road, y lateral); a map's
+  /// network frame has no such meaning.
+  bool scenarioFrame = false;
+};
 
-double aMin(const VehicleTrack& ego);
-double dMin(const Trace& trace);
-double pLatMax(const VehicleTrack& ego);
-double ttcMin(const Trace& trace);
-double thwMin(const Trace& trace);
-double laneOffsetMax(const VehicleTrack& ego, const Polyline& lane_centre);
+/// One metric: an entry of the registry.
+struct MetricDefinition {
+  std::string name;        ///< identifier used in YAML, CSV columns and criteria
+  std::string unit;        ///< "m", "s", "m/s^2"
+  std::string definition;  ///< one line, as printed in reports
+  std::string frame;       ///< what its coordinates are relative to
+  bool needsOtherVehicle = false;
+  bool needsEgoLane = false;
+  bool needsScenarioFrame = false;
+  /// A value <= this counts as a collision in summaries (e.g. d_min <= 0); nullopt: no rule.
+  std::optional<double> collisionAtOrBelow;
+  /// NaN where it cannot be computed (no valid instant); +inf where documented (e.g. never closing).
+  std::function<double(const MetricContext&)> compute;
+
+  bool appliesTo(const Availability& available) const {
+    return (!needsOtherVehicle || available.otherVehicles) && (!needsEgoLane || available.egoLane) &&
+           (!needsScenarioFrame || available.scenarioFrame);
+  }
+};
+
+/// Every metric this tool computes, in a fixed order (the registry's table).
+const std::vector<MetricDefinition>& registry();
+/// Looks a metric up by name; nullptr if unknown.
+const MetricDefinition* findMetric(const std::string& name);
+/// Looks a metric up by name; throws ConfigError "<where>: unknown metric 'x' (known: ...)".
+const MetricDefinition& metric(const std::string& name, const std::string& where);
+/// Names of every registered metric, in registry order.
+std::vector<std::string> metricNames();
+/// The metrics that apply to a source with `available` context, in registry order.
+std::vector<std::string> defaultMetrics(const Availability& available);
 
 /// A chosen list of metrics, validated once.
 class MetricSet {
  public:
-  /// `names` empty: all metrics that apply to a scenario with / without other vehicles.
-  /// Throws ConfigError for an unknown name (listing the known ones) or a metric the
-  /// scenario cannot provide (e.g. d_min without another vehicle); `where` prefixes messages.
-  MetricSet(const std::vector<std::string>& names, bool has_other_vehicles, const std::string& where);
+  /// `names` empty: every metric that applies (defaultMetrics). Throws ConfigError for an
+  /// unknown name (listing the known ones), a name listed twice, or a metric the source
+  /// cannot provide (e.g. d_min without another vehicle); `where` prefixes messages.
+  MetricSet(const std::vector<std::string>& names, const Availability& available, const std::string& where);
 
   const std::vector<std::string>& names() const { return names_; }
+  std::vector<std::string> units() const;
   /// Values in names() order; NaN where a metric cannot be computed (no valid instant).
-  std::vector<double> evaluate(const Trace& trace, const Polyline& ego_lane_centre) const;
+  std::vector<double> evaluate(const MetricContext& context) const;
+  /// True if any value is at or below its metric's collision threshold.
+  bool collision(const std::vector<double>& values) const;
+  /// "d_min <= 0" (the rules of this set's metrics, joined by " or "); empty if none applies.
+  std::string collisionRule() const;
 
  private:
   std::vector<std::string> names_;
+  std::vector<const MetricDefinition*> definitions_;
 };
 
 }  // namespace vsd::metrics

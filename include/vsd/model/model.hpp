@@ -36,12 +36,14 @@ struct VectorNetConfig {
   int globalWidth = 128;     ///< width of the attention's queries, keys and values
   int heads = 1;             ///< attention heads (globalWidth must be divisible by heads)
   int decoderHidden = 256;
-  int horizon = 25;          ///< predicted steps
-  double step = 0.2;         ///< s between predicted positions
+  int horizon = 0;           ///< predicted steps (>= 1); no default: from the training data's header
+  double step = 0.0;         ///< s between predicted positions (> 0); no default, like horizon
   double coordinateScale = 10.0;  ///< m: ego-frame coordinates are divided by this before the network
 
-  /// Throws ConfigError naming the field and the constraint.
+  /// Throws ConfigError naming the field and the constraint (architecture and time base).
   void validate() const;
+  /// The architecture alone: the time base comes from the data, checked once it is known.
+  void validateArchitecture() const;
 };
 
 /// How many samples of each label to train on, e.g. "acc=2000,lk=2000,acc_lk=200".

@@ -19,10 +19,20 @@
 #include <vector>
 
 #include "vsd/core/trace.hpp"
+#include "vsd/road/road_geometry.hpp"
+#include "vsd/scenario/concrete_scenario.hpp"
 #include "vsd/scenario/logical_scenario.hpp"
 #include "vsd/sim/sumo_session.hpp"
 
 namespace vsd::pipeline {
+
+/// A concrete scenario with the road it is simulated on.
+struct ScenarioWithRoad {
+  scenario::ConcreteScenario concrete;
+  road::RoadGeometry road;
+};
+/// Supplies concrete scenario `index` (its `index` field must equal the argument).
+using ScenarioSource = std::function<ScenarioWithRoad(std::uint64_t index)>;
 
 struct RunOptions {
   static constexpr std::size_t kDefaultBatch = 250;
@@ -41,6 +51,9 @@ struct RunOptions {
   bool writeFiles = true;           ///< false: only call the outcome callback (used by compare)
   int compression = 1;              ///< deflate level of dataset.h5's vectors (0 = none .. 9)
   std::string commandLine;          ///< recorded in the manifest
+  /// Empty: scenarios are sampled from the logical scenario (seed, index) and their roads
+  /// generated. Set for scenarios read from elsewhere (`vsd-sumo run FILE.xosc`).
+  ScenarioSource source;
 
   /// Throws ConfigError naming the flag and the accepted range.
   void validate() const;
@@ -75,7 +88,8 @@ struct RunSummary {
   std::uint64_t seed = 0;
   std::uint64_t ok = 0;
   std::uint64_t failed = 0;
-  std::uint64_t collisions = 0;  ///< completed runs with d_min <= 0
+  std::uint64_t collisions = 0;  ///< completed runs that meet the metrics' collision rule
+  std::string collisionRule;     ///< e.g. "d_min <= 0"; empty when no metric of the run defines one
   std::map<std::string, std::uint64_t> failureReasons;  ///< reason (numbers replaced by #) -> count
   std::map<std::string, std::string> failureExamples;   ///< reason (numbers replaced by #) -> first message
   std::vector<std::string> inputNames;

@@ -42,9 +42,15 @@ vector::VectorizedScene plannedScene(const scenario::ConcreteScenario& concrete)
 
 /// Metrics of a scene's Ego moving along `future` (positions t_1..t_F in the scene frame,
 /// valid where the scene's targetValid says; speeds and accelerations reconstructed from
-/// positions, see core/trace.hpp), with the other vehicles as the scene holds them and
-/// the lane the Ego starts on. Scores predictions and recorded futures with one code path.
+/// positions, see core/trace.hpp), with the other vehicles as the scene holds them (their
+/// sizes included) and the lane the Ego starts on. Scores predictions and recorded futures
+/// with one code path.
 std::vector<double> metricsOfFuture(const metrics::MetricSet& metric_set, const vector::VectorizedScene& scene,
-                                    const Polyline& future, double ego_length, double other_length);
+                                    const Polyline& future);
+
+/// What metrics can rely on in scenes of a dataset of this kind ("generated" or "map").
+metrics::Availability sceneAvailability(const std::string& dataset_kind);
+/// What metrics can rely on in runs of a logical scenario (generated roads, its vehicles).
+metrics::Availability scenarioAvailability(const scenario::LogicalScenario& logical);
 
 }  // namespace vsd::pipeline

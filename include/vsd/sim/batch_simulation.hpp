@@ -35,8 +35,8 @@ struct SimulatedScenario {
 };
 
 struct BatchOptions {
-  double step = 0.2;                     ///< s
-  int steps = 25;
+  double step = 0.0;                     ///< s (> 0); no default: from the logical scenario
+  int steps = 0;                         ///< recorded steps (>= 1); no default: from the logical scenario
   std::string collisionAction = "warn";  ///< SUMO --collision.action
   std::vector<std::string> sumoOptions;  ///< appended to SUMO's command line
   std::filesystem::path fcdOutput;       ///< SUMO FCD XML for this batch (empty: none)

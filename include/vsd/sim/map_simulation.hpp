@@ -43,7 +43,7 @@ struct VehicleSnapshot {
 
 struct MapSimulationOptions {
   MapSource source;
-  double step = 0.2;             ///< s
+  double step = 0.0;             ///< s (> 0); no default: from the export options
   std::optional<double> begin;   ///< s; default: the map's own
   std::optional<double> end;     ///< s; default: the map's own, else until no vehicle is left
   std::uint64_t seed = 1;        ///< SUMO's --seed

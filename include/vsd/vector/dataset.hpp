@@ -1,5 +1,5 @@
 #pragma once
-// Datasets of vectorized scenes (HDF5, schema "vsd-dataset/1", documented in
+// Datasets of vectorized scenes (HDF5, schema "vsd-dataset/2", documented in
 // the README): written streaming (memory flat in the number of samples), read
 // per sample, validated, summarised, and combined across files without copying.
 //
@@ -12,6 +12,7 @@
 //   /shared_vectors [S, 7] float64 lane-boundary vectors of a map, stored once (absolute coordinates)
 //   /polyline_type [P] int8, /polyline_shared [P] uint8 (1: vectors in /shared_vectors),
 //   /polyline_vector_start [P] int64 (into /vectors or /shared_vectors), /polyline_vector_count [P] int32
+//   /polyline_length [P], /polyline_width [P] float64   vehicle size (m; 0 for lane boundaries)
 //   /sample_polyline_start [N] int64, /sample_polyline_count [N] int32, /sample_ego_polyline [N] int32
 //   /sample_origin [N, 2] float64  (the Ego's initial position)
 //   /sample_label [N] int32, /sample_index [N] int64, /sample_source [N] int32,
@@ -30,19 +31,26 @@
 
 namespace vsd::vector {
 
-inline constexpr const char* kDatasetSchema = "vsd-dataset/1";
+inline constexpr const char* kDatasetSchema = "vsd-dataset/2";
+/// The previous schema, still read: it stores no vehicle sizes, so readers assume
+/// kAssumedVehicleLength x kAssumedVehicleWidth for every vehicle and say so.
+inline constexpr const char* kDatasetSchemaVersion1 = "vsd-dataset/1";
+inline constexpr double kAssumedVehicleLength = 5.0;  ///< m, version-1 files only
+inline constexpr double kAssumedVehicleWidth = 1.8;   ///< m, version-1 files only
 
 /// What every sample of a file shares.
 struct DatasetHeader {
   std::string kind = "generated";  ///< "generated" (vsd-sumo run) or "map" (vsd-sumo export)
-  double step = 0.2;               ///< s
-  int horizon = 25;                ///< F: target steps
+  double step = 0.0;               ///< s (> 0); no default: from the scenario or the export options
+  int horizon = 0;                 ///< F: target steps (>= 1); no default, like step
   int history = 0;                 ///< H: steps before t0 in vehicle polylines
   std::vector<std::string> inputNames;
   std::vector<std::string> metricNames;
   /// deflate level of the bulk arrays (vectors): 0 = none (fastest, ~2x larger), 1..9.
   /// Not stored: HDF5 records the filter per dataset, h5py reads either.
   int compression = 1;
+  /// Set by readers of version-1 files: vehicle sizes are not stored there and were assumed.
+  bool vehicleSizesAssumed = false;
 };
 
 class DatasetWriter {

@@ -12,7 +12,8 @@
 //     p(t0) + max(v dt, 1 cm) * heading, so it holds position, heading and speed
 //     (the 1 cm keeps the heading at standstill); timestamp 0. With a history,
 //     its past steps come first (timestamps -H+dt .. 0), then the initial vector.
-// polyline_id is the polyline's position in the scene. Coordinates are in the
+// polyline_id is the polyline's position in the scene. Vehicle and Ego polylines
+// also carry the vehicle's length and width (m), which gaps between vehicles need. Coordinates are in the
 // scene's frame (scenario frame for generated scenarios, network frame for maps),
 // metres. The target is the Ego's centre at t_1 .. t_F.
 
@@ -48,6 +49,9 @@ struct ScenePolyline {
   /// lane-vector pool (the vectors are consecutive there); -1 otherwise. Lets a
   /// dataset store a map's lanes once instead of once per sample.
   std::int64_t sharedStart = -1;
+  /// Vehicles and the Ego: the vehicle's bounding box (m, > 0); lane boundaries: 0.
+  double length = 0.0;
+  double width = 0.0;
 };
 
 /// Where a sample came from.
@@ -61,7 +65,7 @@ struct Provenance {
 struct VectorizedScene {
   std::string label;          ///< functional scenario (acc, lk, acc_lk) or map label
   std::uint64_t sample = 0;   ///< sample index of the run / window number of the export
-  double step = 0.2;          ///< s between instants
+  double step = 0.0;          ///< s between instants; no default: from the trace or the dataset header
   std::vector<ScenePolyline> polylines;
   std::size_t egoPolyline = 0;        ///< index of the Ego's polyline
   std::vector<Vec2> target;           ///< Ego centre at t_1 .. t_F (scene frame)

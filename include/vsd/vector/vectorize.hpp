@@ -77,11 +77,9 @@ namespace vsd::vector {
 /// The scene as a Trace over t = 0 .. F: the Ego along `ego_future` (positions at
 /// t_1 .. t_F; speed, heading and acceleration from trackFromPositions), every other
 /// vehicle from its vectors (positions at their end points, heading along them, speed
-/// = length / dt; masked where invalid). Lengths are the vehicles' (m): datasets do not
-/// store them, the logical scenario does. Used to score predictions with the metric
-/// code of simulated runs.
-Trace sceneTrace(const VectorizedScene& scene, const Polyline& ego_future, double ego_length = 5.0,
-                 double other_length = 5.0);
+/// = length / dt; masked where invalid), each with the length and width its polyline
+/// carries. Used to score predictions with the metric code of simulated runs.
+Trace sceneTrace(const VectorizedScene& scene, const Polyline& ego_future);
 
 /// The centre line of the lane the Ego starts on: the midline of the left/right
 /// boundary pair (consecutive lane polylines of equal length) nearest to its initial

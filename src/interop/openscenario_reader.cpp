@@ -1,0 +1,562 @@
+// Reads OpenSCENARIO files within the supported subset (README "OpenSCENARIO subset")
+// into a scenario `vsd-sumo run` can simulate.
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <sstream>
+
+#include "openscenario_names.hpp"
+#include "vsd/core/error.hpp"
+#include "vsd/interop/opendrive.hpp"
+#include "vsd/interop/openscenario.hpp"
+#include "xml_support.hpp"
+
+namespace fs = std::filesystem;
+
+namespace vsd::interop {
+
+namespace {
+
+/// Start positions and controller properties are exact in exported files; hand-written
+/// ones may round. Larger deviations mean a vehicle is not where vsd-sumo can put it.
+constexpr double kOnLaneTolerance = 0.01;  // m
+
+struct Entity {
+  std::string name;
+  pugi::xml_node node;
+  double length = 0.0;
+  double width = 0.0;
+  double referenceAhead = 0.0;  ///< m the box centre lies ahead of the entity's reference point
+  // From the Init:
+  std::optional<Vec2> position;  ///< box centre, scenario frame
+  int lane = 0;
+  double initialSpeed = 0.0;
+  pugi::xml_node controller;    ///< <Controller>, if the entity has one
+  // From the Story: speed changes (instant index, the change).
+  struct SpeedChange {
+    int instant = 0;
+    double target = 0.0;
+    double duration = 0.0;  ///< s over which the speed changes linearly (0: a step)
+    double rate = 0.0;      ///< m/s^2 (> 0: ramp with this rate instead of a duration)
+  };
+  std::vector<SpeedChange> speedChanges;
+};
+
+struct Document {
+  const xml::Reader& reader;
+  std::map<std::string, std::string> properties;            ///< FileHeader properties
+  std::vector<std::pair<std::string, double>> parameters;   ///< numeric ParameterDeclarations, in order
+  OpenDriveRoad road;
+  std::vector<Entity> entities;
+  double step = 0.0;
+  double duration = 0.0;
+
+  Entity& entity(const pugi::xml_node& node, const std::string& name) {
+    for (auto& candidate : entities) {
+      if (candidate.name == name) return candidate;
+    }
+    reader.fail(node, fmt::format("entityRef=\"{}\" names no entity of <Entities>", name));
+  }
+  int instantOf(const pugi::xml_node& node, double time) const {
+    const double instants = time / step;
+    const double rounded = std::round(instants);
+    // Times between two instants take effect at the next one (the condition becomes true there).
+    const int instant = static_cast<int>(std::abs(instants - rounded) < 1e-6 ? rounded : std::ceil(instants));
+    if (instant < 0) reader.fail(node, fmt::format("time {} s: expected >= 0", xml::number(time)));
+    return instant;
+  }
+};
+
+std::map<std::string, std::string> readFileHeader(const xml::Reader& reader, const pugi::xml_node& root) {
+  const pugi::xml_node header = reader.only(root, "FileHeader");
+  reader.requireSubset(header, {"License", "Properties"});
+  if (reader.number(header, "revMajor") != names::kRevMajor) {
+    reader.fail(header, fmt::format("revMajor=\"{}\": expected OpenSCENARIO 1.x", reader.text(header, "revMajor")));
+  }
+  std::map<std::string, std::string> properties;
+  if (const pugi::xml_node list = header.child("Properties")) {
+    reader.requireSubset(list, {"Property"});
+    for (const pugi::xml_node& property : list.children("Property")) {
+      properties[reader.text(property, "name")] = reader.text(property, "value");
+    }
+  }
+  return properties;
+}
+
+std::vector<std::pair<std::string, double>> readParameters(xml::Reader& reader, const pugi::xml_node& root) {
+  std::vector<std::pair<std::string, double>> numeric;
+  std::map<std::string, std::string> values;
+  if (const pugi::xml_node declarations = root.child("ParameterDeclarations")) {
+    reader.requireSubset(declarations, {"ParameterDeclaration"});
+    for (const pugi::xml_node& declaration : declarations.children("ParameterDeclaration")) {
+      reader.requireSubset(declaration, {});
+      const std::string name = reader.text(declaration, "name");
+      const std::string type = reader.oneOf(declaration, "parameterType",
+                                            {"double", "int", "integer", "unsignedInt", "unsignedShort", "string", "boolean"});
+      values[name] = reader.text(declaration, "value");
+      if (type != "string" && type != "boolean") numeric.emplace_back(name, reader.number(declaration, "value"));
+    }
+  }
+  reader.setParameters(std::move(values));
+  return numeric;
+}
+
+void readEntities(Document& document, const pugi::xml_node& root) {
+  const xml::Reader& reader = document.reader;
+  const pugi::xml_node entities = reader.only(root, "Entities");
+  reader.requireSubset(entities, {"ScenarioObject"});
+  for (const pugi::xml_node& object : entities.children("ScenarioObject")) {
+    reader.requireSubset(object, {"Vehicle", "ObjectController"});
+    Entity entity;
+    entity.name = reader.text(object, "name");
+    entity.node = object;
+    const pugi::xml_node vehicle = reader.only(object, "Vehicle");
+    reader.requireSubset(vehicle, {"BoundingBox", "Performance", "Axles", "Properties"});
+    const pugi::xml_node box = reader.only(vehicle, "BoundingBox");
+    reader.requireSubset(box, {"Center", "Dimensions"});
+    const pugi::xml_node dimensions = reader.only(box, "Dimensions");
+    entity.length = reader.number(dimensions, "length");
+    entity.width = reader.number(dimensions, "width");
+    if (!(entity.length > 0.0) || !(entity.width > 0.0)) reader.fail(dimensions, "length and width: expected > 0 m");
+    const pugi::xml_node center = reader.only(box, "Center");
+    entity.referenceAhead = reader.number(center, "x");
+    if (std::abs(reader.number(center, "y")) > kOnLaneTolerance) {
+      reader.fail(center, "y: expected 0 (the bounding box centred on the vehicle's axis)");
+    }
+    if (const pugi::xml_node object_controller = object.child("ObjectController")) {
+      reader.requireSubset(object_controller, {"Controller"});
+      entity.controller = reader.only(object_controller, "Controller");
+    }
+    for (const auto& other : document.entities) {
+      if (other.name == entity.name) reader.fail(object, fmt::format("entity name '{}' is used twice", entity.name));
+    }
+    document.entities.push_back(entity);
+  }
+  if (document.entities.empty()) reader.fail(entities, "expected at least one <ScenarioObject>");
+}
+
+/// Where a LanePosition or WorldPosition puts the entity's box centre, and on which lane.
+void readPosition(Document& document, Entity& entity, const pugi::xml_node& position_node) {
+  const xml::Reader& reader = document.reader;
+  const road::RoadGeometry& road = document.road.geometry;
+  const pugi::xml_node position = reader.choice(position_node, {"LanePosition", "WorldPosition"});
+  RoadCoordinate coordinate;
+  int lane = 0;
+  if (std::string(position.name()) == "LanePosition") {
+    reader.requireSubset(position, {"Orientation"});
+    if (reader.text(position, "roadId") != document.road.id) {
+      reader.fail(position, fmt::format("roadId=\"{}\": the road network has road \"{}\" only",
+                                        reader.text(position, "roadId"), document.road.id));
+    }
+    const double lane_id = reader.number(position, "laneId");
+    const auto found = laneFromOpenDrive(static_cast<int>(lane_id), road.lanes);
+    if (!found || lane_id != std::round(lane_id)) {
+      reader.fail(position, fmt::format("laneId=\"{}\": expected a driving lane, -1 .. -{}", reader.text(position, "laneId"), road.lanes));
+    }
+    lane = *found;
+    const double offset = reader.optionalNumber(position, "offset").value_or(0.0);
+    if (std::abs(offset) > kOnLaneTolerance) {
+      reader.fail(position, fmt::format("offset=\"{}\": vehicles start on their lane's centre line (|offset| <= {} m)",
+                                        reader.text(position, "offset"), kOnLaneTolerance));
+    }
+    if (const pugi::xml_node orientation = position.child("Orientation")) {
+      const bool relative = reader.optionalText(orientation, "type").value_or("relative") == "relative";
+      if (!relative || std::abs(reader.optionalNumber(orientation, "h").value_or(0.0)) > 1e-6) {
+        reader.fail(orientation, "vehicles start heading along their lane (relative h = 0)");
+      }
+    }
+    coordinate = {reader.number(position, "s"), road.laneOffset(lane) + offset};
+  } else {
+    reader.requireSubset(position, {});
+    coordinate = toRoadCoordinate(road, Vec2(reader.number(position, "x"), reader.number(position, "y")));
+    lane = static_cast<int>(std::lround((coordinate.t - road.laneOffset(0)) / road.laneWidth));
+    if (lane < 0 || lane >= road.lanes || std::abs(coordinate.t - road.laneOffset(lane)) > kOnLaneTolerance) {
+      reader.fail(position, fmt::format("({}, {}) is not on a lane's centre line (vehicles start there)",
+                                        reader.text(position, "x"), reader.text(position, "y")));
+    }
+  }
+  const MeasuredPolyline lane_centre(road.laneCentre(lane));
+  const Vec2 reference = fromRoadCoordinate(road, coordinate);
+  const double along = lane_centre.project(reference).arcLength + entity.referenceAhead;
+  entity.position = entity.referenceAhead == 0.0 ? reference : lane_centre.pointAt(along);
+  entity.lane = lane;
+}
+
+/// The target speed of a SpeedAction and how it gets there.
+Entity::SpeedChange readSpeedAction(const xml::Reader& reader, const pugi::xml_node& longitudinal) {
+  const pugi::xml_node action = reader.choice(longitudinal, {"SpeedAction"});
+  reader.requireSubset(action, {"SpeedActionDynamics", "SpeedActionTarget"});
+  const pugi::xml_node dynamics = reader.only(action, "SpeedActionDynamics");
+  const pugi::xml_node target = reader.choice(reader.only(action, "SpeedActionTarget"), {"AbsoluteTargetSpeed"});
+  Entity::SpeedChange change;
+  change.target = reader.number(target, "value");
+  if (change.target < 0.0) reader.fail(target, "value: expected >= 0 m/s (vehicles do not reverse)");
+  const std::string shape = reader.oneOf(dynamics, "dynamicsShape", {"step", "linear"});
+  if (shape == "linear") {
+    const std::string dimension = reader.oneOf(dynamics, "dynamicsDimension", {"time", "rate"});
+    const double value = reader.number(dynamics, "value");
+    if (!(value >= 0.0)) reader.fail(dynamics, "value: expected >= 0");
+    (dimension == "time" ? change.duration : change.rate) = value;
+  }
+  return change;
+}
+
+void readInit(Document& document, const pugi::xml_node& storyboard) {
+  const xml::Reader& reader = document.reader;
+  const pugi::xml_node actions = reader.only(reader.only(storyboard, "Init"), "Actions");
+  reader.requireSubset(actions, {"Private"});
+  for (const pugi::xml_node& private_node : actions.children("Private")) {
+    Entity& entity = document.entity(private_node, reader.text(private_node, "entityRef"));
+    reader.requireSubset(private_node, {"PrivateAction"});
+    for (const pugi::xml_node& action_node : private_node.children("PrivateAction")) {
+      const pugi::xml_node action = reader.choice(
+          action_node, {"TeleportAction", "LongitudinalAction", "ControllerAction", "ActivateControllerAction"});
+      const std::string kind = action.name();
+      if (kind == "TeleportAction") {
+        reader.requireSubset(action, {"Position"});
+        readPosition(document, entity, reader.only(action, "Position"));
+      } else if (kind == "LongitudinalAction") {
+        entity.initialSpeed = readSpeedAction(reader, action).target;
+      } else if (kind == "ControllerAction") {
+        reader.requireSubset(action, {"AssignControllerAction", "ActivateControllerAction"});
+        if (const pugi::xml_node assign = action.child("AssignControllerAction")) {
+          reader.requireSubset(assign, {"Controller"});
+          entity.controller = reader.only(assign, "Controller");
+        }
+      }
+      // ActivateControllerAction: vsd-sumo's controllers drive both directions from the start.
+    }
+  }
+  for (const auto& entity : document.entities) {
+    if (!entity.position) reader.fail(entity.node, fmt::format("entity '{}' has no TeleportAction in the Init (where does it start?)", entity.name));
+  }
+}
+
+/// Instant at which a trigger made of one SimulationTimeCondition fires.
+int readTimeTrigger(const Document& document, const pugi::xml_node& trigger) {
+  const xml::Reader& reader = document.reader;
+  reader.requireSubset(trigger, {"ConditionGroup"});
+  const pugi::xml_node group = reader.only(trigger, "ConditionGroup");
+  reader.requireSubset(group, {"Condition"});
+  const pugi::xml_node condition = reader.only(group, "Condition");
+  reader.oneOf(condition, "conditionEdge", {"none", "rising"});
+  const double delay = reader.number(condition, "delay");
+  const pugi::xml_node by_value = reader.choice(condition, {"ByValueCondition"});
+  const pugi::xml_node time = reader.choice(by_value, {"SimulationTimeCondition"});
+  const std::string rule = reader.oneOf(time, "rule", {"greaterOrEqual", "greaterThan", "equalTo"});
+  double value = reader.number(time, "value") + delay;
+  // greaterThan t holds from the first instant after t.
+  const int instant = document.instantOf(time, value);
+  return rule == "greaterThan" && std::abs(instant * document.step - value) < 1e-6 * document.step ? instant + 1 : instant;
+}
+
+void readEvent(Document& document, Entity& actor, const pugi::xml_node& event, int act_start) {
+  const xml::Reader& reader = document.reader;
+  reader.requireSubset(event, {"Action", "StartTrigger"});
+  const int start = std::max(act_start, event.child("StartTrigger") ? readTimeTrigger(document, event.child("StartTrigger")) : 0);
+  for (const pugi::xml_node& action : event.children("Action")) {
+    const pugi::xml_node private_action = reader.choice(action, {"PrivateAction"});
+    Entity::SpeedChange change = readSpeedAction(reader, reader.choice(private_action, {"LongitudinalAction"}));
+    change.instant = start;
+    actor.speedChanges.push_back(change);
+  }
+}
+
+void readStories(Document& document, const pugi::xml_node& storyboard) {
+  const xml::Reader& reader = document.reader;
+  for (const pugi::xml_node& story : storyboard.children("Story")) {
+    reader.requireSubset(story, {"Act"});
+    for (const pugi::xml_node& act : story.children("Act")) {
+      reader.requireSubset(act, {"ManeuverGroup", "StartTrigger"});
+      const int act_start = readTimeTrigger(document, reader.only(act, "StartTrigger"));
+      for (const pugi::xml_node& group : act.children("ManeuverGroup")) {
+        reader.requireSubset(group, {"Actors", "Maneuver"});
+        const pugi::xml_node actors = reader.only(group, "Actors");
+        reader.requireSubset(actors, {"EntityRef"});
+        Entity& actor = document.entity(actors, reader.text(reader.only(actors, "EntityRef"), "entityRef"));
+        if (actor.controller) {
+          reader.fail(actors, fmt::format("'{}' is driven by its controller; the supported subset scripts only the "
+                                          "other vehicles",
+                                          actor.name));
+        }
+        for (const pugi::xml_node& maneuver : group.children("Maneuver")) {
+          reader.requireSubset(maneuver, {"Event"});
+          for (const pugi::xml_node& event : maneuver.children("Event")) readEvent(document, actor, event, act_start);
+        }
+      }
+    }
+  }
+}
+
+void readTimeBase(Document& document, const pugi::xml_node& storyboard, const ImportOptions& options) {
+  const xml::Reader& reader = document.reader;
+  const auto property = document.properties.find(names::kStep);
+  if (property != document.properties.end()) {
+    const double step = std::strtod(property->second.c_str(), nullptr);
+    if (!(step > 0.0)) {
+      throw ConfigError(fmt::format("{}: FileHeader property {}=\"{}\": expected a step > 0 s", reader.file().string(),
+                                    names::kStep, property->second));
+    }
+    if (options.step && std::abs(*options.step - step) > 1e-12) {
+      throw ConfigError(fmt::format("{}: --step {} contradicts the file's step {} s ({})", reader.file().string(),
+                                    xml::number(*options.step), property->second, names::kStep));
+    }
+    document.step = step;
+  } else if (options.step) {
+    document.step = *options.step;
+  } else {
+    throw ConfigError(fmt::format("{}: the simulation step is not in the file (FileHeader property {}); pass --step",
+                                  reader.file().string(), names::kStep));
+  }
+  const pugi::xml_node stop = reader.only(storyboard, "StopTrigger");
+  const int steps = readTimeTrigger(document, stop);
+  if (steps < 1) reader.fail(stop, "the scenario stops at t = 0 (expected a duration of at least one step)");
+  document.duration = steps * document.step;
+}
+
+/// Speeds at instants 0..steps: the initial speed, then the speed changes in time order.
+/// A change that starts at t_k shapes the speed from t_k on; the value at t_k+1 is what
+/// the vehicle drives with over [t_k, t_k+1] (SUMO's Euler update, see the writer).
+std::vector<double> speedProfile(const Entity& entity, int steps, double step) {
+  std::vector<Entity::SpeedChange> changes = entity.speedChanges;
+  std::stable_sort(changes.begin(), changes.end(), [](const auto& a, const auto& b) { return a.instant < b.instant; });
+  std::vector<double> speeds(static_cast<std::size_t>(steps) + 1, entity.initialSpeed);
+  double ramp_start_time = 0.0;
+  double ramp_start_speed = entity.initialSpeed;
+  Entity::SpeedChange ramp;
+  ramp.target = entity.initialSpeed;
+  std::size_t next = 0;
+  for (int k = 0; k < steps; ++k) {
+    for (; next < changes.size() && changes[next].instant <= k; ++next) {
+      ramp = changes[next];
+      ramp_start_time = k * step;
+      ramp_start_speed = speeds[static_cast<std::size_t>(k)];
+    }
+    double span = ramp.duration;
+    if (ramp.rate > 0.0) span = std::abs(ramp.target - ramp_start_speed) / ramp.rate;
+    const double elapsed = (k + 1) * step - ramp_start_time;
+    const double fraction = span > 0.0 ? std::min(1.0, elapsed / span) : 1.0;
+    speeds[static_cast<std::size_t>(k) + 1] = ramp_start_speed + (ramp.target - ramp_start_speed) * fraction;
+  }
+  return speeds;
+}
+
+std::string property(const Document& document, const char* name, const std::string& fallback) {
+  const auto it = document.properties.find(name);
+  return it == document.properties.end() ? fallback : it->second;
+}
+
+nlohmann::json jsonProperty(const Document& document, const char* name, const char* fallback) {
+  const std::string text = property(document, name, fallback);
+  try {
+    return nlohmann::json::parse(text);
+  } catch (const nlohmann::json::exception&) {
+    throw ConfigError(fmt::format("{}: FileHeader property {}=\"{}\": expected JSON", document.reader.file().string(),
+                                  name, text));
+  }
+}
+
+std::pair<double, double> numberPair(const Document& document, const char* name, std::pair<double, double> fallback) {
+  const auto it = document.properties.find(name);
+  if (it == document.properties.end()) return fallback;
+  std::istringstream stream(it->second);
+  std::pair<double, double> values;
+  if (!(stream >> values.first >> values.second)) {
+    throw ConfigError(fmt::format("{}: FileHeader property {}=\"{}\": expected two numbers",
+                                  document.reader.file().string(), name, it->second));
+  }
+  return values;
+}
+
+const Entity& findEgo(const Document& document) {
+  const Entity* ego = nullptr;
+  for (const auto& entity : document.entities) {
+    if (!entity.controller) continue;
+    if (ego) {
+      document.reader.fail(entity.node, fmt::format("'{}' and '{}' both have a controller; the supported subset has "
+                                                    "one controller-driven vehicle (the Ego)",
+                                                    ego->name, entity.name));
+    }
+    ego = &entity;
+  }
+  if (!ego) {
+    document.reader.fail(document.entities.front().node,
+                         "no vehicle has a controller (assign the Ego's with an AssignControllerAction in the Init)");
+  }
+  return *ego;
+}
+
+void readRoadSpec(const Document& document, scenario::LogicalScenario& logical) {
+  const road::RoadGeometry& road = document.road.geometry;
+  double lowest = road.centre.front().x();
+  double highest = lowest;
+  for (const auto& point : road.centre) {
+    lowest = std::min(lowest, point.x());
+    highest = std::max(highest, point.x());
+  }
+  const auto [x_min, x_max] = numberPair(document, names::kRegion, {lowest, highest});
+  const auto [before, after] = numberPair(document, names::kExtension, {0.0, 0.0});
+  logical.road.xMin = x_min;
+  logical.road.xMax = x_max;
+  logical.road.extensionBefore = before;
+  logical.road.extensionAfter = after;
+  logical.road.lanes = road.lanes;
+  logical.road.laneWidth = scenario::Expression::constant(road.laneWidth);
+  logical.road.speedLimit = road.speedLimit;
+  logical.road.points = static_cast<int>(std::count_if(road.centre.begin(), road.centre.end(), [&](const Vec2& p) {
+    return p.x() >= x_min - 1e-6 && p.x() <= x_max + 1e-6;
+  }));
+}
+
+/// The Ego's controller: its name, parameters (numeric Properties), disturbances and library.
+void readController(const Document& document, const Entity& ego, scenario::LogicalScenario& logical,
+                    scenario::ConcreteScenario& concrete) {
+  const xml::Reader& reader = document.reader;
+  const pugi::xml_node controller = ego.controller;
+  reader.requireSubset(controller, {"Properties"});
+  auto& spec = logical.ego.controller;
+  spec.name = reader.text(controller, "name");
+  spec.where = reader.where(controller);
+  concrete.headingNoise.assign(static_cast<std::size_t>(logical.steps()), 0.0);
+  const pugi::xml_node properties = reader.only(controller, "Properties");
+  reader.requireSubset(properties, {"Property"});
+  for (const pugi::xml_node& property : properties.children("Property")) {
+    const std::string name = reader.text(property, "name");
+    if (name == names::kLibrary) {
+      spec.library = reader.text(property, "value");
+      if (spec.library.is_relative()) spec.library = fs::absolute(reader.file()).parent_path() / spec.library;
+    } else if (name == names::kHeadingDisturbance) {
+      std::istringstream stream(reader.text(property, "value"));
+      std::vector<double> values;
+      for (double value = 0.0; stream >> value;) values.push_back(value);
+      if (!stream.eof() || values.size() != concrete.headingNoise.size()) {
+        reader.fail(property, fmt::format("{}: expected {} numbers (one per step)", name, concrete.headingNoise.size()));
+      }
+      concrete.headingNoise = values;
+    } else if (name != names::kDescription) {
+      const double value = reader.number(property, "value");
+      spec.params.emplace_back(name, scenario::Expression::constant(value));
+      concrete.controllerParams.emplace_back(name, value);
+    }
+  }
+}
+
+scenario::VehicleSpec vehicleSpec(const Entity& entity, const std::string& where) {
+  scenario::VehicleSpec spec;
+  spec.id = entity.name;
+  spec.lane = entity.lane;
+  spec.length = entity.length;
+  spec.width = entity.width;
+  spec.x = scenario::Expression::constant(entity.position->x());
+  spec.where = where;
+  return spec;
+}
+
+scenario::ConcreteVehicle concreteVehicle(const Entity& entity, double speed) {
+  scenario::ConcreteVehicle vehicle;
+  vehicle.id = entity.name;
+  vehicle.lane = entity.lane;
+  vehicle.length = entity.length;
+  vehicle.width = entity.width;
+  vehicle.x = entity.position->x();
+  vehicle.speed = speed;
+  return vehicle;
+}
+
+void readSumoOptions(const Document& document, scenario::LogicalScenario& logical) {
+  const std::string where = document.reader.file().string() + ": FileHeader properties";
+  try {
+    logical.sumo.collisionAction = property(document, names::kCollisionAction, logical.sumo.collisionAction);
+    logical.sumo.sumoOptions = jsonProperty(document, names::kSumoOptions, "[]").get<std::vector<std::string>>();
+    logical.sumo.netconvertOptions = jsonProperty(document, names::kNetconvertOptions, "[]").get<std::vector<std::string>>();
+    logical.metrics = jsonProperty(document, names::kMetrics, "[]").get<std::vector<std::string>>();
+    for (const auto& criterion : jsonProperty(document, names::kCriteria, "[]")) {
+      logical.criteria.push_back({criterion.at("name").get<std::string>(), criterion.at("fail_if").get<std::string>(),
+                                  where + " " + names::kCriteria});
+    }
+  } catch (const nlohmann::json::exception& error) {
+    throw ConfigError(fmt::format("{}: unexpected structure ({})", where, error.what()));
+  }
+}
+
+ImportedScenario buildScenario(const Document& document, const fs::path& xosc) {
+  auto logical = std::make_shared<scenario::LogicalScenario>();
+  ImportedScenario imported;
+  scenario::ConcreteScenario& concrete = imported.concrete;
+  logical->name = property(document, names::kFunctionalScenario, xosc.stem().string());
+  logical->description = "imported from " + xosc.filename().string();
+  logical->sourceFile = xosc;
+  logical->step = document.step;
+  logical->duration = document.duration;
+  for (const auto& [name, value] : document.parameters) {
+    scenario::InputSpec input;
+    input.name = name;
+    input.distribution.kind = scenario::Distribution::Kind::Constant;
+    input.distribution.value = scenario::Expression::constant(value);
+    logical->inputs.push_back(input);
+    concrete.inputs.push_back(value);
+  }
+  readRoadSpec(document, *logical);
+  readSumoOptions(document, *logical);
+
+  const Entity& ego = findEgo(document);
+  logical->ego = vehicleSpec(ego, document.reader.where(ego.node));
+  logical->ego.speed = scenario::Expression::constant(ego.initialSpeed);
+  readController(document, ego, *logical, concrete);
+  concrete.ego = concreteVehicle(ego, ego.initialSpeed);
+  for (const auto& entity : document.entities) {
+    if (&entity == &ego) continue;
+    logical->others.push_back(vehicleSpec(entity, document.reader.where(entity.node)));
+    scenario::ConcreteVehicle other = concreteVehicle(entity, entity.initialSpeed);
+    other.scriptedSpeed = speedProfile(entity, logical->steps(), logical->step);
+    concrete.others.push_back(std::move(other));
+  }
+
+  concrete.seed = std::stoull(property(document, names::kSeed, "0"));
+  concrete.index = std::stoull(property(document, names::kSample, "0"));
+  concrete.laneWidth = document.road.geometry.laneWidth;
+  imported.road = document.road.geometry;
+  imported.road.regionBegin = 0;
+  imported.road.regionEnd = imported.road.centre.size();
+  concrete.logical = logical;
+  imported.logical = logical;
+  return imported;
+}
+
+}  // namespace
+
+ImportedScenario importOpenScenario(const fs::path& xosc, const ImportOptions& options) {
+  xml::Reader reader(xosc);
+  const pugi::xml_node root = reader.root();
+  if (std::string(root.name()) != "OpenSCENARIO") reader.fail(root, "expected the root element <OpenSCENARIO>");
+  if (root.child("Catalog") || root.child("ParameterValueDistribution")) {
+    reader.fail(root, "this is a catalog or a parameter distribution; `vsd-sumo run` takes a concrete scenario");
+  }
+  reader.requireSubset(root, {"FileHeader", "ParameterDeclarations", "CatalogLocations", "RoadNetwork", "Entities",
+                              "Storyboard"});
+  Document document{reader, readFileHeader(reader, root), readParameters(reader, root), {}, {}, 0.0, 0.0};
+  const pugi::xml_node network = reader.only(root, "RoadNetwork");
+  reader.requireSubset(network, {"LogicFile", "SceneGraphFile"});
+  const fs::path logic_file = reader.text(reader.only(network, "LogicFile"), "filepath");
+  const fs::path xodr = logic_file.is_absolute() ? logic_file : xosc.parent_path() / logic_file;
+  if (!fs::exists(xodr)) {
+    reader.fail(network.child("LogicFile"), fmt::format("the road network {} does not exist", xodr.string()));
+  }
+  document.road = readOpenDrive(xodr);
+  readEntities(document, root);
+  const pugi::xml_node storyboard = reader.only(root, "Storyboard");
+  reader.requireSubset(storyboard, {"Init", "Story", "StopTrigger"});
+  readTimeBase(document, storyboard, options);
+  readInit(document, storyboard);
+  readStories(document, storyboard);
+  ImportedScenario imported = buildScenario(document, xosc);
+  imported.roadFile = xodr;
+  imported.roadId = document.road.id;
+  return imported;
+}
+
+}  // namespace vsd::interop

@@ -1,0 +1,163 @@
+#include "xml_support.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <charconv>
+#include <cmath>
+#include <sstream>
+
+#include "vsd/core/error.hpp"
+#include "vsd/core/files.hpp"
+
+namespace fs = std::filesystem;
+
+namespace vsd::interop::xml {
+
+std::string number(double value) {
+  if (value == 0.0) return "0";  // never "-0"
+  return fmt::format("{}", value);
+}
+
+pugi::xml_node child(pugi::xml_node parent, const char* name,
+                     std::initializer_list<std::pair<const char*, std::string>> attributes) {
+  pugi::xml_node node = parent.append_child(name);
+  for (const auto& [key, value] : attributes) node.append_attribute(key).set_value(value.c_str());
+  return node;
+}
+
+std::string toText(const pugi::xml_document& document) {
+  std::ostringstream stream;
+  document.save(stream, "  ", pugi::format_default, pugi::encoding_utf8);
+  return stream.str();
+}
+
+void save(const pugi::xml_document& document, const fs::path& file) { writeTextFileAtomically(file, toText(document)); }
+
+Reader::Reader(const fs::path& file) : file_(file), text_(readTextFile(file)) { parse(); }
+
+Reader::Reader(const fs::path& file, std::string text) : file_(file), text_(std::move(text)) { parse(); }
+
+void Reader::parse() {
+  lineStarts_.push_back(0);
+  for (std::size_t i = 0; i < text_.size(); ++i) {
+    if (text_[i] == '\n') lineStarts_.push_back(i + 1);
+  }
+  const auto result = document_.load_buffer(text_.data(), text_.size(), pugi::parse_default | pugi::parse_ws_pcdata_single);
+  if (!result) {
+    const auto it = std::upper_bound(lineStarts_.begin(), lineStarts_.end(), static_cast<std::size_t>(result.offset));
+    throw ConfigError(fmt::format("{}:{}: not well-formed XML ({})", file_.string(), std::distance(lineStarts_.begin(), it),
+                                  result.description()));
+  }
+  if (!document_.document_element()) throw ConfigError(fmt::format("{}: no XML root element", file_.string()));
+}
+
+int Reader::line(const pugi::xml_node& node) const {
+  const auto offset = node.offset_debug();
+  if (offset < 0) return 0;
+  const auto it = std::upper_bound(lineStarts_.begin(), lineStarts_.end(), static_cast<std::size_t>(offset));
+  return static_cast<int>(std::distance(lineStarts_.begin(), it));
+}
+
+std::string Reader::where(const pugi::xml_node& node) const {
+  return fmt::format("{}:{}: <{}>", file_.string(), line(node), node.name());
+}
+
+void Reader::fail(const pugi::xml_node& node, const std::string& message) const {
+  throw ConfigError(fmt::format("{}: {}", where(node), message));
+}
+
+std::optional<std::string> Reader::optionalText(const pugi::xml_node& node, const char* attribute) const {
+  const pugi::xml_attribute found = node.attribute(attribute);
+  if (!found) return std::nullopt;
+  std::string value = found.value();
+  if (value.rfind("${", 0) == 0) {
+    fail(node, fmt::format("attribute {}=\"{}\": expressions are outside the supported subset (use a literal or a "
+                           "$parameter)",
+                           attribute, value));
+  }
+  if (!value.empty() && value[0] == '$') {
+    const auto it = parameters_.find(value.substr(1));
+    if (it == parameters_.end()) {
+      fail(node, fmt::format("attribute {}=\"{}\" refers to an undeclared parameter", attribute, value));
+    }
+    value = it->second;
+  }
+  return value;
+}
+
+std::string Reader::text(const pugi::xml_node& node, const char* attribute) const {
+  auto value = optionalText(node, attribute);
+  if (!value) fail(node, fmt::format("attribute '{}' is missing", attribute));
+  return *value;
+}
+
+std::optional<double> Reader::optionalNumber(const pugi::xml_node& node, const char* attribute) const {
+  const auto value = optionalText(node, attribute);
+  if (!value) return std::nullopt;
+  // from_chars: locale-independent, and it must consume the whole text.
+  double parsed = 0.0;
+  const char* begin = value->data();
+  const char* end = begin + value->size();
+  while (begin < end && *begin == ' ') ++begin;
+  if (begin < end && *begin == '+') ++begin;
+  const auto [stop, error] = std::from_chars(begin, end, parsed);
+  if (error != std::errc() || stop != end || !std::isfinite(parsed)) {
+    fail(node, fmt::format("attribute {}=\"{}\": expected a finite number", attribute, *value));
+  }
+  return parsed;
+}
+
+double Reader::number(const pugi::xml_node& node, const char* attribute) const {
+  const auto value = optionalNumber(node, attribute);
+  if (!value) fail(node, fmt::format("attribute '{}' is missing", attribute));
+  return *value;
+}
+
+std::string Reader::oneOf(const pugi::xml_node& node, const char* attribute,
+                          std::initializer_list<const char*> allowed) const {
+  const std::string value = text(node, attribute);
+  for (const char* candidate : allowed) {
+    if (value == candidate) return value;
+  }
+  fail(node, fmt::format("attribute {}=\"{}\" is outside the supported subset (supported: {})", attribute, value,
+                         fmt::join(allowed, ", ")));
+}
+
+pugi::xml_node Reader::only(const pugi::xml_node& parent, const char* name) const {
+  pugi::xml_node found;
+  for (const pugi::xml_node& node : parent.children(name)) {
+    if (found) fail(node, fmt::format("more than one <{}> in <{}> (the supported subset allows one)", name, parent.name()));
+    found = node;
+  }
+  if (!found) fail(parent, fmt::format("expected a <{}> element", name));
+  return found;
+}
+
+void Reader::requireSubset(const pugi::xml_node& parent, std::initializer_list<const char*> supported) const {
+  for (const pugi::xml_node& node : parent.children()) {
+    if (node.type() != pugi::node_element) continue;
+    const bool known = std::any_of(supported.begin(), supported.end(),
+                                   [&](const char* name) { return std::string(node.name()) == name; });
+    if (!known) {
+      throw ConfigError(fmt::format("{}:{}: element <{}> is outside the supported subset (supported in <{}>: {})",
+                                    file_.string(), line(node), node.name(), parent.name(),
+                                    supported.size() == 0 ? std::string("nothing") : fmt::format("{}", fmt::join(supported, ", "))));
+    }
+  }
+}
+
+pugi::xml_node Reader::choice(const pugi::xml_node& parent, std::initializer_list<const char*> supported) const {
+  requireSubset(parent, supported);
+  pugi::xml_node found;
+  for (const pugi::xml_node& node : parent.children()) {
+    if (node.type() != pugi::node_element) continue;
+    if (found) fail(node, fmt::format("<{}> holds more than one element (expected one of: {})", parent.name(),
+                                      fmt::join(supported, ", ")));
+    found = node;
+  }
+  if (!found) fail(parent, fmt::format("expected one of: {}", fmt::join(supported, ", ")));
+  return found;
+}
+
+}  // namespace vsd::interop::xml

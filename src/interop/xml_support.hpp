@@ -1,0 +1,86 @@
+#pragma once
+// pugixml helpers shared by the OpenDRIVE and OpenSCENARIO readers and writers
+// (private to the interop module).
+//
+// Writing: numbers in their shortest exact form (so a reader gets the very same
+// double back), documents saved atomically.
+// Reading: every message names the file, the line, the element and what was
+// expected; elements outside the supported subset are refused by name.
+
+#include <pugixml.hpp>
+
+#include <filesystem>
+#include <functional>
+#include <initializer_list>
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace vsd::interop::xml {
+
+/// Shortest text that parses back to exactly `value` ("0.2", "12.5", "-1e-05").
+std::string number(double value);
+
+/// Appends <name> to `parent` with the attributes in the given order.
+pugi::xml_node child(pugi::xml_node parent, const char* name,
+                     std::initializer_list<std::pair<const char*, std::string>> attributes = {});
+
+/// The document as text (2-space indentation, UTF-8 declaration).
+std::string toText(const pugi::xml_document& document);
+/// Writes the document under a temporary name and renames it into place.
+void save(const pugi::xml_document& document, const std::filesystem::path& file);
+
+/// A parsed file that remembers where its elements are. Attribute values of the
+/// form `$name` are replaced by the parameter `name` (OpenSCENARIO parameters)
+/// when a resolver is set.
+class Reader {
+ public:
+  /// Throws ConfigError "file:line: not well-formed XML (...)" or IoError.
+  explicit Reader(const std::filesystem::path& file);
+  /// Parses `text` as if it were `file` (messages name `file`).
+  Reader(const std::filesystem::path& file, std::string text);
+
+  const pugi::xml_document& document() const { return document_; }
+  pugi::xml_node root() const { return document_.document_element(); }
+  const std::filesystem::path& file() const { return file_; }
+
+  /// 1-based line of an element in the file.
+  int line(const pugi::xml_node& node) const;
+  /// "file:line: <element>" for messages.
+  std::string where(const pugi::xml_node& node) const;
+
+  /// Parameter values for `$name` references (OpenSCENARIO ParameterDeclarations).
+  void setParameters(std::map<std::string, std::string> parameters) { parameters_ = std::move(parameters); }
+
+  /// An attribute's text with parameters resolved; throws ConfigError if absent.
+  std::string text(const pugi::xml_node& node, const char* attribute) const;
+  std::optional<std::string> optionalText(const pugi::xml_node& node, const char* attribute) const;
+  /// An attribute as a finite number; throws ConfigError naming element, attribute, value.
+  double number(const pugi::xml_node& node, const char* attribute) const;
+  std::optional<double> optionalNumber(const pugi::xml_node& node, const char* attribute) const;
+  /// An attribute that must be one of `allowed`.
+  std::string oneOf(const pugi::xml_node& node, const char* attribute, std::initializer_list<const char*> allowed) const;
+
+  /// The single child element `name`; throws ConfigError if it is missing or repeated.
+  pugi::xml_node only(const pugi::xml_node& parent, const char* name) const;
+  /// Every child element must be named in `supported`; otherwise throws ConfigError
+  /// "file:line: element <X> is outside the supported subset (here: a, b, c)".
+  void requireSubset(const pugi::xml_node& parent, std::initializer_list<const char*> supported) const;
+  /// The one child element of a choice (e.g. <Position>), after requireSubset.
+  pugi::xml_node choice(const pugi::xml_node& parent, std::initializer_list<const char*> supported) const;
+
+  /// ConfigError "file:line: <element>: message".
+  [[noreturn]] void fail(const pugi::xml_node& node, const std::string& message) const;
+
+ private:
+  void parse();
+
+  std::filesystem::path file_;
+  std::string text_;
+  std::vector<std::size_t> lineStarts_;
+  pugi::xml_document document_;
+  std::map<std::string, std::string> parameters_;
+};
+
+}  // namespace vsd::interop::xml

@@ -1,0 +1,20 @@
+#pragma once
+// The functions behind the registry's entries (internal to the metrics module).
+// Each takes the run's context and returns the metric's value (README "Metrics").
+
+#include "vsd/metrics/metrics.hpp"
+
+namespace vsd::metrics::detail {
+
+// Ego alone (ego_metrics.cpp)
+double egoMinAcceleration(const MetricContext& context);
+double egoMaxLateralOffsetFromLane(const MetricContext& context);
+double egoMaxScenarioY(const MetricContext& context);
+double egoMaxAbsLaneOffset(const MetricContext& context);
+
+// Ego and the other vehicles (pair_metrics.cpp)
+double minGap(const MetricContext& context);
+double minTimeToCollision(const MetricContext& context);
+double minTimeHeadway(const MetricContext& context);
+
+}  // namespace vsd::metrics::detail
