@@ -276,4 +276,25 @@ Polyline egoLaneCentre(const VectorizedScene& scene) {
   return best;
 }
 
+std::vector<Polyline> laneBoundaryLines(const VectorizedScene& scene) {
+  std::vector<Polyline> lines;
+  for (const auto& polyline : scene.polylines) {
+    if (polyline.type != ObjectType::LaneBoundary) continue;
+    Polyline line;
+    for (std::size_t v = 0; v < polyline.vectors.size(); ++v) {
+      if (!polyline.valid[v]) continue;
+      const auto& f = polyline.vectors[v];
+      const Vec2 start(f[0], f[1]);
+      if (!line.empty() && (line.back() - start).norm() > 1e-6) {  // a break: a new line
+        lines.push_back(std::move(line));
+        line.clear();
+      }
+      if (line.empty()) line.push_back(start);
+      line.emplace_back(f[2], f[3]);
+    }
+    if (line.size() >= 2) lines.push_back(std::move(line));
+  }
+  return lines;
+}
+
 }  // namespace vsd::vector

@@ -186,7 +186,25 @@ TEST_F(CompareTest, DatasetModeWorksOnAnExportedRealMap) {
   options.criteria = {"close: d_min < 2"};
   const auto summary = runComparison(options);
   EXPECT_GT(summary.statistics.compared, 20u);
-  EXPECT_EQ(summary.comparison.metricNames, (std::vector<std::string>{"a_min", "d_min", "ttc_min", "thw_min"}));
+  const std::vector<std::string> names = {"a_min", "d_min", "d_lon_min", "ttc_min", "thw_min", "lane_offset_max"};
+  EXPECT_EQ(summary.comparison.metricNames, names);
+  // The recorded futures of SUMO's drivers: they keep to their lanes (offsets within half
+  // a lane, lane changes included) and never collide - also not with a car side by side in
+  // the next lane, which centre distances minus half lengths counted as a collision.
+  std::size_t offsets = 0;
+  for (const auto& row : summary.comparison.scenarios) {
+    if (!row.failure.empty()) continue;
+    const double d_min = row.reference[1];
+    const double lane_offset = row.reference[5];
+    if (std::isfinite(d_min)) {
+      EXPECT_GT(d_min, -0.05) << row.sample;
+    }
+    if (std::isfinite(lane_offset)) {
+      ++offsets;
+      EXPECT_LT(lane_offset, 2.0) << row.sample;
+    }
+  }
+  EXPECT_GT(offsets, summary.statistics.compared / 2);
   EXPECT_TRUE(std::isfinite(summary.statistics.ade.mean));
   const auto html = readTextFile(work_.path() / "map_report" / "index.html");
   EXPECT_NE(html.find("Predicted vs recorded"), std::string::npos);
