@@ -11,6 +11,28 @@
 
 namespace vsd::baseline {
 
+namespace {
+
+/// One forest per target column. A multi-output forest picks every split by the summed
+/// variance decrease of all outputs, so the metric with the largest variance decides for
+/// all (measured on ACC: a_min MAE 0.42 m/s^2 fitted jointly with d_min, 0.27 alone).
+std::vector<ExtraTrees> fitPerTarget(const ExtraTreesOptions& options, const Matrix& x, const Matrix& y) {
+  std::vector<ExtraTrees> forests;
+  for (Eigen::Index c = 0; c < y.cols(); ++c) {
+    forests.emplace_back(options);
+    forests.back().fit(x, y.col(c));
+  }
+  return forests;
+}
+
+Matrix predictPerTarget(const std::vector<ExtraTrees>& forests, const Matrix& x) {
+  Matrix predicted(x.rows(), static_cast<Eigen::Index>(forests.size()));
+  for (std::size_t c = 0; c < forests.size(); ++c) predicted.col(static_cast<Eigen::Index>(c)) = forests[c].predict(x);
+  return predicted;
+}
+
+}  // namespace
+
 BaselineReport runBaseline(const BaselineOptions& options) {
   if (options.model != "et" && options.model != "bnn") {
     throw ConfigError::field("command line", "--model", options.model, "et (extra trees) or bnn");
@@ -44,11 +66,10 @@ BaselineReport runBaseline(const BaselineOptions& options) {
   Matrix std;
   const auto start = std::chrono::steady_clock::now();
   if (options.model == "et") {
-    ExtraTrees trees(options.extraTrees);
-    trees.fit(train.inputs, train.targets);
+    const auto forests = fitPerTarget(options.extraTrees, train.inputs, train.targets);
     report.fitSeconds = secondsSince(start);
     const auto predict_start = std::chrono::steady_clock::now();
-    mean = trees.predict(test.inputs);
+    mean = predictPerTarget(forests, test.inputs);
     report.predictSeconds = secondsSince(predict_start);
   } else {
     BayesianNetwork bnn(options.bnn);

@@ -28,6 +28,8 @@ void addCompareCommand(CLI::App& app, CommandContext& context) {
   addNumber(command, "--threads", options->threads, "libtorch threads")->capture_default_str();
   addNumber(command, "--worst", options->worst, "Scenarios with the largest ADE drawn in the report")
       ->capture_default_str();
+  command->add_flag("--allow-dirty", options->allowDirty,
+                    "Write into the repository's results/ even though this binary was built from uncommitted changes");
   command->add_option("--metrics", options->metrics, "Datasets: metrics to compare, e.g. a_min,d_min")->delimiter(',');
   command->add_option("--criterion", options->criteria, "Datasets: pass/fail criterion 'name: expression', e.g. "
                                                         "'close: d_min < 2' (repeatable)");

@@ -34,6 +34,8 @@ int main(int argc, char** argv) {
   bool verbose = false;
   app.add_flag("-q,--quiet", quiet, "Only warnings and errors on stderr, no progress");
   app.add_flag("-v,--verbose", verbose, "Debug messages on stderr");
+  // -q/-v are global but may also follow the subcommand (`vsd-sumo run x.yaml -q`).
+  app.fallthrough();
 
   vsd::cli::CommandContext context;
   context.commandLine = joinCommandLine(argc, argv);

@@ -17,6 +17,7 @@
 #include "vsd/core/interrupt.hpp"
 #include "vsd/core/log.hpp"
 #include "vsd/core/progress.hpp"
+#include "vsd/core/provenance.hpp"
 #include "vsd/model/model.hpp"
 #include "vsd/pipeline/run.hpp"
 #include "vsd/pipeline/scenes.hpp"
@@ -422,6 +423,7 @@ CompareSummary runComparison(const CompareOptions& options_in) {
     options.output = fs::path("reports") / (options.scenarioFile.empty() ? vector::resolveDatasetPath(options.data.front()).stem()
                                                                           : options.scenarioFile.stem());
   }
+  refuseDirtyCommittedResults(options.output, options.allowDirty, "--allow-dirty");
   if (!fs::is_regular_file(options.model)) {
     throw ModelError(fmt::format("--model {}: no such file", options.model.string()));
   }

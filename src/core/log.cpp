@@ -5,12 +5,10 @@
 #include <ctime>
 
 #include "vsd/core/progress.hpp"
+#include "vsd/core/provenance.hpp"
 
 #ifndef VSD_VERSION
 #define VSD_VERSION "unknown"
-#endif
-#ifndef VSD_GIT_COMMIT
-#define VSD_GIT_COMMIT ""
 #endif
 
 namespace vsd {
@@ -34,8 +32,9 @@ void configureLogging(Verbosity verbosity) {
 }
 
 std::string toolVersion() {
-  const std::string commit = VSD_GIT_COMMIT;
-  return commit.empty() ? std::string(VSD_VERSION) : std::string(VSD_VERSION) + "+" + commit;
+  const auto built = buildProvenance();
+  if (built.commit.empty()) return VSD_VERSION;
+  return fmt::format("{}+{}{}", VSD_VERSION, built.commit, built.dirty ? "-dirty" : "");
 }
 
 std::string utcTimestamp() {

@@ -23,6 +23,7 @@
 #include "vsd/baseline/baseline.hpp"
 #include "vsd/core/error.hpp"
 #include "vsd/core/files.hpp"
+#include "vsd/core/provenance.hpp"
 #include "vsd/core/interrupt.hpp"
 #include "vsd/core/log.hpp"
 #include "vsd/core/progress.hpp"
@@ -516,6 +517,7 @@ ExperimentSummary runExperiment(const ExperimentOptions& options) {
   auto spec = parseSpec(options.spec, options.quick);
   fs::path output = options.output;
   if (output.empty()) output = fs::path("results") / (spec.name + (options.quick ? "-quick" : ""));
+  refuseDirtyCommittedResults(output, options.allowDirty, "--allow-dirty");
   return ExperimentRunner(options, std::move(spec), output).run();
 }
 

@@ -31,6 +31,7 @@ struct Entity {
   double length = 0.0;
   double width = 0.0;
   double referenceAhead = 0.0;  ///< m the box centre lies ahead of the entity's reference point
+  pugi::xml_node headingDisturbance;  ///< the vehicle's Property holding it, if any (scripted vehicles)
   // From the Init:
   std::optional<Vec2> position;  ///< box centre, scenario frame
   int lane = 0;
@@ -126,6 +127,12 @@ void readEntities(Document& document, const pugi::xml_node& root) {
     entity.referenceAhead = reader.number(center, "x");
     if (std::abs(reader.number(center, "y")) > kOnLaneTolerance) {
       reader.fail(center, "y: expected 0 (the bounding box centred on the vehicle's axis)");
+    }
+    if (const pugi::xml_node properties = vehicle.child("Properties")) {
+      reader.requireSubset(properties, {"Property"});
+      for (const pugi::xml_node& property : properties.children("Property")) {
+        if (reader.text(property, "name") == names::kHeadingDisturbance) entity.headingDisturbance = property;
+      }
     }
     if (const pugi::xml_node object_controller = object.child("ObjectController")) {
       reader.requireSubset(object_controller, {"Controller"});
@@ -412,6 +419,17 @@ void readRoadSpec(const Document& document, scenario::LogicalScenario& logical) 
   }));
 }
 
+/// A Property holding one number per step (e.g. a heading disturbance in rad).
+std::vector<double> perStepValues(const xml::Reader& reader, const pugi::xml_node& property, int steps) {
+  std::istringstream stream(reader.text(property, "value"));
+  std::vector<double> values;
+  for (double value = 0.0; stream >> value;) values.push_back(value);
+  if (!stream.eof() || values.size() != static_cast<std::size_t>(steps)) {
+    reader.fail(property, fmt::format("{}: expected {} numbers (one per step)", reader.text(property, "name"), steps));
+  }
+  return values;
+}
+
 /// The Ego's controller: its name, parameters (numeric Properties), disturbances and library.
 void readController(const Document& document, const Entity& ego, scenario::LogicalScenario& logical,
                     scenario::ConcreteScenario& concrete) {
@@ -421,7 +439,7 @@ void readController(const Document& document, const Entity& ego, scenario::Logic
   auto& spec = logical.ego.controller;
   spec.name = reader.text(controller, "name");
   spec.where = reader.where(controller);
-  concrete.headingNoise.assign(static_cast<std::size_t>(logical.steps()), 0.0);
+  concrete.ego.headingNoise.assign(static_cast<std::size_t>(logical.steps()), 0.0);
   const pugi::xml_node properties = reader.only(controller, "Properties");
   reader.requireSubset(properties, {"Property"});
   for (const pugi::xml_node& property : properties.children("Property")) {
@@ -430,13 +448,7 @@ void readController(const Document& document, const Entity& ego, scenario::Logic
       spec.library = reader.text(property, "value");
       if (spec.library.is_relative()) spec.library = fs::absolute(reader.file()).parent_path() / spec.library;
     } else if (name == names::kHeadingDisturbance) {
-      std::istringstream stream(reader.text(property, "value"));
-      std::vector<double> values;
-      for (double value = 0.0; stream >> value;) values.push_back(value);
-      if (!stream.eof() || values.size() != concrete.headingNoise.size()) {
-        reader.fail(property, fmt::format("{}: expected {} numbers (one per step)", name, concrete.headingNoise.size()));
-      }
-      concrete.headingNoise = values;
+      concrete.ego.headingNoise = perStepValues(reader, property, logical.steps());
     } else if (name != names::kDescription) {
       const double value = reader.number(property, "value");
       spec.params.emplace_back(name, scenario::Expression::constant(value));
@@ -506,13 +518,16 @@ ImportedScenario buildScenario(const Document& document, const fs::path& xosc) {
   const Entity& ego = findEgo(document);
   logical->ego = vehicleSpec(ego, document.reader.where(ego.node));
   logical->ego.speed = scenario::Expression::constant(ego.initialSpeed);
-  readController(document, ego, *logical, concrete);
   concrete.ego = concreteVehicle(ego, ego.initialSpeed);
+  readController(document, ego, *logical, concrete);  // after: it sets the Ego's disturbance
   for (const auto& entity : document.entities) {
     if (&entity == &ego) continue;
     logical->others.push_back(vehicleSpec(entity, document.reader.where(entity.node)));
     scenario::ConcreteVehicle other = concreteVehicle(entity, entity.initialSpeed);
     other.scriptedSpeed = speedProfile(entity, logical->steps(), logical->step);
+    other.headingNoise = entity.headingDisturbance
+                             ? perStepValues(document.reader, entity.headingDisturbance, logical->steps())
+                             : std::vector<double>(static_cast<std::size_t>(logical->steps()), 0.0);
     concrete.others.push_back(std::move(other));
   }
 

@@ -84,7 +84,9 @@ void addParameterDeclarations(pugi::xml_node root, const scenario::ConcreteScena
   }
 }
 
-void addVehicle(pugi::xml_node entities, const scenario::ConcreteVehicle& vehicle, double speed_limit) {
+/// A vehicle entity. Scripted vehicles carry their per-step heading disturbance as a Property
+/// (the Ego's travels with its controller).
+void addVehicle(pugi::xml_node entities, const scenario::ConcreteVehicle& vehicle, double speed_limit, bool scripted) {
   pugi::xml_node object = xml::child(entities, "ScenarioObject", {{"name", vehicle.id}});
   pugi::xml_node node = xml::child(object, "Vehicle", {{"name", vehicle.id}, {"vehicleCategory", "car"}});
   pugi::xml_node box = node.append_child("BoundingBox");
@@ -107,7 +109,8 @@ void addVehicle(pugi::xml_node entities, const scenario::ConcreteVehicle& vehicl
                 {"trackWidth", xml::number(vehicle.width)},
                 {"wheelDiameter", xml::number(kNominalWheelDiameter)}});
   }
-  node.append_child("Properties");
+  pugi::xml_node properties = node.append_child("Properties");
+  if (scripted) addProperty(properties, names::kHeadingDisturbance, joinNumbers(vehicle.headingNoise));
 }
 
 pugi::xml_node addPrivateAction(pugi::xml_node private_node) { return private_node.append_child("PrivateAction"); }
@@ -139,7 +142,7 @@ void addController(pugi::xml_node private_node, const scenario::ConcreteScenario
   pugi::xml_node controller = xml::child(assign, "Controller", {{"name", spec.name}});
   pugi::xml_node properties = controller.append_child("Properties");
   for (const auto& [name, value] : concrete.controllerParams) addProperty(properties, name, xml::number(value));
-  addProperty(properties, names::kHeadingDisturbance, joinNumbers(concrete.headingNoise));
+  addProperty(properties, names::kHeadingDisturbance, joinNumbers(concrete.ego.headingNoise));
   if (!spec.library.empty()) {
     // Relative library paths are relative to the scenario file; the export may live elsewhere.
     const fs::path library =
@@ -202,8 +205,8 @@ std::string openScenarioText(const scenario::ConcreteScenario& concrete, const r
   xml::child(root.append_child("CatalogLocations").append_child("ControllerCatalog"), "Directory", {{"path", "."}});
   xml::child(root.append_child("RoadNetwork"), "LogicFile", {{"filepath", xodr_name}});
   pugi::xml_node entities = root.append_child("Entities");
-  addVehicle(entities, concrete.ego, road.speedLimit);
-  for (const auto& other : concrete.others) addVehicle(entities, other, road.speedLimit);
+  addVehicle(entities, concrete.ego, road.speedLimit, /*scripted=*/false);
+  for (const auto& other : concrete.others) addVehicle(entities, other, road.speedLimit, /*scripted=*/true);
   pugi::xml_node storyboard = root.append_child("Storyboard");
   addInit(storyboard, concrete, road);
   addStory(storyboard, concrete);

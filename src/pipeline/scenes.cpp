@@ -2,6 +2,7 @@
 
 #include <cmath>
 
+#include "vsd/sim/scripted_vehicle.hpp"
 #include "vsd/vector/vectorize.hpp"
 
 namespace vsd::pipeline {
@@ -56,19 +57,8 @@ Trace plannedTrace(const scenario::ConcreteScenario& concrete, const road::RoadG
 
   for (const auto& other : concrete.others) {
     VehicleTrack track = emptyTrack(other, VehicleRole::Other, instants);
-    const auto start = road::startPoseOnLane(road, other.lane, other.x, other.id);
-    const MeasuredPolyline lane_centre(road.laneCentre(other.lane));
-    // SUMO tracks the front bumper's arc length along the lane.
-    double front_arc = lane_centre.project(start.position).arcLength + 0.5 * other.length;
-    for (std::size_t k = 0; k < instants; ++k) {
-      if (k > 0) front_arc += other.scriptedSpeed[k] * dt;
-      const Vec2 front = lane_centre.pointAt(front_arc);
-      const Vec2 back = lane_centre.pointAt(front_arc - other.length);
-      const double heading = headingOf(front - back);
-      const Vec2 centre = front - 0.5 * other.length * headingVector(heading);
-      track.states[k] = {centre.x(), centre.y(), heading, other.scriptedSpeed[k], 0.0};
-      track.valid[k] = 1;
-    }
+    track.states = sim::scriptedPath(other, road, dt, concrete.steps());  // the path the simulation places it on
+    track.valid.assign(instants, 1);
     fillAccelerationFromSpeed(track, dt);
     trace.vehicles.push_back(std::move(track));
   }

@@ -128,8 +128,10 @@ ConcreteScenario sampleConcreteScenario(const std::shared_ptr<const LogicalScena
     throw ConfigError(fmt::format("{}: speed '{}' = {} (expected >= 0 m/s)", spec.ego.where, spec.ego.speed.text(),
                                   concrete.ego.speed));
   }
-  concrete.headingNoise.resize(static_cast<std::size_t>(steps));
-  for (auto& noise : concrete.headingNoise) noise = sampleDistribution(spec.ego.headingNoise, vehicle_rng, inputs);
+  concrete.ego.headingNoise.resize(static_cast<std::size_t>(steps));
+  for (auto& noise : concrete.ego.headingNoise) noise = sampleDistribution(spec.ego.headingNoise, vehicle_rng, inputs);
+  // The others' heading noise has its own stream: adding it leaves every other draw as it was.
+  Rng heading_rng = Rng::derive(seed, index, RandomStream::OtherHeadingNoise);
 
   for (const auto& other_spec : spec.others) {
     ConcreteVehicle other = placeVehicle(other_spec, inputs);
@@ -151,6 +153,8 @@ ConcreteScenario sampleConcreteScenario(const std::shared_ptr<const LogicalScena
       other.scriptedSpeed[static_cast<std::size_t>(k)] = std::max(0.0, nominal + noise);
     }
     other.speed = other.scriptedSpeed.front();
+    other.headingNoise.resize(static_cast<std::size_t>(steps));
+    for (auto& noise : other.headingNoise) noise = sampleDistribution(other_spec.headingNoise, heading_rng, inputs);
     concrete.others.push_back(std::move(other));
   }
 

@@ -177,6 +177,14 @@ void parseController(const YamlReader& reader, const YAML::Node& node, const std
   }
 }
 
+/// `heading_noise_deg`: the paper's per-step orientation variation (degrees in the YAML).
+void parseHeadingNoise(const YamlReader& reader, const YAML::Node& vehicle, const std::string& field,
+                       const std::vector<std::string>& inputs, VehicleSpec& spec) {
+  if (!vehicle["heading_noise_deg"]) return;
+  spec.headingNoise = reader.distribution(vehicle["heading_noise_deg"], field + ".heading_noise_deg", inputs);
+  spec.headingNoise.unitScale = kDegree;
+}
+
 void parseVehicles(const YamlReader& reader, const YAML::Node& node, LogicalScenario& scenario) {
   if (!node) reader.fail(YAML::Node(), "vehicles", "missing section 'vehicles' (at least 'ego')");
   reader.checkKeys(node, "vehicles", {"ego", "others"});
@@ -189,10 +197,7 @@ void parseVehicles(const YamlReader& reader, const YAML::Node& node, LogicalScen
   parseCommonVehicle(reader, ego, "vehicles.ego", inputs, scenario, spec);
   if (!ego["speed"]) reader.fail(ego, "vehicles.ego", "missing 'speed' (initial speed, m/s)");
   spec.speed = reader.expression(ego["speed"], "vehicles.ego.speed", inputs);
-  if (ego["heading_noise_deg"]) {
-    spec.headingNoise = reader.distribution(ego["heading_noise_deg"], "vehicles.ego.heading_noise_deg", inputs);
-    spec.headingNoise.unitScale = kDegree;
-  }
+  parseHeadingNoise(reader, ego, "vehicles.ego", inputs, spec);
   if (!ego["controller"]) reader.fail(ego, "vehicles.ego", "missing 'controller'");
   parseController(reader, ego["controller"], "vehicles.ego.controller", inputs, spec.controller);
 
@@ -202,7 +207,8 @@ void parseVehicles(const YamlReader& reader, const YAML::Node& node, LogicalScen
     for (std::size_t i = 0; i < others.size(); ++i) {
       const auto item = others[i];
       const std::string field = fmt::format("vehicles.others[{}]", i);
-      reader.checkKeys(item, field, {"id", "x", "lane", "length", "width", "speed_profile", "speed_noise"});
+      reader.checkKeys(item, field,
+                       {"id", "x", "lane", "length", "width", "speed_profile", "speed_noise", "heading_noise_deg"});
       VehicleSpec other;
       other.id = item["id"] ? reader.scalar(item["id"], field + ".id") : fmt::format("other{}", i);
       if (!isIdentifier(other.id) || !ids.insert(other.id).second) {
@@ -234,6 +240,7 @@ void parseVehicles(const YamlReader& reader, const YAML::Node& node, LogicalScen
         }
       }
       if (item["speed_noise"]) other.speedNoise = reader.distribution(item["speed_noise"], field + ".speed_noise", inputs);
+      parseHeadingNoise(reader, item, field, inputs, other);
       scenario.others.push_back(std::move(other));
     }
   }

@@ -15,6 +15,7 @@
 #include "vsd/core/progress.hpp"
 #include "vsd/road/network.hpp"
 #include "vsd/sim/ego_driver.hpp"
+#include "vsd/sim/scripted_vehicle.hpp"
 
 namespace vsd::sim {
 
@@ -50,22 +51,12 @@ struct Member {
   std::string edge;
   std::string egoId;
   std::vector<std::string> otherIds;
+  std::vector<std::vector<VehicleState>> otherPaths;  ///< scripted vehicles' states at every instant
+  std::vector<std::size_t> otherRoadEnds;  ///< per scripted vehicle: first instant past its road's end (or never)
   std::optional<EgoDriver> ego;
   SimulatedScenario result;
   bool active = true;
 };
-
-VehicleState sumoState(const std::string& id, double length, const Vec2& offset) {
-  const auto front = libsumo::Vehicle::getPosition(id);
-  const double heading = headingFromSumoAngle(libsumo::Vehicle::getAngle(id));
-  VehicleState state;
-  const Vec2 centre = Vec2(front.x, front.y) - 0.5 * length * headingVector(heading) - offset;
-  state.x = centre.x();
-  state.y = centre.y();
-  state.heading = heading;
-  state.speed = libsumo::Vehicle::getSpeed(id);
-  return state;
-}
 
 void initTrack(VehicleTrack& track, const std::string& id, VehicleRole role, double length, double width,
                std::size_t instants) {
@@ -105,6 +96,17 @@ std::string removalReason(const std::string& id, const std::unordered_set<std::s
 }
 
 std::unordered_set<std::string> asSet(const std::vector<std::string>& ids) { return {ids.begin(), ids.end()}; }
+
+/// The first instant at which a scripted vehicle's front bumper is at or beyond the end of
+/// its lane (SUMO would let it arrive there); the path's size if never.
+std::size_t firstInstantPastRoadEnd(const std::vector<VehicleState>& path, const road::RoadGeometry& road,
+                                    const scenario::ConcreteVehicle& vehicle) {
+  const MeasuredPolyline lane(road.laneCentre(vehicle.lane));
+  for (std::size_t k = 0; k < path.size(); ++k) {
+    if (lane.project(path[k].position()).arcLength + 0.5 * vehicle.length >= lane.length()) return k;
+  }
+  return path.size();
+}
 
 }  // namespace
 
@@ -168,23 +170,16 @@ std::vector<SimulatedScenario> simulateBatch(const std::filesystem::path& net, c
 
     for (std::size_t o = 0; o < concrete.others.size(); ++o) {
       const auto& other = concrete.others[o];
-      // The centre starts on the lane at x; the front bumper L/2 further along the lane,
-      // which is where SUMO (lane-bound) puts it.
-      const auto start = road::startPoseOnLane(*run.road, other.lane, other.x, other.id);
-      const MeasuredPolyline lane_centre(run.road->laneCentre(other.lane));
-      const double centre_arc = lane_centre.project(start.position).arcLength;
-      const Vec2 front_local = lane_centre.pointAt(centre_arc + 0.5 * other.length);
-      const Vec2 back_local = lane_centre.pointAt(centre_arc - 0.5 * other.length);
+      // Scripted vehicles follow a path fixed before the simulation (scripted_vehicle.hpp)
+      // and are placed on it like the Ego, so SUMO and the Ego's sensors see them there.
+      member.otherPaths.push_back(scriptedPath(other, *run.road, dt, options.steps));
+      member.otherRoadEnds.push_back(firstInstantPastRoadEnd(member.otherPaths.back(), *run.road, other));
       const std::string id = member.edge + "." + other.id;
       libsumo::Vehicle::add(id, route, types.get(other.length, other.width), "now", std::to_string(other.lane), "base",
                             fmt::format("{}", other.speed));
       libsumo::Vehicle::setSpeedMode(id, 0);
       libsumo::Vehicle::setLaneChangeMode(id, 0);
-      const Vec2 front = front_local + run.offset;
-      // keepRoute = 1: onto its own road, on the lane (it then drives along the lane).
-      libsumo::Vehicle::moveToXY(id, member.edge, other.lane, front.x(), front.y(),
-                                 sumoAngleFromHeading(headingOf(front_local - back_local)), /*keepRoute=*/1);
-      libsumo::Vehicle::setSpeed(id, other.speed);
+      placeInSumo(id, member.otherPaths.back().front(), other.length, run.offset);
       member.otherIds.push_back(id);
       owner.emplace(id, m);
       expected.insert(id);
@@ -198,9 +193,8 @@ std::vector<SimulatedScenario> simulateBatch(const std::filesystem::path& net, c
       auto& trace = member.result.trace;
       trace.vehicles[0].states[k] = member.ego->state();
       trace.vehicles[0].valid[k] = 1;
-      const auto& others = member.run->scenario->others;
       for (std::size_t o = 0; o < member.otherIds.size(); ++o) {
-        trace.vehicles[1 + o].states[k] = sumoState(member.otherIds[o], others[o].length, member.run->offset);
+        trace.vehicles[1 + o].states[k] = member.otherPaths[o][k];
         trace.vehicles[1 + o].valid[k] = 1;
       }
     }
@@ -251,7 +245,7 @@ std::vector<SimulatedScenario> simulateBatch(const std::filesystem::path& net, c
     for (auto& member : members) {
       if (!member.active) continue;
       try {
-        member.ego->step(time, dt, member.run->scenario->headingNoise[static_cast<std::size_t>(k)], lanes);
+        member.ego->step(time, dt, member.run->scenario->ego.headingNoise[static_cast<std::size_t>(k)], lanes);
       } catch (const ConfigError&) {
         throw;
       } catch (const Error& error) {
@@ -259,8 +253,13 @@ std::vector<SimulatedScenario> simulateBatch(const std::filesystem::path& net, c
         continue;
       }
       const auto& others = member.run->scenario->others;
-      for (std::size_t o = 0; o < member.otherIds.size(); ++o) {
-        libsumo::Vehicle::setSpeed(member.otherIds[o], others[o].scriptedSpeed[static_cast<std::size_t>(k) + 1]);
+      const auto next = static_cast<std::size_t>(k) + 1;
+      for (std::size_t o = 0; o < member.otherIds.size() && member.active; ++o) {
+        if (member.otherRoadEnds[o] <= next) {
+          fail(member, fmt::format("vehicle '{}' reached the end of its road at t = {:.1f} s", others[o].id, time + dt));
+          break;
+        }
+        placeInSumo(member.otherIds[o], member.otherPaths[o][next], others[o].length, member.run->offset);
       }
     }
     session.step();

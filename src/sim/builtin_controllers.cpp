@@ -105,16 +105,24 @@ void TimeGapLongitudinal::init(const ControllerParams& params) {
   kCruise_ = params.get("k_cruise", kCruise_, 0.0, 10.0);
   emergencyMargin_ = params.get("emergency_margin", emergencyMargin_, 0.0, 50.0);
   emergencyTrigger_ = params.get("emergency_trigger", emergencyTrigger_, 0.0, 100.0);
+  auto part = [&](const char* name, bool fallback) {
+    return params.get(name, fallback ? 1.0 : 0.0, 0.0, 1.0) >= 0.5;  // 0 = off, 1 = on
+  };
+  parts_.relativeSpeedTerm = part("relative_speed_term", parts_.relativeSpeedTerm);
+  parts_.cruiseCap = part("cruise_cap", parts_.cruiseCap);
+  parts_.emergencyBrake = part("emergency_brake", parts_.emergencyBrake);
 }
 
 double TimeGapLongitudinal::accel(const Observation& observation) {
   const double speed = observation.ego.speed;
-  double command = kCruise_ * (following_.setSpeed(observation) - speed);
-  if (observation.leader) {
-    const auto& leader = *observation.leader;
-    const double desired_gap = std::max(following_.standstillGap, following_.timeGap * speed);
-    const double follow = kGap_ * (leader.gap - desired_gap) + kSpeed_ * (leader.speed - speed);
-    command = std::min(command, follow);
+  const double cruise = kCruise_ * (following_.setSpeed(observation) - speed);
+  if (!observation.leader) return following_.clamp(cruise);
+  const auto& leader = *observation.leader;
+  const double desired_gap = std::max(following_.standstillGap, following_.timeGap * speed);
+  double command = kGap_ * (leader.gap - desired_gap);
+  if (parts_.relativeSpeedTerm) command += kSpeed_ * (leader.speed - speed);
+  if (parts_.cruiseCap) command = std::min(command, cruise);
+  if (parts_.emergencyBrake) {
     // Only braking of the leader is extrapolated: a measured acceleration > 0 may be noise.
     const double required = requiredDeceleration(leader.gap, speed, leader.speed, std::min(leader.accel, 0.0),
                                                  emergencyMargin_, following_.maxDecel);
@@ -126,7 +134,7 @@ double TimeGapLongitudinal::accel(const Observation& observation) {
 void PaperEgoController::init(const ControllerParams& params) {
   longitudinal_.init(params);
   lateral_.init(params);
-  params.rejectUnknown("paper_ego");
+  params.rejectUnknown(name_);
 }
 
 Command PaperEgoController::step(const Observation& observation, double /*dt*/) {

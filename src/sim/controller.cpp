@@ -47,8 +47,14 @@ void ControllerParams::rejectUnknown(const std::string& controller_name) const {
 
 ControllerRegistry ControllerRegistry::withBuiltins() {
   ControllerRegistry registry;
-  registry.add("paper_ego", "time-gap P-controller (2 s) + pure-pursuit lane keeping (Winkelmann et al.)",
-               [] { return std::make_unique<PaperEgoController>(); });
+  registry.add("paper_ego",
+               "time-gap P-term + relative-speed term, cruise cap and emergency brake (each switchable) + "
+               "pure-pursuit lane keeping",
+               [] { return std::make_unique<PaperEgoController>("paper_ego", TimeGapLongitudinal::Parts{true, true, true}); });
+  registry.add("time_gap_p", "plain time-gap P-controller (the paper's description) + pure-pursuit lane keeping",
+               [] {
+                 return std::make_unique<PaperEgoController>("time_gap_p", TimeGapLongitudinal::Parts{false, false, false});
+               });
   registry.add("idm", "Intelligent Driver Model + pure-pursuit lane keeping",
                [] { return std::make_unique<IdmController>(); });
   return registry;

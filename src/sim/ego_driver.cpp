@@ -35,15 +35,29 @@ EgoDriver::EgoDriver(std::string vehicle_id, std::unique_ptr<EgoController> cont
   minGap_ = libsumo::Vehicle::getMinGap(vehicleId_);
 }
 
-void EgoDriver::pushToSumo() const {
-  // SUMO positions vehicles by their front bumper.
-  const Vec2 front = state_.position() + 0.5 * length_ * headingVector(state_.heading) + offset_;
-  // keepRoute = 3: match only along the Ego's own route (cheap, and never onto a
-  // neighbouring scenario's road) and place it exactly, even off the lane.
-  libsumo::Vehicle::moveToXY(vehicleId_, "", -1, front.x(), front.y(), sumoAngleFromHeading(state_.heading),
+void placeInSumo(const std::string& vehicle_id, const VehicleState& state, double length, const Vec2& offset) {
+  const Vec2 front = state.position() + 0.5 * length * headingVector(state.heading) + offset;
+  libsumo::Vehicle::moveToXY(vehicle_id, "", -1, front.x(), front.y(), sumoAngleFromHeading(state.heading),
                              /*keepRoute=*/3);
-  libsumo::Vehicle::setSpeed(vehicleId_, state_.speed);
+  libsumo::Vehicle::setSpeed(vehicle_id, state.speed);
 }
+
+Observation::Lane observeLane(const MeasuredPolyline& preview_line, const PolylineProjection& projection,
+                              const VehicleState& state, double width) {
+  Observation::Lane lane;
+  lane.lateralOffset = projection.lateralOffset;
+  lane.headingError = wrapAngle(state.heading - projection.heading);
+  lane.width = width;
+  const double cos_h = std::cos(state.heading);
+  const double sin_h = std::sin(state.heading);
+  for (int i = 0; i < kPreviewPoints; ++i) {
+    const Vec2 ahead = preview_line.pointAt(projection.arcLength + lane.previewSpacing * (i + 1)) - state.position();
+    lane.preview[static_cast<std::size_t>(i)] = Vec2(cos_h * ahead.x() + sin_h * ahead.y(), -sin_h * ahead.x() + cos_h * ahead.y());
+  }
+  return lane;
+}
+
+void EgoDriver::pushToSumo() const { placeInSumo(vehicleId_, state_, length_, offset_); }
 
 Observation EgoDriver::observe(double time, LaneCache& lanes) const {
   Observation observation;
@@ -64,19 +78,7 @@ Observation EgoDriver::observe(double time, LaneCache& lanes) const {
       extended = routeAhead(lane_id, lanes, preview_end);
       centre_ptr = &extended;
     }
-    const MeasuredPolyline& centre = *centre_ptr;
-    Observation::Lane lane;
-    lane.lateralOffset = projection.lateralOffset;
-    lane.headingError = wrapAngle(state_.heading - projection.heading);
-    lane.width = lanes.width(lane_id, offset_);
-    const double cos_h = std::cos(state_.heading);
-    const double sin_h = std::sin(state_.heading);
-    for (int i = 0; i < kPreviewPoints; ++i) {
-      const Vec2 ahead = centre.pointAt(projection.arcLength + lane.previewSpacing * (i + 1)) - state_.position();
-      lane.preview[static_cast<std::size_t>(i)] =
-          Vec2(cos_h * ahead.x() + sin_h * ahead.y(), -sin_h * ahead.x() + cos_h * ahead.y());
-    }
-    observation.lane = lane;
+    observation.lane = observeLane(*centre_ptr, projection, state_, lanes.width(lane_id, offset_));
   }
 
   const auto [leader_id, distance] = libsumo::Vehicle::getLeader(vehicleId_, kLeaderRange);

@@ -24,7 +24,8 @@ VehicleState advanceKinematic(const VehicleState& state, const Command& command,
   VehicleState next;
   next.x = state.x + distance * std::cos(mid_heading);
   next.y = state.y + distance * std::sin(mid_heading);
-  next.heading = wrapAngle(state.heading + turn + heading_noise);
+  // The disturbance models the wobble of a moving vehicle: a standing one does not turn.
+  next.heading = wrapAngle(state.heading + turn + (distance > 0.0 ? heading_noise : 0.0));
   next.speed = next_speed;
   next.accel = (next_speed - state.speed) / dt;
   return next;

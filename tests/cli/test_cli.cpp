@@ -38,6 +38,22 @@ TEST(Cli, HelpListsSubcommandsAndRunOptions) {
   }
 }
 
+// -q and -v are global options; they work before and after the subcommand.
+TEST(Cli, QuietAndVerboseWorkBeforeAndAfterTheSubcommand) {
+  TemporaryDirectory dir;
+  const auto scenario = test::scenarioFile("lk.yaml").string();
+  const auto before = test::run({test::vsdSumo().string(), "-q", "run", scenario, "--samples", "5", "--out",
+                                 (dir.path() / "a").string()}, dir.path());
+  const auto after = test::run({test::vsdSumo().string(), "run", scenario, "--samples", "5", "--out",
+                                (dir.path() / "b").string(), "-q"}, dir.path());
+  const auto loud = test::run({test::vsdSumo().string(), "run", scenario, "--samples", "5", "--out",
+                               (dir.path() / "c").string(), "-v"}, dir.path());
+  for (const auto* result : {&before, &after, &loud}) ASSERT_EQ(result->exitCode, 0) << result->output;
+  EXPECT_EQ(before.output.find("run lk: 5/5"), std::string::npos) << before.output;  // no progress
+  EXPECT_EQ(after.output.find("run lk: 5/5"), std::string::npos) << after.output;
+  EXPECT_NE(loud.output.find("debug: batch 0"), std::string::npos) << loud.output;
+}
+
 TEST(Cli, RunPrintsASummaryAndWritesTheOutputs) {
   TemporaryDirectory dir;
   const auto out = dir.path() / "out";
@@ -88,7 +104,7 @@ TEST(Cli, BadInputGivesOneLineNamingTheProblemAndNoOutput) {
       {"unknown_input", test::scenarioVariant("acc.yaml", "v_ego - 4", "v_egoo - 4"), "unknown name 'v_egoo'"},
       {"negative_duration", test::scenarioVariant("acc.yaml", "duration: 5.0", "duration: -1"), "time.duration"},
       {"unknown_controller", test::scenarioVariant("acc.yaml", "name: paper_ego", "name: tesla_fsd"),
-       "unknown controller 'tesla_fsd' (available: idm, paper_ego)"},
+       "unknown controller 'tesla_fsd' (available: idm, paper_ego, time_gap_p)"},
       {"missing_library",
        test::scenarioVariant("acc.yaml", "name: paper_ego", "name: mine\n      library: /nonexistent/libmine.so"),
        "controller library '/nonexistent/libmine.so' does not exist"},

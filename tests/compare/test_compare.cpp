@@ -93,7 +93,7 @@ TEST_F(CompareTest, ScenarioModeScoresLikeEvaluateOnTheSimulatedScenes) {
   EXPECT_NEAR(stats.fde.mean, evaluation.overall.fde, 0.02);
 
   // Every metric of the scenario, with MAE, bias and the reconstruction floor.
-  ASSERT_EQ(stats.metrics.size(), 6u);
+  ASSERT_EQ(stats.metrics.size(), 7u);
   for (const auto& metric : stats.metrics) {
     EXPECT_GT(metric.pairs + metric.bothInfinite + metric.finitenessMismatch, 0u) << metric.name;
     if (metric.pairs > 0) {
@@ -138,7 +138,7 @@ TEST_F(CompareTest, AScenarioSumoFailsOnIsListedAndTheRestIsCompared) {
   EXPECT_GT(summary.statistics.compared, 0u);
   const auto html = readTextFile(work_.path() / "short" / "index.html");
   EXPECT_NE(html.find("without a simulated reference"), std::string::npos);
-  EXPECT_NE(html.find("SUMO removed vehicle &#39;co&#39;"), std::string::npos);
+  EXPECT_NE(html.find("vehicle &#39;co&#39; reached the end of its road"), std::string::npos);
   const auto csv = CsvTable::read(work_.path() / "short" / "comparison.csv");
   std::size_t failed = 0;
   for (std::size_t row = 0; row < csv.rows(); ++row) failed += csv.cell(row, csv.column("status")) == "failed";

@@ -5,6 +5,8 @@
 #include "test_support.hpp"
 #include "vsd/core/error.hpp"
 #include "vsd/core/files.hpp"
+#include "vsd/core/log.hpp"
+#include "vsd/core/provenance.hpp"
 
 using namespace vsd;
 namespace fs = std::filesystem;
@@ -67,4 +69,31 @@ TEST(Files, AnOutputFileThatCannotBeAFileIsRefusedBeforeAnyWork) {
   EXPECT_THROW(requireFileOutputPath(file / "model.pt", "--out"), ConfigError);  // inside a file
   EXPECT_THROW(requireFileOutputPath("", "--out"), ConfigError);
   EXPECT_THROW(requireFileOutputPath(dir.path() / "x" / "..", "--out"), ConfigError);
+}
+
+// Committed results must name the code that ran: a dirty build may not write into
+// <source>/results unless forced; anywhere else, and clean builds, are fine.
+TEST(Provenance, DirtyBuildsMayNotWriteCommittedResults) {
+  TemporaryDirectory tree;
+  const BuildProvenance dirty{"0123456789ab", true};
+  const BuildProvenance clean{"0123456789ab", false};
+  const auto results = tree.path() / "results" / "paper";
+  try {
+    refuseDirtyCommittedResults(results, false, "--allow-dirty", dirty, tree.path());
+    FAIL() << "a dirty build wrote committed results";
+  } catch (const ConfigError& error) {
+    const std::string message = error.what();
+    EXPECT_NE(message.find("0123456789ab with uncommitted changes"), std::string::npos) << message;
+    EXPECT_NE(message.find("--allow-dirty"), std::string::npos) << message;
+  }
+  EXPECT_NO_THROW(refuseDirtyCommittedResults(results, true, "--allow-dirty", dirty, tree.path()));
+  EXPECT_NO_THROW(refuseDirtyCommittedResults(results, false, "--allow-dirty", clean, tree.path()));
+  EXPECT_NO_THROW(refuseDirtyCommittedResults(tree.path() / "out" / "paper", false, "--allow-dirty", dirty, tree.path()));
+  EXPECT_NO_THROW(refuseDirtyCommittedResults(tree.path() / "results_elsewhere", false, "--allow-dirty", dirty, tree.path()));
+  // The version this binary prints carries the commit it was built from, and the flag.
+  const auto built = buildProvenance();
+  if (!built.commit.empty()) {
+    EXPECT_NE(toolVersion().find("+" + built.commit), std::string::npos) << toolVersion();
+    EXPECT_EQ(toolVersion().find("-dirty") != std::string::npos, built.dirty) << toolVersion();
+  }
 }

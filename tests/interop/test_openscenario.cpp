@@ -76,7 +76,7 @@ TEST(OpenScenario, ExportedConcreteScenarioReadsBackExactly) {
   EXPECT_EQ(copy.inputs, original.inputs);
   EXPECT_EQ(copy.seed, 5u);
   EXPECT_EQ(copy.index, 11u);
-  EXPECT_EQ(copy.headingNoise, original.headingNoise);
+  EXPECT_EQ(copy.ego.headingNoise, original.ego.headingNoise);
   EXPECT_EQ(copy.controllerParams, original.controllerParams);
   EXPECT_EQ(imported.logical->ego.controller.name, "paper_ego");
   EXPECT_NEAR(copy.ego.x, original.ego.x, 1e-9);
@@ -85,6 +85,7 @@ TEST(OpenScenario, ExportedConcreteScenarioReadsBackExactly) {
   ASSERT_EQ(copy.others.size(), 1u);
   EXPECT_NEAR(copy.others[0].x, original.others[0].x, 1e-9);
   EXPECT_EQ(copy.others[0].scriptedSpeed, original.others[0].scriptedSpeed);
+  EXPECT_EQ(copy.others[0].headingNoise, original.others[0].headingNoise);  // the Co's disturbance travels too
   EXPECT_EQ(imported.logical->metrics, logical->metrics);
   ASSERT_EQ(imported.logical->criteria.size(), 1u);
   EXPECT_EQ(imported.logical->criteria[0].expression, "d_min < 2");

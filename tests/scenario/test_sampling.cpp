@@ -34,13 +34,16 @@ TEST(Sampling, RespectsTheTableIncludingDependentRanges) {
     ASSERT_LE(input(c, "a_co"), -1.0);
     ASSERT_LE(std::abs(input(c, "a3")), 0.001);
     // Random variations of the paper: lane width 3.5 + U(-0.3, 0.3), centre noise U(-0.5, 0.5)
-    // at each of the 25 points, heading noise U(-2.9, 2.9) deg per step.
+    // at each of the 25 points, heading noise U(-2.9, 2.9) deg per step of the Ego and of the Co.
     ASSERT_GE(c.laneWidth, 3.2);
     ASSERT_LE(c.laneWidth, 3.8);
     ASSERT_EQ(c.centreNoise.size(), 25u);
     for (double n : c.centreNoise) ASSERT_LE(std::abs(n), 0.5);
-    ASSERT_EQ(c.headingNoise.size(), 25u);
-    for (double n : c.headingNoise) ASSERT_LE(std::abs(n), 2.9 * 3.14159265358979323846 / 180.0 + 1e-15);
+    for (const auto* vehicle : {&c.ego, &c.others.at(0)}) {
+      ASSERT_EQ(vehicle->headingNoise.size(), 25u);
+      for (double n : vehicle->headingNoise) ASSERT_LE(std::abs(n), 2.9 * 3.14159265358979323846 / 180.0 + 1e-15);
+    }
+    ASSERT_NE(c.ego.headingNoise, c.others[0].headingNoise);  // independent draws
     ASSERT_EQ(c.ego.x, -50.0);
   }
   // Uniform sampling covers the range.
@@ -55,6 +58,7 @@ TEST(Sampling, IsAPureFunctionOfSeedAndIndex) {
   EXPECT_EQ(a.inputs, b.inputs);
   EXPECT_EQ(a.centreNoise, b.centreNoise);
   EXPECT_EQ(a.others[0].scriptedSpeed, b.others[0].scriptedSpeed);
+  EXPECT_EQ(a.others[0].headingNoise, b.others[0].headingNoise);
   EXPECT_NE(sampleConcreteScenario(logical, 5, 43).inputs, a.inputs);
   EXPECT_NE(sampleConcreteScenario(logical, 6, 42).inputs, a.inputs);
 }

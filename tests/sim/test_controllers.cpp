@@ -125,7 +125,9 @@ TEST(TimeGapLongitudinal, RequiredDecelerationMatchesKinematics) {
 }
 
 TEST(PaperEgo, KeepsTheTimeGapCruisesAndKeepsTheLane) {
-  PaperEgoController controller;
+  auto registry = ControllerRegistry::withBuiltins();
+  auto made = registry.create("paper_ego");
+  EgoController& controller = *made;
   controller.init(ControllerParams({{"set_speed", 12.0}}, "c"));
   controller.reset();
   // At exactly 2 s gap behind an equally fast leader: no action.
@@ -146,3 +148,40 @@ TEST(PaperEgo, KeepsTheTimeGapCruisesAndKeepsTheLane) {
   emergency.leader = Observation::Leader{15.0, 0.0, 0.0};
   EXPECT_LT(controller.step(emergency, 0.2).accel, -5.0);
 }
+
+// Each part of paper_ego can be switched off in the scenario; time_gap_p is the paper's
+// plain P-controller on the time gap (every extra part off unless switched on).
+TEST(PaperEgo, PartsAreSwitchableAndTimeGapPIsThePlainPController) {
+  auto registry = ControllerRegistry::withBuiltins();
+  auto command = [&](const std::string& name, std::vector<std::pair<std::string, double>> params,
+                     const Observation& observation) {
+    auto controller = registry.create(name);
+    params.emplace_back("set_speed", 12.0);
+    controller->init(ControllerParams(params, "c"));
+    controller->reset();
+    return controller->step(observation, 0.2).accel;
+  };
+  // 2 m/s slower leader 20 m ahead at 12 m/s: P-term 0.3 (20 - 24) = -1.2; relative-speed term 0.8 (10 - 12) = -1.6.
+  Observation closing = straightLane(12.0, 0.0);
+  closing.leader = Observation::Leader{20.0, 10.0, 0.0};
+  EXPECT_NEAR(command("paper_ego", {}, closing), -2.8, 1e-9);
+  EXPECT_NEAR(command("paper_ego", {{"relative_speed_term", 0.0}}, closing), -1.2, 1e-9);
+  EXPECT_NEAR(command("time_gap_p", {}, closing), -1.2, 1e-9);
+  EXPECT_NEAR(command("time_gap_p", {{"relative_speed_term", 1.0}}, closing), -2.8, 1e-9);
+  // Far behind a fast leader: the cruise cap limits the P-term's acceleration to k_cruise (12 - 10).
+  Observation far = straightLane(10.0, 0.0);
+  far.leader = Observation::Leader{60.0, 14.0, 0.0};
+  EXPECT_NEAR(command("paper_ego", {}, far), 0.5 * 2.0, 1e-9);
+  EXPECT_NEAR(command("paper_ego", {{"cruise_cap", 0.0}}, far), 2.0, 1e-9);  // 0.3 (60 - 20) + 0.8 * 4, clamped to max_accel
+  EXPECT_NEAR(command("time_gap_p", {}, far), 2.0, 1e-9);
+  // A stopped obstacle 15 m ahead at 12 m/s: only the emergency brake reacts that hard.
+  Observation obstacle = straightLane(12.0, 0.0);
+  obstacle.leader = Observation::Leader{15.0, 0.0, 0.0};
+  EXPECT_LT(command("paper_ego", {}, obstacle), -5.0);
+  EXPECT_NEAR(command("paper_ego", {{"emergency_brake", 0.0}, {"relative_speed_term", 0.0}}, obstacle),
+              0.3 * (15.0 - 24.0), 1e-9);
+  EXPECT_NEAR(command("time_gap_p", {}, obstacle), 0.3 * (15.0 - 24.0), 1e-9);
+  // A switch is 0 or 1.
+  EXPECT_THROW(command("paper_ego", {{"cruise_cap", 2.0}}, far), ConfigError);
+}
+

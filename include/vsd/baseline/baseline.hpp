@@ -111,6 +111,8 @@ std::vector<double> meanAbsoluteError(const Matrix& predicted, const Matrix& tru
 namespace vsd::baseline {
 
 /// `vsd-sumo baseline`: fit a metamodel on one run's concrete.csv, evaluate it on another's.
+/// Extra trees are fitted per target (one forest per metric, as scikit-learn's single-output
+/// ExtraTreesRegressor on each column); the BNN standardises its targets and fits them jointly.
 struct BaselineOptions {
   std::filesystem::path train;             ///< concrete.csv or run folder
   std::filesystem::path test;              ///< concrete.csv or run folder of the same functional scenario

@@ -26,6 +26,7 @@ struct CompareOptions {
   std::vector<std::filesystem::path> data;     ///< dataset mode: dataset files or run folders
   std::filesystem::path output;                ///< default: reports/<scenario name> or reports/<first dataset stem>
   bool force = false;                          ///< replace an existing output folder
+  bool allowDirty = false;                     ///< write into the repository's results/ from a dirty build
   static constexpr std::uint64_t kDefaultScenarios = 500;
   /// Scenario mode: scenarios to sample (0: kDefaultScenarios); dataset mode: the first N samples (0: all).
   std::uint64_t samples = 0;

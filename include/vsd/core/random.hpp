@@ -27,6 +27,7 @@ enum class RandomStream : std::uint64_t {
   DataSplit = 5,
   Training = 6,
   EgoSelection = 7,
+  OtherHeadingNoise = 8,
 };
 
 class Rng {

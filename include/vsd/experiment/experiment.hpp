@@ -18,6 +18,7 @@ struct ExperimentOptions {
   std::filesystem::path spec;
   std::filesystem::path output;  ///< default: results/<name> (results/<name>-quick with quick)
   bool quick = false;            ///< the spec's small sizes: minutes instead of most of an hour
+  bool allowDirty = false;       ///< write into the repository's results/ from a dirty build
   std::string commandLine;
 };
 

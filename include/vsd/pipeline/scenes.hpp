@@ -3,8 +3,8 @@
 //   - simulatedScene: what `run` stores in dataset.h5 — lanes as SUMO built them,
 //     the Co as SUMO moved it, the Ego's simulated future as target;
 //   - plannedScene: the same scene *before* simulating — lanes from the road
-//     generator, the Co integrated from its scripted speed the way SUMO does it
-//     (lane-bound, Euler), the Ego's initial vector; no target. This is what a
+//     generator, the Co along its scripted path (the one the simulation places it
+//     on), the Ego's initial vector; no target. This is what a
 //     model sees for a scenario nobody has simulated (`vsd-sumo compare`).
 // Both go through vector::buildScene, so their layout is identical; tests check
 // that their vectors agree to millimetres.
@@ -30,10 +30,8 @@ std::vector<LaneGeometry> plannedLanes(const road::RoadGeometry& road);
 
 /// Trace of a concrete scenario before simulation, in its scenario frame: the Ego valid
 /// at t = 0 only (start pose on its lane, sampled speed); every other vehicle valid at
-/// every instant, on its lane's centre line, its front bumper advanced by scripted
-/// speed x step per step (SUMO's Euler update with speed mode 0), its centre half a
-/// length behind the front along the back-to-front direction (SUMO's vehicle angle).
-/// Throws ConfigError if a vehicle starts outside its road.
+/// every instant along its scripted path (sim/scripted_vehicle.hpp), the same path the
+/// simulation places it on. Throws ConfigError if a vehicle starts outside its road.
 Trace plannedTrace(const scenario::ConcreteScenario& concrete, const road::RoadGeometry& road);
 
 /// The scene of a concrete scenario before simulation (targets all invalid), with

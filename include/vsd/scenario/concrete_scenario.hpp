@@ -22,6 +22,8 @@ struct ConcreteVehicle {
   double speed = 0.0;   ///< m/s, initial speed
   /// Non-Ego vehicles: scripted speed (m/s, >= 0, noise included) at every instant t_k, k = 0..steps.
   std::vector<double> scriptedSpeed;
+  /// rad, disturbance of the vehicle's heading in step k (steps values; all 0 without heading noise).
+  std::vector<double> headingNoise;
 };
 
 struct ConcreteScenario {
@@ -33,7 +35,6 @@ struct ConcreteScenario {
   double laneWidth = 3.5;            ///< m, realised (nominal + noise)
   ConcreteVehicle ego;
   std::vector<ConcreteVehicle> others;
-  std::vector<double> headingNoise;  ///< rad, disturbance of the Ego's heading in step k (steps values)
   std::vector<std::pair<std::string, double>> controllerParams;  ///< evaluated
 
   double step() const { return logical->step; }

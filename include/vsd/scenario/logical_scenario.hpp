@@ -86,12 +86,12 @@ struct ControllerSpec {
 struct VehicleSpec {
   std::string id;
   int lane = 0;            ///< 0 = rightmost
+  Distribution headingNoise;  ///< rad, added to the heading at every step (Ego and others)
   Expression x;            ///< m, initial x of the vehicle's centre (on its lane's centre line)
   double length = 5.0;     ///< m
   double width = 1.8;      ///< m
   // Ego only:
   Expression speed;                   ///< m/s, initial speed
-  Distribution headingNoise;          ///< rad, added to the heading at every step
   ControllerSpec controller;
   // Others only:
   SpeedProfile speedProfile;

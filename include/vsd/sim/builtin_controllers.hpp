@@ -40,21 +40,31 @@ struct FollowingParameters {
   std::optional<double> setSpeed_;
 };
 
-/// The paper's Ego, longitudinally: a P-controller on the time gap to the leader,
-///   a = k_gap * (gap - max(standstill_gap, time_gap * v)) + k_speed * (v_leader - v),
-/// never more than the cruise command k_cruise * (set_speed - v); with no leader
-/// it cruises at set_speed (default: the initial speed).
-/// Collision avoidance on top: b_req = the smallest constant deceleration that keeps
-/// `emergency_margin` to the leader (assumed to keep braking at its current rate
-/// until it stops); when b_req > emergency_trigger the command is at most -1.1 b_req.
+/// Time-gap car following, in parts that the scenario switches on and off (0/1 parameters):
+///   time-gap P-term (always):  a = k_gap * (gap - max(standstill_gap, time_gap * v))
+///   relative_speed_term:       + k_speed * (v_leader - v)
+///   cruise_cap:                never more than the cruise command k_cruise * (set_speed - v)
+///   emergency_brake:           b_req = the smallest constant deceleration that keeps
+///                              `emergency_margin` to the leader (assumed to keep braking at
+///                              its current rate until it stops); when b_req > emergency_trigger
+///                              the command is at most -1.1 b_req
+/// With no leader it cruises: k_cruise * (set_speed - v) (set_speed default: the initial speed).
 /// The result is clamped to [-max_decel, max_accel].
 class TimeGapLongitudinal {
  public:
+  /// Which parts are on unless the scenario's parameters say otherwise.
+  struct Parts {
+    bool relativeSpeedTerm = true;
+    bool cruiseCap = true;
+    bool emergencyBrake = true;
+  };
+  explicit TimeGapLongitudinal(Parts defaults) : parts_(defaults) {}
   void init(const ControllerParams& params);
   void reset() { following_.reset(); }
   double accel(const Observation& observation);
 
  private:
+  Parts parts_;
   FollowingParameters following_;
   double kGap_ = 0.3;              ///< 1/s^2
   double kSpeed_ = 0.8;            ///< 1/s
@@ -70,14 +80,18 @@ class TimeGapLongitudinal {
 double requiredDeceleration(double gap, double speed, double leader_speed, double leader_accel, double margin,
                             double max_decel);
 
-/// `paper_ego`: TimeGapLongitudinal + PurePursuitLateral.
+/// TimeGapLongitudinal + PurePursuitLateral, registered twice:
+///   `paper_ego`:  every part on (P-term, relative-speed term, cruise cap, emergency brake);
+///   `time_gap_p`: the plain time-gap P-controller the paper names (every extra part off).
 class PaperEgoController final : public EgoController {
  public:
+  PaperEgoController(std::string name, TimeGapLongitudinal::Parts parts) : name_(std::move(name)), longitudinal_(parts) {}
   void init(const ControllerParams& params) override;
   void reset() override { longitudinal_.reset(); }
   Command step(const Observation& observation, double dt) override;
 
  private:
+  std::string name_;
   TimeGapLongitudinal longitudinal_;
   PurePursuitLateral lateral_;
 };

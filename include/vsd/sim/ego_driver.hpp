@@ -29,6 +29,18 @@ class LaneCache {
   std::unordered_map<std::string, Entry> entries_;
 };
 
+/// The lane part of an observation: offsets relative to `projection` (the vehicle's foot
+/// point on its lane) and preview points along `preview_line` (the lane, or the lane
+/// continued along the route), in the vehicle's frame.
+Observation::Lane observeLane(const MeasuredPolyline& preview_line, const PolylineProjection& projection,
+                              const VehicleState& state, double width);
+
+/// Places a vehicle in SUMO at `state` (its centre, in the frame shifted by `offset` from
+/// the network's): SUMO positions vehicles by their front bumper. keepRoute = 3 matches only
+/// along the vehicle's own route (never onto a neighbouring scenario's road) and places it
+/// exactly, even off the lane.
+void placeInSumo(const std::string& vehicle_id, const VehicleState& state, double length, const Vec2& offset);
+
 class EgoDriver {
  public:
   /// `offset`: net coordinates of the scenario frame's origin. The vehicle must

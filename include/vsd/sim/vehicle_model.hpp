@@ -9,7 +9,7 @@
 //   kappa = clamp(command.curvature, +-max_curvature)
 //   position moves s along the heading at mid-step, heading' = heading + kappa s + noise
 // where `noise` is the scenario's heading disturbance for this step (the paper's
-// U(-2.9 deg, 2.9 deg) orientation variation).
+// U(-2.9 deg, 2.9 deg) orientation variation), applied only if the vehicle moves in the step.
 
 #include "vsd/core/trace.hpp"
 #include "vsd/sim/controller.hpp"
