@@ -46,6 +46,15 @@ void RunOptions::validate() const {
     throw ConfigError::field("command line", "--batch", std::to_string(batch),
                              fmt::format("1 .. {}", road::BatchLayout::kMaxBatch));
   }
+  // Sample indices are stored as int64 (datasets) and printed exactly (CSV): the
+  // last one must stay far below 2^63 and must not wrap around.
+  if (firstSample > kMaxSampleIndex - samples) {
+    throw ConfigError::field("command line", "--first-sample", std::to_string(firstSample),
+                             fmt::format("0 .. {} (minus --samples)", kMaxSampleIndex));
+  }
+  if (compression < 0 || compression > 9) {
+    throw ConfigError::field("command line", "--compression", std::to_string(compression), "a deflate level 0 .. 9");
+  }
 }
 
 namespace {
@@ -140,7 +149,7 @@ class BatchProcessor {
       std::string failure;
       if (!context_.layout.fits(batch.roads.back())) {
         const auto [lo, hi] = batch.roads.back().bounds();
-        failure = fmt::format("road extends beyond its {:.0f} m layout cell (x {:.0f}..{:.0f} m, y {:.0f}..{:.0f} m)",
+        failure = fmt::format("road extends beyond its {:.0f} m layout cell (x {:.4g}..{:.4g} m, y {:.4g}..{:.4g} m)",
                               context_.layout.cellSize(), lo.x(), hi.x(), lo.y(), hi.y());
       } else {
         builder.add(index, batch.roads.back(), context_.layout.offsetFor(index));
@@ -541,7 +550,7 @@ class RunFiles {
       widths.push_back(other.width);
     }
     traces_.emplace(folder_.stage(kTraces), logical_.name, logical_.step,
-                    static_cast<std::size_t>(logical_.steps()) + 1, ids, lengths, widths);
+                    static_cast<std::size_t>(logical_.steps()) + 1, ids, lengths, widths, folder_.path() / kTraces);
     vector::DatasetHeader dataset_header;
     dataset_header.kind = "generated";
     dataset_header.step = logical_.step;
@@ -549,7 +558,7 @@ class RunFiles {
     dataset_header.inputNames = logical_.inputNames();
     dataset_header.metricNames = metric_names;
     dataset_header.compression = context.options.compression;
-    dataset_.emplace(folder_.stage(kDataset), dataset_header);
+    dataset_.emplace(folder_.stage(kDataset), dataset_header, folder_.path() / kDataset);
     emptyTrace_.step = logical_.step;
     for (std::size_t v = 0; v < ids.size(); ++v) {
       VehicleTrack track;
