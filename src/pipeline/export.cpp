@@ -499,6 +499,7 @@ std::vector<char> encodeSummary(const ExportSummary& summary) {
   writer.put(summary.egos);
   writer.put(summary.windowsSkipped);
   writer.put(summary.vehiclesSeen);
+  writer.put(summary.parkedSteps);
   writer.put(summary.laneVectors);
   writer.put(summary.simulatedSeconds);
   writer.put<std::uint64_t>(summary.failedEgos.size());
@@ -516,6 +517,7 @@ ExportSummary decodeSummary(ByteReader& reader) {
   summary.egos = reader.get<std::uint64_t>();
   summary.windowsSkipped = reader.get<std::uint64_t>();
   summary.vehiclesSeen = reader.get<std::uint64_t>();
+  summary.parkedSteps = reader.get<std::uint64_t>();
   summary.laneVectors = reader.get<std::uint64_t>();
   summary.simulatedSeconds = reader.get<double>();
   const auto failures = reader.get<std::uint64_t>();
