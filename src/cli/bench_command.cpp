@@ -398,6 +398,7 @@ void addBenchCommand(CLI::App& app, CommandContext& context) {
 
   addInteropBench(*bench, context);
   addSearchBench(*bench, context);
+  addTrainBench(*bench, context);
 }
 
 }  // namespace vsd::cli

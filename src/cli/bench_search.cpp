@@ -4,6 +4,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <memory>
 #include <sstream>
 
@@ -21,6 +22,7 @@ struct SearchBenchOptions {
   search::SearchOptions search;
   std::vector<std::string> surrogates = {"random", "extra-trees"};
   std::uint64_t seeds = 1;
+  fs::path report;  ///< HTML report of every search (empty: none)
 };
 
 struct SurrogateTotals {
@@ -31,6 +33,8 @@ struct SurrogateTotals {
   double randomWidth = 0.0;
   double seconds = 0.0;
   double surrogateSecondsPerRound = 0.0;
+  double simulationMsPerExecution = 0.0;
+  double surrogateMsPerExecution = 0.0;
 };
 
 std::string loadAverage() {
@@ -40,7 +44,8 @@ std::string loadAverage() {
   return fmt::format("{} {} {}", one, five, fifteen);
 }
 
-SurrogateTotals benchSurrogate(const SearchBenchOptions& options, const std::string& surrogate, const fs::path& work) {
+SurrogateTotals benchSurrogate(const SearchBenchOptions& options, const std::string& surrogate, const fs::path& work,
+                               std::vector<search::SearchSummary>& summaries) {
   SurrogateTotals totals;
   for (std::uint64_t seed = 1; seed <= options.seeds; ++seed) {
     search::SearchOptions run = options.search;
@@ -61,10 +66,15 @@ SurrogateTotals benchSurrogate(const SearchBenchOptions& options, const std::str
     totals.seconds += summary.seconds;
     totals.surrogateSecondsPerRound +=
         summary.rounds > 1 ? summary.surrogateSeconds / static_cast<double>(summary.rounds - 1) : 0.0;
+    const double executions = static_cast<double>(std::max<std::uint64_t>(summary.executions, 1));
+    totals.simulationMsPerExecution += 1000.0 * summary.simulationSeconds / executions;
+    totals.surrogateMsPerExecution += 1000.0 * summary.surrogateSeconds / executions;
+    summaries.push_back(summary);
   }
   const double n = static_cast<double>(options.seeds);
   for (double* value : {&totals.critical, &totals.coverage, &totals.estimate, &totals.width, &totals.randomWidth,
-                        &totals.seconds, &totals.surrogateSecondsPerRound}) {
+                        &totals.seconds, &totals.surrogateSecondsPerRound, &totals.simulationMsPerExecution,
+                        &totals.surrogateMsPerExecution}) {
     *value /= n;
   }
   return totals;
@@ -86,31 +96,50 @@ void addSearchBench(CLI::App& bench, CommandContext& context) {
   command->add_option("--initial", options->search.initial, "Initial design")->capture_default_str();
   command->add_option("--round", options->search.roundSize, "Executions per round")->capture_default_str();
   command->add_option("--pool", options->search.pool, "Candidates per round")->capture_default_str();
+  command->add_option("--probability", options->search.probability, "extra-trees: shifts or tail")
+      ->capture_default_str();
+  command->add_flag("--rank-targets", options->search.rankTargets, "extra-trees: fit metric ranks");
+  command->add_option("--diversity", options->search.diversity, "Weight of the distance term in the acquisition")
+      ->capture_default_str();
   command->add_option("--seeds", options->seeds, "Searches per surrogate (seeds 1..N)")->capture_default_str();
+  command->add_option("--report", options->report,
+                      "Write an HTML report (learning curves of every search, rate estimates) to this file");
   command->add_option("-j,--jobs", options->search.jobs, "Worker processes for the simulations")->capture_default_str();
+  addEgoStepCostOption(*command, options->search.egoStepCost);
   command->callback([options, &context] {
-    context.action = [options] {
+    context.action = [options, &context] {
       TemporaryDirectory work("vsd-bench-search");
       const auto& s = options->search;
-      fmt::print("{}: '{}', budget {} (initial {}, rounds of {}, pool {}), {} seed(s); load average {}\n",
+      fmt::print("{}: '{}', budget {} (initial {}, rounds of {}, pool {}), {} seed(s), Ego step cost {} ms; load "
+                 "average {}\n",
                  s.scenarioFile.string(), s.criterion, s.budget, s.initial, s.roundSize, s.pool, options->seeds,
-                 loadAverage());
+                 1000.0 * s.egoStepCost, loadAverage());
       std::vector<std::pair<std::string, SurrogateTotals>> results;
+      std::vector<search::SearchSummary> summaries;
       for (const auto& surrogate : options->surrogates) {
-        results.emplace_back(surrogate, benchSurrogate(*options, surrogate, work.path()));
+        results.emplace_back(surrogate, benchSurrogate(*options, surrogate, work.path(), summaries));
       }
       double random_critical = 0.0;
       for (const auto& [name, totals] : results) {
         if (name == "random") random_critical = totals.critical;
       }
-      fmt::print("  mean over seeds:\n  {:<12} {:>9} {:>8} {:>7} {:>11} {:>11} {:>16} {:>9} {:>14}\n", "surrogate",
-                 "critical", "x random", "cells", "P est. %", "CI width %", "random CI width %", "seconds",
-                 "surrogate s/rnd");
+      fmt::print("  mean over seeds:\n  {:<12} {:>9} {:>8} {:>7} {:>11} {:>11} {:>16} {:>9} {:>14} {:>12} {:>12}\n",
+                 "surrogate", "critical", "x random", "cells", "P est. %", "CI width %", "random CI width %",
+                 "seconds", "surrogate s/rnd", "sim ms/exec", "surr ms/exec");
       for (const auto& [name, t] : results) {
-        fmt::print("  {:<12} {:>9.1f} {:>8} {:>7.1f} {:>11.4f} {:>11.4f} {:>16.4f} {:>9.1f} {:>14.2f}\n", name,
-                   t.critical, random_critical > 0 ? fmt::format("{:.1f}", t.critical / random_critical) : "-",
+        fmt::print("  {:<12} {:>9.1f} {:>8} {:>7.1f} {:>11.4f} {:>11.4f} {:>16.4f} {:>9.1f} {:>14.2f} {:>12.1f} "
+                   "{:>12.1f}\n",
+                   name, t.critical, random_critical > 0 ? fmt::format("{:.1f}", t.critical / random_critical) : "-",
                    t.coverage, 100 * t.estimate, 100 * t.width, 100 * t.randomWidth, t.seconds,
-                   t.surrogateSecondsPerRound);
+                   t.surrogateSecondsPerRound, t.simulationMsPerExecution, t.surrogateMsPerExecution);
+      }
+      if (!options->report.empty()) {
+        std::vector<const search::SearchSummary*> pointers;
+        for (const auto& summary : summaries) pointers.push_back(&summary);
+        writeTextFileAtomically(options->report,
+                                search::searchReportHtml(pointers, {{"command line", context.commandLine},
+                                                                    {"load average", loadAverage()}}));
+        fmt::print("  report: {}\n", options->report.string());
       }
       fmt::print("  load average after: {}\n", loadAverage());
       return 0;

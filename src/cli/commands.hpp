@@ -42,10 +42,15 @@ void addCompareCommand(CLI::App& app, CommandContext& context);
 void addBenchCommand(CLI::App& app, CommandContext& context);
 void addMergeCommand(CLI::App& app, CommandContext& context);
 void addScenarioCommand(CLI::App& app, CommandContext& context);
+/// --ego-step-cost-ms: extra wall time per Ego step (stored in seconds in `seconds`).
+void addEgoStepCostOption(CLI::App& command, double& seconds);
+
 void addSearchCommand(CLI::App& app, CommandContext& context);
 /// `bench interop` (bench_interop.cpp), a subcommand of `bench`.
 void addInteropBench(CLI::App& bench, CommandContext& context);
 /// `bench search` (bench_search.cpp), a subcommand of `bench`.
 void addSearchBench(CLI::App& bench, CommandContext& context);
+/// `vsd-sumo bench train` (bench_train.cpp).
+void addTrainBench(CLI::App& bench, CommandContext& context);
 
 }  // namespace vsd::cli

@@ -75,7 +75,7 @@ void addTrainCommand(CLI::App& app, CommandContext& context) {
                    duration(record.seconds * (planned - record.epoch)));
         std::fflush(stdout);
       });
-      fmt::print("{}", summary.report());
+      if (summary.rank == 0) fmt::print("{}", summary.report());  // the other ranks of a distributed training are silent
       return 0;
     };
   });

@@ -13,6 +13,15 @@
 
 namespace vsd::cli {
 
+void addEgoStepCostOption(CLI::App& command, double& seconds) {
+  command
+      .add_option_function<double>(
+          "--ego-step-cost-ms", [&seconds](double ms) { seconds = ms / 1000.0; },
+          "Extra wall time per Ego controller step (ms), e.g. to stand in for a slow Ego stack in a benchmark; "
+          "counts against --step-timeout")
+      ->default_str("0");
+}
+
 void addRunCommand(CLI::App& app, CommandContext& context) {
   auto options = std::make_shared<pipeline::RunOptions>();
   CLI::App* run = app.add_subcommand(
@@ -35,6 +44,7 @@ void addRunCommand(CLI::App& app, CommandContext& context) {
   addNumber(run, "--step-timeout", options->watchdog.stepTimeout,
                   "Watchdog: longest Ego controller call or libsumo step (s); a scenario exceeding it fails")
       ->capture_default_str();
+  addEgoStepCostOption(*run, options->egoStepCost);
   run->add_flag("--keep-nets", options->keepNets, "Keep the generated networks in <out>/nets (open with sumo-gui)");
   run->add_flag("--fcd", options->fcd,
                 "Write SUMO FCD XML per batch to <out>/fcd (replay: tools/replay_fcd.py); implies --keep-nets");

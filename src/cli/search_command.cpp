@@ -46,10 +46,18 @@ void addSearchCommand(CLI::App& app, CommandContext& context) {
                       "Weight of the distance to critical scenarios already found in the acquisition")
       ->capture_default_str();
   command->add_option("--trees", options->trees, "extra-trees: trees per criterion metric")->capture_default_str();
+  command->add_option("--probability", options->probability,
+                      "extra-trees: probability from the trees' predictions shifted by -1/0/+1 spreads (shifts) or the "
+                      "Gaussian tail of their mean and spread (tail; above 0 everywhere, for rare criteria)")
+      ->capture_default_str();
+  command->add_flag("--rank-targets", options->rankTargets,
+                    "extra-trees: fit each metric's empirical rank and map back through its quantiles, extrapolated "
+                    "beyond the observed range (for criteria below every value seen so far)");
   command->add_option("--bnn-epochs", options->bnnEpochs, "bnn: training epochs per round")->capture_default_str();
   command->add_option("-s,--seed", options->seed, "Random seed; same seed, same choices")->capture_default_str();
   command->add_option("-j,--jobs", options->jobs, "Worker processes for the simulations")->capture_default_str();
   command->add_option("--threads", options->threads, "libtorch threads (bnn)")->capture_default_str();
+  addEgoStepCostOption(*command, options->egoStepCost);
   command->callback([options, &context] {
     context.action = [options, &context] {
       options->commandLine = context.commandLine;

@@ -235,9 +235,9 @@ void loadParameters(VectorNet& network, torch::serialize::InputArchive& archive,
 }
 
 std::string architectureOf(const VectorNetConfig& c) {
-  return fmt::format("the described architecture (decoder {}, hidden {}, subgraph_layers {}, global_width {}, heads {}, "
-                     "decoder_hidden {}, horizon {})",
-                     c.decoder, c.hidden, c.subgraphLayers, c.globalWidth, c.heads, c.decoderHidden, c.horizon);
+  return fmt::format("the described architecture (hidden {}, subgraph_layers {}, global_width {}, heads {}, "
+                     "decoder_hidden {}, horizon {}, decoder {})",
+                     c.hidden, c.subgraphLayers, c.globalWidth, c.heads, c.decoderHidden, c.horizon, c.decoder);
 }
 
 }  // namespace

@@ -4,10 +4,12 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <csignal>
 #include <limits>
 #include <set>
 
 #include "checkpoint.hpp"
+#include "distributed.hpp"
 #include "network.hpp"
 #include "tensors.hpp"
 #include "vsd/core/error.hpp"
@@ -189,14 +191,16 @@ EpochRecord recordFromJson(const nlohmann::json& j) {
 
 /// What a resumed training must share with the interrupted one to repeat it
 /// exactly: the data (each file's SHA-256), the mix, the seed, the schedule and
-/// the architecture. (Threads are left out: they change results only in the last bits.)
+/// the architecture. (Threads are left out: they change results only in the last bits; the
+/// learning rate too: a user may change it on resume, and doing so cannot mix up data.)
 nlohmann::json resumeKey(const TrainOptions& options, const VectorNetConfig& config) {
   ModelInfo architecture;
   architecture.config = config;
   nlohmann::json data = nlohmann::json::array();
   for (const auto& path : options.data) {
-    const fs::path file = vector::resolveDatasetPath(path);
-    data.push_back({{"file", file.string()}, {"sha256", sha256OfFile(file)}});
+    for (const auto& file : vector::datasetFiles(path)) {  // a sharded sweep: every shard
+      data.push_back({{"file", file.string()}, {"sha256", sha256OfFile(file)}});
+    }
   }
   return {{"data", data},
           {"mix", options.mix.str()},
@@ -204,7 +208,6 @@ nlohmann::json resumeKey(const TrainOptions& options, const VectorNetConfig& con
           {"steps", options.steps},
           {"patience", options.patience},
           {"batch", options.batchSize},
-          {"lr", options.learningRate},
           {"weight_decay", options.weightDecay},
           {"validation_fraction", options.validationFraction},
           {"architecture", nlohmann::json::parse(infoToJson(architecture))["config"]}};
@@ -245,8 +248,10 @@ namespace {
 /// that lets an interrupted run resume exactly.
 class Trainer {
  public:
-  explicit Trainer(const TrainOptions& options)
+  /// `parallel`: the other ranks of a distributed training (nullptr: this process alone).
+  Trainer(const TrainOptions& options, DataParallel* parallel)
       : options_(options),
+        parallel_(parallel),
         selection_(selectSamples(options)),
         config_(trainedConfig(options, selection_.header)),
         train_(buildTensors(selection_.train, config_)),
@@ -272,7 +277,8 @@ class Trainer {
     summary_.stopReason = "end of the schedule";
     stepsPerEpoch_ = (train_.size() + options.batchSize - 1) / options.batchSize;
     summary_.plannedEpochs = static_cast<int>((options.steps + stepsPerEpoch_ - 1) / stepsPerEpoch_);
-    if (!options.output.parent_path().empty()) ensureDirectory(options.output.parent_path());
+    if (!options.output.parent_path().empty() && writes()) ensureDirectory(options.output.parent_path());
+    if (parallel_ != nullptr) joinRanks();
   }
 
   TrainSummary run(const std::function<void(const EpochRecord&)>& on_epoch) {
@@ -289,7 +295,7 @@ class Trainer {
           saveLast();
           last_saved = std::chrono::steady_clock::now();
         }
-        if (on_epoch) on_epoch(record);
+        if (on_epoch && writes()) on_epoch(record);
         if (sinceBest_ >= options_.patience) {
           summary_.stopReason = fmt::format("early stopping (no better validation ADE for {} epochs)", options_.patience);
           saveLast();
@@ -309,11 +315,13 @@ class Trainer {
     }
     summary_.seconds = secondsSince(start_);
     summary_.samplesPerSecond = trainingSeconds_ > 0.0 ? trainedSamples_ / trainingSeconds_ : 0.0;
+    summary_.allreduceShare = trainingSeconds_ > 0.0 ? summary_.allreduceSeconds / trainingSeconds_ : 0.0;
     return summary_;
   }
 
  private:
   void resume() {
+    if (parallel_ != nullptr) requireCheckpointOnEveryRank();
     if (!fs::exists(lastCheckpoint_)) {
       throw ConfigError(fmt::format("--resume: no checkpoint {} to resume from", lastCheckpoint_.string()));
     }
@@ -350,16 +358,20 @@ class Trainer {
     record.plannedEpochs = summary_.plannedEpochs;
     double loss_sum = 0.0;
     model_.network->train();
+    const double communication_before = parallel_ != nullptr ? parallel_->communicationSeconds() : 0.0;
     for (std::int64_t first = 0; first < n; first += options_.batchSize) {
-      throwIfInterrupted();
+      if (parallel_ == nullptr) throwIfInterrupted();  // ranks stop together, at a step's all-reduce
       const auto last = std::min<std::int64_t>(first + options_.batchSize, n);
       const std::int64_t batch_index = first / options_.batchSize;
       record.learningRate = learningRateAt(options_, epoch * stepsPerEpoch_ + batch_index);
-      loss_sum += optimizerStep(train_.select(order_tensor.slice(0, first, last)), record.learningRate, epoch,
-                                batch_index) *
+      const auto indices = order_tensor.slice(0, first, last);
+      loss_sum += (parallel_ != nullptr ? parallelStep(indices, record.learningRate, epoch, batch_index)
+                                        : optimizerStep(train_.select(indices), record.learningRate, epoch,
+                                                        batch_index)) *
                   static_cast<double>(last - first);
     }
     const double seconds = secondsSince(epoch_start);
+    if (parallel_ != nullptr) summary_.allreduceSeconds += parallel_->communicationSeconds() - communication_before;
     trainedSamples_ += static_cast<double>(n);
     trainingSeconds_ += seconds;
     record.trainLoss = loss_sum / static_cast<double>(n);
@@ -371,9 +383,7 @@ class Trainer {
   /// Returns the batch's loss. A non-finite loss or predicted variance stops the training
   /// before the optimizer takes it in: the model file and <out>.last keep their last good state.
   double optimizerStep(const SceneTensors& batch, double learning_rate, int epoch, std::int64_t batch_index) {
-    for (auto& group : optimizer_.param_groups()) {
-      static_cast<torch::optim::AdamWOptions&>(group.options()).lr(learning_rate);
-    }
+    setLearningRate(learning_rate);
     optimizer_.zero_grad();
     const auto decoded = model_.decode(batch);
     const auto loss = model_.decoder->loss(decoded, batch.targets, batch.targetMask);
@@ -388,10 +398,73 @@ class Trainer {
     return value;
   }
 
-  /// Validation errors of the epoch; the model file is replaced when the ADE improves.
+  /// The distributed form of optimizerStep: this rank's slice of the global batch `indices`;
+  /// every rank takes the same step with the whole batch's gradient.
+  double parallelStep(const torch::Tensor& indices, double learning_rate, int epoch, std::int64_t batch_index) {
+    setLearningRate(learning_rate);
+    optimizer_.zero_grad();
+    const std::int64_t n = indices.size(0);
+    const auto [first, last] = parallel_->slice(n);
+    const auto step = globalStep(*parallel_, model_, train_.select(indices.slice(0, first, last)),
+                                 static_cast<double>(last - first) / static_cast<double>(n));
+    if (step.interrupted) throw InterruptedError(interruptSignal() != 0 ? interruptSignal() : SIGTERM);
+    if (!std::isfinite(step.loss) || !step.varianceFinite) {
+      throw divergence(options_, summary_, epoch * stepsPerEpoch_ + batch_index + 1, epoch + 1, batch_index + 1,
+                       stepsPerEpoch_, !step.varianceFinite);
+    }
+    torch::nn::utils::clip_grad_norm_(model_.network->parameters(), 5.0);
+    optimizer_.step();
+    return step.loss;
+  }
+
+  void setLearningRate(double learning_rate) {
+    for (auto& group : optimizer_.param_groups()) {
+      static_cast<torch::optim::AdamWOptions&>(group.options()).lr(learning_rate);
+    }
+  }
+
+  /// Rank 0 (or the only process) writes the model file and the resume checkpoint.
+  bool writes() const { return parallel_ == nullptr || parallel_->rank() == 0; }
+
+  /// Ranks must train the same thing from the same start: same options and data (checked),
+  /// the same initial parameters (rank 0's, whatever each rank's libtorch drew).
+  void joinRanks() {
+    const auto sum = [](const torch::Tensor& t) { return t.defined() ? t.sum().item<double>() : 0.0; };
+    const std::string fingerprint =
+        fmt::format("{}|{}|{}|{}|{}|{}|{}|{}|{}|{:a}|{:a}|{:a}", infoToJson(info_), options_.steps,
+                    options_.batchSize, options_.learningRate, options_.weightDecay, options_.patience,
+                    options_.validationFraction, train_.size(), validation_.size(), sum(train_.features),
+                    sum(train_.targets), sum(validation_.targets));
+    parallel_->requireSameOnEveryRank(fingerprint, "options or training data");
+    torch::NoGradGuard no_grad;
+    for (auto& parameter : model_.network->parameters()) parallel_->broadcastFromRankZero(parameter);
+    summary_.rank = parallel_->rank();
+    summary_.ranks = parallel_->size();
+  }
+
+  /// --resume on several ranks: every rank reads rank 0's checkpoint, so it must see it.
+  void requireCheckpointOnEveryRank() {
+    auto found = torch::tensor({fs::exists(lastCheckpoint_) ? 1 : 0}, torch::kInt64);
+    parallel_->sum(found);
+    if (found.item<std::int64_t>() != parallel_->size()) {
+      throw ConfigError(fmt::format("--resume: {} of {} ranks see no checkpoint {} (every rank reads rank 0's: keep "
+                                    "the model's folder on a file system all ranks share)",
+                                    parallel_->size() - found.item<std::int64_t>(), parallel_->size(),
+                                    lastCheckpoint_.string()));
+    }
+  }
+
+  /// Validation errors of the epoch (rank 0 computes them for all); the model file is
+  /// replaced when the ADE improves.
   void validateEpoch(EpochRecord& record) {
     const auto epoch_start = std::chrono::steady_clock::now();
-    const auto result = validate(model_, validation_, 1024);
+    ValidationResult result;
+    if (writes()) result = validate(model_, validation_, 1024);
+    if (parallel_ != nullptr) {
+      auto shared = torch::tensor({result.ade, result.fde, result.nll}, torch::kFloat64);
+      parallel_->broadcastFromRankZero(shared);
+      result = {shared[0].item<double>(), shared[1].item<double>(), shared[2].item<double>()};
+    }
     record.validationAde = result.ade;
     record.validationFde = result.fde;
     record.validationNll = result.nll;
@@ -402,7 +475,7 @@ class Trainer {
       record.best = true;
       info_.epoch = record.epoch;
       info_.validationAde = result.ade;
-      saveModel(options_.output, model_, info_);  // atomic: an interruption keeps the previous best
+      if (writes()) saveModel(options_.output, model_, info_);  // atomic: an interruption keeps the previous best
     } else {
       ++sinceBest_;
     }
@@ -410,6 +483,7 @@ class Trainer {
   }
 
   void saveLast() {
+    if (!writes()) return;
     nlohmann::json state = {{"resume_key", resumeKey_},
                             {"next_epoch", nextEpoch_},
                             {"since_best", sinceBest_},
@@ -421,6 +495,7 @@ class Trainer {
   }
 
   const TrainOptions& options_;
+  DataParallel* parallel_;
   std::chrono::steady_clock::time_point start_ = std::chrono::steady_clock::now();
   Selection selection_;
   VectorNetConfig config_;
@@ -444,8 +519,17 @@ class Trainer {
 TrainSummary train(const TrainOptions& options, const std::function<void(const EpochRecord&)>& on_epoch) {
   options.validate();
   configureThreads(options.threads);
+  std::unique_ptr<DataParallel> parallel;
+  if (const auto rendezvous = rendezvousFromEnvironment()) {
+    if (rendezvous->size > options.batchSize) {
+      throw ConfigError(fmt::format("--batch {}: a distributed training over {} ranks ({}) needs a global batch of "
+                                    "at least {} samples (each rank trains its slice of every batch)",
+                                    options.batchSize, rendezvous->size, rendezvous->source, rendezvous->size));
+    }
+    parallel = std::make_unique<DataParallel>(*rendezvous);
+  }
   torch::manual_seed(options.seed);  // before the model is initialised
-  Trainer trainer(options);
+  Trainer trainer(options, parallel.get());
   return trainer.run(on_epoch);
 }
 
@@ -460,6 +544,10 @@ std::string TrainSummary::report() const {
     text += fmt::format(" {} {}/{}", label, count, it == validationSamples.end() ? 0 : it->second);
   }
   text += fmt::format("\n  model: {}\n", output.string());
+  if (ranks > 1) {
+    text += fmt::format("  data-parallel over {} ranks: all-reduce {:.1f} s = {:.1f} % of the training steps' time\n",
+                        ranks, allreduceSeconds, allreduceShare * 100.0);
+  }
   return text;
 }
 

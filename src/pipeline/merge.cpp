@@ -12,8 +12,7 @@
 #include "vsd/core/log.hpp"
 #include "vsd/core/progress.hpp"
 #include "vsd/core/shards.hpp"
-#include "vsd/sim/trace_file.hpp"
-#include "vsd/vector/dataset.hpp"
+#include "vsd/pipeline/outcome_files.hpp"
 
 namespace fs = std::filesystem;
 
@@ -65,43 +64,10 @@ void mergeCsv(const std::vector<ShardInfo>& shards, const fs::path& target) {
   if (!out) throw IoError(target.string() + ": write failed (disk full?)");
 }
 
-void mergeTraces(const std::vector<ShardInfo>& shards, const fs::path& target) {
-  std::optional<sim::TraceFileWriter> writer;
-  for (const auto& shard : shards) {
-    const sim::TraceFileReader reader(shard.folder / "traces.h5");
-    for (std::size_t row = 0; row < reader.size(); ++row) {
-      const Trace trace = reader.trace(row);
-      if (!writer) {
-        std::vector<double> lengths;
-        std::vector<double> widths;
-        for (const auto& track : trace.vehicles) {
-          lengths.push_back(track.length);
-          widths.push_back(track.width);
-        }
-        writer.emplace(target, reader.functionalScenario(), reader.step(), trace.instants(), reader.vehicleIds(),
-                       lengths, widths);
-      }
-      writer->append(reader.sample(row), trace, reader.ok(row));
-    }
-  }
-  if (writer) writer->close();
-}
-
-void mergeDatasets(const std::vector<ShardInfo>& shards, const fs::path& target) {
-  std::optional<vector::DatasetWriter> writer;
-  Progress progress("merge datasets", shards.size(), "shards");
-  for (const auto& shard : shards) {
-    const vector::DatasetReader reader(shard.folder / "dataset.h5");
-    if (!writer) {
-      vector::DatasetHeader header = reader.header();
-      header.compression = shard.compression;
-      writer.emplace(target, header);
-    }
-    for (std::size_t i = 0; i < reader.size(); ++i) writer->appendCopy(reader, i);
-    progress.advance(1);
-  }
-  progress.finish();
-  if (writer) writer->close();
+std::vector<fs::path> shardFiles(const std::vector<ShardInfo>& shards, const char* file) {
+  std::vector<fs::path> files;
+  for (const auto& shard : shards) files.push_back(shard.folder / file);
+  return files;
 }
 
 nlohmann::json mergedManifest(const std::vector<ShardInfo>& shards, const std::vector<nlohmann::json>& manifests,
@@ -150,8 +116,8 @@ MergeSummary mergeShards(const MergeOptions& options) {
   AtomicOutput traces(out / "traces.h5");
   AtomicOutput dataset(out / "dataset.h5");
   mergeCsv(shards, csv.tempPath());
-  mergeTraces(shards, traces.tempPath());
-  mergeDatasets(shards, dataset.tempPath());
+  concatenateTraces(shardFiles(shards, "traces.h5"), traces.tempPath());
+  concatenateDatasets(shardFiles(shards, "dataset.h5"), dataset.tempPath(), shards.front().compression);
   csv.commit();
   traces.commit();
   dataset.commit();

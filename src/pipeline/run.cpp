@@ -24,6 +24,7 @@
 #include "vsd/core/progress.hpp"
 #include "vsd/metrics/metrics.hpp"
 #include "vsd/pipeline/outcome_codec.hpp"
+#include "vsd/pipeline/outcome_files.hpp"
 #include "vsd/pipeline/scenes.hpp"
 #include "vsd/pipeline/worker_pool.hpp"
 #include "vsd/road/network.hpp"
@@ -42,6 +43,10 @@ void RunOptions::validate() const {
   }
   if (jobs < 1 || jobs > 256) throw ConfigError::field("command line", "--jobs", std::to_string(jobs), "1 .. 256");
   watchdog.validate();
+  if (!(egoStepCost >= 0.0 && egoStepCost <= 10.0)) {
+    throw ConfigError::field("command line", "--ego-step-cost-ms", fmt::format("{}", egoStepCost * 1000.0),
+                             "0 .. 10000");
+  }
   if (batch < 1 || batch > road::BatchLayout::kMaxBatch) {
     throw ConfigError::field("command line", "--batch", std::to_string(batch),
                              fmt::format("1 .. {}", road::BatchLayout::kMaxBatch));
@@ -294,6 +299,7 @@ class BatchProcessor {
     options.collisionAction = context_.logical->sumo.collisionAction;
     options.sumoOptions = context_.logical->sumo.sumoOptions;
     options.scenarioDir = context_.logical->sourceFile.parent_path();
+    options.egoStepCost = context_.options.egoStepCost;
     if (context_.options.fcd) options.fcdOutput = fcd;
     auto results = sim::simulateBatch(net, runs, registry_, options);
     for (std::size_t r = 0; r < results.size(); ++r) {
@@ -531,8 +537,7 @@ class SummaryBuilder {
 class RunFiles {
  public:
   RunFiles(const Context& context, const OutputFolder& folder, const std::vector<std::string>& metric_names)
-      : folder_(folder), logical_(*context.logical), seed_(context.options.seed),
-        scenarioSha256_(sha256OfFile(context.logical->sourceFile)) {
+      : folder_(folder), logical_(*context.logical), seed_(context.options.seed) {
     csvStream_.open(folder_.stage(kCsv), std::ios::binary | std::ios::trunc);
     if (!csvStream_) throw IoError((folder_.path() / kCsv).string() + ": cannot open for writing");
     csv_.emplace(csvStream_);
@@ -540,33 +545,8 @@ class RunFiles {
     for (const auto& input : logical_.inputs) header.push_back(input.name);
     header.insert(header.end(), metric_names.begin(), metric_names.end());
     csv_->writeRow(header);
-
-    std::vector<std::string> ids = {logical_.ego.id};
-    std::vector<double> lengths = {logical_.ego.length};
-    std::vector<double> widths = {logical_.ego.width};
-    for (const auto& other : logical_.others) {
-      ids.push_back(other.id);
-      lengths.push_back(other.length);
-      widths.push_back(other.width);
-    }
-    traces_.emplace(folder_.stage(kTraces), logical_.name, logical_.step,
-                    static_cast<std::size_t>(logical_.steps()) + 1, ids, lengths, widths, folder_.path() / kTraces);
-    vector::DatasetHeader dataset_header;
-    dataset_header.kind = "generated";
-    dataset_header.step = logical_.step;
-    dataset_header.horizon = logical_.steps();
-    dataset_header.inputNames = logical_.inputNames();
-    dataset_header.metricNames = metric_names;
-    dataset_header.compression = context.options.compression;
-    dataset_.emplace(folder_.stage(kDataset), dataset_header, folder_.path() / kDataset);
-    emptyTrace_.step = logical_.step;
-    for (std::size_t v = 0; v < ids.size(); ++v) {
-      VehicleTrack track;
-      track.id = ids[v];
-      track.length = lengths[v];
-      track.width = widths[v];
-      emptyTrace_.vehicles.push_back(track);
-    }
+    outcomeFiles_.emplace(logical_, metric_names, context.options.compression, folder_.stage(kTraces),
+                          folder_.stage(kDataset), folder_.path() / kTraces, folder_.path() / kDataset);
   }
 
   void write(const ScenarioOutcome& outcome) {
@@ -575,16 +555,7 @@ class RunFiles {
     for (double value : outcome.inputs) row.push_back(formatNumber(value));
     for (double value : outcome.metrics) row.push_back(formatNumber(value));
     csv_->writeRow(row);
-    // A scenario that failed before simulation has no trace: store an all-invalid one.
-    traces_->append(outcome.index, outcome.trace.vehicles.empty() ? emptyTrace_ : outcome.trace, outcome.ok());
-    // A failed run has no complete future of the Ego: it cannot be a training sample.
-    if (outcome.ok()) dataset_->append(sceneOf(outcome));
-  }
-
-  vector::VectorizedScene sceneOf(const ScenarioOutcome& outcome) const {
-    auto scene = simulatedScene(logical_, outcome);
-    scene.provenance = {logical_.sourceFile.string(), scenarioSha256_, logical_.ego.id, 0.0};
-    return scene;
+    outcomeFiles_->write(outcome);
   }
 
   /// Completes and closes the three files (still staged).
@@ -592,11 +563,9 @@ class RunFiles {
     csvStream_.close();
     if (!csvStream_) throw IoError((folder_.path() / kCsv).string() + ": write failed (disk full?)");
     folder_.staged(kCsv);
-    traces_->close();
-    traces_.reset();
+    outcomeFiles_->close();
+    outcomeFiles_.reset();
     folder_.staged(kTraces);
-    dataset_->close();
-    dataset_.reset();
     folder_.staged(kDataset);
   }
 
@@ -608,12 +577,9 @@ class RunFiles {
   const OutputFolder& folder_;
   const scenario::LogicalScenario& logical_;
   std::uint64_t seed_;
-  std::string scenarioSha256_;
   std::ofstream csvStream_;
   std::optional<CsvWriter> csv_;
-  std::optional<sim::TraceFileWriter> traces_;
-  std::optional<vector::DatasetWriter> dataset_;
-  Trace emptyTrace_;
+  std::optional<OutcomeFiles> outcomeFiles_;
 };
 
 /// The run's description; the output folder adds every file's hash and size and

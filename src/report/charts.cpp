@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <iterator>
+#include <limits>
 
 #include "vsd/core/svg.hpp"
 
@@ -45,6 +46,17 @@ void drawAxes(SvgCanvas& canvas, const Vec2& lo, const Vec2& hi, const std::stri
   canvas.textPx(kWidth / 2.0, 16, title, 12, "#222222", "middle");
   canvas.textPx((canvas.toX(lo.x()) + canvas.toX(hi.x())) / 2.0, kHeight - 8, x_label, 11, kAxisColour, "middle");
   canvas.textPx(12, (canvas.toY(lo.y()) + canvas.toY(hi.y())) / 2.0, y_label, 11, kAxisColour, "middle", /*rotated=*/true);
+}
+
+/// One named curve in the c-th colour, its name in the legend's c-th line.
+void drawCurve(SvgCanvas& canvas, std::size_t c, const std::string& name, const Polyline& points, bool markers) {
+  static const char* const kColours[] = {"#1f78b4", "#e31a1c", "#33a02c", "#ff7f00", "#6a3d9a", "#b15928"};
+  const std::string colour = kColours[c % std::size(kColours)];
+  canvas.polyline(points, colour, 1.6);
+  if (markers) {
+    for (const auto& p : points) canvas.circle(p, 2.5, colour);
+  }
+  canvas.textPx(kMargin + 8, 34 + 12.0 * static_cast<double>(c), name, 10, colour, "start");
 }
 
 std::string emptyChart(const std::string& title, const std::string& message) {
@@ -156,22 +168,41 @@ std::string histogramSvg(const std::vector<double>& values, const std::string& t
 std::string reliabilitySvg(const std::vector<double>& levels,
                            const std::vector<std::pair<std::string, std::vector<double>>>& curves,
                            const std::string& title) {
-  static const char* const kColours[] = {"#1f78b4", "#e31a1c", "#33a02c", "#ff7f00", "#6a3d9a", "#b15928"};
   if (curves.empty()) return emptyChart(title, "no interval to score");
   SvgCanvas canvas(Vec2(0.0, 0.0), Vec2(1.0, 1.0), kWidth, kHeight, false, kMargin);
   drawAxes(canvas, Vec2(0.0, 0.0), Vec2(1.0, 1.0), title, "nominal coverage of the central interval",
            "observed coverage");
   canvas.line(Vec2(0.0, 0.0), Vec2(1.0, 1.0), "#888888", 1.0, /*dashed=*/true);
   for (std::size_t c = 0; c < curves.size(); ++c) {
-    const std::string colour = kColours[c % std::size(kColours)];
     Polyline points;
     for (std::size_t l = 0; l < levels.size() && l < curves[c].second.size(); ++l) {
       if (std::isfinite(curves[c].second[l])) points.emplace_back(levels[l], curves[c].second[l]);
     }
-    canvas.polyline(points, colour, 1.6);
-    for (const auto& p : points) canvas.circle(p, 2.5, colour);
-    canvas.textPx(kMargin + 8, 34 + 12.0 * static_cast<double>(c), curves[c].first, 10, colour, "start");
+    drawCurve(canvas, c, curves[c].first, points, /*markers=*/true);
   }
+  return canvas.str();
+}
+
+std::string lineChartSvg(const std::vector<std::pair<std::string, std::vector<std::pair<double, double>>>>& curves,
+                         const std::string& title, const std::string& x_label, const std::string& y_label) {
+  std::vector<Polyline> lines;
+  Vec2 lo(std::numeric_limits<double>::infinity(), 0.0);
+  Vec2 hi(-std::numeric_limits<double>::infinity(), -std::numeric_limits<double>::infinity());
+  for (const auto& curve : curves) {
+    Polyline points;
+    for (const auto& [x, y] : curve.second) {
+      if (!std::isfinite(x) || !std::isfinite(y)) continue;
+      points.emplace_back(x, y);
+      lo = Vec2(std::min(lo.x(), x), std::min(lo.y(), y));
+      hi = Vec2(std::max(hi.x(), x), std::max(hi.y(), y));
+    }
+    lines.push_back(std::move(points));
+  }
+  if (!(hi.x() > lo.x())) return emptyChart(title, "fewer than two points");
+  if (!(hi.y() > lo.y())) hi = Vec2(hi.x(), lo.y() + 1.0);
+  SvgCanvas canvas(lo, hi, kWidth, kHeight, false, kMargin);
+  drawAxes(canvas, lo, hi, title, x_label, y_label);
+  for (std::size_t c = 0; c < curves.size(); ++c) drawCurve(canvas, c, curves[c].first, lines[c], /*markers=*/false);
   return canvas.str();
 }
 

@@ -1,6 +1,7 @@
 #pragma once
 // Small SVG charts for the comparison report (no scripts, no external resources).
 
+#include <cstddef>
 #include <limits>
 #include <string>
 #include <utility>
@@ -28,5 +29,16 @@ std::string histogramSvg(const std::vector<double>& values, const std::string& t
 std::string reliabilitySvg(const std::vector<double>& levels,
                            const std::vector<std::pair<std::string, std::vector<double>>>& curves,
                            const std::string& title);
+
+/// Lines through (x, y) points, one per named curve, on axes fitted to the points
+/// (y from 0); non-finite points are skipped.
+std::string lineChartSvg(const std::vector<std::pair<std::string, std::vector<std::pair<double, double>>>>& curves,
+                         const std::string& title, const std::string& x_label, const std::string& y_label);
+
+/// The provenance table of an HTML report (key, value lines).
+std::string provenanceSection(const std::vector<std::pair<std::string, std::string>>& provenance);
+
+/// The inline CSS of the HTML reports (one look for all of them).
+const char* reportStyle();
 
 }  // namespace vsd::report

@@ -309,15 +309,19 @@ void scenarioTable(std::ostringstream& out, const Comparison& comparison) {
   out << "</tbody></table></section>\n";
 }
 
-void provenanceSection(std::ostringstream& out, const Comparison& comparison) {
+}  // namespace
+
+std::string provenanceSection(const std::vector<std::pair<std::string, std::string>>& provenance) {
+  std::ostringstream out;
   out << "<section id=\"provenance\"><h2>Provenance</h2>\n<table>\n";
-  for (const auto& [key, value] : comparison.provenance) {
+  for (const auto& [key, value] : provenance) {
     out << fmt::format("<tr><td>{}</td><td style=\"text-align:left\"><code>{}</code></td></tr>\n", html(key), html(value));
   }
   out << "</table></section>\n";
+  return out.str();
 }
 
-}  // namespace
+const char* reportStyle() { return kStyle; }
 
 std::string renderHtmlReport(const Comparison& comparison, const ComparisonStatistics& statistics,
                              const std::vector<SceneDrawing>& worst) {
@@ -334,7 +338,7 @@ std::string renderHtmlReport(const Comparison& comparison, const ComparisonStati
   worstSection(out, worst);
   failureSection(out, comparison);
   scenarioTable(out, comparison);
-  provenanceSection(out, comparison);
+  out << provenanceSection(comparison.provenance);
   out << "<script>" << kScript << "</script>\n</body>\n</html>\n";
   return out.str();
 }

@@ -25,7 +25,7 @@ fs::path checkpointPath(const SearchContext& context) { return context.options.o
 /// The options a checkpoint's executions depend on; a resume must match every one.
 nlohmann::json identity(const SearchContext& context) {
   const auto& o = context.options;
-  return {{"scenario_sha256", context.scenarioSha256},
+  nlohmann::json json = {{"scenario_sha256", context.scenarioSha256},
           {"criterion", context.criterion->expression()},
           {"surrogate", o.surrogate},
           {"seed", o.seed},
@@ -36,6 +36,9 @@ nlohmann::json identity(const SearchContext& context) {
           {"diversity", formatNumber(o.diversity)},
           {"trees", o.trees},
           {"bnn_epochs", o.bnnEpochs}};
+  if (o.probability != "shifts") json["probability"] = o.probability;  // checkpoints from before it stay valid
+  if (o.rankTargets) json["rank_targets"] = true;
+  return json;
 }
 
 nlohmann::json numbers(const std::vector<double>& values) {

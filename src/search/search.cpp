@@ -18,6 +18,7 @@
 #include "vsd/core/progress.hpp"
 #include "vsd/core/random.hpp"
 #include "vsd/metrics/metrics.hpp"
+#include "vsd/pipeline/outcome_files.hpp"
 #include "vsd/pipeline/run.hpp"
 #include "vsd/pipeline/scenes.hpp"
 #include "vsd/road/road_geometry.hpp"
@@ -53,9 +54,15 @@ void SearchOptions::validate() const {
     throw ConfigError::field(where, "--diversity", fmt::format("{}", diversity), "a finite number >= 0");
   }
   if (trees < 1 || trees > 10'000) throw ConfigError::field(where, "--trees", std::to_string(trees), "1 .. 10000");
+  if (probability != "shifts" && probability != "tail") {
+    throw ConfigError::field(where, "--probability", probability, "shifts or tail");
+  }
   if (bnnEpochs < 1) throw ConfigError::field(where, "--bnn-epochs", std::to_string(bnnEpochs), ">= 1");
   if (jobs < 1 || jobs > 256) throw ConfigError::field(where, "--jobs", std::to_string(jobs), "1 .. 256");
   if (threads < 1 || threads > 256) throw ConfigError::field(where, "--threads", std::to_string(threads), "1 .. 256");
+  if (!(egoStepCost >= 0.0 && egoStepCost <= 10.0)) {
+    throw ConfigError::field(where, "--ego-step-cost-ms", fmt::format("{}", egoStepCost * 1000.0), "0 .. 10000");
+  }
 }
 
 std::pair<double, double> wilsonInterval(std::uint64_t successes, std::uint64_t trials) {
@@ -271,13 +278,15 @@ RoundPlan planRound(const SearchContext& context, const SearchState& state, doub
   return plan;
 }
 
-/// Simulates the plan's scenarios with the pipeline's batch simulation (as `run` does) and
-/// fills in their results.
-void executePlan(const SearchContext& context, RoundPlan& plan) {
+/// Simulates the plan's scenarios with the pipeline's batch simulation (as `run` does),
+/// fills in their results and writes the round's traces and scenes (as `run` writes them)
+/// to <out>/.rounds/, committed before the round's checkpoint.
+void executePlan(const SearchContext& context, std::uint64_t round, RoundPlan& plan) {
   pipeline::RunOptions run;
   run.samples = plan.chosen.size();
   run.seed = context.options.seed;
   run.jobs = context.options.jobs;
+  run.egoStepCost = context.options.egoStepCost;
   run.writeFiles = false;
   const auto logical = context.logical;
   const std::uint64_t seed = context.options.seed;
@@ -290,6 +299,11 @@ void executePlan(const SearchContext& context, RoundPlan& plan) {
     auto road = road::buildRoadGeometry(concrete);
     return pipeline::ScenarioWithRoad{std::move(concrete), std::move(road)};
   };
+  ensureDirectory(detail::roundFile(context, round, "").parent_path());
+  AtomicOutput traces(detail::roundFile(context, round, "traces.h5"));
+  AtomicOutput dataset(detail::roundFile(context, round, "dataset.h5"));
+  pipeline::OutcomeFiles files(*logical, context.metricNames, run.compression, traces.tempPath(), dataset.tempPath(),
+                               traces.finalPath(), dataset.finalPath());
   pipeline::runScenarios(logical, run, [&](const pipeline::ScenarioOutcome& outcome) {
     auto& execution = plan.chosen[outcome.index];
     execution.inputs = outcome.inputs;
@@ -297,21 +311,35 @@ void executePlan(const SearchContext& context, RoundPlan& plan) {
     execution.failure = outcome.failure;
     const auto verdict = outcome.ok() ? context.criterion->verdict(outcome.metrics) : std::nullopt;
     execution.verdict = verdict ? (*verdict ? 1 : 0) : -1;
+    pipeline::ScenarioOutcome stored = outcome;  // stored under its sample index, not its layout cell
+    stored.index = execution.sample;
+    files.write(stored);
   });
+  files.close();
+  traces.commitUnlessInterrupted();
+  dataset.commitUnlessInterrupted();
 }
 
-std::size_t coverageCells(const SearchContext& context, const std::vector<Execution>& executions) {
+}  // namespace
+
+std::size_t detail::coverageCells(const SearchContext& context, const std::vector<Execution>& executions,
+                                  std::size_t count) {
   std::set<std::vector<int>> cells;
-  for (const auto& execution : executions) {
-    if (execution.verdict != 1) continue;
-    std::vector<int> cell;
-    for (const double u : context.normaliser.apply(execution.inputs)) {
-      cell.push_back(std::clamp(static_cast<int>(std::floor(3.0 * u)), 0, 2));
-    }
-    cells.insert(cell);
+  for (std::size_t i = 0; i < count && i < executions.size(); ++i) {
+    if (executions[i].verdict == 1) cells.insert(coverageCell(context, executions[i]));
   }
   return cells.size();
 }
+
+std::vector<int> detail::coverageCell(const SearchContext& context, const Execution& execution) {
+  std::vector<int> cell;
+  for (const double u : context.normaliser.apply(execution.inputs)) {
+    cell.push_back(std::clamp(static_cast<int>(std::floor(kCoverageBins * u)), 0, kCoverageBins - 1));
+  }
+  return cell;
+}
+
+namespace {
 
 std::uint64_t countCritical(const std::vector<Execution>& executions) {
   return static_cast<std::uint64_t>(
@@ -325,7 +353,7 @@ void runRounds(const SearchContext& context, SearchState& state, SearchSummary& 
     throwIfInterrupted();
     RoundPlan plan = planRound(context, state, summary.surrogateSeconds);
     const auto start = std::chrono::steady_clock::now();
-    executePlan(context, plan);
+    executePlan(context, state.rounds, plan);
     summary.simulationSeconds += secondsSince(start);
     for (auto& execution : plan.chosen) {
       execution.round = state.rounds;
@@ -351,17 +379,17 @@ SearchSummary runSearch(const SearchOptions& options) {
   const auto start = std::chrono::steady_clock::now();
   const std::string started = utcTimestamp();
   const SearchContext context = makeContext(options);
-  ensureDirectory(options.outputDir);
+  OutputFolder folder(options.outputDir);  // locked; its files change as one set at the end
   SearchState state = detail::readCheckpoint(context).value_or(SearchState{});
+  for (const char* file : {"traces.h5", "dataset.h5"}) detail::roundFiles(context, state.rounds, file);  // before any work
 
   SearchSummary summary;
   summary.functionalScenario = context.logical->name;
   summary.criterion = context.criterion->name();
   summary.expression = context.criterion->expression();
   summary.surrogate = options.surrogate;
+  summary.seed = options.seed;
   summary.resumedFrom = state.executions.size();
-  std::error_code ignored;
-  fs::remove(options.outputDir / "manifest.json", ignored);  // the folder is incomplete until the new one is written
   runRounds(context, state, summary);
 
   summary.executions = state.executions.size();
@@ -372,15 +400,13 @@ SearchSummary runSearch(const SearchOptions& options) {
   summary.criterionSeenInInitialDesign = std::any_of(state.executions.begin(), state.executions.end(), [](const Execution& e) {
     return e.round == 0 && e.verdict == 1;
   });
-  summary.coverageCells = coverageCells(context, state.executions);
+  summary.coverageCells = detail::coverageCells(context, state.executions, state.executions.size());
   const auto estimate_start = std::chrono::steady_clock::now();
   summary.estimate = detail::estimateRate(context, state.executions);
   summary.surrogateSeconds += secondsSince(estimate_start);
   summary.executionsList = std::move(state.executions);
   summary.seconds = secondsSince(start);
-  summary.outputs = detail::writeSearchFiles(context, summary);
-  detail::writeSearchManifest(context, summary, started);
-  summary.outputs.push_back(options.outputDir / "manifest.json");
+  summary.outputs = detail::commitSearchFolder(context, folder, summary, started);
   return summary;
 }
 

@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "vsd/core/files.hpp"
 #include "vsd/scenario/logical_scenario.hpp"
 #include "vsd/search/criterion.hpp"
 #include "vsd/search/search.hpp"
@@ -72,8 +73,26 @@ void writeCheckpoint(const SearchContext& context, const SearchState& state);
 
 RateEstimate estimateRate(const SearchContext& context, const std::vector<Execution>& executions);
 
-/// concrete.csv, failures.csv, learning_curve.csv, estimate.json; returns their paths.
-std::vector<std::filesystem::path> writeSearchFiles(const SearchContext& context, const SearchSummary& summary);
-void writeSearchManifest(const SearchContext& context, const SearchSummary& summary, const std::string& started);
+/// Bins per normalised input of the failure-region coverage (cells = bins^inputs).
+constexpr int kCoverageBins = 3;
+/// The coverage cell of an execution's inputs (one bin index per input).
+std::vector<int> coverageCell(const SearchContext& context, const Execution& execution);
+/// Distinct cells holding a critical scenario among the first `count` executions.
+std::size_t coverageCells(const SearchContext& context, const std::vector<Execution>& executions, std::size_t count);
+
+/// Round `round`'s traces or scenes ("traces.h5", "dataset.h5"), kept in <out>/.rounds/
+/// (not part of the output set) until the search's files are assembled from them.
+std::filesystem::path roundFile(const SearchContext& context, std::uint64_t round, const std::string& file);
+
+/// The first `rounds` rounds' files `file`, in round order; DatasetError naming the first
+/// one missing (a folder from before .rounds/ existed, or files removed by hand).
+std::vector<std::filesystem::path> roundFiles(const SearchContext& context, std::uint64_t rounds,
+                                              const std::string& file);
+
+/// Stages concrete.csv, failures.csv, learning_curve.csv, coverage.csv, estimate.json,
+/// traces.h5, dataset.h5 (joined from the rounds' files) and report.html, and commits
+/// them with the manifest (core/files.hpp: OutputFolder). Returns the committed paths.
+std::vector<std::filesystem::path> commitSearchFolder(const SearchContext& context, OutputFolder& folder,
+                                                      const SearchSummary& summary, const std::string& started);
 
 }  // namespace vsd::search::detail

@@ -2,6 +2,10 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
 #include "vsd/core/error.hpp"
 #include "vsd/search/surrogate.hpp"
 
@@ -37,6 +41,55 @@ double shiftedProbability(const std::vector<double>& centre, const std::vector<d
     if (criterion.meetsUsed(values)) ++meeting;
   }
   return static_cast<double>(meeting) / static_cast<double>(shifts.size());
+}
+
+namespace {
+
+/// Smallest z (to ~1e-6) at which some move of every metric by +-z spreads gives `wanted`
+/// as the criterion's verdict: the first of the grid 0, 0.1, ..., 6 that does, refined by
+/// bisection from the grid point before it; infinity if none.
+double smallestMove(const std::vector<double>& centre, const std::vector<double>& spread, const Criterion& criterion,
+                    const std::function<void(std::vector<double>&)>& to_metrics, bool wanted) {
+  const std::size_t metrics = centre.size();
+  // Every sign pattern for up to 3 metrics; beyond that all up or all down.
+  const std::size_t patterns = metrics <= 3 ? (std::size_t{1} << metrics) : 2;
+  std::vector<double> values(metrics);
+  auto gives = [&](double z, std::size_t pattern) {
+    for (std::size_t m = 0; m < metrics; ++m) {
+      const bool up = metrics <= 3 ? ((pattern >> m) & 1U) != 0 : pattern == 1;
+      values[m] = centre[m] + (up ? z : -z) * spread[m];
+    }
+    if (to_metrics) to_metrics(values);
+    return criterion.meetsUsed(values) == wanted;
+  };
+  for (int step = 0; step <= 60; ++step) {
+    for (std::size_t pattern = 0; pattern < patterns; ++pattern) {
+      if (!gives(0.1 * step, pattern)) continue;
+      if (step == 0) return 0.0;
+      double low = 0.1 * (step - 1);
+      double high = 0.1 * step;
+      for (int i = 0; i < 20; ++i) {
+        const double middle = 0.5 * (low + high);
+        (gives(middle, pattern) ? high : low) = middle;
+      }
+      return high;
+    }
+  }
+  return std::numeric_limits<double>::infinity();
+}
+
+double standardNormalCdf(double z) { return 0.5 * std::erfc(-z / std::sqrt(2.0)); }
+
+}  // namespace
+
+double tailProbability(const std::vector<double>& centre, const std::vector<double>& spread,
+                       const Criterion& criterion, const std::function<void(std::vector<double>&)>& toMetrics) {
+  std::vector<double> values = centre;
+  if (toMetrics) toMetrics(values);
+  const bool meets = criterion.meetsUsed(values);
+  if (std::all_of(spread.begin(), spread.end(), [](double s) { return !(s > 0.0); })) return meets ? 1.0 : 0.0;
+  if (meets) return standardNormalCdf(smallestMove(centre, spread, criterion, toMetrics, false));
+  return standardNormalCdf(-smallestMove(centre, spread, criterion, toMetrics, true));
 }
 
 }  // namespace vsd::search

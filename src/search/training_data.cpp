@@ -92,6 +92,8 @@ std::unique_ptr<Surrogate> fitSurrogate(const SearchContext& context, const std:
   SurrogateOptions options;
   options.seed = mix64(context.options.seed ^ mix64(round + 1));
   options.trees = context.options.trees;
+  options.probability = context.options.probability;
+  options.rankTargets = context.options.rankTargets;
   options.bnnEpochs = context.options.bnnEpochs;
   options.threads = context.options.threads;
   auto surrogate = context.surrogate->make(options);

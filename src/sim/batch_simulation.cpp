@@ -165,8 +165,9 @@ std::vector<SimulatedScenario> simulateBatch(const std::filesystem::path& net, c
     initial.heading = ego_start.heading;
     initial.speed = ego_spec.speed;
     const ControllerParams params(concrete.controllerParams, spec.ego.controller.where);
-    auto controller = makeController(registry, spec.ego.controller.name, spec.ego.controller.library,
-                                     options.scenarioDir, params);
+    auto controller = withStepCost(makeController(registry, spec.ego.controller.name, spec.ego.controller.library,
+                                                  options.scenarioDir, params),
+                                   options.egoStepCost);
     member.ego.emplace(member.egoId, std::move(controller), initial, ego_spec.length, ego_spec.width, run.offset);
     member.ego->pushToSumo();
     owner.emplace(member.egoId, m);

@@ -14,6 +14,8 @@
 #include "vsd/search/criterion.hpp"
 #include "vsd/search/search.hpp"
 #include "vsd/search/surrogate.hpp"
+#include "vsd/sim/trace_file.hpp"
+#include "vsd/vector/dataset.hpp"
 
 namespace fs = std::filesystem;
 using testing::HasSubstr;
@@ -72,6 +74,44 @@ TEST(SearchSurrogates, UnknownNameListsTheKnownOnes) {
   EXPECT_THAT(message, HasSubstr("random, extra-trees, bnn"));
 }
 
+TEST(SearchSurrogates, TailProbabilityIsTheGaussianTailBeyondTheCriterion) {
+  const auto logical = scenario::loadLogicalScenario(test::scenarioFile("acc_lk.yaml"));
+  const Criterion criterion("ttc_min < 1", *logical, kMetrics);
+  // Two spreads above the threshold: Phi(-2); half a spread below it: Phi(0.5) (scipy.stats.norm.cdf).
+  EXPECT_NEAR(tailProbability({3.0}, {1.0}, criterion), 0.0227501319, 1e-6);
+  EXPECT_NEAR(tailProbability({0.5}, {1.0}, criterion), 0.6914624613, 1e-6);
+  EXPECT_GT(tailProbability({9.0}, {2.0}, criterion), 0.0);  // far, yet ranked
+  EXPECT_LT(tailProbability({9.0}, {2.0}, criterion), tailProbability({5.0}, {2.0}, criterion));
+  EXPECT_EQ(tailProbability({3.0}, {0.0}, criterion), 0.0);
+  EXPECT_EQ(tailProbability({0.5}, {0.0}, criterion), 1.0);
+}
+
+TEST(SearchSurrogates, RankTargetsMapBackToMetricValuesAndReachBelowTheObservedRange) {
+  const auto logical = scenario::loadLogicalScenario(test::scenarioFile("acc_lk.yaml"));
+  SurrogateOptions options;
+  options.trees = 20;
+  options.probability = "tail";
+  options.rankTargets = true;
+  const auto surrogate = makeExtraTreesSurrogate(options);
+  Matrix x(50, 1);
+  Matrix y(50, 1);
+  for (Eigen::Index i = 0; i < 50; ++i) {
+    x(i, 0) = static_cast<double>(i) / 49.0;
+    y(i, 0) = 0.5 + 2.0 * x(i, 0);  // d_min from 0.5 to 2.5 m
+  }
+  surrogate->fit(x, y);
+  Matrix candidates(3, 1);
+  candidates << 0.1, 0.9, 0.01;
+  // Inside the observed range: judged on metric values, not on ranks (d_min < 1.5 <=> x < 0.5).
+  const auto inside = surrogate->probability(candidates, Criterion("d_min < 1.5", *logical, kMetrics));
+  EXPECT_GT(inside[0], 0.5);
+  EXPECT_LT(inside[1], 0.5);
+  // Just below every observed value: still a probability, largest where d_min is smallest.
+  const auto below = surrogate->probability(candidates, Criterion("d_min < 0.49", *logical, kMetrics));
+  EXPECT_GT(below[2], 0.0);
+  EXPECT_GT(below[2], below[1]);
+}
+
 SearchOptions smallSearch(const fs::path& out, const std::string& surrogate, std::uint64_t budget) {
   SearchOptions options;
   options.scenarioFile = test::scenarioFile("acc_lk.yaml");
@@ -124,6 +164,23 @@ TEST(SearchLoop, ResumesWithoutRepeatingAndMakesTheSameChoicesAsAnUninterruptedS
   const auto origins = column(resumed / "concrete.csv", "origin");
   EXPECT_EQ(std::count(origins.begin(), origins.end(), "acquired"), 48);  // 3 rounds of 20, 4 importance draws each
   EXPECT_TRUE(fs::exists(resumed / "manifest.json"));
+  // One output set like run's: every file listed with its hash; traces and scenes of every
+  // execution (scenes of the completed ones), stored under their sample indices.
+  EXPECT_TRUE(checkOutputFolder(resumed, true).empty());
+  const auto listed = readManifestOutputs(resumed);
+  for (const char* file : {"concrete.csv", "failures.csv", "learning_curve.csv", "coverage.csv", "estimate.json",
+                           "traces.h5", "dataset.h5", "report.html"}) {
+    EXPECT_EQ(listed.count(file), 1u) << file;
+  }
+  const auto validation = vector::validateDataset(resumed);  // what `vsd-sumo dataset validate <out>` checks
+  EXPECT_TRUE(validation.ok()) << (validation.problems.empty() ? "" : validation.problems.front());
+  const sim::TraceFileReader traces(resumed / "traces.h5");
+  ASSERT_EQ(traces.size(), samples.size());
+  EXPECT_EQ(std::to_string(traces.sample(70)), samples[70]);
+  const auto statuses = column(resumed / "concrete.csv", "status");
+  EXPECT_EQ(vector::DatasetReader(resumed / "dataset.h5").size(),
+            static_cast<std::size_t>(std::count(statuses.begin(), statuses.end(), "ok")));
+  EXPECT_THAT(readTextFile(resumed / "report.html"), HasSubstr("extra-trees (seed 1)"));
 
   auto other = smallSearch(resumed, "extra-trees", 120);
   other.seed = 2;
@@ -178,7 +235,8 @@ TEST(SearchCli, BadInputIsOneLineWithExitCodeOneAndNoFolder) {
   const std::string scenario = test::scenarioFile("acc_lk.yaml").string();
   for (const std::vector<std::string>& flags :
        {std::vector<std::string>{"--criterion", "dmin < 2"}, {"--criterion", "d_min < 2", "--budget", "50"},
-        {"--criterion", "d_min < 2", "--surrogate", "vectornet"}, {"--criterion", "d_min < 2", "--pool", "0"}}) {
+        {"--criterion", "d_min < 2", "--surrogate", "vectornet"}, {"--criterion", "d_min < 2", "--pool", "0"},
+        {"--criterion", "d_min < 2", "--probability", "gauss"}, {"--criterion", "d_min < 2", "--ego-step-cost-ms", "-1"}}) {
     std::vector<std::string> argv = {test::vsdSumo().string(), "-q", "search", scenario, "--out", out.string()};
     argv.insert(argv.end(), flags.begin(), flags.end());
     const auto result = test::run(argv, work.path());

@@ -1,5 +1,6 @@
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <cmath>
 #include <limits>
 
@@ -185,3 +186,19 @@ TEST(PaperEgo, PartsAreSwitchableAndTimeGapPIsThePlainPController) {
   EXPECT_THROW(command("paper_ego", {{"cruise_cap", 2.0}}, far), ConfigError);
 }
 
+
+TEST(StepCost, TheWrappedControllerDrivesAndEachStepTakesTheExtraTime) {
+  auto registry = ControllerRegistry::withBuiltins();
+  const ControllerParams params({}, "controller");
+  auto plain = makeController(registry, "paper_ego", "", "", params);
+  auto slow = withStepCost(makeController(registry, "paper_ego", "", "", params), 0.02);
+  const auto observation = straightLane(20.0, 0.3);
+  const auto start = std::chrono::steady_clock::now();
+  const Command slow_command = slow->step(observation, 0.1);
+  const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  const Command plain_command = plain->step(observation, 0.1);
+  EXPECT_EQ(slow_command.accel, plain_command.accel);
+  EXPECT_EQ(slow_command.curvature, plain_command.curvature);
+  EXPECT_GE(elapsed, 0.02);  // it sleeps at least the cost (an upper bound would be a timing test)
+  EXPECT_EQ(withStepCost(nullptr, 0.0), nullptr);  // no cost: the controller itself, unwrapped
+}

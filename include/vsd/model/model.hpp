@@ -53,10 +53,18 @@ struct TrainSummary {
   double seconds = 0.0;
   double samplesPerSecond = 0.0;  ///< training throughput (forward + backward)
   std::string stopReason;         ///< "early stopping", "max epochs", ...
+  int rank = 0;                   ///< this process's rank in a distributed training (README "Distributed training")
+  int ranks = 1;                  ///< processes training together (1: not distributed)
+  double allreduceSeconds = 0.0;  ///< wall time the training steps spent in the gradient all-reduce
+  double allreduceShare = 0.0;    ///< allreduceSeconds / the training steps' wall time (0 when not distributed)
   std::string report() const;
 };
 
-/// Trains VectorNet; prints one line per epoch through `on_epoch` (if given).
+/// Trains VectorNet; prints one line per epoch through `on_epoch` (if given; rank 0 only).
+/// Data-parallel over several processes when the environment names a world of more than one
+/// rank (WORLD_SIZE/RANK/MASTER_ADDR/MASTER_PORT, or mpirun's; README "Distributed training"):
+/// throws ConfigError when the rendezvous times out, the ranks disagree on the world size or
+/// the options, or there are more ranks than --batch.
 /// Throws ConfigError for an empty mix, a count larger than the data holds, an unknown
 /// decoder or option; DatasetError for non-finite features; ModelError when the training
 /// diverges (a non-finite loss or predicted variance: the message names the optimizer

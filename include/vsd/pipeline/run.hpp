@@ -68,6 +68,9 @@ struct RunOptions {
   /// already (same sweep) is not run again: re-running a sweep resumes it.
   std::optional<ShardId> shard;
   WatchdogOptions watchdog;         ///< per-step time limit of controllers and libsumo (--step-timeout)
+  /// s of extra wall time per Ego step (--ego-step-cost-ms; 0: none): a slow Ego stack's
+  /// cost, for benchmarks. It counts against the watchdog's per-step limit.
+  double egoStepCost = 0.0;
   std::string commandLine;          ///< recorded in the manifest
   /// Empty: scenarios are sampled from the logical scenario (seed, index) and their roads
   /// generated. Set for scenarios read from elsewhere (`vsd-sumo run FILE.xosc`).

@@ -21,12 +21,16 @@
 // stratified importance sampling over the rounds' pools, see src/search/estimate.cpp. The
 // random surrogate is plain Monte Carlo with a Wilson interval.
 //
-// Outputs in <out>: concrete.csv (every execution), failures.csv, learning_curve.csv,
-// estimate.json, checkpoint.json, manifest.json (last, with every file's hash).
+// Outputs in <out>, one set (core/files.hpp: OutputFolder; manifest.json last, with every
+// file's hash and size): concrete.csv (every execution), failures.csv, learning_curve.csv,
+// coverage.csv, estimate.json, traces.h5 and dataset.h5 (as `run` writes them: a search's
+// executions can train a model), report.html. Resume state, not part of the set:
+// checkpoint.json and .rounds/ (each round's traces and scenes).
 
 #include <cstdint>
 #include <filesystem>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace vsd::search {
@@ -43,10 +47,13 @@ struct SearchOptions {
   std::uint64_t pool = 20000;         ///< candidates scored per round (and for the rate estimate)
   double diversity = 1.0;             ///< weight of the distance term in the acquisition (>= 0)
   int trees = 50;                     ///< extra-trees surrogate: trees per metric
+  std::string probability = "shifts"; ///< extra-trees: "shifts" or "tail" (SurrogateOptions::probability)
+  bool rankTargets = false;           ///< extra-trees: fit metric ranks (SurrogateOptions::rankTargets)
   int bnnEpochs = 200;                ///< bnn surrogate: epochs per fit
   std::uint64_t seed = 1;
   int jobs = 1;                       ///< worker processes for the simulations
   int threads = 2;                    ///< libtorch threads (bnn)
+  double egoStepCost = 0.0;           ///< s of extra wall time per Ego step (pipeline::RunOptions::egoStepCost)
   std::string commandLine;            ///< recorded in the manifest
   /// Throws ConfigError naming the flag and the accepted range (e.g. budget < initial).
   void validate() const;
@@ -90,6 +97,7 @@ struct SearchSummary {
   std::string criterion;          ///< name
   std::string expression;
   std::string surrogate;
+  std::uint64_t seed = 0;
   std::uint64_t executions = 0;
   std::uint64_t critical = 0;     ///< executions meeting the criterion
   std::uint64_t failedRuns = 0;   ///< simulations that did not complete
@@ -110,6 +118,11 @@ struct SearchSummary {
 /// metric or surrogate, or a checkpoint made with other options; SumoError when a round's
 /// simulations all fail (the checkpoint keeps every finished round).
 SearchSummary runSearch(const SearchOptions& options);
+
+/// The HTML report of one or more searches of one criterion (report module): their
+/// learning curves and rate estimates with intervals side by side.
+std::string searchReportHtml(const std::vector<const SearchSummary*>& searches,
+                             const std::vector<std::pair<std::string, std::string>>& provenance);
 
 /// Wilson score interval (95 %) of `successes` out of `trials`; {0, 1} when trials == 0.
 std::pair<double, double> wilsonInterval(std::uint64_t successes, std::uint64_t trials);

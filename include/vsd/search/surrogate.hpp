@@ -24,6 +24,14 @@ struct SurrogateOptions {
   int trees = 50;          ///< extra-trees: forest size per target metric
   int bnnEpochs = 200;     ///< bnn: training epochs per fit
   int threads = 2;         ///< bnn: libtorch threads
+  /// extra-trees: how the trees' predictions become a probability: "shifts" (share of
+  /// tree predictions shifted by -1, 0, +1 spreads that meet the criterion) or "tail"
+  /// (tailProbability of the trees' mean and spread).
+  std::string probability = "shifts";
+  /// extra-trees: fit each metric's empirical rank (0..1) instead of its value, and map
+  /// predictions back through the empirical quantiles, extrapolated linearly beyond the
+  /// observed range (so that a criterion below every observed value gets a probability).
+  bool rankTargets = false;
 };
 
 class Surrogate {
@@ -57,5 +65,16 @@ std::unique_ptr<Surrogate> makeBnnSurrogate(const SurrogateOptions& options);
 /// the criterion: the spread-based probability both model surrogates use.
 double shiftedProbability(const std::vector<double>& centre, const std::vector<double>& spread,
                           const std::vector<double>& shifts, const Criterion& criterion);
+
+/// Gaussian tail probability that N(centre, spread^2) per metric meets the criterion,
+/// continuous everywhere (ranks candidates far from the criterion by how far): z = the
+/// smallest number of spreads (up to 6; grid 0.1, then bisection) by which the centre must move, every
+/// metric up or down, to meet it; p = Phi(-z). A centre that meets it already gets
+/// Phi(z'), z' the smallest move that leaves it. Zero spread: 1 or 0.
+/// `toMetrics` (optional) maps values on the scale the model predicts on (e.g. ranks) to
+/// metric values in place before the criterion judges them.
+double tailProbability(const std::vector<double>& centre, const std::vector<double>& spread,
+                       const Criterion& criterion,
+                       const std::function<void(std::vector<double>&)>& toMetrics = {});
 
 }  // namespace vsd::search

@@ -41,6 +41,7 @@ struct BatchOptions {
   std::vector<std::string> sumoOptions;  ///< appended to SUMO's command line
   std::filesystem::path fcdOutput;       ///< SUMO FCD XML for this batch (empty: none)
   std::filesystem::path scenarioDir;     ///< base for relative controller library paths
+  double egoStepCost = 0.0;              ///< s of extra wall time per Ego step (withStepCost; 0: none)
 };
 
 /// Runs all `runs` in one simulation of `net`. Per-scenario faults (a vehicle

@@ -128,6 +128,12 @@ std::unique_ptr<EgoController> makeController(ControllerRegistry& registry, cons
                                               const std::filesystem::path& scenario_dir,
                                               const ControllerParams& params);
 
+/// Wraps a controller so that each of its steps takes `seconds` more wall time (it
+/// sleeps, then returns the wrapped controller's command): a stand-in for a slow Ego
+/// stack when measuring what the tools around it cost (`--ego-step-cost-ms`).
+/// seconds <= 0: the controller itself.
+std::unique_ptr<EgoController> withStepCost(std::unique_ptr<EgoController> controller, double seconds);
+
 /// The C view of an Observation (for plugins).
 vsd_observation toAbi(const Observation& observation);
 
