@@ -7,11 +7,15 @@
 // own and CPU time counts every process of the run (workers, netconvert).
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 #include <sys/resource.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <filesystem>
+#include <map>
 #include <memory>
 #include <optional>
 #include <tuple>
@@ -22,8 +26,11 @@
 #include "vsd/core/files.hpp"
 #include "vsd/core/progress.hpp"
 #include "vsd/core/process.hpp"
+#include "vsd/baseline/baseline.hpp"
+#include "vsd/model/intervals.hpp"
 #include "vsd/model/model.hpp"
 #include "vsd/pipeline/cluster.hpp"
+#include "vsd/pipeline/scenes.hpp"
 #include "vsd/pipeline/run.hpp"
 #include "vsd/vector/dataset.hpp"
 
@@ -211,11 +218,109 @@ struct ModelBenchOptions {
   std::uint64_t samples = 2000;
   std::uint64_t testSamples = 2000;
   bool singles = false;
+  bool row4 = false;           ///< also train on acc + lk only and test on acc_lk (the paper's row 4)
+  bool resume = false;         ///< continue trainings from <model>.last where it exists
   int threads = 2;
+  int steps = 6000;            ///< optimizer steps of every training
   std::string decoder = "kinematic";
+  std::vector<std::string> decoderOptions;  ///< name=value
   std::string frame = "ego";
-  int draws = 32;              ///< sampled futures per scene for the inference benchmark
+  int draws = 32;              ///< sampled futures per scene for the inference and interval benchmarks
 };
+
+/// Metrics of a predicted future as compare scores them (its own states where it has them).
+std::vector<double> metricsOfTrajectory(const metrics::MetricSet& metric_set, const vector::VectorizedScene& scene,
+                                        const model::Trajectory& future) {
+  if (future.states.empty()) return pipeline::metricsOfFuture(metric_set, scene, future.positions);
+  return pipeline::metricsOfFuture(metric_set, scene, future.states);
+}
+
+/// One metric of many scenes: errors of the most likely future against the simulated value,
+/// the floor (the metric of the true positions), and how often the sampled intervals hold it.
+struct MetricAccuracy {
+  std::size_t scenes = 0;
+  double absError = 0.0;       ///< sum |predicted - simulated|
+  double error = 0.0;          ///< sum (predicted - simulated)
+  double floorError = 0.0;     ///< sum |metric of the true positions - simulated|
+  std::size_t withDraws = 0;
+  double medianAbsError = 0.0;  ///< sum |median of the draws - simulated|
+  double covered50 = 0.0;       ///< scenes whose central 50 % interval holds the simulated value
+  double covered90 = 0.0;
+
+  void add(double predicted, double simulated, double from_truth, std::vector<double> draws) {
+    if (!std::isfinite(predicted) || !std::isfinite(simulated)) return;
+    ++scenes;
+    absError += std::abs(predicted - simulated);
+    error += predicted - simulated;
+    floorError += std::isfinite(from_truth) ? std::abs(from_truth - simulated) : 0.0;
+    if (draws.empty()) return;
+    const double median = model::sampleQuantile(draws, 0.5);
+    const double q = model::quantilePosition(std::move(draws), simulated);
+    if (std::isnan(q) || std::isnan(median)) return;
+    ++withDraws;
+    medianAbsError += std::abs(median - simulated);
+    covered50 += std::abs(2.0 * q - 1.0) <= 0.5 ? 1.0 : 0.0;
+    covered90 += std::abs(2.0 * q - 1.0) <= 0.9 ? 1.0 : 0.0;
+  }
+};
+
+/// The simulated metric values of a test run by sample index (its concrete.csv).
+std::map<std::uint64_t, std::vector<double>> simulatedMetrics(const fs::path& run, const std::vector<std::string>& names) {
+  const auto table = baseline::readMetricTable(run, names);
+  std::map<std::uint64_t, std::vector<double>> bySample;
+  for (std::size_t r = 0; r < table.samples.size(); ++r) {
+    bySample[table.samples[r]] = std::vector<double>(table.targets.row(static_cast<Eigen::Index>(r)).data(),
+                                                     table.targets.row(static_cast<Eigen::Index>(r)).data() + names.size());
+  }
+  return bySample;
+}
+
+/// Prints, for the metrics of the issue (a_min, d_min, lane_offset_max where the test run
+/// has them), the MAE and bias of the most likely future's metric against the simulated
+/// value, the floor, and the coverage of the 50 % / 90 % intervals of `draws` futures.
+void printMetricAccuracy(const model::Predictor& predictor, const fs::path& test_run, int draws) {
+  const vector::DatasetReader reader(vector::resolveDatasetPath(test_run));
+  std::vector<std::string> names;
+  for (const std::string name : {"a_min", "d_min", "lane_offset_max"}) {
+    const auto& stored = reader.header().metricNames;
+    if (std::find(stored.begin(), stored.end(), name) != stored.end()) names.push_back(name);
+  }
+  if (names.empty()) return;
+  const metrics::MetricSet metric_set(names, pipeline::sceneAvailability(reader.header().kind), "bench model");
+  const auto simulated = simulatedMetrics(test_run, names);
+  model::PredictOptions options;
+  options.samples = predictor.probabilistic() ? draws : 0;
+  std::vector<MetricAccuracy> accuracy(names.size());
+  for (std::size_t first = 0; first < reader.size(); first += 4096) {
+    std::vector<vector::VectorizedScene> scenes;
+    for (std::size_t i = first; i < std::min(reader.size(), first + 4096); ++i) scenes.push_back(reader.scene(i));
+    const auto predictions = predictor.predictDistribution(scenes, options);
+    for (std::size_t j = 0; j < scenes.size(); ++j) {
+      const auto found = simulated.find(scenes[j].sample);
+      if (found == simulated.end()) continue;
+      const auto predicted = metricsOfTrajectory(metric_set, scenes[j], predictions[j].mostLikely);
+      const auto from_truth = pipeline::metricsOfFuture(metric_set, scenes[j], scenes[j].target);
+      std::vector<std::vector<double>> drawn(names.size());
+      for (const auto& future : predictions[j].samples) {
+        const auto values = metricsOfTrajectory(metric_set, scenes[j], future);
+        for (std::size_t m = 0; m < names.size(); ++m) drawn[m].push_back(values[m]);
+      }
+      for (std::size_t m = 0; m < names.size(); ++m) {
+        accuracy[m].add(predicted[m], found->second[m], from_truth[m], std::move(drawn[m]));
+      }
+    }
+  }
+  fmt::print("    {:<16} {:>7} {:>9} {:>9} {:>11} {:>11} {:>9} {:>9}\n", test_run.filename().string(), "scenes", "MAE",
+             "bias", "MAE floor", "MAE median", "cover 50%", "cover 90%");
+  for (std::size_t m = 0; m < names.size(); ++m) {
+    const auto& a = accuracy[m];
+    const double n = static_cast<double>(std::max<std::size_t>(a.scenes, 1));
+    const double d = static_cast<double>(std::max<std::size_t>(a.withDraws, 1));
+    auto drawn = [&](double sum) { return a.withDraws ? fmt::format("{:.3f}", sum / d) : std::string("-"); };
+    fmt::print("    {:<16} {:>7} {:>9.3f} {:>+9.3f} {:>11.3f} {:>11} {:>9} {:>9}\n", names[m], a.scenes, a.absError / n,
+               a.error / n, a.floorError / n, drawn(a.medianAbsError), drawn(a.covered50), drawn(a.covered90));
+  }
+}
 
 /// Scenes per second of predicting the most likely future and `draws` sampled futures of
 /// every test scene (read once, predicted in chunks as `evaluate` does).
@@ -260,6 +365,8 @@ int runModelBench(const ModelBenchOptions& options) {
       if (name == "acc_lk") simulation_rate = static_cast<double>(samples) / result.seconds;
     }
   }
+  std::vector<fs::path> tests;
+  for (const std::string label : {"acc", "lk", "acc_lk"}) tests.push_back(work / ("test_" + label));
   auto train_and_evaluate = [&](const std::string& mix, const std::vector<std::string>& labels,
                                 const std::string& model_name) {
     model::TrainOptions train_options;
@@ -267,12 +374,13 @@ int runModelBench(const ModelBenchOptions& options) {
     train_options.mix = model::Mix::parse(mix);
     train_options.output = work / model_name;
     train_options.threads = options.threads;
+    train_options.steps = options.steps;
     train_options.config.decoder = options.decoder;
+    train_options.config.decoderOptions = model::parseDecoderOptions(options.decoderOptions);
     train_options.config.frame = options.frame;
+    train_options.resume = options.resume && fs::exists(train_options.output.string() + ".last");
     const auto summary = model::train(train_options);
     const model::Predictor predictor(train_options.output, options.threads);
-    std::vector<fs::path> tests;
-    for (const std::string label : {"acc", "lk", "acc_lk"}) tests.push_back(work / ("test_" + label));
     const auto evaluation = model::evaluate(predictor, tests);
     fmt::print("  mix {:<32} trained in {:>5.1f} s ({} epochs, {:.0f} samples/s), test ADE [m]:", mix, summary.seconds,
                summary.plannedEpochs, summary.samplesPerSecond);
@@ -281,14 +389,27 @@ int runModelBench(const ModelBenchOptions& options) {
     if (evaluation.overall.scored > 0) fmt::print("{}", evaluation.table());
     return std::pair{summary, evaluation};
   };
-  fmt::print("  decoder {}, frame {}\n", options.decoder, options.frame);
-  const std::string suffix = fmt::format("_{}_{}.pt", options.decoder, options.frame);
+  fmt::print("  decoder {}{}{}, frame {}, {} optimizer steps\n", options.decoder, options.decoderOptions.empty() ? "" : " ",
+             fmt::join(options.decoderOptions, " "), options.frame, options.steps);
+  std::string suffix = fmt::format("_{}_{}", options.decoder, options.frame);
+  for (const auto& option : options.decoderOptions) suffix += "_" + option;
+  suffix += ".pt";
   const auto [summary, evaluation] = train_and_evaluate(
       fmt::format("acc={0},lk={0},acc_lk={0}", options.samples), {"acc", "lk", "acc_lk"}, "all" + suffix);
+  {
+    const model::Predictor all(work / ("all" + suffix), options.threads);
+    fmt::print("  metrics of the all-three model's predictions vs. the simulated values (concrete.csv); floor: metric "
+               "of the true positions; intervals of {} sampled futures:\n", options.draws);
+    for (const auto& test : tests) printMetricAccuracy(all, test, options.draws);
+  }
   if (options.singles) {
     for (const std::string label : {"acc", "lk", "acc_lk"}) {
       train_and_evaluate(fmt::format("{}={}", label, options.samples), {label}, label + suffix);
     }
+  }
+  if (options.row4) {
+    fmt::print("  row 4 (ACC + LK -> ACC&LK): the acc_lk column below\n");
+    train_and_evaluate(fmt::format("acc={0},lk={0}", options.samples), {"acc", "lk"}, "row4" + suffix);
   }
   const double inference_rate = static_cast<double>(evaluation.overall.samples) / evaluation.predictionSeconds;
   fmt::print("  training throughput: {:.0f} samples/s; {} samples to convergence (end of the schedule) in {:.1f} s\n",
@@ -301,8 +422,6 @@ int runModelBench(const ModelBenchOptions& options) {
   fmt::print("\n");
   const model::Predictor predictor(work / ("all" + suffix), options.threads);
   if (predictor.probabilistic() && options.draws > 0) {
-    std::vector<fs::path> tests;
-    for (const std::string label : {"acc", "lk", "acc_lk"}) tests.push_back(work / ("test_" + label));
     fmt::print("  inference with {} sampled futures per scene: {:.0f} scenes/s\n", options.draws,
                samplingRate(predictor, tests, options.draws));
   }
@@ -377,6 +496,11 @@ void addBenchCommand(CLI::App& app, CommandContext& context) {
   modeling->add_flag("--singles", model_options->singles, "Also train one model per functional scenario");
   addNumber(modeling, "--threads", model_options->threads, "libtorch threads")->capture_default_str();
   modeling->add_option("--decoder", model_options->decoder, "Decoder of the trained models")->capture_default_str();
+  modeling->add_option("--decoder-option", model_options->decoderOptions, "Decoder option name=value (repeatable)");
+  modeling->add_option("--steps", model_options->steps, "Optimizer steps of every training")->capture_default_str();
+  modeling->add_flag("--resume", model_options->resume,
+                     "Continue trainings from <model>.last where it exists (a finished one only calibrates)");
+  modeling->add_flag("--row4", model_options->row4, "Also train on acc + lk only and test on acc_lk (paper row 4)");
   modeling->add_option("--frame", model_options->frame, "Model frame (ego, lane)")->capture_default_str();
   addNumber(modeling, "--draws", model_options->draws, "Sampled futures per scene in the inference benchmark")
       ->capture_default_str();

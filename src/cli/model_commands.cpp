@@ -6,6 +6,7 @@
 
 #include "commands.hpp"
 #include "flags.hpp"
+#include "vsd/core/error.hpp"
 #include "vsd/core/files.hpp"
 #include "vsd/core/progress.hpp"
 #include "vsd/model/model.hpp"
@@ -91,13 +92,17 @@ void addPredictCommand(CLI::App& app, CommandContext& context) {
   command->add_option("-m,--model", *model_file, "Model file, or cv / ca (no training)")->required();
   command->add_option("-d,--data", *data, "Dataset file or run folder")->required();
   command->add_option("-o,--out", *out, "Predictions file (.h5)")->required();
-  addNumber(command, "--samples", file_options->predict.samples,
-                      "Futures to draw per scene from a probabilistic model (0: the most likely only)")
-      ->capture_default_str();
+  CLI::Option* samples = addNumber(command, "--samples", file_options->predict.samples,
+                                    "Futures to draw per scene from a probabilistic model, >= 1 (without it: "
+                                    "the most likely future only)");
   addNumber(command, "--sample-seed", file_options->predict.seed, "Seed of the drawn futures")->capture_default_str();
   addNumber(command, "--threads", *threads, "libtorch threads")->capture_default_str();
   command->callback([=, &context] {
     context.action = [=] {
+      if (samples->count() > 0 && file_options->predict.samples < 1) {  // 0 would silently draw nothing
+        throw ConfigError::field("command line", "--samples", std::to_string(file_options->predict.samples),
+                                 ">= 1 futures per scene (leave it out for the most likely future only)");
+      }
       file_options->predict.validate();
       const model::Predictor predictor(*model_file, *threads);
       const auto count = model::writePredictions(predictor, *model_file, *data, *out, *file_options);

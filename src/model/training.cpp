@@ -8,6 +8,7 @@
 #include <limits>
 #include <set>
 
+#include "calibration.hpp"
 #include "checkpoint.hpp"
 #include "distributed.hpp"
 #include "network.hpp"
@@ -306,12 +307,15 @@ class Trainer {
       saveLast();  // complete epochs so far; --resume continues after them
       throw;
     }
-    if (summary_.bestEpoch == 0) {
+    if (writes() && summary_.bestEpoch == 0) {
       // Nothing was written: exit 0 would promise a model file that does not exist.
       throw ModelError(fmt::format("no epoch reached a finite validation ADE (last: {}); no model written to {}",
                                    summary_.epochs.empty() ? std::string("none")
                                                            : formatValue(summary_.epochs.back().validationAde),
                                    options_.output.string()));
+    }
+    if (writes() && config_.decoderOptions.count("calibrate") != 0 && config_.decoderOption("calibrate") != 0.0) {
+      calibrate();  // rank 0 alone: it holds the validation split and writes the model file
     }
     summary_.seconds = secondsSince(start_);
     summary_.samplesPerSecond = trainingSeconds_ > 0.0 ? trainedSamples_ / trainingSeconds_ : 0.0;
@@ -480,6 +484,19 @@ class Trainer {
       ++sinceBest_;
     }
     record.seconds += secondsSince(epoch_start);
+  }
+
+  /// The decoder option `calibrate`: fits the best model's variance_scale on the
+  /// validation split and rewrites the model file with it.
+  void calibrate() {
+    ModelInfo info;
+    Model best = loadModel(options_.output, info);
+    const auto fitted = calibrateVariance(best, validation_);
+    info.config = best.config;
+    saveModel(options_.output, best, info);
+    spdlog::info("calibrated {}: variance scale {:.3f} fitted on the validation split, its positions inside their "
+                 "90 % regions {:.1f} % -> {:.1f} %",
+                 options_.output.string(), fitted.scale, 100.0 * fitted.coverageBefore, 100.0 * fitted.coverageAfter);
   }
 
   void saveLast() {

@@ -295,13 +295,15 @@ print("ok")
 )");
   const auto read = test::run({test::python(), check.string(), predictions.string()}, dir.path());
   EXPECT_EQ(read.exitCode, 0) << read.output;
-  const auto no_samples = runForErrors({"predict", "--model", model.string(), "--data", data.string(), "--out",
-                                        (dir.path() / "p.h5").string(), "--samples", "-2"},
-                                       dir.path());
-  EXPECT_EQ(no_samples.exitCode, 1);
-  EXPECT_EQ(lineCount(no_samples.output), 1u) << no_samples.output;
-  EXPECT_NE(no_samples.output.find("--samples"), std::string::npos) << no_samples.output;
-  EXPECT_FALSE(fs::exists(dir.path() / "p.h5"));
+  for (const std::string samples : {"-2", "0"}) {  // 0 would draw nothing: refused like a negative count
+    const auto no_samples = runForErrors({"predict", "--model", model.string(), "--data", data.string(), "--out",
+                                          (dir.path() / "p.h5").string(), "--samples", samples},
+                                         dir.path());
+    EXPECT_EQ(no_samples.exitCode, 1);
+    EXPECT_EQ(lineCount(no_samples.output), 1u) << no_samples.output;
+    EXPECT_NE(no_samples.output.find("--samples: got '" + samples + "', expected"), std::string::npos) << no_samples.output;
+    EXPECT_FALSE(fs::exists(dir.path() / "p.h5"));
+  }
   const auto no_decoder = runForErrors({"train", "--data", data.string(), "--out", (dir.path() / "x.pt").string(),
                                         "--decoder", "lstm"},
                                        dir.path());

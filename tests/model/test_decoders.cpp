@@ -8,9 +8,11 @@
 #include <cmath>
 #include <random>
 
+#include "../../src/model/calibration.hpp"
 #include "../../src/model/decoder.hpp"
 #include "../../src/model/kinematics.hpp"
 #include "../../src/model/network.hpp"
+#include "../../src/model/tensors.hpp"
 #include "synthetic_scenes.hpp"
 #include "test_support.hpp"
 #include "vsd/core/error.hpp"
@@ -161,6 +163,52 @@ TEST(KinematicDecoder, ControlsAreBoundedAndTheCovarianceIsThatOfItsSamples) {
       }
     }
   }
+}
+
+TEST(KinematicDecoder, TheAccelerationLossComparesWithTheAccelerationsOfTheTruePositions) {
+  auto config = kinematicConfig();
+  config.decoderOptions = {{"nll", 0.0}};
+  const auto plain = makeDecoder(config);
+  config.decoderOptions["accel_weight"] = 1.0;
+  const auto weighted = makeDecoder(config);
+  EgoStart start{torch::zeros({1, 2}), torch::zeros({1}), torch::tensor({10.0F})};
+  auto raw = torch::zeros({1, plain->outputWidth()});
+  raw.narrow(1, 0, 10).fill_(-2.0);  // brakes, then holds its speed, straight ahead
+  const auto decoded = weighted->decode(raw, start);
+  const auto mask = torch::ones({1, 25}, torch::kBool);
+  // The true future is the predicted one: nothing to learn.
+  EXPECT_NEAR(weighted->loss(decoded, decoded.positions.clone(), mask).item<float>(), 0.0F, 1e-3F);
+  // The true Ego kept its speed: the predicted decelerations are the error.
+  const auto kept = torch::arange(1, 26, torch::kFloat32).unsqueeze(-1) * torch::tensor({2.0F, 0.0F});
+  const float ade = plain->loss(plain->decode(raw, start), kept.unsqueeze(0), mask).item<float>();
+  const float mean_decel = -decoded.accels.mean().item<float>();
+  EXPECT_GT(mean_decel, 0.5F);
+  EXPECT_NEAR(weighted->loss(decoded, kept.unsqueeze(0), mask).item<float>(), ade + mean_decel, 1e-3F);
+}
+
+TEST(KinematicDecoder, CalibrationScalesTheVariancesUntilNinetyPercentAreCovered) {
+  auto config = kinematicConfig();
+  config.hidden = 16;
+  config.globalWidth = 16;
+  config.decoderHidden = 32;
+  torch::manual_seed(2);
+  Model model = Model::create(config);
+  std::vector<vector::VectorizedScene> scenes;
+  for (std::uint64_t i = 0; i < 200; ++i) scenes.push_back(syntheticScene(i));
+  const auto tensors = buildTensors(scenes, config);
+  const auto before = coverage90(model, tensors);
+  const auto covariance = model.decode(tensors.select(torch::arange(0, 1))).covariance;
+  const auto fitted = calibrateVariance(model, tensors);
+  EXPECT_NEAR(fitted.coverageBefore, before, 1e-9);
+  EXPECT_GT(std::abs(fitted.scale - 1.0), 0.05);
+  EXPECT_NEAR(fitted.coverageAfter, 0.9, 0.02);
+  EXPECT_NEAR(coverage90(model, tensors), fitted.coverageAfter, 1e-9);
+  EXPECT_EQ(model.config.decoderOption("variance_scale"), fitted.scale);
+  // Every control variance is multiplied by the scale: the covariances follow, up to the
+  // position floor (0.02 m)^2 that does not scale.
+  const auto scaled = model.decode(tensors.select(torch::arange(0, 1))).covariance;
+  const auto floor = 0.02 * 0.02 * torch::eye(2);
+  EXPECT_TRUE(torch::allclose(scaled - floor, fitted.scale * (covariance - floor), 1e-3, 1e-6));
 }
 
 TEST(GaussianNll, IsTheTwoDimensionalNormalDensity) {
@@ -338,6 +386,29 @@ TEST(KinematicModel, ADivergingTrainingStopsWithTheStepAndKeepsTheLastGoodModel)
   EXPECT_NE(error.find("keeps the last good model"), std::string::npos) << error;
   EXPECT_EQ(readTextFile(options.output), good_model);
   EXPECT_EQ(readTextFile(options.output.string() + ".last"), good_state);
+}
+
+TEST(KinematicModel, CalibrateFitsTheVarianceScaleAfterTrainingAndStoresItInTheModelFile) {
+  TemporaryDirectory dir;
+  auto options = tinyTraining(writeDataset(dir.path() / "acc.h5", 60), dir.path() / "k.pt");
+  options.config.decoder = "kinematic";
+  options.steps = 12;
+  train(options);
+  const Predictor plain(options.output);
+  EXPECT_EQ(plain.info().config.decoderOption("variance_scale"), 1.0);
+  const auto before = plain.predictDistribution({syntheticScene(3)}, {}).front();
+  // A finished training resumed with calibrate=1 trains nothing and only fits the scale.
+  options.resume = true;
+  options.config.decoderOptions["calibrate"] = 1.0;
+  train(options);
+  const Predictor calibrated(options.output);
+  const double scale = calibrated.info().config.decoderOption("variance_scale");
+  EXPECT_GT(std::abs(scale - 1.0), 0.01);
+  const auto after = calibrated.predictDistribution({syntheticScene(3)}, {}).front();
+  EXPECT_LT((after.mostLikely.positions.back() - before.mostLikely.positions.back()).norm(), 1e-6);
+  const Eigen::Matrix2d floor = 0.02 * 0.02 * Eigen::Matrix2d::Identity();
+  EXPECT_NEAR((after.positionCovariance.back() - floor).trace(), scale * (before.positionCovariance.back() - floor).trace(),
+              1e-3 * scale * before.positionCovariance.back().trace());
 }
 
 // --- intervals and scores ----------------------------------------------------------------

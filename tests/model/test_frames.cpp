@@ -96,16 +96,23 @@ TEST(LaneFrame, WorksOnAnExportOfARealMapAndTrainsThere) {
   EXPECT_GT(static_cast<double>(on_lane), 0.95 * static_cast<double>(reader.size()));
   EXPECT_GT(static_cast<double>(returned), 0.97 * static_cast<double>(points));
 
-  // A kinematic model in the lane frame trains and predicts on the map.
-  auto options = tinyTraining(exporting.output, dir.path() / "lane.pt");
+  // A kinematic model in the lane frame trains and predicts on the map. Map scenes are
+  // large (every lane boundary near the Ego), so a few dozen of them keep this cheap.
+  const fs::path subset = dir.path() / "a10_subset.h5";
+  {
+    vector::DatasetWriter writer(subset, reader.header());
+    for (std::size_t i = 0; i < reader.size(); i += reader.size() / 24) writer.append(reader.scene(i));
+    writer.close();
+  }
+  auto options = tinyTraining(subset, dir.path() / "lane.pt");
   options.config.decoder = "kinematic";
   options.config.frame = "lane";
-  options.steps = 20;
+  options.steps = 6;
   train(options);
   const Predictor predictor(options.output);
   EXPECT_EQ(predictor.info().config.frame, "lane");
-  const auto evaluation = evaluate(predictor, {exporting.output});
-  EXPECT_EQ(evaluation.overall.samples, reader.size());
+  const auto evaluation = evaluate(predictor, {subset});
+  EXPECT_EQ(evaluation.overall.samples, vector::DatasetReader(subset).size());
   EXPECT_TRUE(std::isfinite(evaluation.overall.ade));
   EXPECT_TRUE(std::isfinite(evaluation.overall.nll));
 }

@@ -12,7 +12,15 @@
 // kPositionNoise for float32 storage of the targets), and the loss is its negative
 // log-likelihood of the true positions. Samples draw the controls and roll them out
 // exactly (clamped to the limits, no reversing).
+//
+// Options off by default (they leave the decoder's numerics as they were):
+// `variance_scale` multiplies every control variance (the post-hoc calibration of
+// `calibrate`, fitted on the validation split after training, calibration.hpp);
+// `accel_weight` adds the mean absolute error between the predicted accelerations and
+// those of the true positions, so that a_min of a prediction is learnt directly.
 #include "kinematic.hpp"
+
+#include <cmath>
 
 #include "../kinematics.hpp"
 
@@ -32,7 +40,9 @@ class KinematicDecoder final : public Decoder {
         limits_{config.decoderOption("max_accel"), config.decoderOption("max_decel"),
                 config.decoderOption("max_curvature")},
         probabilistic_(config.decoderOption("nll") != 0.0),
-        adeWeight_(config.decoderOption("ade_weight")) {}
+        adeWeight_(config.decoderOption("ade_weight")),
+        accelWeight_(config.decoderOption("accel_weight")),
+        sigmaScale_(std::sqrt(config.decoderOption("variance_scale"))) {}
 
   std::int64_t outputWidth() const override { return 4 * horizon_ + 2; }
 
@@ -45,30 +55,31 @@ class KinematicDecoder final : public Decoder {
     decoded.headings = path.headings;
     decoded.speeds = path.speeds;
     decoded.accels = path.accels;
-    if (!probabilistic_) return decoded;
+    if (!probabilistic_) {
+      decoded.parameters = {start.position, start.speed};  // what accelError needs
+      return decoded;
+    }
 
-    const auto sigma_accel = standardDeviation(raw.narrow(1, 2 * horizon_, horizon_), kAccelUnit);
-    const auto sigma_curvature = standardDeviation(raw.narrow(1, 3 * horizon_, horizon_), kCurvatureUnit);
-    const auto sigma_accel_bias = standardDeviation(raw.select(1, 4 * horizon_), kAccelUnit);
-    const auto sigma_curvature_bias = standardDeviation(raw.select(1, 4 * horizon_ + 1), kCurvatureUnit);
+    const auto sigma_accel = standardDeviation(raw.narrow(1, 2 * horizon_, horizon_), kAccelUnit * sigmaScale_);
+    const auto sigma_curvature = standardDeviation(raw.narrow(1, 3 * horizon_, horizon_), kCurvatureUnit * sigmaScale_);
+    const auto sigma_accel_bias = standardDeviation(raw.select(1, 4 * horizon_), kAccelUnit * sigmaScale_);
+    const auto sigma_curvature_bias = standardDeviation(raw.select(1, 4 * horizon_ + 1), kCurvatureUnit * sigmaScale_);
     decoded.covariance = positionCovariance(path, sigma_accel, sigma_curvature, sigma_accel_bias, sigma_curvature_bias);
-    decoded.parameters = {accel, curvature, sigma_accel, sigma_curvature, sigma_accel_bias, sigma_curvature_bias};
+    decoded.parameters = {accel,           curvature,         sigma_accel, sigma_curvature, sigma_accel_bias,
+                          sigma_curvature_bias, start.position, start.speed};
     return decoded;
   }
 
   torch::Tensor loss(const Decoded& decoded, const torch::Tensor& targets, const torch::Tensor& mask) const override {
-    const auto ade = adeLoss(decoded.positions, targets, mask);
-    if (!probabilistic_) return ade;
-    const auto weights = mask.to(torch::kFloat32);
-    const auto nll = gaussianNll(decoded.positions, decoded.covariance, targets);
-    const auto per_sample = (nll * weights).sum(1) / weights.sum(1).clamp_min(1.0);
-    return per_sample.mean() + adeWeight_ * ade;
+    auto loss = positionLoss(decoded, targets, mask);
+    if (accelWeight_ > 0.0) loss = loss + accelWeight_ * accelError(decoded, targets, mask);
+    return loss;
   }
 
   std::int64_t noiseWidth() const override { return probabilistic_ ? 2 * horizon_ + 2 : 0; }
 
   Sampled sample(const Decoded& decoded, const EgoStart& start, const torch::Tensor& noise) const override {
-    const auto& p = decoded.parameters;  // accel, curvature, their sigmas, the bias sigmas
+    const auto& p = decoded.parameters;  // accel, curvature, their sigmas, the bias sigmas, the start
     const auto draws = noise.size(1);
     auto accel = p[0].unsqueeze(1) + p[2].unsqueeze(1) * noise.narrow(2, 0, horizon_) +
                  (p[4].unsqueeze(1) * noise.select(2, 2 * horizon_)).unsqueeze(-1);
@@ -119,11 +130,45 @@ class KinematicDecoder final : public Decoder {
     return covariance + kPositionNoise * kPositionNoise * torch::eye(2, covariance.options());
   }
 
+  /// The ADE (nll off) or the NLL of the true positions plus ade_weight times the ADE.
+  torch::Tensor positionLoss(const Decoded& decoded, const torch::Tensor& targets, const torch::Tensor& mask) const {
+    const auto ade = adeLoss(decoded.positions, targets, mask);
+    if (!probabilistic_) return ade;
+    const auto weights = mask.to(torch::kFloat32);
+    const auto nll = gaussianNll(decoded.positions, decoded.covariance, targets);
+    const auto per_sample = (nll * weights).sum(1) / weights.sum(1).clamp_min(1.0);
+    return per_sample.mean() + adeWeight_ * ade;
+  }
+
+  /// Mean absolute difference (m/s^2) between the predicted accelerations and those of the
+  /// true positions under the same vehicle model: the distance of step k is the trapezoid
+  /// s_k = (v_k + v_{k+1}) dt / 2, so v_{k+1} = 2 s_k / dt - v_k from the start speed and
+  /// a_k = (v_{k+1} - v_k) / dt (exact for a simulated Ego; no reversing). Steps after an
+  /// invalid position are left out.
+  torch::Tensor accelError(const Decoded& decoded, const torch::Tensor& targets, const torch::Tensor& mask) const {
+    const auto& start_position = decoded.parameters.at(decoded.parameters.size() - 2);
+    const auto& start_speed = decoded.parameters.back();
+    const auto previous = torch::cat({start_position.unsqueeze(1), targets.narrow(1, 0, horizon_ - 1)}, 1);
+    const auto distances = (targets - previous).norm(2, -1);  // [B, F]
+    std::vector<torch::Tensor> accels;
+    auto speed = start_speed;
+    for (std::int64_t k = 0; k < horizon_; ++k) {
+      const auto next = (2.0 * distances.select(1, k) / step_ - speed).clamp_min(0.0);
+      accels.push_back((next - speed) / step_);
+      speed = next;
+    }
+    const auto weights = mask.to(torch::kFloat32).cumprod(1);
+    const auto true_accels = torch::stack(accels, 1);
+    return ((decoded.accels - true_accels).abs() * weights).sum() / weights.sum().clamp_min(1.0);
+  }
+
   std::int64_t horizon_;
   double step_;
   ControlLimits limits_;
   bool probabilistic_;
   double adeWeight_;
+  double accelWeight_;
+  double sigmaScale_;
 };
 
 }  // namespace
@@ -142,6 +187,11 @@ DecoderEntry kinematicDecoderEntry() {
       {"max_curvature", 0.25, 0.001, 2.0, "1/m, largest path curvature (the simulated Ego's limit)"},
       {"nll", 1.0, 0.0, 1.0, "1: predictive distribution trained by NLL; 0: most likely future only, trained on ADE"},
       {"ade_weight", 0.0, 0.0, 100.0, "weight of the ADE of the most likely future added to the NLL"},
+      {"accel_weight", 0.0, 0.0, 100.0,
+       "weight of the mean absolute error (m/s^2) of the predicted accelerations against those of the true positions"},
+      {"calibrate", 0.0, 0.0, 1.0,
+       "1: after training, fit variance_scale on the validation split (90 % of its positions in their 90 % regions)"},
+      {"variance_scale", 1.0, 1e-3, 1e3, "multiplies every predicted control variance (written by calibrate)"},
   };
   entry.create = [](const VectorNetConfig& config) -> std::unique_ptr<Decoder> {
     return std::make_unique<KinematicDecoder>(config);
