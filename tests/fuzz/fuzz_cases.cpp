@@ -271,4 +271,110 @@ std::vector<Case> flagCases(const Fixtures& fixtures, Random& random, std::size_
   return cases;
 }
 
+// --- kills at write/rename points ------------------------------------------------------------
+
+namespace {
+
+/// A command that writes, its write/rename points (vsd/core/fault.hpp) and an older
+/// output to start from (empty: none).
+struct Writer {
+  std::string name;
+  std::vector<std::string> args;  ///< "@x": x in the case folder
+  std::string output;
+  std::vector<std::string> points;
+  fs::path older;
+  bool validatesDataset = false;
+};
+
+std::vector<Writer> writers(const Fixtures& f) {
+  const std::vector<std::string> atomic = {"atomic.fsync:*", "atomic.rename:*"};
+  return {
+      {"run",
+       {"run", (sourceDir() / "scenarios" / "acc.yaml").string(), "--samples", "3", "--batch", "2", "--out", "@out"},
+       "out",
+       {"run.write", "folder.stage:*", "folder.fsync:*", "folder.manifest", "folder.decide", "folder.unlink-manifest",
+        "folder.remove:*", "folder.rename:*", "folder.publish", "folder.cleanup"},
+       f.run,
+       true},
+      {"export",
+       {"export", "--opendrive", f.openDrive.string(), "--routes", f.routes.string(), "--end", "25", "--out", "@out.h5"},
+       "out.h5",
+       atomic,
+       f.mapDataset,
+       true},
+      {"train",
+       {"train", "--data", f.run.string(), "--out", "@m.pt", "--steps", "3", "--batch", "8", "--hidden", "8",
+        "--global-width", "8", "--decoder-hidden", "16", "--threads", "1"},
+       "m.pt",
+       atomic,
+       f.model},
+      {"predict",
+       {"predict", "--model", f.model.string(), "--data", f.run.string(), "--out", "@p.h5", "--threads", "1"},
+       "p.h5",
+       atomic,
+       {}},
+  };
+}
+
+}  // namespace
+
+std::vector<Case> killCases(const Fixtures& fixtures, Random& random, std::size_t count) {
+  const auto commands = writers(fixtures);
+  std::vector<Case> cases;
+  for (std::size_t i = 0; i < count; ++i) {
+    const fs::path folder = caseFolder(fixtures, "kills", i);
+    // Round robin over the commands, so that even a short run kills each of them.
+    const Writer& writer = commands[i % commands.size()];
+    const std::string point = random.pick(writer.points) + (random.chance(0.3) ? "#2" : "");
+    const fs::path output = folder / writer.output;
+    const bool older = !writer.older.empty() && random.chance(0.6);
+    if (older) fs::copy(writer.older, output, fs::copy_options::recursive | fs::copy_options::overwrite_existing);
+    Case c;
+    c.name = fmt::format("kills/{} killed at {}{}", writer.name, point, older ? " (over an older output)" : "");
+    for (const auto& arg : writer.args) c.args.push_back(arg.rfind('@', 0) == 0 ? (folder / arg.substr(1)).string() : arg);
+    c.outputs = {output};
+    c.environment = {"VSD_FAULT=kill@" + point};
+    c.expectKill = true;
+    if (writer.validatesDataset) c.checkOutputs = [output] { return datasetProblems(output); };
+    cases.push_back(std::move(c));
+  }
+  return cases;
+}
+
+// --- misbehaving Ego plugins -----------------------------------------------------------------
+
+std::vector<Case> pluginCases(const Fixtures& fixtures, Random& random, std::size_t count) {
+  const std::vector<std::string> controllers = {"crashing_ego", "aborting_ego", "exiting_ego",
+                                                "hanging_ego",  "failing_ego",  "misbehaving_ego"};
+  const fs::path plugin = fs::path(VSD_BINARY_DIR) / "plugins" / "libvsd_misbehaving_egos.so";
+  std::ifstream stream(sourceDir() / "scenarios" / "acc_lk.yaml");
+  const std::string text((std::istreambuf_iterator<char>(stream)), std::istreambuf_iterator<char>());
+  const std::regex controller_entry(R"(name: paper_ego[^\n]*\n(\s*)params: \{[^}]*\})");
+  if (!std::regex_search(text, controller_entry)) throw std::runtime_error("acc_lk.yaml: no paper_ego controller entry");
+  std::vector<Case> cases;
+  for (std::size_t i = 0; i < count; ++i) {
+    const fs::path folder = caseFolder(fixtures, "plugins", i);
+    const std::string& controller = controllers[i % controllers.size()];
+    const std::string fault = random.pick(std::vector<std::string>{"1", "v_ego > 12", "v_ego > 14"});
+    const std::string at = random.pick(std::vector<std::string>{"-1", "0", "1.0"});
+    std::string params = fmt::format("fault: {}, at: {}", fault, at);
+    if (controller == "misbehaving_ego") params += ", kind: (v_ego > 12) + (v_ego > 13) + (v_ego > 14) + (v_ego > 14.4)";
+    const std::string scenario = std::regex_replace(
+        text, controller_entry, fmt::format("name: {}\n$1library: {}\n$1params: {{{}}}", controller, plugin.string(), params));
+    const fs::path file = folder / "acc_lk.yaml";
+    std::ofstream(file) << scenario;
+    const std::string jobs = random.chance(0.5) ? "1" : "2";
+    const std::string batch = random.chance(0.5) ? "1" : "3";
+    const fs::path out = folder / "out";
+    Case c;
+    c.name = fmt::format("plugins/{} ({}) --jobs {} --batch {}", controller, params, jobs, batch);
+    c.args = {"run", file.string(), "--samples", "3", "--jobs", jobs, "--batch", batch, "--step-timeout", "1",
+              "--out", out.string()};
+    c.outputs = {out};
+    c.checkOutputs = [out] { return datasetProblems(out); };
+    cases.push_back(std::move(c));
+  }
+  return cases;
+}
+
 }  // namespace vsd::fuzz

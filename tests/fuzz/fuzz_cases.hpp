@@ -32,6 +32,10 @@ std::vector<Case> scenarioYamlCases(const Fixtures& fixtures, Random& random, st
 std::vector<Case> datasetCases(const Fixtures& fixtures, Random& random, std::size_t count);
 std::vector<Case> modelCases(const Fixtures& fixtures, Random& random, std::size_t count);
 std::vector<Case> flagCases(const Fixtures& fixtures, Random& random, std::size_t count);
+/// `run`, `export`, `train`, `predict` killed (SIGKILL) at one of their write/rename points.
+std::vector<Case> killCases(const Fixtures& fixtures, Random& random, std::size_t count);
+/// `run` with an Ego plugin that crashes, aborts, exits, hangs or fails (tests/plugins).
+std::vector<Case> pluginCases(const Fixtures& fixtures, Random& random, std::size_t count);
 
 /// Problems of a dataset file (empty: it opens and validates).
 std::string datasetProblems(const std::filesystem::path& path);

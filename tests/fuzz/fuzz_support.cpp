@@ -143,17 +143,17 @@ void checkRefusal(const Case& c, const RunResult& run, const std::vector<Snapsho
 
 }  // namespace
 
-Verdict runCase(const Case& c, const fs::path& work) {
-  Verdict verdict;
-  verdict.name = c.name;
-  std::vector<Snapshot> before;
-  for (const auto& output : c.outputs) before.push_back(Snapshot::of(output));
+namespace {
+
+std::vector<std::string> vsdArgv(const Case& c) {
   std::vector<std::string> argv = {(fs::path(VSD_BINARY_DIR) / "vsd-sumo").string(), "--quiet"};
   argv.insert(argv.end(), c.args.begin(), c.args.end());
-  const RunResult run = runWatched(argv, work, c.timeout, c.environment);
-  verdict.exitCode = run.exitCode;
-  verdict.seconds = run.seconds;
-  auto& problems = verdict.problems;
+  return argv;
+}
+
+/// The oracle of an ordinary run (any input, no fault injected).
+void checkRun(const Case& c, const RunResult& run, const std::vector<Snapshot>& before,
+              std::vector<std::string>& problems) {
   if (run.timedOut) {
     problems.push_back(fmt::format("hang: stopped by the watchdog after {:.0f} s", run.seconds));
   } else if (!run.exited) {
@@ -170,14 +170,64 @@ Verdict runCase(const Case& c, const fs::path& work) {
   } else {
     problems.push_back(fmt::format("exit code {} (expected 0 or 1): {}", run.exitCode, run.stderrText));
   }
+}
+
+/// After a kill: every output is as before, or complete (checkOutputs passes) — never
+/// a file or folder under its final name that is neither.
+void checkAfterKill(const Case& c, const std::vector<Snapshot>& before, std::vector<std::string>& problems) {
+  for (std::size_t i = 0; i < c.outputs.size(); ++i) {
+    if (Snapshot::of(c.outputs[i]) == before[i]) continue;
+    const std::string problem =
+        c.checkOutputs ? c.checkOutputs() : std::string("it is neither the old output nor a checked new one");
+    if (!problem.empty()) {
+      problems.push_back(fmt::format("after the kill {} changed and is not complete: {}", c.outputs[i].string(), problem));
+    }
+  }
+}
+
+void checkLeftovers(const Case& c, std::vector<std::string>& problems) {
   for (const auto& output : c.outputs) {
     const fs::path folder = fs::is_directory(output) ? output : output.parent_path();
     for (const auto& leftover : leftovers(folder)) {
       problems.push_back(fmt::format("temporary file left behind: {}", leftover.string()));
     }
   }
+}
+
+}  // namespace
+
+Verdict runCase(const Case& c, const fs::path& work) {
+  Verdict verdict;
+  verdict.name = c.name;
+  std::vector<Snapshot> before;
+  for (const auto& output : c.outputs) before.push_back(Snapshot::of(output));
+  const RunResult run = runWatched(vsdArgv(c), work, c.timeout, c.environment);
+  verdict.exitCode = run.exitCode;
+  verdict.seconds = run.seconds;
+  auto& problems = verdict.problems;
+  if (c.expectKill && !run.timedOut && !run.exited && run.signal == SIGKILL) {
+    verdict.exitCode = 128 + SIGKILL;
+    checkAfterKill(c, before, problems);
+    // The next run (no fault) cleans up what the kill left and succeeds.
+    Case again = c;
+    again.environment.clear();
+    again.expectKill = false;
+    std::vector<Snapshot> now;
+    for (const auto& output : c.outputs) now.push_back(Snapshot::of(output));
+    const RunResult next = runWatched(vsdArgv(again), work / "next", c.timeout);
+    verdict.seconds += next.seconds;
+    if (!next.exited || next.exitCode != 0) {
+      problems.push_back(fmt::format("the run after the kill failed (exit {}): {}", next.exitCode, next.stderrText));
+    }
+    checkRun(again, next, now, problems);
+  } else {
+    checkRun(c, run, before, problems);
+  }
+  checkLeftovers(c, problems);
   if (!problems.empty()) {
-    std::string command = "vsd-sumo --quiet";
+    std::string command;
+    for (const auto& entry : c.environment) command += entry + " ";
+    command += "vsd-sumo --quiet";
     for (const auto& arg : c.args) command += " '" + arg + "'";
     problems.push_back("command: " + command);
   }

@@ -66,6 +66,11 @@ struct Case {
   bool exitOneIsAVerdict = false;
   std::vector<std::string> environment;         ///< e.g. fault-injection settings
   std::chrono::seconds timeout{60};
+  /// A kill case (VSD_FAULT=kill@<point> in `environment`): the run must die by
+  /// SIGKILL at the point (or, if it never reaches it, pass as usual), each output must
+  /// be as before or complete (checkOutputs passes), and the same command without the
+  /// fault must then succeed and leave no temporary file.
+  bool expectKill = false;
 };
 
 /// Outcome of a case, for the summary.
