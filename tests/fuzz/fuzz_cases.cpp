@@ -64,6 +64,16 @@ std::string datasetProblems(const fs::path& path) {
   return fmt::format("{} is invalid: {}", path.string(), validation.problems.front());
 }
 
+/// A model file is complete if vsd-sumo evaluates with it (a training killed after an epoch
+/// leaves the best model so far: complete, by design, so that --resume can continue).
+std::string modelProblems(const fs::path& model, const fs::path& data) {
+  const RunResult run = runWatched({(fs::path(VSD_BINARY_DIR) / "vsd-sumo").string(), "--quiet", "evaluate", "--model",
+                                    model.string(), "--data", data.string(), "--threads", "1"},
+                                   model.parent_path() / "model-check", std::chrono::seconds(120));
+  if (run.exited && run.exitCode == 0) return {};
+  return fmt::format("{} does not evaluate: {}", model.string(), run.stderrText);
+}
+
 // --- scenario YAML ---------------------------------------------------------------------------
 
 namespace {
@@ -284,6 +294,7 @@ struct Writer {
   std::vector<std::string> points;
   fs::path older;
   bool validatesDataset = false;
+  bool evaluatesModel = false;
 };
 
 std::vector<Writer> writers(const Fixtures& f) {
@@ -307,7 +318,9 @@ std::vector<Writer> writers(const Fixtures& f) {
         "--global-width", "8", "--decoder-hidden", "16", "--threads", "1"},
        "m.pt",
        atomic,
-       f.model},
+       f.model,
+       false,
+       true},
       {"predict",
        {"predict", "--model", f.model.string(), "--data", f.run.string(), "--out", "@p.h5", "--threads", "1"},
        "p.h5",
@@ -336,6 +349,7 @@ std::vector<Case> killCases(const Fixtures& fixtures, Random& random, std::size_
     c.environment = {"VSD_FAULT=kill@" + point};
     c.expectKill = true;
     if (writer.validatesDataset) c.checkOutputs = [output] { return datasetProblems(output); };
+    if (writer.evaluatesModel) c.checkOutputs = [output, data = fixtures.run] { return modelProblems(output, data); };
     cases.push_back(std::move(c));
   }
   return cases;
