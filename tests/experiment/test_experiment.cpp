@@ -99,8 +99,12 @@ TEST(Experiment, QuickRunProducesTheTablesFiguresAndManifestAndCachesArtefacts) 
     // d_min is the clearance of oriented footprints, whose headings a future of positions
     // only approximates: a few cm (measured 0.023 / 0.040 m on the quick run).
     const std::string metric = mae.cell(r, mae.column("metric"));
-    if (metric == "p_lat_max") EXPECT_LT(mae.number(r, mae.column("vectornet_from_true_positions")), 1e-4);
-    if (metric == "d_min") EXPECT_LT(mae.number(r, mae.column("vectornet_from_true_positions")), 0.1);
+    if (metric == "p_lat_max") {
+      EXPECT_LT(mae.number(r, mae.column("vectornet_from_true_positions")), 1e-4);
+    }
+    if (metric == "d_min") {
+      EXPECT_LT(mae.number(r, mae.column("vectornet_from_true_positions")), 0.1);
+    }
   }
   for (const char* figure : {"fig6_trained_on_all_three", "fig7_trained_on_acc_lk", "fig8_trained_on_acc_and_lk"}) {
     const auto svg = readTextFile(out / "figures" / (std::string(figure) + ".svg"));
