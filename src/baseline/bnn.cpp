@@ -16,14 +16,14 @@ void BnnOptions::validate() const {
   auto require = [](bool ok, const char* field, double value, const char* constraint) {
     if (!ok) throw ConfigError::field("bnn", field, fmt::format("{}", value), constraint);
   };
-  require(hidden >= 1, "hidden", hidden, ">= 1");
-  require(layers >= 1, "layers", layers, ">= 1");
-  require(epochs >= 1, "epochs", epochs, ">= 1");
-  require(batchSize >= 1, "batch", batchSize, ">= 1");
-  require(learningRate > 0.0, "lr", learningRate, "> 0");
-  require(priorStd > 0.0, "prior_std", priorStd, "> 0");
-  require(samples >= 1, "samples", samples, ">= 1");
-  require(threads >= 1, "threads", threads, ">= 1");
+  require(hidden >= 1 && hidden <= 4096, "hidden", hidden, "1 .. 4096");
+  require(layers >= 1 && layers <= 16, "layers", layers, "1 .. 16");
+  require(epochs >= 1 && epochs <= 1000000, "epochs", epochs, "1 .. 1000000");
+  require(batchSize >= 1 && batchSize <= 65536, "batch", batchSize, "1 .. 65536");
+  require(learningRate > 0.0 && learningRate <= 10.0, "lr", learningRate, "(0, 10]");
+  require(priorStd > 0.0 && priorStd <= 1e6, "prior_std", priorStd, "(0, 1e6]");
+  require(samples >= 1 && samples <= 100000, "samples", samples, "1 .. 100000");
+  require(threads >= 1 && threads <= 256, "threads", threads, "1 .. 256");
 }
 
 namespace {

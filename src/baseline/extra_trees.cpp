@@ -12,12 +12,12 @@
 namespace vsd::baseline {
 
 void ExtraTreesOptions::validate() const {
-  if (trees < 1) throw ConfigError::field("extra trees", "trees", std::to_string(trees), ">= 1");
+  if (trees < 1 || trees > 100000) throw ConfigError::field("extra trees", "trees", std::to_string(trees), "1 .. 100000");
   if (!(maxFeatures > 0.0 && maxFeatures <= 1.0)) {
     throw ConfigError::field("extra trees", "max_features", fmt::format("{}", maxFeatures), "in (0, 1]");
   }
   if (minSamplesSplit < 2) {
-    throw ConfigError::field("extra trees", "min_samples_split", std::to_string(minSamplesSplit), ">= 2");
+    throw ConfigError::field("extra trees", "min_samples_split", std::to_string(minSamplesSplit), ">= 2 (a count)");
   }
 }
 

@@ -37,6 +37,9 @@ BaselineReport runBaseline(const BaselineOptions& options) {
   if (options.model != "et" && options.model != "bnn") {
     throw ConfigError::field("command line", "--model", options.model, "et (extra trees) or bnn");
   }
+  if (!options.predictionsCsv.empty()) requireFileOutputPath(options.predictionsCsv, "--out");
+  options.extraTrees.validate();
+  options.bnn.validate();
   auto train = readMetricTable(options.train, options.targets, options.inputs);
   // The functional scenario first: another scenario's table also lacks the inputs, but
   // "another functional scenario" is what the user needs to hear.

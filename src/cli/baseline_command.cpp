@@ -3,6 +3,7 @@
 #include <memory>
 
 #include "commands.hpp"
+#include "flags.hpp"
 #include "vsd/baseline/baseline.hpp"
 
 namespace vsd::cli {
@@ -20,18 +21,18 @@ void addBaselineCommand(CLI::App& app, CommandContext& context) {
       ->delimiter(',');
   command->add_option("--inputs", options->inputs, "Input columns (default: every input of the scenario)")
       ->delimiter(',');
-  command->add_option("--train-rows", options->maxTrainRows, "Use the first N completed rows (0: all)")
+  addNumber(command, "--train-rows", options->maxTrainRows, "Use the first N completed rows (0: all)")
       ->capture_default_str();
   command->add_option("-o,--out", options->predictionsCsv, "Write per-row truth and prediction (and std) as CSV");
-  command->add_option("--trees", options->extraTrees.trees, "Extra trees: number of trees")->capture_default_str();
-  command->add_option("--max-features", options->extraTrees.maxFeatures, "Extra trees: share of features per split")
+  addNumber(command, "--trees", options->extraTrees.trees, "Extra trees: number of trees")->capture_default_str();
+  addNumber(command, "--max-features", options->extraTrees.maxFeatures, "Extra trees: share of features per split")
       ->capture_default_str();
-  command->add_option("--min-samples-split", options->extraTrees.minSamplesSplit, "Extra trees: smallest node to split")
+  addNumber(command, "--min-samples-split", options->extraTrees.minSamplesSplit, "Extra trees: smallest node to split")
       ->capture_default_str();
-  command->add_option("--bnn-hidden", options->bnn.hidden, "BNN: width")->capture_default_str();
-  command->add_option("--bnn-epochs", options->bnn.epochs, "BNN: epochs")->capture_default_str();
-  command->add_option("--bnn-samples", options->bnn.samples, "BNN: weight draws per prediction")->capture_default_str();
-  command->add_option("-s,--seed", options->extraTrees.seed, "Seed")->capture_default_str();
+  addNumber(command, "--bnn-hidden", options->bnn.hidden, "BNN: width")->capture_default_str();
+  addNumber(command, "--bnn-epochs", options->bnn.epochs, "BNN: epochs")->capture_default_str();
+  addNumber(command, "--bnn-samples", options->bnn.samples, "BNN: weight draws per prediction")->capture_default_str();
+  addNumber(command, "-s,--seed", options->extraTrees.seed, "Seed")->capture_default_str();
   command->callback([=, &context] {
     context.action = [=] {
       options->bnn.seed = options->extraTrees.seed;

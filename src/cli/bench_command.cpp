@@ -21,6 +21,7 @@
 #include <tuple>
 
 #include "commands.hpp"
+#include "flags.hpp"
 #include "vsd/core/error.hpp"
 #include "vsd/core/files.hpp"
 #include "vsd/core/progress.hpp"
@@ -463,23 +464,23 @@ void addBenchCommand(CLI::App& app, CommandContext& context) {
   auto options = std::make_shared<BenchOptions>();
   CLI::App* run = bench->add_subcommand("run", "Throughput and peak memory of `vsd-sumo run`");
   run->add_option("scenario", options->scenario, "Logical scenario")->check(CLI::ExistingFile)->capture_default_str();
-  run->add_option("--samples", options->samples, "Samples for the batched run")->capture_default_str();
-  run->add_option("--batch-one-samples", options->batchOneSamples, "Samples for the --batch 1 run")
+  addNumber(run, "--samples", options->samples, "Samples for the batched run")->capture_default_str();
+  addNumber(run, "--batch-one-samples", options->batchOneSamples, "Samples for the --batch 1 run")
       ->capture_default_str();
-  run->add_option("--memory-samples", options->memorySamples, "Sample counts for the memory runs")
+  addNumber(run, "--memory-samples", options->memorySamples, "Sample counts for the memory runs")
       ->capture_default_str();
-  run->add_option("--batch", options->batch, "Batch size of the batched runs")->capture_default_str();
-  run->add_option("--jobs", options->jobs, "Worker processes")->capture_default_str();
-  run->add_option("--mpi-samples", options->mpiSamples, "Samples for the MPI runs (1 rank vs 2)")
+  addNumber(run, "--batch", options->batch, "Batch size of the batched runs")->capture_default_str();
+  addNumber(run, "--jobs", options->jobs, "Worker processes")->capture_default_str();
+  addNumber(run, "--mpi-samples", options->mpiSamples, "Samples for the MPI runs (1 rank vs 2)")
       ->capture_default_str();
   run->callback([options, &context] { context.action = [options] { return runBench(*options); }; });
 
   auto export_options = std::make_shared<ExportBenchOptions>();
   CLI::App* exporting = bench->add_subcommand("export", "Throughput, size and peak memory of `vsd-sumo export`");
   exporting->add_option("map", export_options->map, "SUMO configuration")->check(CLI::ExistingFile)->capture_default_str();
-  exporting->add_option("--end", export_options->end, "Simulated seconds")->capture_default_str();
+  addNumber(exporting, "--end", export_options->end, "Simulated seconds")->capture_default_str();
   exporting->add_option("--egos", export_options->egos, "Ego selection")->capture_default_str();
-  exporting->add_option("--memory-ends", export_options->memoryEnds, "Simulated seconds for the memory runs")
+  addNumber(exporting, "--memory-ends", export_options->memoryEnds, "Simulated seconds for the memory runs")
       ->capture_default_str();
   exporting->callback([export_options, &context] {
     context.action = [export_options] { return runExportBench(*export_options); };
@@ -488,12 +489,12 @@ void addBenchCommand(CLI::App& app, CommandContext& context) {
   auto model_options = std::make_shared<ModelBenchOptions>();
   CLI::App* modeling = bench->add_subcommand("model", "Training and inference throughput and test ADE of VectorNet");
   modeling->add_option("--work", model_options->work, "Keep data and models in this folder (reused when present)");
-  modeling->add_option("--samples", model_options->samples, "Training samples per functional scenario")
+  addNumber(modeling, "--samples", model_options->samples, "Training samples per functional scenario")
       ->capture_default_str();
-  modeling->add_option("--test-samples", model_options->testSamples, "Test samples per functional scenario")
+  addNumber(modeling, "--test-samples", model_options->testSamples, "Test samples per functional scenario")
       ->capture_default_str();
   modeling->add_flag("--singles", model_options->singles, "Also train one model per functional scenario");
-  modeling->add_option("--threads", model_options->threads, "libtorch threads")->capture_default_str();
+  addNumber(modeling, "--threads", model_options->threads, "libtorch threads")->capture_default_str();
   modeling->add_option("--decoder", model_options->decoder, "Decoder of the trained models")->capture_default_str();
   modeling->add_option("--decoder-option", model_options->decoderOptions, "Decoder option name=value (repeatable)");
   modeling->add_option("--steps", model_options->steps, "Optimizer steps of every training")->capture_default_str();
@@ -501,7 +502,7 @@ void addBenchCommand(CLI::App& app, CommandContext& context) {
                      "Continue trainings from <model>.last where it exists (a finished one only calibrates)");
   modeling->add_flag("--row4", model_options->row4, "Also train on acc + lk only and test on acc_lk (paper row 4)");
   modeling->add_option("--frame", model_options->frame, "Model frame (ego, lane)")->capture_default_str();
-  modeling->add_option("--draws", model_options->draws, "Sampled futures per scene in the inference benchmark")
+  addNumber(modeling, "--draws", model_options->draws, "Sampled futures per scene in the inference benchmark")
       ->capture_default_str();
   modeling->callback([model_options, &context] {
     context.action = [model_options] { return runModelBench(*model_options); };
@@ -513,8 +514,8 @@ void addBenchCommand(CLI::App& app, CommandContext& context) {
   comparing->add_option("scenario", compare_options->scenario, "Logical scenario")
       ->check(CLI::ExistingFile)
       ->capture_default_str();
-  comparing->add_option("--samples", compare_options->samples, "Scenario counts to compare")->capture_default_str();
-  comparing->add_option("--jobs", compare_options->jobs, "SUMO worker processes")->capture_default_str();
+  addNumber(comparing, "--samples", compare_options->samples, "Scenario counts to compare")->capture_default_str();
+  addNumber(comparing, "--jobs", compare_options->jobs, "SUMO worker processes")->capture_default_str();
   comparing->callback([compare_options, &context] {
     context.action = [compare_options] { return runCompareBench(*compare_options); };
   });

@@ -8,6 +8,7 @@
 #include <memory>
 
 #include "commands.hpp"
+#include "flags.hpp"
 #include "vsd/core/files.hpp"
 #include "vsd/interop/export.hpp"
 #include "vsd/interop/roundtrip.hpp"
@@ -64,10 +65,10 @@ void addInteropBench(CLI::App& bench, CommandContext& context) {
   auto options = std::make_shared<InteropBenchOptions>();
   CLI::App* interop = bench.add_subcommand("interop", "Export speed and netconvert round trip of OpenDRIVE/OpenSCENARIO");
   interop->add_option("scenario", options->scenario, "Logical scenario")->check(CLI::ExistingFile)->capture_default_str();
-  interop->add_option("--export-samples", options->exportSamples, "Concrete scenarios to export")->capture_default_str();
-  interop->add_option("--round-trip-samples", options->roundTripSamples, "Concrete scenarios for the netconvert round trip")
+  addNumber(interop, "--export-samples", options->exportSamples, "Concrete scenarios to export")->capture_default_str();
+  addNumber(interop, "--round-trip-samples", options->roundTripSamples, "Concrete scenarios for the netconvert round trip")
       ->capture_default_str();
-  interop->add_option("--seed", options->seed, "Random seed")->capture_default_str();
+  addNumber(interop, "--seed", options->seed, "Random seed")->capture_default_str();
   interop->callback([options, &context] {
     context.action = [options] {
       TemporaryDirectory work("vsd-bench-interop");

@@ -4,6 +4,7 @@
 #include <memory>
 
 #include "commands.hpp"
+#include "flags.hpp"
 #include "vsd/compare/compare.hpp"
 
 namespace vsd::cli {
@@ -21,19 +22,19 @@ void addCompareCommand(CLI::App& app, CommandContext& context) {
                                                   "vs recorded)");
   command->add_option("-o,--out", options->output, "Report folder (default: reports/<scenario or dataset name>)");
   command->add_flag("--force", options->force, "Replace an existing report folder");
-  command->add_option("-n,--samples", options->samples,
+  addNumber(command, "-n,--samples", options->samples,
                       "Scenarios to sample and simulate (default 500); datasets: the first N samples (default: all)");
-  command->add_option("-s,--seed", options->seed, "Sampling seed")->capture_default_str();
-  command->add_option("-j,--jobs", options->jobs, "SUMO worker processes")->capture_default_str();
-  command->add_option("--threads", options->threads, "libtorch threads")->capture_default_str();
-  command->add_option("--worst", options->worst, "Scenarios with the largest ADE drawn in the report")
+  addNumber(command, "-s,--seed", options->seed, "Sampling seed")->capture_default_str();
+  addNumber(command, "-j,--jobs", options->jobs, "SUMO worker processes")->capture_default_str();
+  addNumber(command, "--threads", options->threads, "libtorch threads")->capture_default_str();
+  addNumber(command, "--worst", options->worst, "Scenarios with the largest ADE drawn in the report")
       ->capture_default_str();
-  command->add_option("--draws", options->draws,
+  addNumber(command, "--draws", options->draws,
                       "Futures drawn per scenario from a probabilistic model: metric intervals, calibration, confident "
                       "verdicts (0: none)")
       ->capture_default_str();
-  command->add_option("--draw-seed", options->drawSeed, "Seed of the drawn futures")->capture_default_str();
-  command->add_option("--confidence", options->confidence,
+  addNumber(command, "--draw-seed", options->drawSeed, "Seed of the drawn futures")->capture_default_str();
+  addNumber(command, "--confidence", options->confidence,
                       "A criterion's verdict is confident when this share of the drawn futures agrees")
       ->capture_default_str();
   command->add_flag("--allow-dirty", options->allowDirty,

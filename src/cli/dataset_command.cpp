@@ -4,6 +4,7 @@
 #include <memory>
 
 #include "commands.hpp"
+#include "flags.hpp"
 #include "vsd/core/error.hpp"
 #include "vsd/core/files.hpp"
 #include "vsd/core/shards.hpp"
@@ -46,6 +47,7 @@ vector::DatasetSummary summarize(const std::filesystem::path& path) {
 }
 
 int showSample(const std::filesystem::path& path, std::size_t sample, const std::filesystem::path& svg) {
+  if (!svg.empty()) requireFileOutputPath(svg, "--svg");
   vector::DatasetCollection collection;
   collection.add(path);
   const auto refs = collection.all();
@@ -102,7 +104,7 @@ void addDatasetCommand(CLI::App& app, CommandContext& context) {
   auto svg = std::make_shared<std::filesystem::path>();
   CLI::App* show = dataset->add_subcommand("show", "Print one sample and optionally draw it as SVG");
   show->add_option("dataset", *show_path, "Dataset file, run folder or sharded sweep folder")->required();
-  show->add_option("--sample", *sample, "Sample index")->capture_default_str();
+  addNumber(show, "--sample", *sample, "Sample index")->capture_default_str();
   show->add_option("--svg", *svg, "Write a drawing of the sample here");
   show->callback([=, &context] { context.action = [=] { return showSample(*show_path, *sample, *svg); }; });
 

@@ -3,6 +3,7 @@
 #include <memory>
 
 #include "commands.hpp"
+#include "flags.hpp"
 #include "vsd/core/error.hpp"
 #include "vsd/pipeline/cluster.hpp"
 #include "vsd/pipeline/export.hpp"
@@ -16,14 +17,11 @@ std::pair<std::string, double> parseParam(const std::string& text) {
   if (equals == std::string::npos || equals == 0) {
     throw ConfigError::field("command line", "--controller-param", text, "name=value");
   }
-  try {
-    std::size_t used = 0;
-    const std::string value = text.substr(equals + 1);
-    const double number = std::stod(value, &used);
-    if (used == value.size()) return {text.substr(0, equals), number};
-  } catch (const std::exception&) {
+  const std::string value = text.substr(equals + 1);
+  if (!checkRealText(value).empty()) {
+    throw ConfigError::field("command line", "--controller-param", text, "name=<finite decimal number>");
   }
-  throw ConfigError::field("command line", "--controller-param", text, "name=<number>");
+  return {text.substr(0, equals), std::stod(value)};
 }
 }  // namespace
 
@@ -31,8 +29,8 @@ void addExportCommand(CLI::App& app, CommandContext& context) {
   auto options = std::make_shared<pipeline::ExportOptions>();
   auto config = std::make_shared<std::string>();
   auto params = std::make_shared<std::vector<std::string>>();
-  auto begin = std::make_shared<double>(-1.0);
-  auto end = std::make_shared<double>(-1.0);
+  auto begin = std::make_shared<double>(0.0);
+  auto end = std::make_shared<double>(0.0);
   CLI::App* command = app.add_subcommand(
       "export", "Vectorized scenes (dataset .h5) from an arbitrary SUMO map with its own demand");
   command->add_option("config", *config, "SUMO configuration (.sumocfg)");
@@ -41,26 +39,26 @@ void addExportCommand(CLI::App& app, CommandContext& context) {
   command->add_option("--routes", options->source.routes, "Route files (demand) for --net / --opendrive");
   command->add_option("-o,--out", options->output, "Dataset file to write (.h5)")->required();
   command->add_option("--egos", options->egos, "Egos: all | random:K | vtype:NAME | id,id,...")->capture_default_str();
-  command->add_option("-s,--seed", options->seed, "Seed (Ego choice and SUMO)")->capture_default_str();
-  command->add_option("--step", options->step, "Time step (s)")->capture_default_str();
-  command->add_option("--horizon", options->horizon, "Ego future per sample (s)")->capture_default_str();
-  command->add_option("--history", options->history, "Past before t0 in the polylines (s)")->capture_default_str();
-  command->add_option("--stride", options->stride, "Time between window starts of one Ego (s)")->capture_default_str();
-  command->add_option("--radius", options->radius, "Lanes and vehicles within this distance of the Ego (m)")
+  addNumber(command, "-s,--seed", options->seed, "Seed (Ego choice and SUMO)")->capture_default_str();
+  addNumber(command, "--step", options->step, "Time step (s)")->capture_default_str();
+  addNumber(command, "--horizon", options->horizon, "Ego future per sample (s)")->capture_default_str();
+  addNumber(command, "--history", options->history, "Past before t0 in the polylines (s)")->capture_default_str();
+  addNumber(command, "--stride", options->stride, "Time between window starts of one Ego (s)")->capture_default_str();
+  addNumber(command, "--radius", options->radius, "Lanes and vehicles within this distance of the Ego (m)")
       ->capture_default_str();
-  command->add_option("--max-vector-length", options->maxVectorLength, "Longest lane-boundary vector (m)")
+  addNumber(command, "--max-vector-length", options->maxVectorLength, "Longest lane-boundary vector (m)")
       ->capture_default_str();
-  command->add_option("--begin", *begin, "Simulation begin (s; default: the map's)");
-  command->add_option("--end", *end, "Simulation end (s; default: the map's)");
+  CLI::Option* begin_flag = addNumber(command, "--begin", *begin, "Simulation begin (s; default: the map's)");
+  CLI::Option* end_flag = addNumber(command, "--end", *end, "Simulation end (s; default: the map's)");
   command->add_option("--label", options->label, "Label of the samples (default: the map file's name)");
-  command->add_option("--max-samples", options->maxSamples, "Stop after this many samples (0: no limit)")
+  addNumber(command, "--max-samples", options->maxSamples, "Stop after this many samples (0: no limit)")
       ->capture_default_str();
-  command->add_option("--lane-change-duration", options->laneChangeDuration,
+  addNumber(command, "--lane-change-duration", options->laneChangeDuration,
                       "SUMO lane changes take this long (s); 0: the map's own (instantaneous, or sublane)")
       ->capture_default_str();
-  command->add_option("--compression", options->compression, "Deflate level of the vectors: 0 (none, fastest) .. 9")
+  addNumber(command, "--compression", options->compression, "Deflate level of the vectors: 0 (none, fastest) .. 9")
       ->capture_default_str();
-  command->add_option("--step-timeout", options->watchdog.stepTimeout,
+  addNumber(command, "--step-timeout", options->watchdog.stepTimeout,
                       "Watchdog: longest Ego controller call or libsumo step (s); a closed-loop Ego exceeding it is "
                       "taken out")
       ->capture_default_str();
@@ -72,8 +70,8 @@ void addExportCommand(CLI::App& app, CommandContext& context) {
   command->callback([=, &context] {
     context.action = [=] {
       options->source.config = *config;
-      if (*begin >= 0.0) options->begin = *begin;
-      if (*end >= 0.0) options->end = *end;
+      if (begin_flag->count() > 0) options->begin = *begin;
+      if (end_flag->count() > 0) options->end = *end;
       for (const auto& param : *params) options->controllerParams.push_back(parseParam(param));
       if (pipeline::launchedAsMpiRank()) {
         const auto communicator = pipeline::joinMpiJob();

@@ -5,6 +5,7 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
@@ -105,7 +106,12 @@ int main(int argc, char** argv) {
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& error) {
-    return app.exit(error);
+    if (error.get_exit_code() == 0) return app.exit(error);  // --help, --version
+    // Bad flags are bad input like any other: one line, exit code 1.
+    std::string message = error.what();
+    std::replace(message.begin(), message.end(), '\n', ' ');
+    std::fprintf(stderr, "vsd-sumo: error: command line: %s (see --help)\n", message.c_str());
+    return 1;
   }
   vsd::configureLogging(quiet ? vsd::Verbosity::Quiet : verbose ? vsd::Verbosity::Verbose : vsd::Verbosity::Normal);
   vsd::installInterruptHandlers();

@@ -5,7 +5,9 @@
 #include <memory>
 
 #include "commands.hpp"
+#include "flags.hpp"
 #include "vsd/core/error.hpp"
+#include "vsd/core/files.hpp"
 #include "vsd/core/progress.hpp"
 #include "vsd/model/model.hpp"
 
@@ -36,23 +38,23 @@ void addTrainCommand(CLI::App& app, CommandContext& context) {
   command->add_option("-d,--data", options->data, "Dataset files or run folders")->required();
   command->add_option("--mix", *mix, "Samples per label, e.g. acc=2000,lk=2000,acc_lk=200 (default: all)");
   command->add_option("-o,--out", options->output, "Model file to write (the best epoch)")->required();
-  command->add_option("-s,--seed", options->seed, "Seed (sample choice, split, initialisation, order)")
+  addNumber(command, "-s,--seed", options->seed, "Seed (sample choice, split, initialisation, order)")
       ->capture_default_str();
-  command->add_option("--threads", options->threads, "libtorch threads")->capture_default_str();
-  command->add_option("--steps", options->steps, "Optimizer steps (length of the learning-rate schedule)")
+  addNumber(command, "--threads", options->threads, "libtorch threads")->capture_default_str();
+  addNumber(command, "--steps", options->steps, "Optimizer steps (length of the learning-rate schedule)")
       ->capture_default_str();
-  command->add_option("--patience", options->patience, "Stop after this many epochs without improvement")
+  addNumber(command, "--patience", options->patience, "Stop after this many epochs without improvement")
       ->capture_default_str();
-  command->add_option("--batch", options->batchSize, "Batch size")->capture_default_str();
-  command->add_option("--lr", options->learningRate, "Peak learning rate (AdamW)")->capture_default_str();
-  command->add_option("--weight-decay", options->weightDecay, "AdamW weight decay")->capture_default_str();
-  command->add_option("--validation-fraction", options->validationFraction, "Share of each label for validation")
+  addNumber(command, "--batch", options->batchSize, "Batch size")->capture_default_str();
+  addNumber(command, "--lr", options->learningRate, "Peak learning rate (AdamW)")->capture_default_str();
+  addNumber(command, "--weight-decay", options->weightDecay, "AdamW weight decay")->capture_default_str();
+  addNumber(command, "--validation-fraction", options->validationFraction, "Share of each label for validation")
       ->capture_default_str();
-  command->add_option("--hidden", options->config.hidden, "Subgraph width")->capture_default_str();
-  command->add_option("--layers", options->config.subgraphLayers, "Subgraph layers")->capture_default_str();
-  command->add_option("--global-width", options->config.globalWidth, "Attention width")->capture_default_str();
-  command->add_option("--heads", options->config.heads, "Attention heads")->capture_default_str();
-  command->add_option("--decoder-hidden", options->config.decoderHidden, "Decoder width")->capture_default_str();
+  addNumber(command, "--hidden", options->config.hidden, "Subgraph width")->capture_default_str();
+  addNumber(command, "--layers", options->config.subgraphLayers, "Subgraph layers")->capture_default_str();
+  addNumber(command, "--global-width", options->config.globalWidth, "Attention width")->capture_default_str();
+  addNumber(command, "--heads", options->config.heads, "Attention heads")->capture_default_str();
+  addNumber(command, "--decoder-hidden", options->config.decoderHidden, "Decoder width")->capture_default_str();
   command->add_option("--decoder", options->config.decoder, "Decoder: " + decoderNames())->capture_default_str();
   command->add_option("--decoder-option", *decoder_options,
                       "A decoder option name=value (repeatable; README \"Decoders\" lists them)");
@@ -90,11 +92,11 @@ void addPredictCommand(CLI::App& app, CommandContext& context) {
   command->add_option("-m,--model", *model_file, "Model file, or cv / ca (no training)")->required();
   command->add_option("-d,--data", *data, "Dataset file or run folder")->required();
   command->add_option("-o,--out", *out, "Predictions file (.h5)")->required();
-  CLI::Option* samples = command->add_option("--samples", file_options->predict.samples,
-                                              "Futures to draw per scene from a probabilistic model, >= 1 (without it: "
-                                              "the most likely future only)");
-  command->add_option("--sample-seed", file_options->predict.seed, "Seed of the drawn futures")->capture_default_str();
-  command->add_option("--threads", *threads, "libtorch threads")->capture_default_str();
+  CLI::Option* samples = addNumber(command, "--samples", file_options->predict.samples,
+                                    "Futures to draw per scene from a probabilistic model, >= 1 (without it: "
+                                    "the most likely future only)");
+  addNumber(command, "--sample-seed", file_options->predict.seed, "Seed of the drawn futures")->capture_default_str();
+  addNumber(command, "--threads", *threads, "libtorch threads")->capture_default_str();
   command->callback([=, &context] {
     context.action = [=] {
       if (samples->count() > 0 && file_options->predict.samples < 1) {  // 0 would silently draw nothing
@@ -120,9 +122,10 @@ void addEvaluateCommand(CLI::App& app, CommandContext& context) {
   command->add_option("-m,--model", *model_file, "Model file, or cv / ca (no training)")->required();
   command->add_option("-d,--data", *data, "Dataset files or run folders")->required();
   command->add_option("--csv", *csv, "Also write the table as CSV");
-  command->add_option("--threads", *threads, "libtorch threads")->capture_default_str();
+  addNumber(command, "--threads", *threads, "libtorch threads")->capture_default_str();
   command->callback([=, &context] {
     context.action = [=] {
+      if (!csv->empty()) requireFileOutputPath(*csv, "--csv");
       const model::Predictor predictor(*model_file, *threads);
       const auto evaluation = model::evaluate(predictor, *data);
       if (predictor.info().trained) {

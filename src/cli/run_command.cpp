@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "commands.hpp"
+#include "flags.hpp"
 #include "vsd/core/error.hpp"
 #include "vsd/interop/run_openscenario.hpp"
 #include "vsd/pipeline/cluster.hpp"
@@ -30,17 +31,17 @@ void addRunCommand(CLI::App& app, CommandContext& context) {
                   "Logical scenario (YAML), e.g. scenarios/acc_lk.yaml, or a concrete scenario (OpenSCENARIO .xosc)")
       ->required()
       ->check(CLI::ExistingFile);
-  run->add_option("-n,--samples", options->samples, "Number of concrete scenarios")->capture_default_str();
-  run->add_option("-s,--seed", options->seed, "Random seed; same seed, same outputs")->capture_default_str();
+  addNumber(run, "-n,--samples", options->samples, "Number of concrete scenarios")->capture_default_str();
+  addNumber(run, "-s,--seed", options->seed, "Random seed; same seed, same outputs")->capture_default_str();
   run->add_option("-o,--out", options->outputDir, "Output folder (default: out/<functional scenario>)");
-  run->add_option("-j,--jobs", options->jobs, "Worker processes (one libsumo simulation each)")->capture_default_str();
-  run->add_option("-b,--batch", options->batch, "Concrete scenarios per SUMO network and simulation")
+  addNumber(run, "-j,--jobs", options->jobs, "Worker processes (one libsumo simulation each)")->capture_default_str();
+  addNumber(run, "-b,--batch", options->batch, "Concrete scenarios per SUMO network and simulation")
       ->capture_default_str();
-  run->add_option("--first-sample", options->firstSample, "Index of the first concrete scenario")
+  addNumber(run, "--first-sample", options->firstSample, "Index of the first concrete scenario")
       ->capture_default_str();
-  run->add_option("--compression", options->compression, "Deflate level of dataset.h5's vectors: 0 (none) .. 9")
+  addNumber(run, "--compression", options->compression, "Deflate level of dataset.h5's vectors: 0 (none) .. 9")
       ->capture_default_str();
-  run->add_option("--step-timeout", options->watchdog.stepTimeout,
+  addNumber(run, "--step-timeout", options->watchdog.stepTimeout,
                   "Watchdog: longest Ego controller call or libsumo step (s); a scenario exceeding it fails")
       ->capture_default_str();
   addEgoStepCostOption(*run, options->egoStepCost);
@@ -61,7 +62,7 @@ void addRunCommand(CLI::App& app, CommandContext& context) {
   auto import = std::make_shared<interop::ImportOptions>();
   auto step = std::make_shared<double>(0.0);
   CLI::Option* step_option =
-      run->add_option("--step", *step, "OpenSCENARIO input: simulation step (s) if the file does not set one");
+      addNumber(run, "--step", *step, "OpenSCENARIO input: simulation step (s) if the file does not set one");
   run->callback([options, &context, run, import, step, step_option, net_writer, shard, merge] {
     context.action = [options, &context, run, import, step, step_option, net_writer, shard, merge] {
       options->commandLine = context.commandLine;

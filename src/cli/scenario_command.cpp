@@ -6,6 +6,7 @@
 #include <memory>
 
 #include "commands.hpp"
+#include "flags.hpp"
 #include "vsd/interop/distribution.hpp"
 #include "vsd/interop/export.hpp"
 #include "vsd/pipeline/run.hpp"
@@ -28,9 +29,9 @@ void addExport(CLI::App& scenario, CommandContext& context) {
       ->check(CLI::ExistingPath);
   command->add_option("-o,--out", options->outputDir, "Output folder (refused if it exists, unless --force)")->required();
   command->add_option("--format", options->format, "File format")->capture_default_str();
-  command->add_option("-n,--samples", options->samples, "YAML input: number of concrete scenarios")->capture_default_str();
-  command->add_option("-s,--seed", options->seed, "YAML input: random seed (as for `run`)")->capture_default_str();
-  command->add_option("--first-sample", options->firstSample, "YAML input: index of the first concrete scenario")
+  addNumber(command, "-n,--samples", options->samples, "YAML input: number of concrete scenarios")->capture_default_str();
+  addNumber(command, "-s,--seed", options->seed, "YAML input: random seed (as for `run`)")->capture_default_str();
+  addNumber(command, "--first-sample", options->firstSample, "YAML input: index of the first concrete scenario")
       ->capture_default_str();
   command
       ->add_option("--only", options->only,
@@ -60,10 +61,10 @@ void addDistribution(CLI::App& scenario, CommandContext& context) {
       "distribution", "A logical scenario's inputs as an OpenSCENARIO ParameterValueDistribution");
   command->add_option("scenario", *scenario_file, "Logical scenario (YAML)")->required()->check(CLI::ExistingFile);
   command->add_option("-o,--out", options->output, "The .xosc to write")->required();
-  command->add_option("-n,--samples", options->samples, "Stochastic: numberOfTestRuns")->capture_default_str();
-  command->add_option("-s,--seed", options->seed, "Stochastic: randomSeed")->capture_default_str();
+  addNumber(command, "-n,--samples", options->samples, "Stochastic: numberOfTestRuns")->capture_default_str();
+  addNumber(command, "-s,--seed", options->seed, "Stochastic: randomSeed")->capture_default_str();
   CLI::Option* grid_option =
-      command->add_option("--grid", *grid, "A deterministic grid of this many points per input instead");
+      addNumber(command, "--grid", *grid, "A deterministic grid of this many points per input instead");
   command->callback([scenario_file, options, grid, grid_option, &context] {
     context.action = [scenario_file, options, grid, grid_option] {
       if (grid_option->count() > 0) options->grid = *grid;

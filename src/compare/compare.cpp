@@ -426,6 +426,7 @@ void CompareOptions::validate() const {
   if (!(confidence >= 0.5 && confidence <= 1.0)) {
     throw ConfigError::field("command line", "--confidence", formatValue(confidence), "0.5 .. 1");
   }
+  if (batch < 1 || batch > 4096) throw ConfigError::field("command line", "--batch", std::to_string(batch), "1 .. 4096");
   if (!scenarioFile.empty() && (!metrics.empty() || !criteria.empty())) {
     throw ConfigError("compare: --metrics and --criterion are for datasets; a scenario file defines its own "
                       "'metrics' and 'criteria'");

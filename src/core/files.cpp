@@ -130,6 +130,26 @@ void syncDirectory(const fs::path& path) {
   ::close(fd);
 }
 
+void requireFileOutputPath(const fs::path& path, const std::string& flag) {
+  if (path.empty() || path.filename().empty() || path.filename() == "." || path.filename() == "..") {
+    throw ConfigError::field("command line", flag, path.string(), "a file name");
+  }
+  std::error_code ec;
+  if (fs::is_directory(path, ec)) {
+    throw ConfigError::field("command line", flag, path.string(), "a file name (this is an existing folder)");
+  }
+  for (fs::path parent = path.parent_path(); !parent.empty(); parent = parent.parent_path()) {
+    if (fs::exists(parent, ec)) {
+      if (!fs::is_directory(parent, ec)) {
+        throw ConfigError::field("command line", flag, path.string(),
+                                 fmt::format("a path in a folder ({} is a file)", parent.string()));
+      }
+      break;
+    }
+    if (parent == parent.parent_path()) break;
+  }
+}
+
 void writeTextFileAtomically(const fs::path& path, const std::string& contents) {
   AtomicOutput output(path);
   writeWholeFile(output.tempPath(), contents, path);

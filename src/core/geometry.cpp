@@ -1,7 +1,9 @@
 #include "vsd/core/geometry.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <limits>
 
 #include "vsd/core/error.hpp"
 
@@ -149,6 +151,58 @@ double sumoAngleFromHeading(double heading_rad) {
   angle = std::fmod(angle, 360.0);
   if (angle < 0.0) angle += 360.0;
   return angle;
+}
+
+namespace {
+
+std::array<Vec2, 4> cornersOf(const Footprint& f) {
+  const Vec2 along = 0.5 * f.length * headingVector(f.heading);
+  const Vec2 across = 0.5 * f.width * headingVector(f.heading + 0.5 * kPi);
+  return {f.centre + along + across, f.centre - along + across, f.centre - along - across, f.centre + along - across};
+}
+
+double pointSegmentDistance(const Vec2& p, const Vec2& a, const Vec2& b) {
+  const Vec2 ab = b - a;
+  const double length_sq = ab.squaredNorm();
+  const double t = length_sq > 0.0 ? std::clamp((p - a).dot(ab) / length_sq, 0.0, 1.0) : 0.0;
+  return (a + t * ab - p).norm();
+}
+
+}  // namespace
+
+double footprintGap(const Footprint& a, const Footprint& b) {
+  const auto ca = cornersOf(a);
+  const auto cb = cornersOf(b);
+  // Separating-axis test over both rectangles' edge normals: rectangles overlap iff
+  // their projections overlap on all four axes; the smallest separating move over
+  // these axes is then the penetration depth (exact for convex polygons).
+  double depth = std::numeric_limits<double>::infinity();
+  for (const double heading : {a.heading, a.heading + 0.5 * kPi, b.heading, b.heading + 0.5 * kPi}) {
+    const Vec2 axis = headingVector(heading);
+    double min_a = std::numeric_limits<double>::infinity(), max_a = -min_a, min_b = min_a, max_b = -min_a;
+    for (const auto& c : ca) {
+      min_a = std::min(min_a, c.dot(axis));
+      max_a = std::max(max_a, c.dot(axis));
+    }
+    for (const auto& c : cb) {
+      min_b = std::min(min_b, c.dot(axis));
+      max_b = std::max(max_b, c.dot(axis));
+    }
+    // The shorter of the two moves along this axis that separate the projections
+    // (not the length of their intersection: one may contain the other).
+    depth = std::min(depth, std::min(max_a - min_b, max_b - min_a));
+  }
+  if (depth > 0.0) return -depth;
+  // Apart: the shortest distance between two disjoint convex polygons runs from a
+  // corner of one to an edge of the other.
+  double distance = std::numeric_limits<double>::infinity();
+  for (std::size_t i = 0; i < 4; ++i) {
+    for (std::size_t j = 0; j < 4; ++j) {
+      distance = std::min(distance, pointSegmentDistance(ca[i], cb[j], cb[(j + 1) % 4]));
+      distance = std::min(distance, pointSegmentDistance(cb[i], ca[j], ca[(j + 1) % 4]));
+    }
+  }
+  return distance;
 }
 
 }  // namespace vsd

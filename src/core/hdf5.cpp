@@ -1,5 +1,8 @@
 #include "vsd/core/hdf5.hpp"
 
+#include <fmt/format.h>
+
+#include <algorithm>
 #include <numeric>
 
 namespace vsd::h5 {
@@ -43,15 +46,21 @@ void Appendable<T>::append(const T* data, hsize_t rows) {
   if (rows == 0) return;
   std::vector<hsize_t> new_dims = {rows_ + rows};
   new_dims.insert(new_dims.end(), rowShape_.begin(), rowShape_.end());
-  dataset_.extend(new_dims.data());
-  H5::DataSpace file_space = dataset_.getSpace();
-  std::vector<hsize_t> start(new_dims.size(), 0);
-  start[0] = rows_;
-  std::vector<hsize_t> count = new_dims;
-  count[0] = rows;
-  file_space.selectHyperslab(H5S_SELECT_SET, count.data(), start.data());
-  H5::DataSpace memory_space(static_cast<int>(count.size()), count.data());
-  dataset_.write(data, nativeType<T>(), memory_space, file_space);
+  try {
+    dataset_.extend(new_dims.data());
+    H5::DataSpace file_space = dataset_.getSpace();
+    std::vector<hsize_t> start(new_dims.size(), 0);
+    start[0] = rows_;
+    std::vector<hsize_t> count = new_dims;
+    count[0] = rows;
+    file_space.selectHyperslab(H5S_SELECT_SET, count.data(), start.data());
+    H5::DataSpace memory_space(static_cast<int>(count.size()), count.data());
+    dataset_.write(data, nativeType<T>(), memory_space, file_space);
+  } catch (const H5::Exception& error) {
+    // Which array failed, and why (the cause first: the next HDF5 call clears it).
+    const std::string cause = errorCause(error);
+    throw H5::DataSetIException("append", fmt::format("writing '{}' failed: {}", dataset_.getObjName(), cause));
+  }
   rows_ += rows;
 }
 
@@ -88,8 +97,25 @@ void writeAttribute(H5::H5Object& object, const std::string& name, std::int64_t 
 
 bool hasAttribute(const H5::H5Object& object, const std::string& name) { return object.attrExists(name); }
 
-std::string readStringAttribute(const H5::H5Object& object, const std::string& name) {
+namespace {
+
+/// An attribute that must hold one value of `type_class`; reading a longer one into
+/// a single value would write past it.
+H5::Attribute openSingleAttribute(const H5::H5Object& object, const std::string& name,
+                                  std::initializer_list<H5T_class_t> classes, const char* expected) {
   H5::Attribute attribute = object.openAttribute(name);
+  const H5T_class_t type_class = attribute.getTypeClass();
+  const bool class_ok = std::find(classes.begin(), classes.end(), type_class) != classes.end();
+  if (attribute.getSpace().getSimpleExtentNpoints() != 1 || !class_ok) {
+    throw H5::AttributeIException("readAttribute", fmt::format("attribute '{}' is not a single {}", name, expected));
+  }
+  return attribute;
+}
+
+}  // namespace
+
+std::string readStringAttribute(const H5::H5Object& object, const std::string& name) {
+  H5::Attribute attribute = openSingleAttribute(object, name, {H5T_STRING}, "string");
   H5::StrType type = attribute.getStrType();
   std::string value;
   attribute.read(type, value);
@@ -99,13 +125,14 @@ std::string readStringAttribute(const H5::H5Object& object, const std::string& n
 
 double readDoubleAttribute(const H5::H5Object& object, const std::string& name) {
   double value = 0.0;
-  object.openAttribute(name).read(H5::PredType::NATIVE_DOUBLE, &value);
+  openSingleAttribute(object, name, {H5T_FLOAT, H5T_INTEGER}, "number").read(H5::PredType::NATIVE_DOUBLE, &value);
   return value;
 }
 
 std::int64_t readIntAttribute(const H5::H5Object& object, const std::string& name) {
+  // Integers only: HDF5 would truncate 25.7 to 25 and clip 1e30 silently.
   std::int64_t value = 0;
-  object.openAttribute(name).read(H5::PredType::NATIVE_INT64, &value);
+  openSingleAttribute(object, name, {H5T_INTEGER}, "whole number").read(H5::PredType::NATIVE_INT64, &value);
   return value;
 }
 
@@ -147,12 +174,33 @@ std::vector<hsize_t> shapeOf(const H5::DataSet& dataset) {
   return dims;
 }
 
+void checkStoredSize(const H5::DataSet& dataset) {
+  const auto dims = shapeOf(dataset);
+  long double elements = 1.0L;
+  for (const hsize_t dim : dims) elements *= static_cast<long double>(dim);
+  const long double logical = elements * static_cast<long double>(dataset.getDataType().getSize());
+  const auto stored = static_cast<long double>(dataset.getStorageSize());
+  // Deflate compresses at most ~1032:1; a dataset claiming much more than that is an
+  // extent without data (a damaged or forged file), and reading it would allocate it.
+  if (logical > 1100.0L * stored + 1024.0L * 1024.0L) {
+    throw H5::DataSetIException("checkStoredSize",
+                                fmt::format("{}: its shape claims {:.0f} bytes but the file stores only {:.0f}",
+                                            dataset.getObjName(), static_cast<double>(logical),
+                                            static_cast<double>(stored)));
+  }
+}
+
 template <typename T>
 std::vector<T> readRows(const H5::DataSet& dataset, hsize_t first, hsize_t count) {
   const auto dims = shapeOf(dataset);
   std::vector<hsize_t> start(dims.size(), 0);
   std::vector<hsize_t> extent = dims;
   if (!dims.empty()) {
+    // Checked before allocating: a damaged index must not become a huge allocation.
+    if (first > dims[0] || count > dims[0] - first) {
+      throw H5::DataSetIException("readRows", fmt::format("{}: rows {} .. {} requested, it has {}", dataset.getObjName(),
+                                                          first, first + count, dims[0]));
+    }
     start[0] = first;
     extent[0] = count;
   }
@@ -183,5 +231,24 @@ VSD_INSTANTIATE_READ(std::int8_t)
 #undef VSD_INSTANTIATE_READ
 
 void silenceErrorStack() { H5::Exception::dontPrint(); }
+
+std::string errorCause(const H5::Exception& error) {
+  std::string innermost;
+  const auto visit = [](unsigned, const H5E_error2_t* entry, void* data) -> herr_t {
+    if (entry->desc != nullptr) *static_cast<std::string*>(data) = entry->desc;
+    return 0;
+  };
+  H5Ewalk2(H5E_DEFAULT, H5E_WALK_DOWNWARD, visit, &innermost);
+  // A failed system call reports "..., errno = 28, error message = 'No space left on
+  // device', ...": the operating system's words are the cause a user can act on.
+  const std::string marker = "error message = '";
+  if (const auto at = innermost.find(marker); at != std::string::npos) {
+    const auto begin = at + marker.size();
+    const auto end = innermost.find('\'', begin);
+    return innermost.substr(begin, end == std::string::npos ? std::string::npos : end - begin);
+  }
+  if (!innermost.empty()) return innermost;
+  return error.getDetailMsg();
+}
 
 }  // namespace vsd::h5

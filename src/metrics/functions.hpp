@@ -14,6 +14,7 @@ double egoMaxAbsLaneOffset(const MetricContext& context);
 
 // Ego and the other vehicles (pair_metrics.cpp)
 double minGap(const MetricContext& context);
+double minLongitudinalGapInLane(const MetricContext& context);
 double minTimeToCollision(const MetricContext& context);
 double minTimeHeadway(const MetricContext& context);
 

@@ -29,9 +29,52 @@ void forEachPair(const Trace& trace, Visitor&& visit) {
 }
 }  // namespace
 
+namespace {
+
+Footprint footprintAt(const VehicleTrack& track, std::size_t k) {
+  return {track.states[k].position(), track.states[k].heading, track.length, track.width};
+}
+
+/// Half of a footprint's extent across a direction at `angle` (rad) to its heading.
+double halfExtentAcross(const VehicleTrack& track, double angle) {
+  return 0.5 * (std::abs(track.width * std::cos(angle)) + std::abs(track.length * std::sin(angle)));
+}
+
+}  // namespace
+
 double minGap(const MetricContext& context) {
+  // Oriented footprints: a car side by side in the next lane is ~1.7 m away, not a
+  // collision (centre distance minus half lengths would say -2 m).
+  const VehicleTrack& ego = context.trace.ego();
   double result = kInf;
-  forEachPair(context.trace, [&](std::size_t, const VehicleTrack&, double gap, const Vec2&) { result = std::min(result, gap); });
+  forEachPair(context.trace, [&](std::size_t k, const VehicleTrack& other, double, const Vec2&) {
+    result = std::min(result, footprintGap(footprintAt(ego, k), footprintAt(other, k)));
+  });
+  return std::isinf(result) ? kNaN : result;
+}
+
+double minLongitudinalGapInLane(const MetricContext& context) {
+  const VehicleTrack& ego = context.trace.ego();
+  double result = kInf;
+  if (context.egoLaneCentre.size() >= 2 && context.laneBoundaries == nullptr) {
+    // Along the Ego's lane (curves included): arc lengths and offsets on its centre line.
+    const MeasuredPolyline lane(context.egoLaneCentre);
+    forEachPair(context.trace, [&](std::size_t k, const VehicleTrack& other, double, const Vec2&) {
+      const auto e = lane.project(ego.states[k].position());
+      const auto o = lane.project(other.states[k].position());
+      if (std::abs(o.lateralOffset - e.lateralOffset) >= 0.5 * (ego.width + other.width)) return;
+      result = std::min(result, std::abs(o.arcLength - e.arcLength) - 0.5 * (ego.length + other.length));
+    });
+  } else {
+    // Maps: in the Ego's frame at each instant (its lane's direction there).
+    forEachPair(context.trace, [&](std::size_t k, const VehicleTrack& other, double, const Vec2& towards) {
+      const Vec2 along = headingVector(ego.states[k].heading);
+      const Vec2 across(-along.y(), along.x());
+      const double angle = other.states[k].heading - ego.states[k].heading;
+      if (std::abs(towards.dot(across)) >= 0.5 * ego.width + halfExtentAcross(other, angle)) return;
+      result = std::min(result, std::abs(towards.dot(along)) - 0.5 * (ego.length + other.length));
+    });
+  }
   return std::isinf(result) ? kNaN : result;
 }
 

@@ -20,8 +20,13 @@ std::vector<MetricDefinition> buildRegistry() {
   table.push_back({"a_min", "m/s^2", "Ego's minimum longitudinal acceleration, min over k>=1 of (v_k - v_{k-1})/dt",
                    "Ego's direction of travel", false, false, false, std::nullopt, egoMinAcceleration});
   table.push_back({"d_min", "m",
-                   "minimum over instants and other vehicles of the centre distance minus half of both lengths",
+                   "minimum over instants and other vehicles of the clearance between their footprints (rectangles "
+                   "of each vehicle's length and width along its heading; negative: overlap depth)",
                    any_frame, true, false, false, 0.0, minGap});
+  table.push_back({"d_lon_min", "m",
+                   "minimum over instants of the bumper gap to a vehicle in the Ego's lane (footprints overlapping "
+                   "across the lane): distance along the lane between centres minus half of both lengths",
+                   any_frame, true, false, false, std::nullopt, minLongitudinalGapInLane});
   table.push_back({"p_lat_max", "m",
                    "Ego's maximum signed lateral offset (centre, left positive) from the centre line of the lane it "
                    "starts on - the paper's road-relative p_lat_max",
@@ -34,8 +39,11 @@ std::vector<MetricDefinition> buildRegistry() {
                    any_frame, true, false, false, std::nullopt, minTimeToCollision});
   table.push_back({"thw_min", "s", "minimum time headway to a vehicle ahead: gap / Ego speed (Ego > 0.1 m/s); +inf if never",
                    any_frame, true, false, false, std::nullopt, minTimeHeadway});
-  table.push_back({"lane_offset_max", "m", "Ego's maximum distance (centre) from the centre line of its starting lane",
-                   ego_lane, false, true, false, std::nullopt, egoMaxAbsLaneOffset});
+  table.push_back({"lane_offset_max", "m",
+                   "Ego's maximum distance (centre) from the centre line of its lane: the lane it starts on (generated "
+                   "roads); on maps the lane it is in at each instant, midway between the nearest boundaries left and "
+                   "right",
+                   "the Ego's lane", false, false, false, std::nullopt, egoMaxAbsLaneOffset});
   // The measures of SUMO's SSM device (README "Criticality measures and SUMO's SSM device").
   table.push_back({"pet_min", "s",
                    "minimum post-encroachment time where the Ego's centre path crosses another vehicle's: the second "
@@ -101,7 +109,7 @@ std::vector<std::string> defaultMetrics(const Availability& available) {
 }
 
 MetricSet::MetricSet(const std::vector<std::string>& names, const Availability& available, const std::string& where)
-    : names_(names.empty() ? defaultMetrics(available) : names) {
+    : names_(names.empty() ? defaultMetrics(available) : names), available_(available) {
   for (const auto& name : names_) {
     const auto& definition = metric(name, where);
     if (definition.needsOtherVehicle && !available.otherVehicles) {
@@ -131,9 +139,12 @@ std::vector<std::string> MetricSet::units() const {
 }
 
 std::vector<double> MetricSet::evaluate(const MetricContext& context) const {
+  // Lane offsets per instant only where the starting lane does not cover the path.
+  MetricContext scoped = context;
+  if (available_.egoLane) scoped.laneBoundaries = nullptr;
   std::vector<double> values;
   values.reserve(definitions_.size());
-  for (const auto* definition : definitions_) values.push_back(definition->compute(context));
+  for (const auto* definition : definitions_) values.push_back(definition->compute(scoped));
   return values;
 }
 

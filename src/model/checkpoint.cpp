@@ -1,7 +1,11 @@
 #include "checkpoint.hpp"
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 #include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <unordered_map>
 
 #include "vsd/core/error.hpp"
 #include "vsd/core/files.hpp"
@@ -48,6 +52,31 @@ std::string infoToJson(const ModelInfo& info) {
   return json.dump();
 }
 
+namespace {
+
+/// nlohmann would truncate 64.7 to 64 and wrap 1e300 silently: whole-number fields
+/// of a description must be JSON integers.
+void requireIntegers(const nlohmann::json& object, std::initializer_list<const char*> keys, const fs::path& file) {
+  for (const char* key : keys) {
+    const auto& value = object.at(key);
+    if (!value.is_number_integer()) {
+      throw ModelError(fmt::format("{}: model description: {}: got {}, expected a whole number", file.string(), key,
+                                   value.dump()));
+    }
+  }
+}
+
+/// The description's architecture and time base against their documented bounds.
+void checkDescription(const ModelInfo& info, const fs::path& file) {
+  try {
+    info.config.validate();
+  } catch (const ConfigError& error) {
+    throw ModelError(fmt::format("{}: {}", file.string(), error.what()));
+  }
+}
+
+}  // namespace
+
 ModelInfo infoFromJson(const std::string& text, const fs::path& file) {
   ModelInfo info;
   try {
@@ -58,6 +87,8 @@ ModelInfo infoFromJson(const std::string& text, const fs::path& file) {
                                    kModelFormat, kLegacyModelFormat));
     }
     const auto& c = json.at("config");
+    requireIntegers(c, {"hidden", "subgraph_layers", "global_width", "heads", "decoder_hidden", "horizon"}, file);
+    requireIntegers(json, {"feature_version", "epoch"}, file);
     info.config.hidden = c.at("hidden");
     info.config.subgraphLayers = c.at("subgraph_layers");
     info.config.globalWidth = c.at("global_width");
@@ -86,6 +117,7 @@ ModelInfo infoFromJson(const std::string& text, const fs::path& file) {
   } catch (const nlohmann::json::exception& error) {
     throw ModelError(fmt::format("{}: damaged model description: {}", file.string(), error.what()));
   }
+  checkDescription(info, file);
   return info;
 }
 
@@ -141,16 +173,80 @@ ModelInfo readModelInfo(const fs::path& path, torch::serialize::InputArchive& ar
   return info;
 }
 
+namespace {
+
+std::string describeShape(const torch::Tensor& tensor) {
+  return fmt::format("[{}] {}", fmt::join(tensor.sizes(), ", "), c10::toString(tensor.scalar_type()));
+}
+
+/// Paths ("child.weight") of every tensor in an archive, the optimizer's state left out.
+void collectTensorPaths(torch::serialize::InputArchive& archive, const std::string& prefix,
+                        std::vector<std::string>& paths) {
+  for (const auto& key : archive.keys()) {
+    if (prefix.empty() && key == kOptimizerKey) continue;
+    torch::Tensor tensor;
+    torch::serialize::InputArchive child;
+    if (archive.try_read(key, tensor)) {
+      paths.push_back(prefix + key);
+    } else if (archive.try_read(key, child)) {
+      collectTensorPaths(child, prefix + key + ".", paths);
+    }
+  }
+}
+
+/// Loads the archive's tensors into `network` and checks each against the shape and
+/// type the network's architecture gives it. torch's load takes whatever shape the
+/// file holds; a mismatch would only surface as a libtorch error in the first
+/// forward pass. Non-finite values are refused as well (they would predict NaN).
+void loadParameters(VectorNet& network, torch::serialize::InputArchive& archive, const fs::path& file,
+                    const std::string& what) {
+  std::vector<std::pair<std::string, std::string>> expected;
+  for (const auto& item : network->named_parameters()) expected.emplace_back(item.key(), describeShape(item.value()));
+  for (const auto& item : network->named_buffers()) expected.emplace_back(item.key(), describeShape(item.value()));
+  // Tensors the architecture has no place for (e.g. a fourth layer when the description
+  // says three) would be ignored by load(): the description does not describe the file.
+  std::vector<std::string> stored;
+  collectTensorPaths(archive, "", stored);
+  for (const auto& path : stored) {
+    const bool known = std::any_of(expected.begin(), expected.end(), [&](const auto& e) { return e.first == path; });
+    if (!known) {
+      throw ModelError(fmt::format("{}: parameter '{}' in the file has no place in {}", file.string(), path, what));
+    }
+  }
+  try {
+    network->load(archive);
+  } catch (const c10::Error& error) {
+    throw ModelError(fmt::format("{}: parameters do not match {}: {}", file.string(), what,
+                                 error.what_without_backtrace()));
+  }
+  std::unordered_map<std::string, torch::Tensor> loaded;
+  for (const auto& item : network->named_parameters()) loaded.emplace(item.key(), item.value());
+  for (const auto& item : network->named_buffers()) loaded.emplace(item.key(), item.value());
+  for (const auto& [name, shape] : expected) {
+    const torch::Tensor& tensor = loaded.at(name);
+    if (describeShape(tensor) != shape) {
+      throw ModelError(fmt::format("{}: parameter '{}' is {} in the file, {} needs {}", file.string(), name,
+                                   describeShape(tensor), what, shape));
+    }
+    if (tensor.is_floating_point() && !torch::isfinite(tensor).all().item<bool>()) {
+      throw ModelError(fmt::format("{}: parameter '{}' holds non-finite values (NaN or infinity)", file.string(), name));
+    }
+  }
+}
+
+std::string architectureOf(const VectorNetConfig& c) {
+  return fmt::format("the described architecture (hidden {}, subgraph_layers {}, global_width {}, heads {}, "
+                     "decoder_hidden {}, horizon {}, decoder {})",
+                     c.hidden, c.subgraphLayers, c.globalWidth, c.heads, c.decoderHidden, c.horizon, c.decoder);
+}
+
+}  // namespace
+
 Model loadModel(const fs::path& path, ModelInfo& info) {
   torch::serialize::InputArchive archive;
   info = readModelInfo(path, archive);
   Model model = Model::create(info.config);
-  try {
-    model.network->load(archive);
-  } catch (const c10::Error& error) {
-    throw ModelError(fmt::format("{}: parameters do not match the described architecture: {}", path.string(),
-                                 error.what_without_backtrace()));
-  }
+  loadParameters(model.network, archive, path, architectureOf(info.config));
   model.network->eval();
   return model;
 }
@@ -167,6 +263,16 @@ void saveCheckpoint(const fs::path& path, const Model& model, torch::optim::Opti
   writeArchive(archive, path);
 }
 
+std::string readCheckpointState(const fs::path& path) {
+  torch::serialize::InputArchive archive;
+  readModelInfo(path, archive);
+  c10::IValue state;
+  if (!archive.try_read(kStateKey, state) || !state.isString()) {
+    throw ModelError(fmt::format("{}: not a training checkpoint (no training state)", path.string()));
+  }
+  return state.toStringRef();
+}
+
 std::string loadCheckpoint(const fs::path& path, Model& model, torch::optim::Optimizer& optimizer) {
   torch::serialize::InputArchive archive;
   readModelInfo(path, archive);
@@ -174,8 +280,8 @@ std::string loadCheckpoint(const fs::path& path, Model& model, torch::optim::Opt
   if (!archive.try_read(kStateKey, state) || !state.isString()) {
     throw ModelError(fmt::format("{}: not a training checkpoint (no training state)", path.string()));
   }
+  loadParameters(model.network, archive, path, "this training's architecture");
   try {
-    model.network->load(archive);
     torch::serialize::InputArchive optimizer_archive;
     archive.read(kOptimizerKey, optimizer_archive);
     optimizer.load(optimizer_archive);

@@ -29,6 +29,8 @@ Model loadModel(const std::filesystem::path& path, ModelInfo& info);
 /// Training checkpoint: network, optimizer and the training loop's state (JSON).
 void saveCheckpoint(const std::filesystem::path& path, const Model& model, torch::optim::Optimizer& optimizer,
                     const ModelInfo& info, const std::string& state_json);
+/// The training loop's state JSON of a checkpoint, without loading it. Throws ModelError.
+std::string readCheckpointState(const std::filesystem::path& path);
 /// Restores a checkpoint into `network` and `optimizer`; returns the state JSON.
 std::string loadCheckpoint(const std::filesystem::path& path, Model& model, torch::optim::Optimizer& optimizer);
 

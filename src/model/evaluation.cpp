@@ -118,6 +118,8 @@ Evaluation evaluate(const Predictor& predictor, const std::vector<fs::path>& dat
     for (const auto& path : vector::datasetFiles(given)) {  // a sharded sweep: every shard
       const vector::DatasetReader reader(path);
       predictor.checkCompatible(reader.header(), reader.path().string());
+      // An ADE over nothing would print as 0.000 m: nothing to predict is an error.
+      if (reader.size() == 0) throw DatasetError(fmt::format("{}: the dataset holds no sample", reader.path().string()));
       for (std::size_t first = 0; first < reader.size(); first += kReadChunk) {
         throwIfInterrupted();
         std::vector<vector::VectorizedScene> scenes;
@@ -132,6 +134,10 @@ Evaluation evaluate(const Predictor& predictor, const std::vector<fs::path>& dat
         }
       }
     }
+  }
+  if (evaluation.overall.samples == 0) {
+    throw DatasetError(fmt::format("no sample of {} has a valid target step: nothing to evaluate",
+                                   data.size() == 1 ? data.front().string() : "the datasets"));
   }
   return evaluation;
 }

@@ -6,6 +6,8 @@
 #include <set>
 
 #include "vsd/core/error.hpp"
+#include "vsd/core/files.hpp"
+#include "vsd/core/trace.hpp"
 #include "vsd/model/options.hpp"
 
 namespace vsd::model {
@@ -56,9 +58,11 @@ void VectorNetConfig::validate() const {
   require(globalWidth >= 1 && globalWidth <= 4096, "global_width", globalWidth, "1 .. 4096");
   require(heads >= 1 && globalWidth % heads == 0, "heads", heads, "a divisor of global_width");
   require(decoderHidden >= 1 && decoderHidden <= 8192, "decoder_hidden", decoderHidden, "1 .. 8192");
-  require(horizon >= 0, "horizon", horizon, ">= 1 step (0: not yet known)");
-  require(step >= 0.0 && std::isfinite(step), "step", step, "> 0 s (0: not yet known)");
-  require(coordinateScale > 0.0, "coordinate_scale", coordinateScale, "> 0 m");
+  require(horizon >= 0 && horizon <= kMaxWindowSteps, "horizon", horizon,
+          fmt::format("1 .. {} steps (0: not yet known)", kMaxWindowSteps).c_str());
+  require(step == 0.0 || (step >= kMinStep && step <= kMaxStep), "step", step,
+          fmt::format("{} .. {} s (0: not yet known)", kMinStep, kMaxStep).c_str());
+  require(coordinateScale >= 1e-3 && coordinateScale <= 1e6, "coordinate_scale", coordinateScale, "1e-3 .. 1e6 m");
   validateDecoderOptions(findDecoder(decoder, "model configuration"), decoderOptions);
   const auto& frames = availableFrames();
   if (std::find(frames.begin(), frames.end(), frame) == frames.end()) {
@@ -134,12 +138,17 @@ void TrainOptions::validate() const {
   const std::string where = "command line";
   if (data.empty()) throw ConfigError("--data: no dataset given (dataset files or run folders)");
   if (output.empty()) throw ConfigError("--out: no model file given");
+  requireFileOutputPath(output, "--out");
   if (threads < 1 || threads > 256) throw ConfigError::field(where, "--threads", std::to_string(threads), "1 .. 256");
-  if (steps < 1) throw ConfigError::field(where, "--steps", std::to_string(steps), ">= 1");
+  if (steps < 1 || steps > 100'000'000) throw ConfigError::field(where, "--steps", std::to_string(steps), "1 .. 100000000");
   if (patience < 1) throw ConfigError::field(where, "--patience", std::to_string(patience), ">= 1");
-  if (batchSize < 1) throw ConfigError::field(where, "--batch", std::to_string(batchSize), ">= 1");
-  if (!(learningRate > 0.0)) throw ConfigError::field(where, "--lr", formatValue(learningRate), "> 0");
-  if (weightDecay < 0.0) throw ConfigError::field(where, "--weight-decay", formatValue(weightDecay), ">= 0");
+  if (batchSize < 1 || batchSize > 65536) throw ConfigError::field(where, "--batch", std::to_string(batchSize), "1 .. 65536");
+  if (!(learningRate > 0.0 && learningRate <= 10.0)) {
+    throw ConfigError::field(where, "--lr", formatValue(learningRate), "a rate in (0, 10]");
+  }
+  if (!(weightDecay >= 0.0 && weightDecay <= 10.0)) {
+    throw ConfigError::field(where, "--weight-decay", formatValue(weightDecay), "0 .. 10");
+  }
   if (!(validationFraction > 0.0 && validationFraction < 1.0)) {
     throw ConfigError::field(where, "--validation-fraction", formatValue(validationFraction), "in (0, 1)");
   }

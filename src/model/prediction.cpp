@@ -285,7 +285,10 @@ class MotionModelBackend final : public Predictor::Backend {
 bool Predictor::isBuiltin(const fs::path& model) { return model == "cv" || model == "ca"; }
 
 Predictor::Predictor(const fs::path& model, int threads) {
-  configureThreads(std::max(1, threads));
+  if (threads < 1 || threads > 256) {
+    throw ConfigError::field("command line", "--threads", std::to_string(threads), "1 .. 256");
+  }
+  configureThreads(threads);
   if (isBuiltin(model)) backend_ = std::make_unique<MotionModelBackend>(model.string());
   else backend_ = std::make_unique<NetworkBackend>(model);
 }

@@ -169,11 +169,13 @@ void writeHeader(H5::Group& root, const Predictor& predictor, const fs::path& mo
 
 std::size_t writePredictions(const Predictor& predictor, const fs::path& model_file, const fs::path& dataset,
                              const fs::path& output_path, const PredictionFileOptions& options) {
+  requireFileOutputPath(output_path, "--out");
   options.predict.validate();
   if (!options.metricNames.empty() && !options.metrics) throw Error("internal: metric names without a metric function");
   const fs::path dataset_file = vector::resolveDatasetPath(dataset);
   const vector::DatasetReader reader(dataset_file);
   predictor.checkCompatible(reader.header(), reader.path().string());
+  if (reader.size() == 0) throw DatasetError(fmt::format("{}: the dataset holds no sample", reader.path().string()));
   if (options.predict.samples > 0 && !predictor.probabilistic()) {
     spdlog::warn("--samples {}: the {} predictor is deterministic; only its most likely future is written",
                  options.predict.samples, predictor.name());
@@ -202,7 +204,7 @@ std::size_t writePredictions(const Predictor& predictor, const fs::path& model_f
     columns.flush();
     file.close();
   } catch (const H5::Exception& error) {
-    throw IoError(fmt::format("{}: cannot write predictions: {}", output_path.string(), error.getDetailMsg()));
+    throw IoError(fmt::format("{}: cannot write predictions: {}", output_path.string(), h5::errorCause(error)));
   }
   output.commitUnlessInterrupted();
   return count;

@@ -190,6 +190,57 @@ EpochRecord recordFromJson(const nlohmann::json& j) {
   return r;
 }
 
+/// What a resumed training must share with the interrupted one to repeat it
+/// exactly: the data (each file's SHA-256), the mix, the seed, the schedule and
+/// the architecture. (Threads are left out: they change results only in the last bits; the
+/// learning rate too: a user may change it on resume, and doing so cannot mix up data.)
+nlohmann::json resumeKey(const TrainOptions& options, const VectorNetConfig& config) {
+  ModelInfo architecture;
+  architecture.config = config;
+  nlohmann::json data = nlohmann::json::array();
+  for (const auto& path : options.data) {
+    for (const auto& file : vector::datasetFiles(path)) {  // a sharded sweep: every shard
+      data.push_back({{"file", file.string()}, {"sha256", sha256OfFile(file)}});
+    }
+  }
+  return {{"data", data},
+          {"mix", options.mix.str()},
+          {"seed", options.seed},
+          {"steps", options.steps},
+          {"patience", options.patience},
+          {"batch", options.batchSize},
+          {"weight_decay", options.weightDecay},
+          {"validation_fraction", options.validationFraction},
+          {"architecture", nlohmann::json::parse(infoToJson(architecture))["config"]}};
+}
+
+/// Throws ConfigError naming the first setting in which the checkpoint differs.
+void checkResumeKey(const nlohmann::json& state, const nlohmann::json& current, const fs::path& checkpoint) {
+  if (!state.contains("resume_key")) {
+    throw ConfigError(fmt::format("--resume: {} does not record what it was trained on (written by an older "
+                                  "vsd-sumo); start without --resume",
+                                  checkpoint.string()));
+  }
+  const auto& saved = state.at("resume_key");
+  std::vector<std::string> saved_sha;
+  std::vector<std::string> current_sha;
+  for (const auto& entry : saved.at("data")) saved_sha.push_back(entry.at("sha256"));
+  for (const auto& entry : current.at("data")) current_sha.push_back(entry.at("sha256"));
+  if (saved_sha != current_sha) {
+    std::vector<std::string> files;
+    for (const auto& entry : saved.at("data")) files.push_back(entry.at("file"));
+    throw ConfigError(fmt::format("--resume: {} was trained on other data ({}, SHA-256 differs from --data now): "
+                                  "start without --resume, or give the data it was trained on",
+                                  checkpoint.string(), fmt::join(files, ", ")));
+  }
+  for (const auto& [key, value] : current.items()) {
+    if (key == "data" || saved.value(key, nlohmann::json()) == value) continue;
+    throw ConfigError(fmt::format("--resume: {} was trained with {} {}, this training has {}: give the same settings "
+                                  "or start without --resume",
+                                  checkpoint.string(), key, saved.value(key, nlohmann::json()).dump(), value.dump()));
+  }
+}
+
 }  // namespace
 
 namespace {
@@ -209,7 +260,8 @@ class Trainer {
         model_(Model::create(config_)),
         optimizer_(model_.network->parameters(),
                    torch::optim::AdamWOptions(options.learningRate).weight_decay(options.weightDecay)),
-        lastCheckpoint_(options.output.string() + ".last") {
+        lastCheckpoint_(options.output.string() + ".last"),
+        resumeKey_(resumeKey(options, config_)) {
     selection_.train.clear();
     selection_.validation.clear();
     info_.config = config_;
@@ -255,6 +307,13 @@ class Trainer {
       saveLast();  // complete epochs so far; --resume continues after them
       throw;
     }
+    if (writes() && summary_.bestEpoch == 0) {
+      // Nothing was written: exit 0 would promise a model file that does not exist.
+      throw ModelError(fmt::format("no epoch reached a finite validation ADE (last: {}); no model written to {}",
+                                   summary_.epochs.empty() ? std::string("none")
+                                                           : formatValue(summary_.epochs.back().validationAde),
+                                   options_.output.string()));
+    }
     if (writes() && config_.decoderOptions.count("calibrate") != 0 && config_.decoderOption("calibrate") != 0.0) {
       calibrate();  // rank 0 alone: it holds the validation split and writes the model file
     }
@@ -270,12 +329,22 @@ class Trainer {
     if (!fs::exists(lastCheckpoint_)) {
       throw ConfigError(fmt::format("--resume: no checkpoint {} to resume from", lastCheckpoint_.string()));
     }
-    const auto state = nlohmann::json::parse(loadCheckpoint(lastCheckpoint_, model_, optimizer_));
-    nextEpoch_ = state.at("next_epoch");
-    sinceBest_ = state.at("since_best");
-    summary_.bestEpoch = state.at("best_epoch");
-    summary_.bestValidationAde = state.at("best_validation_ade");
-    for (const auto& record : state.at("history")) summary_.epochs.push_back(recordFromJson(record));
+    try {
+      checkResumeKey(nlohmann::json::parse(readCheckpointState(lastCheckpoint_)), resumeKey_, lastCheckpoint_);
+      const auto state = nlohmann::json::parse(loadCheckpoint(lastCheckpoint_, model_, optimizer_));
+      nextEpoch_ = state.at("next_epoch");
+      sinceBest_ = state.at("since_best");
+      summary_.bestEpoch = state.at("best_epoch");
+      summary_.bestValidationAde = state.at("best_validation_ade");
+      for (const auto& record : state.at("history")) summary_.epochs.push_back(recordFromJson(record));
+    } catch (const nlohmann::json::exception& error) {
+      throw ModelError(fmt::format("{}: damaged training state: {}", lastCheckpoint_.string(), error.what()));
+    }
+    if (summary_.bestEpoch > 0 && !fs::exists(options_.output)) {
+      throw ConfigError(fmt::format("--resume: {} holds the state after epoch {}, but the best model of that "
+                                    "training ({}) is gone; start without --resume",
+                                    lastCheckpoint_.string(), nextEpoch_, options_.output.string()));
+    }
     spdlog::info("resuming {} at epoch {} (best validation ADE {:.3f} m at epoch {})", options_.output.string(),
                  nextEpoch_ + 1, summary_.bestValidationAde, summary_.bestEpoch);
   }
@@ -432,7 +501,8 @@ class Trainer {
 
   void saveLast() {
     if (!writes()) return;
-    nlohmann::json state = {{"next_epoch", nextEpoch_},
+    nlohmann::json state = {{"resume_key", resumeKey_},
+                            {"next_epoch", nextEpoch_},
                             {"since_best", sinceBest_},
                             {"best_epoch", summary_.bestEpoch},
                             {"best_validation_ade", summary_.bestValidationAde},
@@ -451,6 +521,7 @@ class Trainer {
   Model model_;
   torch::optim::AdamW optimizer_;
   fs::path lastCheckpoint_;
+  nlohmann::json resumeKey_;  ///< what a --resume must share with this training
   ModelInfo info_;
   TrainSummary summary_;
   std::int64_t stepsPerEpoch_ = 1;

@@ -85,22 +85,44 @@ void ExportOptions::validate() const {
     throw ConfigError("--routes is only used with --net or --opendrive (a .sumocfg names its own route files)");
   }
   if (output.empty()) throw ConfigError("--out is required (the dataset file to write)");
-  if (!(step > 0.0)) throw ConfigError::field(where, "--step", formatValue(step), "a step > 0 s");
-  if (!(horizon > 0.0) || !isMultipleOf(horizon, step)) {
-    throw ConfigError::field(where, "--horizon", formatValue(horizon), "a multiple of --step > 0 s");
+  requireFileOutputPath(output, "--out");
+  // Bounds keep the work finite: a window is at most kMaxWindowSteps steps, the
+  // lane query looks at most kMaxRadius around the Ego, a lane of 1 km is split into
+  // at most 10^4 vectors.
+  if (!(step >= kMinStep && step <= kMaxStep) || !isMultipleOf(step, kMinStep)) {
+    throw ConfigError::field(where, "--step", formatValue(step),
+                             fmt::format("a multiple of {0} s in {0} .. {1} s", kMinStep, kMaxStep));
   }
-  if (history < 0.0 || !isMultipleOf(history, step)) {
-    throw ConfigError::field(where, "--history", formatValue(history), "a multiple of --step >= 0 s");
+  if (!(horizon > 0.0) || !isMultipleOf(horizon, step) || horizon / step > kMaxWindowSteps + 0.5) {
+    throw ConfigError::field(where, "--horizon", formatValue(horizon),
+                             fmt::format("a multiple of --step > 0 s, at most {} steps", kMaxWindowSteps));
   }
-  if (!(stride >= step) || !isMultipleOf(stride, step)) {
-    throw ConfigError::field(where, "--stride", formatValue(stride), "a multiple of --step >= --step");
+  if (!(history >= 0.0) || !isMultipleOf(history, step) || history / step > kMaxWindowSteps + 0.5) {
+    throw ConfigError::field(where, "--history", formatValue(history),
+                             fmt::format("a multiple of --step >= 0 s, at most {} steps", kMaxWindowSteps));
   }
-  if (laneChangeDuration < 0.0) {
-    throw ConfigError::field(where, "--lane-change-duration", formatValue(laneChangeDuration), "a duration >= 0 s");
+  if (!(stride >= step) || !isMultipleOf(stride, step) || stride > kMaxStride) {
+    throw ConfigError::field(where, "--stride", formatValue(stride),
+                             fmt::format("a multiple of --step in --step .. {} s", kMaxStride));
   }
-  if (!(radius > 0.0)) throw ConfigError::field(where, "--radius", formatValue(radius), "a radius > 0 m");
-  if (!(maxVectorLength > 0.0)) {
-    throw ConfigError::field(where, "--max-vector-length", formatValue(maxVectorLength), "a length > 0 m");
+  if (!(laneChangeDuration >= 0.0 && laneChangeDuration <= kMaxLaneChangeDuration)) {
+    throw ConfigError::field(where, "--lane-change-duration", formatValue(laneChangeDuration),
+                             fmt::format("a duration in 0 .. {} s", kMaxLaneChangeDuration));
+  }
+  if (!(radius > 0.0 && radius <= kMaxRadius)) {
+    throw ConfigError::field(where, "--radius", formatValue(radius), fmt::format("a radius in (0, {}] m", kMaxRadius));
+  }
+  if (!(maxVectorLength >= kMinVectorLength && maxVectorLength <= kMaxVectorLength)) {
+    throw ConfigError::field(where, "--max-vector-length", formatValue(maxVectorLength),
+                             fmt::format("a length in {} .. {} m", kMinVectorLength, kMaxVectorLength));
+  }
+  for (const auto& [flag, time] : {std::pair{"--begin", begin}, std::pair{"--end", end}}) {
+    if (time && !(*time >= 0.0 && *time <= kMaxSimulationTime)) {
+      throw ConfigError::field(where, flag, formatValue(*time), fmt::format("a time in 0 .. {} s", kMaxSimulationTime));
+    }
+  }
+  if (compression < 0 || compression > 9) {
+    throw ConfigError::field(where, "--compression", std::to_string(compression), "a deflate level 0 .. 9");
   }
   if (begin && end && *end <= *begin) {
     throw ConfigError::field(where, "--end", formatValue(*end), "an end time after --begin");
@@ -154,6 +176,12 @@ class Exporter {
     std::vector<std::string> fresh;
     const std::int64_t window = historySteps_ + horizonSteps_;
     for (const auto& vehicle : vehicles) {
+      if (vehicle.parked) {
+        // Absent while parked: masked in other vehicles' polylines, and an Ego's
+        // window that overlaps parking is incomplete (skipped).
+        ++parkedSteps_;
+        continue;
+      }
       auto [it, inserted] = histories_.try_emplace(vehicle.id);
       History& history = it->second;
       if (inserted) {
@@ -215,6 +243,7 @@ class Exporter {
   std::uint64_t skipped() const { return skipped_; }
   std::uint64_t egos() const { return egosWithSamples_; }
   std::uint64_t vehiclesSeen() const { return vehiclesSeen_; }
+  std::uint64_t parkedSteps() const { return parkedSteps_; }
 
  private:
   bool completeWindow(const History& history, std::int64_t step) const {
@@ -301,6 +330,7 @@ class Exporter {
   std::uint64_t skipped_ = 0;
   std::uint64_t egosWithSamples_ = 0;
   std::uint64_t vehiclesSeen_ = 0;
+  std::uint64_t parkedSteps_ = 0;
 };
 
 }  // namespace
@@ -399,7 +429,7 @@ ExportSummary simulateAndWrite(const ExportJob& job, const std::function<void(do
   header.horizon = stepsOf(options.horizon, options.step);
   header.history = stepsOf(options.history, options.step);
   header.compression = options.compression;
-  vector::DatasetWriter writer(job.datasetPath, header);
+  vector::DatasetWriter writer(job.datasetPath, header, job.options.output);
   writer.setSharedVectors(lanes.pool());
   if (lane_pool) *lane_pool = lanes.pool();
   const vector::Provenance provenance{job.mapFile.string(), sha256OfFile(job.mapFile), "", 0.0};
@@ -453,6 +483,7 @@ ExportSummary simulateAndWrite(const ExportJob& job, const std::function<void(do
   summary.egos = exporter.egos();
   summary.windowsSkipped = exporter.skipped();
   summary.vehiclesSeen = exporter.vehiclesSeen();
+  summary.parkedSteps = exporter.parkedSteps();
   summary.laneVectors = lanes.vectors();
   summary.simulatedSeconds = simulation.time() - begin;
   summary.failedEgos = simulation.failures();
@@ -468,6 +499,7 @@ std::vector<char> encodeSummary(const ExportSummary& summary) {
   writer.put(summary.egos);
   writer.put(summary.windowsSkipped);
   writer.put(summary.vehiclesSeen);
+  writer.put(summary.parkedSteps);
   writer.put(summary.laneVectors);
   writer.put(summary.simulatedSeconds);
   writer.put<std::uint64_t>(summary.failedEgos.size());
@@ -485,6 +517,7 @@ ExportSummary decodeSummary(ByteReader& reader) {
   summary.egos = reader.get<std::uint64_t>();
   summary.windowsSkipped = reader.get<std::uint64_t>();
   summary.vehiclesSeen = reader.get<std::uint64_t>();
+  summary.parkedSteps = reader.get<std::uint64_t>();
   summary.laneVectors = reader.get<std::uint64_t>();
   summary.simulatedSeconds = reader.get<double>();
   const auto failures = reader.get<std::uint64_t>();
@@ -675,10 +708,11 @@ ClusterExportResult exportOnCluster(const ExportOptions& options, Communicator& 
 std::string ExportSummary::report() const {
   std::string text = fmt::format(
       "{}: {} samples from {} Egos{} ({} vehicles seen, {:.0f} s simulated) in {:.2f} s = {:.0f} samples/s\n"
-      "  windows skipped (Ego left the network before the window ended): {}\n"
+      "  windows skipped (Ego left the network or parked before the window ended): {}\n"
+      "  vehicle steps parked (off the lane, masked): {}\n"
       "  lane-boundary vectors in the network: {}\n",
       label, samples, egos, closedLoop ? " driven by the controller (closed loop)" : "", vehiclesSeen,
-      simulatedSeconds, seconds, samplesPerSecond, windowsSkipped, laneVectors);
+      simulatedSeconds, seconds, samplesPerSecond, windowsSkipped, parkedSteps, laneVectors);
   if (!failedEgos.empty()) {
     text += fmt::format("  Egos taken out because their controller failed: {}\n", failedEgos.size());
     for (const auto& failure : failedEgos) text += fmt::format("    {}: {}\n", failure.id, failure.reason);

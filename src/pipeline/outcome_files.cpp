@@ -9,7 +9,8 @@ namespace fs = std::filesystem;
 namespace vsd::pipeline {
 
 OutcomeFiles::OutcomeFiles(const scenario::LogicalScenario& logical, const std::vector<std::string>& metric_names,
-                           int compression, const fs::path& traces, const fs::path& dataset)
+                           int compression, const fs::path& traces, const fs::path& dataset,
+                           const fs::path& traces_name, const fs::path& dataset_name)
     : logical_(logical), scenarioSha256_(sha256OfFile(logical.sourceFile)) {
   std::vector<std::string> ids = {logical_.ego.id};
   std::vector<double> lengths = {logical_.ego.length};
@@ -20,7 +21,7 @@ OutcomeFiles::OutcomeFiles(const scenario::LogicalScenario& logical, const std::
     widths.push_back(other.width);
   }
   traces_.emplace(traces, logical_.name, logical_.step, static_cast<std::size_t>(logical_.steps()) + 1, ids, lengths,
-                  widths);
+                  widths, traces_name);
   vector::DatasetHeader dataset_header;
   dataset_header.kind = "generated";
   dataset_header.step = logical_.step;
@@ -28,7 +29,7 @@ OutcomeFiles::OutcomeFiles(const scenario::LogicalScenario& logical, const std::
   dataset_header.inputNames = logical_.inputNames();
   dataset_header.metricNames = metric_names;
   dataset_header.compression = compression;
-  dataset_.emplace(dataset, dataset_header);
+  dataset_.emplace(dataset, dataset_header, dataset_name);
   emptyTrace_.step = logical_.step;
   for (std::size_t v = 0; v < ids.size(); ++v) {
     VehicleTrack track;

@@ -51,6 +51,15 @@ void RunOptions::validate() const {
     throw ConfigError::field("command line", "--batch", std::to_string(batch),
                              fmt::format("1 .. {}", road::BatchLayout::kMaxBatch));
   }
+  // Sample indices are stored as int64 (datasets) and printed exactly (CSV): the
+  // last one must stay far below 2^63 and must not wrap around.
+  if (firstSample > kMaxSampleIndex - samples) {
+    throw ConfigError::field("command line", "--first-sample", std::to_string(firstSample),
+                             fmt::format("0 .. {} (minus --samples)", kMaxSampleIndex));
+  }
+  if (compression < 0 || compression > 9) {
+    throw ConfigError::field("command line", "--compression", std::to_string(compression), "a deflate level 0 .. 9");
+  }
 }
 
 namespace {
@@ -145,7 +154,7 @@ class BatchProcessor {
       std::string failure;
       if (!context_.layout.fits(batch.roads.back())) {
         const auto [lo, hi] = batch.roads.back().bounds();
-        failure = fmt::format("road extends beyond its {:.0f} m layout cell (x {:.0f}..{:.0f} m, y {:.0f}..{:.0f} m)",
+        failure = fmt::format("road extends beyond its {:.0f} m layout cell (x {:.4g}..{:.4g} m, y {:.4g}..{:.4g} m)",
                               context_.layout.cellSize(), lo.x(), hi.x(), lo.y(), hi.y());
       } else {
         builder.add(index, batch.roads.back(), context_.layout.offsetFor(index));
@@ -537,7 +546,7 @@ class RunFiles {
     header.insert(header.end(), metric_names.begin(), metric_names.end());
     csv_->writeRow(header);
     outcomeFiles_.emplace(logical_, metric_names, context.options.compression, folder_.stage(kTraces),
-                          folder_.stage(kDataset));
+                          folder_.stage(kDataset), folder_.path() / kTraces, folder_.path() / kDataset);
   }
 
   void write(const ScenarioOutcome& outcome) {

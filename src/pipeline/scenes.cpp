@@ -77,7 +77,8 @@ std::vector<double> metricsOfFuture(const metrics::MetricSet& metric_set, const 
                                     const Polyline& future) {
   const Trace trace = vector::sceneTrace(scene, future);
   const Polyline lane = vector::egoLaneCentre(scene);
-  return metric_set.evaluate({trace, lane});
+  const std::vector<Polyline> boundaries = vector::laneBoundaryLines(scene);
+  return metric_set.evaluate({trace, lane, &boundaries});
 }
 
 metrics::Availability sceneAvailability(const std::string& dataset_kind) {

@@ -115,8 +115,8 @@ ConcreteScenario sampleConcreteScenario(const std::shared_ptr<const LogicalScena
   concrete.laneWidth = evaluateFinite(spec.road.laneWidth, inputs, spec.sourceFile.string() + ": road.lane_width",
                                       "lane_width") +
                        sampleDistribution(spec.road.laneWidthNoise, road_rng, inputs);
-  if (!(concrete.laneWidth > 0.5)) {
-    throw ConfigError(fmt::format("{}: road.lane_width: realised lane width {} m (expected > 0.5 m)",
+  if (!(concrete.laneWidth > 0.5 && concrete.laneWidth <= 50.0)) {
+    throw ConfigError(fmt::format("{}: road.lane_width: realised lane width {} m (expected 0.5 .. 50 m)",
                                   spec.sourceFile.string(), concrete.laneWidth));
   }
 

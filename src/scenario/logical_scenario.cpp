@@ -10,6 +10,7 @@
 
 #include "vsd/core/error.hpp"
 #include "vsd/core/files.hpp"
+#include "vsd/core/trace.hpp"
 
 namespace vsd::scenario {
 
@@ -32,6 +33,8 @@ std::optional<std::size_t> LogicalScenario::inputIndex(const std::string& input_
 namespace {
 
 constexpr double kDegree = 3.14159265358979323846 / 180.0;
+/// m: bound of the scenario region and of the road extensions (keeps net coordinates sane).
+constexpr double kMaxRoadLength = 10'000.0;
 
 bool isIdentifier(const std::string& name) {
   static const std::regex pattern("[A-Za-z][A-Za-z0-9_]*");
@@ -43,18 +46,22 @@ void parseTime(const YamlReader& reader, const YAML::Node& node, LogicalScenario
   reader.checkKeys(node, "time", {"step", "duration"});
   scenario.step = reader.number(node, "step", "time.step", scenario.step);
   scenario.duration = reader.number(node, "duration", "time.duration", scenario.duration);
-  if (!(scenario.step > 0.0)) {
+  // SUMO counts milliseconds; the step count sizes every trace and dataset array.
+  const double milliseconds = scenario.step / kMinStep;
+  if (!(scenario.step >= kMinStep && scenario.step <= kMaxStep) ||
+      std::abs(milliseconds - std::round(milliseconds)) > 1e-6) {
     throw ConfigError::field(reader.where(node["step"], "time.step"), "time.step", formatValue(scenario.step),
-                             "a step > 0 s");
+                             fmt::format("a multiple of {0} s in {0} .. {1} s", kMinStep, kMaxStep));
   }
   if (!(scenario.duration > 0.0)) {
     throw ConfigError::field(reader.where(node["duration"], "time.duration"), "time.duration",
                              formatValue(scenario.duration), "a duration > 0 s");
   }
   const double steps = scenario.duration / scenario.step;
-  if (std::abs(steps - std::round(steps)) > 1e-6) {
+  if (std::abs(steps - std::round(steps)) > 1e-6 || steps > kMaxWindowSteps + 0.5) {
     throw ConfigError::field(reader.where(node["duration"], "time.duration"), "time.duration",
-                             formatValue(scenario.duration), "a whole multiple of time.step");
+                             formatValue(scenario.duration),
+                             fmt::format("a whole multiple of time.step, at most {} steps", kMaxWindowSteps));
   }
 }
 
@@ -101,15 +108,22 @@ void parseRoad(const YamlReader& reader, const YAML::Node& node, LogicalScenario
     if (!(road.xMin < road.xMax)) {
       reader.fail(range, "road.x_range", fmt::format("x_min {} >= x_max {} (expected x_min < x_max)", road.xMin, road.xMax));
     }
+    // Roads are laid out in cells of a shared network sized by the region.
+    if (road.xMax - road.xMin > kMaxRoadLength || std::abs(road.xMin) > kMaxRoadLength ||
+        std::abs(road.xMax) > kMaxRoadLength) {
+      reader.fail(range, "road.x_range",
+                  fmt::format("[{}, {}]: expected a region within -{} .. {} m", road.xMin, road.xMax, kMaxRoadLength,
+                              kMaxRoadLength));
+    }
   }
-  road.points = reader.integer(node, "points", "road.points", road.points, 2);
+  road.points = reader.integer(node, "points", "road.points", road.points, 2, 10'000);
   road.centre = node["centre"] ? reader.expression(node["centre"], "road.centre", with_x) : Expression::constant(0.0);
   if (node["centre_noise"]) road.centreNoise = reader.distribution(node["centre_noise"], "road.centre_noise", inputs);
-  road.lanes = reader.integer(node, "lanes", "road.lanes", road.lanes, 1);
+  road.lanes = reader.integer(node, "lanes", "road.lanes", road.lanes, 1, 16);
   if (node["lane_width"]) road.laneWidth = reader.expression(node["lane_width"], "road.lane_width", inputs);
-  if (road.laneWidth.isConstant() && !(road.laneWidth.evaluate({}) > 0.0)) {
+  if (road.laneWidth.isConstant() && !(road.laneWidth.evaluate({}) > 0.0 && road.laneWidth.evaluate({}) <= 50.0)) {
     throw ConfigError::field(reader.where(node["lane_width"], "road.lane_width"), "road.lane_width",
-                             road.laneWidth.text(), "a width > 0 m");
+                             road.laneWidth.text(), "a width in (0, 50] m");
   }
   if (node["lane_width_noise"]) {
     road.laneWidthNoise = reader.distribution(node["lane_width_noise"], "road.lane_width_noise", inputs);
@@ -123,8 +137,9 @@ void parseRoad(const YamlReader& reader, const YAML::Node& node, LogicalScenario
     reader.checkKeys(extension, "road.extension", {"before", "after"});
     road.extensionBefore = reader.number(extension, "before", "road.extension.before", road.extensionBefore);
     road.extensionAfter = reader.number(extension, "after", "road.extension.after", road.extensionAfter);
-    if (road.extensionBefore < 0.0 || road.extensionAfter < 0.0) {
-      reader.fail(extension, "road.extension", "expected lengths >= 0 m");
+    if (!(road.extensionBefore >= 0.0 && road.extensionBefore <= kMaxRoadLength) ||
+        !(road.extensionAfter >= 0.0 && road.extensionAfter <= kMaxRoadLength)) {
+      reader.fail(extension, "road.extension", fmt::format("expected lengths in 0 .. {} m", kMaxRoadLength));
     }
   }
 }
@@ -141,7 +156,9 @@ void parseCommonVehicle(const YamlReader& reader, const YAML::Node& node, const 
   }
   vehicle.length = reader.number(node, "length", field + ".length", vehicle.length);
   vehicle.width = reader.number(node, "width", field + ".width", vehicle.width);
-  if (!(vehicle.length > 0.0) || !(vehicle.width > 0.0)) reader.fail(node, field, "length and width must be > 0 m");
+  if (!(vehicle.length > 0.0 && vehicle.length <= 100.0) || !(vehicle.width > 0.0 && vehicle.width <= 20.0)) {
+    reader.fail(node, field, "expected a length in (0, 100] m and a width in (0, 20] m");
+  }
 }
 
 void parseController(const YamlReader& reader, const YAML::Node& node, const std::string& field,

@@ -55,13 +55,14 @@ double YamlReader::number(const YAML::Node& map, const std::string& key, const s
   return number(node, field);
 }
 
-int YamlReader::integer(const YAML::Node& map, const std::string& key, const std::string& field, int fallback, int minimum) const {
+int YamlReader::integer(const YAML::Node& map, const std::string& key, const std::string& field, int fallback, int minimum,
+                        int maximum) const {
   const auto node = map[key];
   if (!node) return fallback;
   const double value = number(node, field);
-  if (value != std::floor(value) || value < minimum || value > 1e6) {
+  if (value != std::floor(value) || value < minimum || value > maximum) {
     throw ConfigError::field(where(node, field), field, scalar(node, field),
-                             fmt::format("an integer >= {}", minimum));
+                             fmt::format("an integer in {} .. {}", minimum, maximum));
   }
   return static_cast<int>(value);
 }

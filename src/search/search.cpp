@@ -302,7 +302,8 @@ void executePlan(const SearchContext& context, std::uint64_t round, RoundPlan& p
   ensureDirectory(detail::roundFile(context, round, "").parent_path());
   AtomicOutput traces(detail::roundFile(context, round, "traces.h5"));
   AtomicOutput dataset(detail::roundFile(context, round, "dataset.h5"));
-  pipeline::OutcomeFiles files(*logical, context.metricNames, run.compression, traces.tempPath(), dataset.tempPath());
+  pipeline::OutcomeFiles files(*logical, context.metricNames, run.compression, traces.tempPath(), dataset.tempPath(),
+                               traces.finalPath(), dataset.finalPath());
   pipeline::runScenarios(logical, run, [&](const pipeline::ScenarioOutcome& outcome) {
     auto& execution = plan.chosen[outcome.index];
     execution.inputs = outcome.inputs;

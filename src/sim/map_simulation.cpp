@@ -181,6 +181,8 @@ bool MapSimulation::step() {
     if (driver != drivers_.end()) {
       snapshot.state = driver->second->state();
     } else {
+      // getStopState: bit 0 stopped, bit 1 parking (TraCI's documented layout).
+      snapshot.parked = (libsumo::Vehicle::getStopState(id) & 2) != 0;
       const auto front = libsumo::Vehicle::getPosition(id);
       const double heading = headingFromSumoAngle(libsumo::Vehicle::getAngle(id));
       const Vec2 centre = Vec2(front.x, front.y) - 0.5 * snapshot.length * headingVector(heading);

@@ -23,18 +23,28 @@ struct TraceFileWriter::Impl {
   h5::Appendable<std::uint8_t> valid;
   std::size_t buffered = 0;
   bool open = true;
+  std::filesystem::path name;  ///< the file as messages name it (its final name)
 
   void flush() {
-    h5::flushAll(sample, ok, states, valid);
+    try {
+      h5::flushAll(sample, ok, states, valid);
+    } catch (const H5::Exception& error) {
+      failed(error);
+    }
     buffered = 0;
+  }
+  [[noreturn]] void failed(const H5::Exception& error) const {
+    throw IoError(fmt::format("{}: writing the trace file failed: {}", name.string(), h5::errorCause(error)));
   }
 };
 
 TraceFileWriter::TraceFileWriter(const std::filesystem::path& path, const std::string& functional_scenario, double step,
                                  std::size_t instants, const std::vector<std::string>& vehicle_ids,
-                                 const std::vector<double>& vehicle_lengths, const std::vector<double>& vehicle_widths)
+                                 const std::vector<double>& vehicle_lengths, const std::vector<double>& vehicle_widths,
+                                 const std::filesystem::path& name_in_messages)
     : impl_(std::make_unique<Impl>()) {
   h5::silenceErrorStack();
+  impl_->name = name_in_messages.empty() ? path : name_in_messages;
   try {
     impl_->file = H5::H5File(path.string(), H5F_ACC_TRUNC);
     impl_->vehicles = vehicle_ids.size();
@@ -58,7 +68,7 @@ TraceFileWriter::TraceFileWriter(const std::filesystem::path& path, const std::s
     impl_->states = h5::Appendable<double>(root, "states", {v, t, kTraceFields}, kChunkRows, kDeflateLevel);
     impl_->valid = h5::Appendable<std::uint8_t>(root, "valid", {v, t}, kChunkRows, kDeflateLevel);
   } catch (const H5::Exception& error) {
-    throw IoError(fmt::format("{}: cannot create trace file: {}", path.string(), error.getDetailMsg()));
+    throw IoError(fmt::format("{}: cannot create trace file: {}", impl_->name.string(), h5::errorCause(error)));
   }
 }
 
@@ -91,11 +101,11 @@ void TraceFileWriter::append(std::uint64_t sample, const Trace& trace, bool ok) 
 void TraceFileWriter::close() {
   if (!impl_ || !impl_->open) return;
   impl_->open = false;
+  impl_->flush();
   try {
-    impl_->flush();
     impl_->file.close();
   } catch (const H5::Exception& error) {
-    throw IoError(fmt::format("trace file: write failed: {}", error.getDetailMsg()));
+    impl_->failed(error);
   }
 }
 
@@ -141,8 +151,27 @@ TraceFileReader::TraceFileReader(const std::filesystem::path& path) : impl_(std:
     impl_->ok = h5::readAll<std::uint8_t>(root.openDataSet("ok"));
     impl_->states = root.openDataSet("states");
     impl_->valid = root.openDataSet("valid");
+    checkShapes();
   } catch (const H5::Exception& error) {
-    throw DatasetError(fmt::format("{}: damaged trace file: {}", path.string(), error.getDetailMsg()));
+    throw DatasetError(fmt::format("{}: damaged trace file: {}", path.string(), h5::errorCause(error)));
+  }
+}
+
+void TraceFileReader::checkShapes() const {
+  // trace() indexes /states by the vehicle list and `instants`: they must agree.
+  const auto& d = *impl_;
+  const hsize_t n = d.samples.size();
+  const hsize_t v = d.vehicleIds.size();
+  const auto t = static_cast<hsize_t>(d.instants);
+  h5::checkStoredSize(d.states);
+  h5::checkStoredSize(d.valid);
+  const bool ok = d.ok.size() == n && d.lengths.size() == v && d.widths.size() == v &&
+                  h5::shapeOf(d.states) == std::vector<hsize_t>{n, v, t, kTraceFields} &&
+                  h5::shapeOf(d.valid) == std::vector<hsize_t>{n, v, t};
+  if (!ok) {
+    throw DatasetError(fmt::format("{}: damaged trace file: array shapes do not match {} samples x {} vehicles x {} "
+                                   "instants",
+                                   d.path.string(), n, v, t));
   }
 }
 

@@ -1,6 +1,7 @@
 #include "vsd/vector/dataset.hpp"
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include <algorithm>
 #include <cmath>
@@ -150,6 +151,11 @@ struct DatasetWriter::Impl {
   std::optional<h5::Appendable<double>> metrics;
 
   std::size_t buffered = 0;  ///< samples pushed since the last flush
+  fs::path name;             ///< the file as messages name it (its final name, not the temporary one)
+
+  [[noreturn]] void failed(const H5::Exception& error) const {
+    throw IoError(fmt::format("{}: writing the dataset failed: {}", name.string(), h5::errorCause(error)));
+  }
 
   StringTable labels;
   StringTable sources;
@@ -189,7 +195,13 @@ struct DatasetWriter::Impl {
     if (inputs) inputs->push(stored.inputs.begin(), stored.inputs.end());
     if (metrics) metrics->push(stored.metrics.begin(), stored.metrics.end());
     ++samples;
-    if (++buffered >= kChunkSamples) flush();
+    if (++buffered >= kChunkSamples) {
+      try {
+        flush();
+      } catch (const H5::Exception& error) {
+        failed(error);
+      }
+    }
   }
 
   void flush() {
@@ -202,8 +214,10 @@ struct DatasetWriter::Impl {
   }
 };
 
-DatasetWriter::DatasetWriter(const fs::path& path, DatasetHeader header) : impl_(std::make_unique<Impl>()) {
+DatasetWriter::DatasetWriter(const fs::path& path, DatasetHeader header, const fs::path& name_in_messages)
+    : impl_(std::make_unique<Impl>()) {
   h5::silenceErrorStack();
+  impl_->name = name_in_messages.empty() ? path : name_in_messages;
   impl_->header = std::move(header);
   const auto& h = impl_->header;
   if (!(h.step > 0.0) || !std::isfinite(h.step) || h.horizon < 1) {
@@ -253,7 +267,7 @@ DatasetWriter::DatasetWriter(const fs::path& path, DatasetHeader header) : impl_
       impl_->metrics.emplace(root, "metrics", std::vector<hsize_t>{h.metricNames.size()}, kChunkSamples, kDeflate);
     }
   } catch (const H5::Exception& error) {
-    throw IoError(fmt::format("{}: cannot create dataset: {}", path.string(), error.getDetailMsg()));
+    throw IoError(fmt::format("{}: cannot create dataset: {}", impl_->name.string(), h5::errorCause(error)));
   }
 }
 
@@ -275,7 +289,7 @@ void DatasetWriter::setSharedVectors(const std::vector<Feature>& pool) {
   try {
     impl_->sharedVectors.append(flat);
   } catch (const H5::Exception& error) {
-    throw IoError(fmt::format("dataset: write failed: {}", error.getDetailMsg()));
+    impl_->failed(error);
   }
   impl_->sharedSize = pool.size();
 }
@@ -308,7 +322,7 @@ void DatasetWriter::close() {
     h5::writeStrings(root, "ego_ids", d.egoIds.values());
     d.file.close();
   } catch (const H5::Exception& error) {
-    throw IoError(fmt::format("dataset: write failed: {}", error.getDetailMsg()));
+    d.failed(error);
   }
 }
 
@@ -340,10 +354,20 @@ struct DatasetReader::Impl {
   std::vector<double> sharedVectors;  ///< the map's lane vectors (read eagerly: small)
   std::optional<H5::DataSet> inputs, metrics;
 
+  /// What the reader was reading when HDF5 failed (named in the message).
+  std::string reading;
+
   [[noreturn]] void fail(const std::string& problem) const {
     throw DatasetError(fmt::format("{}: {}", path.string(), problem));
   }
 
+  void readHeader(const H5::Group& root);
+  void openArrays(const H5::Group& root);
+  void readIndex(const H5::Group& root);
+  void checkIndex() const;
+  std::pair<hsize_t, hsize_t> inlineVectorRange(std::size_t sample, const std::vector<std::uint8_t>& shared,
+                                                const std::vector<std::int64_t>& starts,
+                                                const std::vector<std::int32_t>& counts) const;
   /// Lengths and widths of polylines [first, first + count) (m): stored in version 2,
   /// assumed for the vehicles of version-1 files.
   std::pair<std::vector<double>, std::vector<double>> polylineSizes(const std::vector<std::int8_t>& types,
@@ -378,15 +402,8 @@ StoredSample DatasetReader::Impl::stored(std::size_t i) const {
     stored.polylineVectorCount = h5::readRows<std::int32_t>(polylineVectorCount, first_polyline, polylines);
     std::tie(stored.polylineLength, stored.polylineWidth) =
         polylineSizes(stored.polylineType, first_polyline, polylines);
-    hsize_t first_vector = 0;
-    hsize_t vector_count = 0;
-    bool any_inline = false;
-    for (hsize_t p = 0; p < polylines; ++p) {
-      if (stored.polylineShared[p]) continue;
-      if (!any_inline) first_vector = static_cast<hsize_t>(stored.sharedStart[p]);
-      any_inline = true;
-      vector_count += static_cast<hsize_t>(stored.polylineVectorCount[p]);
-    }
+    const auto [first_vector, vector_count] =
+        inlineVectorRange(i, stored.polylineShared, stored.sharedStart, stored.polylineVectorCount);
     stored.vectors = h5::readRows<float>(vectors, first_vector, vector_count);
     stored.vectorValid = h5::readRows<std::uint8_t>(vectorValid, first_vector, vector_count);
     stored.targets = h5::readRows<float>(targets, i, 1);
@@ -394,7 +411,7 @@ StoredSample DatasetReader::Impl::stored(std::size_t i) const {
     if (inputs) stored.inputs = h5::readRows<double>(*inputs, i, 1);
     if (metrics) stored.metrics = h5::readRows<double>(*metrics, i, 1);
   } catch (const H5::Exception& error) {
-    fail(fmt::format("cannot read sample {}: {}", i, error.getDetailMsg()));
+    fail(fmt::format("cannot read sample {}: {}", i, h5::errorCause(error)));
   }
   stored.originX = sampleOrigin[2 * i];
   stored.originY = sampleOrigin[2 * i + 1];
@@ -430,6 +447,201 @@ void DatasetWriter::appendCopy(const DatasetReader& source, std::size_t sample) 
   d.push(source.impl_->stored(sample));
 }
 
+/// First row and count of a sample's own (inline) vectors in /vectors, which the
+/// writer stores contiguously; checked against the array before anything is read.
+std::pair<hsize_t, hsize_t> DatasetReader::Impl::inlineVectorRange(std::size_t sample,
+                                                                  const std::vector<std::uint8_t>& shared,
+                                                                  const std::vector<std::int64_t>& starts,
+                                                                  const std::vector<std::int32_t>& counts) const {
+  const auto total = static_cast<std::int64_t>(h5::shapeOf(vectors).front());
+  std::int64_t first = -1;
+  std::int64_t next = 0;
+  for (std::size_t p = 0; p < shared.size(); ++p) {
+    if (counts[p] < 0 || shared[p] > 1) {
+      fail(fmt::format("sample {} polyline {}: {} vectors, shared flag {}", sample, p, counts[p], shared[p]));
+    }
+    if (shared[p]) continue;
+    if (first < 0) first = next = starts[p];
+    if (starts[p] != next || next < 0 || counts[p] > total - next) {
+      fail(fmt::format("sample {} polyline {}: vectors {} .. {} are not the sample's next rows of the {} in "
+                       "/vectors",
+                       sample, p, starts[p], starts[p] + counts[p], total));
+    }
+    next += counts[p];
+  }
+  if (first < 0) return {0, 0};
+  return {static_cast<hsize_t>(first), static_cast<hsize_t>(next - first)};
+}
+
+void DatasetReader::Impl::readHeader(const H5::Group& root) {
+  reading = "attributes";
+  if (!h5::hasAttribute(root, "schema")) fail("not a vsd-sumo dataset (no 'schema' attribute)");
+  const auto schema = h5::readStringAttribute(root, "schema");
+  if (schema != kDatasetSchema && schema != kDatasetSchemaVersion1) {
+    fail(fmt::format("dataset schema '{}' is not supported by this version (expected '{}' or '{}')", schema,
+                     kDatasetSchema, kDatasetSchemaVersion1));
+  }
+  header.vehicleSizesAssumed = schema == kDatasetSchemaVersion1;
+  const auto features = h5::readIntAttribute(root, "feature_version");
+  if (features != kFeatureVersion) {
+    fail(fmt::format("feature version {} is not supported (expected {})", features, kFeatureVersion));
+  }
+  header.kind = h5::readStringAttribute(root, "kind");
+  header.step = h5::readDoubleAttribute(root, "step");
+  const auto horizon = h5::readIntAttribute(root, "horizon");
+  const auto history = h5::readIntAttribute(root, "history");
+  toolVersion = h5::readStringAttribute(root, "tool_version");
+  // The time base sizes every per-sample array and tensor: bounded before use.
+  if (header.kind != "generated" && header.kind != "map") {
+    fail(fmt::format("attribute 'kind': got '{}', expected 'generated' or 'map'", header.kind));
+  }
+  if (!(header.step >= kMinStep && header.step <= kMaxStep)) {
+    fail(fmt::format("attribute 'step': got {}, expected {} .. {} s", header.step, kMinStep, kMaxStep));
+  }
+  if (horizon < 1 || horizon > kMaxWindowSteps) {
+    fail(fmt::format("attribute 'horizon': got {}, expected 1 .. {} steps", horizon, kMaxWindowSteps));
+  }
+  if (history < 0 || history > kMaxWindowSteps) {
+    fail(fmt::format("attribute 'history': got {}, expected 0 .. {} steps", history, kMaxWindowSteps));
+  }
+  header.horizon = static_cast<int>(horizon);
+  header.history = static_cast<int>(history);
+}
+
+void DatasetReader::Impl::openArrays(const H5::Group& root) {
+  const auto open = [&](const char* name) {
+    reading = name;
+    H5::DataSet dataset = root.openDataSet(name);
+    h5::checkStoredSize(dataset);
+    return dataset;
+  };
+  const auto rows = [](const H5::DataSet& dataset) {
+    const auto shape = h5::shapeOf(dataset);
+    return shape.empty() ? hsize_t{0} : shape[0];
+  };
+  // Every array's shape follows from N samples, P polylines, V inline and S shared
+  // vectors, F horizon steps and the I inputs / M metrics named in the header.
+  for (const char* table : {"labels", "input_names", "metric_names", "sources", "source_sha256", "ego_ids"}) open(table);
+  const std::map<std::string, H5::DataSet> arrays = [&] {
+    std::map<std::string, H5::DataSet> result;
+    for (const char* name : {"sample_polyline_start", "sample_polyline_count", "sample_ego_polyline", "sample_origin",
+                             "sample_label", "sample_index", "sample_source", "sample_ego", "sample_t0", "vectors",
+                             "vector_valid", "polyline_type", "polyline_shared", "shared_vectors",
+                             "polyline_vector_start", "polyline_vector_count", "targets", "target_valid"}) {
+      result.emplace(name, open(name));
+    }
+    for (const char* name : {"inputs", "metrics"}) {
+      if (root.nameExists(name)) result.emplace(name, open(name));
+    }
+    if (!header.vehicleSizesAssumed) {
+      for (const char* name : {"polyline_length", "polyline_width"}) result.emplace(name, open(name));
+    }
+    return result;
+  }();
+  reading = "input_names";
+  header.inputNames = h5::readStrings(root, "input_names");
+  reading = "metric_names";
+  header.metricNames = h5::readStrings(root, "metric_names");
+  const hsize_t n = rows(arrays.at("sample_label"));
+  const hsize_t p = rows(arrays.at("polyline_type"));
+  const hsize_t v = rows(arrays.at("vectors"));
+  const hsize_t shared = rows(arrays.at("shared_vectors"));
+  const auto f = static_cast<hsize_t>(header.horizon);
+  const std::vector<std::pair<std::string, std::vector<hsize_t>>> expected = {
+      {"sample_polyline_start", {n}}, {"sample_polyline_count", {n}}, {"sample_ego_polyline", {n}},
+      {"sample_origin", {n, 2}},      {"sample_label", {n}},          {"sample_index", {n}},
+      {"sample_source", {n}},         {"sample_ego", {n}},            {"sample_t0", {n}},
+      {"vectors", {v, kFeatures}},    {"vector_valid", {v}},          {"polyline_type", {p}},
+      {"polyline_shared", {p}},       {"shared_vectors", {shared, kFeatures}},
+      {"polyline_vector_start", {p}}, {"polyline_vector_count", {p}}, {"targets", {n, f, 2}},
+      {"target_valid", {n, f}},       {"inputs", {n, header.inputNames.size()}},
+      {"metrics", {n, header.metricNames.size()}}, {"polyline_length", {p}}, {"polyline_width", {p}}};
+  for (const auto& [name, shape] : expected) {
+    const bool sizes = name == "polyline_length" || name == "polyline_width";
+    if (sizes && header.vehicleSizesAssumed) continue;  // version 1 stores none
+    const auto it = arrays.find(name);
+    if (it == arrays.end()) {
+      // inputs/metrics are left out when the header names none.
+      if (shape.back() == 0) continue;
+      fail(fmt::format("array '{}' is missing ({} columns are named)", name, shape.back()));
+    }
+    const auto actual = h5::shapeOf(it->second);
+    if (actual != shape) {
+      fail(fmt::format("array '{}' has shape [{}], expected [{}] (from {} samples, {} polylines, {} vectors, horizon "
+                       "{})",
+                       name, fmt::join(actual, ", "), fmt::join(shape, ", "), n, p, v, f));
+    }
+  }
+  vectors = arrays.at("vectors");
+  vectorValid = arrays.at("vector_valid");
+  polylineType = arrays.at("polyline_type");
+  polylineShared = arrays.at("polyline_shared");
+  polylineVectorStart = arrays.at("polyline_vector_start");
+  polylineVectorCount = arrays.at("polyline_vector_count");
+  targets = arrays.at("targets");
+  targetValid = arrays.at("target_valid");
+  if (arrays.count("inputs")) inputs = arrays.at("inputs");
+  if (arrays.count("metrics")) metrics = arrays.at("metrics");
+  if (!header.vehicleSizesAssumed) {
+    polylineLength = arrays.at("polyline_length");
+    polylineWidth = arrays.at("polyline_width");
+  }
+}
+
+void DatasetReader::Impl::readIndex(const H5::Group& root) {
+  const auto strings = [&](const char* name) {
+    reading = name;
+    return h5::readStrings(root, name);
+  };
+  labels = strings("labels");
+  sources = strings("sources");
+  sourceSha = strings("source_sha256");
+  egoIds = strings("ego_ids");
+  const auto all = [&](const char* name, auto& values) {
+    reading = name;
+    values = h5::readAll<typename std::decay_t<decltype(values)>::value_type>(root.openDataSet(name));
+  };
+  all("sample_polyline_start", samplePolylineStart);
+  all("sample_polyline_count", samplePolylineCount);
+  all("sample_ego_polyline", sampleEgoPolyline);
+  all("sample_origin", sampleOrigin);
+  all("sample_label", sampleLabel);
+  all("sample_index", sampleIndex);
+  all("sample_source", sampleSource);
+  all("sample_ego", sampleEgo);
+  all("sample_t0", sampleT0);
+  all("shared_vectors", sharedVectors);
+}
+
+void DatasetReader::Impl::checkIndex() const {
+  const std::size_t n = sampleLabel.size();
+  const auto polylines = static_cast<std::int64_t>(h5::shapeOf(polylineType).front());
+  const auto in_table = [](std::int32_t index, std::size_t size) {
+    return index >= 0 && static_cast<std::size_t>(index) < size;
+  };
+  for (std::size_t i = 0; i < n; ++i) {
+    const std::int64_t first = samplePolylineStart[i];
+    const std::int32_t count = samplePolylineCount[i];
+    if (first < 0 || count < 1 || first > polylines - count) {
+      fail(fmt::format("sample {}: polylines {} .. {} outside the {} polylines of the file", i, first,
+                       first + count, polylines));
+    }
+    if (sampleEgoPolyline[i] < 0 || sampleEgoPolyline[i] >= count) {
+      fail(fmt::format("sample {}: Ego polyline {} of {}", i, sampleEgoPolyline[i], count));
+    }
+    if (!in_table(sampleLabel[i], labels.size())) {
+      fail(fmt::format("sample {} refers to label #{} of {}", i, sampleLabel[i], labels.size()));
+    }
+    if (!in_table(sampleSource[i], sources.size()) || !in_table(sampleEgo[i], egoIds.size())) {
+      fail(fmt::format("sample {} refers to source #{} of {} / Ego id #{} of {}", i, sampleSource[i], sources.size(),
+                       sampleEgo[i], egoIds.size()));
+    }
+    if (!std::isfinite(sampleOrigin[2 * i]) || !std::isfinite(sampleOrigin[2 * i + 1]) || !std::isfinite(sampleT0[i])) {
+      fail(fmt::format("sample {}: non-finite origin or t0", i));
+    }
+  }
+}
+
 DatasetReader::DatasetReader(const fs::path& path) : impl_(std::make_unique<Impl>()) {
   h5::silenceErrorStack();
   auto& d = *impl_;
@@ -442,72 +654,17 @@ DatasetReader::DatasetReader(const fs::path& path) : impl_(std::make_unique<Impl
     d.fail("not an HDF5 file (corrupt, truncated or foreign)");
   }
   try {
-    H5::Group root = d.file.openGroup("/");
-    if (!h5::hasAttribute(root, "schema")) d.fail("not a vsd-sumo dataset (no 'schema' attribute)");
-    const auto schema = h5::readStringAttribute(root, "schema");
-    if (schema != kDatasetSchema && schema != kDatasetSchemaVersion1) {
-      d.fail(fmt::format("dataset schema '{}' is not supported by this version (expected '{}' or '{}')", schema,
-                         kDatasetSchema, kDatasetSchemaVersion1));
-    }
-    d.header.vehicleSizesAssumed = schema == kDatasetSchemaVersion1;
-    const auto features = h5::readIntAttribute(root, "feature_version");
-    if (features != kFeatureVersion) {
-      d.fail(fmt::format("feature version {} is not supported (expected {})", features, kFeatureVersion));
-    }
-    d.header.kind = h5::readStringAttribute(root, "kind");
-    d.header.step = h5::readDoubleAttribute(root, "step");
-    d.header.horizon = static_cast<int>(h5::readIntAttribute(root, "horizon"));
-    d.header.history = static_cast<int>(h5::readIntAttribute(root, "history"));
-    d.header.inputNames = h5::readStrings(root, "input_names");
-    d.header.metricNames = h5::readStrings(root, "metric_names");
-    d.toolVersion = h5::readStringAttribute(root, "tool_version");
-    d.labels = h5::readStrings(root, "labels");
-    d.sources = h5::readStrings(root, "sources");
-    d.sourceSha = h5::readStrings(root, "source_sha256");
-    d.egoIds = h5::readStrings(root, "ego_ids");
-    d.samplePolylineStart = h5::readAll<std::int64_t>(root.openDataSet("sample_polyline_start"));
-    d.samplePolylineCount = h5::readAll<std::int32_t>(root.openDataSet("sample_polyline_count"));
-    d.sampleEgoPolyline = h5::readAll<std::int32_t>(root.openDataSet("sample_ego_polyline"));
-    d.sampleOrigin = h5::readAll<double>(root.openDataSet("sample_origin"));
-    d.sampleLabel = h5::readAll<std::int32_t>(root.openDataSet("sample_label"));
-    d.sampleIndex = h5::readAll<std::int64_t>(root.openDataSet("sample_index"));
-    d.sampleSource = h5::readAll<std::int32_t>(root.openDataSet("sample_source"));
-    d.sampleEgo = h5::readAll<std::int32_t>(root.openDataSet("sample_ego"));
-    d.sampleT0 = h5::readAll<double>(root.openDataSet("sample_t0"));
-    d.vectors = root.openDataSet("vectors");
-    d.vectorValid = root.openDataSet("vector_valid");
-    d.polylineType = root.openDataSet("polyline_type");
-    d.polylineShared = root.openDataSet("polyline_shared");
-    d.sharedVectors = h5::readAll<double>(root.openDataSet("shared_vectors"));
-    d.polylineVectorStart = root.openDataSet("polyline_vector_start");
-    d.polylineVectorCount = root.openDataSet("polyline_vector_count");
-    if (!d.header.vehicleSizesAssumed) {
-      d.polylineLength = root.openDataSet("polyline_length");
-      d.polylineWidth = root.openDataSet("polyline_width");
-    }
-    d.targets = root.openDataSet("targets");
-    d.targetValid = root.openDataSet("target_valid");
-    if (root.nameExists("inputs")) d.inputs = root.openDataSet("inputs");
-    if (root.nameExists("metrics")) d.metrics = root.openDataSet("metrics");
+    const H5::Group root = d.file.openGroup("/");
+    d.readHeader(root);
+    d.openArrays(root);
+    d.readIndex(root);
   } catch (const H5::Exception& error) {
-    d.fail(fmt::format("damaged dataset: {}", error.getDetailMsg()));
+    d.fail(fmt::format("damaged dataset: cannot read '{}': {}", d.reading, h5::errorCause(error)));
   }
-  const std::size_t n = d.sampleLabel.size();
-  for (const auto* size : {&d.samplePolylineStart, &d.sampleIndex}) {
-    if (size->size() != n) d.fail("per-sample arrays have different lengths (damaged file)");
-  }
-  if (d.samplePolylineCount.size() != n || d.sampleEgoPolyline.size() != n || d.sampleOrigin.size() != 2 * n ||
-      d.sampleSource.size() != n || d.sampleEgo.size() != n || d.sampleT0.size() != n) {
-    d.fail("per-sample arrays have different lengths (damaged file)");
-  }
+  d.checkIndex();
   if (d.header.vehicleSizesAssumed) {
     spdlog::warn("{}: a {} file stores no vehicle sizes; assuming {} m x {} m for every vehicle", path.string(),
                  kDatasetSchemaVersion1, kAssumedVehicleLength, kAssumedVehicleWidth);
-  }
-  for (std::size_t i = 0; i < n; ++i) {
-    if (d.sampleLabel[i] < 0 || static_cast<std::size_t>(d.sampleLabel[i]) >= d.labels.size()) {
-      d.fail(fmt::format("sample {} refers to label #{} of {}", i, d.sampleLabel[i], d.labels.size()));
-    }
   }
 }
 
@@ -542,16 +699,7 @@ VectorizedScene DatasetReader::scene(std::size_t sample) const {
     const auto starts = h5::readRows<std::int64_t>(d.polylineVectorStart, first_polyline, polylines);
     const auto counts = h5::readRows<std::int32_t>(d.polylineVectorCount, first_polyline, polylines);
     const auto sizes = d.polylineSizes(types, first_polyline, polylines);
-    // The sample's own (inline) vectors are contiguous in /vectors.
-    hsize_t first_vector = 0;
-    hsize_t vector_count = 0;
-    bool any_inline = false;
-    for (hsize_t p = 0; p < polylines; ++p) {
-      if (shared[p]) continue;
-      if (!any_inline) first_vector = static_cast<hsize_t>(starts[p]);
-      any_inline = true;
-      vector_count += static_cast<hsize_t>(counts[p]);
-    }
+    const auto [first_vector, vector_count] = d.inlineVectorRange(sample, shared, starts, counts);
     const auto raw = h5::readRows<float>(d.vectors, first_vector, vector_count);
     const auto valid = h5::readRows<std::uint8_t>(d.vectorValid, first_vector, vector_count);
     const double ox = d.sampleOrigin[2 * sample];

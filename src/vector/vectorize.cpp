@@ -1,5 +1,7 @@
 #include "vsd/vector/vectorize.hpp"
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <cmath>
 
@@ -137,24 +139,36 @@ std::int64_t LaneIndex::cellKey(std::int64_t ix, std::int64_t iy) const {
 }
 
 std::vector<ScenePolyline> LaneIndex::query(const Vec2& centre, double radius) const {
+  if (!(radius >= 0.0) || !centre.allFinite()) {
+    throw Error(fmt::format("internal: lane query at ({}, {}) with radius {}", centre.x(), centre.y(), radius));
+  }
   std::vector<std::uint32_t> hits;  // pool indices of the vectors within the radius
   const double radius_sq = radius * radius;
-  const auto ix0 = static_cast<std::int64_t>(std::floor((centre.x() - radius) / cellSize_));
-  const auto ix1 = static_cast<std::int64_t>(std::floor((centre.x() + radius) / cellSize_));
-  const auto iy0 = static_cast<std::int64_t>(std::floor((centre.y() - radius) / cellSize_));
-  const auto iy1 = static_cast<std::int64_t>(std::floor((centre.y() + radius) / cellSize_));
-  for (auto ix = ix0; ix <= ix1; ++ix) {
-    for (auto iy = iy0; iy <= iy1; ++iy) {
-      const auto it = grid_.find(cellKey(ix, iy));
-      if (it == grid_.end()) continue;
-      for (const Entry& entry : it->second) {
-        const auto& [a, b] = boundaries_[entry.boundary][entry.vector];
-        const Vec2 delta = b - a;
-        const double length_sq = delta.squaredNorm();
-        const double fraction = length_sq > 0.0 ? std::clamp((centre - a).dot(delta) / length_sq, 0.0, 1.0) : 0.0;
-        if ((a + fraction * delta - centre).squaredNorm() <= radius_sq) {
-          hits.push_back(boundaryStart_[entry.boundary] + entry.vector);
-        }
+  const auto collect = [&](const std::vector<Entry>& entries) {
+    for (const Entry& entry : entries) {
+      const auto& [a, b] = boundaries_[entry.boundary][entry.vector];
+      const Vec2 delta = b - a;
+      const double length_sq = delta.squaredNorm();
+      const double fraction = length_sq > 0.0 ? std::clamp((centre - a).dot(delta) / length_sq, 0.0, 1.0) : 0.0;
+      if ((a + fraction * delta - centre).squaredNorm() <= radius_sq) {
+        hits.push_back(boundaryStart_[entry.boundary] + entry.vector);
+      }
+    }
+  };
+  // Cells of the circle's bounding box, or every occupied cell when those are fewer
+  // (a radius larger than the network): the work is bounded by the network's size.
+  const double span = 2.0 * radius / cellSize_ + 2.0;
+  if (span * span > static_cast<double>(grid_.size())) {
+    for (const auto& [key, entries] : grid_) collect(entries);
+  } else {
+    const auto ix0 = static_cast<std::int64_t>(std::floor((centre.x() - radius) / cellSize_));
+    const auto ix1 = static_cast<std::int64_t>(std::floor((centre.x() + radius) / cellSize_));
+    const auto iy0 = static_cast<std::int64_t>(std::floor((centre.y() - radius) / cellSize_));
+    const auto iy1 = static_cast<std::int64_t>(std::floor((centre.y() + radius) / cellSize_));
+    for (auto ix = ix0; ix <= ix1; ++ix) {
+      for (auto iy = iy0; iy <= iy1; ++iy) {
+        const auto it = grid_.find(cellKey(ix, iy));
+        if (it != grid_.end()) collect(it->second);
       }
     }
   }
@@ -260,6 +274,27 @@ Polyline egoLaneCentre(const VectorizedScene& scene) {
     ++p;  // boundaries come in (left, right) pairs
   }
   return best;
+}
+
+std::vector<Polyline> laneBoundaryLines(const VectorizedScene& scene) {
+  std::vector<Polyline> lines;
+  for (const auto& polyline : scene.polylines) {
+    if (polyline.type != ObjectType::LaneBoundary) continue;
+    Polyline line;
+    for (std::size_t v = 0; v < polyline.vectors.size(); ++v) {
+      if (!polyline.valid[v]) continue;
+      const auto& f = polyline.vectors[v];
+      const Vec2 start(f[0], f[1]);
+      if (!line.empty() && (line.back() - start).norm() > 1e-6) {  // a break: a new line
+        lines.push_back(std::move(line));
+        line.clear();
+      }
+      if (line.empty()) line.push_back(start);
+      line.emplace_back(f[2], f[3]);
+    }
+    if (line.size() >= 2) lines.push_back(std::move(line));
+  }
+  return lines;
 }
 
 }  // namespace vsd::vector

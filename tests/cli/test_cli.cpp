@@ -6,6 +6,7 @@
 #include <regex>
 
 #include "test_support.hpp"
+#include "vsd/vector/dataset.hpp"
 
 using namespace vsd;
 namespace fs = std::filesystem;
@@ -328,4 +329,82 @@ print("ok")
   EXPECT_EQ(lineCount(corrupt.output), 1u) << corrupt.output;
   EXPECT_NE(corrupt.output.find("not a vsd-sumo model file"), std::string::npos);
   EXPECT_FALSE(fs::exists(dir.path() / "x.pt"));
+
+  // A dataset without samples has no ADE (not 0.000): refused.
+  const auto empty = dir.path() / "empty.h5";
+  {
+    vector::DatasetWriter writer(empty, vector::DatasetReader(data / "dataset.h5").header());
+    writer.close();
+  }
+  for (const auto& command : std::vector<std::vector<std::string>>{
+           {"evaluate", "--model", model.string(), "--data", empty.string()},
+           {"compare", "--model", model.string(), "--data", empty.string(), "--out", (dir.path() / "r").string()},
+           {"predict", "--model", model.string(), "--data", empty.string(), "--out", (dir.path() / "p0.h5").string()}}) {
+    const auto refused = runForErrors(command, dir.path());
+    EXPECT_EQ(refused.exitCode, 1) << command[0] << ": " << refused.output;
+    EXPECT_EQ(lineCount(refused.output), 1u) << refused.output;
+    EXPECT_NE(refused.output.find("empty.h5"), std::string::npos) << refused.output;
+  }
+  EXPECT_FALSE(fs::exists(dir.path() / "r"));
+  EXPECT_FALSE(fs::exists(dir.path() / "p0.h5"));
+
+  // An existing folder where a file is expected is refused before the work starts: the
+  // data is never opened (a missing dataset would be the error otherwise).
+  const auto folder = dir.path() / "a_folder";
+  const auto missing = (dir.path() / "missing.h5").string();
+  fs::create_directories(folder);
+  for (const auto& command : std::vector<std::vector<std::string>>{
+           {"train", "--data", missing, "--out", folder.string(), "--steps", "3"},
+           {"predict", "--model", model.string(), "--data", missing, "--out", folder.string()},
+           {"evaluate", "--model", model.string(), "--data", missing, "--csv", folder.string()}}) {
+    const auto refused = runForErrors(command, dir.path());
+    EXPECT_EQ(refused.exitCode, 1) << command[0] << ": " << refused.output;
+    EXPECT_NE(refused.output.find("a_folder', expected a file name (this is an existing folder)"), std::string::npos)
+        << command[0] << ": " << refused.output;
+  }
+  EXPECT_TRUE(fs::is_empty(folder));
+}
+
+// Numbers from flags are checked where they enter: no wrap-around of negative values
+// into unsigned ones, no infinities, no absurd sizes that allocate or run forever.
+TEST(Cli, NumbersFromFlagsAreCheckedWhereTheyEnter) {
+  TemporaryDirectory dir;
+  const auto out = dir.path() / "out";
+  const std::string acc = test::scenarioFile("acc.yaml").string();
+  const std::string xodr = (test::sourceDir() / "sumo_nets/opendrive_curve/curve.xodr").string();
+  const std::string routes = (test::sourceDir() / "sumo_nets/opendrive_curve/curve.rou.xml").string();
+  struct Case {
+    std::vector<std::string> args;
+    std::string expected;
+  };
+  const std::vector<Case> cases = {
+      {{"run", acc, "--seed", "-1"}, "--seed: got '-1', expected a whole number 0 .. 18446744073709551615"},
+      {{"run", acc, "--first-sample", "-5"}, "--first-sample: got '-5', expected a whole number"},
+      {{"run", acc, "--first-sample", "1125899906842620"}, "--first-sample: got '1125899906842620'"},
+      {{"run", acc, "--samples", "0x10"}, "--samples: got '0x10'"},
+      {{"run", acc, "--jobs", "99999999999"}, "--jobs: got '99999999999', expected a whole number -2147483648"},
+      {{"run", acc, "--compression", "12"}, "--compression: got '12', expected a deflate level 0 .. 9"},
+      {{"export", "--opendrive", xodr, "--routes", routes, "--radius", "inf"},
+       "--radius: got 'inf', expected a finite decimal number"},
+      {{"export", "--opendrive", xodr, "--routes", routes, "--radius", "1e9"}, "expected a radius in (0, 1000] m"},
+      {{"export", "--opendrive", xodr, "--routes", routes, "--step", "1e-9"}, "--step: got '1e-09'"},
+      {{"export", "--opendrive", xodr, "--routes", routes, "--horizon", "1e6"}, "at most 1000 steps"},
+      {{"export", "--opendrive", xodr, "--routes", routes, "--begin", "-5"}, "--begin: got '-5', expected a time"},
+      {{"export", "--opendrive", xodr, "--routes", routes, "--controller-param", "time_gap=nan"},
+       "--controller-param: got 'time_gap=nan'"},
+      {{"train", "--data", out.string(), "--lr", "nan"}, "--lr: got 'nan', expected a finite decimal number"},
+      {{"compare", acc, "--model", "m.pt", "--worst", "-1"}, "--worst: got '-1'"},
+      {{"dataset", "show", out.string(), "--sample", "-1"}, "--sample: got '-1'"},
+  };
+  for (const auto& c : cases) {
+    auto args = c.args;
+    if (args[0] == "run" || args[0] == "export") args.insert(args.end(), {"--out", (out / args[0]).string()});
+    if (args[0] == "train") args.insert(args.end(), {"--out", (out / "m.pt").string()});
+    const auto result = runForErrors(args, dir.path());
+    EXPECT_EQ(result.exitCode, 1) << c.expected << ": " << result.output;
+    EXPECT_EQ(lineCount(result.output), 1u) << result.output;
+    EXPECT_NE(result.output.find(c.expected), std::string::npos) << result.output;
+    EXPECT_EQ(result.output.find("internal error"), std::string::npos) << result.output;
+  }
+  EXPECT_FALSE(fs::exists(out));
 }

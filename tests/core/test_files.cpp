@@ -238,6 +238,28 @@ TEST(FaultInjection, SignalsActionsAtTheNthHitOfAPoint) {
   EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0);
 }
 
+TEST(Files, AnOutputFileThatCannotBeAFileIsRefusedBeforeAnyWork) {
+  TemporaryDirectory dir;
+  const auto folder = dir.path() / "folder";
+  std::filesystem::create_directories(folder);
+  const auto file = dir.path() / "file";
+  std::ofstream(file) << "x";
+  EXPECT_NO_THROW(requireFileOutputPath(dir.path() / "new" / "deeper" / "model.pt", "--out"));
+  EXPECT_NO_THROW(requireFileOutputPath(file, "--out"));  // an older file is replaced
+  try {
+    requireFileOutputPath(folder, "--out");
+    ADD_FAILURE() << "a folder was accepted as an output file";
+  } catch (const ConfigError& error) {
+    EXPECT_NE(std::string(error.what()).find("--out: got '" + folder.string() + "', expected a file name (this is an "
+                                             "existing folder)"),
+              std::string::npos)
+        << error.what();
+  }
+  EXPECT_THROW(requireFileOutputPath(file / "model.pt", "--out"), ConfigError);  // inside a file
+  EXPECT_THROW(requireFileOutputPath("", "--out"), ConfigError);
+  EXPECT_THROW(requireFileOutputPath(dir.path() / "x" / "..", "--out"), ConfigError);
+}
+
 // Committed results must name the code that ran: a dirty build may not write into
 // <source>/results unless forced; anywhere else, and clean builds, are fine.
 TEST(Provenance, DirtyBuildsMayNotWriteCommittedResults) {

@@ -1,6 +1,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <random>
 
 #include "vsd/core/geometry.hpp"
 #include "vsd/core/trace.hpp"
@@ -77,6 +78,65 @@ TEST(Geometry, ClipToXRangeInterpolatesBorders) {
   ASSERT_TRUE(at.has_value());
   EXPECT_NEAR(at->y(), 1.0, 1e-12);
   EXPECT_FALSE(pointAtX(line, 100).has_value());
+}
+
+// The footprint gap against a brute-force reference: for rectangles apart, the
+// smallest distance between densely sampled boundary points; for overlapping ones,
+// the smallest translation that separates them over 1440 directions
+// (h_A(d) + h_B(-d), h = support function).
+TEST(Geometry, FootprintGapMatchesABruteForceReference) {
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> position(-6.0, 6.0);
+  std::uniform_real_distribution<double> angle(-kPi, kPi);
+  std::uniform_real_distribution<double> size(0.5, 12.0);
+  const auto boundary = [](const Footprint& f) {
+    std::vector<Vec2> points;
+    const Vec2 u = headingVector(f.heading);
+    const Vec2 n = headingVector(f.heading + 0.5 * kPi);
+    for (int i = 0; i <= 100; ++i) {
+      const double s = -0.5 + i / 100.0;
+      points.push_back(f.centre + s * f.length * u + 0.5 * f.width * n);
+      points.push_back(f.centre + s * f.length * u - 0.5 * f.width * n);
+      points.push_back(f.centre + 0.5 * f.length * u + s * f.width * n);
+      points.push_back(f.centre - 0.5 * f.length * u + s * f.width * n);
+    }
+    return points;
+  };
+  int apart = 0;
+  int overlapping = 0;
+  for (int trial = 0; trial < 300; ++trial) {
+    const Footprint a{Vec2(position(rng), position(rng)), angle(rng), size(rng), size(rng) / 3.0};
+    const Footprint b{Vec2(position(rng), position(rng)), angle(rng), size(rng), size(rng) / 3.0};
+    const double gap = footprintGap(a, b);
+    const auto pa = boundary(a);
+    const auto pb = boundary(b);
+    double reference = std::numeric_limits<double>::infinity();
+    for (int d = 0; d < 1440; ++d) {
+      const Vec2 dir = headingVector(2.0 * kPi * d / 1440.0);
+      double max_a = -std::numeric_limits<double>::infinity();
+      double min_b = std::numeric_limits<double>::infinity();
+      for (const auto& p : pa) max_a = std::max(max_a, p.dot(dir));
+      for (const auto& p : pb) min_b = std::min(min_b, p.dot(dir));
+      reference = std::min(reference, max_a - min_b);
+    }
+    if (reference > 0.0) {  // overlapping: the penetration depth
+      ++overlapping;
+      EXPECT_NEAR(gap, -reference, 0.03) << trial;  // 0.25° steps: up to 0.02 m on 12 m vehicles
+    } else {
+      ++apart;
+      double distance = std::numeric_limits<double>::infinity();
+      for (const auto& p : pa) {
+        for (const auto& q : pb) distance = std::min(distance, (p - q).norm());
+      }
+      EXPECT_NEAR(gap, distance, 0.07) << trial;
+    }
+  }
+  EXPECT_GT(apart, 50);
+  EXPECT_GT(overlapping, 50);
+  // Two cars side by side in neighbouring 3.5 m lanes: apart by the lane width minus the width.
+  EXPECT_NEAR(footprintGap({Vec2(0, 0), 0.0, 5.0, 1.8}, {Vec2(1.0, 3.5), 0.0, 5.0, 1.8}), 1.7, 1e-12);
+  // One behind the other in the same lane: the bumper gap.
+  EXPECT_NEAR(footprintGap({Vec2(0, 0), 0.0, 5.0, 1.8}, {Vec2(12.0, 0.1), 0.0, 4.0, 1.8}), 7.5, 1e-12);
 }
 
 TEST(Trace, AccelerationFromSpeedDifferences) {

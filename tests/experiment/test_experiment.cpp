@@ -95,10 +95,15 @@ TEST(Experiment, QuickRunProducesTheTablesFiguresAndManifestAndCachesArtefacts) 
       const double value = mae.number(r, mae.column(column));
       EXPECT_TRUE(std::isfinite(value) && value >= 0.0) << column << " row " << r;
     }
-    // Positions reproduce distances exactly: d_min and p_lat_max have no reconstruction error.
-    if (mae.cell(r, mae.column("metric")) != "a_min") {
-      // (datasets store positions as float32: about 1e-5 m at 100 m from the origin)
+    // Positions reproduce p_lat_max exactly (datasets store float32: about 1e-5 m at 100 m).
+    // d_min is the clearance of oriented footprints, whose headings a future of positions
+    // only approximates: a few cm (measured 0.023 / 0.040 m on the quick run).
+    const std::string metric = mae.cell(r, mae.column("metric"));
+    if (metric == "p_lat_max") {
       EXPECT_LT(mae.number(r, mae.column("vectornet_from_true_positions")), 1e-4);
+    }
+    if (metric == "d_min") {
+      EXPECT_LT(mae.number(r, mae.column("vectornet_from_true_positions")), 0.1);
     }
   }
   for (const char* figure : {"fig6_trained_on_all_three", "fig7_trained_on_acc_lk", "fig8_trained_on_acc_and_lk"}) {

@@ -125,7 +125,7 @@ TEST(SsmCrossCheck, FollowingOnCurvedRoadsMatchesSsmAtEveryInstant) {
   TemporaryDirectory work("vsd-ssm-acc-lk");
   Replayed replayed;
   runAndReplay("acc_lk", 20, work.path(), replayed);
-  const std::vector<std::string> names = {"gap_min_lane", "ttc_min_lane", "thw_min_lane", "drac_max_lane", "d_min"};
+  const std::vector<std::string> names = {"gap_min_lane", "ttc_min_lane", "thw_min_lane", "drac_max_lane", "d_lon_min"};
   std::size_t compared = 0;
   for (const auto& outcome : replayed.outcomes) {
     ASSERT_TRUE(outcome.ok()) << outcome.failure;
@@ -152,9 +152,9 @@ TEST(SsmCrossCheck, FollowingOnCurvedRoadsMatchesSsmAtEveryInstant) {
       // The straight gap between centres is nearly a chord of the lane: longer only by what
       // lateral offsets on the outside of a bend add (<= 0.1 m), and within 0.25 m where the
       // vehicles are close (<= 10 m).
-      EXPECT_LE(ours.at("d_min")[k], sgap + 0.1) << where;
+      EXPECT_LE(ours.at("d_lon_min")[k], sgap + 0.1) << where;
       if (sgap <= 10.0) {
-        EXPECT_NEAR(ours.at("d_min")[k], sgap, 0.25) << where;
+        EXPECT_NEAR(ours.at("d_lon_min")[k], sgap, 0.25) << where;
       }
     }
   }
@@ -167,7 +167,7 @@ TEST(SsmCrossCheck, StraightLineMeasuresAgreeWithSsmOnStraightRoads) {
   TemporaryDirectory work("vsd-ssm-acc");
   Replayed replayed;
   runAndReplay("acc", 20, work.path(), replayed);
-  const std::vector<std::string> names = {"d_min", "ttc_min", "drac_max"};
+  const std::vector<std::string> names = {"d_lon_min", "ttc_min", "drac_max"};
   const metrics::MetricSet set(names, {true, true, true}, "test");
   std::vector<double> ttc_differences;
   for (const auto& outcome : replayed.outcomes) {

@@ -115,6 +115,84 @@ TEST(Metrics, LateralMetricsAreRelativeToTheEgosLane) {
   EXPECT_TRUE(std::isnan(value("lane_offset_max", trace)));
 }
 
+// Gaps between vehicles are clearances between oriented footprints: a car side by side
+// in the next lane is not a collision, one ahead in the lane keeps its bumper gap, and
+// the bumper gap to vehicles in the Ego's lane is its own metric (d_lon_min).
+TEST(Metrics, GapsComeFromOrientedFootprintsAndTheLaneGapIsItsOwnMetric) {
+  Trace trace = following(15.0, 15.0, 20.0);  // leader 20 m ahead, same speed
+  VehicleTrack beside = trace.vehicles[1];     // a car in the next lane, 1 m ahead of the Ego
+  beside.width = 1.8;
+  for (std::size_t k = 0; k < beside.states.size(); ++k) {
+    beside.states[k].x = trace.vehicles[0].states[k].x + 1.0;
+    beside.states[k].y = 3.5;
+  }
+  trace.vehicles.push_back(beside);
+  EXPECT_NEAR(value("d_min", trace), 3.5 - 0.5 * (1.8 + 1.8), 1e-9);  // 1.7 m, no collision
+  EXPECT_NEAR(value("d_lon_min", trace), 20.0, 1e-9);                 // the leader's bumper gap
+  // The same car overlapping the Ego by 0.3 m sideways: the overlap depth.
+  for (auto& state : trace.vehicles[2].states) state.y = 1.5;
+  EXPECT_NEAR(value("d_min", trace), -0.3, 1e-9);
+  EXPECT_NEAR(value("d_lon_min", trace), -4.0, 1e-9);  // now in the Ego's lane: 1 m - 5 m
+}
+
+TEST(Metrics, LaneGapFollowsACurvedLane) {
+  // A lane curving left with radius 40 m; Ego at arc 0, leader at arc 30 m, both centred.
+  const double radius = 40.0;
+  Polyline lane;
+  for (int i = -10; i <= 100; ++i) {
+    const double angle = i * 0.01;
+    lane.emplace_back(radius * std::sin(angle), radius * (1.0 - std::cos(angle)));
+  }
+  const auto at_arc = [&](double arc) {
+    const double angle = arc / radius;
+    return VehicleState{radius * std::sin(angle), radius * (1.0 - std::cos(angle)), angle, 10.0, 0.0};
+  };
+  Trace trace;
+  trace.step = 0.2;
+  VehicleTrack ego;
+  ego.length = 5.0;
+  ego.width = 1.8;
+  VehicleTrack leader = ego;
+  ego.states = {at_arc(0.0)};
+  leader.states = {at_arc(30.0)};
+  ego.valid = leader.valid = {1};
+  trace.vehicles = {ego, leader};
+  // 11 m to the side in the Ego's frame, but in its lane: 30 m along it minus 5 m.
+  EXPECT_NEAR(value("d_lon_min", trace, lane), 25.0, 0.05);
+}
+
+// On maps the Ego's lane is the one it is in at each instant: midway between the
+// nearest boundaries left and right that run along its heading.
+TEST(Metrics, LaneOffsetOnMapsIsMeasuredInTheLaneTheEgoIsIn) {
+  Trace trace;
+  trace.step = 0.2;
+  VehicleTrack ego;
+  ego.width = 1.8;
+  const double ys[] = {0.0, 0.4, 1.6, 1.9, 3.4};  // drifts left, changes into the next lane
+  for (int k = 0; k < 5; ++k) {
+    ego.states.push_back({10.0 * k, ys[k], 0.0, 10.0, 0.0});
+    ego.valid.push_back(1);
+  }
+  trace.vehicles = {ego};
+  // Two lanes along +x (boundaries at -1.75, 1.75, 5.25) and a crossing road's boundaries.
+  const std::vector<Polyline> boundaries = {{{-20, -1.75}, {80, -1.75}}, {{-20, 1.75}, {80, 1.75}},
+                                            {{-20, 1.75}, {80, 1.75}},   {{-20, 5.25}, {80, 5.25}},
+                                            {{18, -30}, {18, 30}},       {{22, -30}, {22, 30}}};
+  const Polyline starting_lane = {{-20, 0.0}, {80, 0.0}};
+  const MetricContext context{trace, starting_lane, &boundaries};
+  // Largest: 1.6 m from lane 0's centre just before the boundary (then 1.6 from lane 1's).
+  EXPECT_NEAR(metric("lane_offset_max", "test").compute(context), 1.6, 1e-9);
+  // A source without the lane along the whole path measures per instant ...
+  const Availability map{/*otherVehicles=*/false, /*egoLane=*/false, /*scenarioFrame=*/false};
+  EXPECT_NEAR(MetricSet({"lane_offset_max"}, map, "w").evaluate(context)[0], 1.6, 1e-9);
+  // ... one with it, against the starting lane (the lane change shows as 3.4 m).
+  const Availability generated{/*otherVehicles=*/false, /*egoLane=*/true, /*scenarioFrame=*/true};
+  EXPECT_NEAR(MetricSet({"lane_offset_max"}, generated, "w").evaluate(context)[0], 3.4, 1e-9);
+  // Off every lane (beyond the boundaries' ends): not computable.
+  for (auto& state : trace.vehicles[0].states) state.x += 500.0;
+  EXPECT_TRUE(std::isnan(metric("lane_offset_max", "test").compute(context)));
+}
+
 TEST(Metrics, InvalidInstantsAreIgnored) {
   Trace trace = following(15.0, 10.0, 30.0);
   trace.vehicles[1].valid[25] = 0;  // the leader vanished at the last instant
@@ -149,10 +227,11 @@ TEST(MetricSet, DefaultsFollowWhatTheSourceProvides) {
             (std::vector<std::string>{"a_min", "p_lat_max", "y_max", "lane_offset_max"}));
   EXPECT_EQ(MetricSet({}, generated, "w").names(), metricNames());
   EXPECT_EQ(MetricSet({}, map, "w").names(),
-            (std::vector<std::string>{"a_min", "d_min", "ttc_min", "thw_min", "pet_min", "drac_max"}));
+            (std::vector<std::string>{"a_min", "d_min", "d_lon_min", "ttc_min", "thw_min", "lane_offset_max", "pet_min",
+                                      "drac_max"}));
   EXPECT_THROW(MetricSet({"y_max"}, map, "--metrics"), ConfigError);
   EXPECT_THROW(MetricSet({"d_min"}, ego_alone, "lk.yaml: metrics"), ConfigError);
-  EXPECT_THROW(MetricSet({"lane_offset_max"}, map, "--metrics"), ConfigError);
+  EXPECT_THROW(MetricSet({"p_lat_max"}, map, "--metrics"), ConfigError);
   EXPECT_THROW(MetricSet({"a_min", "a_min"}, map, "--metrics"), ConfigError);
   const Trace trace = following(15.0, 10.0, 30.0);
   const auto values = MetricSet({"d_min", "ttc_min"}, generated, "w").evaluate({trace, {}});

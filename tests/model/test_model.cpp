@@ -1,4 +1,5 @@
 // VectorNet: tensors and masks, invariances, frames, training, checkpoints, bad input.
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
 #include <csignal>
@@ -254,4 +255,67 @@ TEST(ModelTraining, InterruptedTrainingKeepsTheBestModelAndResumes) {
   auto fresh = tinyTraining(data, dir.path() / "fresh.pt");
   fresh.resume = true;
   EXPECT_THROW(train(fresh), ConfigError);  // nothing to resume
+}
+
+// A model file whose description does not match its tensors (edited by hand, or
+// written by something else) is refused in one ModelError naming the file and the
+// field: never an "internal error" from inside libtorch, never a huge allocation.
+TEST_F(ModelTest, DescriptionsThatDoNotMatchTheTensorsAreOneModelError) {
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {"d['config']['hidden'] = 32", "the described architecture (hidden 32"},
+      {"d['config']['decoder_hidden'] = 8", "needs"},
+      {"d['config']['subgraph_layers'] = 2", "has no place in the described architecture (hidden 16, subgraph_layers 2"},
+      {"d['config']['hidden'] = 1e300", "hidden: got 1e+300, expected a whole number"},
+      {"d['config']['global_width'] = 64.5", "global_width: got 64.5, expected a whole number"},
+      {"d['config']['horizon'] = 100000", "horizon: got '100000', expected 1 .. 1000 steps"},
+      {"d['config']['heads'] = 3", "heads: got '3', expected a divisor of global_width"},
+      {"d['config']['step'] = -0.2", "step: got '-0.2'"},
+      {"d['config']['hidden'] = '16'", "hidden: got \"16\", expected a whole number"},
+      {"del d['config']['horizon']", "damaged model description"},
+  };
+  for (std::size_t i = 0; i < cases.size(); ++i) {
+    const auto& [edit, expected] = cases[i];
+    const auto copy = dir_.path() / fmt::format("edited{}.pt", i);
+    ASSERT_TRUE(test::rewriteModelDescription(model_, copy, edit)) << edit;
+    try {
+      const Predictor predictor(copy);
+      predictor.predict({syntheticScene(0, "acc")});
+      ADD_FAILURE() << edit << ": accepted";
+    } catch (const ModelError& error) {
+      const std::string message = error.what();
+      EXPECT_NE(message.find(expected), std::string::npos) << edit << ": " << message;
+      EXPECT_EQ(message.rfind(copy.string(), 0), 0u) << edit << ": " << message;
+    }
+  }
+}
+
+// --resume repeats an interrupted training exactly, so it must be the same training:
+// other data or other settings are refused, naming what differs.
+TEST(ModelTraining, ResumeWithOtherDataOrSettingsIsRefused) {
+  TemporaryDirectory dir;
+  const auto data = writeDataset(dir.path() / "acc.h5", 20);
+  auto options = tinyTraining(data, dir.path() / "m.pt");
+  options.steps = 10;
+  train(options);
+  options.resume = true;
+  const auto refused = [&](TrainOptions changed, const std::string& expected) {
+    try {
+      train(changed);
+      ADD_FAILURE() << "resumed although " << expected;
+    } catch (const ConfigError& error) {
+      EXPECT_NE(std::string(error.what()).find(expected), std::string::npos) << error.what();
+    }
+  };
+  auto other_data = options;
+  other_data.data = {writeDataset(dir.path() / "other.h5", 21)};
+  refused(other_data, "was trained on other data");
+  auto other_batch = options;
+  other_batch.batchSize = 4;
+  refused(other_batch, "was trained with batch 8, this training has 4");
+  auto other_width = options;
+  other_width.config.hidden = 8;
+  refused(other_width, "architecture");
+  EXPECT_NO_THROW(train(options));  // the same training resumes (nothing left to do)
+  fs::remove(options.output);       // the best model of the interrupted training is gone
+  refused(options, "is gone");
 }

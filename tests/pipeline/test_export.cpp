@@ -1,3 +1,4 @@
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -196,4 +197,59 @@ TEST(Export, GeneratedAndExportedSamplesAreTheSameKindOfObject) {
   for (const auto& path : {dir.path() / "acc" / "dataset.h5", dir.path() / "od.h5"}) {
     EXPECT_TRUE(vector::validateDataset(path).ok()) << path;
   }
+}
+
+// A bus that parks at a stop (parking="true") is drawn beside the lane by SUMO: its
+// position jumps sideways in one step. Parked instants are masked (other vehicles)
+// or leave the window out (Egos), so no trajectory in the dataset holds the jump.
+TEST(Export, ParkedVehiclesNeverJumpIntoTrajectories) {
+  TemporaryDirectory dir;
+  const auto routes = test::writeFile(dir.path() / "parking.rou.xml", R"(<routes>
+  <vType id="car" length="5.0" width="1.8" maxSpeed="20" accel="2.6" decel="4.5" sigma="0"/>
+  <vType id="bus" length="12.0" width="2.5" maxSpeed="15" accel="1.2" decel="4.0" sigma="0" vClass="bus"/>
+  <vehicle id="bus" type="bus" depart="0" departSpeed="max"><route edges="-1"/>
+    <stop lane="-1_0" endPos="150" duration="12" parking="true"/></vehicle>
+  <flow id="east" type="car" begin="1" end="40" period="6" from="-1" to="-1" departSpeed="max"/>
+</routes>)");
+  auto options = openDriveExport(dir.path() / "parking.h5");
+  options.source.routes = {routes};
+  const auto summary = exportMap(options);
+  EXPECT_GT(summary.parkedSteps, 40u);  // 12 s parked at 0.2 s steps
+  EXPECT_NE(summary.report().find("parked"), std::string::npos);
+
+  const vector::DatasetReader reader(options.output);
+  const double dt = reader.header().step;
+  // Implied acceleration of consecutive displacements: SUMO's vehicles brake at most
+  // 4.5 m/s^2 here; a 3 m sideways jump from standstill would imply ~75 m/s^2.
+  const auto check_track = [&](const std::vector<Vec2>& points, const std::string& what) {
+    for (std::size_t k = 2; k < points.size(); ++k) {
+      const double before = (points[k - 1] - points[k - 2]).norm() / dt;
+      const double after = (points[k] - points[k - 1]).norm() / dt;
+      EXPECT_LT(std::abs(after - before) / dt, 15.0) << what << " at step " << k;
+    }
+  };
+  std::size_t bus_seen = 0;
+  for (std::size_t i = 0; i < reader.size(); ++i) {
+    const auto scene = reader.scene(i);
+    std::vector<Vec2> ego = {scene.egoInitialState().position()};
+    ego.insert(ego.end(), scene.target.begin(), scene.target.end());
+    check_track(ego, fmt::format("sample {} Ego {}", i, scene.provenance.egoId));
+    if (scene.provenance.egoId == "bus") ++bus_seen;
+    for (std::size_t p = 0; p < scene.polylines.size(); ++p) {
+      const auto& polyline = scene.polylines[p];
+      if (polyline.type != vector::ObjectType::Vehicle) continue;
+      std::vector<Vec2> run;
+      for (std::size_t v = 0; v <= polyline.vectors.size(); ++v) {
+        if (v == polyline.vectors.size() || !polyline.valid[v]) {
+          check_track(run, fmt::format("sample {} vehicle polyline {}", i, p));
+          run.clear();
+          continue;
+        }
+        const auto& f = polyline.vectors[v];
+        if (run.empty()) run.emplace_back(f[0], f[1]);
+        run.emplace_back(f[2], f[3]);
+      }
+    }
+  }
+  EXPECT_GT(bus_seen, 0u);  // windows of the bus before and after parking remain
 }

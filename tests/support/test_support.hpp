@@ -50,6 +50,31 @@ with zipfile.ZipFile(src) as zin, zipfile.ZipFile(dst, "w", zipfile.ZIP_STORED) 
   return run({python(), script.string(), model.string(), copy.string(), from, to}, work).exitCode == 0;
 }
 
+/// Copies a model file with its JSON description edited by `python_edit`, Python
+/// statements on the parsed description `d` (e.g. "d['config']['hidden'] = 16").
+/// The description is a length-prefixed string in the archive's data.pkl; the length
+/// and the zip's checksums are rewritten. True on success.
+inline bool rewriteModelDescription(const std::filesystem::path& model, const std::filesystem::path& copy,
+                                    const std::string& python_edit) {
+  const auto work = copy.parent_path();
+  const auto script = writeFile(work / "rewrite_model_description.py", R"(
+import sys, zipfile, struct, json
+src, dst, edit = sys.argv[1], sys.argv[2], sys.argv[3]
+with zipfile.ZipFile(src) as zin, zipfile.ZipFile(dst, "w", zipfile.ZIP_STORED) as zout:
+    for item in zin.infolist():
+        data = zin.read(item.filename)
+        if item.filename.endswith("data.pkl"):
+            at = data.find(b'{"architecture"')
+            n = struct.unpack("<I", data[at - 4:at])[0]
+            d = json.loads(data[at:at + n])
+            exec(edit)
+            new = json.dumps(d, separators=(",", ":")).encode()
+            data = data[:at - 4] + struct.pack("<I", len(new)) + new + data[at + n:]
+        zout.writestr(item, data)
+)");
+  return run({python(), script.string(), model.string(), copy.string(), python_edit}, work).exitCode == 0;
+}
+
 /// Copies a model file as if a future vsd-sumo had written it for feature schema v2.
 inline bool writeModelForFeatureSchemaV2(const std::filesystem::path& model, const std::filesystem::path& copy) {
   return rewriteModelDescription(model, copy, R"("feature_version":1)", R"("feature_version":2)");

@@ -214,6 +214,84 @@ TEST(Dataset, ValidationFindsBrokenInvariants) {
   EXPECT_NE(validation.problems[1].find("timestamp 99"), std::string::npos) << validation.problems[1];
 }
 
+// Numbers in a file that do not match the data are refused where they enter, naming
+// the attribute or array: never a huge allocation, an out-of-range read or a crash.
+TEST(Dataset, NumbersThatDoNotMatchTheDataAreRefusedByField) {
+  TemporaryDirectory dir;
+  const auto good = dir.path() / "good.h5";
+  {
+    DatasetWriter writer(good, header());
+    for (std::uint64_t i = 0; i < 3; ++i) writer.append(sceneAt(Vec2(100.0 * static_cast<double>(i), 0), i, "acc"));
+    writer.close();
+  }
+  // One Python process edits every copy (starting h5py costs seconds on a busy machine).
+  const auto script = test::writeFile(dir.path() / "mutate.py", R"(
+import sys, h5py, numpy as np
+for path, what in zip(sys.argv[1::2], sys.argv[2::2]):
+  with h5py.File(path, "a") as f:
+    if what == "huge_horizon": f.attrs["horizon"] = np.int64(2**31)
+    elif what == "tiny_step": f.attrs["step"] = 1e-9
+    elif what == "other_horizon": f.attrs["horizon"] = np.int64(24)
+    elif what == "float_horizon": f.attrs["horizon"] = 25.5
+    elif what == "array_history": f.attrs["history"] = np.array([1, 2], dtype=np.int64)
+    elif what == "polyline_count": f["sample_polyline_count"][0] = 2**31 - 1
+    elif what == "ego_index": f["sample_ego_polyline"][1] = 99
+    elif what == "label_index": f["sample_label"][2] = -3
+    elif what == "vector_count": f["polyline_vector_count"][1] = 2**31 - 1
+    elif what == "claimed_rows": f["sample_t0"].resize((10**12,))
+    elif what == "no_targets": del f["targets"]
+    elif what == "nan_origin": f["sample_origin"][0, 0] = np.nan
+)");
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {"huge_horizon", "attribute 'horizon': got 2147483648, expected 1 .. 1000 steps"},
+      {"tiny_step", "attribute 'step': got 1e-09"},
+      {"other_horizon", "array 'targets' has shape [3, 25, 2], expected [3, 24, 2]"},
+      {"float_horizon", "attribute 'horizon' is not a single whole number"},
+      {"array_history", "attribute 'history' is not a single whole number"},
+      {"polyline_count", "sample 0: polylines 0 .. 2147483647 outside"},
+      {"ego_index", "sample 1: Ego polyline 99 of 4"},
+      {"label_index", "sample 2 refers to label #-3 of 1"},
+      {"vector_count", "sample 0 polyline 1: vectors"},
+      {"claimed_rows", "its shape claims"},
+      {"no_targets", "cannot read 'targets'"},
+      {"nan_origin", "sample 0: non-finite origin"},
+  };
+  std::vector<std::string> command = {test::python(), script.string()};
+  for (const auto& [what, expected] : cases) {
+    fs::copy_file(good, dir.path() / (what + ".h5"));
+    command.insert(command.end(), {(dir.path() / (what + ".h5")).string(), what});
+  }
+  const auto mutated = test::run(command, dir.path());
+  ASSERT_EQ(mutated.exitCode, 0) << mutated.output;
+  for (const auto& [what, expected] : cases) {
+    const auto path = dir.path() / (what + ".h5");
+    try {
+      const DatasetReader reader(path);
+      for (std::size_t i = 0; i < reader.size(); ++i) reader.scene(i);
+      ADD_FAILURE() << what << ": accepted";
+    } catch (const DatasetError& error) {
+      const std::string message = error.what();
+      EXPECT_NE(message.find(expected), std::string::npos) << what << ": " << message;
+      EXPECT_EQ(message.rfind(path.string(), 0), 0u) << what << ": the message names the file first: " << message;
+    }
+  }
+}
+
+// A write that fails (here: a full disk) names the file as the user knows it (not the
+// temporary name it is written under), the array, and the operating system's cause.
+TEST(Dataset, WriteFailuresNameTheFileTheArrayAndTheCause) {
+  try {
+    DatasetWriter writer("/dev/full", header(), "out/acc/dataset.h5");
+    for (std::uint64_t i = 0; i < 600; ++i) writer.append(sceneAt(Vec2(0, 0), i, "acc"));
+    writer.close();
+    ADD_FAILURE() << "writing to a full disk succeeded";
+  } catch (const IoError& error) {
+    const std::string message = error.what();
+    EXPECT_EQ(message.rfind("out/acc/dataset.h5: ", 0), 0u) << message;
+    EXPECT_NE(message.find("No space left on device"), std::string::npos) << message;
+  }
+}
+
 TEST(DatasetCollection, CombinesFilesAndSelectsByLabelWithoutCopying) {
   TemporaryDirectory dir;
   for (const char* name : {"one", "two"}) {

@@ -153,6 +153,10 @@ void recoverOutputFolder(const std::filesystem::path& folder);
 void syncFile(const std::filesystem::path& path);
 /// Flushes a directory's entries (renames) to disk; best effort.
 void syncDirectory(const std::filesystem::path& path);
+/// Checks, before any work starts, that `path` can become a file: refuses (ConfigError
+/// naming `flag` and the path) an empty path, an existing directory, and a parent
+/// that exists but is not a directory. A missing parent is fine (it gets created).
+void requireFileOutputPath(const std::filesystem::path& path, const std::string& flag);
 
 /// Writes a whole text file atomically.
 void writeTextFileAtomically(const std::filesystem::path& path, const std::string& contents);

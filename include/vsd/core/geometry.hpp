@@ -79,6 +79,20 @@ std::optional<Vec2> pointAtX(const Polyline& points, double x);
 /// Meant for polylines that advance in x (roads of the scenario frame).
 Polyline clipToXRange(const Polyline& points, double x_min, double x_max);
 
+/// A vehicle's footprint: a rectangle around its centre, `length` along its heading.
+struct Footprint {
+  Vec2 centre = Vec2::Zero();  ///< m
+  double heading = 0.0;        ///< rad
+  double length = 0.0;         ///< m, > 0
+  double width = 0.0;          ///< m, > 0
+};
+
+/// Signed clearance between two footprints (m): the shortest distance between the
+/// rectangles when they are apart, 0 when they touch, and minus the penetration
+/// depth (the shortest translation that separates them) when they overlap. Two cars
+/// side by side in neighbouring lanes are ~1.7 m apart, not overlapping.
+double footprintGap(const Footprint& a, const Footprint& b);
+
 // --- SUMO conventions (only for the sim boundary) --------------------------------------
 
 /// SUMO angle (deg, 0 = north, clockwise) -> heading (rad, 0 = +x, counter-clockwise).

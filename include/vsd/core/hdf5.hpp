@@ -85,7 +85,12 @@ std::vector<std::string> readStrings(const H5::Group& parent, const std::string&
 
 /// Dimensions of a dataset.
 std::vector<hsize_t> shapeOf(const H5::DataSet& dataset);
-/// Reads rows [first, first + count) of a dataset of T (all trailing dimensions).
+/// Throws H5::DataSetIException (naming the dataset) if its shape claims far more data
+/// than the file stores (more than deflate could compress into it): reading it would
+/// allocate memory for data that is not there. Costs a walk over its chunks.
+void checkStoredSize(const H5::DataSet& dataset);
+/// Reads rows [first, first + count) of a dataset of T (all trailing dimensions);
+/// throws H5::DataSetIException for rows outside the dataset (before allocating).
 template <typename T>
 std::vector<T> readRows(const H5::DataSet& dataset, hsize_t first, hsize_t count);
 /// Reads a whole dataset of T.
@@ -95,5 +100,10 @@ std::vector<T> readAll(const H5::DataSet& dataset);
 /// Turns HDF5's exceptions into silence: HDF5 prints its error stack to stderr by
 /// default, which we report ourselves as one line.
 void silenceErrorStack();
+
+/// The innermost cause of an HDF5 failure, read from HDF5's error stack (call it in
+/// the catch block, before any other HDF5 call): the operating system's message for
+/// a failed read or write (e.g. "No space left on device"), else HDF5's own words.
+std::string errorCause(const H5::Exception& error);
 
 }  // namespace vsd::h5

@@ -11,6 +11,14 @@
 
 namespace vsd {
 
+/// Bounds of every time base (scenario, export flags, dataset attributes, model
+/// description), checked wherever one enters: SUMO counts milliseconds, and at most
+/// kMaxWindowSteps steps per horizon (and per history) keep every per-sample array,
+/// trace and tensor bounded.
+inline constexpr double kMinStep = 0.001;     ///< s
+inline constexpr double kMaxStep = 10.0;      ///< s
+inline constexpr int kMaxWindowSteps = 1000;  ///< steps
+
 /// State of one vehicle at one instant. Reference point: the centre of the
 /// vehicle's bounding box (SUMO's front-bumper position is converted at the
 /// `sim` boundary).

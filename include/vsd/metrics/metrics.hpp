@@ -12,8 +12,12 @@
 //   frame:      the scenario frame (x along the road, y left) unless an entry says otherwise;
 //   reference:  the centre of each vehicle's bounding box;
 //   instants:   every recorded instant k = 0..K where the vehicles involved are valid;
+//   footprint:  a rectangle of the vehicle's own length and width along its heading;
+//   clearance:  footprintGap (core/geometry.hpp): the distance between two footprints,
+//               minus the overlap depth when they overlap (d_min; <= 0 means they touch);
 //   gap:        gap_k(Ego, O) = |p_O,k - p_Ego,k| - (L_Ego + L_O) / 2 with each vehicle's own
-//               length (m; <= 0 means the boxes touch).
+//               length: the bumper gap to a vehicle ahead or behind in the Ego's lane
+//               (d_lon_min, and the gaps of ttc_min and thw_min).
 
 #include <functional>
 #include <optional>
@@ -28,6 +32,11 @@ namespace vsd::metrics {
 struct MetricContext {
   const Trace& trace;            ///< vehicles[0] is the Ego; each track carries its length and width
   const Polyline& egoLaneCentre; ///< centre line of the Ego's starting lane (scene frame); empty if unknown
+  /// Every lane boundary of the scene (scene frame), or nullptr. Used by sources that do
+  /// not know the Ego's lane along its whole path (map exports: lanes cross junctions,
+  /// end and split): lane offsets are then measured at each instant against the lane the
+  /// Ego is in. MetricSet::evaluate passes it on only for such sources.
+  const std::vector<Polyline>* laneBoundaries = nullptr;
 };
 
 /// What a source of traces can provide to metrics.
@@ -83,6 +92,8 @@ class MetricSet {
   const std::vector<std::string>& names() const { return names_; }
   std::vector<std::string> units() const;
   /// Values in names() order; NaN where a metric cannot be computed (no valid instant).
+  /// For a source without the Ego's lane along its whole path (maps), lane offsets are
+  /// measured at each instant between context.laneBoundaries; else against egoLaneCentre.
   std::vector<double> evaluate(const MetricContext& context) const;
   /// True if any value is at or below its metric's collision threshold.
   bool collision(const std::vector<double>& values) const;
@@ -92,6 +103,7 @@ class MetricSet {
  private:
   std::vector<std::string> names_;
   std::vector<const MetricDefinition*> definitions_;
+  Availability available_;
 };
 
 }  // namespace vsd::metrics

@@ -37,17 +37,26 @@ struct EgoSelection {
 };
 
 struct ExportOptions {
+  // Bounds of the numeric options (validate() names the violated one).
+  // --step, --horizon and --history: kMinStep, kMaxStep, kMaxWindowSteps (core/trace.hpp).
+  static constexpr double kMaxStride = 3600.0;           ///< s
+  static constexpr double kMaxLaneChangeDuration = 60.0; ///< s
+  static constexpr double kMaxRadius = 1000.0;           ///< m
+  static constexpr double kMinVectorLength = 0.1;        ///< m
+  static constexpr double kMaxVectorLength = 1000.0;     ///< m
+  static constexpr double kMaxSimulationTime = 1e7;      ///< s (--begin, --end; about 116 days)
+
   sim::MapSource source;                 ///< a .sumocfg, or --net + --routes
   std::filesystem::path openDrive;       ///< alternatively an OpenDRIVE map (+ source.routes), imported by netconvert
   std::filesystem::path output;          ///< dataset file (.h5)
   std::string egos = "all";
   std::uint64_t seed = 1;                ///< Ego selection and SUMO's --seed
-  double step = 0.2;                     ///< s
-  double horizon = 5.0;                  ///< s of Ego future (target)
-  double history = 0.0;                  ///< s of past before t0 in the polylines
-  double stride = 1.0;                   ///< s between window starts of one Ego
-  double radius = 60.0;                  ///< m around the Ego at t0
-  double maxVectorLength = 5.0;          ///< m, lane boundary vectors
+  double step = 0.2;                     ///< s, kMinStep .. kMaxStep
+  double horizon = 5.0;                  ///< s of Ego future (target), a multiple of step, <= kMaxWindowSteps steps
+  double history = 0.0;                  ///< s of past before t0 in the polylines, as horizon (0 allowed)
+  double stride = 1.0;                   ///< s between window starts of one Ego, step .. kMaxStride
+  double radius = 60.0;                  ///< m around the Ego at t0, (0, kMaxRadius]
+  double maxVectorLength = 5.0;          ///< m, lane boundary vectors, kMinVectorLength .. kMaxVectorLength
   std::optional<double> begin;           ///< s of simulation time (default: the map's)
   std::optional<double> end;
   std::string label;                     ///< default: the map file's stem
@@ -69,7 +78,8 @@ struct ExportSummary {
   std::string label;
   std::uint64_t samples = 0;
   std::uint64_t egos = 0;            ///< Egos with at least one sample
-  std::uint64_t windowsSkipped = 0;  ///< windows the Ego left before their end
+  std::uint64_t windowsSkipped = 0;  ///< windows the Ego left (or parked in) before their end
+  std::uint64_t parkedSteps = 0;     ///< vehicle steps spent parked (masked: off the lane)
   std::uint64_t vehiclesSeen = 0;
   std::uint64_t laneVectors = 0;     ///< lane-boundary vectors of the whole network
   double simulatedSeconds = 0.0;

@@ -20,9 +20,12 @@ namespace vsd::pipeline {
 class OutcomeFiles {
  public:
   /// Opens both files for writing (IoError / DatasetError naming the path on failure).
-  /// `compression`: deflate level of the dataset's vectors (0 = none).
+  /// `compression`: deflate level of the dataset's vectors (0 = none). `traces`/`dataset`
+  /// are where to write (e.g. staged files); errors name `tracesName`/`datasetName` if given
+  /// (the final paths), else the paths written.
   OutcomeFiles(const scenario::LogicalScenario& logical, const std::vector<std::string>& metric_names,
-               int compression, const std::filesystem::path& traces, const std::filesystem::path& dataset);
+               int compression, const std::filesystem::path& traces, const std::filesystem::path& dataset,
+               const std::filesystem::path& tracesName = {}, const std::filesystem::path& datasetName = {});
   OutcomeFiles(const OutcomeFiles&) = delete;
   OutcomeFiles& operator=(const OutcomeFiles&) = delete;
 

@@ -46,18 +46,20 @@ using ScenarioSource = std::function<ScenarioWithRoad(std::uint64_t index)>;
 
 struct RunOptions {
   static constexpr std::size_t kDefaultBatch = 250;
+  /// Largest sample index (first sample + samples); 2^50 keeps indices exact in double.
+  static constexpr std::uint64_t kMaxSampleIndex = std::uint64_t{1} << 50;
 
   std::filesystem::path scenarioFile;
   std::filesystem::path outputDir;  ///< empty: out/<functional scenario>
-  std::uint64_t samples = 1000;
-  std::uint64_t seed = 1;
-  std::uint64_t firstSample = 0;    ///< index of the first concrete scenario (runs can be split)
-  int jobs = 1;                     ///< worker processes (libsumo: one simulation per process)
-  std::size_t batch = kDefaultBatch;  ///< concrete scenarios per SUMO network and simulation
+  std::uint64_t samples = 1000;     ///< 1 .. 100000000
+  std::uint64_t seed = 1;           ///< any value
+  std::uint64_t firstSample = 0;    ///< index of the first concrete scenario (runs can be split), .. kMaxSampleIndex
+  int jobs = 1;                     ///< worker processes (libsumo: one simulation per process), 1 .. 256
+  std::size_t batch = kDefaultBatch;  ///< concrete scenarios per SUMO network and simulation, 1 .. 4096
   bool keepNets = false;            ///< keep <out>/nets/batch_*.{nod,edg,net}.xml + .sumocfg
   bool fcd = false;                 ///< write <out>/fcd/batch_*.fcd.xml (implies keepNets)
   bool writeFiles = true;           ///< false: only call the outcome callback (used by compare)
-  int compression = 1;              ///< deflate level of dataset.h5's vectors (0 = none)
+  int compression = 1;              ///< deflate level of dataset.h5's vectors (0 = none .. 9)
   /// How batch networks are built; unset: written directly, unless the scenario gives
   /// netconvert options (sumo.netconvert_options), which need netconvert.
   std::optional<road::NetWriter> netWriter;

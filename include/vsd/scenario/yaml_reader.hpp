@@ -24,7 +24,9 @@ class YamlReader {
   std::string scalar(const YAML::Node& node, const std::string& field) const;
   double number(const YAML::Node& node, const std::string& field) const;
   double number(const YAML::Node& map, const std::string& key, const std::string& field, double fallback) const;
-  int integer(const YAML::Node& map, const std::string& key, const std::string& field, int fallback, int minimum) const;
+  /// A whole number in [minimum, maximum] (ConfigError naming the field otherwise).
+  int integer(const YAML::Node& map, const std::string& key, const std::string& field, int fallback, int minimum,
+              int maximum = 1'000'000) const;
   Expression expression(const YAML::Node& node, const std::string& field, const std::vector<std::string>& variables) const;
   Distribution distribution(const YAML::Node& node, const std::string& field, const std::vector<std::string>& variables,
                             const std::set<std::string>& extra_keys = {}) const;

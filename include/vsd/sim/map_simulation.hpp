@@ -35,6 +35,10 @@ struct VehicleSnapshot {
   double length = 5.0;
   double width = 1.8;
   std::string type;
+  /// Stopped with parking="true": SUMO takes it off the lane and draws it beside the
+  /// road, so its position jumps sideways by metres in one step and back when it
+  /// leaves. Such instants are not driving and must not enter trajectories.
+  bool parked = false;
 };
 
 /// A closed-loop Ego taken out of the simulation because its controller failed.

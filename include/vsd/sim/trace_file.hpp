@@ -29,10 +29,13 @@ inline constexpr std::size_t kTraceFields = 5;
 
 class TraceFileWriter {
  public:
-  /// Creates the file at `path` (callers pass a temporary path and rename on success).
+  /// Creates the file at `path` (callers pass a temporary path and rename on success;
+  /// `name_in_messages`, e.g. the final path, is what errors name). Throws IoError
+  /// naming the file, the array and the cause.
   TraceFileWriter(const std::filesystem::path& path, const std::string& functional_scenario, double step,
                   std::size_t instants, const std::vector<std::string>& vehicle_ids,
-                  const std::vector<double>& vehicle_lengths, const std::vector<double>& vehicle_widths);
+                  const std::vector<double>& vehicle_lengths, const std::vector<double>& vehicle_widths,
+                  const std::filesystem::path& name_in_messages = {});
   TraceFileWriter(const TraceFileWriter&) = delete;
   TraceFileWriter& operator=(const TraceFileWriter&) = delete;
   ~TraceFileWriter();
@@ -64,6 +67,7 @@ class TraceFileReader {
   Trace trace(std::size_t row) const;
 
  private:
+  void checkShapes() const;
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };

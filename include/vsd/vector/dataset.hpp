@@ -57,8 +57,11 @@ class DatasetReader;
 
 class DatasetWriter {
  public:
-  /// Creates the file at `path` (callers write to a temporary path and rename when complete).
-  DatasetWriter(const std::filesystem::path& path, DatasetHeader header);
+  /// Creates the file at `path` (callers write to a temporary path and rename when
+  /// complete; `name_in_messages`, e.g. the final path, is what errors name).
+  /// Throws IoError naming the file, the array and the cause (e.g. a full disk).
+  DatasetWriter(const std::filesystem::path& path, DatasetHeader header,
+                const std::filesystem::path& name_in_messages = {});
   DatasetWriter(const DatasetWriter&) = delete;
   DatasetWriter& operator=(const DatasetWriter&) = delete;
   ~DatasetWriter();

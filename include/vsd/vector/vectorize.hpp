@@ -86,4 +86,8 @@ Trace sceneTrace(const VectorizedScene& scene, const Polyline& ego_future);
 /// position; empty if the scene has no such pair.
 Polyline egoLaneCentre(const VectorizedScene& scene);
 
+/// Every lane-boundary polyline of the scene as a line (valid vectors joined where
+/// they connect), for lane offsets measured at each instant on maps.
+std::vector<Polyline> laneBoundaryLines(const VectorizedScene& scene);
+
 }  // namespace vsd::vector
