@@ -26,11 +26,10 @@
 #include "vsd/core/files.hpp"
 #include "vsd/core/progress.hpp"
 #include "vsd/core/process.hpp"
-#include "vsd/baseline/baseline.hpp"
-#include "vsd/model/intervals.hpp"
+#include "vsd/compare/compare.hpp"
 #include "vsd/model/model.hpp"
 #include "vsd/pipeline/cluster.hpp"
-#include "vsd/pipeline/scenes.hpp"
+#include "vsd/report/comparison.hpp"
 #include "vsd/pipeline/run.hpp"
 #include "vsd/vector/dataset.hpp"
 
@@ -213,6 +212,10 @@ int runExportBench(const ExportBenchOptions& options) {
   return 0;
 }
 
+/// Seeds of `bench model`'s training and test scenarios (test: fresh scenarios).
+constexpr std::uint64_t kModelBenchTrainSeed = 1;
+constexpr std::uint64_t kModelBenchTestSeed = 2;
+
 struct ModelBenchOptions {
   fs::path work;               ///< keeps the generated data and models here (default: a temporary folder)
   std::uint64_t samples = 2000;
@@ -228,97 +231,30 @@ struct ModelBenchOptions {
   int draws = 32;              ///< sampled futures per scene for the inference and interval benchmarks
 };
 
-/// Metrics of a predicted future as compare scores them (its own states where it has them).
-std::vector<double> metricsOfTrajectory(const metrics::MetricSet& metric_set, const vector::VectorizedScene& scene,
-                                        const model::Trajectory& future) {
-  if (future.states.empty()) return pipeline::metricsOfFuture(metric_set, scene, future.positions);
-  return pipeline::metricsOfFuture(metric_set, scene, future.states);
-}
-
-/// One metric of many scenes: errors of the most likely future against the simulated value,
-/// the floor (the metric of the true positions), and how often the sampled intervals hold it.
-struct MetricAccuracy {
-  std::size_t scenes = 0;
-  double absError = 0.0;       ///< sum |predicted - simulated|
-  double error = 0.0;          ///< sum (predicted - simulated)
-  double floorError = 0.0;     ///< sum |metric of the true positions - simulated|
-  std::size_t withDraws = 0;
-  double medianAbsError = 0.0;  ///< sum |median of the draws - simulated|
-  double covered50 = 0.0;       ///< scenes whose central 50 % interval holds the simulated value
-  double covered90 = 0.0;
-
-  void add(double predicted, double simulated, double from_truth, std::vector<double> draws) {
-    if (!std::isfinite(predicted) || !std::isfinite(simulated)) return;
-    ++scenes;
-    absError += std::abs(predicted - simulated);
-    error += predicted - simulated;
-    floorError += std::isfinite(from_truth) ? std::abs(from_truth - simulated) : 0.0;
-    if (draws.empty()) return;
-    const double median = model::sampleQuantile(draws, 0.5);
-    const double q = model::quantilePosition(std::move(draws), simulated);
-    if (std::isnan(q) || std::isnan(median)) return;
-    ++withDraws;
-    medianAbsError += std::abs(median - simulated);
-    covered50 += std::abs(2.0 * q - 1.0) <= 0.5 ? 1.0 : 0.0;
-    covered90 += std::abs(2.0 * q - 1.0) <= 0.9 ? 1.0 : 0.0;
-  }
-};
-
-/// The simulated metric values of a test run by sample index (its concrete.csv).
-std::map<std::uint64_t, std::vector<double>> simulatedMetrics(const fs::path& run, const std::vector<std::string>& names) {
-  const auto table = baseline::readMetricTable(run, names);
-  std::map<std::uint64_t, std::vector<double>> bySample;
-  for (std::size_t r = 0; r < table.samples.size(); ++r) {
-    bySample[table.samples[r]] = std::vector<double>(table.targets.row(static_cast<Eigen::Index>(r)).data(),
-                                                     table.targets.row(static_cast<Eigen::Index>(r)).data() + names.size());
-  }
-  return bySample;
-}
-
-/// Prints, for the metrics of the issue (a_min, d_min, lane_offset_max where the test run
-/// has them), the MAE and bias of the most likely future's metric against the simulated
-/// value, the floor, and the coverage of the 50 % / 90 % intervals of `draws` futures.
-void printMetricAccuracy(const model::Predictor& predictor, const fs::path& test_run, int draws) {
-  const vector::DatasetReader reader(vector::resolveDatasetPath(test_run));
-  std::vector<std::string> names;
-  for (const std::string name : {"a_min", "d_min", "lane_offset_max"}) {
-    const auto& stored = reader.header().metricNames;
-    if (std::find(stored.begin(), stored.end(), name) != stored.end()) names.push_back(name);
-  }
-  if (names.empty()) return;
-  const metrics::MetricSet metric_set(names, pipeline::sceneAvailability(reader.header().kind), "bench model");
-  const auto simulated = simulatedMetrics(test_run, names);
-  model::PredictOptions options;
-  options.samples = predictor.probabilistic() ? draws : 0;
-  std::vector<MetricAccuracy> accuracy(names.size());
-  for (std::size_t first = 0; first < reader.size(); first += 4096) {
-    std::vector<vector::VectorizedScene> scenes;
-    for (std::size_t i = first; i < std::min(reader.size(), first + 4096); ++i) scenes.push_back(reader.scene(i));
-    const auto predictions = predictor.predictDistribution(scenes, options);
-    for (std::size_t j = 0; j < scenes.size(); ++j) {
-      const auto found = simulated.find(scenes[j].sample);
-      if (found == simulated.end()) continue;
-      const auto predicted = metricsOfTrajectory(metric_set, scenes[j], predictions[j].mostLikely);
-      const auto from_truth = pipeline::metricsOfFuture(metric_set, scenes[j], scenes[j].target);
-      std::vector<std::vector<double>> drawn(names.size());
-      for (const auto& future : predictions[j].samples) {
-        const auto values = metricsOfTrajectory(metric_set, scenes[j], future);
-        for (std::size_t m = 0; m < names.size(); ++m) drawn[m].push_back(values[m]);
-      }
-      for (std::size_t m = 0; m < names.size(); ++m) {
-        accuracy[m].add(predicted[m], found->second[m], from_truth[m], std::move(drawn[m]));
-      }
-    }
-  }
-  fmt::print("    {:<16} {:>7} {:>9} {:>9} {:>11} {:>11} {:>9} {:>9}\n", test_run.filename().string(), "scenes", "MAE",
+/// For the metrics of the issue (a_min, d_min, lane_offset_max where the scenario has
+/// them), `vsd-sumo compare`'s scenario mode on the test run's scenarios (same file, seed
+/// and count: fresh SUMO runs, the metric registry on the trace and on the prediction with
+/// the same scene context): the MAE and bias of the most likely future's metric against
+/// the simulated value, the floor (the metric of the simulated positions), and for sampled
+/// futures the MAE of their median and the coverage of their 50 % / 90 % intervals.
+void printMetricAccuracy(const model::Predictor& predictor, const fs::path& scenario_file, std::uint64_t samples,
+                         std::uint64_t seed, int draws, int threads) {
+  compare::CompareOptions options;
+  options.scenarioFile = scenario_file;
+  options.samples = samples;
+  options.seed = seed;
+  options.threads = threads;
+  options.draws = draws;
+  const auto comparison = compare::compareScenarioPredictions(options, predictor);
+  const auto statistics = report::computeStatistics(comparison);
+  fmt::print("    {:<16} {:>7} {:>9} {:>9} {:>11} {:>11} {:>9} {:>9}\n", scenario_file.stem().string(), "scenes", "MAE",
              "bias", "MAE floor", "MAE median", "cover 50%", "cover 90%");
-  for (std::size_t m = 0; m < names.size(); ++m) {
-    const auto& a = accuracy[m];
-    const double n = static_cast<double>(std::max<std::size_t>(a.scenes, 1));
-    const double d = static_cast<double>(std::max<std::size_t>(a.withDraws, 1));
-    auto drawn = [&](double sum) { return a.withDraws ? fmt::format("{:.3f}", sum / d) : std::string("-"); };
-    fmt::print("    {:<16} {:>7} {:>9.3f} {:>+9.3f} {:>11.3f} {:>11} {:>9} {:>9}\n", names[m], a.scenes, a.absError / n,
-               a.error / n, a.floorError / n, drawn(a.medianAbsError), drawn(a.covered50), drawn(a.covered90));
+  for (const auto& m : statistics.metrics) {
+    if (m.name != "a_min" && m.name != "d_min" && m.name != "lane_offset_max") continue;
+    auto drawn = [&](double value) { return m.intervalPairs ? fmt::format("{:.3f}", value) : std::string("-"); };
+    fmt::print("    {:<16} {:>7} {:>9.3f} {:>+9.3f} {:>11} {:>11} {:>9} {:>9}\n", m.name, m.pairs, m.mae, m.bias,
+               m.floorMae ? fmt::format("{:.3f}", *m.floorMae) : std::string("-"), drawn(m.medianDrawMae),
+               drawn(m.coverage50), drawn(m.coverage90));
   }
 }
 
@@ -355,8 +291,8 @@ int runModelBench(const ModelBenchOptions& options) {
              options.samples, options.testSamples, options.threads);
   double simulation_rate = 0.0;
   for (const std::string name : {"acc", "lk", "acc_lk"}) {
-    for (const auto& [kind, samples, seed] : {std::tuple{std::string("train"), options.samples, 1},
-                                                std::tuple{std::string("test"), options.testSamples, 2}}) {
+    for (const auto& [kind, samples, seed] : {std::tuple{std::string("train"), options.samples, kModelBenchTrainSeed},
+                                                std::tuple{std::string("test"), options.testSamples, kModelBenchTestSeed}}) {
       const fs::path out = work / fmt::format("{}_{}", kind, name);
       if (fs::exists(out / "dataset.h5")) continue;
       const auto result = runSelf({"run", (scenarios / (name + ".yaml")).string(), "--samples", std::to_string(samples),
@@ -398,9 +334,13 @@ int runModelBench(const ModelBenchOptions& options) {
       fmt::format("acc={0},lk={0},acc_lk={0}", options.samples), {"acc", "lk", "acc_lk"}, "all" + suffix);
   {
     const model::Predictor all(work / ("all" + suffix), options.threads);
-    fmt::print("  metrics of the all-three model's predictions vs. the simulated values (concrete.csv); floor: metric "
-               "of the true positions; intervals of {} sampled futures:\n", options.draws);
-    for (const auto& test : tests) printMetricAccuracy(all, test, options.draws);
+    fmt::print("  metrics of the all-three model's predictions vs. fresh SUMO runs of the test scenarios (as `vsd-sumo "
+               "compare`); floor: metric of the simulated positions; intervals of {} sampled futures:\n",
+               options.draws);
+    for (const std::string label : {"acc", "lk", "acc_lk"}) {
+      printMetricAccuracy(all, scenarios / (label + ".yaml"), options.testSamples, kModelBenchTestSeed, options.draws,
+                          options.threads);
+    }
   }
   if (options.singles) {
     for (const std::string label : {"acc", "lk", "acc_lk"}) {

@@ -433,6 +433,18 @@ void CompareOptions::validate() const {
   }
 }
 
+report::Comparison compareScenarioPredictions(const CompareOptions& options_in, const model::Predictor& predictor) {
+  CompareOptions options = options_in;
+  options.validate();
+  if (options.scenarioFile.empty()) throw ConfigError("compare: scenario mode needs a logical scenario file");
+  if (options.samples == 0) options.samples = CompareOptions::kDefaultScenarios;
+  options.worst = 0;  // nothing is drawn
+  Run run = compareScenario(options, predictor);
+  run.comparison.draws = drawOptions(options, predictor).samples;
+  run.comparison.confidence = options.confidence;
+  return std::move(run.comparison);
+}
+
 CompareSummary runComparison(const CompareOptions& options_in) {
   const auto start = std::chrono::steady_clock::now();
   CompareOptions options = options_in;

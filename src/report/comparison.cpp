@@ -65,6 +65,8 @@ namespace {
 void calibrate(MetricStatistics& stats, const Comparison& comparison, std::size_t m) {
   std::vector<std::size_t> inside(kReliabilityLevels.size(), 0);
   double width_sum = 0.0;
+  double median_error_sum = 0.0;
+  std::size_t median_errors = 0;
   std::size_t inside50 = 0;
   std::size_t inside90 = 0;
   for (const auto& scenario : comparison.scenarios) {
@@ -77,12 +79,18 @@ void calibrate(MetricStatistics& stats, const Comparison& comparison, std::size_
     inside50 += level <= 0.5 ? 1 : 0;
     inside90 += level <= 0.9 ? 1 : 0;
     if (std::isfinite(interval.p95 - interval.p05)) width_sum += interval.p95 - interval.p05;
+    const double median_error = std::abs(interval.median - scenario.reference.at(m));
+    if (std::isfinite(median_error)) {
+      median_error_sum += median_error;
+      ++median_errors;
+    }
   }
   if (stats.intervalPairs == 0) return;
   const auto n = static_cast<double>(stats.intervalPairs);
   stats.coverage50 = static_cast<double>(inside50) / n;
   stats.coverage90 = static_cast<double>(inside90) / n;
   stats.meanWidth90 = width_sum / n;
+  stats.medianDrawMae = median_errors == 0 ? kNaN : median_error_sum / static_cast<double>(median_errors);
   for (const auto count : inside) stats.reliability.push_back(static_cast<double>(count) / n);
 }
 
@@ -265,9 +273,9 @@ std::string textSummary(const Comparison& comparison, const ComparisonStatistics
     out << ")\n";
     if (m.intervalPairs > 0) {
       out << fmt::format("  {:<16} intervals of {} sampled futures: {} value in the 50 % interval {:.1f} %, in the "
-                         "90 % interval {:.1f} % (mean width {:.3f} {})\n",
+                         "90 % interval {:.1f} % (mean width {:.3f} {}); their median: MAE {:.3f} {}\n",
                          "", comparison.draws, comparison.referenceName, 100.0 * m.coverage50, 100.0 * m.coverage90,
-                         m.meanWidth90, m.unit);
+                         m.meanWidth90, m.unit, m.medianDrawMae, m.unit);
     }
   }
   for (const auto& c : s.criteria) {

@@ -124,6 +124,27 @@ TEST_F(CompareTest, ScenarioModeScoresLikeEvaluateOnTheSimulatedScenes) {
   EXPECT_NE(html.find("VectorNet prediction"), std::string::npos);
   EXPECT_NE(html.find(sha256OfFile(modelFile())), std::string::npos);
   EXPECT_LT(fs::file_size(work_.path() / "report" / "index.html"), 5u * 1024 * 1024);
+  // The same scoring without a report (what `vsd-sumo bench model` scores with): the same rows, nothing written.
+  const auto rows = compareScenarioPredictions(scenarioOptions(work_.path() / "not written"), predictor);
+  EXPECT_FALSE(fs::exists(work_.path() / "not written"));
+  ASSERT_EQ(rows.scenarios.size(), summary.comparison.scenarios.size());
+  EXPECT_EQ(rows.metricNames, summary.comparison.metricNames);
+  const auto same = [](const std::vector<double>& a, const std::vector<double>& b) {
+    if (a.size() != b.size()) return false;
+    for (std::size_t i = 0; i < a.size(); ++i) {
+      if (!(a[i] == b[i] || (std::isnan(a[i]) && std::isnan(b[i])))) return false;
+    }
+    return true;
+  };
+  for (std::size_t i = 0; i < rows.scenarios.size(); ++i) {
+    const auto& row = rows.scenarios[i];
+    const auto& shown = summary.comparison.scenarios[i];
+    EXPECT_EQ(row.failure, shown.failure) << i;
+    EXPECT_EQ(row.ade, shown.ade) << i;
+    EXPECT_TRUE(same(row.predicted, shown.predicted)) << i;
+    EXPECT_TRUE(same(row.reference, shown.reference)) << i;
+    EXPECT_TRUE(same(row.fromReferencePositions, shown.fromReferencePositions)) << i;
+  }
   // Nothing but the two outputs, and no temporary folder left beside them.
   std::size_t entries = 0;
   for (const auto& entry : fs::directory_iterator(work_.path())) entries += entry.path().filename().string()[0] == '.';

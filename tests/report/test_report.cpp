@@ -99,6 +99,31 @@ TEST(ReportStatistics, MaeBiasInfinitiesAndConfusionCounts) {
   EXPECT_NEAR(s.ade.p90, 0.9 * 3.8, 1e-9);
 }
 
+TEST(ReportStatistics, IntervalCoverageAndTheErrorOfTheDrawsMedian) {
+  auto c = syntheticComparison();
+  c.draws = 32;
+  for (std::size_t i = 0; i < c.scenarios.size(); ++i) {
+    auto& s = c.scenarios[i];
+    // a_min (reference -2.0): the draws' median 0.1 too high in half of the scenarios and
+    // 0.3 too low in the other; the reference at quantile 0.3 (inside the 50 % interval)
+    // or 0.97 (inside neither).
+    const bool high = i % 2 == 0;
+    const double median = high ? -1.9 : -2.3;
+    const double q = high ? 0.3 : 0.97;
+    s.intervals = {MetricInterval{}, MetricInterval{32, median - 1, median - 0.5, median, median + 0.5, median + 1, q},
+                   MetricInterval{}};
+  }
+  const auto s = computeStatistics(c);
+  const auto& a_min = s.metrics[1];
+  EXPECT_EQ(a_min.intervalPairs, 39u);  // scenario 39 failed
+  EXPECT_NEAR(a_min.coverage50, 20.0 / 39.0, 1e-12);
+  EXPECT_NEAR(a_min.coverage90, 20.0 / 39.0, 1e-12);
+  EXPECT_NEAR(a_min.meanWidth90, 2.0, 1e-12);
+  EXPECT_NEAR(a_min.medianDrawMae, (20 * 0.1 + 19 * 0.3) / 39.0, 1e-12);
+  EXPECT_EQ(s.metrics[0].intervalPairs, 0u);  // no draws: no interval statistics
+  EXPECT_NE(textSummary(c, s).find("their median: MAE 0.197 m/s^2"), std::string::npos) << textSummary(c, s);
+}
+
 TEST(ReportStatistics, DescribeIgnoresNonFiniteValues) {
   const auto d = describe({1.0, kNaN, 3.0, kInf, 2.0});
   EXPECT_EQ(d.count, 3u);

@@ -18,6 +18,10 @@
 
 #include "vsd/report/comparison.hpp"
 
+namespace vsd::model {
+class Predictor;
+}
+
 namespace vsd::compare {
 
 struct CompareOptions {
@@ -64,5 +68,13 @@ struct CompareSummary {
 /// ModelError (model file, feature schema, step/horizon mismatch), DatasetError, SumoError
 /// (for faults of the whole run; a scenario SUMO fails on is listed in the report).
 CompareSummary runComparison(const CompareOptions& options);
+
+/// Scenario mode without a report: samples `options.samples` (0: kDefaultScenarios) fresh
+/// scenarios of `options.scenarioFile` with `options.seed`, predicts them with `predictor`
+/// (`options.draws` sampled futures), simulates them with SUMO and scores both through the
+/// metric registry exactly as `runComparison` does (`options.model` and `options.output`
+/// are not used). For benchmarks that need the simulated metrics (`vsd-sumo bench model`).
+/// Throws as runComparison.
+report::Comparison compareScenarioPredictions(const CompareOptions& options, const model::Predictor& predictor);
 
 }  // namespace vsd::compare

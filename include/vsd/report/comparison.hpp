@@ -110,6 +110,10 @@ struct MetricStatistics {
   double coverage50 = 0.0;
   double coverage90 = 0.0;
   double meanWidth90 = 0.0;
+  /// Mean |median of the sampled futures' values - reference| over the intervalPairs where
+  /// it is finite (NaN if none): the
+  /// error of the draws' median as a point estimate, next to `mae` of the most likely future.
+  double medianDrawMae = 0.0;
   std::vector<double> reliability;
 };
 
