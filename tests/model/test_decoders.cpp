@@ -187,6 +187,33 @@ TEST(KinematicDecoder, TheAccelerationLossComparesWithTheAccelerationsOfTheTrueP
   EXPECT_NEAR(weighted->loss(decoded, kept.unsqueeze(0), mask).item<float>(), ade + mean_decel, 1e-3F);
 }
 
+TEST(KinematicDecoder, TheMinimumAccelerationLossComparesTheMinimaOverValidSteps) {
+  auto config = kinematicConfig();
+  config.decoderOptions = {{"nll", 0.0}};
+  const auto plain = makeDecoder(config);
+  config.decoderOptions["amin_weight"] = 1.0;
+  const auto weighted = makeDecoder(config);
+  EgoStart start{torch::zeros({1, 2}), torch::zeros({1}), torch::tensor({10.0F})};
+  auto raw = torch::zeros({1, plain->outputWidth()});
+  raw.narrow(1, 0, 10).fill_(-2.0);   // brakes for 2 s ...
+  raw.narrow(1, 20, 5).fill_(-3.0);   // ... and harder at the end
+  const auto decoded = weighted->decode(raw, start);
+  auto mask = torch::ones({1, 25}, torch::kBool);
+  EXPECT_NEAR(weighted->loss(decoded, decoded.positions.clone(), mask).item<float>(), 0.0F, 1e-3F);
+  // The true Ego kept its speed (a_min 0): the error is the predicted minimum.
+  const auto kept = (torch::arange(1, 26, torch::kFloat32).unsqueeze(-1) * torch::tensor({2.0F, 0.0F})).unsqueeze(0);
+  const float ade = plain->loss(plain->decode(raw, start), kept, mask).item<float>();
+  const float predicted_min = decoded.accels.min().item<float>();
+  EXPECT_LT(predicted_min, -2.5F);
+  EXPECT_NEAR(weighted->loss(decoded, kept, mask).item<float>(), ade - predicted_min, 1e-3F);
+  // Steps after an invalid position do not count: the hard braking at the end is left out.
+  mask.narrow(1, 15, 10).fill_(false);
+  const float ade_valid = plain->loss(plain->decode(raw, start), kept, mask).item<float>();
+  const float valid_min = decoded.accels.narrow(1, 0, 15).min().item<float>();
+  EXPECT_GT(valid_min, -2.5F);
+  EXPECT_NEAR(weighted->loss(decoded, kept, mask).item<float>(), ade_valid - valid_min, 1e-3F);
+}
+
 TEST(KinematicDecoder, CalibrationScalesTheVariancesUntilNinetyPercentAreCovered) {
   auto config = kinematicConfig();
   config.hidden = 16;

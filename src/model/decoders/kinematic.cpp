@@ -17,7 +17,8 @@
 // `variance_scale` multiplies every control variance (the post-hoc calibration of
 // `calibrate`, fitted on the validation split after training, calibration.hpp);
 // `accel_weight` adds the mean absolute error between the predicted accelerations and
-// those of the true positions, so that a_min of a prediction is learnt directly.
+// those of the true positions; `amin_weight` the absolute error of their minima (a_min of
+// the most likely future), so that a_min of a prediction is learnt directly.
 #include "kinematic.hpp"
 
 #include <cmath>
@@ -42,6 +43,7 @@ class KinematicDecoder final : public Decoder {
         probabilistic_(config.decoderOption("nll") != 0.0),
         adeWeight_(config.decoderOption("ade_weight")),
         accelWeight_(config.decoderOption("accel_weight")),
+        minAccelWeight_(config.decoderOption("amin_weight")),
         sigmaScale_(std::sqrt(config.decoderOption("variance_scale"))) {}
 
   std::int64_t outputWidth() const override { return 4 * horizon_ + 2; }
@@ -72,7 +74,12 @@ class KinematicDecoder final : public Decoder {
 
   torch::Tensor loss(const Decoded& decoded, const torch::Tensor& targets, const torch::Tensor& mask) const override {
     auto loss = positionLoss(decoded, targets, mask);
-    if (accelWeight_ > 0.0) loss = loss + accelWeight_ * accelError(decoded, targets, mask);
+    if (accelWeight_ > 0.0 || minAccelWeight_ > 0.0) {
+      const auto true_accels = trueAccels(decoded, targets);
+      const auto weights = mask.to(torch::kFloat32).cumprod(1);  // steps after an invalid position are left out
+      if (accelWeight_ > 0.0) loss = loss + accelWeight_ * accelError(decoded.accels, true_accels, weights);
+      if (minAccelWeight_ > 0.0) loss = loss + minAccelWeight_ * minAccelError(decoded.accels, true_accels, weights);
+    }
     return loss;
   }
 
@@ -140,12 +147,11 @@ class KinematicDecoder final : public Decoder {
     return per_sample.mean() + adeWeight_ * ade;
   }
 
-  /// Mean absolute difference (m/s^2) between the predicted accelerations and those of the
-  /// true positions under the same vehicle model: the distance of step k is the trapezoid
-  /// s_k = (v_k + v_{k+1}) dt / 2, so v_{k+1} = 2 s_k / dt - v_k from the start speed and
-  /// a_k = (v_{k+1} - v_k) / dt (exact for a simulated Ego; no reversing). Steps after an
-  /// invalid position are left out.
-  torch::Tensor accelError(const Decoded& decoded, const torch::Tensor& targets, const torch::Tensor& mask) const {
+  /// The accelerations (m/s^2) of the true positions [B, F] under the same vehicle model:
+  /// the distance of step k is the trapezoid s_k = (v_k + v_{k+1}) dt / 2, so
+  /// v_{k+1} = 2 s_k / dt - v_k from the start speed and a_k = (v_{k+1} - v_k) / dt (exact
+  /// for a simulated Ego; no reversing).
+  torch::Tensor trueAccels(const Decoded& decoded, const torch::Tensor& targets) const {
     const auto& start_position = decoded.parameters.at(decoded.parameters.size() - 2);
     const auto& start_speed = decoded.parameters.back();
     const auto previous = torch::cat({start_position.unsqueeze(1), targets.narrow(1, 0, horizon_ - 1)}, 1);
@@ -157,9 +163,27 @@ class KinematicDecoder final : public Decoder {
       accels.push_back((next - speed) / step_);
       speed = next;
     }
-    const auto weights = mask.to(torch::kFloat32).cumprod(1);
-    const auto true_accels = torch::stack(accels, 1);
-    return ((decoded.accels - true_accels).abs() * weights).sum() / weights.sum().clamp_min(1.0);
+    return torch::stack(accels, 1);
+  }
+
+  /// Mean absolute difference (m/s^2) between the predicted and the true accelerations over
+  /// the steps with weight 1.
+  static torch::Tensor accelError(const torch::Tensor& predicted, const torch::Tensor& truth,
+                                  const torch::Tensor& weights) {
+    return ((predicted - truth).abs() * weights).sum() / weights.sum().clamp_min(1.0);
+  }
+
+  /// Mean over samples of |min_k predicted a_k - min_k true a_k| (m/s^2) over the steps with
+  /// weight 1: the error of a_min itself, whose metric is the minimum of the predicted
+  /// accelerations. Samples without a valid step are left out.
+  static torch::Tensor minAccelError(const torch::Tensor& predicted, const torch::Tensor& truth,
+                                     const torch::Tensor& weights) {
+    constexpr double kNotAMinimum = 1e3;  // m/s^2, above any acceleration: masks invalid steps out of the min
+    const auto outside = (1.0 - weights) * kNotAMinimum;
+    const auto predicted_min = std::get<0>((predicted + outside).min(1));
+    const auto true_min = std::get<0>((truth + outside).min(1));
+    const auto scored = (weights.sum(1) > 0).to(torch::kFloat32);
+    return ((predicted_min - true_min).abs() * scored).sum() / scored.sum().clamp_min(1.0);
   }
 
   std::int64_t horizon_;
@@ -168,6 +192,7 @@ class KinematicDecoder final : public Decoder {
   bool probabilistic_;
   double adeWeight_;
   double accelWeight_;
+  double minAccelWeight_;
   double sigmaScale_;
 };
 
@@ -189,6 +214,9 @@ DecoderEntry kinematicDecoderEntry() {
       {"ade_weight", 0.0, 0.0, 100.0, "weight of the ADE of the most likely future added to the NLL"},
       {"accel_weight", 0.0, 0.0, 100.0,
        "weight of the mean absolute error (m/s^2) of the predicted accelerations against those of the true positions"},
+      {"amin_weight", 0.0, 0.0, 100.0,
+       "weight of the mean absolute error (m/s^2) of the minimum predicted acceleration (the a_min metric of the most "
+       "likely future) against that of the true positions"},
       {"calibrate", 0.0, 0.0, 1.0,
        "1: after training, fit variance_scale on the validation split (90 % of its positions in their 90 % regions)"},
       {"variance_scale", 1.0, 1e-3, 1e3, "multiplies every predicted control variance (written by calibrate)"},
