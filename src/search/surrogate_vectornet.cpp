@@ -4,12 +4,14 @@
 // before simulation (pipeline::plannedScene), S futures are sampled from its predictive
 // distribution, every future's metrics come from the metric registry (the code `compare`
 // scores predictions with), and the probability is the share of futures meeting the
-// criterion. Every round trains from scratch on all the data so far (fine-tuning would
-// need a warm start that model::train does not offer).
+// criterion (where none does, a Gaussian tail below 1 / (2 S) that ranks by closeness).
+// Every round trains from scratch on all the data so far (fine-tuning would need a warm
+// start that model::train does not offer).
 
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <cmath>
 #include <stdexcept>
 
 #include "vsd/core/error.hpp"
@@ -76,9 +78,15 @@ class VectorNetSurrogate final : public Surrogate {
 
  private:
   /// Share of the sampled futures whose metrics meet the criterion (futures whose
-  /// criterion metrics cannot be computed do not count).
+  /// criterion metrics cannot be computed do not count). Where none meets it (a rare
+  /// criterion: most candidates), the share is 0 everywhere and cannot rank; then the
+  /// Gaussian tail of the futures' criterion metrics (their mean and spread,
+  /// tailProbability) ranks by closeness, scaled below 1 / (2 S) so that it stays below
+  /// every candidate with a future that meets it.
   double shareMeeting(const vector::VectorizedScene& scene, const model::Prediction& prediction,
                       const Criterion& criterion) const {
+    const auto& used = criterion.usedColumns();
+    std::vector<std::vector<double>> draws(used.size());
     std::size_t judged = 0;
     std::size_t meeting = 0;
     for (const auto& future : prediction.samples) {
@@ -88,8 +96,33 @@ class VectorNetSurrogate final : public Surrogate {
       if (!verdict) continue;
       ++judged;
       meeting += *verdict ? 1 : 0;
+      for (std::size_t m = 0; m < used.size(); ++m) draws[m].push_back(values[used[m]]);
     }
-    return judged == 0 ? 0.0 : static_cast<double>(meeting) / static_cast<double>(judged);
+    if (judged == 0) return 0.0;
+    if (meeting > 0) return static_cast<double>(meeting) / static_cast<double>(judged);
+    return tailProbabilityOf(draws, criterion) / (2.0 * static_cast<double>(judged));
+  }
+
+  /// tailProbability of the draws' mean and standard deviation per metric (finite draws
+  /// only; 0 when a metric has none, e.g. ttc_min of futures that never close in).
+  static double tailProbabilityOf(const std::vector<std::vector<double>>& draws, const Criterion& criterion) {
+    std::vector<double> centre(draws.size());
+    std::vector<double> spread(draws.size());
+    for (std::size_t m = 0; m < draws.size(); ++m) {
+      double sum = 0.0;
+      double squares = 0.0;
+      std::size_t finite = 0;
+      for (const double value : draws[m]) {
+        if (!std::isfinite(value)) continue;
+        sum += value;
+        squares += value * value;
+        ++finite;
+      }
+      if (finite == 0) return 0.0;
+      centre[m] = sum / static_cast<double>(finite);
+      spread[m] = std::sqrt(std::max(0.0, squares / static_cast<double>(finite) - centre[m] * centre[m]));
+    }
+    return tailProbability(centre, spread, criterion);
   }
 
   SurrogateOptions options_;

@@ -244,13 +244,14 @@ TEST(SearchVectorNet, APriorIsMixedInAndTheSearchResumesWithTheSameChoices) {
   runSearch(vectornet(work.path() / "straight", 60));
   EXPECT_EQ(readTextFile(resumed / "concrete.csv"), readTextFile(work.path() / "straight" / "concrete.csv"));
   EXPECT_TRUE(fs::exists(resumed / ".rounds" / "round-00001.vectornet.pt"));
-  // The probability is the share of 4 sampled futures meeting the criterion.
+  // The probability is the share of 4 sampled futures meeting the criterion, or below
+  // 1/8 (the Gaussian tail) where none does.
   const auto origins = column(resumed / "concrete.csv", "origin");
   const auto predicted = column(resumed / "concrete.csv", "predicted_probability");
   for (std::size_t i = 0; i < origins.size(); ++i) {
     if (origins[i] != "acquired") continue;
     const double p = std::stod(predicted[i]);
-    EXPECT_DOUBLE_EQ(p * 4.0, std::round(p * 4.0)) << predicted[i];
+    EXPECT_TRUE(p < 0.125 || p * 4.0 == std::round(p * 4.0)) << predicted[i];
   }
 
   // A prior with another time base is refused in one line naming the folder and the value.
