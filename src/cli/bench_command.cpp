@@ -9,12 +9,15 @@
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 #include <sys/resource.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdlib>
 #include <filesystem>
+#include <functional>
 #include <map>
 #include <memory>
 #include <optional>
@@ -29,8 +32,10 @@
 #include "vsd/compare/compare.hpp"
 #include "vsd/model/model.hpp"
 #include "vsd/pipeline/cluster.hpp"
-#include "vsd/report/comparison.hpp"
+#include "vsd/pipeline/outcome_codec.hpp"
 #include "vsd/pipeline/run.hpp"
+#include "vsd/pipeline/scenes.hpp"
+#include "vsd/report/comparison.hpp"
 #include "vsd/vector/dataset.hpp"
 
 namespace fs = std::filesystem;
@@ -59,16 +64,29 @@ struct Measurement {
   double cpuMillisecondsPerSample() const { return 1000.0 * cpuSeconds / static_cast<double>(samples); }
 };
 
+/// Resource use of this process and of the children it has reaped so far.
+struct Usage {
+  double user = 0.0;       ///< CPU time in user mode (s)
+  double system = 0.0;     ///< CPU time in the kernel (s): page faults, fork, pipes, files
+  double pageFaults = 0.0;  ///< minor page faults (first touch of a page, copy on write)
+
+  static Usage of(int who) {
+    struct rusage usage {};
+    ::getrusage(who, &usage);
+    const auto seconds = [](const timeval& time) {
+      return static_cast<double>(time.tv_sec) + 1e-6 * static_cast<double>(time.tv_usec);
+    };
+    return {seconds(usage.ru_utime), seconds(usage.ru_stime), static_cast<double>(usage.ru_minflt)};
+  }
+  Usage operator-(const Usage& before) const {
+    return {user - before.user, system - before.system, pageFaults - before.pageFaults};
+  }
+  double cpu() const { return user + system; }
+};
+
 /// User + system CPU time of every child process this process has waited for, and
 /// of their descendants they waited for (s).
-double childrenCpuSeconds() {
-  struct rusage usage {};
-  ::getrusage(RUSAGE_CHILDREN, &usage);
-  const auto seconds = [](const timeval& time) {
-    return static_cast<double>(time.tv_sec) + 1e-6 * static_cast<double>(time.tv_usec);
-  };
-  return seconds(usage.ru_utime) + seconds(usage.ru_stime);
-}
+double childrenCpuSeconds() { return Usage::of(RUSAGE_CHILDREN).cpu(); }
 
 struct CheckedRun {
   ProcessResult result;
@@ -177,6 +195,152 @@ int runBench(const BenchOptions& options) {
                static_cast<double>(memory.maxRssKiB) / 1024.0, memory.rate());
   }
   printMpiBench(options, work.path());
+  return 0;
+}
+
+struct IsolationBenchOptions {
+  fs::path scenario = "scenarios/acc_lk.yaml";
+  std::uint64_t samples = 2000;
+  std::size_t batch = pipeline::RunOptions::kDefaultBatch;
+  int rounds = 3;
+};
+
+/// One `run` in this process: wall time and the resources of this process (the
+/// parent) and of the worker processes it forked and reaped.
+struct IsolationMeasurement {
+  double seconds = 0.0;
+  Usage parent;
+  Usage workers;
+  double cpu() const { return parent.cpu() + workers.cpu(); }
+};
+
+pipeline::RunOptions isolationRun(const IsolationBenchOptions& options, pipeline::RunOptions::Isolation isolation,
+                                  const fs::path& out) {
+  pipeline::RunOptions run;
+  run.scenarioFile = options.scenario;
+  run.outputDir = out;
+  run.samples = options.samples;
+  run.batch = options.batch;
+  run.seed = 1;
+  run.jobs = 1;
+  run.isolation = isolation;
+  return run;
+}
+
+IsolationMeasurement measureIsolation(const pipeline::RunOptions& run) {
+  const Usage parent = Usage::of(RUSAGE_SELF), workers = Usage::of(RUSAGE_CHILDREN);
+  const auto start = std::chrono::steady_clock::now();
+  pipeline::runScenarios(run);
+  const double seconds = secondsSince(start);
+  return {seconds, Usage::of(RUSAGE_SELF) - parent, Usage::of(RUSAGE_CHILDREN) - workers};
+}
+
+/// What moving the outcomes through the pipe costs: encoding and decoding every
+/// batch's outcomes as worker and parent do (CPU ms per scenario, bytes per scenario).
+std::pair<double, double> outcomeCodecCost(const IsolationBenchOptions& options) {
+  auto run = isolationRun(options, pipeline::RunOptions::Isolation::None, {});
+  run.writeFiles = false;
+  std::vector<pipeline::ScenarioOutcome> outcomes;
+  pipeline::runScenarios(run, [&](const pipeline::ScenarioOutcome& outcome) { outcomes.push_back(outcome); });
+  const Usage before = Usage::of(RUSAGE_SELF);
+  double bytes = 0.0;
+  for (std::size_t first = 0; first < outcomes.size(); first += options.batch) {
+    const std::vector<pipeline::ScenarioOutcome> batch(
+        outcomes.begin() + static_cast<std::ptrdiff_t>(first),
+        outcomes.begin() + static_cast<std::ptrdiff_t>(std::min(outcomes.size(), first + options.batch)));
+    const auto message = pipeline::encodeOutcomes(batch);
+    bytes += static_cast<double>(message.size());
+    if (pipeline::decodeOutcomes(message).size() != batch.size()) throw Error("internal: outcome codec lost scenarios");
+  }
+  const double cpu = (Usage::of(RUSAGE_SELF) - before).cpu();
+  const auto n = static_cast<double>(std::max<std::size_t>(outcomes.size(), 1));
+  return {1000.0 * cpu / n, bytes / n};
+}
+
+/// CPU time (parent + child, ms) of forking this process and reaping a child that
+/// exits at once: what starting a worker costs before it does any work (the page
+/// tables of this process are copied and torn down again).
+double forkMilliseconds(int forks) {
+  const Usage parent = Usage::of(RUSAGE_SELF), children = Usage::of(RUSAGE_CHILDREN);
+  for (int i = 0; i < forks; ++i) {
+    const pid_t pid = ::fork();
+    if (pid < 0) throw Error("bench: cannot fork");
+    if (pid == 0) ::_exit(0);
+    int status = 0;
+    ::waitpid(pid, &status, 0);
+  }
+  const double cpu = (Usage::of(RUSAGE_SELF) - parent).cpu() + (Usage::of(RUSAGE_CHILDREN) - children).cpu();
+  return 1000.0 * cpu / forks;
+}
+
+std::string loadAverageNow() {
+  double load[3] = {0.0, 0.0, 0.0};
+  if (::getloadavg(load, 3) != 3) return "unknown";
+  return fmt::format("{:.2f} {:.2f} {:.2f}", load[0], load[1], load[2]);
+}
+
+double median(std::vector<double> values) {
+  std::sort(values.begin(), values.end());
+  const std::size_t n = values.size();
+  return n % 2 == 1 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
+}
+
+/// `run` with its controllers and libsumo in a worker process (what users get) vs in
+/// the calling process (RunOptions::Isolation::None), alternating, both in this process.
+int runIsolationBench(const IsolationBenchOptions& options) {
+  using Isolation = pipeline::RunOptions::Isolation;
+  TemporaryDirectory work("vsd-bench-isolation");
+  fmt::print("vsd-sumo bench isolation: {}, --samples {} --batch {} --jobs 1, {} rounds (order alternating); load "
+             "average before: {}\n",
+             options.scenario.string(), options.samples, options.batch, options.rounds, loadAverageNow());
+  fmt::print("  per scenario: CPU ms = user + system of the parent and its workers; faults = minor page faults\n");
+  fmt::print("  {:<5} {:<9} {:>8} {:>11} {:>8} {:>12} {:>12} {:>14} {:>14}\n", "round", "isolation", "seconds",
+             "scenarios/s", "CPU ms", "parent u+s", "workers u+s", "parent faults", "workers faults");
+  std::map<Isolation, std::vector<IsolationMeasurement>> measured;
+  const std::map<Isolation, std::string> names = {{Isolation::None, "none"}, {Isolation::Process, "process"}};
+  const auto n = static_cast<double>(options.samples);
+  for (int round = 1; round <= options.rounds; ++round) {
+    std::vector<Isolation> order = {Isolation::None, Isolation::Process};
+    if (round % 2 == 0) std::reverse(order.begin(), order.end());
+    for (const auto isolation : order) {
+      const fs::path out = work.path() / names.at(isolation);
+      fs::remove_all(out);
+      const auto m = measureIsolation(isolationRun(options, isolation, out));
+      const auto& p = m.parent;
+      const auto& w = m.workers;
+      fmt::print("  {:<5} {:<9} {:>8.2f} {:>11.1f} {:>8.3f} {:>5.3f}+{:.3f} {:>5.3f}+{:.3f} {:>14.0f} {:>14.0f}\n", round,
+                 names.at(isolation), m.seconds, n / m.seconds, 1000.0 * m.cpu() / n, 1000.0 * p.user / n,
+                 1000.0 * p.system / n, 1000.0 * w.user / n, 1000.0 * w.system / n, p.pageFaults / n,
+                 w.pageFaults / n);
+      measured[isolation].push_back(m);
+    }
+  }
+  auto median_of = [&](Isolation isolation, const std::function<double(const IsolationMeasurement&)>& value) {
+    std::vector<double> values;
+    for (const auto& m : measured[isolation]) values.push_back(value(m));
+    return median(values);
+  };
+  const auto cpu = [](const IsolationMeasurement& m) { return m.cpu(); };
+  const auto system = [](const IsolationMeasurement& m) { return m.parent.system + m.workers.system; };
+  const auto wall = [](const IsolationMeasurement& m) { return m.seconds; };
+  const double cpu_none = median_of(Isolation::None, cpu), cpu_process = median_of(Isolation::Process, cpu);
+  const double wall_none = median_of(Isolation::None, wall), wall_process = median_of(Isolation::Process, wall);
+  fmt::print("  medians: CPU {:.3f} (none) vs {:.3f} (process) ms/scenario = {:+.1f} % (system time {:.3f} vs {:.3f}); "
+             "wall {:.2f} vs {:.2f} s = {:+.1f} %\n",
+             1000.0 * cpu_none / n, 1000.0 * cpu_process / n, 100.0 * (cpu_process / cpu_none - 1.0),
+             1000.0 * median_of(Isolation::None, system) / n, 1000.0 * median_of(Isolation::Process, system) / n,
+             wall_none, wall_process, 100.0 * (wall_process / wall_none - 1.0));
+  fmt::print("  outputs (concrete.csv, traces.h5, dataset.h5) byte-identical: {}\n",
+             sameOutputs(work.path() / "none", work.path() / "process") ? "yes" : "NO");
+  const auto [codec_ms, codec_bytes] = outcomeCodecCost(options);
+  fmt::print("  of the difference: encoding + decoding the outcomes for the pipe {:.3f} ms CPU per scenario ({:.1f} "
+             "KiB per scenario)\n",
+             codec_ms, codec_bytes / 1024.0);
+  const double fork_ms = forkMilliseconds(20);
+  fmt::print("  starting a worker (fork + exit, no work) {:.2f} ms CPU; a run starts two (controller probe, worker): "
+             "{:.4f} ms per scenario\n",
+             fork_ms, 2.0 * fork_ms / n);
+  fmt::print("  load average after: {}\n", loadAverageNow());
   return 0;
 }
 
@@ -414,6 +578,22 @@ void addBenchCommand(CLI::App& app, CommandContext& context) {
   addNumber(run, "--mpi-samples", options->mpiSamples, "Samples for the MPI runs (1 rank vs 2)")
       ->capture_default_str();
   run->callback([options, &context] { context.action = [options] { return runBench(*options); }; });
+
+  auto isolation_options = std::make_shared<IsolationBenchOptions>();
+  CLI::App* isolation = bench->add_subcommand(
+      "isolation", "CPU and wall time of `run` --jobs 1 with its controllers and libsumo in a worker process vs in "
+                   "this process");
+  isolation->add_option("scenario", isolation_options->scenario, "Logical scenario")
+      ->check(CLI::ExistingFile)
+      ->capture_default_str();
+  addNumber(isolation, "--samples", isolation_options->samples, "Samples per run")->capture_default_str();
+  addNumber(isolation, "--batch", isolation_options->batch, "Batch size")->capture_default_str();
+  addNumber(isolation, "--rounds", isolation_options->rounds, "Rounds of both runs")
+      ->check(CLI::Range(1, 1000))
+      ->capture_default_str();
+  isolation->callback([isolation_options, &context] {
+    context.action = [isolation_options] { return runIsolationBench(*isolation_options); };
+  });
 
   auto export_options = std::make_shared<ExportBenchOptions>();
   CLI::App* exporting = bench->add_subcommand("export", "Throughput, size and peak memory of `vsd-sumo export`");

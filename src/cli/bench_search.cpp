@@ -9,6 +9,8 @@
 #include <sstream>
 
 #include "commands.hpp"
+#include "flags.hpp"
+#include "vsd/core/error.hpp"
 #include "vsd/core/files.hpp"
 #include "vsd/search/search.hpp"
 
@@ -92,22 +94,31 @@ void addSearchBench(CLI::App& bench, CommandContext& context) {
       ->capture_default_str();
   command->add_option("--criterion", options->search.criterion, "Criterion")->capture_default_str();
   command->add_option("--surrogates", options->surrogates, "Surrogates to compare")->delimiter(',')->capture_default_str();
-  command->add_option("--budget", options->search.budget, "Executions per search")->capture_default_str();
-  command->add_option("--initial", options->search.initial, "Initial design")->capture_default_str();
-  command->add_option("--round", options->search.roundSize, "Executions per round")->capture_default_str();
-  command->add_option("--pool", options->search.pool, "Candidates per round")->capture_default_str();
+  addNumber(command, "--budget", options->search.budget, "Executions per search")->capture_default_str();
+  addNumber(command, "--initial", options->search.initial, "Initial design")->capture_default_str();
+  addNumber(command, "--round", options->search.roundSize, "Executions per round")->capture_default_str();
+  addNumber(command, "--pool", options->search.pool, "Candidates per round")->capture_default_str();
   command->add_option("--probability", options->search.probability, "extra-trees: shifts or tail")
       ->capture_default_str();
   command->add_flag("--rank-targets", options->search.rankTargets, "extra-trees: fit metric ranks");
-  command->add_option("--diversity", options->search.diversity, "Weight of the distance term in the acquisition")
+  addNumber(command, "--diversity", options->search.diversity, "Weight of the distance term in the acquisition")
       ->capture_default_str();
-  command->add_option("--seeds", options->seeds, "Searches per surrogate (seeds 1..N)")->capture_default_str();
+  command->add_option("--prior", options->search.priors, "vectornet: prior datasets (see search --prior)")
+      ->check(CLI::ExistingPath);
+  addNumber(command, "--vectornet-steps", options->search.vectornetSteps, "vectornet: training steps per round")
+      ->capture_default_str();
+  addNumber(command, "--future-samples", options->search.futureSamples, "vectornet: sampled futures per candidate")
+      ->capture_default_str();
+  addNumber(command, "--seeds", options->seeds, "Searches per surrogate (seeds 1..N)")->capture_default_str();
   command->add_option("--report", options->report,
                       "Write an HTML report (learning curves of every search, rate estimates) to this file");
-  command->add_option("-j,--jobs", options->search.jobs, "Worker processes for the simulations")->capture_default_str();
+  addNumber(command, "-j,--jobs", options->search.jobs, "Worker processes for the simulations")->capture_default_str();
   addEgoStepCostOption(*command, options->search.egoStepCost);
   command->callback([options, &context] {
     context.action = [options, &context] {
+      if (options->seeds < 1 || options->seeds > 1000) {
+        throw ConfigError::field("command line", "--seeds", std::to_string(options->seeds), "1 .. 1000");
+      }
       TemporaryDirectory work("vsd-bench-search");
       const auto& s = options->search;
       fmt::print("{}: '{}', budget {} (initial {}, rounds of {}, pool {}), {} seed(s), Ego step cost {} ms; load "

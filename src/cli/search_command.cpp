@@ -4,6 +4,7 @@
 #include <string>
 
 #include "commands.hpp"
+#include "flags.hpp"
 #include "vsd/search/search.hpp"
 #include "vsd/search/surrogate.hpp"
 
@@ -34,18 +35,18 @@ void addSearchCommand(CLI::App& app, CommandContext& context) {
   command->add_option("-o,--out", options->outputDir, "Output folder; re-running with it resumes the search")
       ->required();
   command->add_option("--surrogate", options->surrogate, surrogateHelp())->capture_default_str();
-  command->add_option("--budget", options->budget, "Executions (SUMO simulations) in total")->capture_default_str();
-  command->add_option("--initial", options->initial, "Executions of the initial random design")->capture_default_str();
-  command->add_option("--round", options->roundSize, "Executions per later round")->capture_default_str();
-  command->add_option("--estimate-share", options->estimateShare,
+  addNumber(command, "--budget", options->budget, "Executions (SUMO simulations) in total")->capture_default_str();
+  addNumber(command, "--initial", options->initial, "Executions of the initial random design")->capture_default_str();
+  addNumber(command, "--round", options->roundSize, "Executions per later round")->capture_default_str();
+  addNumber(command, "--estimate-share", options->estimateShare,
                       "Share of each later round drawn by importance sampling from the candidates (feeds the unbiased "
                       "rate estimate; the rest is chosen by the acquisition)")
       ->capture_default_str();
-  command->add_option("--pool", options->pool, "Candidate concrete scenarios scored per round")->capture_default_str();
-  command->add_option("--diversity", options->diversity,
+  addNumber(command, "--pool", options->pool, "Candidate concrete scenarios scored per round")->capture_default_str();
+  addNumber(command, "--diversity", options->diversity,
                       "Weight of the distance to critical scenarios already found in the acquisition")
       ->capture_default_str();
-  command->add_option("--trees", options->trees, "extra-trees: trees per criterion metric")->capture_default_str();
+  addNumber(command, "--trees", options->trees, "extra-trees: trees per criterion metric")->capture_default_str();
   command->add_option("--probability", options->probability,
                       "extra-trees: probability from the trees' predictions shifted by -1/0/+1 spreads (shifts) or the "
                       "Gaussian tail of their mean and spread (tail; above 0 everywhere, for rare criteria)")
@@ -53,10 +54,20 @@ void addSearchCommand(CLI::App& app, CommandContext& context) {
   command->add_flag("--rank-targets", options->rankTargets,
                     "extra-trees: fit each metric's empirical rank and map back through its quantiles, extrapolated "
                     "beyond the observed range (for criteria below every value seen so far)");
-  command->add_option("--bnn-epochs", options->bnnEpochs, "bnn: training epochs per round")->capture_default_str();
-  command->add_option("-s,--seed", options->seed, "Random seed; same seed, same choices")->capture_default_str();
-  command->add_option("-j,--jobs", options->jobs, "Worker processes for the simulations")->capture_default_str();
-  command->add_option("--threads", options->threads, "libtorch threads (bnn)")->capture_default_str();
+  addNumber(command, "--bnn-epochs", options->bnnEpochs, "bnn: training epochs per round")->capture_default_str();
+  command->add_option("--prior", options->priors,
+                      "vectornet: datasets or run/export folders of other functional scenarios or maps, mixed into "
+                      "its training from the first round (same step and horizon as the scenario)")
+      ->check(CLI::ExistingPath);
+  addNumber(command, "--vectornet-steps", options->vectornetSteps,
+            "vectornet: optimizer steps of each round's training (from scratch, on every execution so far)")
+      ->capture_default_str();
+  addNumber(command, "--future-samples", options->futureSamples,
+            "vectornet: sampled futures per candidate; probability = share meeting the criterion")
+      ->capture_default_str();
+  addNumber(command, "-s,--seed", options->seed, "Random seed; same seed, same choices")->capture_default_str();
+  addNumber(command, "-j,--jobs", options->jobs, "Worker processes for the simulations")->capture_default_str();
+  addNumber(command, "--threads", options->threads, "libtorch threads (bnn, vectornet)")->capture_default_str();
   addEgoStepCostOption(*command, options->egoStepCost);
   command->callback([options, &context] {
     context.action = [options, &context] {

@@ -10,6 +10,7 @@
 #include <ctime>
 #include <deque>
 #include <fstream>
+#include <iterator>
 #include <optional>
 #include <regex>
 #include <set>
@@ -59,6 +60,10 @@ void RunOptions::validate() const {
   }
   if (compression < 0 || compression > 9) {
     throw ConfigError::field("command line", "--compression", std::to_string(compression), "a deflate level 0 .. 9");
+  }
+  if (isolation == Isolation::None && jobs != 1) {
+    throw ConfigError::field("command line", "--jobs", std::to_string(jobs),
+                             "1 when the simulation runs in the calling process (isolation none)");
   }
 }
 
@@ -136,7 +141,7 @@ ScenarioWithRoad concreteScenario(const std::shared_ptr<const scenario::LogicalS
 /// Prepares, converts and simulates batches; one per worker process.
 class BatchProcessor {
  public:
-  using Send = std::function<void(Part, const std::vector<ScenarioOutcome>&)>;
+  using Send = std::function<void(Part, std::vector<ScenarioOutcome>)>;
 
   BatchProcessor(const Context& context, const RecoveryPlan& plan)
       : context_(context), plan_(plan), registry_(sim::ControllerRegistry::withBuiltins()) {}
@@ -206,7 +211,7 @@ class BatchProcessor {
     for (std::size_t i = 0; i < outcomes.size(); ++i) {
       if (!sent[i] && !plan_.done.count(outcomes[i].index)) rest.push_back(withMetrics(std::move(outcomes[i])));
     }
-    send(Part::BatchEnd, rest);
+    send(Part::BatchEnd, std::move(rest));
     if (!context_.keepBatchFiles) removeBatchFiles(batch.stem);
     spdlog::debug("batch {}: waited {:.3f} s for netconvert, simulated and computed metrics in {:.3f} s", batch.number,
                   wait_seconds, secondsSince(t_start) - wait_seconds);
@@ -281,7 +286,7 @@ class BatchProcessor {
         part.push_back(withMetrics(std::move(outcomes[i])));
         sent[i] = true;
       }
-      send(Part::Group, part);
+      send(Part::Group, std::move(part));
     }
     reportUnit(-1);
   }
@@ -608,6 +613,7 @@ nlohmann::json runManifest(const Context& context, const RunSummary& summary, co
   manifest["collisions"] = summary.collisions;
   if (context.shard) manifest["shard"] = nlohmann::json::parse(context.shard->toJson());
   manifest["worker_restarts"] = summary.workerRestarts;
+  if (context.options.isolation == RunOptions::Isolation::None) manifest["isolation"] = "none";
   manifest["inputs"] = summary.inputNames;
   manifest["metrics"] = summary.metricNames;
   return manifest;
@@ -642,13 +648,18 @@ void stageBatchFiles(const Context& context, const OutputFolder& folder) {
 /// The probe runs the controller's code, so it runs in a worker: a probe that
 /// crashes or hangs proves nothing about the run (its scenario will record it).
 void probeController(const std::shared_ptr<const scenario::LogicalScenario>& logical, const RunOptions& options) {
-  WorkerPool probe(1, [&](int, WorkerChannel&) {
+  auto make_controller = [&] {
     auto concrete = concreteScenario(logical, options, options.firstSample).concrete;
     auto registry = sim::ControllerRegistry::withBuiltins();
     sim::makeController(registry, logical->ego.controller.name, logical->ego.controller.library,
                         logical->sourceFile.parent_path(),
                         sim::ControllerParams(concrete.controllerParams, logical->ego.controller.where));
-  }, options.watchdog);
+  };
+  if (options.isolation == RunOptions::Isolation::None) {
+    make_controller();
+    return;
+  }
+  WorkerPool probe(1, [&](int, WorkerChannel&) { make_controller(); }, options.watchdog);
   try {
     probe.finish();
   } catch (const WorkerLost& lost) {
@@ -734,8 +745,30 @@ RunSummary runShard(const std::shared_ptr<const scenario::LogicalScenario>& logi
   return summary;
 }
 
-/// Runs every batch in worker processes and hands the outcomes, in sample order, to `consume`.
-int simulateAll(const Context& context, const std::function<void(const std::vector<ScenarioOutcome>&)>& consume) {
+using ConsumeBatch = std::function<void(const std::vector<ScenarioOutcome>&)>;
+
+/// RunOptions::Isolation::None: what simulateAll's only worker does with --jobs 1,
+/// here in the calling process; each batch's outcomes go to `consume` in sample
+/// order when its last part is ready. Nothing to recover: a fault ends the caller.
+void simulateInProcess(const Context& context, const ConsumeBatch& consume) {
+  const RecoveryPlan nothing_failed;
+  std::vector<ScenarioOutcome> batch;
+  processBatches(context, nothing_failed, 0, 1, [&](Part part, std::vector<ScenarioOutcome> outcomes) {
+    std::move(outcomes.begin(), outcomes.end(), std::back_inserter(batch));
+    if (part != Part::BatchEnd) return;
+    std::sort(batch.begin(), batch.end(), [](const auto& a, const auto& b) { return a.index < b.index; });
+    consume(batch);
+    batch.clear();
+  });
+}
+
+/// Runs every batch in worker processes and hands the outcomes, in sample order, to
+/// `consume`. Returns the number of workers restarted after a fault.
+int simulateAll(const Context& context, const ConsumeBatch& consume) {
+  if (context.options.isolation == RunOptions::Isolation::None) {
+    simulateInProcess(context, consume);
+    return 0;
+  }
   const int jobs = context.options.jobs;
   RecoveryPlan plan;
   for (int w = 0; w < jobs; ++w) plan.resumeAt.push_back(static_cast<std::size_t>(w));

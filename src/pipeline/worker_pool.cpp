@@ -282,8 +282,10 @@ void WorkerPool::reportLoss(int w) {
   ::kill(-worker.pid, SIGKILL);  // a netconvert it left behind
   WorkerFault fault;
   fault.activity = records_[w].snapshot();
-  // A worker that died of its own signal before the watchdog's SIGKILL took effect crashed.
-  if (worker.timedOut && !(WIFSIGNALED(status) && WTERMSIG(status) != SIGKILL)) {
+  // Only the watchdog's SIGKILL makes a timeout. A worker that crashed or exited on its
+  // own before it — or already lay dead while the parent read another worker, its
+  // activity seemingly lasting on — ended as its status says.
+  if (worker.timedOut && WIFSIGNALED(status) && WTERMSIG(status) == SIGKILL) {
     fault.kind = WorkerFault::Kind::Timeout;
     fault.limit = worker.limit;
     fault.activity = worker.timedOutActivity;

@@ -38,6 +38,14 @@ nlohmann::json identity(const SearchContext& context) {
           {"bnn_epochs", o.bnnEpochs}};
   if (o.probability != "shifts") json["probability"] = o.probability;  // checkpoints from before it stay valid
   if (o.rankTargets) json["rank_targets"] = true;
+  if (o.surrogate == "vectornet") {
+    nlohmann::json priors = nlohmann::json::array();
+    for (const auto& file : context.priors) priors.push_back({{"file", file.string()}, {"sha256", sha256OfFile(file)}});
+    json["prior"] = priors;
+    json["vectornet_steps"] = o.vectornetSteps;
+    json["future_samples"] = o.futureSamples;
+    json["threads"] = o.threads;  // training's float rounding depends on the thread layout
+  }
   return json;
 }
 

@@ -23,6 +23,7 @@
 #include "vsd/pipeline/scenes.hpp"
 #include "vsd/road/road_geometry.hpp"
 #include "vsd/scenario/concrete_scenario.hpp"
+#include "vsd/vector/dataset.hpp"
 
 namespace fs = std::filesystem;
 
@@ -58,6 +59,16 @@ void SearchOptions::validate() const {
     throw ConfigError::field(where, "--probability", probability, "shifts or tail");
   }
   if (bnnEpochs < 1) throw ConfigError::field(where, "--bnn-epochs", std::to_string(bnnEpochs), ">= 1");
+  if (vectornetSteps < 1 || vectornetSteps > 1'000'000) {
+    throw ConfigError::field(where, "--vectornet-steps", std::to_string(vectornetSteps), "1 .. 1000000");
+  }
+  if (futureSamples < 1 || futureSamples > 1000) {
+    throw ConfigError::field(where, "--future-samples", std::to_string(futureSamples), "1 .. 1000");
+  }
+  if (!priors.empty() && surrogate != "vectornet") {
+    throw ConfigError::field(where, "--prior", priors.front().string(),
+                             fmt::format("no --prior with --surrogate {}: only vectornet learns from scenes", surrogate));
+  }
   if (jobs < 1 || jobs > 256) throw ConfigError::field(where, "--jobs", std::to_string(jobs), "1 .. 256");
   if (threads < 1 || threads > 256) throw ConfigError::field(where, "--threads", std::to_string(threads), "1 .. 256");
   if (!(egoStepCost >= 0.0 && egoStepCost <= 10.0)) {
@@ -78,6 +89,28 @@ std::pair<double, double> wilsonInterval(std::uint64_t successes, std::uint64_t 
 
 namespace {
 
+/// The dataset files of the --prior folders, each checked against the scenario's step
+/// and horizon (a model learns one time base).
+std::vector<fs::path> priorDatasets(const std::vector<fs::path>& priors, const scenario::LogicalScenario& logical) {
+  std::vector<fs::path> files;
+  for (const auto& prior : priors) {
+    for (const auto& file : vector::datasetFiles(prior)) {
+      const vector::DatasetReader reader(file);
+      const auto& header = reader.header();
+      if (std::abs(header.step - logical.step) > 1e-9) {
+        throw ConfigError(fmt::format("--prior {}: step {} s, but {} has step {} s (a model learns one time base)",
+                                      prior.string(), header.step, logical.sourceFile.string(), logical.step));
+      }
+      if (header.horizon != logical.steps()) {
+        throw ConfigError(fmt::format("--prior {}: horizon {} steps, but {} has {} steps", prior.string(),
+                                      header.horizon, logical.sourceFile.string(), logical.steps()));
+      }
+      files.push_back(file);
+    }
+  }
+  return files;
+}
+
 SearchContext makeContext(const SearchOptions& options) {
   options.validate();
   SearchContext context;
@@ -85,11 +118,13 @@ SearchContext makeContext(const SearchOptions& options) {
   context.surrogate = &findSurrogate(options.surrogate);
   context.guides = context.surrogate->make(SurrogateOptions{})->guidesSelection();
   context.logical = scenario::loadLogicalScenario(options.scenarioFile);
-  const metrics::MetricSet metric_set(context.logical->metrics, pipeline::scenarioAvailability(*context.logical),
-                                      context.logical->sourceFile.string() + ": metrics");
-  context.metricNames = metric_set.names();
+  context.metricSet = std::make_shared<const metrics::MetricSet>(
+      context.logical->metrics, pipeline::scenarioAvailability(*context.logical),
+      context.logical->sourceFile.string() + ": metrics");
+  context.metricNames = context.metricSet->names();
   context.criterion = std::make_unique<Criterion>(options.criterion, *context.logical, context.metricNames);
   context.scenarioSha256 = sha256OfFile(context.logical->sourceFile);
+  context.priors = priorDatasets(options.priors, *context.logical);
   context.normaliser =
       detail::Normaliser(detail::sampleInputs(context, detail::kEstimateBase, detail::kNormalisationSamples));
   return context;
@@ -210,7 +245,12 @@ ScoredPool scorePool(const SearchContext& context, const SearchState& state) {
   ScoredPool pool;
   pool.firstSample = detail::kPoolBase + state.rounds * detail::kPoolStride;
   pool.normalised = context.normaliser.apply(detail::sampleInputs(context, pool.firstSample, context.options.pool));
-  pool.probability = surrogate ? surrogate->probability(pool.normalised, *context.criterion)
+  CandidateSet candidates;
+  candidates.x = pool.normalised;
+  candidates.scene = [logical = context.logical, seed = context.options.seed, first = pool.firstSample](std::size_t row) {
+    return pipeline::plannedScene(scenario::sampleConcreteScenario(logical, seed, first + row));
+  };
+  pool.probability = surrogate ? surrogate->probability(candidates, *context.criterion)
                                : std::vector<double>(static_cast<std::size_t>(pool.normalised.rows()), 0.0);
   return pool;
 }

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "vsd/core/files.hpp"
+#include "vsd/metrics/metrics.hpp"
 #include "vsd/scenario/logical_scenario.hpp"
 #include "vsd/search/criterion.hpp"
 #include "vsd/search/search.hpp"
@@ -45,11 +46,13 @@ class Normaliser {
 struct SearchContext {
   SearchOptions options;
   std::shared_ptr<const scenario::LogicalScenario> logical;
-  std::vector<std::string> metricNames;
+  std::shared_ptr<const metrics::MetricSet> metricSet;
+  std::vector<std::string> metricNames;  ///< metricSet->names()
   std::unique_ptr<Criterion> criterion;
   const SurrogateEntry* surrogate = nullptr;
   bool guides = false;  ///< the surrogate selects (false: Monte Carlo)
   std::string scenarioSha256;
+  std::vector<std::filesystem::path> priors;  ///< dataset files of --prior, checked against the scenario
   Normaliser normaliser;
 };
 

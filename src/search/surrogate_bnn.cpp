@@ -32,12 +32,15 @@ class BnnSurrogate final : public Surrogate {
 
   bool guidesSelection() const override { return true; }
 
-  void fit(const Matrix& x, const Matrix& y) override {
+  void fit(const TrainingSet& data) override {
+    const Matrix& x = data.x;
+    const Matrix& y = data.y;
     network_ = std::make_unique<baseline::BayesianNetwork>(bnnOptions_);
     network_->fit(x, y);
   }
 
-  std::vector<double> probability(const Matrix& x, const Criterion& criterion) const override {
+  std::vector<double> probability(const CandidateSet& candidates, const Criterion& criterion) const override {
+    const Matrix& x = candidates.x;
     const auto prediction = network_->predict(x);
     const auto targets = static_cast<std::size_t>(prediction.mean.cols());
     std::vector<double> result(static_cast<std::size_t>(x.rows()));

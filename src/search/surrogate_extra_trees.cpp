@@ -23,7 +23,9 @@ class ExtraTreesSurrogate final : public Surrogate {
 
   bool guidesSelection() const override { return true; }
 
-  void fit(const Matrix& x, const Matrix& y) override {
+  void fit(const TrainingSet& data) override {
+    const Matrix& x = data.x;
+    const Matrix& y = data.y;
     forests_.clear();
     quantiles_.clear();
     for (Eigen::Index target = 0; target < y.cols(); ++target) {
@@ -42,7 +44,8 @@ class ExtraTreesSurrogate final : public Surrogate {
     }
   }
 
-  std::vector<double> probability(const Matrix& x, const Criterion& criterion) const override {
+  std::vector<double> probability(const CandidateSet& candidates, const Criterion& criterion) const override {
+    const Matrix& x = candidates.x;
     // per target: one [n, 1] prediction per tree
     std::vector<std::vector<Matrix>> per_tree;
     for (const auto& forest : forests_) per_tree.push_back(forest.predictPerTree(x));

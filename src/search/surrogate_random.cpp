@@ -9,10 +9,10 @@ namespace {
 class RandomSurrogate final : public Surrogate {
  public:
   bool guidesSelection() const override { return false; }
-  void fit(const Matrix&, const Matrix&) override {}
+  void fit(const TrainingSet&) override {}
   /// Monte Carlo has no model: every candidate is equally likely to be critical.
-  std::vector<double> probability(const Matrix& x, const Criterion&) const override {
-    return std::vector<double>(static_cast<std::size_t>(x.rows()), 0.0);
+  std::vector<double> probability(const CandidateSet& candidates, const Criterion&) const override {
+    return std::vector<double>(static_cast<std::size_t>(candidates.x.rows()), 0.0);
   }
 };
 

@@ -19,6 +19,10 @@ const std::vector<SurrogateEntry>& surrogateRegistry() {
        makeExtraTreesSurrogate},
       {"bnn", "Bayesian neural network on the inputs; probability from its posterior predictive mean and std",
        makeBnnSurrogate},
+      {"vectornet",
+       "VectorNet (kinematic decoder) on the vectorized scenes, retrained each round; probability = share of its "
+       "sampled futures whose metrics meet the criterion",
+       makeVectorNetSurrogate},
   };
   return entries;
 }

@@ -89,6 +89,11 @@ std::unique_ptr<Surrogate> fitSurrogate(const SearchContext& context, const std:
     }
   }
   capInfinities(y);
+  TrainingSet data{context.normaliser.apply(x), std::move(y), {}};
+  if (context.options.surrogate == "vectornet") {
+    data.scenes = roundFiles(context, round, "dataset.h5");
+    data.scenes.insert(data.scenes.end(), context.priors.begin(), context.priors.end());
+  }
   SurrogateOptions options;
   options.seed = mix64(context.options.seed ^ mix64(round + 1));
   options.trees = context.options.trees;
@@ -96,8 +101,12 @@ std::unique_ptr<Surrogate> fitSurrogate(const SearchContext& context, const std:
   options.rankTargets = context.options.rankTargets;
   options.bnnEpochs = context.options.bnnEpochs;
   options.threads = context.options.threads;
+  options.metricSet = context.metricSet;
+  options.modelFile = roundFile(context, round, "vectornet.pt");
+  options.vectornetSteps = context.options.vectornetSteps;
+  options.futureSamples = context.options.futureSamples;
   auto surrogate = context.surrogate->make(options);
-  surrogate->fit(context.normaliser.apply(x), y);
+  surrogate->fit(data);
   return surrogate;
 }
 

@@ -56,6 +56,7 @@ struct Member {
   std::vector<std::vector<VehicleState>> otherPaths;  ///< scripted vehicles' states at every instant
   std::vector<std::size_t> otherRoadEnds;  ///< per scripted vehicle: first instant past its road's end (or never)
   std::optional<EgoDriver> ego;
+  SumoPlacement placement;  ///< how this scenario's vehicles are put on its road in SUMO
   SimulatedScenario result;
   bool active = true;
 };
@@ -129,6 +130,7 @@ std::vector<SimulatedScenario> simulateBatch(const std::filesystem::path& net, c
 
   VehicleTypes types;
   LaneCache lanes;
+  const bool match_to_lanes = sumoIgnoresLateralPositions();
   std::vector<Member> members(runs.size());
   std::unordered_map<std::string, std::size_t> owner;  // SUMO vehicle id -> member
   std::unordered_set<std::string> expected;             // vehicles that should be in the simulation
@@ -150,6 +152,7 @@ std::vector<SimulatedScenario> simulateBatch(const std::filesystem::path& net, c
     for (int lane = 0; lane < run.road->lanes; ++lane) {
       member.result.lanes.push_back(fetchLane(fmt::format("{}_{}", member.edge, lane), run.offset));
     }
+    if (match_to_lanes) member.placement = SumoPlacement(member.result.lanes);
 
     // Ego: starts on its lane's centre line at its x, heading along the lane.
     const auto& ego_spec = concrete.ego;
@@ -169,6 +172,7 @@ std::vector<SimulatedScenario> simulateBatch(const std::filesystem::path& net, c
                                                   options.scenarioDir, params),
                                    options.egoStepCost);
     member.ego.emplace(member.egoId, std::move(controller), initial, ego_spec.length, ego_spec.width, run.offset);
+    member.ego->placeBy(member.placement);
     member.ego->pushToSumo();
     owner.emplace(member.egoId, m);
     expected.insert(member.egoId);
@@ -188,7 +192,7 @@ std::vector<SimulatedScenario> simulateBatch(const std::filesystem::path& net, c
                             fmt::format("{}", other.speed));
       libsumo::Vehicle::setSpeedMode(id, 0);
       libsumo::Vehicle::setLaneChangeMode(id, 0);
-      placeInSumo(id, member.otherPaths.back().front(), other.length, run.offset);
+      placeInSumo(id, member.otherPaths.back().front(), other.length, other.width, run.offset, member.placement);
       member.otherIds.push_back(id);
       owner.emplace(id, m);
       expected.insert(id);
@@ -277,7 +281,8 @@ std::vector<SimulatedScenario> simulateBatch(const std::filesystem::path& net, c
           fail(member, fmt::format("vehicle '{}' reached the end of its road at t = {:.1f} s", others[o].id, time + dt));
           break;
         }
-        placeInSumo(member.otherIds[o], member.otherPaths[o][next], others[o].length, member.run->offset);
+        placeInSumo(member.otherIds[o], member.otherPaths[o][next], others[o].length, others[o].width,
+                    member.run->offset, member.placement);
       }
     }
     if (faultInjectionActive()) {

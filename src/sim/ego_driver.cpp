@@ -2,7 +2,9 @@
 
 #include <libsumo/libsumo.h>
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "vsd/core/activity.hpp"
 #include "vsd/core/error.hpp"
@@ -36,10 +38,40 @@ EgoDriver::EgoDriver(std::string vehicle_id, std::unique_ptr<EgoController> cont
   minGap_ = libsumo::Vehicle::getMinGap(vehicleId_);
 }
 
-void placeInSumo(const std::string& vehicle_id, const VehicleState& state, double length, const Vec2& offset) {
-  const Vec2 front = state.position() + 0.5 * length * headingVector(state.heading) + offset;
-  libsumo::Vehicle::moveToXY(vehicle_id, "", -1, front.x(), front.y(), sumoAngleFromHeading(state.heading),
-                             /*keepRoute=*/3);
+SumoPlacement::SumoPlacement(const std::vector<LaneGeometry>& lanes) {
+  narrowest_ = std::numeric_limits<double>::infinity();
+  for (const auto& lane : lanes) {
+    lanes_.emplace_back(lane.centre);
+    narrowest_ = std::min(narrowest_, lane.width);
+  }
+}
+
+int SumoPlacement::keepRoute(const Vec2& front, double width) const {
+  // SUMO keeps a vehicle on its lane while |lateral offset| < (lane width + vehicle width) / 2,
+  // measured from the nearest lane's shape; 1 cm covers the rounding of the frame shift.
+  constexpr double kMargin = 0.01;
+  for (const auto& lane : lanes_) {
+    if (std::abs(lane.project(front).lateralOffset) < 0.5 * (narrowest_ + width) - kMargin) return 1;
+  }
+  return 3;
+}
+
+bool sumoIgnoresLateralPositions() {
+  const auto option = [](const char* name) { return libsumo::Simulation::getOption(name); };
+  try {
+    return std::stod(option("lateral-resolution")) <= 0.0 && option("fcd-output").empty() &&
+           option("collision.check-junctions") == "false";
+  } catch (const std::exception&) {
+    return false;  // an option SUMO does not report as expected: place exactly
+  }
+}
+
+void placeInSumo(const std::string& vehicle_id, const VehicleState& state, double length, double width,
+                 const Vec2& offset, const SumoPlacement& placement) {
+  const Vec2 front = state.position() + 0.5 * length * headingVector(state.heading);
+  const Vec2 net_front = front + offset;
+  libsumo::Vehicle::moveToXY(vehicle_id, "", -1, net_front.x(), net_front.y(), sumoAngleFromHeading(state.heading),
+                             placement.keepRoute(front, width));
   libsumo::Vehicle::setSpeed(vehicle_id, state.speed);
 }
 
@@ -58,7 +90,7 @@ Observation::Lane observeLane(const MeasuredPolyline& preview_line, const Polyli
   return lane;
 }
 
-void EgoDriver::pushToSumo() const { placeInSumo(vehicleId_, state_, length_, offset_); }
+void EgoDriver::pushToSumo() const { placeInSumo(vehicleId_, state_, length_, width_, offset_, placement_); }
 
 Observation EgoDriver::observe(double time, LaneCache& lanes) const {
   Observation observation;

@@ -58,6 +58,15 @@ fs::path caseFolder(const Fixtures& fixtures, const std::string& category, std::
   return folder;
 }
 
+namespace {
+
+/// A command's argument in a case: "@x" names x in the case's `folder`; others stay.
+std::string inCaseFolder(const std::string& arg, const fs::path& folder) {
+  return arg.rfind('@', 0) == 0 ? (folder / arg.substr(1)).string() : arg;
+}
+
+}  // namespace
+
 std::string datasetProblems(const fs::path& path) {
   const auto validation = vector::validateDataset(vector::resolveDatasetPath(path));
   if (validation.ok()) return {};
@@ -199,7 +208,7 @@ namespace {
 /// A valid command and the output it promises; flags are mutated one at a time.
 struct BaseCommand {
   std::string name;
-  std::vector<std::string> args;
+  std::vector<std::string> args;  ///< "@x": x in the case folder
   std::vector<std::string> numericFlags;
   fs::path output;  ///< relative to the case folder
   bool validatesDataset = false;
@@ -265,8 +274,7 @@ std::vector<Case> flagCases(const Fixtures& fixtures, Random& random, std::size_
         ++a;
         continue;
       }
-      const auto& arg = base.args[a];
-      c.args.push_back(arg.rfind('@', 0) == 0 ? (folder / arg.substr(1)).string() : arg);
+      c.args.push_back(inCaseFolder(base.args[a], folder));
     }
     // "--flag=value" keeps a value such as "-1" a value.
     c.args.push_back(flag + "=" + value);
@@ -344,7 +352,7 @@ std::vector<Case> killCases(const Fixtures& fixtures, Random& random, std::size_
     if (older) fs::copy(writer.older, output, fs::copy_options::recursive | fs::copy_options::overwrite_existing);
     Case c;
     c.name = fmt::format("kills/{} killed at {}{}", writer.name, point, older ? " (over an older output)" : "");
-    for (const auto& arg : writer.args) c.args.push_back(arg.rfind('@', 0) == 0 ? (folder / arg.substr(1)).string() : arg);
+    for (const auto& arg : writer.args) c.args.push_back(inCaseFolder(arg, folder));
     c.outputs = {output};
     c.environment = {"VSD_FAULT=kill@" + point};
     c.expectKill = true;

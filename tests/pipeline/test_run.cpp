@@ -111,6 +111,25 @@ TEST(Run, SameSeedGivesIdenticalOutputsWhateverJobsAndBatch) {
   EXPECT_NE(csv_a, readTextFile(dir.path() / "d" / "concrete.csv"));
 }
 
+// `vsd-sumo bench isolation` compares the two; it measures only the cost if they compute the same.
+TEST(Run, InTheCallingProcessTheSameBatchesGiveTheSameOutputsAsInAWorker) {
+  TemporaryDirectory dir;
+  auto worker = options(test::scenarioFile("acc_lk.yaml"), dir.path() / "worker", 12);
+  worker.batch = 5;  // three batches, the last one short
+  auto in_process = worker;
+  in_process.outputDir = dir.path() / "in_process";
+  in_process.isolation = RunOptions::Isolation::None;
+  const auto a = runScenarios(worker);
+  const auto b = runScenarios(in_process);
+  EXPECT_EQ(b.ok, a.ok);
+  EXPECT_GT(a.ok, 0u);
+  for (const char* file : {"concrete.csv", "traces.h5", "dataset.h5"}) {
+    EXPECT_EQ(sha256OfFile(dir.path() / "in_process" / file), sha256OfFile(dir.path() / "worker" / file)) << file;
+  }
+  in_process.jobs = 2;  // one process cannot be two workers
+  EXPECT_THROW(in_process.validate(), ConfigError);
+}
+
 TEST(Run, PerScenarioFaultsAreRecordedAndTheRestGoesOn) {
   TemporaryDirectory dir;
   const auto scenario = test::writeFile(

@@ -106,6 +106,33 @@ TEST(WorkerPool, TheWatchdogStopsAHangAndARestartedWorkerGoesOn) {
   EXPECT_EQ(pool.restarts(), 1);
 }
 
+// While the parent waits for worker 0, worker 1 exits inside its controller; its
+// record still says "controller" and the watchdog sees that activity last past the
+// limit. It must still be reported as the exit it was, not as a hang.
+TEST(WorkerPool, AWorkerThatExitedWhileTheParentReadAnotherIsNotTakenForAHang) {
+  WatchdogOptions watchdog;
+  watchdog.stepTimeout = 0.2;
+  WorkerPool pool(2, [](int worker, WorkerChannel& channel) {
+    const ActivityScope in_controller(Activity::Controller);
+    if (worker == 1) std::exit(0);
+    std::this_thread::sleep_for(std::chrono::milliseconds(600));  // outlasts the limit: worker 0 times out
+    channel.send(bytesOf(worker));
+  }, watchdog);
+  auto fault_of = [&pool](int worker) {
+    try {
+      pool.receive(worker);
+    } catch (const WorkerLost& lost) {
+      return lost.fault();
+    }
+    ADD_FAILURE() << "expected WorkerLost from worker " << worker;
+    return WorkerFault{};
+  };
+  EXPECT_EQ(fault_of(0).kind, WorkerFault::Kind::Timeout);
+  const WorkerFault exited = fault_of(1);
+  EXPECT_EQ(exited.kind, WorkerFault::Kind::Exit) << exited.what();
+  EXPECT_EQ(exited.exitCode, 0);
+}
+
 TEST(WorkerPool, IdleWorkersAreNotStoppedByTheWatchdogAndErrorsKeepTheirType) {
   WatchdogOptions watchdog;
   watchdog.stepTimeout = 0.05;

@@ -4,6 +4,7 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <filesystem>
 
 #include "test_support.hpp"
@@ -99,9 +100,10 @@ TEST(SearchSurrogates, RankTargetsMapBackToMetricValuesAndReachBelowTheObservedR
     x(i, 0) = static_cast<double>(i) / 49.0;
     y(i, 0) = 0.5 + 2.0 * x(i, 0);  // d_min from 0.5 to 2.5 m
   }
-  surrogate->fit(x, y);
-  Matrix candidates(3, 1);
-  candidates << 0.1, 0.9, 0.01;
+  surrogate->fit({x, y, {}});
+  CandidateSet candidates;
+  candidates.x.resize(3, 1);
+  candidates.x << 0.1, 0.9, 0.01;
   // Inside the observed range: judged on metric values, not on ranks (d_min < 1.5 <=> x < 0.5).
   const auto inside = surrogate->probability(candidates, Criterion("d_min < 1.5", *logical, kMetrics));
   EXPECT_GT(inside[0], 0.5);
@@ -215,6 +217,62 @@ TEST(SearchLoop, ACriterionNeverMetInTheInitialDesignDoesNotStopTheSearch) {
   EXPECT_GT(summary.estimate.high, 0.0);
 }
 
+// vectornet learns from scenes: the executions' and a prior's (another functional
+// scenario); it scores candidates' planned scenes, retrains each round, resumes like
+// the other surrogates and makes the same choices whether resumed or not.
+TEST(SearchVectorNet, APriorIsMixedInAndTheSearchResumesWithTheSameChoices) {
+  TemporaryDirectory work("vsd-test-search");
+  const auto prior = work.path() / "lk";
+  const auto run = test::run({test::vsdSumo().string(), "-q", "run", test::scenarioFile("lk.yaml").string(), "-n", "30",
+                              "--out", prior.string()},
+                             work.path());
+  ASSERT_EQ(run.exitCode, 0) << run.output;
+  auto vectornet = [&](const fs::path& out, std::uint64_t budget) {
+    auto options = smallSearch(out, "vectornet", budget);
+    options.pool = 200;
+    options.priors = {prior};
+    options.vectornetSteps = 20;
+    options.futureSamples = 4;
+    return options;
+  };
+  const auto resumed = work.path() / "resumed";
+  runSearch(vectornet(resumed, 40));  // "interrupted" after the initial design
+  fs::remove(resumed / "manifest.json");
+  const auto summary = runSearch(vectornet(resumed, 60));
+  EXPECT_EQ(summary.resumedFrom, 40u);
+  EXPECT_EQ(summary.executions, 60u);
+  runSearch(vectornet(work.path() / "straight", 60));
+  EXPECT_EQ(readTextFile(resumed / "concrete.csv"), readTextFile(work.path() / "straight" / "concrete.csv"));
+  EXPECT_TRUE(fs::exists(resumed / ".rounds" / "round-00001.vectornet.pt"));
+  // The probability is the share of 4 sampled futures meeting the criterion, or below
+  // 1/8 (the Gaussian tail) where none does.
+  const auto origins = column(resumed / "concrete.csv", "origin");
+  const auto predicted = column(resumed / "concrete.csv", "predicted_probability");
+  for (std::size_t i = 0; i < origins.size(); ++i) {
+    if (origins[i] != "acquired") continue;
+    const double p = std::stod(predicted[i]);
+    EXPECT_TRUE(p < 0.125 || p * 4.0 == std::round(p * 4.0)) << predicted[i];
+  }
+
+  // A prior with another time base is refused in one line naming the folder and the value.
+  const auto fine = work.path() / "lk_fine.yaml";
+  writeTextFileAtomically(fine, test::scenarioVariant("lk.yaml", "step: 0.2", "step: 0.1"));
+  const auto fine_run = work.path() / "lk_fine";
+  ASSERT_EQ(test::run({test::vsdSumo().string(), "-q", "run", fine.string(), "-n", "3", "--out", fine_run.string()},
+                      work.path())
+                .exitCode,
+            0);
+  auto refused = vectornet(work.path() / "refused", 60);
+  refused.priors = {fine_run};
+  const auto message = errorOf([&] { runSearch(refused); });
+  EXPECT_THAT(message, HasSubstr("--prior " + fine_run.string() + ": step 0.1 s"));
+  EXPECT_EQ(std::count(message.begin(), message.end(), '\n'), 0) << message;
+  refused.priors = {prior};
+  refused.surrogate = "extra-trees";
+  EXPECT_THAT(errorOf([&] { runSearch(refused); }), HasSubstr("only vectornet learns from scenes"));
+  EXPECT_FALSE(fs::exists(work.path() / "refused"));
+}
+
 TEST(SearchEstimate, WilsonIntervalMatchesTheReference) {
   // scipy.stats.binomtest(8, 1000).proportion_ci(method="wilson") = (0.0040591958, 0.0157063345)
   const auto [low, high] = wilsonInterval(8, 1000);
@@ -235,13 +293,41 @@ TEST(SearchCli, BadInputIsOneLineWithExitCodeOneAndNoFolder) {
   const std::string scenario = test::scenarioFile("acc_lk.yaml").string();
   for (const std::vector<std::string>& flags :
        {std::vector<std::string>{"--criterion", "dmin < 2"}, {"--criterion", "d_min < 2", "--budget", "50"},
-        {"--criterion", "d_min < 2", "--surrogate", "vectornet"}, {"--criterion", "d_min < 2", "--pool", "0"},
-        {"--criterion", "d_min < 2", "--probability", "gauss"}, {"--criterion", "d_min < 2", "--ego-step-cost-ms", "-1"}}) {
+        {"--criterion", "d_min < 2", "--surrogate", "gp"}, {"--criterion", "d_min < 2", "--pool", "0"},
+        {"--criterion", "d_min < 2", "--probability", "gauss"}, {"--criterion", "d_min < 2", "--ego-step-cost-ms", "-1"},
+        {"--criterion", "d_min < 2", "--prior", scenario}}) {
     std::vector<std::string> argv = {test::vsdSumo().string(), "-q", "search", scenario, "--out", out.string()};
     argv.insert(argv.end(), flags.begin(), flags.end());
     const auto result = test::run(argv, work.path());
     EXPECT_EQ(result.exitCode, 1) << result.output;
     EXPECT_THAT(result.output, HasSubstr("vsd-sumo: error: "));
+    EXPECT_EQ(std::count(result.output.begin(), result.output.end(), '\n'), 1) << result.output;
+    EXPECT_FALSE(fs::exists(out));
+  }
+}
+
+// Numeric flags are checked where they enter (src/cli/flags.hpp): no wrap-around of a
+// negative budget into 2^64 - 5, no infinite pool, no zero seeds in the bench.
+TEST(SearchCli, NumbersFromFlagsAreCheckedWhereTheyEnter) {
+  TemporaryDirectory work("vsd-test-search-cli");
+  const auto out = work.path() / "out";
+  const std::string scenario = test::scenarioFile("acc_lk.yaml").string();
+  const std::vector<std::pair<std::vector<std::string>, std::string>> cases = {
+      {{"search", scenario, "--out", out.string(), "-c", "d_min < 2", "--budget", "-5"},
+       "--budget: got '-5', expected a whole number"},
+      {{"search", scenario, "--out", out.string(), "-c", "d_min < 2", "--pool", "inf"},
+       "--pool: got 'inf', expected a whole number"},
+      {{"search", scenario, "--out", out.string(), "-c", "d_min < 2", "--diversity", "nan"},
+       "--diversity: got 'nan', expected a finite decimal number"},
+      {{"bench", "search", scenario, "--budget", "-5"}, "--budget: got '-5', expected a whole number"},
+      {{"bench", "search", scenario, "--seeds", "0"}, "--seeds"},
+  };
+  for (const auto& [flags, expected] : cases) {
+    std::vector<std::string> argv = {test::vsdSumo().string(), "-q"};
+    argv.insert(argv.end(), flags.begin(), flags.end());
+    const auto result = test::run(argv, work.path());
+    EXPECT_EQ(result.exitCode, 1) << result.output;
+    EXPECT_THAT(result.output, HasSubstr(expected));
     EXPECT_EQ(std::count(result.output.begin(), result.output.end(), '\n'), 1) << result.output;
     EXPECT_FALSE(fs::exists(out));
   }

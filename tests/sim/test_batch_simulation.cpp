@@ -1,6 +1,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 #include <regex>
 
 #include "test_support.hpp"
@@ -129,6 +130,46 @@ TEST(BatchSimulation, TheCoKeepsItsLaneWithThePapersOrientationNoise) {
   // Bounded: lane keeping corrects the disturbance (slowly when the Co crawls after braking,
   // where a step's turn is small: a few disturbances in a row then add up).
   EXPECT_LT(largest_deviation, 20.0 * kPi / 180.0);
+}
+
+// Vehicles inside their lane are matched to it in SUMO (keepRoute 1), vehicles near or past
+// its edge placed exactly (keepRoute 3); with FCD output every vehicle is placed exactly.
+// Both must give the same simulation, also when vehicles leave the road.
+TEST(BatchSimulation, MatchingVehiclesToTheirLanesChangesNothingSumoComputes) {
+  std::string text = test::scenarioVariant("acc_lk.yaml", "lanes: 1", "lanes: 3");
+  const std::string noise = "heading_noise_deg: {min: -2.9, max: 2.9}";
+  for (auto at = text.find(noise); at != std::string::npos; at = text.find(noise)) {
+    text.replace(at, noise.size(), "heading_noise_deg: {min: -45, max: 45}");
+  }
+  const auto logical = scenario::parseLogicalScenario(text, test::scenarioFile("acc_lk_wild.yaml"));
+  const std::size_t count = 40;
+  TemporaryDirectory matched_dir;
+  TemporaryDirectory exact_dir;
+  const Batch matched(logical, count, matched_dir.path());
+  const Batch exact(logical, count, exact_dir.path(), ControllerRegistry::withBuiltins(), exact_dir.path() / "fcd.xml");
+  std::size_t off_lane = 0;
+  for (std::size_t i = 0; i < count; ++i) {
+    const auto& a = matched.results[i];
+    const auto& b = exact.results[i];
+    EXPECT_EQ(a.failure, b.failure) << "sample " << i;
+    ASSERT_EQ(a.trace.vehicles.size(), b.trace.vehicles.size());
+    for (std::size_t v = 0; v < a.trace.vehicles.size(); ++v) {
+      const auto& track = a.trace.vehicles[v];
+      ASSERT_EQ(track.valid, b.trace.vehicles[v].valid) << "sample " << i;
+      for (std::size_t k = 0; k < track.states.size(); ++k) {
+        const auto& x = track.states[k];
+        const auto& y = b.trace.vehicles[v].states[k];
+        ASSERT_TRUE(x.x == y.x && x.y == y.y && x.heading == y.heading && x.speed == y.speed && x.accel == y.accel)
+            << "sample " << i << " vehicle " << v << " instant " << k;
+        double nearest = std::numeric_limits<double>::infinity();
+        for (const auto& lane : a.lanes) {
+          nearest = std::min(nearest, std::abs(MeasuredPolyline(lane.centre).project(x.position()).lateralOffset));
+        }
+        if (track.valid[k] && nearest > 0.5 * (a.lanes[0].width + track.width)) ++off_lane;
+      }
+    }
+  }
+  EXPECT_GT(off_lane, 0u);  // the exact placement's case happened
 }
 
 TEST(BatchSimulation, AVehicleReachingTheEndOfItsRoadFailsOnlyItsScenario) {

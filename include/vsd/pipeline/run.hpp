@@ -71,6 +71,14 @@ struct RunOptions {
   /// s of extra wall time per Ego step (--ego-step-cost-ms; 0: none): a slow Ego stack's
   /// cost, for benchmarks. It counts against the watchdog's per-step limit.
   double egoStepCost = 0.0;
+  /// Where the Ego controllers and libsumo run. Process (the default, and the only
+  /// choice `vsd-sumo run` offers): forked worker processes under the watchdog (see
+  /// worker_pool.hpp). None: the calling process itself, the same batches in the same
+  /// order through the same code, without fork, pipe or watchdog — a plugin's crash,
+  /// exit() or hang takes the caller with it. Only with jobs = 1. It exists so that
+  /// `vsd-sumo bench isolation` can measure what the worker processes cost.
+  enum class Isolation { Process, None };
+  Isolation isolation = Isolation::Process;
   std::string commandLine;          ///< recorded in the manifest
   /// Empty: scenarios are sampled from the logical scenario (seed, index) and their roads
   /// generated. Set for scenarios read from elsewhere (`vsd-sumo run FILE.xosc`).

@@ -50,9 +50,15 @@ struct SearchOptions {
   std::string probability = "shifts"; ///< extra-trees: "shifts" or "tail" (SurrogateOptions::probability)
   bool rankTargets = false;           ///< extra-trees: fit metric ranks (SurrogateOptions::rankTargets)
   int bnnEpochs = 200;                ///< bnn surrogate: epochs per fit
+  /// vectornet: datasets (files or run/export folders) of other functional scenarios or
+  /// maps mixed into its training from the first round; their step and horizon must be
+  /// the scenario's (ConfigError naming the folder and the value otherwise).
+  std::vector<std::filesystem::path> priors;
+  int vectornetSteps = 400;           ///< vectornet: optimizer steps of each round's training (from scratch)
+  int futureSamples = 16;             ///< vectornet: sampled futures per candidate (probability = share meeting it)
   std::uint64_t seed = 1;
   int jobs = 1;                       ///< worker processes for the simulations
-  int threads = 2;                    ///< libtorch threads (bnn)
+  int threads = 2;                    ///< libtorch threads (bnn, vectornet)
   double egoStepCost = 0.0;           ///< s of extra wall time per Ego step (pipeline::RunOptions::egoStepCost)
   std::string commandLine;            ///< recorded in the manifest
   /// Throws ConfigError naming the flag and the accepted range (e.g. budget < initial).

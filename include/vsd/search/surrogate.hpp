@@ -5,6 +5,7 @@
 // per surrogate (name, description, factory); an unknown name lists the known ones.
 
 #include <cstdint>
+#include <filesystem>
 #include <functional>
 #include <memory>
 #include <string>
@@ -13,10 +14,32 @@
 #include <Eigen/Core>
 
 #include "vsd/search/criterion.hpp"
+#include "vsd/vector/scene.hpp"
+
+namespace vsd::metrics {
+class MetricSet;
+}
 
 namespace vsd::search {
 
 using Matrix = Eigen::MatrixXd;  ///< rows = concrete scenarios
+
+/// What a surrogate learns from: the executions whose criterion metrics are computable.
+struct TrainingSet {
+  Matrix x;  ///< [n, inputs] normalised to about [0, 1]
+  Matrix y;  ///< [n, criterion.usedMetrics()] finite (infinities capped)
+  /// Vectorized scenes of every completed execution with its simulated future (the rounds'
+  /// dataset.h5 files, in round order), then the --prior datasets. For scene models.
+  std::vector<std::filesystem::path> scenes;
+};
+
+/// The candidates of one round (sampled, never simulated).
+struct CandidateSet {
+  Matrix x;  ///< [n, inputs] normalised
+  /// The vectorized scene of row i before simulation (pipeline::plannedScene); throws
+  /// ConfigError when it cannot be planned (a vehicle off its road: SUMO fails it too).
+  std::function<vector::VectorizedScene(std::size_t row)> scene;
+};
 
 /// Settings shared by every surrogate; each takes what applies to it.
 struct SurrogateOptions {
@@ -32,6 +55,12 @@ struct SurrogateOptions {
   /// predictions back through the empirical quantiles, extrapolated linearly beyond the
   /// observed range (so that a criterion below every observed value gets a probability).
   bool rankTargets = false;
+  /// vectornet: the metric set whose names() the criterion indexes (metrics of predicted futures).
+  std::shared_ptr<const metrics::MetricSet> metricSet;
+  /// vectornet: where this round's model is written.
+  std::filesystem::path modelFile;
+  int vectornetSteps = 400;   ///< vectornet: optimizer steps of each round's training
+  int futureSamples = 16;     ///< vectornet: sampled futures per candidate
 };
 
 class Surrogate {
@@ -39,10 +68,10 @@ class Surrogate {
   virtual ~Surrogate() = default;
   /// False for plain Monte Carlo: the loop then executes the random stream only.
   virtual bool guidesSelection() const = 0;
-  /// x [n, inputs] normalised to about [0, 1]; y [n, criterion.usedMetrics()] finite.
-  virtual void fit(const Matrix& x, const Matrix& y) = 0;
-  /// Predicted probability (0..1) that each row of x meets the criterion.
-  virtual std::vector<double> probability(const Matrix& x, const Criterion& criterion) const = 0;
+  /// Fits on every execution so far (n >= 2).
+  virtual void fit(const TrainingSet& data) = 0;
+  /// Predicted probability (0..1) that each candidate meets the criterion.
+  virtual std::vector<double> probability(const CandidateSet& candidates, const Criterion& criterion) const = 0;
 };
 
 struct SurrogateEntry {
@@ -53,13 +82,14 @@ struct SurrogateEntry {
 
 /// Every surrogate, in a fixed order.
 const std::vector<SurrogateEntry>& surrogateRegistry();
-/// Throws ConfigError "--surrogate 'x': unknown (known: random, extra-trees, bnn)".
+/// Throws ConfigError "--surrogate 'x': unknown (known: random, extra-trees, bnn, vectornet)".
 const SurrogateEntry& findSurrogate(const std::string& name);
 
 // Factories, one per file (surrogate_*.cpp); listed in surrogateRegistry().
 std::unique_ptr<Surrogate> makeRandomSurrogate(const SurrogateOptions& options);
 std::unique_ptr<Surrogate> makeExtraTreesSurrogate(const SurrogateOptions& options);
 std::unique_ptr<Surrogate> makeBnnSurrogate(const SurrogateOptions& options);
+std::unique_ptr<Surrogate> makeVectorNetSurrogate(const SurrogateOptions& options);
 
 /// Fraction of the shifted predictions `centre + z * spread` (z from `shifts`) that meet
 /// the criterion: the spread-based probability both model surrogates use.

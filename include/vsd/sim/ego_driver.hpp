@@ -6,6 +6,8 @@
 #include <memory>
 #include <string>
 #include <unordered_map>
+#include <utility>
+#include <vector>
 
 #include "vsd/sim/controller.hpp"
 #include "vsd/sim/sumo_session.hpp"
@@ -35,11 +37,40 @@ class LaneCache {
 Observation::Lane observeLane(const MeasuredPolyline& preview_line, const PolylineProjection& projection,
                               const VehicleState& state, double width);
 
+/// How exactly placeInSumo puts a vehicle across its lane. SUMO without the sublane model
+/// uses a vehicle's lateral position only for drawing and position outputs: leaders, gaps,
+/// collisions and lane changes use positions along the lane. A vehicle inside its lane can
+/// then be matched to the lane (moveToXY keepRoute 1: same lane, same position along it,
+/// lateral offset 0) instead of being placed exactly (keepRoute 3), which saves SUMO a
+/// sideways-moved copy of the lane shape on every call (a quarter of `vsd-sumo run`'s CPU
+/// time) and changes nothing SUMO computes for the simulation. A vehicle near or beyond
+/// its lane's edge is still placed exactly: SUMO takes it off the lane then.
+class SumoPlacement {
+ public:
+  /// Every vehicle placed exactly (maps, and whenever SUMO may use lateral positions).
+  SumoPlacement() = default;
+  /// Vehicles well inside one of `lanes` (in the frame net - offset, as fetched from SUMO)
+  /// are matched to it; only for a SUMO for which sumoIgnoresLateralPositions() holds.
+  explicit SumoPlacement(const std::vector<LaneGeometry>& lanes);
+  /// moveToXY's keepRoute for a vehicle `width` m wide whose front bumper is at `front`
+  /// (frame net - offset): 1 (matched) or 3 (exact).
+  int keepRoute(const Vec2& front, double width) const;
+
+ private:
+  std::vector<MeasuredPolyline> lanes_;
+  double narrowest_ = 0.0;  ///< m, the narrowest lane's width
+};
+
+/// True if the running simulation uses no lateral position of a vehicle on a lane: no
+/// sublane model, no FCD output, no collision checks on junctions (SUMO's options).
+bool sumoIgnoresLateralPositions();
+
 /// Places a vehicle in SUMO at `state` (its centre, in the frame shifted by `offset` from
-/// the network's): SUMO positions vehicles by their front bumper. keepRoute = 3 matches only
+/// the network's): SUMO positions vehicles by their front bumper. keepRoute 3 matches only
 /// along the vehicle's own route (never onto a neighbouring scenario's road) and places it
-/// exactly, even off the lane.
-void placeInSumo(const std::string& vehicle_id, const VehicleState& state, double length, const Vec2& offset);
+/// exactly, even off the lane; keepRoute 1 (where `placement` allows) matches the same way.
+void placeInSumo(const std::string& vehicle_id, const VehicleState& state, double length, double width,
+                 const Vec2& offset, const SumoPlacement& placement);
 
 class EgoDriver {
  public:
@@ -51,6 +82,8 @@ class EgoDriver {
   const VehicleState& state() const { return state_; }
   const std::string& vehicleId() const { return vehicleId_; }
 
+  /// How pushToSumo places the vehicle from now on (default: exactly).
+  void placeBy(SumoPlacement placement) { placement_ = std::move(placement); }
   /// Places the vehicle in SUMO at the current state (moveToXY + speed).
   void pushToSumo() const;
   /// Builds the controller's observation from SUMO's current state.
@@ -75,6 +108,7 @@ class EgoDriver {
   Vec2 offset_;
   VehicleLimits limits_;
   double minGap_ = 0.0;
+  SumoPlacement placement_;
 };
 
 }  // namespace vsd::sim

@@ -1,0 +1,138 @@
+// `vectornet`: the model module's VectorNet with the probabilistic `kinematic` decoder,
+// learning from vectorized scenes instead of inputs: the executions' scenes with their
+// simulated futures (plus the --prior datasets) train it; each candidate is vectorized
+// before simulation (pipeline::plannedScene), S futures are sampled from its predictive
+// distribution, every future's metrics come from the metric registry (the code `compare`
+// scores predictions with), and the probability is the share of futures meeting the
+// criterion (where none does, a Gaussian tail below 1 / (2 S) that ranks by closeness).
+// Every round trains from scratch on all the data so far (fine-tuning would need a warm
+// start that model::train does not offer).
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+#include "vsd/core/error.hpp"
+#include "vsd/core/interrupt.hpp"
+#include "vsd/metrics/metrics.hpp"
+#include "vsd/model/model.hpp"
+#include "vsd/pipeline/scenes.hpp"
+#include "vsd/search/surrogate.hpp"
+
+namespace fs = std::filesystem;
+
+namespace vsd::search {
+
+namespace {
+
+/// Candidates predicted per batch: bounds the memory of scenes and sampled futures.
+constexpr std::size_t kChunk = 512;
+
+class VectorNetSurrogate final : public Surrogate {
+ public:
+  explicit VectorNetSurrogate(const SurrogateOptions& options) : options_(options) {}
+
+  bool guidesSelection() const override { return true; }
+
+  void fit(const TrainingSet& data) override {
+    if (!options_.metricSet) throw std::logic_error("vectornet surrogate: no metric set");
+    model::TrainOptions train;
+    train.data = data.scenes;
+    train.output = options_.modelFile;
+    train.config.decoder = "kinematic";  // probabilistic, and its futures carry speeds and accelerations
+    train.seed = options_.seed;
+    train.threads = options_.threads;
+    train.steps = options_.vectornetSteps;
+    train.patience = 1'000'000;  // the whole (short) schedule; the best epoch by validation ADE is kept
+    model::train(train);
+    fs::remove(options_.modelFile.string() + ".last");  // resume state of the training: not needed
+    predictor_ = std::make_unique<model::Predictor>(options_.modelFile, options_.threads);
+  }
+
+  std::vector<double> probability(const CandidateSet& candidates, const Criterion& criterion) const override {
+    const auto rows = static_cast<std::size_t>(candidates.x.rows());
+    std::vector<double> result(rows, 0.0);
+    model::PredictOptions predict;
+    predict.samples = options_.futureSamples;
+    predict.seed = options_.seed;
+    for (std::size_t first = 0; first < rows; first += kChunk) {
+      throwIfInterrupted();
+      std::vector<vector::VectorizedScene> scenes;
+      std::vector<std::size_t> which;
+      for (std::size_t row = first; row < std::min(rows, first + kChunk); ++row) {
+        try {
+          scenes.push_back(candidates.scene(row));
+          which.push_back(row);
+        } catch (const ConfigError&) {
+          // Cannot be planned (a vehicle off its road): the simulation fails it too; p = 0.
+        }
+      }
+      if (scenes.empty()) continue;
+      const auto predictions = predictor_->predictDistribution(scenes, predict);
+      for (std::size_t k = 0; k < scenes.size(); ++k) result[which[k]] = shareMeeting(scenes[k], predictions[k], criterion);
+    }
+    return result;
+  }
+
+ private:
+  /// Share of the sampled futures whose metrics meet the criterion (futures whose
+  /// criterion metrics cannot be computed do not count). Where none meets it (a rare
+  /// criterion: most candidates), the share is 0 everywhere and cannot rank; then the
+  /// Gaussian tail of the futures' criterion metrics (their mean and spread,
+  /// tailProbability) ranks by closeness, scaled below 1 / (2 S) so that it stays below
+  /// every candidate with a future that meets it.
+  double shareMeeting(const vector::VectorizedScene& scene, const model::Prediction& prediction,
+                      const Criterion& criterion) const {
+    const auto& used = criterion.usedColumns();
+    std::vector<std::vector<double>> draws(used.size());
+    std::size_t judged = 0;
+    std::size_t meeting = 0;
+    for (const auto& future : prediction.samples) {
+      const auto values = future.states.empty() ? pipeline::metricsOfFuture(*options_.metricSet, scene, future.positions)
+                                                : pipeline::metricsOfFuture(*options_.metricSet, scene, future.states);
+      const auto verdict = criterion.verdict(values);
+      if (!verdict) continue;
+      ++judged;
+      meeting += *verdict ? 1 : 0;
+      for (std::size_t m = 0; m < used.size(); ++m) draws[m].push_back(values[used[m]]);
+    }
+    if (judged == 0) return 0.0;
+    if (meeting > 0) return static_cast<double>(meeting) / static_cast<double>(judged);
+    return tailProbabilityOf(draws, criterion) / (2.0 * static_cast<double>(judged));
+  }
+
+  /// tailProbability of the draws' mean and standard deviation per metric (finite draws
+  /// only; 0 when a metric has none, e.g. ttc_min of futures that never close in).
+  static double tailProbabilityOf(const std::vector<std::vector<double>>& draws, const Criterion& criterion) {
+    std::vector<double> centre(draws.size());
+    std::vector<double> spread(draws.size());
+    for (std::size_t m = 0; m < draws.size(); ++m) {
+      double sum = 0.0;
+      double squares = 0.0;
+      std::size_t finite = 0;
+      for (const double value : draws[m]) {
+        if (!std::isfinite(value)) continue;
+        sum += value;
+        squares += value * value;
+        ++finite;
+      }
+      if (finite == 0) return 0.0;
+      centre[m] = sum / static_cast<double>(finite);
+      spread[m] = std::sqrt(std::max(0.0, squares / static_cast<double>(finite) - centre[m] * centre[m]));
+    }
+    return tailProbability(centre, spread, criterion);
+  }
+
+  SurrogateOptions options_;
+  std::unique_ptr<model::Predictor> predictor_;
+};
+
+}  // namespace
+
+std::unique_ptr<Surrogate> makeVectorNetSurrogate(const SurrogateOptions& options) {
+  return std::make_unique<VectorNetSurrogate>(options);
+}
+
+}  // namespace vsd::search
