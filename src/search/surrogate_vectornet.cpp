@@ -64,6 +64,9 @@ class VectorNetSurrogate final : public Surrogate {
       for (std::size_t row = first; row < std::min(rows, first + kChunk); ++row) {
         try {
           scenes.push_back(candidates.scene(row));
+          // A planned scene records no future (targets invalid), and metricsOfFuture judges a
+          // future only where the target is valid: the whole horizon, as a completed run has it.
+          std::fill(scenes.back().targetValid.begin(), scenes.back().targetValid.end(), 1);
           which.push_back(row);
         } catch (const ConfigError&) {
           // Cannot be planned (a vehicle off its road): the simulation fails it too; p = 0.
