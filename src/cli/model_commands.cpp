@@ -9,7 +9,10 @@
 #include "vsd/core/error.hpp"
 #include "vsd/core/files.hpp"
 #include "vsd/core/progress.hpp"
+#include "vsd/metrics/metrics.hpp"
 #include "vsd/model/model.hpp"
+#include "vsd/pipeline/scenes.hpp"
+#include "vsd/vector/dataset.hpp"
 
 namespace vsd::cli {
 
@@ -19,6 +22,20 @@ std::string duration(double seconds) {
   if (seconds >= 3600.0) return fmt::format("{:.1f} h", seconds / 3600.0);
   if (seconds >= 60.0) return fmt::format("{:.1f} min", seconds / 60.0);
   return fmt::format("{:.0f} s", seconds);
+}
+
+/// With sampled futures, `predict` writes every metric that applies to the dataset's scenes
+/// for the most likely future and as intervals over the draws: the metric code of simulated
+/// runs, on the predictor's own states where it has them (README "vsd-predictions/2").
+void bindPredictionMetrics(const std::filesystem::path& data, model::PredictionFileOptions& options) {
+  if (options.predict.samples < 1) return;
+  const vector::DatasetReader reader(vector::resolveDatasetPath(data));
+  const auto metric_set = std::make_shared<const metrics::MetricSet>(
+      std::vector<std::string>{}, pipeline::sceneAvailability(reader.header().kind), data.string());
+  options.metricNames = metric_set->names();
+  options.metrics = [metric_set](const vector::VectorizedScene& scene, const model::Trajectory& future) {
+    return pipeline::metricsOfFuture(*metric_set, scene, future.positions, future.states);
+  };
 }
 
 /// "offsets, kinematic" for help texts.
@@ -105,7 +122,9 @@ void addPredictCommand(CLI::App& app, CommandContext& context) {
       }
       file_options->predict.validate();
       const model::Predictor predictor(*model_file, *threads);
-      const auto count = model::writePredictions(predictor, *model_file, *data, *out, *file_options);
+      auto with_metrics = *file_options;
+      if (predictor.probabilistic()) bindPredictionMetrics(*data, with_metrics);
+      const auto count = model::writePredictions(predictor, *model_file, *data, *out, with_metrics);
       fmt::print("predicted {} samples of {} with {} -> {}\n", count, data->string(), model_file->string(),
                  out->string());
       return 0;

@@ -126,8 +126,7 @@ class PredictionScorer {
       : metricSet_(metric_set), criteria_(criteria) {}
 
   std::vector<double> metricsOf(const vector::VectorizedScene& scene, const model::Trajectory& future) const {
-    if (future.states.empty()) return pipeline::metricsOfFuture(metricSet_, scene, future.positions);
-    return pipeline::metricsOfFuture(metricSet_, scene, future.states);
+    return pipeline::metricsOfFuture(metricSet_, scene, future.positions, future.states);
   }
 
   void score(report::ComparedScenario& row, const vector::VectorizedScene& scene, const model::Prediction& prediction) const {

@@ -13,6 +13,7 @@
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <limits>
@@ -300,7 +301,7 @@ class ExperimentRunner {
     auto model_key = key("model", modelModules());
     model_key.add("mix", mix.str());
     for (const auto& [label, count] : mix.counts) model_key.add("data_" + label, data(label).trainDigest);
-    model_key.add("decoder", model_spec.decoder);
+    model_key.add("decoder", model_spec.decoder).add("frame", model_spec.frame);
     for (const auto& [option, value] : model_spec.options) model_key.add("decoder_option_" + option, value);
     model_key.add("seed", seed)
         .add("steps", spec_.steps)
@@ -334,6 +335,7 @@ class ExperimentRunner {
     train_options.output = folder / "model.pt";
     train_options.config.decoder = model_spec.decoder;
     train_options.config.decoderOptions = model_spec.options;
+    train_options.config.frame = model_spec.frame;
     train_options.seed = seed;
     train_options.threads = spec_.threads;
     train_options.steps = spec_.steps;
@@ -375,8 +377,8 @@ class ExperimentRunner {
                                    fmt::format("eval/{}/row{}_seed{}", run.model, run.row, run.seed),
                                    fmt::format("{} row {} seed {}", run.model, run.row, run.seed));
       errors_by_row[{run.model, run.row}].push_back(errors);
+      if (run.seed == spec_.seed) rowModels_[{run.model, run.row}] = run.modelFile;
       if (run.model == spec_.models.front().name && run.seed == spec_.seed) {
-        models_[run.row] = run.modelFile;
         for (const auto& source : spec_.sources) {
           const auto& entry = errors.at(source.label);
           medianSample_[{run.row, source.label}] = {entry.at("median_sample").get<std::size_t>(),
@@ -471,6 +473,18 @@ class ExperimentRunner {
   }
 
   // --- metric MAE ------------------------------------------------------------------
+  /// The models predicting a functional scenario in the MAE table: every model of the spec
+  /// that trains its `mae.vectornet_rows` row (first seed), the main model first.
+  std::vector<std::pair<std::string, RowModel>> maeModels(const std::string& label) const {
+    std::vector<std::pair<std::string, RowModel>> models;
+    const int row = spec_.vectornetRows.at(label);
+    for (const auto& model_spec : spec_.models) {
+      const auto found = rowModels_.find({model_spec.name, row});
+      if (found != rowModels_.end()) models.emplace_back(model_spec.name, found->second);
+    }
+    return models;
+  }
+
   void compareMetrics() {
     std::vector<std::string> labels;
     for (const auto& item : spec_.maeMetrics) {
@@ -483,11 +497,11 @@ class ExperimentRunner {
         if (item.label == label) names.push_back(item.metric);
       }
       const auto& label_data = data(label);
-      const int vectornet_row = spec_.vectornetRows.at(label);
-      const auto& row_model = models_.at(vectornet_row);
+      const auto models = maeModels(label);
       const auto folder = cache_.folder("mae/" + label);
       auto mae_key = key("metric mae", maeModules());
-      mae_key.add("metrics", fmt::format("{}", fmt::join(names, ",")))
+      mae_key.add("format", 2)  // 2: every model's errors, bias and interval coverage
+          .add("metrics", fmt::format("{}", fmt::join(names, ",")))
           .add("train", label_data.trainDigest)
           .add("test", label_data.testDigest)
           .add("train_rows", spec_.maeSamples)
@@ -495,37 +509,51 @@ class ExperimentRunner {
                                  spec_.extraTrees.maxFeatures, spec_.extraTrees.minSamplesSplit, spec_.extraTrees.seed))
           .add("bnn", fmt::format("hidden {} layers {} epochs {} samples {} seed {}", spec_.bnn.hidden,
                                   spec_.bnn.layers, spec_.bnn.epochs, spec_.bnn.samples, spec_.bnn.seed))
-          .add("vectornet_model", row_model.digest);
+          .add("draws", fmt::format("{} seed {}", spec_.maeDraws, spec_.seed));
+      for (const auto& [name, row_model] : models) mae_key.add("vectornet_model_" + name, row_model.digest);
       if (!reuse(folder, mae_key, fmt::format("{} metric MAE", label))) {
         cache_.clear(folder);
-        writeJson(folder / "mae.json", computeMae(label, names, row_model));
+        writeJson(folder / "mae.json", computeMae(label, names, models));
         cache_.commit(folder, mae_key);
       }
-      const auto results = readJson(folder / "mae.json");
-      for (const auto& name : names) {
-        const auto& entry = results.at("metrics").at(name);
-        MaeRow mae_row;
-        mae_row.label = label;
-        mae_row.metric = name;
-        mae_row.unit = metrics::findMetric(name)->unit;
-        mae_row.et = entry.at("et").get<double>();
-        mae_row.bnn = entry.at("bnn").get<double>();
-        mae_row.bnnStd = entry.at("bnn_std").get<double>();
-        mae_row.vectornet = entry.at("vectornet").get<double>();
-        mae_row.fromTruePositions = entry.at("from_true_positions").get<double>();
-        mae_row.testSamples = entry.at("vectornet_samples").get<std::size_t>();
-        mae_row.etSeconds = results.at("et_seconds").get<double>();
-        mae_row.bnnSeconds = results.at("bnn_seconds").get<double>();
-        mae_row.trainRows = results.at("train_rows").get<std::size_t>();
-        for (const auto& item : spec_.maeMetrics) {
-          if (item.label == label && item.metric == name) mae_row.paper = item.paper;
-        }
-        summary_.mae.push_back(mae_row);
-      }
+      addMaeRows(label, names, readJson(folder / "mae.json"));
     }
   }
 
-  json computeMae(const std::string& label, const std::vector<std::string>& names, const RowModel& row_model) {
+  void addMaeRows(const std::string& label, const std::vector<std::string>& names, const json& results) {
+    for (const auto& name : names) {
+      const auto& entry = results.at("metrics").at(name);
+      MaeRow mae_row;
+      mae_row.label = label;
+      mae_row.metric = name;
+      mae_row.unit = metrics::findMetric(name)->unit;
+      mae_row.et = entry.at("et").get<double>();
+      mae_row.bnn = entry.at("bnn").get<double>();
+      mae_row.bnnStd = entry.at("bnn_std").get<double>();
+      mae_row.fromTruePositions = entry.at("from_true_positions").get<double>();
+      for (const auto& model : results.at("vectornet")) {
+        const auto& errors = model.at("metrics").at(name);
+        VectorNetMetricError error;
+        error.model = model.at("model").get<std::string>();
+        error.mae = errors.at("mae").get<double>();
+        error.bias = errors.at("bias").get<double>();
+        error.samples = errors.at("samples").get<std::size_t>();
+        if (!errors.at("coverage50").is_null()) error.coverage50 = errors.at("coverage50").get<double>();
+        if (!errors.at("coverage90").is_null()) error.coverage90 = errors.at("coverage90").get<double>();
+        mae_row.vectornet.push_back(error);
+      }
+      mae_row.etSeconds = results.at("et_seconds").get<double>();
+      mae_row.bnnSeconds = results.at("bnn_seconds").get<double>();
+      mae_row.trainRows = results.at("train_rows").get<std::size_t>();
+      for (const auto& item : spec_.maeMetrics) {
+        if (item.label == label && item.metric == name) mae_row.paper = item.paper;
+      }
+      summary_.mae.push_back(mae_row);
+    }
+  }
+
+  json computeMae(const std::string& label, const std::vector<std::string>& names,
+                  const std::vector<std::pair<std::string, RowModel>>& models) {
     const auto& label_data = data(label);
     json results;
     // Regression metamodels on the concrete inputs.
@@ -552,6 +580,42 @@ class ExperimentRunner {
     // with the recorded trajectories of the other vehicles.
     const auto& scenes = testScenes(label);
     const vector::DatasetReader reader(vector::resolveDatasetPath(label_data.testRun));
+    const auto simulated = simulatedMetrics(reader, names);
+    const metrics::MetricSet metric_set(names, pipeline::sceneAvailability(reader.header().kind),
+                                        fmt::format("{}: mae.metrics.{}", spec_.file.string(), label));
+    std::vector<double> true_sum(names.size(), 0.0);
+    std::vector<std::size_t> true_counted(names.size(), 0);
+    for (std::size_t i = 0; i < scenes.size(); ++i) {
+      const auto from_truth = pipeline::metricsOfFuture(metric_set, scenes[i], scenes[i].target);
+      for (std::size_t m = 0; m < names.size(); ++m) {
+        // Infinite values (e.g. ttc_min without closing in) and NaN have no error to average.
+        if (!std::isfinite(simulated[i][m]) || !std::isfinite(from_truth[m])) continue;
+        true_sum[m] += std::abs(from_truth[m] - simulated[i][m]);
+        ++true_counted[m];
+      }
+    }
+    for (std::size_t m = 0; m < names.size(); ++m) {
+      results["metrics"][names[m]] = {{"et", et.mae[m]},
+                                      {"bnn", bnn.mae[m]},
+                                      {"bnn_std", bnn.meanStd.empty() ? 0.0 : bnn.meanStd[m]},
+                                      {"from_true_positions", mean(true_sum[m], true_counted[m])}};
+    }
+    results["vectornet"] = json::array();
+    for (const auto& [model_name, row_model] : models) {
+      results["vectornet"].push_back(vectornetErrors(model_name, row_model, scenes, simulated, metric_set));
+      for (std::size_t m = 0; m < names.size(); ++m) {
+        const auto& errors = results["vectornet"].back()["metrics"][names[m]];
+        spdlog::info("{} {}: MAE extra trees {:.3f}, BNN {:.3f}, VectorNet {} {:.3f} (true positions {:.3f})", label,
+                     names[m], et.mae[m], bnn.mae[m], model_name, errors["mae"].get<double>(),
+                     mean(true_sum[m], true_counted[m]));
+      }
+    }
+    return results;
+  }
+
+  /// The simulated value of every metric of `names` per test scene (the stored metrics).
+  static std::vector<std::vector<double>> simulatedMetrics(const vector::DatasetReader& reader,
+                                                          const std::vector<std::string>& names) {
     const auto& stored = reader.header().metricNames;
     std::vector<std::size_t> stored_index;
     for (const auto& name : names) {
@@ -562,45 +626,82 @@ class ExperimentRunner {
       }
       stored_index.push_back(static_cast<std::size_t>(found - stored.begin()));
     }
-    const metrics::MetricSet metric_set(names, pipeline::sceneAvailability(reader.header().kind),
-                                        fmt::format("{}: mae.metrics.{}", spec_.file.string(), label));
-    const model::Predictor predictor(row_model.file, spec_.threads);
-    const auto predictions = predictor.predict(scenes);
+    std::vector<std::vector<double>> values;
+    values.reserve(reader.size());
+    for (std::size_t i = 0; i < reader.size(); ++i) {
+      const auto scene = reader.scene(i);
+      std::vector<double> row;
+      for (const auto index : stored_index) row.push_back(scene.metrics.at(index));
+      values.push_back(std::move(row));
+    }
+    return values;
+  }
 
-    std::vector<double> predicted_sum(names.size(), 0.0);
-    std::vector<double> true_sum(names.size(), 0.0);
-    std::vector<std::size_t> counted(names.size(), 0);
-    for (std::size_t i = 0; i < scenes.size(); ++i) {
-      const auto& scene = scenes[i];
-      const auto from_prediction = pipeline::metricsOfFuture(metric_set, scene, predictions[i]);
-      const auto from_truth = pipeline::metricsOfFuture(metric_set, scene, scene.target);
-      for (std::size_t m = 0; m < names.size(); ++m) {
-        const double simulated = scene.metrics.at(stored_index[m]);
-        // Infinite values (e.g. ttc_min without closing in) and NaN have no error to average.
-        if (!std::isfinite(simulated) || !std::isfinite(from_prediction[m]) || !std::isfinite(from_truth[m])) continue;
-        predicted_sum[m] += std::abs(from_prediction[m] - simulated);
-        true_sum[m] += std::abs(from_truth[m] - simulated);
-        ++counted[m];
+  /// One model's metric errors on a test set: MAE and bias of the most likely future's
+  /// metrics (its own states where it has them), and for a probabilistic model the coverage
+  /// of the metrics' intervals over mae.draws sampled futures.
+  json vectornetErrors(const std::string& model_name, const RowModel& row_model,
+                       const std::vector<vector::VectorizedScene>& scenes,
+                       const std::vector<std::vector<double>>& simulated, const metrics::MetricSet& metric_set) const {
+    const model::Predictor predictor(row_model.file, spec_.threads);
+    model::PredictOptions draw_options;
+    draw_options.samples = predictor.probabilistic() ? spec_.maeDraws : 0;
+    draw_options.seed = spec_.seed;
+    const auto metrics_of = [&](const vector::VectorizedScene& scene, const model::Trajectory& future) {
+      return pipeline::metricsOfFuture(metric_set, scene, future.positions, future.states);
+    };
+    const std::size_t count = metric_set.names().size();
+    std::vector<double> error_sum(count, 0.0);
+    std::vector<double> signed_sum(count, 0.0);
+    std::vector<std::size_t> scored(count, 0);
+    std::vector<std::array<std::size_t, 2>> covered(count, {0, 0});
+    std::vector<std::size_t> with_interval(count, 0);
+    // Chunks keep the sampled futures of a 10,000-scene test set out of memory at once.
+    constexpr std::size_t kChunk = 512;
+    for (std::size_t first = 0; first < scenes.size(); first += kChunk) {
+      throwIfInterrupted();
+      const std::vector<vector::VectorizedScene> chunk(
+          scenes.begin() + static_cast<std::ptrdiff_t>(first),
+          scenes.begin() + static_cast<std::ptrdiff_t>(std::min(scenes.size(), first + kChunk)));
+      const auto predictions = predictor.predictDistribution(chunk, draw_options);
+      for (std::size_t i = 0; i < chunk.size(); ++i) {
+        const auto& truth = simulated[first + i];
+        const auto predicted = metrics_of(chunk[i], predictions[i].mostLikely);
+        const auto draws = model::metricDraws(chunk[i], predictions[i], metrics_of, count);
+        for (std::size_t m = 0; m < count; ++m) {
+          if (!std::isfinite(truth[m]) || !std::isfinite(predicted[m])) continue;
+          error_sum[m] += std::abs(predicted[m] - truth[m]);
+          signed_sum[m] += predicted[m] - truth[m];
+          ++scored[m];
+          if (draws[m].empty()) continue;
+          const auto interval = model::intervalOf(draws[m]);
+          if (interval.draws == 0) continue;
+          ++with_interval[m];
+          covered[m][0] += interval.contains(truth[m], 0.5) ? 1 : 0;
+          covered[m][1] += interval.contains(truth[m], 0.9) ? 1 : 0;
+        }
       }
     }
-    for (std::size_t m = 0; m < names.size(); ++m) {
-      results["metrics"][names[m]] = {{"et", et.mae[m]},
-                                      {"bnn", bnn.mae[m]},
-                                      {"bnn_std", bnn.meanStd.empty() ? 0.0 : bnn.meanStd[m]},
-                                      {"vectornet", mean(predicted_sum[m], counted[m])},
-                                      {"from_true_positions", mean(true_sum[m], counted[m])},
-                                      {"vectornet_samples", counted[m]}};
-      spdlog::info("{} {}: MAE extra trees {:.3f}, BNN {:.3f}, VectorNet {:.3f} (true positions {:.3f})", label,
-                   names[m], et.mae[m], bnn.mae[m], mean(predicted_sum[m], counted[m]), mean(true_sum[m], counted[m]));
+    json errors;
+    errors["model"] = model_name;
+    errors["decoder"] = predictor.name();
+    for (std::size_t m = 0; m < count; ++m) {
+      const bool has_intervals = with_interval[m] > 0;
+      errors["metrics"][metric_set.names()[m]] = {
+          {"mae", mean(error_sum[m], scored[m])},
+          {"bias", mean(signed_sum[m], scored[m])},
+          {"samples", scored[m]},
+          {"coverage50", has_intervals ? json(mean(static_cast<double>(covered[m][0]), with_interval[m])) : json()},
+          {"coverage90", has_intervals ? json(mean(static_cast<double>(covered[m][1]), with_interval[m])) : json()}};
     }
-    return results;
+    return errors;
   }
 
   // --- figures ----------------------------------------------------------------------
   void drawFigures() {
     if (spec_.figures.empty()) return;
     for (const auto& figure : spec_.figures) {
-      const model::Predictor predictor(models_.at(figure.row).file, spec_.threads);
+      const model::Predictor predictor(rowModels_.at({spec_.models.front().name, figure.row}).file, spec_.threads);
       std::vector<std::string> panels;
       for (const auto& source : spec_.sources) {
         const auto [sample, ade] = medianSample_.at({figure.row, source.label});
@@ -628,7 +729,8 @@ class ExperimentRunner {
   std::vector<ArtefactRecord> artefacts_;
   std::map<std::string, LabelData> data_;
   std::vector<TrainedRun> runs_;
-  std::map<int, RowModel> models_;  ///< the main model's first seed per row: MAE and figures
+  /// The first seed's model file per (model name, row): the MAE table and the figures use them.
+  std::map<std::pair<std::string, int>, RowModel> rowModels_;
   std::map<std::string, std::vector<vector::VectorizedScene>> testScenes_;
   std::map<std::pair<int, std::string>, std::pair<std::size_t, double>> medianSample_;
 };

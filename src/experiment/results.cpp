@@ -128,7 +128,98 @@ std::string adeTableHead(const std::vector<std::string>& labels, const std::stri
 std::string modelDescription(const ModelSpec& model) {
   std::vector<std::string> options;
   for (const auto& [name, value] : model.options) options.push_back(fmt::format("{}={}", name, formatNumber(value)));
-  return options.empty() ? model.decoder : fmt::format("{} ({})", model.decoder, fmt::join(options, ", "));
+  std::string text = options.empty() ? model.decoder : fmt::format("{} ({})", model.decoder, fmt::join(options, ", "));
+  return model.frame == "ego" ? text : text + fmt::format(", {} frame", model.frame);
+}
+
+/// The spec's models that predict in the MAE table, in spec order (main model first).
+std::vector<std::string> maeModelNames(const Spec& spec, const std::vector<MaeRow>& rows) {
+  std::vector<std::string> names;
+  for (const auto& model : spec.models) {
+    const bool present = std::any_of(rows.begin(), rows.end(), [&](const MaeRow& row) {
+      return std::any_of(row.vectornet.begin(), row.vectornet.end(),
+                         [&](const VectorNetMetricError& error) { return error.model == model.name; });
+    });
+    if (present) names.push_back(model.name);
+  }
+  return names;
+}
+
+const VectorNetMetricError* errorOf(const MaeRow& row, const std::string& model) {
+  for (const auto& error : row.vectornet) {
+    if (error.model == model) return &error;
+  }
+  return nullptr;
+}
+
+std::string percent(double share) { return std::isfinite(share) ? fmt::format("{:.0f} %", 100.0 * share) : "–"; }
+
+/// A model's cell of mae.md: "0.440 (bias +0.20; 90 % interval covers 87 %, 50 %: 48 %)";
+/// the main model's also carries the paper's value.
+std::string maeCell(const MaeRow& row, const std::string& model, bool main) {
+  const auto* error = errorOf(row, model);
+  if (error == nullptr) return "";
+  std::string cell = main ? withPaper(error->mae, row.paper, "vectornet", 3) : fmt::format("{:.3f}", error->mae);
+  cell += fmt::format(" bias {:+.3f}", error->bias);
+  if (std::isfinite(error->coverage90)) {
+    cell += fmt::format("; covered {} / {}", percent(error->coverage50), percent(error->coverage90));
+  }
+  return cell;
+}
+
+std::string optionalNumber(double value) { return std::isfinite(value) ? formatNumber(value) : std::string(); }
+
+/// mae.csv (a row per functional scenario and metric; `vectornet` is the main model's MAE,
+/// then per model of the spec its MAE, bias and interval coverage) and mae.md.
+std::pair<std::string, std::string> maeFiles(const Spec& spec, const std::vector<MaeRow>& rows) {
+  const auto models = maeModelNames(spec, rows);
+  std::vector<std::string> head = {"functional_scenario", "metric", "unit", "et", "bnn", "vectornet",
+                                   "vectornet_from_true_positions", "bnn_mean_std", "paper_et", "paper_bnn",
+                                   "paper_vectornet", "train_rows", "vectornet_test_samples", "et_seconds", "bnn_seconds"};
+  for (const auto& model : models) {
+    for (const char* column : {"", "_bias", "_coverage_50", "_coverage_90"}) head.push_back("vectornet_" + model + column);
+  }
+  std::ostringstream csv;
+  CsvWriter writer(csv);
+  writer.writeRow(head);
+  std::string md =
+      "# MAE of evaluation metrics: ours (paper's Table III)\n\n" + sizesLine(spec) +
+      fmt::format("\n\nExtra trees and the BNN are trained on the first {} training scenarios' concrete inputs; "
+                  "VectorNet's metrics come from its predicted Ego trajectory (README: metrics from predictions; a "
+                  "kinematic model's own speeds and accelerations), with the first seed's model of the ADE row "
+                  "named in the spec, for every model of the spec that trains that row: the MAE (the paper's value "
+                  "in brackets for the main model), the bias (mean of predicted − simulated) and, for probabilistic "
+                  "models, the share of simulated values inside the metric's 50 % / 90 % interval over {} sampled "
+                  "futures. 'true positions' is the same computation on the simulated future positions: the error "
+                  "of reconstructing the metric from positions alone, a floor for VectorNet's.\n\n",
+                  spec.maeSamples, spec.maeDraws) +
+      "| scenario | metric | extra trees | BNN | BNN mean std |";
+  for (const auto& model : models) md += fmt::format(" VectorNet `{}` |", model);
+  md += " true positions | ET / BNN time |\n|";
+  for (std::size_t c = 0; c < 7 + models.size(); ++c) md += "---|";
+  md += "\n";
+  for (const auto& row : rows) {
+    const auto* main_error = models.empty() ? nullptr : errorOf(row, models.front());
+    std::vector<std::string> cells = {
+        row.label, row.metric, row.unit, formatNumber(row.et), formatNumber(row.bnn),
+        main_error ? formatNumber(main_error->mae) : "", formatNumber(row.fromTruePositions), formatNumber(row.bnnStd),
+        paperValue(row.paper, "et"), paperValue(row.paper, "bnn"), paperValue(row.paper, "vectornet"),
+        std::to_string(row.trainRows), main_error ? std::to_string(main_error->samples) : "",
+        formatNumber(row.etSeconds), formatNumber(row.bnnSeconds)};
+    for (const auto& model : models) {
+      const auto* error = errorOf(row, model);
+      cells.push_back(error ? formatNumber(error->mae) : "");
+      cells.push_back(error ? formatNumber(error->bias) : "");
+      cells.push_back(error ? optionalNumber(error->coverage50) : "");
+      cells.push_back(error ? optionalNumber(error->coverage90) : "");
+    }
+    writer.writeRow(cells);
+    md += fmt::format("| {} | {} [{}] | {} | {} | {:.3f} |", row.label, row.metric, row.unit,
+                      withPaper(row.et, row.paper, "et", 3), withPaper(row.bnn, row.paper, "bnn", 3), row.bnnStd);
+    for (std::size_t m = 0; m < models.size(); ++m) md += " " + maeCell(row, models[m], m == 0) + " |";
+    md += fmt::format(" {:.3f} | {:.1f} s / {:.1f} s |\n", row.fromTruePositions, row.etSeconds, row.bnnSeconds);
+  }
+  return {csv.str(), md};
 }
 
 /// ade.md: per model of the spec one table in the paper's layout (ours, the paper's in
@@ -313,33 +404,8 @@ void writeResults(const Spec& spec, const ExperimentOptions& options, Experiment
   }
 
   {  // mae.csv and mae.md
-    std::ostringstream csv;
-    CsvWriter writer(csv);
-    writer.writeRow({"functional_scenario", "metric", "unit", "et", "bnn", "vectornet", "vectornet_from_true_positions",
-                     "bnn_mean_std", "paper_et", "paper_bnn", "paper_vectornet", "train_rows", "vectornet_test_samples",
-                     "et_seconds", "bnn_seconds"});
-    std::string md =
-        "# MAE of evaluation metrics: ours (paper's Table III)\n\n" + sizesLine(spec) +
-        fmt::format("\n\nExtra trees and the BNN are trained on the first {} training scenarios' concrete inputs; "
-                    "VectorNet's metrics come from its predicted Ego trajectory (README: metrics from predictions), "
-                    "with the model of the ADE row named in the spec. 'true positions' is the same computation on the "
-                    "simulated future positions: the error of reconstructing the metric from positions alone, a floor "
-                    "for VectorNet's.\n\n",
-                    spec.maeSamples) +
-        "| scenario | metric | extra trees | BNN | BNN mean std | VectorNet | true positions | ET / BNN time |\n"
-        "|---|---|---|---|---|---|---|---|\n";
-    for (const auto& row : summary.mae) {
-      writer.writeRow({row.label, row.metric, row.unit, formatNumber(row.et), formatNumber(row.bnn),
-                       formatNumber(row.vectornet), formatNumber(row.fromTruePositions), formatNumber(row.bnnStd),
-                       paperValue(row.paper, "et"), paperValue(row.paper, "bnn"), paperValue(row.paper, "vectornet"),
-                       std::to_string(row.trainRows), std::to_string(row.testSamples), formatNumber(row.etSeconds),
-                       formatNumber(row.bnnSeconds)});
-      md += fmt::format("| {} | {} [{}] | {} | {} | {:.3f} | {} | {:.3f} | {:.1f} s / {:.1f} s |\n", row.label, row.metric,
-                        row.unit, withPaper(row.et, row.paper, "et", 3), withPaper(row.bnn, row.paper, "bnn", 3),
-                        row.bnnStd, withPaper(row.vectornet, row.paper, "vectornet", 3), row.fromTruePositions,
-                        row.etSeconds, row.bnnSeconds);
-    }
-    keep(out / "mae.csv", csv.str());
+    const auto [csv, md] = maeFiles(spec, summary.mae);
+    keep(out / "mae.csv", csv);
     keep(out / "mae.md", md);
   }
 
@@ -400,9 +466,14 @@ std::string ExperimentSummary::report() const {
   if (!mae.empty()) {
     text += "\nMAE of metrics, ours (paper):\n";
     for (const auto& row : mae) {
-      text += fmt::format("  {:<7} {:<10} ET {:<14} BNN {:<14} VectorNet {:<14} (true positions {:.3f})\n", row.label,
-                          row.metric, withPaper(row.et, row.paper, "et", 3), withPaper(row.bnn, row.paper, "bnn", 3),
-                          withPaper(row.vectornet, row.paper, "vectornet", 3), row.fromTruePositions);
+      text += fmt::format("  {:<7} {:<10} ET {:<14} BNN {:<14}", row.label, row.metric,
+                          withPaper(row.et, row.paper, "et", 3), withPaper(row.bnn, row.paper, "bnn", 3));
+      for (std::size_t m = 0; m < row.vectornet.size(); ++m) {
+        const auto& error = row.vectornet[m];
+        text += fmt::format(" VectorNet {} {}", error.model,
+                            m == 0 ? withPaper(error.mae, row.paper, "vectornet", 3) : fmt::format("{:.3f}", error.mae));
+      }
+      text += fmt::format(" (true positions {:.3f})\n", row.fromTruePositions);
     }
   }
   text += "\nFindings:\n";

@@ -26,7 +26,7 @@ const Source& Spec::source(const std::string& label) const {
 }
 
 bool ModelSpec::trains(int row) const {
-  return rows.empty() || std::find(rows.begin(), rows.end(), row) != rows.end();
+  return std::find(rows.begin(), rows.end(), row) != rows.end();
 }
 
 const AdeSpec& Spec::row(int number) const {
@@ -61,7 +61,7 @@ std::vector<int> allRows(const Spec& spec) {
 
 ModelSpec parseModel(const scenario::YamlReader& reader, const YAML::Node& node, const std::string& field,
                      const Spec& spec) {
-  reader.checkKeys(node, field, {"name", "decoder", "options", "rows"});
+  reader.checkKeys(node, field, {"name", "decoder", "frame", "options", "rows"});
   ModelSpec model;
   if (!node["name"]) reader.fail(node, field, "missing 'name' (names its rows and cache folders)");
   model.name = reader.scalar(node["name"], field + ".name");
@@ -71,6 +71,7 @@ ModelSpec parseModel(const scenario::YamlReader& reader, const YAML::Node& node,
                 fmt::format("'{}' is not a usable name (non-empty, no spaces or slashes, not cv/ca)", model.name));
   }
   if (node["decoder"]) model.decoder = reader.scalar(node["decoder"], field + ".decoder");
+  if (node["frame"]) model.frame = reader.scalar(node["frame"], field + ".frame");
   if (const auto options = node["options"]) {
     reader.requireMap(options, field + ".options");
     for (const auto& entry : options) {
@@ -81,6 +82,7 @@ ModelSpec parseModel(const scenario::YamlReader& reader, const YAML::Node& node,
   model::VectorNetConfig config;
   config.decoder = model.decoder;
   config.decoderOptions = model.options;
+  config.frame = model.frame;
   try {
     config.validate();
   } catch (const ConfigError& error) {
@@ -108,7 +110,10 @@ void parseModels(const scenario::YamlReader& reader, const YAML::Node& root, Spe
       spec.models.push_back(std::move(model));
     }
   } else {
-    spec.models.push_back(ModelSpec{"offsets", "offsets", {}, allRows(spec)});
+    ModelSpec model;
+    model.name = "offsets";
+    model.rows = allRows(spec);
+    spec.models.push_back(model);
   }
   if (const auto seeds = root["seeds"]) {
     reader.checkKeys(seeds, "seeds", {"count", "rows"});
@@ -129,10 +134,8 @@ void parseModels(const scenario::YamlReader& reader, const YAML::Node& root, Spe
 }
 
 /// In --quick, extra seeds and extra models train only the rows of `quick.repeat_rows`.
-void restrictRepeats(std::vector<int>& rows, const std::vector<int>& allowed, const std::vector<AdeSpec>& all_rows) {
-  if (rows.empty()) {
-    for (const auto& row : all_rows) rows.push_back(row.row);
-  }
+/// A model none of whose rows is repeated trains nothing there.
+void restrictRepeats(std::vector<int>& rows, const std::vector<int>& allowed) {
   rows.erase(std::remove_if(rows.begin(), rows.end(),
                             [&](int row) { return std::find(allowed.begin(), allowed.end(), row) == allowed.end(); }),
              rows.end());
@@ -159,8 +162,8 @@ void applyQuickSizes(const scenario::YamlReader& reader, const YAML::Node& root,
     spec.extraTrees.trees = reader.integer(q, "trees", "quick.trees", 30, 1);
     std::vector<int> repeat_rows;
     if (const auto rows = q["repeat_rows"]) repeat_rows = rowList(reader, rows, "quick.repeat_rows", spec);
-    restrictRepeats(spec.seedRows, repeat_rows, spec.ade);
-    for (std::size_t i = 1; i < spec.models.size(); ++i) restrictRepeats(spec.models[i].rows, repeat_rows, spec.ade);
+    restrictRepeats(spec.seedRows, repeat_rows);
+    for (std::size_t i = 1; i < spec.models.size(); ++i) restrictRepeats(spec.models[i].rows, repeat_rows);
   }
 }
 
@@ -298,8 +301,9 @@ Spec parseSpec(const fs::path& file, bool quick) {
   parseModels(reader, root, spec);
 
   if (const auto mae = root["mae"]) {
-    reader.checkKeys(mae, "mae", {"samples", "vectornet_rows", "metrics", "extra_trees", "bnn"});
+    reader.checkKeys(mae, "mae", {"samples", "draws", "vectornet_rows", "metrics", "extra_trees", "bnn"});
     spec.maeSamples = static_cast<std::size_t>(reader.integer(mae, "samples", "mae.samples", 2000, 2));
+    spec.maeDraws = reader.integer(mae, "draws", "mae.draws", spec.maeDraws, 2, 1000);
     if (const auto rows_node = mae["vectornet_rows"]) {
       for (const auto& [label, row] : labelled_counts(rows_node, "mae.vectornet_rows")) {
         requireRow(rows_node[label], "mae.vectornet_rows." + label, static_cast<int>(row));

@@ -29,7 +29,8 @@ struct ModelSpec {
   std::string name;                        ///< names the rows in the tables and the cache folders
   std::string decoder = "offsets";         ///< a name of model::availableDecoders()
   std::map<std::string, double> options;   ///< decoder options (the rest take the decoder's defaults)
-  std::vector<int> rows;                   ///< ade rows trained this way; empty: all
+  std::string frame = "ego";               ///< the model's coordinate frame (model::availableFrames())
+  std::vector<int> rows;                   ///< ade rows trained this way (every row unless the spec names them)
   bool trains(int row) const;
 };
 
@@ -66,6 +67,7 @@ struct Spec {
   std::vector<std::string> predictors;     ///< predictors without training ("cv", "ca") as extra rows
   std::size_t maeSamples = 2000;
   std::map<std::string, int> vectornetRows;
+  int maeDraws = 32;                       ///< sampled futures per test scene of a probabilistic model (interval coverage)
   std::vector<MaeMetricSpec> maeMetrics;
   baseline::ExtraTreesOptions extraTrees;
   baseline::BnnOptions bnn;

@@ -119,11 +119,7 @@ class PredictionColumns {
   void pushMetrics(const vector::VectorizedScene& scene, const Prediction& prediction, const PredictionFileOptions& options) {
     const auto point = options.metrics(scene, prediction.mostLikely);
     metricColumns_->predicted.push(point.begin(), point.end());
-    std::vector<std::vector<double>> draws(metrics_);
-    for (const auto& draw : prediction.samples) {
-      const auto values = options.metrics(scene, draw);
-      for (std::size_t m = 0; m < metrics_; ++m) draws[m].push_back(values[m]);
-    }
+    const auto draws = metricDraws(scene, prediction, options.metrics, metrics_);
     for (std::size_t m = 0; m < metrics_; ++m) {
       if (draws[m].empty()) {
         metricColumns_->intervals.push({kNaN, kNaN, kNaN, kNaN, kNaN});
@@ -166,6 +162,17 @@ void writeHeader(H5::Group& root, const Predictor& predictor, const fs::path& mo
 }
 
 }  // namespace
+
+std::vector<std::vector<double>> metricDraws(const vector::VectorizedScene& scene, const Prediction& prediction,
+                                             const FutureMetrics& metrics, std::size_t count) {
+  std::vector<std::vector<double>> draws(count);
+  for (auto& column : draws) column.reserve(prediction.samples.size());
+  for (const auto& future : prediction.samples) {
+    const auto values = metrics(scene, future);
+    for (std::size_t m = 0; m < count; ++m) draws[m].push_back(values.at(m));
+  }
+  return draws;
+}
 
 std::size_t writePredictions(const Predictor& predictor, const fs::path& model_file, const fs::path& dataset,
                              const fs::path& output_path, const PredictionFileOptions& options) {

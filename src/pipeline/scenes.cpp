@@ -73,12 +73,22 @@ vector::VectorizedScene plannedScene(const scenario::ConcreteScenario& concrete)
   return scene;
 }
 
-std::vector<double> metricsOfFuture(const metrics::MetricSet& metric_set, const vector::VectorizedScene& scene,
-                                    const Polyline& future) {
-  const Trace trace = vector::sceneTrace(scene, future);
+namespace {
+
+/// The metrics of a trace of the scene's vehicles, with the scene's lanes as context (one
+/// path for futures of positions and of states: the same lane offsets on maps for both).
+std::vector<double> metricsOfSceneTrace(const metrics::MetricSet& metric_set, const vector::VectorizedScene& scene,
+                                        const Trace& trace) {
   const Polyline lane = vector::egoLaneCentre(scene);
   const std::vector<Polyline> boundaries = vector::laneBoundaryLines(scene);
   return metric_set.evaluate({trace, lane, &boundaries});
+}
+
+}  // namespace
+
+std::vector<double> metricsOfFuture(const metrics::MetricSet& metric_set, const vector::VectorizedScene& scene,
+                                    const Polyline& future) {
+  return metricsOfSceneTrace(metric_set, scene, vector::sceneTrace(scene, future));
 }
 
 metrics::Availability sceneAvailability(const std::string& dataset_kind) {
@@ -100,8 +110,12 @@ std::vector<double> metricsOfFuture(const metrics::MetricSet& metric_set, const 
   auto& ego = trace.vehicles.front().states;
   for (std::size_t k = 0; k < future.size() && k + 1 < ego.size(); ++k) ego[k + 1] = future[k];
   if (!future.empty()) ego[0].accel = future.front().accel;  // a_0 = a_1, as for every recorded track
-  const Polyline lane = vector::egoLaneCentre(scene);
-  return metric_set.evaluate({trace, lane});
+  return metricsOfSceneTrace(metric_set, scene, trace);
+}
+
+std::vector<double> metricsOfFuture(const metrics::MetricSet& metric_set, const vector::VectorizedScene& scene,
+                                    const Polyline& positions, const std::vector<VehicleState>& states) {
+  return states.empty() ? metricsOfFuture(metric_set, scene, positions) : metricsOfFuture(metric_set, scene, states);
 }
 
 }  // namespace vsd::pipeline

@@ -93,8 +93,7 @@ class VectorNetSurrogate final : public Surrogate {
     std::size_t judged = 0;
     std::size_t meeting = 0;
     for (const auto& future : prediction.samples) {
-      const auto values = future.states.empty() ? pipeline::metricsOfFuture(*options_.metricSet, scene, future.positions)
-                                                : pipeline::metricsOfFuture(*options_.metricSet, scene, future.states);
+      const auto values = pipeline::metricsOfFuture(*options_.metricSet, scene, future.positions, future.states);
       const auto verdict = criterion.verdict(values);
       if (!verdict) continue;
       ++judged;

@@ -291,6 +291,15 @@ with h5py.File(sys.argv[1], "r") as f:
     assert f["position_covariance"].shape == (30, 25, 2, 2)
     speed, accel = f["predicted_speed"][:], f["predicted_accel"][:]
     assert (speed >= 0).all() and (accel >= -8 - 1e-3).all()
+    # Metrics of the most likely future and their intervals over the 4 draws, by the metric code.
+    names = list(f["metric_names"].asstr()[:])
+    point, intervals = f["metrics_predicted"][:], f["metric_intervals"][:]
+    assert "a_min" in names and "d_min" in names, names
+    assert point.shape == (30, len(names)) and intervals.shape == (30, len(names), 5)
+    a = names.index("a_min")
+    assert np.allclose(point[:, a], accel.min(axis=1), atol=1e-4)  # the model's own accelerations
+    assert np.isfinite(intervals[:, a]).all()
+    assert (np.diff(intervals[:, a], axis=-1) >= 0).all()  # 5 <= 25 <= 50 <= 75 <= 95 %
 print("ok")
 )");
   const auto read = test::run({test::python(), check.string(), predictions.string()}, dir.path());

@@ -9,6 +9,7 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <limits>
 #include <map>
 #include <string>
 #include <vector>
@@ -39,17 +40,29 @@ struct AdeRow {
   std::string stopReason;                ///< of the first seed
 };
 
+/// A metric of one VectorNet model of the spec (the first seed of the ADE row that predicts the
+/// functional scenario) against the simulated values of the test set.
+struct VectorNetMetricError {
+  std::string model;          ///< the spec's model name
+  double mae = 0.0;           ///< of the metric of the most likely future
+  double bias = 0.0;          ///< mean of predicted - simulated
+  std::size_t samples = 0;    ///< test scenarios scored (finite simulated and predicted values)
+  /// Share of the simulated values inside the central 50 % / 90 % interval of the metric over
+  /// the model's sampled futures (mae.draws per scene); NaN for deterministic decoders.
+  double coverage50 = std::numeric_limits<double>::quiet_NaN();
+  double coverage90 = std::numeric_limits<double>::quiet_NaN();
+};
+
 struct MaeRow {
   std::string label;
   std::string metric;
   std::string unit;
   double et = 0.0;
   double bnn = 0.0;
-  double vectornet = 0.0;
+  std::vector<VectorNetMetricError> vectornet;  ///< every model that trains the row; the main model first
   double fromTruePositions = 0.0;  ///< MAE of the metric computed from the true future positions (the
                                    ///< reconstruction's own error: a floor for VectorNet's)
   double bnnStd = 0.0;             ///< mean predictive standard deviation of the BNN
-  std::size_t testSamples = 0;     ///< test scenarios scored by VectorNet
   std::size_t trainRows = 0;       ///< training rows of extra trees and the BNN
   double etSeconds = 0.0;          ///< extra trees fit + predict (all metrics of the scenario)
   double bnnSeconds = 0.0;         ///< BNN fit + predict

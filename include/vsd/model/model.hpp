@@ -76,6 +76,11 @@ TrainSummary train(const TrainOptions& options, const std::function<void(const E
 /// Metrics of one predicted future (e.g. pipeline::metricsOfFuture bound to a metric set).
 using FutureMetrics = std::function<std::vector<double>(const vector::VectorizedScene&, const Trajectory&)>;
 
+/// The metrics of every sampled future of a prediction, per metric: draws[m][s] for the
+/// `count` metrics `metrics` returns (empty lists when the prediction has no samples).
+std::vector<std::vector<double>> metricDraws(const vector::VectorizedScene& scene, const Prediction& prediction,
+                                             const FutureMetrics& metrics, std::size_t count);
+
 struct PredictionFileOptions {
   PredictOptions predict;            ///< samples per scene and their seed
   std::vector<std::string> metricNames;  ///< metrics written with intervals (empty: none)

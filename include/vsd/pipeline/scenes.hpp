@@ -53,6 +53,11 @@ std::vector<double> metricsOfFuture(const metrics::MetricSet& metric_set, const 
 std::vector<double> metricsOfFuture(const metrics::MetricSet& metric_set, const vector::VectorizedScene& scene,
                                     const std::vector<VehicleState>& future);
 
+/// A predicted future as a predictor returns it: its states when it carries them (kinematic
+/// decoder, cv, ca), otherwise its positions (position-only decoders).
+std::vector<double> metricsOfFuture(const metrics::MetricSet& metric_set, const vector::VectorizedScene& scene,
+                                    const Polyline& positions, const std::vector<VehicleState>& states);
+
 /// What metrics can rely on in scenes of a dataset of this kind ("generated" or "map").
 metrics::Availability sceneAvailability(const std::string& dataset_kind);
 /// What metrics can rely on in runs of a logical scenario (generated roads, its vehicles).
