@@ -14,6 +14,9 @@
 
 #include <algorithm>
 #include <array>
+#include <atomic>
+#include <exception>
+#include <thread>
 #include <chrono>
 #include <cmath>
 #include <limits>
@@ -279,7 +282,19 @@ class ExperimentRunner {
     return mix;
   }
 
+  /// One training of the experiment: a row of a model with one seed, and its cache entry.
+  struct TrainingJob {
+    const ModelSpec* model = nullptr;
+    model::Mix mix;
+    std::uint64_t seed = 0;
+    std::string what;
+    fs::path folder;
+    CacheKey key{"model"};
+    int row = 0;
+  };
+
   void trainModels() {
+    std::vector<TrainingJob> jobs;
     for (std::size_t m = 0; m < spec_.models.size(); ++m) {
       const auto& model_spec = spec_.models[m];
       for (const auto& row : spec_.ade) {
@@ -288,30 +303,69 @@ class ExperimentRunner {
         if (mix.counts.empty()) {
           throw ConfigError(fmt::format("{}: ade row {}: the mix holds no sample", spec_.file.string(), row.row));
         }
-        for (const auto seed : seedsOf(m, row.row)) {
-          throwIfInterrupted();
-          trainOne(model_spec, row, mix, seed);
-        }
+        for (const auto seed : seedsOf(m, row.row)) jobs.push_back(trainingJob(model_spec, row, mix, seed));
       }
+    }
+    std::vector<const TrainingJob*> pending;
+    for (const auto& job : jobs) {
+      if (!reuse(job.folder, job.key, job.what)) pending.push_back(&job);
+    }
+    trainInParallel(pending);
+    for (const auto& job : jobs) {
+      runs_.push_back({job.model->name, job.row, job.seed, {job.folder / "model.pt", job.key.digest()},
+                       readJson(job.folder / "training.json")});
     }
   }
 
-  void trainOne(const ModelSpec& model_spec, const AdeSpec& row, const model::Mix& mix, std::uint64_t seed) {
-    const auto folder = cache_.folder(fmt::format("models/{}/row{}_seed{}", model_spec.name, row.row, seed));
-    auto model_key = key("model", modelModules());
-    model_key.add("mix", mix.str());
-    for (const auto& [label, count] : mix.counts) model_key.add("data_" + label, data(label).trainDigest);
-    model_key.add("decoder", model_spec.decoder).add("frame", model_spec.frame);
-    for (const auto& [option, value] : model_spec.options) model_key.add("decoder_option_" + option, value);
-    model_key.add("seed", seed)
+  TrainingJob trainingJob(const ModelSpec& model_spec, const AdeSpec& row, const model::Mix& mix, std::uint64_t seed) {
+    TrainingJob job;
+    job.model = &model_spec;
+    job.mix = mix;
+    job.seed = seed;
+    job.row = row.row;
+    job.folder = cache_.folder(fmt::format("models/{}/row{}_seed{}", model_spec.name, row.row, seed));
+    job.key = key("model", modelModules());
+    job.key.add("mix", mix.str());
+    for (const auto& [label, count] : mix.counts) job.key.add("data_" + label, data(label).trainDigest);
+    job.key.add("decoder", model_spec.decoder).add("frame", model_spec.frame);
+    for (const auto& [option, value] : model_spec.options) job.key.add("decoder_option_" + option, value);
+    job.key.add("seed", seed)
         .add("steps", spec_.steps)
         .add("batch", spec_.batch)
         .add("learning_rate", spec_.learningRate)
         .add("threads", spec_.threads);
-    const std::string what = fmt::format("{} row {} seed {} model ({})", model_spec.name, row.row, seed, mix.str());
-    if (!reuse(folder, model_key, what)) train(what, folder, model_spec, mix, seed, model_key);
-    runs_.push_back({model_spec.name, row.row, seed, {folder / "model.pt", model_key.digest()},
-                     readJson(folder / "training.json")});
+    job.what = fmt::format("{} row {} seed {} model ({})", model_spec.name, row.row, seed, mix.str());
+    return job;
+  }
+
+  /// Runs the trainings `training.parallel` at a time, each on `training.threads` threads.
+  /// A training's result depends on its own options only (model::train seeds its
+  /// initialisation under a lock), so the order in which they finish changes nothing. After
+  /// a failure no new training starts; the first error is rethrown once the others ended.
+  void trainInParallel(const std::vector<const TrainingJob*>& pending) {
+    std::atomic<std::size_t> next{0};
+    std::atomic<bool> failed{false};
+    std::vector<std::exception_ptr> errors(static_cast<std::size_t>(spec_.parallel));
+    auto work = [&](std::size_t worker) {
+      try {
+        for (std::size_t i = next++; i < pending.size() && !failed; i = next++) {
+          throwIfInterrupted();
+          const auto& job = *pending[i];
+          train(job.what, job.folder, *job.model, job.mix, job.seed, job.key);
+        }
+      } catch (...) {
+        errors[worker] = std::current_exception();
+        failed = true;
+      }
+    };
+    std::vector<std::thread> workers;
+    const auto count = std::min(pending.size(), static_cast<std::size_t>(spec_.parallel));
+    for (std::size_t w = 1; w < count; ++w) workers.emplace_back(work, w);
+    work(0);
+    for (auto& worker : workers) worker.join();
+    for (const auto& error : errors) {
+      if (error) std::rethrow_exception(error);
+    }
   }
 
   void train(const std::string& what, const fs::path& folder, const ModelSpec& model_spec, const model::Mix& mix,
@@ -408,7 +462,7 @@ class ExperimentRunner {
     for (const auto& source : spec_.sources) eval_key.add("test_" + source.label, data(source.label).testDigest);
     if (!reuse(folder, eval_key, what + " evaluation")) {
       cache_.clear(folder);
-      const model::Predictor predictor(model, spec_.threads);
+      const model::Predictor predictor(model, spec_.cores());
       json errors;
       for (const auto& source : spec_.sources) errors[source.label] = displacementSummary(predictor, source.label, what);
       writeJson(folder / "errors.json", errors);
@@ -564,7 +618,7 @@ class ExperimentRunner {
     baseline_options.maxTrainRows = spec_.maeSamples;
     baseline_options.extraTrees = spec_.extraTrees;
     baseline_options.bnn = spec_.bnn;
-    baseline_options.bnn.threads = spec_.threads;
+    baseline_options.bnn.threads = spec_.cores();
     baseline_options.model = "et";
     const auto et = baseline::runBaseline(baseline_options);
     baseline_options.model = "bnn";
@@ -643,7 +697,7 @@ class ExperimentRunner {
   json vectornetErrors(const std::string& model_name, const RowModel& row_model,
                        const std::vector<vector::VectorizedScene>& scenes,
                        const std::vector<std::vector<double>>& simulated, const metrics::MetricSet& metric_set) const {
-    const model::Predictor predictor(row_model.file, spec_.threads);
+    const model::Predictor predictor(row_model.file, spec_.cores());
     model::PredictOptions draw_options;
     draw_options.samples = predictor.probabilistic() ? spec_.maeDraws : 0;
     draw_options.seed = spec_.seed;
@@ -701,7 +755,7 @@ class ExperimentRunner {
   void drawFigures() {
     if (spec_.figures.empty()) return;
     for (const auto& figure : spec_.figures) {
-      const model::Predictor predictor(rowModels_.at({spec_.models.front().name, figure.row}).file, spec_.threads);
+      const model::Predictor predictor(rowModels_.at({spec_.models.front().name, figure.row}).file, spec_.cores());
       std::vector<std::string> panels;
       for (const auto& source : spec_.sources) {
         const auto [sample, ade] = medianSample_.at({figure.row, source.label});

@@ -109,9 +109,11 @@ std::string seedsText(const Spec& spec) {
 std::string sizesLine(const Spec& spec) {
   return fmt::format(
       "Data per functional scenario: {} training scenarios (seed {}), {} test scenarios (seed {}). "
-      "VectorNet: {} optimizer steps, batch {}, peak learning rate {}, seed {}{}, {} threads.{}",
+      "VectorNet: {} optimizer steps, batch {}, peak learning rate {}, seed {}{}, {} thread(s) per training, {} "
+      "training(s) at a time.{}",
       spec.trainSamples, spec.trainSeed, spec.testSamples, spec.testSeed, spec.steps, spec.batch, spec.learningRate,
-      spec.seed, seedsText(spec), spec.threads, spec.quick ? " **--quick sizes: not comparable with the paper.**" : "");
+      spec.seed, seedsText(spec), spec.threads, spec.parallel,
+      spec.quick ? " **--quick sizes: not comparable with the paper.**" : "");
 }
 
 
@@ -442,7 +444,8 @@ void writeResults(const Spec& spec, const ExperimentOptions& options, Experiment
   manifest["predictors"] = spec.predictors;
   manifest["sizes"] = {{"train_samples", spec.trainSamples}, {"test_samples", spec.testSamples},
                        {"steps", spec.steps},                {"batch", spec.batch},
-                       {"mae_train_rows", spec.maeSamples},  {"threads", spec.threads}};
+                       {"mae_train_rows", spec.maeSamples},  {"threads", spec.threads},
+                       {"parallel_trainings", spec.parallel}};
   for (const auto& artefact : artefacts) {
     manifest["artefacts"].push_back({{"path", artefact.path}, {"key_sha256", artefact.keyDigest}, {"reused", artefact.reused}});
   }

@@ -233,11 +233,12 @@ Spec parseSpec(const fs::path& file, bool quick) {
     spec.jobs = reader.integer(data, "jobs", "data.jobs", 2, 1);
   }
   if (const auto training = root["training"]) {
-    reader.checkKeys(training, "training", {"steps", "batch", "learning_rate", "threads"});
+    reader.checkKeys(training, "training", {"steps", "batch", "learning_rate", "threads", "parallel"});
     spec.steps = reader.integer(training, "steps", "training.steps", spec.steps, 1);
     spec.batch = reader.integer(training, "batch", "training.batch", spec.batch, 1);
     spec.learningRate = reader.number(training, "learning_rate", "training.learning_rate", spec.learningRate);
-    spec.threads = reader.integer(training, "threads", "training.threads", spec.threads, 1);
+    spec.threads = reader.integer(training, "threads", "training.threads", spec.threads, 1, 256);
+    spec.parallel = reader.integer(training, "parallel", "training.parallel", spec.parallel, 1, 64);
   }
 
   auto requireLabel = [&](const YAML::Node& node, const std::string& field, const std::string& label) {

@@ -59,7 +59,10 @@ struct Spec {
   int steps = 6000;
   int batch = 64;
   double learningRate = 2e-3;
-  int threads = 2;
+  int threads = 2;                         ///< libtorch threads of one training (part of a model's key)
+  int parallel = 1;                        ///< trainings at a time; threads * parallel cores in all
+  /// Threads for the work that is not split into trainings (evaluations, the BNN).
+  int cores() const { return threads * parallel; }
   std::vector<AdeSpec> ade;
   std::vector<ModelSpec> models;           ///< never empty after parsing (default: one offsets model)
   int seedCount = 1;                       ///< seeds seed .. seed + seedCount - 1 for `seedRows` of the main model

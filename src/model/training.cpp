@@ -6,6 +6,7 @@
 #include <cmath>
 #include <csignal>
 #include <limits>
+#include <mutex>
 #include <set>
 
 #include "calibration.hpp"
@@ -247,6 +248,17 @@ namespace {
 
 /// One training run: the data as tensors, the model, the optimizer and the bookkeeping
 /// that lets an interrupted run resume exactly.
+/// A new model initialised from `seed`. Initialisation draws from libtorch's process-wide
+/// generator: the lock makes seeding and drawing one step, so trainings running side by side
+/// in one process (the experiment's `training.parallel`) each get the parameters of their
+/// own seed, as a training alone does.
+Model createSeeded(const VectorNetConfig& config, std::uint64_t seed) {
+  static std::mutex initialisation;
+  const std::lock_guard<std::mutex> lock(initialisation);
+  torch::manual_seed(seed);
+  return Model::create(config);
+}
+
 class Trainer {
  public:
   /// `parallel`: the other ranks of a distributed training (nullptr: this process alone).
@@ -257,7 +269,7 @@ class Trainer {
         config_(trainedConfig(options, selection_.header)),
         train_(buildTensors(selection_.train, config_)),
         validation_(buildTensors(selection_.validation, config_)),
-        model_(Model::create(config_)),
+        model_(createSeeded(config_, options.seed)),
         optimizer_(model_.network->parameters(),
                    torch::optim::AdamWOptions(options.learningRate).weight_decay(options.weightDecay)),
         lastCheckpoint_(options.output.string() + ".last"),
@@ -545,7 +557,6 @@ TrainSummary train(const TrainOptions& options, const std::function<void(const E
     }
     parallel = std::make_unique<DataParallel>(*rendezvous);
   }
-  torch::manual_seed(options.seed);  // before the model is initialised
   Trainer trainer(options, parallel.get());
   return trainer.run(on_epoch);
 }
