@@ -60,17 +60,19 @@ TEST(Experiment, QuickRunProducesTheTablesFiguresAndManifestAndCachesArtefacts) 
   const auto first = runExperimentCli({spec.string(), "--quick", "--out", out.string()}, dir.path());
   ASSERT_EQ(first.exitCode, 0) << first.output;
 
-  // Ten rows of the main model, row 3 (quick.repeat_rows) also with the residual, and the two
-  // predictors without training, each on three test sets: every ADE finite and positive.
+  // Ten rows of the main model, row 3 (quick.repeat_rows) also with the residual, the kinematic
+  // decoder and in the lane frame, and the two predictors without training, each on three test
+  // sets: every ADE finite and positive.
   const auto ade = adeValues(out / "ade.csv");
-  ASSERT_EQ(ade.size(), (10u + 1u + 2u) * 3u);
+  ASSERT_EQ(ade.size(), (10u + 3u + 2u) * 3u);
   for (const auto& [key, value] : ade) EXPECT_TRUE(std::isfinite(value) && value > 0.0) << key;
   const auto ade_table = CsvTable::read(out / "ade.csv");
   EXPECT_EQ(ade_table.cell(0, ade_table.column("paper_ade_m")), "0.37");
   // In-distribution beats out-of-distribution even at quick sizes: ACC-only on LK is far off.
   EXPECT_LT(ade.at("no_residual 1 acc"), ade.at("no_residual 1 lk"));
   EXPECT_LT(ade.at("no_residual 2 lk"), ade.at("no_residual 2 acc"));
-  EXPECT_TRUE(ade.count("residual 3 acc_lk") && ade.count("cv 0 lk") && ade.count("ca 0 acc"));
+  EXPECT_TRUE(ade.count("residual 3 acc_lk") && ade.count("kinematic 3 lk") && ade.count("lane 3 acc") &&
+              ade.count("cv 0 lk") && ade.count("ca 0 acc"));
   // Row 3 (a row carrying findings) over three seeds: mean with a spread; row 1 over one.
   for (std::size_t r = 0; r < ade_table.rows(); ++r) {
     const auto row = ade_table.cell(r, ade_table.column("row"));
@@ -85,6 +87,7 @@ TEST(Experiment, QuickRunProducesTheTablesFiguresAndManifestAndCachesArtefacts) 
   }
   const auto ade_md = readTextFile(out / "ade.md");
   EXPECT_NE(ade_md.find("## residual: decoder offsets (residual=1)"), std::string::npos) << ade_md;
+  EXPECT_NE(ade_md.find("## lane: decoder offsets (residual=0), lane frame"), std::string::npos) << ade_md;
   EXPECT_NE(ade_md.find(" ± "), std::string::npos) << ade_md;
   EXPECT_NE(ade_md.find("| cv |"), std::string::npos) << ade_md;
 
@@ -98,6 +101,19 @@ TEST(Experiment, QuickRunProducesTheTablesFiguresAndManifestAndCachesArtefacts) 
     // Positions reproduce p_lat_max exactly (datasets store float32: about 1e-5 m at 100 m).
     // d_min is the clearance of oriented footprints, whose headings a future of positions
     // only approximates: a few cm (measured 0.023 / 0.040 m on the quick run).
+    // Every model that trains the row predicting the scenario has a column; only the
+    // probabilistic one (kinematic, row 3: acc_lk) has interval coverage, between 0 and 1
+    // and larger for the wider interval.
+    const bool acc_lk = mae.cell(r, mae.column("functional_scenario")) == "acc_lk";
+    EXPECT_EQ(mae.cell(r, mae.column("vectornet_no_residual_coverage_90")), "");
+    EXPECT_EQ(mae.cell(r, mae.column("vectornet_kinematic")) != "", acc_lk) << "row " << r;
+    EXPECT_EQ(mae.cell(r, mae.column("vectornet_lane")) != "", acc_lk) << "row " << r;
+    if (acc_lk) {
+      const double covered50 = mae.number(r, mae.column("vectornet_kinematic_coverage_50"));
+      const double covered90 = mae.number(r, mae.column("vectornet_kinematic_coverage_90"));
+      EXPECT_TRUE(covered50 >= 0.0 && covered50 <= covered90 && covered90 <= 1.0) << covered50 << " " << covered90;
+      EXPECT_EQ(mae.cell(r, mae.column("vectornet_lane_coverage_90")), "");
+    }
     const std::string metric = mae.cell(r, mae.column("metric"));
     if (metric == "p_lat_max") {
       EXPECT_LT(mae.number(r, mae.column("vectornet_from_true_positions")), 1e-4);
