@@ -117,13 +117,19 @@ std::string sizesLine(const Spec& spec) {
 }
 
 
+/// "| first | <labels> | last |" and its separator row; `first` and `last` may hold several
+/// columns ("a | b"), `last` none ("").
 std::string adeTableHead(const std::vector<std::string>& labels, const std::string& first_columns,
-                         const std::string& last_column) {
+                         const std::string& last_columns) {
   std::string md = "| " + first_columns + " |";
   for (const auto& label : labels) md += " " + label + " |";
-  md += " " + last_column + " |\n|";
-  const auto columns = std::count(first_columns.begin(), first_columns.end(), '|') + 2 + labels.size();
-  for (std::size_t i = 0; i < static_cast<std::size_t>(columns); ++i) md += "---|";
+  if (!last_columns.empty()) md += " " + last_columns + " |";
+  md += "\n|";
+  auto count = [](const std::string& columns) {
+    return columns.empty() ? 0 : 1 + static_cast<std::size_t>(std::count(columns.begin(), columns.end(), '|'));
+  };
+  const auto columns = count(first_columns) + labels.size() + count(last_columns);
+  for (std::size_t i = 0; i < columns; ++i) md += "---|";
   return md + "\n";
 }
 
@@ -254,7 +260,7 @@ std::string adeMarkdown(const Spec& spec, const std::vector<AdeRow>& rows) {
       if (row.row != 0) continue;
       md += "| " + row.model + " |";
       for (const auto& label : labels) md += " " + adeText(row, label) + " |";
-      md += " |\n";
+      md += "\n";
     }
   }
   return md;

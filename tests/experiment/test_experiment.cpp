@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <regex>
+#include <sstream>
 
 #include "../../src/experiment/cache.hpp"
 #include "../../src/experiment/results.hpp"
@@ -18,6 +19,13 @@ using namespace vsd;
 using namespace vsd::experiment;
 
 namespace {
+
+std::vector<std::string> splitLines(const std::string& text) {
+  std::vector<std::string> lines;
+  std::istringstream stream(text);
+  for (std::string line; std::getline(stream, line);) lines.push_back(line);
+  return lines;
+}
 
 ProcessResult runExperimentCli(const std::vector<std::string>& args, const fs::path& work) {
   std::vector<std::string> argv = {test::vsdSumo().string(), "experiment"};
@@ -90,6 +98,19 @@ TEST(Experiment, QuickRunProducesTheTablesFiguresAndManifestAndCachesArtefacts) 
   EXPECT_NE(ade_md.find("## lane: decoder offsets (residual=0), lane frame"), std::string::npos) << ade_md;
   EXPECT_NE(ade_md.find(" ± "), std::string::npos) << ade_md;
   EXPECT_NE(ade_md.find("| cv |"), std::string::npos) << ade_md;
+  // Every Markdown table is well formed: its separator has a column per header cell and every
+  // row has as many cells (a table that does not is shown as text).
+  for (const auto& file : {"ade.md", "mae.md"}) {
+    const auto lines = splitLines(readTextFile(out / file));
+    for (std::size_t i = 1; i < lines.size(); ++i) {
+      if (lines[i].rfind("|---", 0) != 0) continue;
+      const auto columns = std::count(lines[i - 1].begin(), lines[i - 1].end(), '|');
+      EXPECT_EQ(std::count(lines[i].begin(), lines[i].end(), '|'), columns) << file << ": " << lines[i - 1];
+      for (std::size_t r = i + 1; r < lines.size() && lines[r].rfind("|", 0) == 0; ++r) {
+        EXPECT_EQ(std::count(lines[r].begin(), lines[r].end(), '|'), columns) << file << ": " << lines[r];
+      }
+    }
+  }
 
   const auto mae = CsvTable::read(out / "mae.csv");
   ASSERT_EQ(mae.rows(), 6u);  // acc: a_min, d_min; lk: p_lat_max; acc_lk: all three
