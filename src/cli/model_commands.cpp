@@ -9,6 +9,7 @@
 #include "vsd/core/error.hpp"
 #include "vsd/core/files.hpp"
 #include "vsd/core/progress.hpp"
+#include "vsd/experiment/experiment.hpp"
 #include "vsd/metrics/metrics.hpp"
 #include "vsd/model/model.hpp"
 #include "vsd/pipeline/scenes.hpp"
@@ -29,13 +30,9 @@ std::string duration(double seconds) {
 /// runs, on the predictor's own states where it has them (README "vsd-predictions/2").
 void bindPredictionMetrics(const std::filesystem::path& data, model::PredictionFileOptions& options) {
   if (options.predict.samples < 1) return;
-  const vector::DatasetReader reader(vector::resolveDatasetPath(data));
-  const auto metric_set = std::make_shared<const metrics::MetricSet>(
-      std::vector<std::string>{}, pipeline::sceneAvailability(reader.header().kind), data.string());
-  options.metricNames = metric_set->names();
-  options.metrics = [metric_set](const vector::VectorizedScene& scene, const model::Trajectory& future) {
-    return pipeline::metricsOfFuture(*metric_set, scene, future.positions, future.states);
-  };
+  const auto binding = experiment::futureMetricBinding(data);
+  options.metricNames = binding->names;
+  options.metrics = binding->compute;
 }
 
 /// "offsets, kinematic" for help texts.
@@ -82,6 +79,8 @@ void addTrainCommand(CLI::App& app, CommandContext& context) {
       options->mix = model::Mix::parse(*mix);
       model::findDecoder(options->config.decoder, "--decoder");
       options->config.decoderOptions = model::parseDecoderOptions(*decoder_options);
+      // `calibrate` calibrates the intervals of every metric that applies to the data.
+      if (options->config.decoderOptions.count("calibrate") != 0) options->metrics = experiment::futureMetricBinding(options->data.front());
       const auto summary = model::train(*options, [&](const model::EpochRecord& record) {
         const int planned = record.plannedEpochs;
         const std::string nll =

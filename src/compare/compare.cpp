@@ -122,8 +122,10 @@ model::PredictOptions drawOptions(const CompareOptions& options, const model::Pr
 /// failing each criterion. Every future goes through the same metric code.
 class PredictionScorer {
  public:
-  PredictionScorer(const metrics::MetricSet& metric_set, const Criteria& criteria)
-      : metricSet_(metric_set), criteria_(criteria) {}
+  /// `calibration`: the model's metric calibration (README "Calibration"; empty: plain intervals).
+  PredictionScorer(const metrics::MetricSet& metric_set, const Criteria& criteria,
+                   const model::IntervalCalibration& calibration)
+      : metricSet_(metric_set), criteria_(criteria), calibration_(calibration) {}
 
   std::vector<double> metricsOf(const vector::VectorizedScene& scene, const model::Trajectory& future) const {
     return pipeline::metricsOfFuture(metricSet_, scene, future.positions, future.states);
@@ -151,9 +153,10 @@ class PredictionScorer {
       }
     }
     for (std::size_t m = 0; m < metrics; ++m) {
-      const auto interval = model::intervalOf(draws[m]);
+      const auto* widening = calibration_.find(scene.label, metricSet_.names()[m]);
+      const auto interval = model::intervalOf(draws[m], widening);
       row.intervals.push_back({interval.draws, interval.p05, interval.p25, interval.median, interval.p75, interval.p95,
-                               model::quantilePosition(draws[m], row.reference.at(m))});
+                               model::containingLevel(draws[m], row.reference.at(m), widening)});
     }
     for (std::size_t c = 0; c < failing.size(); ++c) {
       row.failShare.push_back(defined[c] == 0 ? std::nan("")
@@ -164,6 +167,7 @@ class PredictionScorer {
  private:
   const metrics::MetricSet& metricSet_;
   const Criteria& criteria_;
+  const model::IntervalCalibration& calibration_;
 };
 
 std::string metricCaption(const report::Comparison& comparison, const report::ComparedScenario& row) {
@@ -260,7 +264,7 @@ Run compareScenario(const CompareOptions& options, const model::Predictor& predi
   }
   const auto predictions = predictInChunks(predictor, planned, to_predict, drawOptions(options, predictor));
   comparison.timings.push_back({"predict", secondsSince(start)});
-  const PredictionScorer scorer(metric_set, criteria);
+  const PredictionScorer scorer(metric_set, criteria, predictor.info().metricIntervals);
   spdlog::info("predicted the Ego in {} scenarios", predictions.size());
 
   // 3. Simulation of the same concrete scenarios, compared as they arrive.
@@ -354,7 +358,7 @@ Run compareDatasets(const CompareOptions& options, const model::Predictor& predi
     where.push_back("--criterion '" + text + "'");
   }
   const Criteria criteria(comparison.criteria, where, comparison.metricNames);
-  const PredictionScorer scorer(metric_set, criteria);
+  const PredictionScorer scorer(metric_set, criteria, predictor.info().metricIntervals);
   const auto predict_options = drawOptions(options, predictor);
 
   double read_seconds = 0.0;

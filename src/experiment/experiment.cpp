@@ -100,6 +100,7 @@ json readJson(const fs::path& path) {
 void writeJson(const fs::path& path, const json& value) { writeTextFileAtomically(path, value.dump(2) + "\n"); }
 
 
+
 class ExperimentRunner {
  public:
   ExperimentRunner(const ExperimentOptions& options, Spec spec, fs::path output)
@@ -396,6 +397,7 @@ class ExperimentRunner {
     train_options.batchSize = spec_.batch;
     train_options.learningRate = spec_.learningRate;
     train_options.resume = resume;
+    if (model_spec.options.count("calibrate") != 0) train_options.metrics = futureMetricBinding(data(mix.counts.front().first).trainRun);
     spdlog::info("{}: training{}", what, resume ? " (resuming)" : "");
     auto last_line = std::chrono::steady_clock::now();
     const auto trained = model::train(train_options, [&](const model::EpochRecord& record) {
@@ -728,7 +730,8 @@ class ExperimentRunner {
           signed_sum[m] += predicted[m] - truth[m];
           ++scored[m];
           if (draws[m].empty()) continue;
-          const auto interval = model::intervalOf(draws[m]);
+          const auto interval =
+              model::intervalOf(draws[m], predictor.info().metricIntervals.find(chunk[i].label, metric_set.names()[m]));
           if (interval.draws == 0) continue;
           ++with_interval[m];
           covered[m][0] += interval.contains(truth[m], 0.5) ? 1 : 0;
@@ -797,6 +800,18 @@ ExperimentSummary runExperiment(const ExperimentOptions& options) {
   if (output.empty()) output = fs::path("results") / (spec.name + (options.quick ? "-quick" : ""));
   refuseDirtyCommittedResults(output, options.allowDirty, "--allow-dirty");
   return ExperimentRunner(options, std::move(spec), output).run();
+}
+
+std::shared_ptr<const model::MetricBinding> futureMetricBinding(const fs::path& data) {
+  const vector::DatasetReader reader(vector::datasetFiles(data).front());
+  const auto metric_set = std::make_shared<const metrics::MetricSet>(
+      std::vector<std::string>{}, pipeline::sceneAvailability(reader.header().kind), data.string());
+  auto binding = std::make_shared<model::MetricBinding>();
+  binding->names = metric_set->names();
+  binding->compute = [metric_set](const vector::VectorizedScene& scene, const model::Trajectory& future) {
+    return pipeline::metricsOfFuture(*metric_set, scene, future.positions, future.states);
+  };
+  return binding;
 }
 
 }  // namespace vsd::experiment

@@ -5,6 +5,7 @@
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
+#include <cmath>
 #include <unordered_map>
 
 #include "vsd/core/error.hpp"
@@ -22,6 +23,88 @@ constexpr const char* kLegacyModelFormat = "vsd-model/1";
 constexpr const char* kInfoKey = "vsd_model_info";
 constexpr const char* kStateKey = "vsd_training_state";
 constexpr const char* kOptimizerKey = "optimizer";
+}  // namespace
+
+namespace {
+
+nlohmann::json calibrationToJson(const ModelInfo& info) {
+  nlohmann::json json = nlohmann::json::object();
+  if (!info.positionRegions.byLabel.empty()) {
+    auto& regions = json["position_regions"];
+    regions["levels"] = kCoverageLevels;
+    regions["scenes"] = info.positionRegions.scenes;
+    for (const auto& [label, radii] : info.positionRegions.byLabel) regions["by_label"][label] = radii;
+  }
+  for (const auto& [label, metrics] : info.metricIntervals.byLabel) {
+    for (const auto& [metric, widening] : metrics) {
+      json["metric_intervals"][label][metric] = {{"levels", widening.levels},
+                                                 {"raw_levels", widening.rawLevels},
+                                                 {"widening", widening.widening},
+                                                 {"floor", widening.floor},
+                                                 {"scenes", widening.scenes}};
+    }
+  }
+  return json;
+}
+
+bool allFinite(const std::vector<double>& values) {
+  return std::all_of(values.begin(), values.end(), [](double v) { return std::isfinite(v); });
+}
+
+/// Reads what calibrationToJson wrote; throws ModelError naming the file for anything else.
+void calibrationFromJson(const nlohmann::json& json, ModelInfo& info, const fs::path& file) {
+  const auto damaged = [&](const std::string& what) {
+    return ModelError(fmt::format("{}: model description: calibration: {}", file.string(), what));
+  };
+  if (const auto regions = json.find("position_regions"); regions != json.end()) {
+    if (regions->at("levels").get<std::vector<double>>() !=
+        std::vector<double>(kCoverageLevels.begin(), kCoverageLevels.end())) {
+      throw damaged("position_regions.levels: expected the levels 0.5, 0.9");
+    }
+    info.positionRegions.scenes = regions->at("scenes");
+    for (const auto& [label, radii] : regions->at("by_label").items()) {
+      auto steps = radii.get<std::vector<std::array<double, kCoverageLevels.size()>>>();
+      if (steps.size() != static_cast<std::size_t>(info.config.horizon)) {
+        throw damaged(fmt::format("position_regions '{}': {} steps, expected the horizon {}", label, steps.size(),
+                                  info.config.horizon));
+      }
+      for (const auto& radius : steps) {
+        if (!(radius[0] > 0.0 && radius[0] <= radius[1] && std::isfinite(radius[1]))) {
+          throw damaged(fmt::format("position_regions '{}': radii {}, {}: expected 0 < r50 <= r90 < inf", label,
+                                    radius[0], radius[1]));
+        }
+      }
+      info.positionRegions.byLabel[label] = std::move(steps);
+    }
+  }
+  if (const auto intervals = json.find("metric_intervals"); intervals != json.end()) {
+    for (const auto& [label, metrics] : intervals->items()) {
+      for (const auto& [metric, entry] : metrics.items()) {
+        IntervalWidening widening;
+        widening.levels = entry.at("levels").get<std::vector<double>>();
+        widening.rawLevels = entry.at("raw_levels").get<std::vector<double>>();
+        widening.widening = entry.at("widening").get<std::vector<double>>();
+        widening.floor = entry.at("floor");
+        widening.scenes = entry.at("scenes");
+        const bool ascending = std::is_sorted(widening.levels.begin(), widening.levels.end()) &&
+                               !widening.levels.empty() && widening.levels.front() > 0.0 && widening.levels.back() < 1.0;
+        const auto& raw = widening.rawLevels;
+        const auto& w = widening.widening;
+        const bool raw_ok = raw.size() == widening.levels.size() && allFinite(raw) && std::is_sorted(raw.begin(), raw.end()) &&
+                            !raw.empty() && raw.front() >= 0.0 && raw.back() <= 1.0;
+        const bool widening_ok = w.size() == widening.levels.size() && allFinite(w) && std::is_sorted(w.begin(), w.end()) &&
+                                 !w.empty() && w.front() >= 0.0;
+        if (!ascending || !raw_ok || !widening_ok || !(widening.floor > 0.0)) {
+          throw damaged(fmt::format("metric_intervals '{}' {}: expected ascending levels in (0, 1), as many "
+                                    "non-decreasing raw levels in [0, 1] and widenings >= 0, and a positive floor",
+                                    label, metric));
+        }
+        info.metricIntervals.byLabel[label][metric] = std::move(widening);
+      }
+    }
+  }
+}
+
 }  // namespace
 
 std::string infoToJson(const ModelInfo& info) {
@@ -49,6 +132,8 @@ std::string infoToJson(const ModelInfo& info) {
       {"labels", info.labels},
       {"tool_version", info.toolVersion},
   };
+  auto calibration = calibrationToJson(info);
+  if (!calibration.empty()) json["calibration"] = std::move(calibration);
   return json.dump();
 }
 
@@ -114,6 +199,9 @@ ModelInfo infoFromJson(const std::string& text, const fs::path& file) {
     info.validationAde = json.at("validation_ade");
     info.labels = json.at("labels").get<std::vector<std::string>>();
     info.toolVersion = json.at("tool_version");
+    if (const auto calibration = json.find("calibration"); calibration != json.end()) {
+      calibrationFromJson(*calibration, info, file);
+    }
   } catch (const nlohmann::json::exception& error) {
     throw ModelError(fmt::format("{}: damaged model description: {}", file.string(), error.what()));
   }

@@ -103,8 +103,10 @@ LabelErrors predictionErrors(const Prediction& prediction, const vector::Vectori
     errors.countAt[t] = 1;
     errors.nllAt[t] = score.nll;
     for (std::size_t l = 0; l < kCoverageLevels.size(); ++l) {
-      // The 2-D Gaussian's central region of probability p: r' S^-1 r <= -2 ln(1 - p).
-      errors.coverageAt[t][l] = score.mahalanobis2 <= -2.0 * std::log(1.0 - kCoverageLevels[l]) ? 1.0 : 0.0;
+      // The region of level p: r' S^-1 r <= r2, the Gaussian's -2 ln(1 - p) unless calibrated.
+      const double radius2 = *k < prediction.regionRadius2.size() ? prediction.regionRadius2[*k][l]
+                                                                  : gaussianRegionRadius2(kCoverageLevels[l]);
+      errors.coverageAt[t][l] = score.mahalanobis2 <= radius2 ? 1.0 : 0.0;
     }
   }
   return errors;

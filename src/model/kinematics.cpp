@@ -38,40 +38,70 @@ SpeedProfile integrateSpeeds(const torch::Tensor& speed, const torch::Tensor& ac
 
 }  // namespace
 
-Rollout rollout(const torch::Tensor& position, const torch::Tensor& heading, const torch::Tensor& speed,
-                const torch::Tensor& accel, const torch::Tensor& curvature, double dt) {
+namespace {
+
+/// The longitudinal part every rollout shares: speeds, distances, stops, accelerations.
+Rollout longitudinal(const torch::Tensor& speed, const torch::Tensor& accel, double dt) {
   Rollout result;
   auto profile = integrateSpeeds(speed, accel, dt);
   result.speeds = profile.speeds;
   result.distances = profile.distances;
   result.stops = profile.stops;
   result.controlAccel = accel;
-  result.controlCurvature = curvature;
   result.initialSpeed = speed;
+  const auto previous = torch::cat({speed.unsqueeze(-1), result.speeds.narrow(-1, 0, result.speeds.size(-1) - 1)}, -1);
+  result.accels = (result.speeds - previous) / dt;
+  return result;
+}
+
+/// Positions from the distances and mid-step headings: p_{k+1} = p_k + s_k (cos m_k, sin m_k).
+void integratePositions(Rollout& path, const torch::Tensor& position) {
+  const auto steps = torch::stack({path.distances * path.midHeadings.cos(), path.distances * path.midHeadings.sin()}, -1);
+  path.positions = position.unsqueeze(-2) + steps.cumsum(-2);
+}
+
+}  // namespace
+
+Rollout rollout(const torch::Tensor& position, const torch::Tensor& heading, const torch::Tensor& speed,
+                const torch::Tensor& accel, const torch::Tensor& curvature, double dt) {
+  Rollout result = longitudinal(speed, accel, dt);
+  result.controlCurvature = curvature;
   const auto turn = curvature * result.distances;
   result.headings = heading.unsqueeze(-1) + turn.cumsum(-1);
   result.midHeadings = result.headings - 0.5 * turn;
-  const auto steps = torch::stack({result.distances * result.midHeadings.cos(), result.distances * result.midHeadings.sin()}, -1);
-  result.positions = position.unsqueeze(-2) + steps.cumsum(-2);
-  const auto previous = torch::cat({speed.unsqueeze(-1), result.speeds.narrow(-1, 0, result.speeds.size(-1) - 1)}, -1);
-  result.accels = (result.speeds - previous) / dt;
+  integratePositions(result, position);
+  return result;
+}
+
+Rollout rolloutHeadings(const torch::Tensor& position, const torch::Tensor& speed, const torch::Tensor& accel,
+                        const torch::Tensor& heading, double dt) {
+  Rollout result = longitudinal(speed, accel, dt);
+  result.controlHeading = heading;
+  result.headings = heading;
+  result.midHeadings = heading;
+  integratePositions(result, position);
   return result;
 }
 
 namespace {
 
 /// d p_{k+1} / d c_j for a control c from how it changes every step's distance
-/// (distance[b, i, j] = d s_i / d c_j) and turn (turn[b, i, j] = d (kappa_i s_i) / d c_j):
-/// the mid-step heading m_i moves by the turns of earlier steps plus half its own, and
+/// (distance[b, i, j] = d s_i / d c_j) and mid-step heading (mid_heading[b, i, j] =
+/// d m_i / d c_j):
 ///   d p_{k+1} = sum_{i <= k} (d s_i u_i + s_i d m_i J u_i),  u_i = (cos m_i, sin m_i).
-torch::Tensor positionSensitivity(const Rollout& path, const torch::Tensor& distance, const torch::Tensor& turn) {
-  const auto steps = path.distances.size(-1);
-  const auto strictly_lower = torch::ones({steps, steps}, turn.options()).tril(-1);
-  const auto mid_heading = torch::matmul(strictly_lower, turn) + 0.5 * turn;  // [B, F(i), F(j)]
+torch::Tensor positionSensitivity(const Rollout& path, const torch::Tensor& distance, const torch::Tensor& mid_heading) {
   const auto u = torch::stack({path.midHeadings.cos(), path.midHeadings.sin()}, -1).unsqueeze(2);  // [B, F, 1, 2]
   const auto ju = torch::stack({-path.midHeadings.sin(), path.midHeadings.cos()}, -1).unsqueeze(2);
   const auto per_step = distance.unsqueeze(-1) * u + (path.distances.unsqueeze(-1) * mid_heading).unsqueeze(-1) * ju;
   return per_step.cumsum(1);
+}
+
+/// d m_i / d c_j of a curvature rollout from the turns (turn[b, i, j] = d (kappa_i s_i) / d c_j):
+/// the mid-step heading m_i moves by the turns of earlier steps plus half its own.
+torch::Tensor midHeadingOfTurns(const torch::Tensor& turn) {
+  const auto steps = turn.size(-1);
+  const auto strictly_lower = torch::ones({steps, steps}, turn.options()).tril(-1);
+  return torch::matmul(strictly_lower, turn) + 0.5 * turn;  // [B, F(i), F(j)]
 }
 
 }  // namespace
@@ -91,10 +121,17 @@ Sensitivities sensitivities(const Rollout& path, double dt) {
   const auto unbroken = (stops_before.unsqueeze(-1) == stops_before.unsqueeze(-2)).to(options.dtype());  // [B, i, j]
   const auto later = torch::ones({steps, steps}, options).tril(-1);
   const auto distance_accel = ds_dv.unsqueeze(-1) * dt * unbroken * later + torch::diag_embed(ds_da);
-  const auto turn_accel = path.controlCurvature.unsqueeze(-1) * distance_accel;
+  const auto no_change = torch::zeros_like(distance_accel);
   Sensitivities result;
-  result.accel = positionSensitivity(path, distance_accel, turn_accel);
-  result.curvature = positionSensitivity(path, torch::zeros_like(distance_accel), torch::diag_embed(path.distances));
+  if (path.controlHeading.defined()) {
+    // Headings are controls themselves: an acceleration only stretches the steps.
+    result.accel = positionSensitivity(path, distance_accel, no_change);
+    result.curvature = positionSensitivity(path, no_change, torch::diag_embed(torch::ones_like(path.distances)));
+    return result;
+  }
+  const auto turn_accel = path.controlCurvature.unsqueeze(-1) * distance_accel;
+  result.accel = positionSensitivity(path, distance_accel, midHeadingOfTurns(turn_accel));
+  result.curvature = positionSensitivity(path, no_change, midHeadingOfTurns(torch::diag_embed(path.distances)));
   return result;
 }
 

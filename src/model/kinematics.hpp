@@ -10,6 +10,12 @@
 //   psi_{k+1} = psi_k + kappa_k s_k
 // The same update as the simulator's, without its heading disturbance: a rollout of the
 // controls a simulated Ego applied reproduces its positions exactly.
+//
+// Heading control (rolloutHeadings): instead of a curvature, each step has its own heading
+// chi_k (in the frame's coordinates, e.g. relative to the lane in the lane frame), and the
+// Ego moves straight along it: p_{k+1} = p_k + s_k (cos chi_k, sin chi_k), psi_{k+1} = chi_k.
+// The lateral position is then one integration away from the controls instead of two,
+// like a lane-keeping Ego that follows the lane's polyline step by step.
 
 #include <torch/torch.h>
 
@@ -33,7 +39,8 @@ struct Rollout {
   torch::Tensor midHeadings;  ///< [L..., F]    m_0 .. m_{F-1}
   torch::Tensor stops;       ///< [L..., F]     1 where the Ego comes to (or stays at) a standstill within the step
   torch::Tensor controlAccel;      ///< [L..., F] a_k as applied
-  torch::Tensor controlCurvature;  ///< [L..., F] kappa_k as applied
+  torch::Tensor controlCurvature;  ///< [L..., F] kappa_k as applied (undefined for heading control)
+  torch::Tensor controlHeading;    ///< [L..., F] chi_k as applied (heading control only)
   torch::Tensor initialSpeed;      ///< [L...]    v_0
 };
 
@@ -41,15 +48,20 @@ struct Rollout {
 Rollout rollout(const torch::Tensor& position, const torch::Tensor& heading, const torch::Tensor& speed,
                 const torch::Tensor& accel, const torch::Tensor& curvature, double dt);
 
+/// The same with a heading chi_k per step instead of a curvature: heading [L..., F] rad.
+Rollout rolloutHeadings(const torch::Tensor& position, const torch::Tensor& speed, const torch::Tensor& accel,
+                        const torch::Tensor& heading, double dt);
+
 /// Sensitivities of the positions to the controls, the exact linearisation of the update
 /// above about a rollout of batch [B]:
 ///   accel[b, k, j, :]     = d p_{k+1} / d a_j
-///   curvature[b, k, j, :] = d p_{k+1} / d kappa_j      (zero for j > k)
+///   curvature[b, k, j, :] = d p_{k+1} / d kappa_j      (zero for j > k); d p_{k+1} / d chi_j
+///                           for a heading-control rollout
 /// A speed change moves the Ego along (ds) and turns it (kappa ds); a standstill passes no
 /// speed change on (the one-sided case of starting again is taken as 0).
 struct Sensitivities {
   torch::Tensor accel;      ///< [B, F, F, 2] m / (m/s^2)
-  torch::Tensor curvature;  ///< [B, F, F, 2] m / (1/m)
+  torch::Tensor curvature;  ///< [B, F, F, 2] m / (1/m), or m / rad for heading control
 };
 Sensitivities sensitivities(const Rollout& rollout, double dt);
 

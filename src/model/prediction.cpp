@@ -24,6 +24,16 @@ constexpr std::size_t kPredictBatch = 512;
 constexpr int kMaxSamples = 100000;
 }  // namespace
 
+double gaussianRegionRadius2(double level) { return -2.0 * std::log(1.0 - level); }
+
+const std::vector<std::array<double, kCoverageLevels.size()>>* PositionRegions::find(const std::string& label) const {
+  for (const auto& key : {label, std::string()}) {
+    const auto found = byLabel.find(key);
+    if (found != byLabel.end()) return &found->second;
+  }
+  return nullptr;
+}
+
 void PredictOptions::validate() const {
   if (samples < 0 || samples > kMaxSamples) {
     throw ConfigError::field("command line", "--samples", std::to_string(samples),
@@ -124,10 +134,20 @@ torch::Tensor contiguousOrUndefined(const torch::Tensor& tensor) {
   return tensor.defined() ? tensor.contiguous() : tensor;
 }
 
+/// The region radii of each step of a scene with `label`: the model's calibrated ones or
+/// the Gaussian's.
+std::vector<std::array<double, kCoverageLevels.size()>> regionRadii(const PositionRegions& regions,
+                                                                    const std::string& label, std::int64_t steps) {
+  if (const auto* calibrated = regions.find(label)) return *calibrated;
+  std::array<double, kCoverageLevels.size()> gaussian{};
+  for (std::size_t l = 0; l < kCoverageLevels.size(); ++l) gaussian[l] = gaussianRegionRadius2(kCoverageLevels[l]);
+  return std::vector<std::array<double, kCoverageLevels.size()>>(static_cast<std::size_t>(steps), gaussian);
+}
+
 /// Decoded tensors of a batch -> Predictions in each scene's frame.
 std::vector<Prediction> toPredictions(const std::vector<vector::VectorizedScene>& scenes, std::size_t first,
                                       const SceneTensors& tensors, const Decoded& decoded, const Sampled& sampled,
-                                      double step) {
+                                      double step, const PositionRegions& regions = {}) {
   const auto positions = decoded.positions.contiguous();
   const auto headings = contiguousOrUndefined(decoded.headings);
   const auto speeds = contiguousOrUndefined(decoded.speeds);
@@ -152,6 +172,7 @@ std::vector<Prediction> toPredictions(const std::vector<vector::VectorizedScene>
         const Eigen::Matrix2d j = frame.jacobian({p[0], p[1]});
         prediction.positionCovariance.push_back(j * model_covariance * j.transpose());
       }
+      prediction.regionRadius2 = regionRadii(regions, scenes[first + static_cast<std::size_t>(i)].label, steps);
     }
     for (std::int64_t s = 0; s < draws; ++s) {
       const std::int64_t row = i * draws + s;  // [B, S, ...] rows in order
@@ -192,7 +213,7 @@ class NetworkBackend final : public Predictor::Backend {
       const auto noise = samplingNoise(scenes, first, last, options, model_.decoder->noiseWidth());
       sampled = model_.decoder->sample(decoded, tensors.start, noise);
     }
-    return toPredictions(scenes, first, tensors, decoded, sampled, info_.config.step);
+    return toPredictions(scenes, first, tensors, decoded, sampled, info_.config.step, info_.positionRegions);
   }
 
  private:

@@ -30,6 +30,8 @@ class PredictionColumns {
       : horizon_(horizon),
         draws_(predictor.probabilistic() ? static_cast<hsize_t>(options.predict.samples) : 0),
         metrics_(options.metricNames.size()),
+        metricNames_(options.metricNames),
+        calibration_(predictor.info().metricIntervals),
         row_(root, "dataset_row", {}, 4096, 4),
         sampleIndex_(root, "sample_index", {}, 4096, 4),
         label_(root, "sample_label", {}, 4096, 4),
@@ -43,7 +45,10 @@ class PredictionColumns {
                                      {root, "predicted_speed", {horizon}, 1024, 1},
                                      {root, "predicted_accel", {horizon}, 1024, 1}});
     }
-    if (predictor.probabilistic()) covariance_.emplace(root, "position_covariance", std::vector<hsize_t>{horizon, 2, 2}, 512, 1);
+    if (predictor.probabilistic()) {
+      covariance_.emplace(root, "position_covariance", std::vector<hsize_t>{horizon, 2, 2}, 512, 1);
+      regionRadius2_.emplace(root, "position_region_radius2", std::vector<hsize_t>{horizon, kCoverageLevels.size()}, 512, 1);
+    }
     if (draws_ > 0) {
       samples_.emplace(Samples{{root, "sample_positions", {draws_, horizon, 2}, 64, 1},
                                {root, "sample_speed", {draws_, horizon}, 64, 1},
@@ -73,6 +78,7 @@ class PredictionColumns {
     if (kinematics_) pushStates(most_likely, &kinematics_->heading, kinematics_->speed, kinematics_->accel);
     if (covariance_) {
       for (const auto& c : prediction.positionCovariance) covariance_->push({c(0, 0), c(0, 1), c(1, 0), c(1, 1)});
+      for (const auto& r : prediction.regionRadius2) regionRadius2_->push(r.begin(), r.end());
     }
     if (samples_) pushSamples(prediction);
     if (metricColumns_) pushMetrics(scene, prediction, options);
@@ -82,7 +88,7 @@ class PredictionColumns {
   void flush() {
     h5::flushAll(row_, sampleIndex_, label_, predictions_, targets_, targetValid_, ade_, fde_);
     if (kinematics_) h5::flushAll(kinematics_->heading, kinematics_->speed, kinematics_->accel);
-    if (covariance_) covariance_->flush();
+    if (covariance_) h5::flushAll(*covariance_, *regionRadius2_);
     if (samples_) h5::flushAll(samples_->positions, samples_->speed, samples_->accel);
     if (metricColumns_) h5::flushAll(metricColumns_->predicted, metricColumns_->intervals);
   }
@@ -125,7 +131,7 @@ class PredictionColumns {
         metricColumns_->intervals.push({kNaN, kNaN, kNaN, kNaN, kNaN});
         continue;
       }
-      const auto interval = intervalOf(draws[m]);
+      const auto interval = intervalOf(draws[m], calibration_.find(scene.label, metricNames_[m]));
       metricColumns_->intervals.push({interval.p05, interval.p25, interval.median, interval.p75, interval.p95});
     }
   }
@@ -133,6 +139,8 @@ class PredictionColumns {
   hsize_t horizon_;
   hsize_t draws_;
   std::size_t metrics_;
+  std::vector<std::string> metricNames_;
+  const IntervalCalibration& calibration_;
   std::size_t pushed_ = 0;
   h5::Appendable<std::int64_t> row_, sampleIndex_;
   h5::Appendable<std::int32_t> label_;
@@ -141,6 +149,7 @@ class PredictionColumns {
   h5::Appendable<double> ade_, fde_;
   std::optional<Kinematics> kinematics_;
   std::optional<h5::Appendable<double>> covariance_;
+  std::optional<h5::Appendable<double>> regionRadius2_;
   std::optional<Samples> samples_;
   std::optional<Metrics> metricColumns_;
 };

@@ -6,11 +6,13 @@
 #include <cmath>
 #include <csignal>
 #include <limits>
+#include <memory>
 #include <mutex>
 #include <set>
 
 #include "calibration.hpp"
 #include "checkpoint.hpp"
+#include "conformal.hpp"
 #include "distributed.hpp"
 #include "network.hpp"
 #include "tensors.hpp"
@@ -31,6 +33,8 @@ namespace {
 struct Selection {
   std::vector<vector::VectorizedScene> train;
   std::vector<vector::VectorizedScene> validation;
+  /// Per validation scene, the names of its stored (simulated) metrics: its file's header's.
+  std::vector<std::shared_ptr<const std::vector<std::string>>> validationMetricNames;
   std::map<std::string, std::size_t> trainCounts;
   std::map<std::string, std::size_t> validationCounts;
   vector::DatasetHeader header;
@@ -74,6 +78,10 @@ Selection selectSamples(const TrainOptions& options) {
   }
   if (total < 2) throw ConfigError(fmt::format("--mix {}: the mix is empty (at least 2 samples needed)", options.mix.str()));
 
+  std::vector<std::shared_ptr<const std::vector<std::string>>> metric_names;
+  for (std::size_t f = 0; f < data.files(); ++f) {
+    metric_names.push_back(std::make_shared<const std::vector<std::string>>(data.reader(f).header().metricNames));
+  }
   for (const auto& [label, count] : wanted) {
     if (count == 0) continue;
     selection.labels.push_back(label);
@@ -87,6 +95,7 @@ Selection selectSamples(const TrainOptions& options) {
       auto scene = data.scene(refs[order[i]]);
       if (i < validation) {
         selection.validation.push_back(std::move(scene));
+        selection.validationMetricNames.push_back(metric_names[refs[order[i]].file]);
         ++selection.validationCounts[label];
       } else {
         selection.train.push_back(std::move(scene));
@@ -275,7 +284,7 @@ class Trainer {
         lastCheckpoint_(options.output.string() + ".last"),
         resumeKey_(resumeKey(options, config_)) {
     selection_.train.clear();
-    selection_.validation.clear();
+    if (!calibrates()) selection_.validation.clear();  // calibrate() predicts the scenes themselves
     info_.config = config_;
     info_.datasetSchema = vector::kDatasetSchema;
     info_.mix = options.mix.str();
@@ -326,9 +335,7 @@ class Trainer {
                                                            : formatValue(summary_.epochs.back().validationAde),
                                    options_.output.string()));
     }
-    if (writes() && config_.decoderOptions.count("calibrate") != 0 && config_.decoderOption("calibrate") != 0.0) {
-      calibrate();  // rank 0 alone: it holds the validation split and writes the model file
-    }
+    if (writes() && calibrates()) calibrate();  // rank 0 alone: it holds the validation split and writes the model file
     summary_.seconds = secondsSince(start_);
     summary_.samplesPerSecond = trainingSeconds_ > 0.0 ? trainedSamples_ / trainingSeconds_ : 0.0;
     summary_.allreduceShare = trainingSeconds_ > 0.0 ? summary_.allreduceSeconds / trainingSeconds_ : 0.0;
@@ -498,17 +505,36 @@ class Trainer {
     record.seconds += secondsSince(epoch_start);
   }
 
-  /// The decoder option `calibrate`: fits the best model's variance_scale on the
-  /// validation split and rewrites the model file with it.
+  bool calibrates() const {
+    return config_.decoderOptions.count("calibrate") != 0 && config_.decoderOption("calibrate") != 0.0;
+  }
+
+  /// The decoder option `calibrate`, on the validation split: fits the best model's
+  /// variance_scale, then the conformal radii of its position regions and (when the
+  /// options bind metrics) the widening of its metric intervals, and rewrites the model
+  /// file with them (README "Calibration").
   void calibrate() {
     ModelInfo info;
     Model best = loadModel(options_.output, info);
     const auto fitted = calibrateVariance(best, validation_);
     info.config = best.config;
+    info.positionRegions = {};
+    info.metricIntervals = {};
     saveModel(options_.output, best, info);
     spdlog::info("calibrated {}: variance scale {:.3f} fitted on the validation split, its positions inside their "
                  "90 % regions {:.1f} % -> {:.1f} %",
                  options_.output.string(), fitted.scale, 100.0 * fitted.coverageBefore, 100.0 * fitted.coverageAfter);
+    const Predictor scaled(options_.output, options_.threads);
+    const auto conformal = fitConformal(scaled, selection_.validation, selection_.validationMetricNames,
+                                        options_.metrics.get(), options_.seed);
+    info.positionRegions = conformal.positionRegions;
+    info.metricIntervals = conformal.metricIntervals;
+    saveModel(options_.output, best, info);
+    spdlog::info("calibrated {}: conformal position regions on {} validation scenes (5 s positions inside the Gaussian "
+                 "90 % region before: {:.1f} %){}\n{}",
+                 options_.output.string(), selection_.validation.size(), 100.0 * conformal.gaussianCoverage90AtEnd,
+                 options_.metrics ? "; metric intervals:" : "; no metrics bound, metric intervals uncalibrated",
+                 conformal.report());
   }
 
   void saveLast() {

@@ -72,9 +72,9 @@ void calibrate(MetricStatistics& stats, const Comparison& comparison, std::size_
   for (const auto& scenario : comparison.scenarios) {
     if (!scenario.ok() || m >= scenario.intervals.size()) continue;
     const auto& interval = scenario.intervals[m];
-    if (interval.draws == 0 || std::isnan(interval.quantilePosition)) continue;
+    if (interval.draws == 0 || std::isnan(interval.containingLevel)) continue;
     ++stats.intervalPairs;
-    const double level = std::abs(2.0 * interval.quantilePosition - 1.0);  // smallest central level holding it
+    const double level = interval.containingLevel;  // smallest central level holding it
     for (std::size_t l = 0; l < kReliabilityLevels.size(); ++l) inside[l] += level <= kReliabilityLevels[l] ? 1 : 0;
     inside50 += level <= 0.5 ? 1 : 0;
     inside90 += level <= 0.9 ? 1 : 0;

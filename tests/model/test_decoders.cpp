@@ -5,8 +5,11 @@
 #include <Eigen/LU>
 
 #include <csignal>
+#include <functional>
 #include <cmath>
+#include <algorithm>
 #include <random>
+#include <tuple>
 
 #include "../../src/model/calibration.hpp"
 #include "../../src/model/decoder.hpp"
@@ -95,24 +98,23 @@ TEST(Kinematics, RolloutIsTheSimulatorsVehicleModel) {
   }
 }
 
-TEST(Kinematics, SensitivitiesMatchFiniteDifferences) {
-  const int steps = 12;
-  const double dt = 0.2;
-  auto accel = torch::linspace(-1.0, 1.0, steps, torch::kFloat64).view({1, steps});
-  auto curvature = torch::linspace(0.02, -0.01, steps, torch::kFloat64).view({1, steps});
-  const auto position = torch::zeros({1, 2}, torch::kFloat64);
-  const auto heading = torch::full({1}, 0.4, torch::kFloat64);
-  const auto speed = torch::full({1}, 10.0, torch::kFloat64);
-  const auto base = rollout(position, heading, speed, accel, curvature, dt);
+namespace {
+
+/// The linearisation of a rollout (`roll(accel, lateral control)`) against one-sided finite
+/// differences of its positions, for a few controls.
+void expectSensitivitiesMatchFiniteDifferences(const std::function<Rollout(const torch::Tensor&, const torch::Tensor&)>& roll,
+                                               const torch::Tensor& accel, const torch::Tensor& lateral, double dt,
+                                               double h) {
+  const auto base = roll(accel, lateral);
   const auto sens = sensitivities(base, dt);
-  const double h = 1e-5;
+  const auto steps = accel.size(1);
   for (const int j : {0, 5, 11}) {
     auto a = accel.clone();
     a[0][j] += h;
-    const auto da = (rollout(position, heading, speed, a, curvature, dt).positions - base.positions) / h;
-    auto c = curvature.clone();
+    const auto da = (roll(a, lateral).positions - base.positions) / h;
+    auto c = lateral.clone();
     c[0][j] += h;
-    const auto dc = (rollout(position, heading, speed, accel, c, dt).positions - base.positions) / h;
+    const auto dc = (roll(accel, c).positions - base.positions) / h;
     for (int k = 0; k < steps; ++k) {
       for (int x = 0; x < 2; ++x) {
         const double numeric_a = da[0][k][x].item<double>();
@@ -122,6 +124,46 @@ TEST(Kinematics, SensitivitiesMatchFiniteDifferences) {
       }
     }
   }
+}
+
+}  // namespace
+
+TEST(Kinematics, SensitivitiesMatchFiniteDifferences) {
+  const int steps = 12;
+  const double dt = 0.2;
+  auto accel = torch::linspace(-1.0, 1.0, steps, torch::kFloat64).view({1, steps});
+  auto curvature = torch::linspace(0.02, -0.01, steps, torch::kFloat64).view({1, steps});
+  const auto position = torch::zeros({1, 2}, torch::kFloat64);
+  const auto heading = torch::full({1}, 0.4, torch::kFloat64);
+  const auto speed = torch::full({1}, 10.0, torch::kFloat64);
+  expectSensitivitiesMatchFiniteDifferences(
+      [&](const torch::Tensor& a, const torch::Tensor& c) { return rollout(position, heading, speed, a, c, dt); }, accel,
+      curvature, dt, 1e-5);
+}
+
+TEST(Kinematics, HeadingControlMovesAlongEachStepsHeadingAndItsSensitivitiesMatchFiniteDifferences) {
+  const int steps = 12;
+  const double dt = 0.2;
+  auto accel = torch::linspace(-3.0, 1.0, steps, torch::kFloat64).view({1, steps});
+  auto heading = torch::linspace(0.2, -0.3, steps, torch::kFloat64).view({1, steps});
+  const auto position = torch::tensor({{1.0, -2.0}}, torch::kFloat64);
+  const auto speed = torch::full({1}, 6.0, torch::kFloat64);
+  const auto base = rolloutHeadings(position, speed, accel, heading, dt);
+  // Each step goes straight along its heading for the trapezoid's distance; speeds and
+  // accelerations are those of the curvature rollout (the same longitudinal model).
+  const auto curved = rollout(position, torch::zeros({1}, torch::kFloat64), speed, accel, torch::zeros_like(accel), dt);
+  Vec2 p(1.0, -2.0);
+  for (int k = 0; k < steps; ++k) {
+    const double s = curved.distances[0][k].item<double>();
+    p += s * headingVector(heading[0][k].item<double>());
+    EXPECT_NEAR(base.positions[0][k][0].item<double>(), p.x(), 1e-9);
+    EXPECT_NEAR(base.positions[0][k][1].item<double>(), p.y(), 1e-9);
+    EXPECT_NEAR(base.speeds[0][k].item<double>(), curved.speeds[0][k].item<double>(), 1e-12);
+    EXPECT_NEAR(base.headings[0][k].item<double>(), heading[0][k].item<double>(), 1e-12);
+  }
+  expectSensitivitiesMatchFiniteDifferences(
+      [&](const torch::Tensor& a, const torch::Tensor& c) { return rolloutHeadings(position, speed, a, c, dt); }, accel,
+      heading, dt, 1e-6);
 }
 
 TEST(KinematicDecoder, ControlsAreBoundedAndTheCovarianceIsThatOfItsSamples) {
@@ -444,6 +486,65 @@ TEST(KinematicModel, CalibrateFitsTheVarianceScaleAfterTrainingAndStoresItInTheM
               1e-3 * scale * before.positionCovariance.back().trace());
 }
 
+TEST(KinematicModel, CalibrateFitsConformalPositionRegionsAndMetricIntervalsThatPredictionsCarry) {
+  TemporaryDirectory dir;
+  auto options = tinyTraining(writeDataset(dir.path() / "acc.h5", 80), dir.path() / "k.pt");
+  options.config.decoder = "kinematic";
+  options.config.decoderOptions = {{"heading_control", 1.0}, {"calibrate", 1.0}};
+  options.steps = 12;
+  options.validationFraction = 0.5;  // 40 held-out scenes: enough for a calibration
+  auto metric_set = std::make_shared<const metrics::MetricSet>(std::vector<std::string>{"a_min", "d_min"},
+                                                               pipeline::sceneAvailability("generated"), "test");
+  auto binding = std::make_shared<MetricBinding>();
+  binding->names = metric_set->names();
+  binding->compute = [metric_set](const vector::VectorizedScene& scene, const Trajectory& future) {
+    return pipeline::metricsOfFuture(*metric_set, scene, future.positions, future.states);
+  };
+  options.metrics = binding;
+  train(options);
+
+  const Predictor calibrated(options.output);
+  const auto& info = calibrated.info();
+  // Radii per step for the label and pooled, nested, fitted on the 40 held-out scenes.
+  ASSERT_NE(info.positionRegions.find("acc"), nullptr);
+  EXPECT_EQ(info.positionRegions.scenes, 40u);
+  const auto& radii = *info.positionRegions.find("acc");
+  ASSERT_EQ(radii.size(), 25u);
+  for (const auto& radius : radii) {
+    EXPECT_GT(radius[0], 0.0);
+    EXPECT_LE(radius[0], radius[1]);
+  }
+  // The held-out positions lie inside their calibrated regions in the nominal share (at least).
+  std::vector<vector::VectorizedScene> scenes;
+  for (std::uint64_t i = 0; i < 40; ++i) scenes.push_back(syntheticScene(i));
+  const auto predictions = calibrated.predictDistribution(scenes, {});
+  ASSERT_EQ(predictions.front().regionRadius2.size(), 25u);
+  EXPECT_EQ(predictions.front().regionRadius2[24][1], radii[24][1]);
+  // Metric intervals for both metrics, looked up by label (pooled for an unknown one).
+  for (const std::string metric : {"a_min", "d_min"}) {
+    const auto* widening = info.metricIntervals.find("acc", metric);
+    ASSERT_NE(widening, nullptr) << metric;
+    EXPECT_EQ(widening->scenes, 40u);
+    EXPECT_EQ(widening->levels.size(), kCalibratedLevels.size());
+    EXPECT_NE(info.metricIntervals.find("a map", metric), nullptr);
+  }
+  // They reach predict's file: the region radii of every step.
+  const auto predictions_file = dir.path() / "p.h5";
+  writePredictions(calibrated, options.output, dir.path() / "acc.h5", predictions_file);
+  H5::H5File file(predictions_file.string(), H5F_ACC_RDONLY);
+  const auto written = h5::readAll<double>(file.openDataSet("position_region_radius2"));
+  ASSERT_EQ(written.size(), 80u * 25u * 2u);
+  EXPECT_EQ(written[24 * 2 + 1], radii[24][1]);
+
+  // A damaged calibration is refused naming the file.
+  const auto damaged = dir.path() / "damaged.pt";
+  ASSERT_TRUE(rewriteModelDescription(options.output, damaged,
+                                      "d['calibration']['metric_intervals']['acc']['a_min']['widening'][0] = 1e9"));
+  const auto error = errorOf([&] { Predictor predictor(damaged); });
+  EXPECT_NE(error.find("damaged.pt"), std::string::npos) << error;
+  EXPECT_NE(error.find("calibration"), std::string::npos) << error;
+}
+
 // --- intervals and scores ----------------------------------------------------------------
 
 TEST(Intervals, WeibullQuantilesCoverTheirNominalShareForFewDraws) {
@@ -471,6 +572,72 @@ TEST(Intervals, WeibullQuantilesCoverTheirNominalShareForFewDraws) {
   }
   EXPECT_NEAR(static_cast<double>(inside90) / trials, 0.90, 0.01);
   EXPECT_NEAR(static_cast<double>(inside50) / trials, 0.50, 0.015);
+}
+
+namespace {
+
+/// Held-out scenes of a metric whose futures are over-confident and biased (or
+/// over-cautious): per scene a centre m; 32 draws N(m, spread^2); the true value
+/// N(m + bias, truth^2).
+std::vector<HeldOutMetric> heldOutMetric(std::size_t scenes, double spread, double bias, double truth,
+                                         std::mt19937& engine) {
+  std::normal_distribution<double> normal;
+  std::uniform_real_distribution<double> centre(-3.0, 3.0);
+  std::vector<HeldOutMetric> result;
+  for (std::size_t i = 0; i < scenes; ++i) {
+    HeldOutMetric scene;
+    const double m = centre(engine);
+    for (int s = 0; s < 32; ++s) scene.draws.push_back(m + spread * normal(engine));
+    scene.reference = m + bias + truth * normal(engine);
+    result.push_back(scene);
+  }
+  return result;
+}
+
+double coverageOf(const std::vector<HeldOutMetric>& scenes, double level, const IntervalWidening* widening) {
+  std::size_t inside = 0;
+  for (const auto& scene : scenes) {
+    const auto interval = intervalOf(scene.draws, widening);
+    inside += interval.contains(scene.reference, level) ? 1 : 0;
+    // One number per scene gives the coverage of every level (the reliability diagram).
+    EXPECT_EQ(interval.contains(scene.reference, level), containingLevel(scene.draws, scene.reference, widening) <= level);
+  }
+  return static_cast<double>(inside) / static_cast<double>(scenes.size());
+}
+
+}  // namespace
+
+TEST(Intervals, ConformalWideningBringsOverConfidentAndOverCautiousIntervalsToTheirNominalCoverage) {
+  std::mt19937 engine(5);
+  for (const auto& [spread, bias, truth] : {std::tuple{0.3, 0.4, 0.8}, std::tuple{2.0, 0.0, 0.5}}) {
+    const auto held_out = heldOutMetric(1000, spread, bias, truth, engine);
+    const auto fresh = heldOutMetric(20000, spread, bias, truth, engine);
+    IntervalWidening widening;
+    ASSERT_TRUE(fitIntervalWidening(held_out, widening));
+    EXPECT_EQ(widening.scenes, 1000u);
+    EXPECT_TRUE(std::is_sorted(widening.widening.begin(), widening.widening.end()));
+    const double raw90 = coverageOf(fresh, 0.9, nullptr);
+    EXPECT_GT(std::abs(raw90 - 0.9), 0.08) << "spread " << spread;  // the draws alone are off
+    EXPECT_NEAR(coverageOf(fresh, 0.9, &widening), 0.90, 0.025) << "spread " << spread;
+    EXPECT_NEAR(coverageOf(fresh, 0.5, &widening), 0.50, 0.04) << "spread " << spread;
+    // Every calibrated level, not only 50 % and 90 %.
+    std::size_t inside70 = 0;
+    for (const auto& scene : fresh) inside70 += containingLevel(scene.draws, scene.reference, &widening) <= 0.7 ? 1 : 0;
+    EXPECT_NEAR(static_cast<double>(inside70) / static_cast<double>(fresh.size()), 0.70, 0.04) << "spread " << spread;
+  }
+  // Too few usable held-out scenes (NaN references do not count): no calibration.
+  auto few = heldOutMetric(kMinCalibrationScenes + 5, 1.0, 0.0, 1.0, engine);
+  for (std::size_t i = 0; i < 6; ++i) few[i].reference = std::nan("");
+  IntervalWidening untouched;
+  EXPECT_FALSE(fitIntervalWidening(few, untouched));
+  EXPECT_TRUE(untouched.levels.empty());
+  // Lookup: the label's own widening, else the pooled one, else none.
+  IntervalCalibration calibration;
+  calibration.byLabel[""]["a_min"].floor = 1.0;
+  calibration.byLabel["acc"]["a_min"].floor = 2.0;
+  EXPECT_EQ(calibration.find("acc", "a_min")->floor, 2.0);
+  EXPECT_EQ(calibration.find("lk", "a_min")->floor, 1.0);
+  EXPECT_EQ(calibration.find("acc", "d_min"), nullptr);
 }
 
 TEST(Calibration, NllAndCoverageOfAPredictedGaussian) {

@@ -105,12 +105,12 @@ TEST(ReportStatistics, IntervalCoverageAndTheErrorOfTheDrawsMedian) {
   for (std::size_t i = 0; i < c.scenarios.size(); ++i) {
     auto& s = c.scenarios[i];
     // a_min (reference -2.0): the draws' median 0.1 too high in half of the scenarios and
-    // 0.3 too low in the other; the reference at quantile 0.3 (inside the 50 % interval)
-    // or 0.97 (inside neither).
+    // 0.3 too low in the other; the reference inside the central 40 % interval (inside the
+    // 50 % one) or only inside the 94 % one (inside neither).
     const bool high = i % 2 == 0;
     const double median = high ? -1.9 : -2.3;
-    const double q = high ? 0.3 : 0.97;
-    s.intervals = {MetricInterval{}, MetricInterval{32, median - 1, median - 0.5, median, median + 0.5, median + 1, q},
+    const double level = high ? 0.4 : 0.94;
+    s.intervals = {MetricInterval{}, MetricInterval{32, median - 1, median - 0.5, median, median + 0.5, median + 1, level},
                    MetricInterval{}};
   }
   const auto s = computeStatistics(c);

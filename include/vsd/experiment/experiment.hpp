@@ -9,10 +9,13 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <memory>
 #include <limits>
 #include <map>
 #include <string>
 #include <vector>
+
+#include "vsd/model/predictor.hpp"
 
 namespace vsd::experiment {
 
@@ -95,5 +98,10 @@ struct ExperimentSummary {
 /// Runs (or completes) the experiment. Throws ConfigError naming the file, line and
 /// field for a bad spec or missing scenario/run folders.
 ExperimentSummary runExperiment(const ExperimentOptions& options);
+
+/// Every metric that applies to the scenes of a dataset (file, run or sweep folder), bound
+/// for predicted futures (pipeline::metricsOfFuture, on a predictor's own states where it
+/// has them): what `predict --samples` writes and the decoder option `calibrate` calibrates.
+std::shared_ptr<const model::MetricBinding> futureMetricBinding(const std::filesystem::path& data);
 
 }  // namespace vsd::experiment

@@ -16,8 +16,6 @@ namespace vsd::model {
 
 /// Times (s after t0) at which evaluate reports NLL and coverage of positions.
 inline constexpr std::array<double, 3> kCalibrationTimes = {1.0, 3.0, 5.0};
-/// Nominal probabilities of the predicted position regions whose coverage is reported.
-inline constexpr std::array<double, 2> kCoverageLevels = {0.5, 0.9};
 
 /// Running sums of the errors of many predictions (means are read off with the accessors).
 struct LabelErrors {
@@ -30,7 +28,8 @@ struct LabelErrors {
   double nll = 0.0;
   /// At each of kCalibrationTimes: scenes with a valid true position there, their mean
   /// NLL, and the share of them inside the predicted region of each kCoverageLevels level
-  /// (the ellipse {r : r' S^-1 r <= -2 ln(1 - level)} of the predictive covariance S).
+  /// (the ellipse {r : r' S^-1 r <= r2} of the predictive covariance S, r2 = the
+  /// prediction's regionRadius2: -2 ln(1 - level) unless the model is calibrated).
   std::array<std::size_t, kCalibrationTimes.size()> countAt{};
   std::array<double, kCalibrationTimes.size()> nllAt{};
   std::array<std::array<double, kCoverageLevels.size()>, kCalibrationTimes.size()> coverageAt{};

@@ -73,9 +73,6 @@ struct TrainSummary {
 /// leaves the previous best model intact.
 TrainSummary train(const TrainOptions& options, const std::function<void(const EpochRecord&)>& on_epoch = {});
 
-/// Metrics of one predicted future (e.g. pipeline::metricsOfFuture bound to a metric set).
-using FutureMetrics = std::function<std::vector<double>(const vector::VectorizedScene&, const Trajectory&)>;
-
 /// The metrics of every sampled future of a prediction, per metric: draws[m][s] for the
 /// `count` metrics `metrics` returns (empty lists when the prediction has no samples).
 std::vector<std::vector<double>> metricDraws(const vector::VectorizedScene& scene, const Prediction& prediction,

@@ -5,11 +5,14 @@
 #include <cstdint>
 #include <filesystem>
 #include <map>
+#include <memory>
 #include <string>
 #include <utility>
 #include <vector>
 
 namespace vsd::model {
+
+struct MetricBinding;  // predictor.hpp
 
 /// One option of a decoder: numbers only (flags are 0/1), stored in the model file.
 struct DecoderOption {
@@ -90,6 +93,9 @@ struct TrainOptions {
   double weightDecay = 1e-4;
   double validationFraction = 0.1;          ///< the paper's 90 % / 10 % split
   bool resume = false;                      ///< continue from <output>.last if it exists
+  /// The metrics whose intervals the decoder option `calibrate` calibrates on the validation
+  /// split (their values on the recorded futures are the references); none when not set.
+  std::shared_ptr<const MetricBinding> metrics;
   /// Throws ConfigError naming the flag and the constraint.
   void validate() const;
 };

@@ -5,7 +5,10 @@
 // Free of libtorch.
 
 #include <Eigen/Core>
+#include <array>
 #include <cstdint>
+#include <functional>
+#include <map>
 #include <filesystem>
 #include <memory>
 #include <string>
@@ -13,11 +16,30 @@
 
 #include "vsd/core/geometry.hpp"
 #include "vsd/core/trace.hpp"
+#include "vsd/model/intervals.hpp"
 #include "vsd/model/options.hpp"
 #include "vsd/vector/dataset.hpp"
 #include "vsd/vector/scene.hpp"
 
 namespace vsd::model {
+
+/// Nominal probabilities of the predicted position regions (evaluate reports their coverage).
+inline constexpr std::array<double, 2> kCoverageLevels = {0.5, 0.9};
+
+/// Conformal radii of the predicted position regions, fitted on held-out scenes (README
+/// "Calibration"): per scene label ("" pooled over all labels) and future step, the
+/// squared Mahalanobis radius r2 of each kCoverageLevels level, so that the region
+/// {r : r' S^-1 r <= r2} of the predicted covariance S holds the true position of that
+/// share of held-out scenes. Uncalibrated: the chi-square quantiles -2 ln(1 - level).
+struct PositionRegions {
+  std::map<std::string, std::vector<std::array<double, kCoverageLevels.size()>>> byLabel;
+  std::size_t scenes = 0;  ///< held-out scenes they were fitted on
+  /// The label's own radii, else the pooled ones, else nullptr (chi-square quantiles).
+  const std::vector<std::array<double, kCoverageLevels.size()>>* find(const std::string& label) const;
+};
+
+/// The squared Mahalanobis radius of a 2-D Gaussian's central region of probability `level`.
+double gaussianRegionRadius2(double level);
 
 /// Metadata stored with a model (for predictors without a file: what they are).
 struct ModelInfo {
@@ -31,6 +53,9 @@ struct ModelInfo {
   std::vector<std::string> labels;  ///< labels it was trained on
   std::string toolVersion;
   bool trained = true;              ///< false for cv/ca
+  /// Calibration fitted after training (decoder option `calibrate`); empty otherwise.
+  PositionRegions positionRegions;
+  IntervalCalibration metricIntervals;
 };
 
 /// One future of the Ego, t_1 .. t_F, in the scene's frame.
@@ -49,7 +74,19 @@ struct Prediction {
   std::vector<Trajectory> samples;   ///< S draws from the predictive distribution (empty if deterministic)
   /// Per step, the predictive covariance of the position (m², scene frame); empty if deterministic.
   std::vector<Eigen::Matrix2d> positionCovariance;
+  /// Per step, the squared Mahalanobis radius of the region of each kCoverageLevels level
+  /// (PositionRegions; chi-square quantiles for an uncalibrated model); empty if deterministic.
+  std::vector<std::array<double, kCoverageLevels.size()>> regionRadius2;
   bool probabilistic() const { return !positionCovariance.empty(); }
+};
+
+/// Metrics of one predicted future (e.g. pipeline::metricsOfFuture bound to a metric set).
+using FutureMetrics = std::function<std::vector<double>(const vector::VectorizedScene&, const Trajectory&)>;
+
+/// A metric set bound for predicted futures: the names and how to compute them (in that order).
+struct MetricBinding {
+  std::vector<std::string> names;
+  FutureMetrics compute;
 };
 
 struct PredictOptions {

@@ -23,8 +23,8 @@ struct CriterionSpec {
 };
 
 /// What the sampled futures of a probabilistic prediction say about one metric of one
-/// scenario: quantiles over the draws (vsd::model::intervalOf) and where the reference
-/// value lies among them (vsd::model::quantilePosition).
+/// scenario: quantiles over the draws (vsd::model::intervalOf; calibrated when the model
+/// is) and the smallest central interval holding the reference (vsd::model::containingLevel).
 struct MetricInterval {
   std::size_t draws = 0;  ///< sampled futures with a value (0: no interval)
   double p05 = 0.0;
@@ -32,9 +32,9 @@ struct MetricInterval {
   double median = 0.0;
   double p75 = 0.0;
   double p95 = 0.0;
-  /// q in [0, 1]: the reference lies in the central interval of level L exactly when
-  /// |2q - 1| <= L (NaN: no reference value).
-  double quantilePosition = 0.0;
+  /// The reference lies in the central interval of level L exactly when containingLevel <= L
+  /// (0..1; NaN: no reference value).
+  double containingLevel = 0.0;
 };
 
 /// One compared scenario.
