@@ -30,6 +30,7 @@
 #include "vsd/core/progress.hpp"
 #include "vsd/core/process.hpp"
 #include "vsd/compare/compare.hpp"
+#include "vsd/experiment/experiment.hpp"
 #include "vsd/model/model.hpp"
 #include "vsd/pipeline/cluster.hpp"
 #include "vsd/pipeline/outcome_codec.hpp"
@@ -479,6 +480,7 @@ int runModelBench(const ModelBenchOptions& options) {
     train_options.config.decoderOptions = model::parseDecoderOptions(options.decoderOptions);
     train_options.config.frame = options.frame;
     train_options.resume = options.resume && fs::exists(train_options.output.string() + ".last");
+    experiment::bindCalibrationMetrics(train_options);
     const auto summary = model::train(train_options);
     const model::Predictor predictor(train_options.output, options.threads);
     const auto evaluation = model::evaluate(predictor, tests);

@@ -98,6 +98,9 @@ void addSearchBench(CLI::App& bench, CommandContext& context) {
   addNumber(command, "--initial", options->search.initial, "Initial design")->capture_default_str();
   addNumber(command, "--round", options->search.roundSize, "Executions per round")->capture_default_str();
   addNumber(command, "--pool", options->search.pool, "Candidates per round")->capture_default_str();
+  addNumber(command, "--estimate-share", options->search.estimateShare,
+            "Share of each round drawn by importance sampling for the rate estimate")
+      ->capture_default_str();
   command->add_option("--probability", options->search.probability, "extra-trees: shifts or tail")
       ->capture_default_str();
   command->add_flag("--rank-targets", options->search.rankTargets, "extra-trees: fit metric ranks");

@@ -27,7 +27,7 @@ std::string duration(double seconds) {
 
 /// With sampled futures, `predict` writes every metric that applies to the dataset's scenes
 /// for the most likely future and as intervals over the draws: the metric code of simulated
-/// runs, on the predictor's own states where it has them (README "vsd-predictions/2").
+/// runs, on the predictor's own states where it has them (README "vsd-predictions/3").
 void bindPredictionMetrics(const std::filesystem::path& data, model::PredictionFileOptions& options) {
   if (options.predict.samples < 1) return;
   const auto binding = experiment::futureMetricBinding(data);
@@ -79,8 +79,7 @@ void addTrainCommand(CLI::App& app, CommandContext& context) {
       options->mix = model::Mix::parse(*mix);
       model::findDecoder(options->config.decoder, "--decoder");
       options->config.decoderOptions = model::parseDecoderOptions(*decoder_options);
-      // `calibrate` calibrates the intervals of every metric that applies to the data.
-      if (options->config.decoderOptions.count("calibrate") != 0) options->metrics = experiment::futureMetricBinding(options->data.front());
+      experiment::bindCalibrationMetrics(*options);  // `calibrate` also calibrates metric intervals
       const auto summary = model::train(*options, [&](const model::EpochRecord& record) {
         const int planned = record.plannedEpochs;
         const std::string nll =
@@ -104,7 +103,7 @@ void addPredictCommand(CLI::App& app, CommandContext& context) {
   auto out = std::make_shared<std::filesystem::path>();
   auto threads = std::make_shared<int>(2);
   auto file_options = std::make_shared<model::PredictionFileOptions>();
-  CLI::App* command = app.add_subcommand("predict", "Predict the Ego of every sample of a dataset (vsd-predictions/2)");
+  CLI::App* command = app.add_subcommand("predict", "Predict the Ego of every sample of a dataset (vsd-predictions/3)");
   command->add_option("-m,--model", *model_file, "Model file, or cv / ca (no training)")->required();
   command->add_option("-d,--data", *data, "Dataset file or run folder")->required();
   command->add_option("-o,--out", *out, "Predictions file (.h5)")->required();

@@ -397,7 +397,7 @@ class ExperimentRunner {
     train_options.batchSize = spec_.batch;
     train_options.learningRate = spec_.learningRate;
     train_options.resume = resume;
-    if (model_spec.options.count("calibrate") != 0) train_options.metrics = futureMetricBinding(data(mix.counts.front().first).trainRun);
+    bindCalibrationMetrics(train_options);
     spdlog::info("{}: training{}", what, resume ? " (resuming)" : "");
     auto last_line = std::chrono::steady_clock::now();
     const auto trained = model::train(train_options, [&](const model::EpochRecord& record) {
@@ -812,6 +812,12 @@ std::shared_ptr<const model::MetricBinding> futureMetricBinding(const fs::path& 
     return pipeline::metricsOfFuture(*metric_set, scene, future.positions, future.states);
   };
   return binding;
+}
+
+void bindCalibrationMetrics(model::TrainOptions& options) {
+  const auto calibrate = options.config.decoderOptions.find("calibrate");
+  if (calibrate == options.config.decoderOptions.end() || calibrate->second == 0.0 || options.data.empty()) return;
+  options.metrics = futureMetricBinding(options.data.front());
 }
 
 }  // namespace vsd::experiment

@@ -18,7 +18,10 @@ namespace vsd::model {
 namespace {
 /// vsd-model/1: before decoders had names - always the offsets decoder with the
 /// constant-velocity residual, in the Ego frame. vsd-model/2 names decoder, options, frame.
-constexpr const char* kModelFormat = "vsd-model/2";
+/// vsd-model/3: the kinematic decoder's heading_control defaults to 1; in /2 files, where it
+/// did not exist, an absent heading_control means curvature control (0).
+constexpr const char* kModelFormat = "vsd-model/3";
+constexpr const char* kModelFormatVersion2 = "vsd-model/2";
 constexpr const char* kLegacyModelFormat = "vsd-model/1";
 constexpr const char* kInfoKey = "vsd_model_info";
 constexpr const char* kStateKey = "vsd_training_state";
@@ -167,9 +170,9 @@ ModelInfo infoFromJson(const std::string& text, const fs::path& file) {
   try {
     const auto json = nlohmann::json::parse(text);
     const std::string format = json.value("format", "");
-    if (format != kModelFormat && format != kLegacyModelFormat) {
-      throw ModelError(fmt::format("{}: model format '{}' is not supported (expected {} or {})", file.string(), format,
-                                   kModelFormat, kLegacyModelFormat));
+    if (format != kModelFormat && format != kModelFormatVersion2 && format != kLegacyModelFormat) {
+      throw ModelError(fmt::format("{}: model format '{}' is not supported (expected {}, {} or {})", file.string(),
+                                   format, kModelFormat, kModelFormatVersion2, kLegacyModelFormat));
     }
     const auto& c = json.at("config");
     requireIntegers(c, {"hidden", "subgraph_layers", "global_width", "heads", "decoder_hidden", "horizon"}, file);
@@ -190,6 +193,9 @@ ModelInfo infoFromJson(const std::string& text, const fs::path& file) {
       info.config.decoder = json.at("decoder").at("name");
       info.config.decoderOptions = json.at("decoder").at("options").get<std::map<std::string, double>>();
       info.config.frame = json.at("frame");
+      if (format == kModelFormatVersion2 && info.config.decoder == "kinematic") {
+        info.config.decoderOptions.emplace("heading_control", 0.0);  // written before heading control existed
+      }
     }
     info.featureVersion = json.at("feature_version");
     info.datasetSchema = json.at("dataset_schema");

@@ -24,12 +24,18 @@ double mahalanobis2(const Prediction& prediction, const vector::VectorizedScene&
   return r.dot(prediction.positionCovariance[k].inverse() * r);
 }
 
+/// The keys a held-out scene counts under: pooled ("") and its own label.
+std::vector<std::string> keysOf(const vector::VectorizedScene& scene) {
+  if (scene.label.empty()) return {std::string()};
+  return {std::string(), scene.label};
+}
+
 /// Per label ("" = all): per step, the squared distances of the valid held-out positions.
 using DistancesByLabel = std::map<std::string, std::vector<std::vector<double>>>;
 
 void addDistances(DistancesByLabel& distances, const Prediction& prediction, const vector::VectorizedScene& scene) {
   const auto steps = prediction.positionCovariance.size();
-  for (const auto& key : {std::string(), scene.label}) {
+  for (const auto& key : keysOf(scene)) {
     auto& per_step = distances[key];
     per_step.resize(steps);
     for (std::size_t k = 0; k < steps && k < scene.target.size(); ++k) {
@@ -79,7 +85,7 @@ void addMetrics(HeldOutByLabel& held_out, const Prediction& prediction, const ve
   const std::size_t count = metrics.names.size();
   const auto reference = references(scene, stored, metrics);
   auto draws = metricDraws(scene, prediction, metrics.compute, count);
-  for (const auto& key : {std::string(), scene.label}) {
+  for (const auto& key : keysOf(scene)) {
     auto& per_metric = held_out[key];
     per_metric.resize(count);
     for (std::size_t m = 0; m < count; ++m) per_metric[m].push_back({draws[m], reference.at(m)});

@@ -1,4 +1,4 @@
-// `vsd-predictions/2`: what `vsd-sumo predict` writes (README "train / predict / evaluate").
+// `vsd-predictions/3`: what `vsd-sumo predict` writes (README "train / predict / evaluate").
 #include <fmt/format.h>
 
 #include <chrono>
@@ -156,7 +156,7 @@ class PredictionColumns {
 
 void writeHeader(H5::Group& root, const Predictor& predictor, const fs::path& model_file, const fs::path& dataset_file,
                  const vector::DatasetReader& reader, const PredictionFileOptions& options) {
-  h5::writeAttribute(root, "schema", std::string("vsd-predictions/2"));
+  h5::writeAttribute(root, "schema", std::string("vsd-predictions/3"));
   h5::writeAttribute(root, "predictor", predictor.name());
   h5::writeAttribute(root, "model", model_file.string());
   h5::writeAttribute(root, "model_sha256", Predictor::isBuiltin(model_file) ? std::string() : sha256OfFile(model_file));

@@ -8,12 +8,13 @@
 // surrogate fitted on earlier rounds). z_j = C_r / N + y_j / (N q_i) then has
 // E[z | pool] = the pool's critical share, so the mean of all z is unbiased whatever the
 // surrogate predicts; the better it predicts, the more critical mass lies in A or where
-// q is large, and the smaller the variance. Interval: normal, with the draws' pooled
-// variance / n plus the pools' own sampling variance; with no critical draw in B the upper
-// bound adds the rule of three for weights <= 1 / a: 3 / (a n). The initial design is left
-// out of this estimate (fixed in advance, so no bias): its Monte Carlo draws have a far
-// larger variance each. Runs without a verdict (failed simulation, metric not computable)
-// count as not critical in A and are left out of B; the summary counts them.
+// q is large, and the smaller the variance. Interval: normal, with the draws' variance
+// within rounds (pooled; rounds differ in C_r, which is known, not noise) / n plus the
+// pools' own sampling variance; with no critical draw in B the upper bound adds the rule
+// of three for weights <= 1 / a: 3 / (a n). The initial design is left out of this
+// estimate (fixed in advance, so no bias): its Monte Carlo draws have a far larger
+// variance each. Runs without a verdict (failed simulation, metric not computable) count
+// as not critical in A and are left out of B; the summary counts them.
 
 #include <algorithm>
 #include <cmath>
@@ -29,38 +30,45 @@ namespace {
 
 constexpr double kZ95 = 1.959963984540054;
 
-double mean(const std::vector<double>& values) {
-  double sum = 0.0;
-  for (const double value : values) sum += value;
-  return values.empty() ? 0.0 : sum / static_cast<double>(values.size());
-}
+/// One importance draw: its round, the round's known part C_r / N and the draw's own
+/// part y / (N q).
+struct ImportanceDraw {
+  std::uint64_t round = 0;
+  double known = 0.0;
+  double own = 0.0;
+};
 
-/// Sample variance (n - 1).
-double variance(const std::vector<double>& values) {
-  if (values.size() < 2) return 0.0;
-  const double m = mean(values);
-  double sum = 0.0;
-  for (const double value : values) sum += (value - m) * (value - m);
-  return sum / static_cast<double>(values.size() - 1);
-}
-
-/// Contributions of every importance draw, repeated as often as drawn: z = C_r / N + y / (N q),
-/// C_r the critical acquired candidates of its round (stratum A, simulated in full).
-std::vector<double> importanceContributions(const std::vector<Execution>& executions, double pool_size,
-                                            std::uint64_t& rounds) {
+/// Every importance draw, repeated as often as drawn.
+std::vector<ImportanceDraw> importanceDraws(const std::vector<Execution>& executions, double pool_size) {
   std::map<std::uint64_t, double> acquired_critical;
   for (const auto& e : executions) {
     if (e.origin == "acquired" && e.verdict == 1) acquired_critical[e.round] += 1.0;
   }
-  std::vector<double> values;
-  std::set<std::uint64_t> seen_rounds;
+  std::vector<ImportanceDraw> draws;
   for (const auto& e : executions) {
     if (e.draws == 0 || e.verdict < 0 || e.fromRandomStream()) continue;
-    values.insert(values.end(), e.draws, acquired_critical[e.round] / pool_size + e.weight * e.verdict);
-    seen_rounds.insert(e.round);
+    const ImportanceDraw draw{e.round, acquired_critical[e.round] / pool_size, e.weight * static_cast<double>(e.verdict)};
+    draws.insert(draws.end(), e.draws, draw);
   }
-  rounds = seen_rounds.size();
-  return values;
+  return draws;
+}
+
+/// The variance of the draws' own parts within rounds, pooled over the rounds (n - rounds
+/// degrees of freedom).
+double pooledWithinRoundVariance(const std::vector<ImportanceDraw>& draws, std::uint64_t& rounds) {
+  std::map<std::uint64_t, std::pair<double, double>> sums;  // round -> (count, sum)
+  for (const auto& d : draws) {
+    sums[d.round].first += 1.0;
+    sums[d.round].second += d.own;
+  }
+  rounds = sums.size();
+  double squares = 0.0;
+  for (const auto& d : draws) {
+    const auto& [count, sum] = sums[d.round];
+    squares += (d.own - sum / count) * (d.own - sum / count);
+  }
+  const double freedom = static_cast<double>(draws.size()) - static_cast<double>(rounds);
+  return freedom > 0.0 ? squares / freedom : 0.0;
 }
 
 bool anyCriticalDraw(const std::vector<Execution>& executions) {
@@ -91,16 +99,19 @@ RateEstimate estimateRate(const SearchContext& context, const std::vector<Execut
   result.estimate = result.randomEstimate;
   result.low = result.randomLow;
   result.high = result.randomHigh;
-  std::uint64_t rounds = 0;
-  const auto draws = importanceContributions(executions, static_cast<double>(context.options.pool), rounds);
+  const auto draws = importanceDraws(executions, static_cast<double>(context.options.pool));
   if (context.guides && !draws.empty()) {
     const double n = static_cast<double>(draws.size());
-    const double estimate = std::clamp(mean(draws), 0.0, 1.0);
+    double sum = 0.0;
+    for (const auto& d : draws) sum += d.known + d.own;
+    const double estimate = std::clamp(sum / n, 0.0, 1.0);
+    std::uint64_t rounds = 0;
+    const double within = pooledWithinRoundVariance(draws, rounds);
     // Each round's pool is N fresh draws of the distribution; rounds weigh by their draws,
     // so the pools' sampling variance adds up to about p (1 - p) / (N * rounds).
     const double pool_variance =
         estimate * (1.0 - estimate) / (static_cast<double>(context.options.pool) * static_cast<double>(rounds));
-    const double half = kZ95 * std::sqrt(variance(draws) / n + pool_variance);
+    const double half = kZ95 * std::sqrt(within / n + pool_variance);
     result.method = "importance-sampling";
     result.draws = draws.size();
     result.estimate = estimate;

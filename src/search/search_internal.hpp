@@ -3,12 +3,14 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <map>
 #include <memory>
 #include <optional>
 #include <string>
 #include <vector>
 
 #include "vsd/core/files.hpp"
+#include "vsd/core/random.hpp"
 #include "vsd/metrics/metrics.hpp"
 #include "vsd/scenario/logical_scenario.hpp"
 #include "vsd/search/criterion.hpp"
@@ -75,6 +77,12 @@ std::optional<SearchState> readCheckpoint(const SearchContext& context);
 void writeCheckpoint(const SearchContext& context, const SearchState& state);
 
 RateEstimate estimateRate(const SearchContext& context, const std::vector<Execution>& executions);
+
+/// The importance proposal q over a round's pool (search.cpp): 0 for the `acquired`
+/// candidates, (1 - kDefensiveShare) p_i / sum(p) + kDefensiveShare / N_B for the others.
+std::vector<double> importanceProposal(const std::vector<double>& probability, const std::vector<bool>& acquired);
+/// `count` draws with replacement from `proposal`: pool position -> times drawn.
+std::map<std::size_t, std::uint64_t> drawFromPool(const std::vector<double>& proposal, std::uint64_t count, Rng& rng);
 
 /// Bins per normalised input of the failure-region coverage (cells = bins^inputs).
 constexpr int kCoverageBins = 3;

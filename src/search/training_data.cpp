@@ -89,10 +89,10 @@ std::unique_ptr<Surrogate> fitSurrogate(const SearchContext& context, const std:
     }
   }
   capInfinities(y);
-  TrainingSet data{context.normaliser.apply(x), std::move(y), {}};
+  TrainingSet data{context.normaliser.apply(x), std::move(y), {}, {}};
   if (context.options.surrogate == "vectornet") {
     data.scenes = roundFiles(context, round, "dataset.h5");
-    data.scenes.insert(data.scenes.end(), context.priors.begin(), context.priors.end());
+    data.priorScenes = context.priors;
   }
   SurrogateOptions options;
   options.seed = mix64(context.options.seed ^ mix64(round + 1));

@@ -280,7 +280,7 @@ TEST(Cli, TrainPredictEvaluate) {
   const auto check = test::writeFile(dir.path() / "check.py", R"(
 import sys, h5py, numpy as np
 with h5py.File(sys.argv[1], "r") as f:
-    assert f.attrs["schema"] == "vsd-predictions/2"
+    assert f.attrs["schema"] == "vsd-predictions/3"
     assert f.attrs["predictor"] == "kinematic" and f.attrs["samples"] == 4
     p, t, v = f["predictions"][:], f["targets"][:], f["target_valid"][:]
     assert p.shape == (30, 25, 2) and t.shape == (30, 25, 2) and v.all()
@@ -289,6 +289,8 @@ with h5py.File(sys.argv[1], "r") as f:
     assert list(f["labels"].asstr()[:]) == ["acc"]
     assert f["sample_positions"].shape == (30, 4, 25, 2)
     assert f["position_covariance"].shape == (30, 25, 2, 2)
+    # Uncalibrated model: the regions' radii are the Gaussian's (-2 ln(1 - level)).
+    assert np.allclose(f["position_region_radius2"][:], [-2 * np.log(0.5), -2 * np.log(0.1)])
     speed, accel = f["predicted_speed"][:], f["predicted_accel"][:]
     assert (speed >= 0).all() and (accel >= -8 - 1e-3).all()
     # Metrics of the most likely future and their intervals over the 4 draws, by the metric code.

@@ -166,8 +166,39 @@ TEST(Kinematics, HeadingControlMovesAlongEachStepsHeadingAndItsSensitivitiesMatc
       heading, dt, 1e-6);
 }
 
+namespace {
+
+/// Moderate noise: the decoder's linearised position covariance equals the sample
+/// covariance of its rollouts.
+void expectCovarianceOfSamples(const Decoder& decoder) {
+  auto raw = torch::zeros({1, decoder.outputWidth()});
+  raw.narrow(1, 0, 25).fill_(-0.5);
+  raw.narrow(1, 25, 25).fill_(1.0);
+  raw.narrow(1, 50, 52).fill_(-2.5);
+  EgoStart one{torch::zeros({1, 2}), torch::zeros({1}), torch::tensor({10.0F})};
+  const auto distribution = decoder.decode(raw, one);
+  torch::manual_seed(3);
+  const auto samples = decoder.sample(distribution, one, torch::randn({1, 20000, decoder.noiseWidth()}));
+  for (const int k : {4, 14, 24}) {
+    const auto points = samples.positions[0].select(1, k);  // [S, 2]
+    const auto centred = points - points.mean(0);
+    const auto empirical = centred.t().mm(centred) / static_cast<double>(points.size(0) - 1);
+    // Less the floor every position's variance has (float32 targets), which samples do not draw.
+    const auto predicted = distribution.covariance[0][k] - 0.02 * 0.02 * torch::eye(2);
+    for (int r = 0; r < 2; ++r) {
+      for (int c = 0; c < 2; ++c) {
+        const double scale = std::sqrt(predicted[r][r].item<float>() * predicted[c][c].item<float>());
+        EXPECT_NEAR(empirical[r][c].item<float>(), predicted[r][c].item<float>(), 0.1 * scale) << k << " " << r << c;
+      }
+    }
+  }
+}
+
+}  // namespace
+
 TEST(KinematicDecoder, ControlsAreBoundedAndTheCovarianceIsThatOfItsSamples) {
-  const auto config = kinematicConfig();
+  auto config = kinematicConfig();
+  config.decoderOptions = {{"heading_control", 0.0}};  // curvature control
   const auto decoder = makeDecoder(config);
   ASSERT_EQ(decoder->outputWidth(), 4 * 25 + 2);
   EgoStart start{torch::zeros({2, 2}), torch::zeros({2}), torch::tensor({12.0F, 3.0F})};
@@ -183,29 +214,23 @@ TEST(KinematicDecoder, ControlsAreBoundedAndTheCovarianceIsThatOfItsSamples) {
   const auto path = torch::cat({torch::zeros({1, 2}), decoded.positions[0]}, 0);
   EXPECT_NEAR((path.narrow(0, 1, 25) - path.narrow(0, 0, 25)).norm(2, 1).sum().item<float>(), 12.0 * 12.0 / 18.0, 0.05);
   EXPECT_NEAR(decoded.headings[0][24].item<float>(), 0.25 * 8.0, 0.02);
+  expectCovarianceOfSamples(*decoder);
+}
 
-  // Moderate noise: the linearised covariance equals the sample covariance of rollouts.
-  raw = torch::zeros({1, decoder->outputWidth()});
-  raw.narrow(1, 0, 25).fill_(-0.5);
-  raw.narrow(1, 25, 25).fill_(1.0);
-  raw.narrow(1, 50, 52).fill_(-2.5);
-  EgoStart one{torch::zeros({1, 2}), torch::zeros({1}), torch::tensor({10.0F})};
-  const auto distribution = decoder->decode(raw, one);
-  torch::manual_seed(3);
-  const auto samples = decoder->sample(distribution, one, torch::randn({1, 20000, decoder->noiseWidth()}));
-  for (const int k : {4, 14, 24}) {
-    const auto points = samples.positions[0].select(1, k);  // [S, 2]
-    const auto centred = points - points.mean(0);
-    const auto empirical = centred.t().mm(centred) / static_cast<double>(points.size(0) - 1);
-    // Less the floor every position's variance has (float32 targets), which samples do not draw.
-    const auto predicted = distribution.covariance[0][k] - 0.02 * 0.02 * torch::eye(2);
-    for (int r = 0; r < 2; ++r) {
-      for (int c = 0; c < 2; ++c) {
-        const double scale = std::sqrt(predicted[r][r].item<float>() * predicted[c][c].item<float>());
-        EXPECT_NEAR(empirical[r][c].item<float>(), predicted[r][c].item<float>(), 0.1 * scale) << k << " " << r << c;
-      }
-    }
-  }
+TEST(KinematicDecoder, HeadingControlIsTheDefaultBoundedToMaxHeadingWithTheCovarianceOfItsSamples) {
+  auto config = kinematicConfig();
+  config.decoderOptions = {{"max_heading", 0.5}};
+  const auto decoder = makeDecoder(config);
+  EgoStart start{torch::zeros({1, 2}), torch::zeros({1}), torch::tensor({12.0F})};
+  auto raw = torch::zeros({1, decoder->outputWidth()});
+  raw.narrow(1, 25, 25).fill_(1000.0);  // every step as far left as allowed
+  raw.narrow(1, 50, 52).fill_(-20.0);
+  const auto decoded = decoder->decode(raw, start);
+  for (int k = 0; k < 25; ++k) EXPECT_NEAR(decoded.headings[0][k].item<float>(), 0.5F, 1e-4F);
+  // A straight line at 0.5 rad: 12 m/s for 5 s.
+  EXPECT_NEAR(decoded.positions[0][24][0].item<float>(), 60.0F * std::cos(0.5F), 1e-2F);
+  EXPECT_NEAR(decoded.positions[0][24][1].item<float>(), 60.0F * std::sin(0.5F), 1e-2F);
+  expectCovarianceOfSamples(*decoder);
 }
 
 TEST(KinematicDecoder, TheAccelerationLossComparesWithTheAccelerationsOfTheTruePositions) {
@@ -328,6 +353,22 @@ TEST(ModelFiles, AModelOfAnUnknownDecoderIsRefusedWithTheKnownOnes) {
   const auto error = errorOf([&] { Predictor predictor(foreign); });
   EXPECT_NE(error.find("foreign.pt"), std::string::npos) << error;
   EXPECT_NE(error.find("unknown decoder 'mystery' (known: offsets, kinematic)"), std::string::npos) << error;
+}
+
+TEST(ModelFiles, KinematicModelsOfFormatTwoKeepCurvatureControl) {
+  TemporaryDirectory dir;
+  auto options = tinyTraining(writeDataset(dir.path() / "acc.h5", 20), dir.path() / "k.pt");
+  options.config.decoder = "kinematic";
+  options.steps = 2;
+  train(options);
+  EXPECT_EQ(Predictor(options.output).info().config.decoderOption("heading_control"), 1.0);  // today's default
+  // Written before heading control existed: the options are absent and it meant curvature control.
+  const auto older = dir.path() / "older.pt";
+  ASSERT_TRUE(rewriteModelDescription(options.output, older,
+                                      "d['format'] = 'vsd-model/2'\n"
+                                      "for name in ('heading_control', 'max_heading', 'accel_nll'):\n"
+                                      "    del d['decoder']['options'][name]"));
+  EXPECT_EQ(Predictor(older).info().config.decoderOption("heading_control"), 0.0);
 }
 
 // --- predictors without training ---------------------------------------------------------

@@ -104,4 +104,8 @@ ExperimentSummary runExperiment(const ExperimentOptions& options);
 /// has them): what `predict --samples` writes and the decoder option `calibrate` calibrates.
 std::shared_ptr<const model::MetricBinding> futureMetricBinding(const std::filesystem::path& data);
 
+/// Binds futureMetricBinding(the first data) to a training whose decoder options set
+/// `calibrate`, so that its metric intervals are calibrated too; leaves others unchanged.
+void bindCalibrationMetrics(model::TrainOptions& options);
+
 }  // namespace vsd::experiment

@@ -84,7 +84,7 @@ struct PredictionFileOptions {
   FutureMetrics metrics;             ///< computes them (required when metricNames is not empty)
 };
 
-/// Predicts every sample of one dataset and writes `vsd-predictions/2` (README). Returns
+/// Predicts every sample of one dataset and writes `vsd-predictions/3` (README). Returns
 /// the number of samples.
 std::size_t writePredictions(const Predictor& predictor, const std::filesystem::path& model_file,
                              const std::filesystem::path& dataset, const std::filesystem::path& output,

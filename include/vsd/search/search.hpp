@@ -11,7 +11,8 @@
 //             probability of meeting the criterion, d in [0, 1] the normalised distance to
 //             the nearest critical scenario found or candidate already chosen; the best
 //             (1 - estimateShare) of the round are "acquired"; the rest are "importance" draws
-//             from the other candidates with probability q_i = 0.8 p_i^2 / sum(p^2) + 0.2 / N_B
+//             from the other candidates with probability
+//             q_i = 0.8 p_i / sum(p) + 0.2 / N_B
 //             (with replacement; a candidate drawn twice is simulated once). Everything is
 //             simulated by the pipeline's batch simulation (the code `run` uses);
 //   until     `budget` executions. A re-run with the same --out resumes after the last
@@ -43,8 +44,8 @@ struct SearchOptions {
   std::uint64_t budget = 2000;        ///< executions in total, initial design included
   std::uint64_t initial = 200;        ///< executions of the initial design (random stream)
   std::uint64_t roundSize = 100;      ///< executions per later round
-  double estimateShare = 0.2;         ///< share of each later round drawn by importance sampling (0..1)
-  std::uint64_t pool = 20000;         ///< candidates scored per round (and for the rate estimate)
+  double estimateShare = 0.4;         ///< share of each later round drawn by importance sampling (0..1)
+  std::uint64_t pool = 10000;         ///< candidates scored per round (and for the rate estimate)
   double diversity = 1.0;             ///< weight of the distance term in the acquisition (>= 0)
   int trees = 50;                     ///< extra-trees surrogate: trees per metric
   std::string probability = "shifts"; ///< extra-trees: "shifts" or "tail" (SurrogateOptions::probability)

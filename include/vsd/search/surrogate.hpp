@@ -29,8 +29,10 @@ struct TrainingSet {
   Matrix x;  ///< [n, inputs] normalised to about [0, 1]
   Matrix y;  ///< [n, criterion.usedMetrics()] finite (infinities capped)
   /// Vectorized scenes of every completed execution with its simulated future (the rounds'
-  /// dataset.h5 files, in round order), then the --prior datasets. For scene models.
+  /// dataset.h5 files, in round order). For scene models.
   std::vector<std::filesystem::path> scenes;
+  /// The --prior datasets (other functional scenarios or maps). For scene models.
+  std::vector<std::filesystem::path> priorScenes;
 };
 
 /// The candidates of one round (sampled, never simulated).

@@ -240,10 +240,11 @@ DecoderEntry kinematicDecoderEntry() {
       {"max_accel", 4.0, 0.1, 20.0, "m/s^2, largest acceleration (the simulated Ego's limit)"},
       {"max_decel", 9.0, 0.1, 20.0, "m/s^2, largest deceleration (the simulated Ego's limit)"},
       {"max_curvature", 0.25, 0.001, 2.0, "1/m, largest path curvature (the simulated Ego's limit)"},
-      {"heading_control", 0.0, 0.0, 1.0,
+      {"heading_control", 1.0, 0.0, 1.0,
        "1: the lateral control is the heading of each step in the model's frame (relative to the lane in the lane "
        "frame) instead of a curvature: the lateral position is one integration from the controls, not two"},
-      {"max_heading", 1.0, 0.01, 3.1, "rad, largest heading of a step in the model's frame (heading control)"},
+      {"max_heading", 3.0, 0.01, 3.1,
+       "rad, largest heading of a step in the model's frame (heading control; the lane frame needs far less)"},
       {"nll", 1.0, 0.0, 1.0, "1: predictive distribution trained by NLL; 0: most likely future only, trained on ADE"},
       {"ade_weight", 0.0, 0.0, 100.0, "weight of the ADE of the most likely future added to the NLL"},
       {"accel_weight", 0.0, 0.0, 100.0,
