@@ -92,7 +92,27 @@ double widthFloor(const std::vector<Scored>& scored) {
 }
 
 /// The smallest central level of sorted draws holding `value` (1 outside their range).
-double rawContainingLevel(const std::vector<double>& sorted, double value);
+double rawContainingLevel(const std::vector<double>& sorted, double value) {
+  if (value < sorted.front() || value > sorted.back()) return 1.0;
+  return std::abs(2.0 * quantilePosition(sorted, value) - 1.0);
+}
+
+/// centralInterval of draws already sorted without NaN.
+std::array<double, 2> centralIntervalOfSorted(const std::vector<double>& sorted, double level,
+                                              const IntervalWidening* widening) {
+  if (sorted.empty()) return {kNaN, kNaN};
+  const double raw = widening == nullptr ? level : widening->rawLevelAt(level);
+  double low = quantileOfSorted(sorted, 0.5 * (1.0 - raw));
+  double high = quantileOfSorted(sorted, 0.5 * (1.0 + raw));
+  if (widening == nullptr) return {low, high};
+  const double scale = quantileOfSorted(sorted, 0.95) - quantileOfSorted(sorted, 0.05) + widening->floor;
+  const double extra = widening->wideningAt(level) * scale;
+  if (extra > 0.0 && std::isfinite(scale)) {  // infinite draws (e.g. ttc_min): nothing to scale by
+    low -= extra;
+    high += extra;
+  }
+  return {low, high};
+}
 
 }  // namespace
 
@@ -141,19 +161,7 @@ bool fitIntervalWidening(const std::vector<HeldOutMetric>& scenes, IntervalWiden
 }
 
 std::array<double, 2> centralInterval(const std::vector<double>& draws, double level, const IntervalWidening* widening) {
-  const auto sorted = sortedDraws(draws);
-  if (sorted.empty()) return {kNaN, kNaN};
-  const double raw = widening == nullptr ? level : widening->rawLevelAt(level);
-  double low = quantileOfSorted(sorted, 0.5 * (1.0 - raw));
-  double high = quantileOfSorted(sorted, 0.5 * (1.0 + raw));
-  if (widening == nullptr) return {low, high};
-  const double scale = quantileOfSorted(sorted, 0.95) - quantileOfSorted(sorted, 0.05) + widening->floor;
-  const double extra = widening->wideningAt(level) * scale;
-  if (extra > 0.0 && std::isfinite(scale)) {  // infinite draws (e.g. ttc_min): nothing to scale by
-    low -= extra;
-    high += extra;
-  }
-  return {low, high};
+  return centralIntervalOfSorted(sortedDraws(draws), level, widening);
 }
 
 bool Interval::contains(double value, double level) const {
@@ -168,23 +176,14 @@ Interval intervalOf(const std::vector<double>& draws, const IntervalWidening* wi
   Interval interval;
   interval.draws = sorted.size();
   interval.median = quantileOfSorted(sorted, 0.5);
-  const auto inner = centralInterval(sorted, 0.5, widening);
-  const auto outer = centralInterval(sorted, 0.9, widening);
+  const auto inner = centralIntervalOfSorted(sorted, 0.5, widening);
+  const auto outer = centralIntervalOfSorted(sorted, 0.9, widening);
   interval.p25 = inner[0];
   interval.p75 = inner[1];
   interval.p05 = outer[0];
   interval.p95 = outer[1];
   return interval;
 }
-
-namespace {
-
-double rawContainingLevel(const std::vector<double>& sorted, double value) {
-  if (value < sorted.front() || value > sorted.back()) return 1.0;
-  return std::abs(2.0 * quantilePosition(sorted, value) - 1.0);
-}
-
-}  // namespace
 
 double containingLevel(const std::vector<double>& draws, double value, const IntervalWidening* widening) {
   if (widening == nullptr) {
@@ -194,7 +193,7 @@ double containingLevel(const std::vector<double>& draws, double value, const Int
   const auto sorted = sortedDraws(draws);
   if (sorted.empty() || std::isnan(value)) return kNaN;
   const auto inside = [&](double level) {
-    const auto interval = centralInterval(sorted, level, widening);
+    const auto interval = centralIntervalOfSorted(sorted, level, widening);
     return value >= interval[0] && value <= interval[1];  // false for an empty interval (NaN)
   };
   if (!inside(1.0)) return 1.0;

@@ -24,6 +24,7 @@
 #include <cmath>
 
 #include "../kinematics.hpp"
+#include "vsd/core/geometry.hpp"
 
 namespace vsd::model {
 
@@ -195,7 +196,7 @@ class KinematicDecoder final : public Decoder {
   /// positions alone barely constrain (they integrate it twice).
   static torch::Tensor accelNll(const Decoded& decoded, const torch::Tensor& truth, const torch::Tensor& weights) {
     const auto variance = decoded.parameters[2].pow(2) + decoded.parameters[4].pow(2).unsqueeze(1);
-    const auto nll = 0.5 * ((truth - decoded.accels).pow(2) / variance + variance.log() + std::log(2.0 * M_PI));
+    const auto nll = 0.5 * ((truth - decoded.accels).pow(2) / variance + variance.log() + std::log(2.0 * kPi));
     return (nll * weights).sum() / weights.sum().clamp_min(1.0);
   }
 
