@@ -73,7 +73,13 @@ void addTrainCommand(CLI::App& app, CommandContext& context) {
   command->add_option("--decoder-option", *decoder_options,
                       "A decoder option name=value (repeatable; README \"Decoders\" lists them)");
   command->add_option("--frame", options->config.frame, "Model frame: ego or lane")->capture_default_str();
+  addNumber(command, "--lane-smoothing", options->config.laneSmoothing,
+            "m: half-width of the lane frame's smoothing of its reference line")
+      ->capture_default_str();
   command->add_flag("--resume", options->resume, "Continue an interrupted training from <out>.last");
+  command->add_option("--init-from", options->initialModel,
+                      "Fine-tune: start from this model's weights (same architecture, decoder, frame) instead of fresh "
+                      "ones");
   command->callback([=, &context] {
     context.action = [=] {
       options->mix = model::Mix::parse(*mix);

@@ -20,8 +20,11 @@ namespace {
 /// constant-velocity residual, in the Ego frame. vsd-model/2 names decoder, options, frame.
 /// vsd-model/3: the kinematic decoder's heading_control defaults to 1; in /2 files, where it
 /// did not exist, an absent heading_control means curvature control (0).
-constexpr const char* kModelFormat = "vsd-model/3";
+/// vsd-model/4: records the lane frame's smoothing (lane_smoothing); older files used 4 m.
+constexpr const char* kModelFormat = "vsd-model/4";
+constexpr const char* kModelFormatVersion3 = "vsd-model/3";
 constexpr const char* kModelFormatVersion2 = "vsd-model/2";
+constexpr double kLaneSmoothingBeforeVersion4 = 4.0;  ///< m
 constexpr const char* kLegacyModelFormat = "vsd-model/1";
 constexpr const char* kInfoKey = "vsd_model_info";
 constexpr const char* kStateKey = "vsd_training_state";
@@ -123,7 +126,8 @@ std::string infoToJson(const ModelInfo& info) {
         {"decoder_hidden", c.decoderHidden},
         {"horizon", c.horizon},
         {"step", c.step},
-        {"coordinate_scale", c.coordinateScale}}},
+        {"coordinate_scale", c.coordinateScale},
+        {"lane_smoothing", c.laneSmoothing}}},
       {"decoder", {{"name", c.decoder}, {"options", c.decoderOptions}}},
       {"frame", c.frame},
       {"feature_version", info.featureVersion},
@@ -170,9 +174,11 @@ ModelInfo infoFromJson(const std::string& text, const fs::path& file) {
   try {
     const auto json = nlohmann::json::parse(text);
     const std::string format = json.value("format", "");
-    if (format != kModelFormat && format != kModelFormatVersion2 && format != kLegacyModelFormat) {
-      throw ModelError(fmt::format("{}: model format '{}' is not supported (expected {}, {} or {})", file.string(),
-                                   format, kModelFormat, kModelFormatVersion2, kLegacyModelFormat));
+    if (format != kModelFormat && format != kModelFormatVersion3 && format != kModelFormatVersion2 &&
+        format != kLegacyModelFormat) {
+      throw ModelError(fmt::format("{}: model format '{}' is not supported (expected {}, {}, {} or {})", file.string(),
+                                   format, kModelFormat, kModelFormatVersion3, kModelFormatVersion2,
+                                   kLegacyModelFormat));
     }
     const auto& c = json.at("config");
     requireIntegers(c, {"hidden", "subgraph_layers", "global_width", "heads", "decoder_hidden", "horizon"}, file);
@@ -185,6 +191,7 @@ ModelInfo infoFromJson(const std::string& text, const fs::path& file) {
     info.config.horizon = c.at("horizon");
     info.config.step = c.at("step");
     info.config.coordinateScale = c.at("coordinate_scale");
+    info.config.laneSmoothing = format == kModelFormat ? c.at("lane_smoothing").get<double>() : kLaneSmoothingBeforeVersion4;
     if (format == kLegacyModelFormat) {
       info.config.decoder = "offsets";
       info.config.decoderOptions = {{"residual", 1.0}};

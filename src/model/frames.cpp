@@ -151,26 +151,36 @@ class LaneTracer {
   double width_ = kDefaultWidth;
 };
 
-/// Moving average over +-`half` points (ends keep their shorter windows): the lane points
-/// of generated roads carry +-0.5 m of noise, and a frame should not zigzag with it.
-Polyline smoothed(const Polyline& line, std::size_t half) {
+/// Moving average over +-`half_m` m of points `spacing` m apart (a point at the window's
+/// edge weighs by the share of its spacing inside; ends keep their shorter windows): the lane
+/// points of generated roads carry +-0.5 m of noise that drivers, previewing a few metres
+/// ahead, do not follow, and a frame should not zigzag with it.
+Polyline smoothed(const Polyline& line, double half_m, double spacing) {
+  const double reach_points = half_m / spacing;
+  const auto half = static_cast<std::size_t>(std::ceil(reach_points));
   Polyline out;
   out.reserve(line.size());
   for (std::size_t i = 0; i < line.size(); ++i) {
     const std::size_t reach = std::min({half, i, line.size() - 1 - i});
     Vec2 sum = Vec2::Zero();
-    for (std::size_t j = i - reach; j <= i + reach; ++j) sum += line[j];
-    out.push_back(sum / static_cast<double>(2 * reach + 1));
+    double weights = 0.0;
+    for (std::size_t j = i - reach; j <= i + reach; ++j) {
+      const double d = std::abs(static_cast<double>(j) - static_cast<double>(i));
+      const double w = std::clamp(reach_points - d + 1.0, 0.0, 1.0);
+      sum += w * line[j];
+      weights += w;
+    }
+    out.push_back(sum / weights);
   }
   return out;
 }
 
 /// The reference line of the lane frame: the traced lane centre, smoothed, extended far
 /// along its end directions so that every point of a scene projects inside it.
-Polyline referenceLine(const vector::VectorizedScene& scene, const VehicleState& ego) {
+Polyline referenceLine(const vector::VectorizedScene& scene, const VehicleState& ego, double smoothing_m) {
   constexpr double kExtension = 1000.0;
   LaneTracer tracer(boundarySegments(scene));
-  Polyline line = smoothed(tracer.trace(ego.position(), headingVector(ego.heading)), 2);
+  Polyline line = smoothed(tracer.trace(ego.position(), headingVector(ego.heading)), smoothing_m, LaneTracer::kSpacing);
   const Vec2 first_direction = line.size() >= 2 ? Vec2((line[1] - line[0]).normalized()) : headingVector(ego.heading);
   const Vec2 last_direction =
       line.size() >= 2 ? Vec2((line.back() - line[line.size() - 2]).normalized()) : headingVector(ego.heading);
@@ -183,7 +193,8 @@ Polyline referenceLine(const vector::VectorizedScene& scene, const VehicleState&
 /// y = signed offset (> 0 left).
 class LaneFrame final : public SceneFrame {
  public:
-  LaneFrame(const vector::VectorizedScene& scene, const VehicleState& ego) : line_(referenceLine(scene, ego)) {
+  LaneFrame(const vector::VectorizedScene& scene, const VehicleState& ego, double smoothing_m)
+      : line_(referenceLine(scene, ego, smoothing_m)) {
     origin_ = line_.project(ego.position()).arcLength;
   }
   Vec2 toModel(const Vec2& p) const override {
@@ -215,10 +226,11 @@ class LaneFrame final : public SceneFrame {
 
 }  // namespace
 
-std::unique_ptr<SceneFrame> makeFrame(const std::string& name, const vector::VectorizedScene& scene) {
+std::unique_ptr<SceneFrame> makeFrame(const std::string& name, const vector::VectorizedScene& scene,
+                                      double lane_smoothing_m) {
   const auto ego = scene.egoInitialState();
   if (name == "ego") return std::make_unique<EgoFrame>(ego);
-  if (name == "lane") return std::make_unique<LaneFrame>(scene, ego);
+  if (name == "lane") return std::make_unique<LaneFrame>(scene, ego, lane_smoothing_m);
   throw ModelError("unknown model frame '" + name + "'");
 }
 

@@ -29,7 +29,9 @@ class SceneFrame {
   virtual Eigen::Matrix2d jacobian(const Vec2& model_point) const = 0;
 };
 
-/// The frame `name` (one of availableFrames()) for a scene.
-std::unique_ptr<SceneFrame> makeFrame(const std::string& name, const vector::VectorizedScene& scene);
+/// The frame `name` (one of availableFrames()) for a scene; `lane_smoothing_m`: the lane
+/// frame's smoothing half-width (VectorNetConfig::laneSmoothing).
+std::unique_ptr<SceneFrame> makeFrame(const std::string& name, const vector::VectorizedScene& scene,
+                                      double lane_smoothing_m);
 
 }  // namespace vsd::model

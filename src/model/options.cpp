@@ -64,6 +64,9 @@ void VectorNetConfig::validate() const {
           fmt::format("{} .. {} s (0: not yet known)", kMinStep, kMaxStep).c_str());
   require(coordinateScale >= 1e-3 && coordinateScale <= 1e6, "coordinate_scale", coordinateScale, "1e-3 .. 1e6 m");
   validateDecoderOptions(findDecoder(decoder, "model configuration"), decoderOptions);
+  if (!(laneSmoothing > 0.0 && laneSmoothing <= 20.0)) {
+    throw ConfigError::field("model configuration", "--lane-smoothing", formatValue(laneSmoothing), "in (0, 20] m");
+  }
   const auto& frames = availableFrames();
   if (std::find(frames.begin(), frames.end(), frame) == frames.end()) {
     throw ConfigError::field("model configuration", "--frame", frame, fmt::format("one of {}", fmt::join(frames, ", ")));
@@ -151,6 +154,9 @@ void TrainOptions::validate() const {
   }
   if (!(validationFraction > 0.0 && validationFraction < 1.0)) {
     throw ConfigError::field(where, "--validation-fraction", formatValue(validationFraction), "in (0, 1)");
+  }
+  if (!initialModel.empty() && !std::filesystem::is_regular_file(initialModel)) {
+    throw ConfigError::field(where, "--init-from", initialModel.string(), "an existing model file");
   }
   config.validate();
 }

@@ -271,7 +271,7 @@ class MotionModelBackend final : public Predictor::Backend {
       const auto& scene = scenes[first + static_cast<std::size_t>(i)];
       speed[i] = scene.egoInitialState().speed;
       accel[i][0] = info_.config.decoder == "ca" ? initialAcceleration(scene) : 0.0;
-      frames.frames.push_back(makeFrame("ego", scene));
+      frames.frames.push_back(makeFrame("ego", scene, info_.config.laneSmoothing));
     }
     const auto path = rollout(torch::zeros({n, 2}), torch::zeros({n}), speed, accel.expand({n, steps}),
                               torch::zeros({n, steps}), step);

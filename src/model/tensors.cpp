@@ -145,7 +145,7 @@ SceneTensors buildTensors(const std::vector<vector::VectorizedScene>& scenes, co
       throw DatasetError(fmt::format("sample {} ({}) has {} target steps, the model predicts {}", scene.sample,
                                      scene.label, scene.target.size(), config.horizon));
     }
-    std::shared_ptr<const SceneFrame> frame = makeFrame(config.frame, scene);
+    std::shared_ptr<const SceneFrame> frame = makeFrame(config.frame, scene, config.laneSmoothing);
     fillScene(tensors, i, scene, *frame, config);
     fillTargets(tensors, i, scene, *frame);
     tensors.frames.push_back(std::move(frame));

@@ -200,13 +200,18 @@ EpochRecord recordFromJson(const nlohmann::json& j) {
   return r;
 }
 
+/// The configuration of `config` as JSON (architecture, decoder and options, frame, step, horizon).
+nlohmann::json configJson(const VectorNetConfig& config) {
+  ModelInfo architecture;
+  architecture.config = config;
+  return nlohmann::json::parse(infoToJson(architecture))["config"];
+}
+
 /// What a resumed training must share with the interrupted one to repeat it
 /// exactly: the data (each file's SHA-256), the mix, the seed, the schedule and
 /// the architecture. (Threads are left out: they change results only in the last bits; the
 /// learning rate too: a user may change it on resume, and doing so cannot mix up data.)
 nlohmann::json resumeKey(const TrainOptions& options, const VectorNetConfig& config) {
-  ModelInfo architecture;
-  architecture.config = config;
   nlohmann::json data = nlohmann::json::array();
   for (const auto& path : options.data) {
     for (const auto& file : vector::datasetFiles(path)) {  // a sharded sweep: every shard
@@ -221,7 +226,7 @@ nlohmann::json resumeKey(const TrainOptions& options, const VectorNetConfig& con
           {"batch", options.batchSize},
           {"weight_decay", options.weightDecay},
           {"validation_fraction", options.validationFraction},
-          {"architecture", nlohmann::json::parse(infoToJson(architecture))["config"]}};
+          {"architecture", configJson(config)}};
 }
 
 /// Throws ConfigError naming the first setting in which the checkpoint differs.
@@ -268,6 +273,31 @@ Model createSeeded(const VectorNetConfig& config, std::uint64_t seed) {
   return Model::create(config);
 }
 
+/// The weights a training starts from: fresh ones from the seed, or (fine-tuning) those of
+/// options.initialModel, whose configuration must be this training's.
+Model startingModel(const TrainOptions& options, const VectorNetConfig& config) {
+  if (options.initialModel.empty()) return createSeeded(config, options.seed);
+  ModelInfo info;
+  Model model = loadModel(options.initialModel, info);
+  auto wanted = configJson(config);
+  auto found = configJson(info.config);
+  for (auto* json : {&wanted, &found}) {  // configJson holds the architecture; add what the weights mean
+    const auto& c = json == &wanted ? config : info.config;
+    (*json)["decoder"] = c.decoder;
+    (*json)["decoder_options"] = c.decoderOptions;
+    (*json)["frame"] = c.frame;
+  }
+  for (const auto& [key, value] : wanted.items()) {
+    if (found.value(key, nlohmann::json()) == value) continue;
+    throw ConfigError(fmt::format("--init-from: {} has {} {}, this training {}: fine-tuning needs the same "
+                                  "architecture, decoder, frame, step and horizon",
+                                  options.initialModel.string(), key, found.value(key, nlohmann::json()).dump(),
+                                  value.dump()));
+  }
+  model.network->train();
+  return model;
+}
+
 class Trainer {
  public:
   /// `parallel`: the other ranks of a distributed training (nullptr: this process alone).
@@ -278,7 +308,7 @@ class Trainer {
         config_(trainedConfig(options, selection_.header)),
         train_(buildTensors(selection_.train, config_)),
         validation_(buildTensors(selection_.validation, config_)),
-        model_(createSeeded(config_, options.seed)),
+        model_(startingModel(options, config_)),
         optimizer_(model_.network->parameters(),
                    torch::optim::AdamWOptions(options.learningRate).weight_decay(options.weightDecay)),
         lastCheckpoint_(options.output.string() + ".last"),

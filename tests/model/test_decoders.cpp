@@ -371,6 +371,30 @@ TEST(ModelFiles, KinematicModelsOfFormatTwoKeepCurvatureControl) {
   EXPECT_EQ(Predictor(older).info().config.decoderOption("heading_control"), 0.0);
 }
 
+TEST(ModelFiles, LaneFrameModelsRecordTheirSmoothingAndFormatThreeMeantFourMetres) {
+  TemporaryDirectory dir;
+  auto options = tinyTraining(writeDataset(dir.path() / "acc.h5", 20), dir.path() / "lane.pt");
+  options.config.decoder = "kinematic";
+  options.config.frame = "lane";
+  options.config.laneSmoothing = 2.5;
+  options.steps = 2;
+  train(options);
+  EXPECT_EQ(Predictor(options.output).info().config.laneSmoothing, 2.5);
+  EXPECT_EQ(VectorNetConfig{}.laneSmoothing, 3.0);  // README "Lane frame smoothing"
+  const auto older = dir.path() / "older.pt";
+  ASSERT_TRUE(rewriteModelDescription(options.output, older,
+                                      "d['format'] = 'vsd-model/3'\n"
+                                      "del d['config']['lane_smoothing']"));
+  EXPECT_EQ(Predictor(older).info().config.laneSmoothing, 4.0);
+  options.config.laneSmoothing = 0.0;
+  try {
+    train(options);
+    ADD_FAILURE() << "trained with no smoothing";
+  } catch (const ConfigError& error) {
+    EXPECT_NE(std::string(error.what()).find("--lane-smoothing"), std::string::npos) << error.what();
+  }
+}
+
 // --- predictors without training ---------------------------------------------------------
 
 namespace {

@@ -34,7 +34,7 @@ std::vector<vector::VectorizedScene> plannedScenes(const std::string& scenario, 
 
 TEST(LaneFrame, StraightensACurvedRoadAroundTheEgo) {
   for (const auto& scene : plannedScenes("acc_lk.yaml", 20)) {
-    const auto frame = makeFrame("lane", scene);
+    const auto frame = makeFrame("lane", scene, VectorNetConfig{}.laneSmoothing);
     const auto ego = scene.egoInitialState();
     // The Ego starts on its lane's centre, heading along it (up to the lane points' noise).
     const Vec2 start = frame->toModel(ego.position());
@@ -81,7 +81,7 @@ TEST(LaneFrame, WorksOnAnExportOfARealMapAndTrainsThere) {
   std::size_t returned = 0;
   for (std::size_t i = 0; i < reader.size(); ++i) {
     const auto scene = reader.scene(i);
-    const auto frame = makeFrame("lane", scene);
+    const auto frame = makeFrame("lane", scene, VectorNetConfig{}.laneSmoothing);
     const auto ego = scene.egoInitialState();
     const Vec2 start = frame->toModel(ego.position());
     on_lane += std::abs(start.y()) < 1.0 ? 1 : 0;

@@ -57,6 +57,11 @@ struct VectorNetConfig {
   std::string decoder = "offsets";             ///< a name of availableDecoders()
   std::map<std::string, double> decoderOptions;  ///< given options; the rest take the decoder's defaults
   std::string frame = "ego";                     ///< a name of availableFrames()
+  /// m, in (0, 20]: half-width of the moving average that smooths the lane frame's reference
+  /// line (lane frame only). Measured on row 8 (README "Lane frame smoothing"): 2 / 3 / 4 m
+  /// leave the maximum lane offset of predictions at -0.05 / +-0.02 / +0.13 m bias; model files
+  /// before vsd-model/4 used 4 m.
+  double laneSmoothing = 3.0;
 
   /// The value of a decoder option: the given one or the decoder's default.
   /// Throws ConfigError for an option the decoder does not have.
@@ -93,6 +98,10 @@ struct TrainOptions {
   double weightDecay = 1e-4;
   double validationFraction = 0.1;          ///< the paper's 90 % / 10 % split
   bool resume = false;                      ///< continue from <output>.last if it exists
+  /// Fine-tuning: start from this model file's weights instead of fresh ones from `seed`
+  /// (the optimizer and the schedule start afresh). Its configuration - architecture,
+  /// decoder and options, frame, step, horizon - must equal this training's. Empty: fresh.
+  std::filesystem::path initialModel;
   /// The metrics whose intervals the decoder option `calibrate` calibrates on the validation
   /// split (their values on the recorded futures are the references); none when not set.
   std::shared_ptr<const MetricBinding> metrics;
