@@ -5,8 +5,8 @@
 // distribution, every future's metrics come from the metric registry (the code `compare`
 // scores predictions with), and the probability is the share of futures meeting the
 // criterion (where none does, a Gaussian tail below 1 / (2 S) that ranks by closeness).
-// Every round trains from scratch on all the data so far (fine-tuning would need a warm
-// start that model::train does not offer).
+// Every round trains on all the search's scenes so far: from scratch, or with --prior
+// fine-tuning a model pre-trained on the prior datasets once per search.
 
 #include <fmt/format.h>
 
@@ -31,6 +31,8 @@ namespace {
 
 /// Candidates predicted per batch: bounds the memory of scenes and sampled futures.
 constexpr std::size_t kChunk = 512;
+/// The prior model's training: this many rounds' steps (2,000 by default, ~1 min on one thread).
+constexpr int kPriorStepsPerRound = 5;
 
 class VectorNetSurrogate final : public Surrogate {
  public:
@@ -40,48 +42,16 @@ class VectorNetSurrogate final : public Surrogate {
 
   void fit(const TrainingSet& data) override {
     if (!options_.metricSet) throw std::logic_error("vectornet surrogate: no metric set");
-    model::TrainOptions train;
+    model::TrainOptions train = trainingOptions(options_.seed);
     train.data = data.scenes;
     train.data.insert(train.data.end(), data.priorScenes.begin(), data.priorScenes.end());
-    train.mix = trainingMix(data);
+    train.mix = ownLabelMix(data);
+    if (!data.priorScenes.empty()) train.initialModel = priorModel(data.priorScenes);
     train.output = options_.modelFile;
-    // The kinematic decoder (probabilistic, its futures carry speeds and accelerations) in the
-    // lane frame, in which data of other functional scenarios (--prior) transfer: trained on
-    // acc + lk alone it predicts acc_lk at 0.38 m ADE, the Ego frame at 3.2 m (README "Row 4").
-    // accel_weight 10 as in results/paper: d_min and ttc_min depend on the braking.
-    train.config.decoder = "kinematic";
-    train.config.decoderOptions = {{"accel_weight", 10.0}};
-    train.config.frame = "lane";
-    train.seed = options_.seed;
-    train.threads = options_.threads;
     train.steps = options_.vectornetSteps;
-    train.patience = 1'000'000;  // the whole (short) schedule; the best epoch by validation ADE is kept
     model::train(train);
     fs::remove(options_.modelFile.string() + ".last");  // resume state of the training: not needed
     predictor_ = std::make_unique<model::Predictor>(options_.modelFile, options_.threads);
-  }
-
-  /// Every own scene; of each prior label at most max(own scenes, kPriorFloor) scenes, so that
-  /// the search's own data are not outweighed by thousands of prior scenes. Measured (README
-  /// "Transfer"): with or without the cap, priors of acc + lk made acc_lk searches find less
-  /// than their cold start; the cap also keeps each round's training short.
-  static model::Mix trainingMix(const TrainingSet& data) {
-    constexpr std::size_t kPriorFloor = 500;
-    vector::DatasetCollection own;
-    for (const auto& path : data.scenes) own.add(path);
-    vector::DatasetCollection priors;
-    for (const auto& path : data.priorScenes) priors.add(path);
-    const auto own_counts = own.labelCounts();
-    std::size_t own_total = 0;
-    for (const auto& [label, count] : own_counts) own_total += count;
-    std::map<std::string, std::size_t> counts = own_counts;
-    for (const auto& [label, available] : priors.labelCounts()) {
-      // A prior of the scenario's own label (e.g. an earlier search) counts in full, like own data.
-      counts[label] += own_counts.count(label) != 0 ? available : std::min(available, std::max(own_total, kPriorFloor));
-    }
-    model::Mix mix;
-    for (const auto& [label, count] : counts) mix.counts.emplace_back(label, count);
-    return mix;
   }
 
   std::vector<double> probability(const CandidateSet& candidates, const Criterion& criterion) const override {
@@ -113,6 +83,56 @@ class VectorNetSurrogate final : public Surrogate {
   }
 
  private:
+  /// The training every model of the surrogate shares: the kinematic decoder (probabilistic,
+  /// its futures carry speeds and accelerations) in the lane frame, in which data of other
+  /// functional scenarios (--prior) transfer: trained on acc + lk alone it predicts acc_lk at
+  /// 0.38 m ADE, the Ego frame at 3.2 m (README "Row 4"). accel_weight 10 as in
+  /// results/paper: d_min and ttc_min depend on the braking.
+  model::TrainOptions trainingOptions(std::uint64_t seed) const {
+    model::TrainOptions train;
+    train.config.decoder = "kinematic";
+    train.config.decoderOptions = {{"accel_weight", 10.0}};
+    train.config.frame = "lane";
+    train.seed = seed;
+    train.threads = options_.threads;
+    train.patience = 1'000'000;  // the whole (short) schedule; the best epoch by validation ADE is kept
+    return train;
+  }
+
+  /// The model pre-trained on the priors alone, once per search (kPriorStepsPerRound rounds'
+  /// steps). Every round fine-tunes it on the search's own scenes instead of mixing the priors
+  /// in: measured (README "Transfer"), the mix made acc_lk searches with priors of acc + lk
+  /// find fewer critical scenarios than their cold start, fine-tuning more. Written under a
+  /// temporary name and renamed when complete, so that a search killed meanwhile retrains it.
+  fs::path priorModel(const std::vector<fs::path>& priors) const {
+    const auto& file = options_.priorModelFile;
+    if (fs::exists(file)) return file;
+    model::TrainOptions train = trainingOptions(options_.priorSeed);
+    train.data = priors;
+    train.output = file.string() + ".partial";
+    train.steps = kPriorStepsPerRound * options_.vectornetSteps;
+    model::train(train);
+    fs::remove(train.output.string() + ".last");
+    fs::rename(train.output, file);
+    return file;
+  }
+
+  /// Every own scene, and every prior scene of the scenario's own label (e.g. an earlier
+  /// search of it: as good as own data). Priors of other labels train the prior model only.
+  static model::Mix ownLabelMix(const TrainingSet& data) {
+    vector::DatasetCollection own;
+    for (const auto& path : data.scenes) own.add(path);
+    vector::DatasetCollection priors;
+    for (const auto& path : data.priorScenes) priors.add(path);
+    auto counts = own.labelCounts();
+    for (const auto& [label, available] : priors.labelCounts()) {
+      if (const auto it = counts.find(label); it != counts.end()) it->second += available;
+    }
+    model::Mix mix;
+    for (const auto& [label, count] : counts) mix.counts.emplace_back(label, count);
+    return mix;
+  }
+
   /// Share of the sampled futures whose metrics meet the criterion (futures whose
   /// criterion metrics cannot be computed do not count). Where none meets it (a rare
   /// criterion: most candidates), the share is 0 everywhere and cannot rank; then the

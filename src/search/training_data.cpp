@@ -103,6 +103,8 @@ std::unique_ptr<Surrogate> fitSurrogate(const SearchContext& context, const std:
   options.threads = context.options.threads;
   options.metricSet = context.metricSet;
   options.modelFile = roundFile(context, round, "vectornet.pt");
+  options.priorModelFile = context.options.outputDir / ".rounds" / "vectornet-prior.pt";
+  options.priorSeed = mix64(context.options.seed);
   options.vectornetSteps = context.options.vectornetSteps;
   options.futureSamples = context.options.futureSamples;
   auto surrogate = context.surrogate->make(options);

@@ -13,6 +13,7 @@
 #include "vsd/core/csv.hpp"
 #include "vsd/core/error.hpp"
 #include "vsd/core/files.hpp"
+#include "vsd/model/model.hpp"
 #include "vsd/scenario/logical_scenario.hpp"
 #include "vsd/search/criterion.hpp"
 #include "vsd/search/search.hpp"
@@ -220,10 +221,10 @@ TEST(SearchLoop, ACriterionNeverMetInTheInitialDesignDoesNotStopTheSearch) {
   EXPECT_GT(summary.estimate.high, 0.0);
 }
 
-// vectornet learns from scenes: the executions' and a prior's (another functional
-// scenario); it scores candidates' planned scenes, retrains each round, resumes like
-// the other surrogates and makes the same choices whether resumed or not.
-TEST(SearchVectorNet, APriorIsMixedInAndTheSearchResumesWithTheSameChoices) {
+// vectornet learns from scenes: a prior (another functional scenario) pre-trains a model
+// once, every round fine-tunes it on the executions' scenes; it scores candidates' planned
+// scenes, resumes like the other surrogates and makes the same choices whether resumed or not.
+TEST(SearchVectorNet, APriorPreTrainsTheModelAndTheSearchResumesWithTheSameChoices) {
   TemporaryDirectory work("vsd-test-search");
   const auto prior = work.path() / "lk";
   const auto run = test::run({test::vsdSumo().string(), "-q", "run", test::scenarioFile("lk.yaml").string(), "-n", "30",
@@ -247,6 +248,11 @@ TEST(SearchVectorNet, APriorIsMixedInAndTheSearchResumesWithTheSameChoices) {
   runSearch(vectornet(work.path() / "straight", 60));
   EXPECT_EQ(readTextFile(resumed / "concrete.csv"), readTextFile(work.path() / "straight" / "concrete.csv"));
   EXPECT_TRUE(fs::exists(resumed / ".rounds" / "round-00001.vectornet.pt"));
+  // The prior model learnt lk alone, every round's model (fine-tuned from it) acc_lk alone.
+  EXPECT_EQ(model::Predictor(resumed / ".rounds" / "vectornet-prior.pt").info().labels, std::vector<std::string>{"lk"});
+  EXPECT_EQ(model::Predictor(resumed / ".rounds" / "round-00001.vectornet.pt").info().labels,
+            std::vector<std::string>{"acc_lk"});
+  EXPECT_FALSE(fs::exists(resumed / ".rounds" / "vectornet-prior.pt.partial"));
   // The probability is the share of 4 sampled futures meeting the criterion, or below
   // 1/8 (the Gaussian tail) where none does.
   const auto origins = column(resumed / "concrete.csv", "origin");

@@ -61,6 +61,10 @@ struct SurrogateOptions {
   std::shared_ptr<const metrics::MetricSet> metricSet;
   /// vectornet: where this round's model is written.
   std::filesystem::path modelFile;
+  /// vectornet with --prior: the model pre-trained on the prior datasets alone, written once
+  /// per search (seeded with `priorSeed`) and fine-tuned from in every round.
+  std::filesystem::path priorModelFile;
+  std::uint64_t priorSeed = 1;
   int vectornetSteps = 400;   ///< vectornet: optimizer steps of each round's training
   int futureSamples = 16;     ///< vectornet: sampled futures per candidate
 };
