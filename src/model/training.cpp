@@ -200,7 +200,8 @@ EpochRecord recordFromJson(const nlohmann::json& j) {
   return r;
 }
 
-/// The configuration of `config` as JSON (architecture, decoder and options, frame, step, horizon).
+/// The model file's "config" part of `config` as JSON: widths, horizon, step, coordinate scale
+/// and lane smoothing (not the decoder or the frame).
 nlohmann::json configJson(const VectorNetConfig& config) {
   ModelInfo architecture;
   architecture.config = config;
