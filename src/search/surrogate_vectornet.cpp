@@ -43,9 +43,7 @@ class VectorNetSurrogate final : public Surrogate {
   void fit(const TrainingSet& data) override {
     if (!options_.metricSet) throw std::logic_error("vectornet surrogate: no metric set");
     model::TrainOptions train = trainingOptions(options_.seed);
-    train.data = data.scenes;
-    train.data.insert(train.data.end(), data.priorScenes.begin(), data.priorScenes.end());
-    train.mix = ownLabelMix(data);
+    setOwnLabelData(data, train);
     if (!data.priorScenes.empty()) train.initialModel = priorModel(data.priorScenes);
     train.output = options_.modelFile;
     train.steps = options_.vectornetSteps;
@@ -118,19 +116,27 @@ class VectorNetSurrogate final : public Surrogate {
   }
 
   /// Every own scene, and every prior scene of the scenario's own label (e.g. an earlier
-  /// search of it: as good as own data). Priors of other labels train the prior model only.
-  static model::Mix ownLabelMix(const TrainingSet& data) {
+  /// search of it: as good as own data). Priors of other labels train the prior model only,
+  /// so their files stay out of the rounds' trainings (which would hash and scan them).
+  static void setOwnLabelData(const TrainingSet& data, model::TrainOptions& train) {
     vector::DatasetCollection own;
     for (const auto& path : data.scenes) own.add(path);
-    vector::DatasetCollection priors;
-    for (const auto& path : data.priorScenes) priors.add(path);
     auto counts = own.labelCounts();
-    for (const auto& [label, available] : priors.labelCounts()) {
-      if (const auto it = counts.find(label); it != counts.end()) it->second += available;
+    train.data = data.scenes;
+    for (const auto& prior : data.priorScenes) {
+      vector::DatasetCollection file;
+      file.add(prior);
+      bool shares_a_label = false;
+      for (const auto& [label, available] : file.labelCounts()) {
+        const auto it = counts.find(label);
+        if (it == counts.end()) continue;
+        it->second += available;
+        shares_a_label = true;
+      }
+      if (shares_a_label) train.data.push_back(prior);
     }
-    model::Mix mix;
-    for (const auto& [label, count] : counts) mix.counts.emplace_back(label, count);
-    return mix;
+    train.mix = {};
+    for (const auto& [label, count] : counts) train.mix.counts.emplace_back(label, count);
   }
 
   /// Share of the sampled futures whose metrics meet the criterion (futures whose
