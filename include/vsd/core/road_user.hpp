@@ -1,0 +1,38 @@
+#pragma once
+// The kinds of road users a scenario can hold, each with its documented default size.
+// One table (roadUserKinds) is the single source of these sizes: the scenario language,
+// the simulation, map exports and datasets take a road user's length and width from its
+// scenario (which defaults them from here), never from a default of their own.
+//
+// Sizes are the bounding box of the road user (m): length along its heading, width across.
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace vsd {
+
+enum class RoadUserType : std::uint8_t { Car = 0, Van, Truck, Bus, Motorbike, Pedestrian, StationaryObject };
+
+/// One entry of the road-user table: what the kind is and what it can do.
+struct RoadUserKind {
+  RoadUserType type = RoadUserType::Car;
+  const char* name = "";         ///< identifier in scenario files ("car", "pedestrian", ...)
+  const char* description = "";  ///< one line, for docs and error messages
+  double length = 0.0;           ///< m, default bounding-box length (> 0)
+  double width = 0.0;            ///< m, default bounding-box width (> 0)
+  bool drivesInLanes = false;    ///< a vehicle: follows lanes, changes lanes (not a pedestrian or an object)
+  bool stationary = false;       ///< never moves (speed 0 throughout)
+};
+
+/// Every kind, in RoadUserType order.
+const std::vector<RoadUserKind>& roadUserKinds();
+/// The table entry of a type.
+const RoadUserKind& roadUserKind(RoadUserType type);
+/// The entry named `name` ("car", "van", ...), if any.
+std::optional<RoadUserType> findRoadUserType(const std::string& name);
+/// "car, van, truck, bus, motorbike, pedestrian, stationary_object" (for error messages).
+std::string roadUserTypeList();
+
+}  // namespace vsd
