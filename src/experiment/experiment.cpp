@@ -7,6 +7,7 @@
 //            predicted trajectory) against the simulated metrics of the test set
 //   figures  example predictions like the paper's figures 6-8
 //   results  tables, findings and manifest (results.cpp)
+#include "vsd/core/output_policy.hpp"
 #include "vsd/experiment/experiment.hpp"
 
 #include <fmt/format.h>
@@ -799,6 +800,9 @@ ExperimentSummary runExperiment(const ExperimentOptions& options) {
   fs::path output = options.output;
   if (output.empty()) output = fs::path("results") / (spec.name + (options.quick ? "-quick" : ""));
   refuseDirtyCommittedResults(output, options.allowDirty, "--allow-dirty");
+  // The output policy (docs/output-policy.md): a re-run of the same experiment resumes from its cache.
+  checkOutput({output, &output_kinds::experimentFolder(), spec.name, options.force, "--out", "--force",
+               {{"spec", options.spec}}});
   return ExperimentRunner(options, std::move(spec), output).run();
 }
 
