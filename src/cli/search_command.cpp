@@ -14,6 +14,12 @@ namespace vsd::cli {
 
 namespace {
 
+std::vector<std::string> surrogateNames() {
+  std::vector<std::string> names;
+  for (const auto& entry : search::surrogateRegistry()) names.push_back(entry.name);
+  return names;
+}
+
 std::string surrogateHelp() {
   std::string text = "Surrogate that selects the executions:";
   for (const auto& entry : search::surrogateRegistry()) text += fmt::format("\n  {}: {}", entry.name, entry.description);
@@ -41,7 +47,9 @@ void addSearchCommand(CLI::App& app, CommandContext& context) {
   command->add_flag("--force", *force,
                     "Start afresh in a search folder of another scenario or criterion, discarding its search "
                     "(docs/output-policy.md)");
-  command->add_option("--surrogate", options->surrogate, surrogateHelp())->capture_default_str();
+  command->add_option("--surrogate", options->surrogate, surrogateHelp())
+      ->capture_default_str()
+      ->check(CLI::IsMember(surrogateNames()));  // a name the registry lacks is a usage error
   addNumber(command, "--budget", options->budget, "Executions (SUMO simulations) in total")->capture_default_str();
   addNumber(command, "--initial", options->initial, "Executions of the initial random design")->capture_default_str();
   addNumber(command, "--round", options->roundSize, "Executions per later round")->capture_default_str();

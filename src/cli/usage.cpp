@@ -125,7 +125,8 @@ std::string usageMessage(CLI::App& app, const std::vector<std::string>& args, co
         if (!short_group) return unknownOption(current, name);
         continue;
       }
-      if (name.size() == word.size() && option->get_type_size_max() > 0 && i + 1 < args.size()) ++i;  // its value
+      const bool takes_value = option->get_expected_max() > 0 && option->get_type_size_max() > 0;  // not a flag
+      if (name.size() == word.size() && takes_value && i + 1 < args.size()) ++i;  // its value
       continue;
     }
     if (auto* command = subcommandNamed(current, word)) {

@@ -146,6 +146,14 @@ std::string describe(const fs::path& path) {
   return folder ? "a folder vsd-sumo did not write" : "a file vsd-sumo did not write";
 }
 
+/// "run folder", or "output folder" for a folder of another command's manifest.
+std::string folderNoun(const fs::path& folder) {
+  for (const auto* kind : output_kinds::all()) {
+    if (kind->folder && kind->identify(folder)) return kind->noun;
+  }
+  return "output folder";
+}
+
 bool samePath(const fs::path& a, const fs::path& b) {
   std::error_code ec;
   if (fs::exists(a, ec) && fs::exists(b, ec)) return fs::equivalent(a, b, ec);
@@ -174,8 +182,11 @@ void refusePartOfFolder(const OutputRequest& request) {
       const std::string relative = absolute.lexically_relative(folder).generic_string();
       const auto outputs = manifest->find("outputs");
       if (outputs != manifest->end() && outputs->is_object() && outputs->contains(relative)) {
-        refuse(request, fmt::format("is part of {} {} (its manifest.json lists it); write the {} outside that folder",
-                                    describe(folder), folder.string(), request.kind->noun));
+        // Named as the user named the output: relative to the working folder if it was relative.
+        const fs::path shown = request.path.is_relative() ? folder.lexically_relative(fs::current_path(ec)) : folder;
+        refuse(request, fmt::format("is part of the {} {} (its manifest.json lists it); write the {} outside that folder",
+                                    folderNoun(folder), shown.empty() ? folder.string() : shown.string(),
+                                    request.kind->noun));
       }
     }
     folder = folder.parent_path();

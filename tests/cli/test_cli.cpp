@@ -33,7 +33,7 @@ TEST(Cli, HelpListsSubcommandsAndRunOptions) {
   EXPECT_NE(top.output.find("run"), std::string::npos);
   const auto run = test::run({test::vsdSumo().string(), "run", "--help"}, dir.path());
   EXPECT_EQ(run.exitCode, 0);
-  for (const char* option : {"--samples", "--seed", "--out", "--jobs", "--batch", "--keep-nets", "--fcd"}) {
+  for (const char* option : {"--samples", "--seed", "--out", "--jobs", "--net-batch", "--keep-nets", "--fcd", "--max-failures", "--force"}) {
     EXPECT_NE(run.output.find(option), std::string::npos) << option;
   }
 }
@@ -134,7 +134,7 @@ TEST(Cli, FcdOutputReplaysInSumo) {
   TemporaryDirectory dir;
   const auto out = dir.path() / "out";
   const auto result = test::run({test::vsdSumo().string(), "--quiet", "run", test::scenarioFile("acc_lk.yaml").string(),
-                                 "--samples", "8", "--batch", "4", "--fcd", "--out", out.string()},
+                                 "--samples", "8", "--net-batch", "4", "--fcd", "--out", out.string()},
                                 dir.path());
   ASSERT_EQ(result.exitCode, 0) << result.output;
   const auto replay = test::run(
@@ -243,7 +243,7 @@ TEST(Cli, TrainPredictEvaluate) {
             0);
   const auto model = dir.path() / "models" / "m.pt";
   const auto trained = test::run({test::vsdSumo().string(), "train", "--data", data.string(), "--mix", "acc=30", "--out",
-                                  model.string(), "--steps", "30", "--batch", "8", "--hidden", "8", "--global-width",
+                                  model.string(), "--steps", "30", "--minibatch", "8", "--hidden", "8", "--global-width",
                                   "8", "--decoder-hidden", "16", "--decoder", "kinematic", "--decoder-option",
                                   "max_decel=8"},
                                  dir.path());
@@ -274,7 +274,7 @@ TEST(Cli, TrainPredictEvaluate) {
 
   const auto predictions = dir.path() / "pred.h5";
   const auto predicted = test::run({test::vsdSumo().string(), "predict", "--model", model.string(), "--data",
-                                    data.string(), "--out", predictions.string(), "--samples", "4"},
+                                    data.string(), "--out", predictions.string(), "--futures", "4"},
                                    dir.path());
   ASSERT_EQ(predicted.exitCode, 0) << predicted.output;
   const auto check = test::writeFile(dir.path() / "check.py", R"(
@@ -412,7 +412,7 @@ TEST(Cli, NumbersFromFlagsAreCheckedWhereTheyEnter) {
     if (args[0] == "run" || args[0] == "export") args.insert(args.end(), {"--out", (out / args[0]).string()});
     if (args[0] == "train") args.insert(args.end(), {"--out", (out / "m.pt").string()});
     const auto result = runForErrors(args, dir.path());
-    EXPECT_EQ(result.exitCode, 1) << c.expected << ": " << result.output;
+    EXPECT_EQ(result.exitCode, 2) << c.expected << ": " << result.output;  // a flag's value: a usage error
     EXPECT_EQ(lineCount(result.output), 1u) << result.output;
     EXPECT_NE(result.output.find(c.expected), std::string::npos) << result.output;
     EXPECT_EQ(result.output.find("internal error"), std::string::npos) << result.output;

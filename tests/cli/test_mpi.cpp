@@ -25,7 +25,7 @@ ProcessResult mpirun(int ranks, const std::vector<std::string>& args, const fs::
 }
 
 std::vector<std::string> runArgs(const fs::path& out) {
-  return {"run", test::scenarioFile("acc_lk.yaml").string(), "--samples", "40", "--batch", "10", "--seed", "3",
+  return {"run", test::scenarioFile("acc_lk.yaml").string(), "--samples", "40", "--net-batch", "10", "--seed", "3",
           "--out", out.string()};
 }
 
@@ -162,7 +162,7 @@ TEST(Slurm, ArrayScriptRunsOneShardPerTaskAndTheShardsMergeIntoOneRun) {
                       "SLURM_ARRAY_TASK_COUNT=" + std::to_string(count), "SLURM_ARRAY_TASK_MIN=0",
                       "SLURM_ARRAY_TASK_MAX=" + std::to_string(max), "bash", script,
                       test::scenarioFile("acc_lk.yaml").string(), (dir.path() / "sweep").string(), "--samples", "40",
-                      "--batch", "10", "--seed", "3"},
+                      "--net-batch", "10", "--seed", "3"},
                      dir.path());
   };
   for (int id : {1, 0}) {

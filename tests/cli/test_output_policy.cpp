@@ -10,7 +10,7 @@ namespace fs = std::filesystem;
 
 namespace {
 
-ProcessResult vsd(const std::vector<std::string>& args, const fs::path& work) {
+ProcessResult runVsd(const std::vector<std::string>& args, const fs::path& work) {
   std::vector<std::string> argv = {test::vsdSumo().string(), "--quiet"};
   argv.insert(argv.end(), args.begin(), args.end());
   return test::run(argv, work);
@@ -27,16 +27,18 @@ std::string lastLine(const std::string& output) {
 /// and `kept` unchanged.
 void expectRefused(const std::vector<std::string>& args, const fs::path& work, const std::string& expected,
                    const fs::path& kept) {
-  const std::string before = fs::is_regular_file(kept) ? readTextFile(kept) : sha256OfString(kept.string());
-  const auto result = vsd(args, work);
+  const std::string before = fs::is_regular_file(kept) ? readTextFile(kept) : std::string();
+  const auto result = runVsd(args, work);
   EXPECT_EQ(result.exitCode, 1) << result.output;
   EXPECT_NE(lastLine(result.output).find(expected), std::string::npos) << result.output;
   EXPECT_EQ(lastLine(result.output).rfind("vsd-sumo: error: ", 0), 0u) << result.output;
-  if (fs::is_regular_file(kept)) EXPECT_EQ(readTextFile(kept), before) << kept << " changed";
+  if (fs::is_regular_file(kept)) {
+    EXPECT_EQ(readTextFile(kept), before) << kept << " changed";
+  }
 }
 
 fs::path runFolder(const std::string& scenario, const fs::path& out, const std::string& samples = "6") {
-  const auto result = vsd({"run", test::scenarioFile(scenario + ".yaml").string(), "--samples", samples, "--out",
+  const auto result = runVsd({"run", test::scenarioFile(scenario + ".yaml").string(), "--samples", samples, "--out",
                            out.string()},
                           out.parent_path());
   if (result.exitCode != 0) throw std::runtime_error(result.output);
@@ -54,13 +56,13 @@ TEST(OutputPolicy, RunReplacesItsOwnFolderAndNeedsForceForAnotherScenario) {
   TemporaryDirectory dir;
   const auto out = runFolder("acc", dir.path() / "out");
   const auto manifest = out / "manifest.json";
-  ASSERT_EQ(vsd({"run", test::scenarioFile("acc.yaml").string(), "--samples", "5", "--out", out.string()}, dir.path())
+  ASSERT_EQ(runVsd({"run", test::scenarioFile("acc.yaml").string(), "--samples", "5", "--out", out.string()}, dir.path())
                 .exitCode,
             0);  // a re-run of the same scenario
   expectRefused({"run", test::scenarioFile("lk.yaml").string(), "--samples", "5", "--out", out.string()}, dir.path(),
                 "--out " + out.string() + ": holds a run folder of acc, not of lk; pass --force to replace it",
                 manifest);
-  const auto forced = vsd({"run", test::scenarioFile("lk.yaml").string(), "--samples", "5", "--out", out.string(),
+  const auto forced = runVsd({"run", test::scenarioFile("lk.yaml").string(), "--samples", "5", "--out", out.string(),
                            "--force"},
                           dir.path());
   ASSERT_EQ(forced.exitCode, 0) << forced.output;
@@ -81,7 +83,7 @@ TEST(OutputPolicy, RunNeverReplacesAUsersFileOrFolder) {
   // Notes next to a run's outputs stay where they are.
   const auto out = runFolder("acc", dir.path() / "out");
   const auto kept = test::writeFile(out / "notes.txt", "kept\n");
-  ASSERT_EQ(vsd({"run", test::scenarioFile("acc.yaml").string(), "--samples", "5", "--out", out.string()}, dir.path())
+  ASSERT_EQ(runVsd({"run", test::scenarioFile("acc.yaml").string(), "--samples", "5", "--out", out.string()}, dir.path())
                 .exitCode,
             0);
   EXPECT_EQ(readTextFile(kept), "kept\n");
@@ -93,21 +95,21 @@ TEST(OutputPolicy, ModelCommandsRefuseInputsOtherKindsAndFilesOfARunFolder) {
   const auto model = dir.path() / "m.pt";
   // train: the run's CSV is not a model file, and belongs to the run folder.
   expectRefused(trainArgs(acc, acc / "concrete.csv"), dir.path(),
-                "is part of a run folder written by vsd-sumo " + acc.string(), acc / "concrete.csv");
+                "is part of the run folder " + acc.string(), acc / "concrete.csv");
   const auto notes = test::writeFile(dir.path() / "notes.pt", "not a model\n");
   expectRefused(trainArgs(acc, notes), dir.path(), "exists and is a file vsd-sumo did not write, not a model file",
                 notes);
-  const auto trained = vsd(trainArgs(acc, model), dir.path());
+  const auto trained = runVsd(trainArgs(acc, model), dir.path());
   ASSERT_EQ(trained.exitCode, 0) << trained.output;
   EXPECT_FALSE(fs::exists(model.string() + ".last")) << "a finished training leaves no resume state behind";
-  ASSERT_EQ(vsd(trainArgs(acc, model), dir.path()).exitCode, 0);  // the same labels: replaced
+  ASSERT_EQ(runVsd(trainArgs(acc, model), dir.path()).exitCode, 0);  // the same labels: replaced
 
   // A model trained on other labels needs --force.
   const auto lk = runFolder("lk", dir.path() / "lk", "12");
   expectRefused(trainArgs(lk, model), dir.path(), "holds a model file of labels acc, not of labels lk", model);
   auto forced = trainArgs(lk, model);
   forced.push_back("--force");
-  ASSERT_EQ(vsd(forced, dir.path()).exitCode, 0);
+  ASSERT_EQ(runVsd(forced, dir.path()).exitCode, 0);
 
   // predict: its own model, the training data and the run folder's files are refused.
   const std::vector<std::string> predict = {"predict", "--model", model.string(), "--data", lk.string(), "--out"};
@@ -118,10 +120,10 @@ TEST(OutputPolicy, ModelCommandsRefuseInputsOtherKindsAndFilesOfARunFolder) {
   };
   expectRefused(with(model), dir.path(), "is also this command's input (--model)", model);
   expectRefused(with(lk / "dataset.h5"), dir.path(), "is also this command's input (--data)", lk / "dataset.h5");
-  expectRefused(with(lk / "traces.h5"), dir.path(), "is part of a run folder written by vsd-sumo", lk / "traces.h5");
+  expectRefused(with(lk / "traces.h5"), dir.path(), "is part of the run folder", lk / "traces.h5");
   const auto predictions = dir.path() / "p.h5";
-  ASSERT_EQ(vsd(with(predictions), dir.path()).exitCode, 0);
-  ASSERT_EQ(vsd(with(predictions), dir.path()).exitCode, 0);  // the same model and data: replaced
+  ASSERT_EQ(runVsd(with(predictions), dir.path()).exitCode, 0);
+  ASSERT_EQ(runVsd(with(predictions), dir.path()).exitCode, 0);  // the same model and data: replaced
   expectRefused({"predict", "--model", "cv", "--data", lk.string(), "--out", predictions.string()}, dir.path(),
                 "holds a predictions file of " + model.string(), predictions);
 
@@ -131,8 +133,8 @@ TEST(OutputPolicy, ModelCommandsRefuseInputsOtherKindsAndFilesOfARunFolder) {
   expectRefused({"evaluate", "--model", "cv", "--data", lk.string(), "--csv", predictions.string()}, dir.path(),
                 "exists and is a predictions file written by vsd-sumo, not an evaluation table", predictions);
   const auto table = dir.path() / "e.csv";
-  ASSERT_EQ(vsd({"evaluate", "--model", "cv", "--data", lk.string(), "--csv", table.string()}, dir.path()).exitCode, 0);
-  ASSERT_EQ(vsd({"evaluate", "--model", "cv", "--data", lk.string(), "--csv", table.string()}, dir.path()).exitCode, 0);
+  ASSERT_EQ(runVsd({"evaluate", "--model", "cv", "--data", lk.string(), "--csv", table.string()}, dir.path()).exitCode, 0);
+  ASSERT_EQ(runVsd({"evaluate", "--model", "cv", "--data", lk.string(), "--csv", table.string()}, dir.path()).exitCode, 0);
 
   // compare: a model trained on lk scoring acc scenarios says so.
   const auto report = dir.path() / "report";
@@ -169,8 +171,8 @@ TEST(OutputPolicy, FolderCommandsRefuseFoldersOfAnotherKind) {
   const auto report = dir.path() / "report";
   const std::vector<std::string> compare = {"compare", test::scenarioFile("acc.yaml").string(), "--model", "cv",
                                             "--samples", "3", "--out", report.string()};
-  ASSERT_EQ(vsd(compare, dir.path()).exitCode, 0);
-  ASSERT_EQ(vsd(compare, dir.path()).exitCode, 0);
+  ASSERT_EQ(runVsd(compare, dir.path()).exitCode, 0);
+  ASSERT_EQ(runVsd(compare, dir.path()).exitCode, 0);
   expectRefused({"compare", test::scenarioFile("lk.yaml").string(), "--model", "cv", "--samples", "3", "--out",
                  report.string()},
                 dir.path(), "holds a comparison report folder of acc with cv, not of lk with cv; pass --force",
@@ -180,8 +182,8 @@ TEST(OutputPolicy, FolderCommandsRefuseFoldersOfAnotherKind) {
   const auto exported = dir.path() / "xosc";
   const std::vector<std::string> export_acc = {"scenario", "export", test::scenarioFile("acc.yaml").string(),
                                                "--samples", "2", "--out", exported.string()};
-  ASSERT_EQ(vsd(export_acc, dir.path()).exitCode, 0);
-  ASSERT_EQ(vsd(export_acc, dir.path()).exitCode, 0);
+  ASSERT_EQ(runVsd(export_acc, dir.path()).exitCode, 0);
+  ASSERT_EQ(runVsd(export_acc, dir.path()).exitCode, 0);
   expectRefused({"scenario", "export", test::scenarioFile("lk.yaml").string(), "--samples", "2", "--out",
                  exported.string()},
                 dir.path(), "holds a scenario export folder of acc, not of lk", exported / "manifest.json");
@@ -193,25 +195,25 @@ TEST(OutputPolicy, SingleFileCommandsRefuseFilesOfARunFolder) {
   expectRefused({"export", "--opendrive", (test::sourceDir() / "sumo_nets/opendrive_curve/curve.xodr").string(),
                  "--routes", (test::sourceDir() / "sumo_nets/opendrive_curve/curve.rou.xml").string(), "--out",
                  (acc / "dataset.h5").string(), "--end", "20", "--force"},
-                dir.path(), "is part of a run folder written by vsd-sumo", acc / "dataset.h5");
+                dir.path(), "is part of the run folder", acc / "dataset.h5");
   expectRefused({"scenario", "distribution", test::scenarioFile("acc.yaml").string(), "--out",
                  (acc / "concrete.csv").string()},
-                dir.path(), "is part of a run folder written by vsd-sumo", acc / "concrete.csv");
+                dir.path(), "is part of the run folder", acc / "concrete.csv");
   expectRefused({"dataset", "show", acc.string(), "--svg", (acc / "concrete.csv").string()}, dir.path(),
-                "is part of a run folder written by vsd-sumo", acc / "concrete.csv");
+                "is part of the run folder", acc / "concrete.csv");
   expectRefused({"baseline", "--data", acc.string(), "--test", acc.string(), "--targets", "d_min", "--out",
                  (acc / "concrete.csv").string()},
                 dir.path(), "is also this command's input (--data)", acc / "concrete.csv");
   // merge into a folder holding another scenario's run.
   const auto sweep = dir.path() / "sweep";
-  ASSERT_EQ(vsd({"run", test::scenarioFile("lk.yaml").string(), "--samples", "4", "--shard", "0/1", "--out",
+  ASSERT_EQ(runVsd({"run", test::scenarioFile("lk.yaml").string(), "--samples", "4", "--shard", "0/1", "--out",
                  sweep.string()},
                 dir.path())
                 .exitCode,
             0);
   expectRefused({"merge", sweep.string(), "--out", acc.string()}, dir.path(),
                 "holds a run folder of acc, not of lk; pass --force", acc / "manifest.json");
-  ASSERT_EQ(vsd({"merge", sweep.string()}, dir.path()).exitCode, 0);
+  ASSERT_EQ(runVsd({"merge", sweep.string()}, dir.path()).exitCode, 0);
 }
 
 TEST(OutputPolicy, SearchResumesItsOwnFolderAndStartsAfreshOnlyWithForce) {
@@ -220,14 +222,14 @@ TEST(OutputPolicy, SearchResumesItsOwnFolderAndStartsAfreshOnlyWithForce) {
   const std::vector<std::string> search = {"search", test::scenarioFile("acc.yaml").string(), "--criterion",
                                            "d_min < 2", "--surrogate", "random", "--budget", "8", "--initial", "4",
                                            "--round", "4", "--out", out.string()};
-  ASSERT_EQ(vsd(search, dir.path()).exitCode, 0);
-  const auto again = vsd(search, dir.path());
+  ASSERT_EQ(runVsd(search, dir.path()).exitCode, 0);
+  const auto again = runVsd(search, dir.path());
   ASSERT_EQ(again.exitCode, 0) << again.output;
   expectRefused({"search", test::scenarioFile("acc.yaml").string(), "--criterion", "a_min < -6", "--surrogate",
                  "random", "--budget", "8", "--initial", "4", "--round", "4", "--out", out.string()},
                 dir.path(), "holds a search folder of acc: d_min < 2, not of acc: a_min < -6; pass --force",
                 out / "manifest.json");
-  const auto forced = vsd({"search", test::scenarioFile("acc.yaml").string(), "--criterion", "a_min < -6",
+  const auto forced = runVsd({"search", test::scenarioFile("acc.yaml").string(), "--criterion", "a_min < -6",
                            "--surrogate", "random", "--budget", "8", "--initial", "4", "--round", "4", "--out",
                            out.string(), "--force"},
                           dir.path());

@@ -2,6 +2,8 @@
 // exit code 2; runtime failures exit 1; old spellings work with a one-line note.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+
 #include "test_support.hpp"
 
 using namespace vsd;
@@ -66,7 +68,7 @@ TEST(Usage, CriteriaThatAreNotComparisonsAreRefusedBeforeAnyWork) {
            {"d_min < 1e400", "the number 1e400 is out of range"}}) {
     const auto out = dir.path() / "search";
     const auto result = errorsOf({"search", test::scenarioFile("acc.yaml").string(), "--criterion", criterion,
-                                  "--budget", "8", "--out", out.string()},
+                                  "--budget", "8", "--initial", "4", "--round", "4", "--out", out.string()},
                                  dir.path());
     EXPECT_EQ(result.exitCode, 2) << result.output;  // the flag's text is wrong: a usage error
     EXPECT_EQ(lines(result.output), 1u) << result.output;

@@ -368,7 +368,7 @@ TEST(SearchEstimate, WilsonIntervalMatchesTheReference) {
 namespace vsd::search {
 namespace {
 
-TEST(SearchCli, BadInputIsOneLineWithExitCodeOneAndNoFolder) {
+TEST(SearchCli, BadFlagsAreOneLineWithExitCodeTwoAndNoFolder) {
   TemporaryDirectory work("vsd-test-search-cli");
   const auto out = work.path() / "out";
   const std::string scenario = test::scenarioFile("acc_lk.yaml").string();
@@ -380,8 +380,8 @@ TEST(SearchCli, BadInputIsOneLineWithExitCodeOneAndNoFolder) {
     std::vector<std::string> argv = {test::vsdSumo().string(), "-q", "search", scenario, "--out", out.string()};
     argv.insert(argv.end(), flags.begin(), flags.end());
     const auto result = test::run(argv, work.path());
-    EXPECT_EQ(result.exitCode, 1) << result.output;
-    EXPECT_THAT(result.output, HasSubstr("vsd-sumo: error: "));
+    EXPECT_EQ(result.exitCode, 2) << result.output;  // the command line is wrong: a usage error (docs/cli.md)
+    EXPECT_THAT(result.output, HasSubstr("vsd-sumo: error: command line: "));
     EXPECT_EQ(std::count(result.output.begin(), result.output.end(), '\n'), 1) << result.output;
     EXPECT_FALSE(fs::exists(out));
   }
@@ -407,7 +407,7 @@ TEST(SearchCli, NumbersFromFlagsAreCheckedWhereTheyEnter) {
     std::vector<std::string> argv = {test::vsdSumo().string(), "-q"};
     argv.insert(argv.end(), flags.begin(), flags.end());
     const auto result = test::run(argv, work.path());
-    EXPECT_EQ(result.exitCode, 1) << result.output;
+    EXPECT_EQ(result.exitCode, 2) << result.output;  // a flag's value: a usage error (docs/cli.md)
     EXPECT_THAT(result.output, HasSubstr(expected));
     EXPECT_EQ(std::count(result.output.begin(), result.output.end(), '\n'), 1) << result.output;
     EXPECT_FALSE(fs::exists(out));
