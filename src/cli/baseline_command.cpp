@@ -52,7 +52,7 @@ void addBaselineCommand(CLI::App& app, CommandContext& context) {
     context.action = [=] {
       options->bnn.seed = options->extraTrees.seed;
       if (!options->predictionsCsv.empty()) {
-        static const OutputKind kTable = csvTable("baseline predictions table", "sample,");
+        static const OutputKind kTable = textFileKind("baseline predictions table", "sample,");
         checkOutput({options->predictionsCsv, &kTable, "", false, "--out", "--force",
                      {{"--data", options->train}, {"--test", options->test},
                       {"--data", baseline::concreteTableOf(options->train)},

@@ -10,9 +10,10 @@
 
 #include "commands.hpp"
 #include "flags.hpp"
-#include "vsd/report/numbers.hpp"
 #include "vsd/core/error.hpp"
 #include "vsd/core/files.hpp"
+#include "vsd/core/output_policy.hpp"
+#include "vsd/report/numbers.hpp"
 #include "vsd/search/search.hpp"
 
 namespace fs = std::filesystem;
@@ -123,6 +124,14 @@ void addSearchBench(CLI::App& bench, CommandContext& context) {
     context.action = [options, &context] {
       if (options->seeds < 1 || options->seeds > 1000) {
         throw ConfigError::field("command line", "--seeds", std::to_string(options->seeds), "1 .. 1000");
+      }
+      if (!options->report.empty()) {  // the output policy (docs/output-policy.md), before any work
+        static const OutputKind kSearchReport = textFileKind(
+            "search report", "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n"
+                             "<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">\n"
+                             "<title>vsd-sumo search: ");
+        checkOutput({options->report, &kSearchReport, "", false, "--report", "--force",
+                     {{"scenario", options->search.scenarioFile}}});
       }
       TemporaryDirectory work("vsd-bench-search");
       const auto& s = options->search;

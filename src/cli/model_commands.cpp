@@ -214,7 +214,7 @@ void addEvaluateCommand(CLI::App& app, CommandContext& context) {
   command->callback([=, &context] {
     context.action = [=] {
       if (!csv->empty()) {
-        static const OutputKind kEvaluationTable = csvTable("evaluation table", "label,samples,ade_m");
+        static const OutputKind kEvaluationTable = textFileKind("evaluation table", "label,samples,ade_m");
         auto inputs = inputsOf("--data", *data);
         inputs.emplace_back("--model", *model_file);
         checkOutput({*csv, &kEvaluationTable, "", false, "--csv", "--force", inputs});

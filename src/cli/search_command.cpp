@@ -6,6 +6,8 @@
 #include "commands.hpp"
 #include "flags.hpp"
 #include "vsd/core/output_policy.hpp"
+#include "vsd/metrics/metrics.hpp"
+#include "vsd/pipeline/scenes.hpp"
 #include "vsd/scenario/logical_scenario.hpp"
 #include "vsd/search/search.hpp"
 #include "vsd/search/surrogate.hpp"
@@ -92,7 +94,14 @@ void addSearchCommand(CLI::App& app, CommandContext& context) {
       const std::string subject = fmt::format("{}: {}", logical->name, options->criterion);
       const auto status = checkOutput({options->outputDir, &output_kinds::searchFolder(), subject, *force, "--out",
                                        "--force", {{"scenario", options->scenarioFile}}});
-      if (*force && status != OutputStatus::New) search::discardSearchState(options->outputDir);
+      if (*force && status != OutputStatus::New) {
+        // The options and the criterion are checked before the old search is removed.
+        options->validate();
+        const metrics::MetricSet metric_set(logical->metrics, pipeline::scenarioAvailability(*logical),
+                                            logical->sourceFile.string() + ": metrics");
+        search::Criterion(options->criterion, *logical, metric_set.names());
+        search::discardSearchState(options->outputDir);
+      }
       fmt::print("{}", search::runSearch(*options).report());
       return 0;
     };

@@ -363,9 +363,9 @@ const std::vector<const OutputKind*>& all() {
 
 }  // namespace output_kinds
 
-OutputKind csvTable(const std::string& noun, const std::string& headerStart) {
-  return fileKind(noun, [headerStart](const fs::path& path) -> std::optional<std::string> {
-    if (!startsWith(headOf(path, headerStart.size()), headerStart)) return std::nullopt;
+OutputKind textFileKind(const std::string& noun, const std::string& start) {
+  return fileKind(noun, [start](const fs::path& path) -> std::optional<std::string> {
+    if (!startsWith(headOf(path, start.size()), start)) return std::nullopt;
     return std::string();
   });
 }

@@ -7,7 +7,6 @@
 //            predicted trajectory) against the simulated metrics of the test set
 //   figures  example predictions like the paper's figures 6-8
 //   results  tables, findings and manifest (results.cpp)
-#include "vsd/core/output_policy.hpp"
 #include "vsd/experiment/experiment.hpp"
 
 #include <fmt/format.h>
@@ -31,6 +30,7 @@
 #include "vsd/core/provenance.hpp"
 #include "vsd/core/interrupt.hpp"
 #include "vsd/core/log.hpp"
+#include "vsd/core/output_policy.hpp"
 #include "vsd/core/progress.hpp"
 #include "vsd/core/svg.hpp"
 #include "vsd/metrics/metrics.hpp"

@@ -235,6 +235,9 @@ std::string searchReportHtml(const std::vector<const SearchSummary*>& searches,
 
 void discardSearchState(const fs::path& folder) {
   std::error_code ignored;
+  // The old search's outputs go first: a search resumes from whatever its folder holds.
+  for (const auto& [name, entry] : readManifestOutputs(folder)) fs::remove(folder / name, ignored);
+  fs::remove(folder / "manifest.json", ignored);
   fs::remove(folder / "checkpoint.json", ignored);  // as checkpoint.cpp names it
   fs::remove_all(folder / ".rounds", ignored);      // as roundFile() names them
 }

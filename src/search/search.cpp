@@ -1,4 +1,3 @@
-#include "vsd/report/numbers.hpp"
 #include "vsd/search/search.hpp"
 
 #include <fmt/format.h>
@@ -23,6 +22,7 @@
 #include "vsd/pipeline/run.hpp"
 #include "vsd/pipeline/scenes.hpp"
 #include "vsd/road/road_geometry.hpp"
+#include "vsd/report/numbers.hpp"
 #include "vsd/scenario/concrete_scenario.hpp"
 #include "vsd/vector/dataset.hpp"
 

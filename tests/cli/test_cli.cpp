@@ -121,12 +121,12 @@ TEST(Cli, BadInputGivesOneLineNamingTheProblemAndNoOutput) {
     EXPECT_NE(result.output.find("vsd-sumo: error:"), std::string::npos) << c.name;
     EXPECT_TRUE(!fs::exists(out) || fs::is_empty(out)) << c.name << ": output left behind";
   }
-  // A missing scenario file and a bad flag are usage errors.
+  // A missing scenario file and a bad flag are usage errors (exit code 2, docs/cli.md).
   const auto missing = runForErrors({"run", (dir.path() / "nope.yaml").string()}, dir.path());
-  EXPECT_NE(missing.exitCode, 0);
+  EXPECT_EQ(missing.exitCode, 2);
   EXPECT_NE(missing.output.find("nope.yaml"), std::string::npos);
   const auto flag = runForErrors({"run", test::scenarioFile("acc.yaml").string(), "--jobs", "0"}, dir.path());
-  EXPECT_EQ(flag.exitCode, 1);
+  EXPECT_EQ(flag.exitCode, 2);
   EXPECT_NE(flag.output.find("--jobs: got '0'"), std::string::npos) << flag.output;
 }
 
@@ -308,11 +308,11 @@ print("ok")
   EXPECT_EQ(read.exitCode, 0) << read.output;
   for (const std::string samples : {"-2", "0"}) {  // 0 would draw nothing: refused like a negative count
     const auto no_samples = runForErrors({"predict", "--model", model.string(), "--data", data.string(), "--out",
-                                          (dir.path() / "p.h5").string(), "--samples", samples},
+                                          (dir.path() / "p.h5").string(), "--futures", samples},
                                          dir.path());
-    EXPECT_EQ(no_samples.exitCode, 1);
+    EXPECT_EQ(no_samples.exitCode, 2);  // a flag's value: a usage error
     EXPECT_EQ(lineCount(no_samples.output), 1u) << no_samples.output;
-    EXPECT_NE(no_samples.output.find("--samples: got '" + samples + "', expected"), std::string::npos) << no_samples.output;
+    EXPECT_NE(no_samples.output.find("--futures: got '" + samples + "', expected"), std::string::npos) << no_samples.output;
     EXPECT_FALSE(fs::exists(dir.path() / "p.h5"));
   }
   const auto no_decoder = runForErrors({"train", "--data", data.string(), "--out", (dir.path() / "x.pt").string(),

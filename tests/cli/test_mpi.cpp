@@ -102,12 +102,12 @@ TEST(Mpi, AFailingRankEndsTheJobWithItsMessage) {
   test::writeFile(dir.path() / "sweep" / "shards" / "shard-0001-of-0002", "in the way\n");
   auto args = runArgs(dir.path() / "sweep");
   args[3] = "400";  // --samples: rank 0 has work left when rank 1 fails
-  args[5] = "100";  // --batch
+  args[5] = "100";  // --net-batch
   const auto job = mpirun(2, args, dir.path());
   EXPECT_NE(job.exitCode, 0) << job.output;
   EXPECT_NE(job.exitCode, 124) << "the job hung:\n" << job.output;
   EXPECT_NE(job.output.find("vsd-sumo: error: rank 1 of 2 (shard 1 of 2): "), std::string::npos) << job.output;
-  EXPECT_NE(job.output.find("shard-0001-of-0002: exists and is not a folder"), std::string::npos) << job.output;
+  EXPECT_NE(job.output.find("shard-0001-of-0002: exists and is a file vsd-sumo did not write, not a run folder"), std::string::npos) << job.output;
   EXPECT_FALSE(fs::exists(dir.path() / "sweep" / "shards" / "shard-0000-of-0002" / "manifest.json"));
 }
 

@@ -156,6 +156,9 @@ TEST(SearchLoop, ResumesWithoutRepeatingAndMakesTheSameChoicesAsAnUninterruptedS
   TemporaryDirectory work("vsd-test-search");
   const auto resumed = work.path() / "resumed";
   runSearch(smallSearch(resumed, "extra-trees", 60));  // "interrupted" after 60 executions
+  // An interrupted search has committed nothing yet: no manifest and none of its outputs
+  // (files no manifest lists would be a user's, and a commit refuses to replace them).
+  for (const auto& [name, entry] : readManifestOutputs(resumed)) fs::remove(resumed / name);
   fs::remove(resumed / "manifest.json");
   const auto summary = runSearch(smallSearch(resumed, "extra-trees", 100));
   EXPECT_EQ(summary.resumedFrom, 60u);
@@ -241,6 +244,9 @@ TEST(SearchVectorNet, APriorPreTrainsTheModelAndTheSearchResumesWithTheSameChoic
   };
   const auto resumed = work.path() / "resumed";
   runSearch(vectornet(resumed, 40));  // "interrupted" after the initial design
+  // An interrupted search has committed nothing yet: no manifest and none of its outputs
+  // (files no manifest lists would be a user's, and a commit refuses to replace them).
+  for (const auto& [name, entry] : readManifestOutputs(resumed)) fs::remove(resumed / name);
   fs::remove(resumed / "manifest.json");
   const auto summary = runSearch(vectornet(resumed, 60));
   EXPECT_EQ(summary.resumedFrom, 40u);

@@ -62,9 +62,10 @@ const OutputKind& sceneDrawing();       ///< dataset show --svg; an SVG drawing 
 const std::vector<const OutputKind*>& all();
 }  // namespace output_kinds
 
-/// A CSV table kind recognised by the start of its header line (its subject is ""; a CSV
-/// records nothing about what made it). E.g. csvTable("evaluation table", "label,samples,ade_m").
-OutputKind csvTable(const std::string& noun, const std::string& headerStart);
+/// A kind of text file recognised by how it starts: a CSV table by its header line, an
+/// HTML report by its head (its subject is ""; such files record nothing about what made
+/// them). E.g. textFileKind("evaluation table", "label,samples,ade_m").
+OutputKind textFileKind(const std::string& noun, const std::string& start);
 
 struct OutputRequest {
   std::filesystem::path path;

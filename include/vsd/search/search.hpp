@@ -129,9 +129,10 @@ struct SearchSummary {
 /// simulations all fail (the checkpoint keeps every finished round).
 SearchSummary runSearch(const SearchOptions& options);
 
-/// Removes what a search in `folder` would resume from (its checkpoint and round files),
-/// so that the next search there starts afresh (search --force). The folder's committed
-/// outputs stay until that search commits its own.
+/// Removes a search folder's search (search --force, after the output policy recognised
+/// the folder): the files its manifest lists, the manifest, the checkpoint and the round
+/// files, so that the next search there starts afresh. Files no manifest lists stay.
+/// Throws DatasetError if the folder has no readable manifest.
 void discardSearchState(const std::filesystem::path& folder);
 
 /// The HTML report of one or more searches of one criterion (report module): their
