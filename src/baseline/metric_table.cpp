@@ -2,25 +2,43 @@
 
 #include <algorithm>
 #include <cmath>
+#include <fstream>
 #include <set>
 
 #include "vsd/baseline/baseline.hpp"
 #include "vsd/core/csv.hpp"
 #include "vsd/core/error.hpp"
+#include "vsd/core/files.hpp"
 #include "vsd/metrics/metrics.hpp"
 
 namespace fs = std::filesystem;
 
 namespace vsd::baseline {
 
+fs::path concreteTableOf(const fs::path& run) {
+  if (fs::is_directory(run)) {
+    requireCompleteOutputFolder(run, /*hashes=*/false);  // as every reader of a run folder
+    return run / "concrete.csv";
+  }
+  std::ifstream stream(run, std::ios::binary);
+  std::string head(8, '\0');
+  stream.read(head.data(), 8);
+  if (stream.gcount() == 8 && head == std::string("\x89HDF\r\n\x1a\n", 8)) {
+    throw DatasetError(fmt::format("{}: an HDF5 file (a dataset or traces); baseline learns from the concrete inputs "
+                                   "of a run: give the run folder (e.g. out/acc), which holds concrete.csv",
+                                   run.string()));
+  }
+  return run;
+}
+
 std::string functionalScenarioOf(const fs::path& csv_or_run) {
-  const auto csv = CsvTable::read(fs::is_directory(csv_or_run) ? csv_or_run / "concrete.csv" : csv_or_run);
+  const auto csv = CsvTable::read(concreteTableOf(csv_or_run));
   return csv.rows() > 0 ? csv.cell(0, csv.column("functional_scenario")) : std::string();
 }
 
 MetricTable readMetricTable(const fs::path& csv_or_run, const std::vector<std::string>& targets,
                             const std::vector<std::string>& inputs) {
-  const fs::path path = fs::is_directory(csv_or_run) ? csv_or_run / "concrete.csv" : csv_or_run;
+  const fs::path path = concreteTableOf(csv_or_run);
   const auto csv = CsvTable::read(path);
   if (targets.empty()) throw ConfigError("--targets: no metric given");
   for (const auto& target : targets) {

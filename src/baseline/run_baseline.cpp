@@ -8,6 +8,7 @@
 #include "vsd/core/error.hpp"
 #include "vsd/core/files.hpp"
 #include "vsd/core/progress.hpp"
+#include "vsd/metrics/metrics.hpp"
 
 namespace vsd::baseline {
 
@@ -33,9 +34,13 @@ Matrix predictPerTarget(const std::vector<ExtraTrees>& forests, const Matrix& x)
 
 }  // namespace
 
+namespace {
+bool extraTrees(const std::string& model) { return model == "extra-trees" || model == "et"; }  // "et": the old name
+}  // namespace
+
 BaselineReport runBaseline(const BaselineOptions& options) {
-  if (options.model != "et" && options.model != "bnn") {
-    throw ConfigError::field("command line", "--model", options.model, "et (extra trees) or bnn");
+  if (!extraTrees(options.model) && options.model != "bnn") {
+    throw ConfigError::field("command line", "--model", options.model, "extra-trees or bnn");
   }
   if (!options.predictionsCsv.empty()) requireFileOutputPath(options.predictionsCsv, "--out");
   options.extraTrees.validate();
@@ -55,17 +60,18 @@ BaselineReport runBaseline(const BaselineOptions& options) {
     train.targets = Matrix(train.targets.topRows(n));
   }
   BaselineReport report;
-  report.model = options.model;
+  report.model = extraTrees(options.model) ? "extra-trees" : options.model;
   report.functionalScenario = train.functionalScenario;
   report.trainRows = static_cast<std::size_t>(train.inputs.rows());
   report.testRows = static_cast<std::size_t>(test.inputs.rows());
   report.skipped = train.skipped + test.skipped;
   report.targets = options.targets;
+  for (const auto& target : options.targets) report.units.push_back(metrics::metric(target, "--targets").unit);
 
   Matrix mean;
   Matrix std;
   const auto start = std::chrono::steady_clock::now();
-  if (options.model == "et") {
+  if (extraTrees(options.model)) {
     const auto forests = fitPerTarget(options.extraTrees, train.inputs, train.targets);
     report.fitSeconds = secondsSince(start);
     const auto predict_start = std::chrono::steady_clock::now();
@@ -90,9 +96,11 @@ BaselineReport runBaseline(const BaselineOptions& options) {
       std::ofstream stream(output.tempPath());
       CsvWriter csv(stream);
       std::vector<std::string> header = {"sample"};
-      for (const auto& target : options.targets) {
-        header.insert(header.end(), {target, target + "_predicted"});
-        if (std.size() > 0) header.push_back(target + "_std");
+      for (std::size_t t = 0; t < options.targets.size(); ++t) {
+        const auto& target = options.targets[t];
+        const auto& unit = report.units[t];
+        header.insert(header.end(), {columnWithUnit(target, unit), columnWithUnit(target + "_predicted", unit)});
+        if (std.size() > 0) header.push_back(columnWithUnit(target + "_std", unit));
       }
       csv.writeRow(header);
       for (Eigen::Index r = 0; r < mean.rows(); ++r) {
@@ -114,12 +122,12 @@ BaselineReport runBaseline(const BaselineOptions& options) {
 std::string BaselineReport::report() const {
   std::string text = fmt::format(
       "{} on {}: {} training rows, {} test rows ({} failed or non-finite rows left out); fit {:.2f} s, predict {:.2f} s\n",
-      model == "et" ? "extra trees" : "Bayesian neural network", functionalScenario, trainRows, testRows, skipped,
+      model == "extra-trees" ? "extra trees" : "Bayesian neural network", functionalScenario, trainRows, testRows, skipped,
       fitSeconds, predictSeconds);
-  text += fmt::format("  {:<16} {:>10}{}\n", "metric", "MAE", meanStd.empty() ? "" : "   mean std");
+  text += fmt::format("  {:<16} {:>10}{}  {}\n", "metric", "MAE", meanStd.empty() ? "" : "   mean std", "unit");
   for (std::size_t i = 0; i < targets.size(); ++i) {
-    text += fmt::format("  {:<16} {:>10.4f}{}\n", targets[i], mae[i],
-                        meanStd.empty() ? std::string() : fmt::format(" {:>10.4f}", meanStd[i]));
+    text += fmt::format("  {:<16} {:>10.4f}{}  {}\n", targets[i], mae[i],
+                        meanStd.empty() ? std::string() : fmt::format(" {:>10.4f}", meanStd[i]), units[i]);
   }
   return text;
 }

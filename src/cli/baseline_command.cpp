@@ -1,10 +1,12 @@
 #include <fmt/format.h>
 
+#include <cstdio>
 #include <memory>
 
 #include "commands.hpp"
 #include "flags.hpp"
 #include "vsd/baseline/baseline.hpp"
+#include "vsd/core/output_policy.hpp"
 
 namespace vsd::cli {
 
@@ -12,10 +14,23 @@ void addBaselineCommand(CLI::App& app, CommandContext& context) {
   auto options = std::make_shared<baseline::BaselineOptions>();
   CLI::App* command = app.add_subcommand(
       "baseline", "Regression metamodel (extra trees or BNN) from concrete inputs to metrics, evaluated on a test run");
-  command->add_option("-d,--data", options->train, "Training run: concrete.csv or its folder")->required();
-  command->add_option("-t,--test", options->test, "Test run of the same functional scenario")->required();
-  command->add_option("-m,--model", options->model, "et (extra trees) or bnn (Bayesian neural network)")
-      ->capture_default_str();
+  command->add_option("-d,--data", options->train, "Training run folder (its concrete.csv: concrete inputs and metrics)")
+      ->required();
+  command->add_option("-t,--test", options->test, "Test run folder of the same functional scenario")->required();
+  command
+      ->add_option("-m,--model", options->model,
+                   "extra-trees or bnn (Bayesian neural network): the names of search's surrogates")
+      ->capture_default_str()
+      ->transform(CLI::Validator(
+          [](std::string& name) {
+            if (name == "et") {  // the old name
+              std::fprintf(stderr, "vsd-sumo: note: baseline --model et is deprecated; use extra-trees (the old "
+                                   "spelling still works for now)\n");
+              name = "extra-trees";
+            }
+            return std::string();
+          },
+          "", "model"));
   command->add_option("--targets", options->targets, "Metrics to predict, e.g. a_min,d_min,p_lat_max")
       ->required()
       ->delimiter(',');
@@ -36,6 +51,13 @@ void addBaselineCommand(CLI::App& app, CommandContext& context) {
   command->callback([=, &context] {
     context.action = [=] {
       options->bnn.seed = options->extraTrees.seed;
+      if (!options->predictionsCsv.empty()) {
+        static const OutputKind kTable = textFileKind("baseline predictions table", "sample,");
+        checkOutput({options->predictionsCsv, &kTable, "", false, "--out", "--force",
+                     {{"--data", options->train}, {"--test", options->test},
+                      {"--data", baseline::concreteTableOf(options->train)},
+                      {"--test", baseline::concreteTableOf(options->test)}}});
+      }
       fmt::print("{}", baseline::runBaseline(*options).report());
       return 0;
     };

@@ -118,7 +118,7 @@ ProcessResult runSelf(const std::vector<std::string>& args, const fs::path& work
 
 std::vector<std::string> runArguments(const BenchOptions& options, std::uint64_t samples, std::size_t batch,
                                       const fs::path& out) {
-  return {"run", options.scenario.string(), "--samples", std::to_string(samples), "--batch", std::to_string(batch),
+  return {"run", options.scenario.string(), "--samples", std::to_string(samples), "--net-batch", std::to_string(batch),
           "--jobs", std::to_string(options.jobs), "--seed", "1", "--out", out.string()};
 }
 
@@ -291,7 +291,7 @@ double median(std::vector<double> values) {
 int runIsolationBench(const IsolationBenchOptions& options) {
   using Isolation = pipeline::RunOptions::Isolation;
   TemporaryDirectory work("vsd-bench-isolation");
-  fmt::print("vsd-sumo bench isolation: {}, --samples {} --batch {} --jobs 1, {} rounds (order alternating); load "
+  fmt::print("vsd-sumo bench isolation: {}, --samples {} --net-batch {} --jobs 1, {} rounds (order alternating); load "
              "average before: {}\n",
              options.scenario.string(), options.samples, options.batch, options.rounds, loadAverageNow());
   fmt::print("  per scenario: CPU ms = user + system of the parent and its workers; faults = minor page faults\n");
@@ -481,7 +481,9 @@ int runModelBench(const ModelBenchOptions& options) {
     train_options.config.frame = options.frame;
     train_options.resume = options.resume && fs::exists(train_options.output.string() + ".last");
     experiment::bindCalibrationMetrics(train_options);
-    const auto summary = model::train(train_options);
+    // A finished training leaves its model and no <model>.last: with --resume it is reused as it is.
+    const bool finished = options.resume && !train_options.resume && fs::exists(train_options.output);
+    const auto summary = finished ? model::TrainSummary{} : model::train(train_options);
     const model::Predictor predictor(train_options.output, options.threads);
     const auto evaluation = model::evaluate(predictor, tests);
     fmt::print("  mix {:<32} trained in {:>5.1f} s ({} epochs, {:.0f} samples/s), test ADE [m]:", mix, summary.seconds,
@@ -555,7 +557,7 @@ int runCompareBench(const CompareBenchOptions& options) {
                                  std::to_string(samples), "--seed", "99", "--jobs", std::to_string(options.jobs),
                                  "--out", out.string()},
                                 work.path());
-    const double report_mib = static_cast<double>(fs::file_size(out / "index.html")) / (1024.0 * 1024.0);
+    const double report_mib = static_cast<double>(fs::file_size(out / "report.html")) / (1024.0 * 1024.0);
     fmt::print("  {:>8} {:>10.2f} {:>14.1f} {:>14.2f} {:>8.1f} MiB\n", samples, result.seconds,
                static_cast<double>(samples) / result.seconds, report_mib, static_cast<double>(result.maxRssKiB) / 1024.0);
   }
@@ -571,11 +573,11 @@ void addBenchCommand(CLI::App& app, CommandContext& context) {
   CLI::App* run = bench->add_subcommand("run", "Throughput and peak memory of `vsd-sumo run`");
   run->add_option("scenario", options->scenario, "Logical scenario")->check(CLI::ExistingFile)->capture_default_str();
   addNumber(run, "--samples", options->samples, "Samples for the batched run")->capture_default_str();
-  addNumber(run, "--batch-one-samples", options->batchOneSamples, "Samples for the --batch 1 run")
+  addNumber(run, "--batch-one-samples", options->batchOneSamples, "Samples for the --net-batch 1 run")
       ->capture_default_str();
   addNumber(run, "--memory-samples", options->memorySamples, "Sample counts for the memory runs")
       ->capture_default_str();
-  addNumber(run, "--batch", options->batch, "Batch size of the batched runs")->capture_default_str();
+  addNumber(run, "--net-batch", options->batch, "Samples per SUMO network of the batched runs")->capture_default_str();
   addNumber(run, "--jobs", options->jobs, "Worker processes")->capture_default_str();
   addNumber(run, "--mpi-samples", options->mpiSamples, "Samples for the MPI runs (1 rank vs 2)")
       ->capture_default_str();
@@ -589,7 +591,7 @@ void addBenchCommand(CLI::App& app, CommandContext& context) {
       ->check(CLI::ExistingFile)
       ->capture_default_str();
   addNumber(isolation, "--samples", isolation_options->samples, "Samples per run")->capture_default_str();
-  addNumber(isolation, "--batch", isolation_options->batch, "Batch size")->capture_default_str();
+  addNumber(isolation, "--net-batch", isolation_options->batch, "Samples per SUMO network")->capture_default_str();
   addNumber(isolation, "--rounds", isolation_options->rounds, "Rounds of both runs")
       ->check(CLI::Range(1, 1000))
       ->capture_default_str();
@@ -621,10 +623,10 @@ void addBenchCommand(CLI::App& app, CommandContext& context) {
   modeling->add_option("--decoder-option", model_options->decoderOptions, "Decoder option name=value (repeatable)");
   modeling->add_option("--steps", model_options->steps, "Optimizer steps of every training")->capture_default_str();
   modeling->add_flag("--resume", model_options->resume,
-                     "Continue trainings from <model>.last where it exists (a finished one only calibrates)");
+                     "Continue trainings from <model>.last where it exists; reuse finished models");
   modeling->add_flag("--row4", model_options->row4, "Also train on acc + lk only and test on acc_lk (paper row 4)");
   modeling->add_option("--frame", model_options->frame, "Model frame (ego, lane)")->capture_default_str();
-  addNumber(modeling, "--draws", model_options->draws, "Sampled futures per scene in the inference benchmark")
+  addNumber(modeling, "--futures", model_options->draws, "Sampled futures per scene in the inference benchmark")
       ->capture_default_str();
   modeling->callback([model_options, &context] {
     context.action = [model_options] { return runModelBench(*model_options); };

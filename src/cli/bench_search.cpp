@@ -12,6 +12,8 @@
 #include "flags.hpp"
 #include "vsd/core/error.hpp"
 #include "vsd/core/files.hpp"
+#include "vsd/core/output_policy.hpp"
+#include "vsd/report/numbers.hpp"
 #include "vsd/search/search.hpp"
 
 namespace fs = std::filesystem;
@@ -56,10 +58,11 @@ SurrogateTotals benchSurrogate(const SearchBenchOptions& options, const std::str
     run.outputDir = work / fmt::format("{}_{}", surrogate, seed);
     const auto summary = search::runSearch(run);
     const auto& e = summary.estimate;
-    fmt::print("    {:<12} seed {:>3}: {:>5} critical / {} executions, {:>4} cells, P = {:.4f} % [{:.4f}, {:.4f}] "
-               "({}), {:.1f} s (surrogate {:.1f} s)\n",
-               surrogate, seed, summary.critical, summary.executions, summary.coverageCells, 100 * e.estimate,
-               100 * e.low, 100 * e.high, e.method, summary.seconds, summary.surrogateSeconds);
+    fmt::print("    {:<12} seed {:>3}: {:>5} critical / {} executions, {:>4} cells, P = {} ({}), {:.1f} s (surrogate "
+               "{:.1f} s)\n",
+               surrogate, seed, summary.critical, summary.executions, summary.coverageCells,
+               report::percentWithInterval(e.estimate, e.low, e.high), e.method, summary.seconds,
+               summary.surrogateSeconds);
     totals.critical += static_cast<double>(summary.critical);
     totals.coverage += static_cast<double>(summary.coverageCells);
     totals.estimate += e.estimate;
@@ -110,7 +113,7 @@ void addSearchBench(CLI::App& bench, CommandContext& context) {
       ->check(CLI::ExistingPath);
   addNumber(command, "--vectornet-steps", options->search.vectornetSteps, "vectornet: training steps per round")
       ->capture_default_str();
-  addNumber(command, "--future-samples", options->search.futureSamples, "vectornet: sampled futures per candidate")
+  addNumber(command, "--futures", options->search.futureSamples, "vectornet: sampled futures per candidate")
       ->capture_default_str();
   addNumber(command, "--seeds", options->seeds, "Searches per surrogate (seeds 1..N)")->capture_default_str();
   command->add_option("--report", options->report,
@@ -121,6 +124,14 @@ void addSearchBench(CLI::App& bench, CommandContext& context) {
     context.action = [options, &context] {
       if (options->seeds < 1 || options->seeds > 1000) {
         throw ConfigError::field("command line", "--seeds", std::to_string(options->seeds), "1 .. 1000");
+      }
+      if (!options->report.empty()) {  // the output policy (docs/output-policy.md), before any work
+        static const OutputKind kSearchReport = textFileKind(
+            "search report", "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n"
+                             "<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">\n"
+                             "<title>vsd-sumo search: ");
+        checkOutput({options->report, &kSearchReport, "", false, "--report", "--force",
+                     {{"scenario", options->search.scenarioFile}}});
       }
       TemporaryDirectory work("vsd-bench-search");
       const auto& s = options->search;

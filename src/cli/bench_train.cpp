@@ -66,7 +66,7 @@ TrainMeasurement measured(const ProcessResult& result) {
 std::vector<std::string> trainArguments(const TrainBenchOptions& options, const fs::path& data, const fs::path& out,
                                          int threads) {
   return {siblingExecutable("vsd-sumo"), "--quiet", "train", "-d", data.string(), "-o", out.string(), "--steps",
-          std::to_string(options.steps), "--batch", std::to_string(options.batch), "--patience", "1000000",
+          std::to_string(options.steps), "--minibatch", std::to_string(options.batch), "--patience", "1000000",
           "--threads", std::to_string(threads), "--seed", "1"};
 }
 
@@ -135,7 +135,7 @@ void addTrainBench(CLI::App& bench, CommandContext& context) {
   command->add_option("--work", options->work, "Keep data and models in this folder (data reused when present)");
   command->add_option("--samples", options->samples, "Scenarios simulated for the training data")->capture_default_str();
   command->add_option("--steps", options->steps, "Optimizer steps")->capture_default_str();
-  command->add_option("--batch", options->batch, "Global batch")->capture_default_str();
+  command->add_option("--minibatch", options->batch, "Global training minibatch")->capture_default_str();
   command->add_option("--ranks", options->ranks, "Ranks (and the threads of the one process)")
       ->check(CLI::Range(2, 64))
       ->capture_default_str();

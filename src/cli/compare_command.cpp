@@ -21,7 +21,8 @@ void addCompareCommand(CLI::App& app, CommandContext& context) {
   command->add_option("-d,--data", options->data, "Instead of a scenario: dataset files or run folders (predicted "
                                                   "vs recorded)");
   command->add_option("-o,--out", options->output, "Report folder (default: reports/<scenario or dataset name>)");
-  command->add_flag("--force", options->force, "Replace an existing report folder");
+  command->add_flag("--force", options->force,
+                    "Replace a report folder of another scenario, dataset or model (docs/output-policy.md)");
   addNumber(command, "-n,--samples", options->samples,
                       "Scenarios to sample and simulate (default 500); datasets: the first N samples (default: all)");
   addNumber(command, "-s,--seed", options->seed, "Sampling seed")->capture_default_str();
@@ -29,19 +30,22 @@ void addCompareCommand(CLI::App& app, CommandContext& context) {
   addNumber(command, "--threads", options->threads, "libtorch threads")->capture_default_str();
   addNumber(command, "--worst", options->worst, "Scenarios with the largest ADE drawn in the report")
       ->capture_default_str();
-  addNumber(command, "--draws", options->draws,
-                      "Futures drawn per scenario from a probabilistic model: metric intervals, calibration, confident "
-                      "verdicts (0: none)")
+  addNumber(command, "--futures", options->draws,
+            "Futures drawn per scenario from a probabilistic model: metric intervals, calibration, confident "
+            "verdicts (0: none; was --draws)")
       ->capture_default_str();
-  addNumber(command, "--draw-seed", options->drawSeed, "Seed of the drawn futures")->capture_default_str();
+  addNumber(command, "--future-seed", options->drawSeed, "Seed of the drawn futures (was --draw-seed)")
+      ->capture_default_str();
   addNumber(command, "--confidence", options->confidence,
                       "A criterion's verdict is confident when this share of the drawn futures agrees")
       ->capture_default_str();
   command->add_flag("--allow-dirty", options->allowDirty,
                     "Write into the repository's results/ even though this binary was built from uncommitted changes");
   command->add_option("--metrics", options->metrics, "Datasets: metrics to compare, e.g. a_min,d_min")->delimiter(',');
-  command->add_option("--criterion", options->criteria, "Datasets: pass/fail criterion 'name: expression', e.g. "
-                                                        "'close: d_min < 2' (repeatable)");
+  command->add_option("--criterion", options->criteria,
+                      "Pass/fail criterion (repeatable), added to a scenario's own: a comparison of metrics such as "
+                      "'d_min < 2' or 'ttc_min < 1 or d_min < 0.5', optionally named ('close: d_min < 2'); "
+                      "docs/cli.md \"Criteria\"");
   command->callback([=, &context] {
     context.action = [=, &context] {
       options->commandLine = context.commandLine;

@@ -1,13 +1,20 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <iterator>
+#include <map>
 #include <memory>
+#include <nlohmann/json.hpp>
 
 #include "commands.hpp"
 #include "flags.hpp"
 #include "vsd/core/error.hpp"
 #include "vsd/core/files.hpp"
+#include "vsd/core/output_policy.hpp"
 #include "vsd/core/shards.hpp"
+#include "vsd/metrics/metrics.hpp"
+#include "vsd/pipeline/run.hpp"
+#include "vsd/scenario/logical_scenario.hpp"
 #include "vsd/vector/dataset.hpp"
 #include "vsd/vector/scene_svg.hpp"
 
@@ -46,8 +53,70 @@ vector::DatasetSummary summarize(const std::filesystem::path& path) {
   return total;
 }
 
+/// Unit and meaning of each vector feature (vsd-dataset schema; docs/data-dictionary.md).
+struct FeatureEntry {
+  const char* name;
+  const char* unit;
+  const char* meaning;
+};
+constexpr FeatureEntry kFeatureDictionary[] = {
+    {"x_start", "m", "start of the vector, scenario frame (generated roads: x along the road)"},
+    {"y_start", "m", "start of the vector, scenario frame (lateral)"},
+    {"x_end", "m", "end of the vector"},
+    {"y_end", "m", "end of the vector"},
+    {"object_type", "-", "1 lane boundary, 2 vehicle, 3 Ego"},
+    {"polyline_id", "-", "index of the vector's polyline within its sample"},
+    {"timestamp", "s", "time of the vector's end after t0 (lane boundaries: 0)"},
+};
+static_assert(std::size(kFeatureDictionary) == vector::kFeatures, "one dictionary entry per feature");
+
+/// A run's inputs (unit, description), from the scenario file its manifest names (empty if unknown).
+std::map<std::string, scenario::InputSpec> inputSpecs(const std::filesystem::path& given) {
+  std::map<std::string, scenario::InputSpec> units;
+  try {
+    if (!std::filesystem::is_directory(given)) return units;
+    const auto manifest = nlohmann::json::parse(readTextFile(given / "manifest.json"));
+    const auto logical = scenario::loadLogicalScenario(manifest.at("scenario_file").get<std::string>());
+    for (const auto& input : logical->inputs) units[input.name] = input;
+  } catch (const std::exception&) {
+    // A dataset file alone, or a run whose scenario file moved: its units are not known here.
+  }
+  return units;
+}
+
+/// What every column means and its unit: features, inputs, metrics.
+std::string dataDictionary(const vector::DatasetSummary& summary, const std::filesystem::path& given) {
+  std::string text = "  data dictionary (docs/data-dictionary.md):\n";
+  text += fmt::format("    {:<16} {:<6} {}\n", "feature", "unit", "meaning");
+  for (const auto& entry : kFeatureDictionary) {
+    text += fmt::format("    {:<16} {:<6} {}\n", entry.name, entry.unit, entry.meaning);
+  }
+  if (!summary.header.inputNames.empty()) {
+    const auto specs = inputSpecs(given);
+    text += fmt::format("    {:<16} {:<6} {}\n", "input", "unit", "meaning");
+    for (const auto& name : summary.header.inputNames) {
+      const auto spec = specs.find(name);
+      text += fmt::format("    {:<16} {:<6} {}\n", name, spec == specs.end() ? "?" : spec->second.unit,
+                          spec == specs.end() ? "an input of the logical scenario (its unit is in the scenario file)"
+                                              : spec->second.description);
+    }
+  }
+  if (!summary.header.metricNames.empty()) {
+    text += fmt::format("    {:<16} {:<6} {}\n", "metric", "unit", "definition");
+    for (const auto& name : summary.header.metricNames) {
+      const auto* metric = metrics::findMetric(name);
+      text += fmt::format("    {:<16} {:<6} {}\n", name, metric ? metric->unit : "?",
+                          metric ? metric->definition : "not in this version's metric registry");
+    }
+  }
+  return text;
+}
+
 int showSample(const std::filesystem::path& path, std::size_t sample, const std::filesystem::path& svg) {
-  if (!svg.empty()) requireFileOutputPath(svg, "--svg");
+  if (!svg.empty()) {
+    checkOutput({svg, &output_kinds::sceneDrawing(), "", false, "--svg", "--force", {{"dataset", path}}});
+    requireFileOutputPath(svg, "--svg");
+  }
   vector::DatasetCollection collection;
   collection.add(path);
   const auto refs = collection.all();
@@ -94,7 +163,8 @@ void addDatasetCommand(CLI::App& app, CommandContext& context) {
   info->add_option("dataset", *info_path, "Dataset file, run folder or sharded sweep folder")->required();
   info->callback([info_path, &context] {
     context.action = [info_path] {
-      fmt::print("{}", summarize(*info_path).report());
+      const auto summary = summarize(*info_path);
+      fmt::print("{}{}", summary.report(), dataDictionary(summary, *info_path));
       return 0;
     };
   });

@@ -18,6 +18,9 @@ void addExperimentCommand(CLI::App& app, CommandContext& context) {
       ->check(CLI::ExistingFile);
   command->add_option("-o,--out", options->output, "Output folder (default: results/<name>, results/<name>-quick)");
   command->add_flag("--quick", options->quick, "The spec's small sizes: the same pipeline in minutes");
+  command->add_flag("--force", options->force,
+                    "Replace the results folder of another experiment (docs/output-policy.md); a re-run of the same "
+                    "experiment resumes from its cache without it");
   command->add_flag("--allow-dirty", options->allowDirty,
                     "Write into the repository's results/ even though this binary was built from uncommitted changes");
   command->callback([=, &context] {

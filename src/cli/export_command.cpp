@@ -5,6 +5,7 @@
 #include "commands.hpp"
 #include "flags.hpp"
 #include "vsd/core/error.hpp"
+#include "vsd/core/output_policy.hpp"
 #include "vsd/pipeline/cluster.hpp"
 #include "vsd/pipeline/export.hpp"
 
@@ -23,6 +24,17 @@ std::pair<std::string, double> parseParam(const std::string& text) {
   }
   return {text.substr(0, equals), std::stod(value)};
 }
+/// The output policy (docs/output-policy.md) for the dataset file: its subject is the
+/// export's label, as pipeline::exportMap chooses it (--label, else the map file's name).
+void checkExportOutput(const pipeline::ExportOptions& options, bool force) {
+  const std::filesystem::path map = options.openDrive.empty() ? options.source.mainFile() : options.openDrive;
+  const std::string label = options.label.empty() ? map.stem().string() : options.label;
+  std::vector<std::pair<std::string, std::filesystem::path>> inputs = {
+      {"config", options.source.config}, {"--net", options.source.net}, {"--opendrive", options.openDrive}};
+  for (const auto& routes : options.source.routes) inputs.emplace_back("--routes", routes);
+  checkOutput({options.output, &output_kinds::datasetFile(), label, force, "--out", "--force", inputs});
+}
+
 }  // namespace
 
 void addExportCommand(CLI::App& app, CommandContext& context) {
@@ -38,6 +50,8 @@ void addExportCommand(CLI::App& app, CommandContext& context) {
   command->add_option("--opendrive", options->openDrive, "OpenDRIVE map, imported with netconvert (with --routes)");
   command->add_option("--routes", options->source.routes, "Route files (demand) for --net / --opendrive");
   command->add_option("-o,--out", options->output, "Dataset file to write (.h5)")->required();
+  auto force = std::make_shared<bool>(false);
+  command->add_flag("--force", *force, "Replace a dataset file of another label (docs/output-policy.md)");
   command->add_option("--egos", options->egos, "Egos: all | random:K | vtype:NAME | id,id,...")->capture_default_str();
   addNumber(command, "-s,--seed", options->seed, "Seed (Ego choice and SUMO)")->capture_default_str();
   addNumber(command, "--step", options->step, "Time step (s)")->capture_default_str();
@@ -73,6 +87,7 @@ void addExportCommand(CLI::App& app, CommandContext& context) {
       if (begin_flag->count() > 0) options->begin = *begin;
       if (end_flag->count() > 0) options->end = *end;
       for (const auto& param : *params) options->controllerParams.push_back(parseParam(param));
+      checkExportOutput(*options, *force);
       if (pipeline::launchedAsMpiRank()) {
         const auto communicator = pipeline::joinMpiJob();
         const auto result = pipeline::exportOnCluster(*options, *communicator);

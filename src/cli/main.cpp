@@ -12,6 +12,7 @@
 #include <filesystem>
 
 #include "commands.hpp"
+#include "usage.hpp"
 #include "vsd/core/error.hpp"
 #include "vsd/core/interrupt.hpp"
 #include "vsd/core/log.hpp"
@@ -103,15 +104,20 @@ int main(int argc, char** argv) {
   const bool has_model_commands = vsd::cli::addModelCommands(app, context);
   if (!handledHere(app, has_model_commands, argc, argv)) return handOverToModelExecutable(argv);
 
+  std::vector<std::string> args(argv + 1, argv + argc);
+  for (const auto& note : vsd::cli::replaceDeprecatedSpellings(app, args)) {
+    std::fprintf(stderr, "vsd-sumo: note: %s\n", note.c_str());
+  }
   try {
-    app.parse(argc, argv);
+    std::vector<std::string> reversed(args.rbegin(), args.rend());  // CLI11 takes them last first, and consumes them
+    app.name(argv[0]);
+    app.parse(reversed);
   } catch (const CLI::ParseError& error) {
     if (error.get_exit_code() == 0) return app.exit(error);  // --help, --version
-    // Bad flags are bad input like any other: one line, exit code 1.
-    std::string message = error.what();
-    std::replace(message.begin(), message.end(), '\n', ' ');
-    std::fprintf(stderr, "vsd-sumo: error: command line: %s (see --help)\n", message.c_str());
-    return 1;
+    // A command line that does not parse is a usage error: one line naming the word, exit code 2.
+    std::fprintf(stderr, "vsd-sumo: error: command line: %s (see --help)\n",
+                 vsd::cli::usageMessage(app, args, error.what()).c_str());
+    return vsd::cli::kUsageExit;
   }
   vsd::configureLogging(quiet ? vsd::Verbosity::Quiet : verbose ? vsd::Verbosity::Verbose : vsd::Verbosity::Normal);
   vsd::installInterruptHandlers();
@@ -128,6 +134,9 @@ int main(int argc, char** argv) {
   } catch (const vsd::InterruptedError& error) {
     std::fprintf(stderr, "vsd-sumo: %s\n", error.what());
     return error.exitCode();
+  } catch (const vsd::ConfigError& error) {
+    std::fprintf(stderr, "vsd-sumo: error: %s\n", error.what());
+    return vsd::cli::isUsageError(error) ? vsd::cli::kUsageExit : 1;
   } catch (const vsd::Error& error) {
     std::fprintf(stderr, "vsd-sumo: error: %s\n", error.what());
     return 1;

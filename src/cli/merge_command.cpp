@@ -3,6 +3,8 @@
 #include <memory>
 
 #include "commands.hpp"
+#include "vsd/core/output_policy.hpp"
+#include "vsd/core/shards.hpp"
 #include "vsd/pipeline/merge.hpp"
 
 namespace vsd::cli {
@@ -17,9 +19,18 @@ void addMergeCommand(CLI::App& app, CommandContext& context) {
       ->check(CLI::ExistingDirectory);
   merge->add_option("-o,--out", options->output, "Output folder (default: the sweep folder)");
   merge->add_flag("--remove-shards", options->removeShards, "Delete the shard folders after a successful merge");
-  merge->callback([options, &context] {
-    context.action = [options, &context] {
+  auto force = std::make_shared<bool>(false);
+  merge->add_flag("--force", *force, "Replace a run folder of another functional scenario (docs/output-policy.md)");
+  merge->callback([options, force, &context] {
+    context.action = [options, force, &context] {
       options->commandLine = context.commandLine;
+      // The merged folder is a run folder of the shards' scenario; the shards are its inputs.
+      const auto shards = readShardSet(options->sweep);
+      std::vector<std::pair<std::string, std::filesystem::path>> inputs;
+      for (const auto& shard : shards) inputs.emplace_back("sweep", shard.folder);
+      checkOutput({options->output.empty() ? options->sweep : options->output, &output_kinds::runFolder(),
+                   shards.empty() ? std::string() : shards.front().functionalScenario, *force, "--out", "--force",
+                   inputs});
       fmt::print("{}", pipeline::mergeShards(*options).report());
       return 0;
     };

@@ -8,6 +8,7 @@
 #include "flags.hpp"
 #include "vsd/core/error.hpp"
 #include "vsd/core/files.hpp"
+#include "vsd/core/output_policy.hpp"
 #include "vsd/core/progress.hpp"
 #include "vsd/experiment/experiment.hpp"
 #include "vsd/metrics/metrics.hpp"
@@ -35,6 +36,55 @@ void bindPredictionMetrics(const std::filesystem::path& data, model::PredictionF
   options.metrics = binding->compute;
 }
 
+/// Labels as a model's subject (docs/output-policy.md): sorted, so that the order of a mix does not matter.
+std::string labelSubject(std::vector<std::string> labels) {
+  std::sort(labels.begin(), labels.end());
+  return fmt::format("labels {}", fmt::join(labels, ", "));
+}
+
+/// The model file kind, whose subject is what the model trained on (read with libtorch).
+const OutputKind& modelKind() {
+  static const OutputKind kind = [] {
+    OutputKind copy = output_kinds::modelFile();
+    copy.identify = [](const std::filesystem::path& path) -> std::optional<std::string> {
+      if (!output_kinds::modelFile().identify(path)) return std::nullopt;
+      try {
+        return labelSubject(model::Predictor(path, 1).info().labels);
+      } catch (const std::exception&) {
+        return std::string();  // a model file of ours that this version cannot read: no subject
+      }
+    };
+    return copy;
+  }();
+  return kind;
+}
+
+/// The labels a training of `options` learns: the mix's, or every label of the data.
+std::string trainingSubject(const model::TrainOptions& options) {
+  std::vector<std::string> labels;
+  for (const auto& [label, count] : options.mix.counts) {
+    if (count > 0) labels.push_back(label);
+  }
+  if (labels.empty()) {
+    vector::DatasetCollection data;
+    for (const auto& path : options.data) data.add(path);
+    for (const auto& [label, count] : data.labelCounts()) labels.push_back(label);
+  }
+  return labelSubject(labels);
+}
+
+/// (flag, path) of every input, for the output policy (an output may not be one of them).
+std::vector<std::pair<std::string, std::filesystem::path>> inputsOf(
+    const std::string& flag, const std::vector<std::filesystem::path>& paths) {
+  std::vector<std::pair<std::string, std::filesystem::path>> inputs;
+  for (const auto& path : paths) {
+    inputs.emplace_back(flag, path);
+    std::error_code ec;
+    if (std::filesystem::is_directory(path, ec)) inputs.emplace_back(flag, vector::resolveDatasetPath(path));
+  }
+  return inputs;
+}
+
 /// "offsets, kinematic" for help texts.
 std::string decoderNames() {
   std::vector<std::string> names;
@@ -52,6 +102,8 @@ void addTrainCommand(CLI::App& app, CommandContext& context) {
   command->add_option("-d,--data", options->data, "Dataset files or run folders")->required();
   command->add_option("--mix", *mix, "Samples per label, e.g. acc=2000,lk=2000,acc_lk=200 (default: all)");
   command->add_option("-o,--out", options->output, "Model file to write (the best epoch)")->required();
+  auto force = std::make_shared<bool>(false);
+  command->add_flag("--force", *force, "Replace a model file trained on other labels (docs/output-policy.md)");
   addNumber(command, "-s,--seed", options->seed, "Seed (sample choice, split, initialisation, order)")
       ->capture_default_str();
   addNumber(command, "--threads", options->threads, "libtorch threads")->capture_default_str();
@@ -59,7 +111,7 @@ void addTrainCommand(CLI::App& app, CommandContext& context) {
       ->capture_default_str();
   addNumber(command, "--patience", options->patience, "Stop after this many epochs without improvement")
       ->capture_default_str();
-  addNumber(command, "--batch", options->batchSize, "Batch size")->capture_default_str();
+  addNumber(command, "--minibatch", options->batchSize, "Training minibatch size (scenes per optimizer step; was --batch)")->capture_default_str();
   addNumber(command, "--lr", options->learningRate, "Peak learning rate (AdamW)")->capture_default_str();
   addNumber(command, "--weight-decay", options->weightDecay, "AdamW weight decay")->capture_default_str();
   addNumber(command, "--validation-fraction", options->validationFraction, "Share of each label for validation")
@@ -83,6 +135,9 @@ void addTrainCommand(CLI::App& app, CommandContext& context) {
   command->callback([=, &context] {
     context.action = [=] {
       options->mix = model::Mix::parse(*mix);
+      auto inputs = inputsOf("--data", options->data);
+      inputs.emplace_back("--init-from", options->initialModel);
+      checkOutput({options->output, &modelKind(), trainingSubject(*options), *force, "--out", "--force", inputs});
       model::findDecoder(options->config.decoder, "--decoder");
       options->config.decoderOptions = model::parseDecoderOptions(*decoder_options);
       experiment::bindCalibrationMetrics(*options);  // `calibrate` also calibrates metric intervals
@@ -113,18 +168,28 @@ void addPredictCommand(CLI::App& app, CommandContext& context) {
   command->add_option("-m,--model", *model_file, "Model file, or cv / ca (no training)")->required();
   command->add_option("-d,--data", *data, "Dataset file or run folder")->required();
   command->add_option("-o,--out", *out, "Predictions file (.h5)")->required();
-  CLI::Option* samples = addNumber(command, "--samples", file_options->predict.samples,
+  auto force = std::make_shared<bool>(false);
+  command->add_flag("--force", *force,
+                    "Replace a predictions file of another model or dataset (docs/output-policy.md)");
+  CLI::Option* samples = addNumber(command, "--futures", file_options->predict.samples,
                                     "Futures to draw per scene from a probabilistic model, >= 1 (without it: "
-                                    "the most likely future only)");
-  addNumber(command, "--sample-seed", file_options->predict.seed, "Seed of the drawn futures")->capture_default_str();
+                                    "the most likely future only; was --samples)");
+  addNumber(command, "--future-seed", file_options->predict.seed, "Seed of the drawn futures (was --sample-seed)")
+      ->capture_default_str();
   addNumber(command, "--threads", *threads, "libtorch threads")->capture_default_str();
   command->callback([=, &context] {
     context.action = [=] {
       if (samples->count() > 0 && file_options->predict.samples < 1) {  // 0 would silently draw nothing
-        throw ConfigError::field("command line", "--samples", std::to_string(file_options->predict.samples),
+        throw ConfigError::field("command line", "--futures", std::to_string(file_options->predict.samples),
                                  ">= 1 futures per scene (leave it out for the most likely future only)");
       }
       file_options->predict.validate();
+      auto inputs = inputsOf("--data", {*data});
+      inputs.emplace_back("--model", *model_file);
+      // As the predictions file records them: the model as given, the dataset file it read.
+      const std::string subject =
+          fmt::format("{} on {}", model_file->string(), vector::resolveDatasetPath(*data).string());
+      checkOutput({*out, &output_kinds::predictionsFile(), subject, *force, "--out", "--force", inputs});
       const model::Predictor predictor(*model_file, *threads);
       auto with_metrics = *file_options;
       if (predictor.probabilistic()) bindPredictionMetrics(*data, with_metrics);
@@ -148,7 +213,13 @@ void addEvaluateCommand(CLI::App& app, CommandContext& context) {
   addNumber(command, "--threads", *threads, "libtorch threads")->capture_default_str();
   command->callback([=, &context] {
     context.action = [=] {
-      if (!csv->empty()) requireFileOutputPath(*csv, "--csv");
+      if (!csv->empty()) {
+        static const OutputKind kEvaluationTable = textFileKind("evaluation table", "label,samples,ade_m");
+        auto inputs = inputsOf("--data", *data);
+        inputs.emplace_back("--model", *model_file);
+        checkOutput({*csv, &kEvaluationTable, "", false, "--csv", "--force", inputs});
+        requireFileOutputPath(*csv, "--csv");
+      }
       const model::Predictor predictor(*model_file, *threads);
       const auto evaluation = model::evaluate(predictor, *data);
       if (predictor.info().trained) {

@@ -35,7 +35,8 @@ void addRunCommand(CLI::App& app, CommandContext& context) {
   addNumber(run, "-s,--seed", options->seed, "Random seed; same seed, same outputs")->capture_default_str();
   run->add_option("-o,--out", options->outputDir, "Output folder (default: out/<functional scenario>)");
   addNumber(run, "-j,--jobs", options->jobs, "Worker processes (one libsumo simulation each)")->capture_default_str();
-  addNumber(run, "-b,--batch", options->batch, "Concrete scenarios per SUMO network and simulation")
+  addNumber(run, "--net-batch", options->batch,
+            "Concrete scenarios (samples) per SUMO network and simulation (was --batch)")
       ->capture_default_str();
   addNumber(run, "--first-sample", options->firstSample, "Index of the first concrete scenario")
       ->capture_default_str();
@@ -44,7 +45,12 @@ void addRunCommand(CLI::App& app, CommandContext& context) {
   addNumber(run, "--step-timeout", options->watchdog.stepTimeout,
                   "Watchdog: longest Ego controller call or libsumo step (s); a scenario exceeding it fails")
       ->capture_default_str();
+  addNumber(run, "--max-failures", options->maxFailures,
+            "Fail fast: stop when each of the first N scenarios fails for the same reason (0: never stop early)")
+      ->capture_default_str();
   addEgoStepCostOption(*run, options->egoStepCost);
+  run->add_flag("--force", options->force,
+                "Replace a run folder of another functional scenario (docs/output-policy.md)");
   run->add_flag("--keep-nets", options->keepNets, "Keep the generated networks in <out>/nets (open with sumo-gui)");
   run->add_flag("--fcd", options->fcd,
                 "Write SUMO FCD XML per batch to <out>/fcd (replay: tools/replay_fcd.py); implies --keep-nets");

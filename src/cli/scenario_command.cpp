@@ -4,9 +4,13 @@
 #include <fmt/format.h>
 
 #include <memory>
+#include <nlohmann/json.hpp>
 
 #include "commands.hpp"
 #include "flags.hpp"
+#include "vsd/core/criterion_syntax.hpp"
+#include "vsd/core/files.hpp"
+#include "vsd/core/output_policy.hpp"
 #include "vsd/interop/distribution.hpp"
 #include "vsd/interop/export.hpp"
 #include "vsd/pipeline/run.hpp"
@@ -15,6 +19,30 @@
 namespace vsd::cli {
 
 namespace {
+
+/// The logical scenario of `scenario export`'s input: a logical scenario file, or the one
+/// a run folder's manifest names.
+std::shared_ptr<const scenario::LogicalScenario> logicalOf(const std::filesystem::path& input) {
+  if (!std::filesystem::is_directory(input)) return scenario::loadLogicalScenario(input);
+  const auto manifest = nlohmann::json::parse(readTextFile(input / "manifest.json"));
+  return scenario::loadLogicalScenario(manifest.at("scenario_file").get<std::string>());
+}
+
+/// The functional scenario of `scenario export`'s input.
+std::string functionalScenarioOf(const std::filesystem::path& input) {
+  if (std::filesystem::is_directory(input)) return pipeline::readRunManifest(input).functionalScenario;
+  return scenario::loadLogicalScenario(input)->name;
+}
+
+/// --only failures judges by the scenario's criteria: each must be a comparison (docs/cli.md
+/// "Criteria"), checked before any work.
+void checkCriteriaOf(const std::filesystem::path& input) {
+  try {
+    for (const auto& criterion : logicalOf(input)->criteria) checkCriterion(criterion.expression, criterion.where);
+  } catch (const nlohmann::json::exception&) {
+    // No readable manifest: the export reports the folder itself.
+  }
+}
 
 void addExport(CLI::App& scenario, CommandContext& context) {
   auto options = std::make_shared<interop::ScenarioExportOptions>();
@@ -27,7 +55,7 @@ void addExport(CLI::App& scenario, CommandContext& context) {
   command->add_option("input", options->input, "Logical scenario (YAML) or run folder (output of `vsd-sumo run`)")
       ->required()
       ->check(CLI::ExistingPath);
-  command->add_option("-o,--out", options->outputDir, "Output folder (refused if it exists, unless --force)")->required();
+  command->add_option("-o,--out", options->outputDir, "Output folder")->required();
   command->add_option("--format", options->format, "File format")->capture_default_str();
   addNumber(command, "-n,--samples", options->samples, "YAML input: number of concrete scenarios")->capture_default_str();
   addNumber(command, "-s,--seed", options->seed, "YAML input: random seed (as for `run`)")->capture_default_str();
@@ -40,10 +68,16 @@ void addExport(CLI::App& scenario, CommandContext& context) {
           std::map<std::string, interop::ScenarioExportOptions::Only>{{"all", interop::ScenarioExportOptions::Only::All},
                                                                       {"failures", interop::ScenarioExportOptions::Only::Failures}},
           CLI::ignore_case));
-  command->add_flag("--force", options->force, "Replace an existing output folder");
+  command->add_flag("--force", options->force,
+                    "Replace the export folder of another functional scenario (docs/output-policy.md)");
   command->callback([options, &context] {
     context.action = [options, &context] {
       options->commandLine = context.commandLine;
+      const auto status = checkOutput({options->outputDir, &output_kinds::scenarioExportFolder(),
+                                       functionalScenarioOf(options->input), options->force, "--out", "--force",
+                                       {{"input", options->input}}});
+      if (status != OutputStatus::New) options->force = true;  // the policy allowed the replacement
+      if (options->only == interop::ScenarioExportOptions::Only::Failures) checkCriteriaOf(options->input);
       fmt::print("{}", interop::exportScenarios(*options).report());
       return 0;
     };
@@ -68,6 +102,8 @@ void addDistribution(CLI::App& scenario, CommandContext& context) {
   command->callback([scenario_file, options, grid, grid_option, &context] {
     context.action = [scenario_file, options, grid, grid_option] {
       if (grid_option->count() > 0) options->grid = *grid;
+      checkOutput({options->output, &output_kinds::distributionFile(), "", false, "--out", "--force",
+                   {{"scenario", *scenario_file}}});
       const auto logical = scenario::loadLogicalScenario(*scenario_file);
       fmt::print("{}", interop::writeParameterDistribution(*logical, *options).report());
       return 0;

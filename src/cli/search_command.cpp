@@ -5,12 +5,22 @@
 
 #include "commands.hpp"
 #include "flags.hpp"
+#include "vsd/core/output_policy.hpp"
+#include "vsd/metrics/metrics.hpp"
+#include "vsd/pipeline/scenes.hpp"
+#include "vsd/scenario/logical_scenario.hpp"
 #include "vsd/search/search.hpp"
 #include "vsd/search/surrogate.hpp"
 
 namespace vsd::cli {
 
 namespace {
+
+std::vector<std::string> surrogateNames() {
+  std::vector<std::string> names;
+  for (const auto& entry : search::surrogateRegistry()) names.push_back(entry.name);
+  return names;
+}
 
 std::string surrogateHelp() {
   std::string text = "Surrogate that selects the executions:";
@@ -22,6 +32,7 @@ std::string surrogateHelp() {
 
 void addSearchCommand(CLI::App& app, CommandContext& context) {
   auto options = std::make_shared<search::SearchOptions>();
+  auto force = std::make_shared<bool>(false);
   CLI::App* command = app.add_subcommand(
       "search", "Find the concrete scenarios that meet a criterion with few executions: a surrogate picks which to "
                 "simulate; estimates how often the criterion occurs");
@@ -29,12 +40,18 @@ void addSearchCommand(CLI::App& app, CommandContext& context) {
       ->required()
       ->check(CLI::ExistingFile);
   command->add_option("-c,--criterion", options->criterion,
-                      "Critical if true: an expression over the scenario's metrics (\"d_min < 2\", "
-                      "\"ttc_min < 1 || d_min < 0.5\") or a criterion name from the scenario's `criteria:`")
+                      "Critical if true: a comparison of the scenario's metrics ('d_min < 2', 'ttc_min < 1 or "
+                      "d_min < 0.5'), optionally named ('close: d_min < 2'), or a criterion name from the "
+                      "scenario's `criteria:`; docs/cli.md \"Criteria\"")
       ->required();
   command->add_option("-o,--out", options->outputDir, "Output folder; re-running with it resumes the search")
       ->required();
-  command->add_option("--surrogate", options->surrogate, surrogateHelp())->capture_default_str();
+  command->add_flag("--force", *force,
+                    "Start afresh in a search folder of another scenario or criterion, discarding its search "
+                    "(docs/output-policy.md)");
+  command->add_option("--surrogate", options->surrogate, surrogateHelp())
+      ->capture_default_str()
+      ->check(CLI::IsMember(surrogateNames()));  // a name the registry lacks is a usage error
   addNumber(command, "--budget", options->budget, "Executions (SUMO simulations) in total")->capture_default_str();
   addNumber(command, "--initial", options->initial, "Executions of the initial random design")->capture_default_str();
   addNumber(command, "--round", options->roundSize, "Executions per later round")->capture_default_str();
@@ -62,16 +79,29 @@ void addSearchCommand(CLI::App& app, CommandContext& context) {
   addNumber(command, "--vectornet-steps", options->vectornetSteps,
             "vectornet: optimizer steps of each round's training (from scratch, on every execution so far)")
       ->capture_default_str();
-  addNumber(command, "--future-samples", options->futureSamples,
-            "vectornet: sampled futures per candidate; probability = share meeting the criterion")
+  addNumber(command, "--futures", options->futureSamples,
+            "vectornet: sampled futures per candidate; probability = share meeting the criterion (was "
+            "--future-samples)")
       ->capture_default_str();
   addNumber(command, "-s,--seed", options->seed, "Random seed; same seed, same choices")->capture_default_str();
   addNumber(command, "-j,--jobs", options->jobs, "Worker processes for the simulations")->capture_default_str();
   addNumber(command, "--threads", options->threads, "libtorch threads (bnn, vectornet)")->capture_default_str();
   addEgoStepCostOption(*command, options->egoStepCost);
-  command->callback([options, &context] {
-    context.action = [options, &context] {
+  command->callback([options, force, &context] {
+    context.action = [options, force, &context] {
       options->commandLine = context.commandLine;
+      const auto logical = scenario::loadLogicalScenario(options->scenarioFile);
+      const std::string subject = fmt::format("{}: {}", logical->name, options->criterion);
+      const auto status = checkOutput({options->outputDir, &output_kinds::searchFolder(), subject, *force, "--out",
+                                       "--force", {{"scenario", options->scenarioFile}}});
+      if (*force && status != OutputStatus::New) {
+        // The options and the criterion are checked before the old search is removed.
+        options->validate();
+        const metrics::MetricSet metric_set(logical->metrics, pipeline::scenarioAvailability(*logical),
+                                            logical->sourceFile.string() + ": metrics");
+        search::Criterion(options->criterion, *logical, metric_set.names());
+        search::discardSearchState(options->outputDir);
+      }
       fmt::print("{}", search::runSearch(*options).report());
       return 0;
     };

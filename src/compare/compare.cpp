@@ -10,13 +10,16 @@
 #include <ctime>
 #include <functional>
 #include <limits>
+#include <map>
 #include <numeric>
 #include <optional>
 
+#include "vsd/core/criterion_syntax.hpp"
 #include "vsd/core/error.hpp"
 #include "vsd/core/files.hpp"
 #include "vsd/core/interrupt.hpp"
 #include "vsd/core/log.hpp"
+#include "vsd/core/output_policy.hpp"
 #include "vsd/core/progress.hpp"
 #include "vsd/core/provenance.hpp"
 #include "vsd/model/model.hpp"
@@ -44,7 +47,8 @@ class Criteria {
   Criteria(const std::vector<report::CriterionSpec>& specs, const std::vector<std::string>& where,
            const std::vector<std::string>& metric_names) {
     for (std::size_t c = 0; c < specs.size(); ++c) {
-      expressions_.push_back(scenario::Expression::compile(specs[c].expression, metric_names, where[c]));
+      const auto checked = checkCriterion(specs[c].expression, where[c]);  // one syntax: comparisons
+      expressions_.push_back(scenario::Expression::compile(checked.expression, metric_names, where[c]));
     }
   }
   /// Per criterion: 1 fails, 0 passes, -1 when a metric is NaN (not computable).
@@ -62,26 +66,51 @@ class Criteria {
   std::vector<scenario::Expression> expressions_;
 };
 
-/// "name: expression" or a bare expression (named after itself).
-report::CriterionSpec parseCriterion(const std::string& text) {
-  const auto colon = text.find(':');
-  auto trim = [](std::string s) {
-    const auto first = s.find_first_not_of(" \t");
-    const auto last = s.find_last_not_of(" \t");
-    return first == std::string::npos ? std::string() : s.substr(first, last - first + 1);
-  };
-  report::CriterionSpec spec;
-  if (colon == std::string::npos) {
-    spec.expression = trim(text);
-    spec.name = spec.expression;
-  } else {
-    spec.name = trim(text.substr(0, colon));
-    spec.expression = trim(text.substr(colon + 1));
+/// The criteria of a comparison: the scenario's own (scenario mode), then those of
+/// --criterion ("criterion" or "name: criterion", the syntax `search` takes too).
+void addCriteria(const CompareOptions& options, const scenario::LogicalScenario* logical,
+                 report::Comparison& comparison, std::vector<std::string>& where) {
+  if (logical != nullptr) {
+    for (const auto& criterion : logical->criteria) {
+      comparison.criteria.push_back({criterion.name, criterion.expression});
+      where.push_back(criterion.where);
+    }
   }
-  if (spec.name.empty() || spec.expression.empty()) {
-    throw ConfigError::field("command line", "--criterion", text, "'name: expression', e.g. 'close: d_min < 2'");
+  for (const auto& text : options.criteria) {
+    const bool named = logical != nullptr && std::any_of(logical->criteria.begin(), logical->criteria.end(),
+                                                         [&](const auto& c) { return c.name == text; });
+    if (named) continue;  // a name of the scenario's criteria: compared already
+    const auto split = splitNamedCriterion(text, "command line: --criterion");
+    comparison.criteria.push_back({split.name, split.criterion});
+    where.push_back("command line: --criterion");
   }
-  return spec;
+}
+
+/// Scenarios of labels the model never trained on are out of its distribution: said in
+/// the report and on stderr (a bias of metres per second squared otherwise passes silently).
+void warnAboutUnseenLabels(const model::Predictor& predictor, report::Comparison& comparison) {
+  const auto& info = predictor.info();
+  if (!info.trained || info.labels.empty()) return;
+  std::map<std::string, std::size_t> unseen;
+  for (const auto& row : comparison.scenarios) {
+    if (std::find(info.labels.begin(), info.labels.end(), row.label) == info.labels.end()) ++unseen[row.label];
+  }
+  for (const auto& [label, count] : unseen) {
+    const std::string warning = fmt::format(
+        "the model never trained on label '{}' (it trained on {}): its predictions for these {} scenarios are out of "
+        "its training distribution",
+        label, fmt::join(info.labels, ", "), count);
+    spdlog::warn("{}", warning);
+    comparison.warnings.push_back(warning);
+  }
+}
+
+/// What a comparison is about (its output folder's subject, docs/output-policy.md).
+std::string comparisonSubject(const CompareOptions& options) {
+  std::vector<std::string> inputs;
+  if (!options.scenarioFile.empty()) inputs.push_back(options.scenarioFile.stem().string());
+  for (const auto& path : options.data) inputs.push_back(path.filename().string());
+  return fmt::format("{} with {}", fmt::join(inputs, ", "), options.model.filename().string());
 }
 
 
@@ -229,10 +258,7 @@ Run compareScenario(const CompareOptions& options, const model::Predictor& predi
   comparison.metricNames = metric_set.names();
   comparison.metricUnits = metric_set.units();
   std::vector<std::string> where;
-  for (const auto& criterion : logical->criteria) {
-    comparison.criteria.push_back({criterion.name, criterion.expression});
-    where.push_back(criterion.where);
-  }
+  addCriteria(options, logical.get(), comparison, where);
   const Criteria criteria(comparison.criteria, where, comparison.metricNames);
 
   // 1. Scenes before simulation.
@@ -353,10 +379,7 @@ Run compareDatasets(const CompareOptions& options, const model::Predictor& predi
   comparison.metricNames = metric_set.names();
   comparison.metricUnits = metric_set.units();
   std::vector<std::string> where;
-  for (const auto& text : options.criteria) {
-    comparison.criteria.push_back(parseCriterion(text));
-    where.push_back("--criterion '" + text + "'");
-  }
+  addCriteria(options, nullptr, comparison, where);
   const Criteria criteria(comparison.criteria, where, comparison.metricNames);
   const PredictionScorer scorer(metric_set, criteria, predictor.info().metricIntervals);
   const auto predict_options = drawOptions(options, predictor);
@@ -425,14 +448,13 @@ void CompareOptions::validate() const {
   if (jobs < 1 || jobs > 256) throw ConfigError::field("command line", "--jobs", std::to_string(jobs), "1 .. 256");
   if (threads < 1 || threads > 256) throw ConfigError::field("command line", "--threads", std::to_string(threads), "1 .. 256");
   if (worst < 0 || worst > 50) throw ConfigError::field("command line", "--worst", std::to_string(worst), "0 .. 50");
-  if (draws < 0 || draws > 10000) throw ConfigError::field("command line", "--draws", std::to_string(draws), "0 .. 10000");
+  if (draws < 0 || draws > 10000) throw ConfigError::field("command line", "--futures", std::to_string(draws), "0 .. 10000");
   if (!(confidence >= 0.5 && confidence <= 1.0)) {
     throw ConfigError::field("command line", "--confidence", formatValue(confidence), "0.5 .. 1");
   }
   if (batch < 1 || batch > 4096) throw ConfigError::field("command line", "--batch", std::to_string(batch), "1 .. 4096");
-  if (!scenarioFile.empty() && (!metrics.empty() || !criteria.empty())) {
-    throw ConfigError("compare: --metrics and --criterion are for datasets; a scenario file defines its own "
-                      "'metrics' and 'criteria'");
+  if (!scenarioFile.empty() && !metrics.empty()) {
+    throw ConfigError("command line: compare: --metrics is for datasets; a scenario file defines its own 'metrics'");
   }
 }
 
@@ -462,13 +484,16 @@ CompareSummary runComparison(const CompareOptions& options_in) {
   if (!builtin && !fs::is_regular_file(options.model)) {
     throw ModelError(fmt::format("--model {}: no such file", options.model.string()));
   }
+  std::vector<std::pair<std::string, fs::path>> inputs = {{"--model", options.model}, {"scenario", options.scenarioFile}};
+  for (const auto& path : options.data) inputs.emplace_back("--data", path);
+  const std::string subject = comparisonSubject(options);
+  checkOutput({options.output, &output_kinds::comparisonFolder(), subject, options.force, "--out", "--force", inputs});
   const model::Predictor predictor(options.model, options.threads);
-  OutputFolder::Options folder_options;
-  folder_options.refuseExisting = !options.force;  // before any work
-  OutputFolder folder(options.output, folder_options);
+  OutputFolder folder(options.output);
 
   Run run = options.scenarioFile.empty() ? compareDatasets(options, predictor) : compareScenario(options, predictor);
   auto& comparison = run.comparison;
+  warnAboutUnseenLabels(predictor, comparison);
   comparison.draws = drawOptions(options, predictor).samples;
   comparison.confidence = options.confidence;
   const auto& info = predictor.info();
@@ -498,15 +523,16 @@ CompareSummary runComparison(const CompareOptions& options_in) {
   }
   report::writeComparisonCsv(comparison, folder.stage("comparison.csv"));
   folder.staged("comparison.csv");
-  folder.stageText("index.html", report::renderHtmlReport(comparison, summary.statistics, run.worst));
+  folder.stageText("report.html", report::renderHtmlReport(comparison, summary.statistics, run.worst));
   nlohmann::json manifest;
   manifest["tool"] = "vsd-sumo";
   manifest["kind"] = "comparison";
+  manifest["subject"] = subject;
   for (const auto& [key, value] : comparison.provenance) manifest["provenance"][key] = value;
   folder.commit(manifest);
 
   summary.output = options.output;
-  summary.files = {options.output / "index.html", options.output / "comparison.csv"};
+  summary.files = {options.output / "report.html", options.output / "comparison.csv"};
   summary.seconds = secondsSince(start);
   summary.comparison = std::move(comparison);
   return summary;
@@ -514,7 +540,7 @@ CompareSummary runComparison(const CompareOptions& options_in) {
 
 std::string CompareSummary::report() const {
   std::string text = report::textSummary(comparison, statistics);
-  text += fmt::format("  total {:.1f} s\nreport: {}\n", seconds, (output / "index.html").string());
+  text += fmt::format("  total {:.1f} s\nreport: {}\n", seconds, (output / "report.html").string());
   text += fmt::format("table:  {}\n", (output / "comparison.csv").string());
   return text;
 }

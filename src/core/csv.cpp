@@ -11,6 +11,16 @@
 
 namespace vsd {
 
+std::string columnWithUnit(const std::string& name, const std::string& unit) {
+  if (unit.empty() || unit == "1") return name;
+  std::string suffix;
+  for (const char c : unit) {
+    if (c == '/' || c == ' ' || c == '*') suffix += '_';
+    else if (c != '^') suffix += c;
+  }
+  return name + "_" + suffix;
+}
+
 std::string formatNumber(double value) {
   if (std::isnan(value)) return "";
   if (std::isinf(value)) return value > 0 ? "inf" : "-inf";

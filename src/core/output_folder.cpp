@@ -17,6 +17,7 @@
 #include "vsd/core/fault.hpp"
 #include "vsd/core/files.hpp"
 #include "vsd/core/interrupt.hpp"
+#include "vsd/core/output_policy.hpp"
 
 namespace fs = std::filesystem;
 using nlohmann::json;
@@ -215,6 +216,14 @@ std::vector<fs::path> OutputFolder::commit(const json& manifest_in) {
   json manifest = manifest_in;
   json outputs = json::object();
   const auto files = stagedFiles(staging_);
+  // The output policy's last line of defence, for every writer of a folder: a file of the
+  // new set whose name is taken by a file no manifest lists is the user's (docs/output-policy.md).
+  const auto old_set = listedOutputs(folder_);
+  const std::vector<std::string> listed(old_set.begin(), old_set.end());
+  for (const auto& name : files) {
+    std::error_code ec;
+    if (fs::exists(fs::symlink_status(folder_ / name, ec))) refuseUnlistedFile(folder_, name, listed, "");
+  }
   for (const auto& name : files) {
     const fs::path path = staging_ / name;
     faultPoint("folder.fsync:" + name);
@@ -225,7 +234,7 @@ std::vector<fs::path> OutputFolder::commit(const json& manifest_in) {
   faultPoint("folder.manifest");
   writeJsonDurably(staging_ / kManifest, manifest);
   json obsolete = json::array();
-  for (const auto& old : listedOutputs(folder_)) {
+  for (const auto& old : old_set) {
     if (!outputs.contains(old)) obsolete.push_back(old);
   }
   writeJsonDurably(staging_ / kObsolete, obsolete);

@@ -26,7 +26,7 @@ std::string escapeXml(const std::string& text) {
 }
 
 SvgCanvas::SvgCanvas(Vec2 lo, Vec2 hi, int width, int height, bool equal_aspect, int margin)
-    : lo_(lo), width_(width), height_(height), margin_(margin) {
+    : lo_(lo), width_(width), height_(height), margin_(margin), equalAspect_(equal_aspect) {
   const Vec2 span = (hi - lo).cwiseMax(Vec2(1e-9, 1e-9));
   const double inner_width = width - 2.0 * margin;
   scaleX_ = inner_width / span.x();
@@ -117,11 +117,36 @@ void SvgCanvas::linePx(double x0, double y0, double x1, double y1, const std::st
                        x0, y0, x1, y1, colour, width_px);
 }
 
+/// A bar of a round length (1, 2 or 5 times a power of ten metres, at most about a quarter
+/// of the drawing's width) at the bottom right, inside the margin.
+std::string SvgCanvas::scaleBar() const {
+  const double longest = std::min(140.0, 0.25 * (width_ - 2.0 * margin_)) / scaleX_;
+  if (!(longest > 0.0) || !std::isfinite(longest)) return {};
+  const double magnitude = std::pow(10.0, std::floor(std::log10(longest)));
+  double metres = magnitude;
+  for (const double factor : {2.0, 5.0}) {
+    if (factor * magnitude <= longest) metres = factor * magnitude;
+  }
+  const double px = metres * scaleX_;
+  const double x1 = width_ - margin_;
+  const double x0 = x1 - px;
+  const double y = height_ - 10.0;
+  const std::string label = metres >= 1.0 ? fmt::format("{:g} m", metres) : fmt::format("{:g} cm", 100.0 * metres);
+  return fmt::format(
+      "<g class=\"scale-bar\" stroke=\"#333333\" stroke-width=\"1.5\">"
+      "<line x1=\"{0:.1f}\" y1=\"{2:.1f}\" x2=\"{1:.1f}\" y2=\"{2:.1f}\"/>"
+      "<line x1=\"{0:.1f}\" y1=\"{3:.1f}\" x2=\"{0:.1f}\" y2=\"{2:.1f}\"/>"
+      "<line x1=\"{1:.1f}\" y1=\"{3:.1f}\" x2=\"{1:.1f}\" y2=\"{2:.1f}\"/></g>\n"
+      "<text x=\"{4:.1f}\" y=\"{5:.1f}\" font-size=\"10.0\" font-family=\"sans-serif\" fill=\"#333333\" "
+      "text-anchor=\"middle\">{6}</text>\n",
+      x0, x1, y, y - 4.0, 0.5 * (x0 + x1), y - 6.0, label);
+}
+
 std::string SvgCanvas::str() const {
   return fmt::format(
       "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{0}\" height=\"{1}\" viewBox=\"0 0 {0} {1}\">\n"
-      "<rect width=\"100%\" height=\"100%\" fill=\"white\"/>\n{2}</svg>\n",
-      width_, height_, body_);
+      "<rect width=\"100%\" height=\"100%\" fill=\"white\"/>\n{2}{3}</svg>\n",
+      width_, height_, body_, equalAspect_ ? scaleBar() : std::string());
 }
 
 std::string composeSvgRow(const std::vector<std::string>& panels, const std::string& title, int gap_px) {

@@ -30,6 +30,7 @@
 #include "vsd/core/provenance.hpp"
 #include "vsd/core/interrupt.hpp"
 #include "vsd/core/log.hpp"
+#include "vsd/core/output_policy.hpp"
 #include "vsd/core/progress.hpp"
 #include "vsd/core/svg.hpp"
 #include "vsd/metrics/metrics.hpp"
@@ -799,6 +800,9 @@ ExperimentSummary runExperiment(const ExperimentOptions& options) {
   fs::path output = options.output;
   if (output.empty()) output = fs::path("results") / (spec.name + (options.quick ? "-quick" : ""));
   refuseDirtyCommittedResults(output, options.allowDirty, "--allow-dirty");
+  // The output policy (docs/output-policy.md): a re-run of the same experiment resumes from its cache.
+  checkOutput({output, &output_kinds::experimentFolder(), spec.name, options.force, "--out", "--force",
+               {{"spec", options.spec}}});
   return ExperimentRunner(options, std::move(spec), output).run();
 }
 

@@ -367,6 +367,11 @@ class Trainer {
                                    options_.output.string()));
     }
     if (writes() && calibrates()) calibrate();  // rank 0 alone: it holds the validation split and writes the model file
+    if (writes()) {
+      // A finished training leaves nothing to resume: its state (megabytes) would only be a leftover.
+      std::error_code ignored;
+      fs::remove(lastCheckpoint_, ignored);
+    }
     summary_.seconds = secondsSince(start_);
     summary_.samplesPerSecond = trainingSeconds_ > 0.0 ? trainedSamples_ / trainingSeconds_ : 0.0;
     summary_.allreduceShare = trainingSeconds_ > 0.0 ? summary_.allreduceSeconds / trainingSeconds_ : 0.0;

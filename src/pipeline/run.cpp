@@ -22,6 +22,7 @@
 #include "vsd/core/files.hpp"
 #include "vsd/core/interrupt.hpp"
 #include "vsd/core/log.hpp"
+#include "vsd/core/output_policy.hpp"
 #include "vsd/core/progress.hpp"
 #include "vsd/metrics/metrics.hpp"
 #include "vsd/pipeline/outcome_codec.hpp"
@@ -60,6 +61,9 @@ void RunOptions::validate() const {
   }
   if (compression < 0 || compression > 9) {
     throw ConfigError::field("command line", "--compression", std::to_string(compression), "a deflate level 0 .. 9");
+  }
+  if (maxFailures > 100'000) {
+    throw ConfigError::field("command line", "--max-failures", std::to_string(maxFailures), "0 (never stop early) .. 100000");
   }
   if (isolation == Isolation::None && jobs != 1) {
     throw ConfigError::field("command line", "--jobs", std::to_string(jobs),
@@ -367,13 +371,54 @@ std::string faultReason(const WorkerFault& fault) {
   return fmt::format("worker process {}", fault.what());
 }
 
+/// Groups failure messages that differ only in numbers ("at t = 3.4 s").
+std::string failureKind(const std::string& failure) {
+  static const std::regex numbers("[-+]?[0-9]+(\\.[0-9]+)?");
+  return std::regex_replace(failure, numbers, "#");
+}
+
+/// Fail fast (RunOptions::maxFailures): learns the fates of the run's first scenarios as
+/// they become known (a worker lost in a scenario, or its outcome) and stops the run when
+/// all of them failed the same way - a fault every scenario will meet.
+class FailFast {
+ public:
+  explicit FailFast(const RunOptions& options)
+      : first_(options.firstSample), count_(options.samples > options.maxFailures ? options.maxFailures : 0) {}
+
+  /// Scenario `index` completed (`failure` empty) or failed; throws SumoError when the first
+  /// scenarios all failed for one reason.
+  void note(std::uint64_t index, const std::string& failure) {
+    if (decided_ || index < first_ || index - first_ >= count_) return;
+    if (failure.empty()) {
+      decided_ = true;
+      return;
+    }
+    failures_.emplace(index, failure);
+    if (failures_.size() < count_) return;
+    decided_ = true;
+    const std::string kind = failureKind(failures_.begin()->second);
+    for (const auto& [other, reason] : failures_) {
+      if (failureKind(reason) != kind) return;
+    }
+    throw SumoError(fmt::format("the first {} concrete scenarios all failed the same way: {}; stopped early, nothing "
+                                "written (--max-failures 0 runs every scenario)",
+                                count_, failures_.begin()->second));
+  }
+
+ private:
+  std::uint64_t first_;
+  std::uint64_t count_;
+  bool decided_ = false;
+  std::map<std::uint64_t, std::string> failures_;
+};
+
 /// Receives the outcomes of each batch from its worker, in sample order, and
 /// turns worker faults into failed scenarios: the worker is restarted where it
 /// stopped, without the scenario (or group) that brought it down.
 class BatchCollector {
  public:
   BatchCollector(const Context& context, RecoveryPlan& plan, WorkerPool& pool)
-      : context_(context), plan_(plan), pool_(pool) {}
+      : context_(context), plan_(plan), pool_(pool), failFast_(context.options) {}
 
   std::vector<ScenarioOutcome> collect(std::size_t batch) {
     const int worker = static_cast<int>(batch % static_cast<std::size_t>(pool_.size()));
@@ -384,6 +429,7 @@ class BatchCollector {
         message = pool_.receive(worker);
       } catch (const WorkerLost& lost) {
         recordLoss(batch, lost);
+        for (const auto& [index, reason] : plan_.failed) failFast_.note(index, reason);
         plan_.resumeAt[static_cast<std::size_t>(worker)] = batch;
         pool_.restart(worker);
         continue;
@@ -391,6 +437,7 @@ class BatchCollector {
       const auto part = static_cast<Part>(message.back());
       message.pop_back();
       for (auto& outcome : decodeOutcomes(message)) {
+        failFast_.note(outcome.index, outcome.failure);
         plan_.done.insert(outcome.index);
         received[outcome.index] = std::move(outcome);
       }
@@ -471,13 +518,8 @@ class BatchCollector {
   const Context& context_;
   RecoveryPlan& plan_;
   WorkerPool& pool_;
+  FailFast failFast_;
 };
-
-/// Groups failure messages that differ only in numbers ("at t = 3.4 s").
-std::string failureKind(const std::string& failure) {
-  static const std::regex numbers("[-+]?[0-9]+(\\.[0-9]+)?");
-  return std::regex_replace(failure, numbers, "#");
-}
 
 class SummaryBuilder {
  public:
@@ -680,6 +722,8 @@ road::NetWriter chooseNetWriter(const scenario::LogicalScenario& logical, const 
 
 }  // namespace
 
+fs::path defaultRunFolder(const scenario::LogicalScenario& logical) { return fs::path("out") / logical.name; }
+
 RunSummary runScenarios(const RunOptions& options, const OutcomeCallback& on_outcome) {
   return runScenarios(scenario::loadLogicalScenario(options.scenarioFile), options, on_outcome);
 }
@@ -690,7 +734,7 @@ RunSummary runRange(const std::shared_ptr<const scenario::LogicalScenario>& logi
                     const std::optional<ShardInfo>& shard, const OutcomeCallback& on_outcome);
 
 fs::path outputFolder(const scenario::LogicalScenario& logical, const RunOptions& options) {
-  return options.outputDir.empty() ? fs::path("out") / logical.name : options.outputDir;
+  return options.outputDir.empty() ? defaultRunFolder(logical) : options.outputDir;
 }
 
 /// True if `folder` holds a finished shard of the same sweep whose files are all there.
@@ -752,8 +796,10 @@ using ConsumeBatch = std::function<void(const std::vector<ScenarioOutcome>&)>;
 /// order when its last part is ready. Nothing to recover: a fault ends the caller.
 void simulateInProcess(const Context& context, const ConsumeBatch& consume) {
   const RecoveryPlan nothing_failed;
+  FailFast fail_fast(context.options);
   std::vector<ScenarioOutcome> batch;
   processBatches(context, nothing_failed, 0, 1, [&](Part part, std::vector<ScenarioOutcome> outcomes) {
+    for (const auto& outcome : outcomes) fail_fast.note(outcome.index, outcome.failure);
     std::move(outcomes.begin(), outcomes.end(), std::back_inserter(batch));
     if (part != Part::BatchEnd) return;
     std::sort(batch.begin(), batch.end(), [](const auto& a, const auto& b) { return a.index < b.index; });
@@ -852,7 +898,11 @@ RunSummary runRange(const std::shared_ptr<const scenario::LogicalScenario>& logi
   const fs::path out = outputFolder(*logical, options);
   std::optional<OutputFolder> folder;
   std::optional<TemporaryDirectory> temporary_work;
-  if (options.writeFiles) folder.emplace(out);
+  if (options.writeFiles) {
+    checkOutput({out, &output_kinds::runFolder(), logical->name, options.force, "--out", "--force",
+                 {{"scenario", logical->sourceFile}}});
+    folder.emplace(out);
+  }
   if (context.options.keepNets && folder) {
     context.workDir = folder->stagingPath() / ".work";  // scratch inside the staging folder, not an output
     ensureDirectory(context.workDir);

@@ -50,9 +50,12 @@ void drawAxes(SvgCanvas& canvas, const Vec2& lo, const Vec2& hi, const std::stri
 
 /// One named curve in the c-th colour, its name in the legend's c-th line.
 void drawCurve(SvgCanvas& canvas, std::size_t c, const std::string& name, const Polyline& points, bool markers) {
-  static const char* const kColours[] = {"#1f78b4", "#e31a1c", "#33a02c", "#ff7f00", "#6a3d9a", "#b15928"};
+  // Twelve colours told apart at a glance (a report compares up to ten metrics); the grey
+  // of the dashed reference diagonal is not among them. Beyond twelve, curves are dashed.
+  static const char* const kColours[] = {"#1f77b4", "#ff7f0e", "#2ca02c", "#d62728", "#9467bd", "#8c564b",
+                                         "#e377c2", "#17becf", "#bcbd22", "#222222", "#6b6ecf", "#b5cf6b"};
   const std::string colour = kColours[c % std::size(kColours)];
-  canvas.polyline(points, colour, 1.6);
+  canvas.polyline(points, colour, 1.6, /*dashed=*/c >= std::size(kColours));
   if (markers) {
     for (const auto& p : points) canvas.circle(p, 2.5, colour);
   }

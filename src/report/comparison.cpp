@@ -208,14 +208,17 @@ void writeComparisonCsv(const Comparison& comparison, const std::filesystem::pat
     CsvWriter csv(stream);
     std::vector<std::string> header = {"sample", "label", "status", "failure"};
     for (const auto& name : comparison.inputNames) header.push_back(name);
-    header.insert(header.end(), {"ade_m", "fde_m"});
+    header.insert(header.end(), {columnWithUnit("ade", "m"), columnWithUnit("fde", "m")});
     const bool intervals = comparison.draws > 0;
-    for (const auto& name : comparison.metricNames) {
-      header.push_back(name + "_predicted");
-      header.push_back(name + "_" + comparison.referenceName);
-      header.push_back(name + "_error");
+    for (std::size_t m = 0; m < comparison.metricNames.size(); ++m) {
+      // Every column of a quantity carries its unit (the same convention as ade_m).
+      const auto& name = comparison.metricNames[m];
+      const std::string unit = m < comparison.metricUnits.size() ? comparison.metricUnits[m] : std::string();
+      header.push_back(columnWithUnit(name + "_predicted", unit));
+      header.push_back(columnWithUnit(name + "_" + comparison.referenceName, unit));
+      header.push_back(columnWithUnit(name + "_error", unit));
       if (!intervals) continue;
-      for (const char* q : {"_p05", "_p25", "_median", "_p75", "_p95"}) header.push_back(name + q);
+      for (const char* q : {"_p05", "_p25", "_median", "_p75", "_p95"}) header.push_back(columnWithUnit(name + q, unit));
     }
     for (const auto& criterion : comparison.criteria) {
       header.push_back(criterion.name + "_predicted_fail");
@@ -260,6 +263,7 @@ std::string textSummary(const Comparison& comparison, const ComparisonStatistics
   std::ostringstream out;
   out << fmt::format("{}: {} compared, {} without a {} reference\n", comparison.title, s.compared, s.failed,
                      comparison.referenceName);
+  for (const auto& warning : comparison.warnings) out << "  warning: " << warning << "\n";
   out << fmt::format("  ADE  mean {:.3f} m, median {:.3f} m, p90 {:.3f} m, max {:.3f} m\n", s.ade.mean, s.ade.median,
                      s.ade.p90, s.ade.max);
   out << fmt::format("  FDE  mean {:.3f} m, median {:.3f} m, p90 {:.3f} m, max {:.3f} m\n", s.fde.mean, s.fde.median,

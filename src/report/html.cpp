@@ -58,6 +58,10 @@ figure { margin: 0 0 18px; max-width: 560px; }
 figcaption { font-size: 0.9em; color: #444; margin-top: 2px; }
 .muted { color: #57606a; font-size: 0.9em; }
 .warn { color: #b42318; }
+p.warning { color: #b42318; background: #fff4f2; border: 1px solid #f3c2b8; padding: 6px 10px; }
+/* Wide tables scroll inside their own box: the page never scrolls sideways. */
+.scroll, section { overflow-x: auto; max-width: 100%; }
+td code { overflow-wrap: anywhere; }
 code { background: #f3f5f7; padding: 0 3px; }
 )css";
 
@@ -292,9 +296,14 @@ void scenarioTable(std::ostringstream& out, const Comparison& comparison) {
   out << "<section id=\"scenarios\"><h2>Scenarios</h2>\n<p class=\"muted\">";
   if (shown < rows.size()) out << fmt::format("The {} with the largest ADE of {}; ", shown, rows.size());
   out << "every scenario is in <code>comparison.csv</code>. Click a column to sort.</p>\n";
-  out << "<table class=\"sortable\"><thead><tr><th>sample</th><th>label</th><th>ADE (m)</th><th>FDE (m)</th>";
-  for (const auto& name : comparison.metricNames) {
-    out << fmt::format("<th>{} predicted</th><th>{} {}</th>", html(name), html(name), html(comparison.referenceName));
+  out << "<div class=\"scroll\"><table class=\"sortable\"><thead><tr><th>sample</th><th>label</th><th>ADE (m)</th>"
+         "<th>FDE (m)</th>";
+  for (std::size_t m = 0; m < comparison.metricNames.size(); ++m) {
+    const std::string unit = m < comparison.metricUnits.size() && !comparison.metricUnits[m].empty()
+                                 ? " (" + html(comparison.metricUnits[m]) + ")"
+                                 : std::string();
+    const auto& name = html(comparison.metricNames[m]);
+    out << fmt::format("<th>{0} predicted{2}</th><th>{0} {1}{2}</th>", name, html(comparison.referenceName), unit);
   }
   out << "</tr></thead>\n<tbody>\n";
   for (std::size_t r = 0; r < shown; ++r) {
@@ -306,7 +315,7 @@ void scenarioTable(std::ostringstream& out, const Comparison& comparison) {
     }
     out << "</tr>\n";
   }
-  out << "</tbody></table></section>\n";
+  out << "</tbody></table></div></section>\n";
 }
 
 }  // namespace
@@ -330,8 +339,10 @@ std::string renderHtmlReport(const Comparison& comparison, const ComparisonStati
          "<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">\n";
   out << fmt::format("<title>vsd-sumo comparison: {}</title>\n<style>{}</style>\n</head>\n<body>\n",
                      html(comparison.title), kStyle);
-  out << fmt::format("<header><h1>Predicted vs {}: {}</h1>\n<p class=\"lead\">{}</p></header>\n",
+  out << fmt::format("<header><h1>Predicted vs {}: {}</h1>\n<p class=\"lead\">{}</p>\n",
                      html(comparison.referenceName), html(comparison.title), leadSentence(comparison, statistics));
+  for (const auto& warning : comparison.warnings) out << "<p class=\"warning\">Warning: " << html(warning) << "</p>\n";
+  out << "</header>\n";
   summarySection(out, comparison, statistics);
   calibrationSection(out, comparison, statistics);
   chartSections(out, comparison);

@@ -7,6 +7,7 @@
 
 #include "charts.hpp"
 #include "vsd/core/svg.hpp"
+#include "vsd/report/numbers.hpp"
 
 namespace vsd::report {
 
@@ -14,8 +15,9 @@ namespace {
 
 std::string html(const std::string& text) { return escapeXml(text); }
 
-std::string percent(double share) {
-  return std::isfinite(share) ? fmt::format("{:.4f}&nbsp;%", 100.0 * share) : "&ndash;";
+/// A share as a percentage with `decimals` (those its interval makes meaningful).
+std::string percent(double share, int decimals) {
+  return std::isfinite(share) ? fmt::format("{:.{}f}&nbsp;%", 100.0 * share, decimals) : "&ndash;";
 }
 
 void curveSection(std::ostringstream& out, const SearchReport& report) {
@@ -32,9 +34,10 @@ void rateSection(std::ostringstream& out, const SearchReport& report) {
          "<tr><th>estimate</th><th>method</th><th>executions</th><th>P</th><th>95&nbsp;% low</th>"
          "<th>95&nbsp;% high</th><th>interval width</th></tr>\n";
   for (const auto& row : report.rates) {
+    const int decimals = decimalsFor(100.0 * (row.high - row.low));
     out << fmt::format("<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr>\n",
-                       html(row.name), html(row.method), row.executions, percent(row.estimate), percent(row.low),
-                       percent(row.high), percent(row.high - row.low));
+                       html(row.name), html(row.method), row.executions, percent(row.estimate, decimals),
+                       percent(row.low, decimals), percent(row.high, decimals), percent(row.high - row.low, decimals));
   }
   out << "</table></section>\n";
 }

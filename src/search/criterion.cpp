@@ -3,9 +3,10 @@
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 
+#include <algorithm>
 #include <cmath>
-#include <regex>
 
+#include "vsd/core/criterion_syntax.hpp"
 #include "vsd/core/error.hpp"
 #include "vsd/metrics/metrics.hpp"
 
@@ -13,26 +14,10 @@ namespace vsd::search {
 
 namespace {
 
-bool mentions(const std::string& expression, const std::string& identifier) {
-  const std::regex word("(^|[^A-Za-z0-9_])" + identifier + "($|[^A-Za-z0-9_])");
-  return std::regex_search(expression, word);
-}
-
-/// Identifiers of the expression that are neither metrics of the run nor muparser functions/constants.
-std::vector<std::string> identifiersOf(const std::string& expression) {
-  static const std::regex identifier("[A-Za-z_][A-Za-z0-9_]*");
-  std::vector<std::string> names;
-  for (auto it = std::sregex_iterator(expression.begin(), expression.end(), identifier); it != std::sregex_iterator();
-       ++it) {
-    names.push_back(it->str());
-  }
-  return names;
-}
-
 /// A metric the registry knows but this scenario does not compute gets its own hint.
-void rejectUnknownMetrics(const std::string& expression, const std::string& where,
+void rejectUnknownMetrics(const std::vector<std::string>& names, const std::string& where,
                           const std::vector<std::string>& metric_names) {
-  for (const auto& name : identifiersOf(expression)) {
+  for (const auto& name : names) {
     const bool computed = std::find(metric_names.begin(), metric_names.end(), name) != metric_names.end();
     if (computed || metrics::findMetric(name) == nullptr) continue;
     throw ConfigError(fmt::format("{}: metric '{}' is not computed by this scenario (its metrics: {}); add it to "
@@ -41,26 +26,45 @@ void rejectUnknownMetrics(const std::string& expression, const std::string& wher
   }
 }
 
+/// A single word that is not a criterion of the scenario: a name that does not exist.
+void refuseMisspeltName(const std::string& text, const scenario::LogicalScenario& logical) {
+  const bool word = !text.empty() && text.find_first_not_of(
+                                         "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789_") == std::string::npos;
+  if (!word || std::isdigit(static_cast<unsigned char>(text.front()))) return;
+  std::vector<std::string> names;
+  for (const auto& criterion : logical.criteria) names.push_back(criterion.name);
+  throw ConfigError(fmt::format("command line: --criterion '{}': neither a comparison (e.g. 'd_min < 2') nor a criterion of {} "
+                                "(its criteria: {})",
+                                text, logical.sourceFile.string(),
+                                names.empty() ? std::string("none") : fmt::format("{}", fmt::join(names, ", "))));
+}
+
 }  // namespace
 
 Criterion::Criterion(const std::string& text, const scenario::LogicalScenario& logical,
                      const std::vector<std::string>& metric_names) {
-  std::string where = fmt::format("--criterion '{}'", text);
-  name_ = text;
-  expression_ = text;
-  for (const auto& named : logical.criteria) {
-    if (named.name == text) {
-      expression_ = named.expression;
-      where = named.where.empty() ? logical.sourceFile.string() + ": criteria." + named.name : named.where;
-    }
-  }
-  if (expression_.find_first_not_of(" \t") == std::string::npos) {
+  std::string where = "command line: --criterion";  // a usage error (exit 2) when the flag's text is wrong
+  if (text.find_first_not_of(" \t") == std::string::npos) {
     throw ConfigError::field("command line", "--criterion", "''",
-                             "an expression over metrics such as 'd_min < 2' or a criterion name of the scenario");
+                             "a criterion over metrics such as 'd_min < 2' or a criterion name of the scenario");
   }
-  rejectUnknownMetrics(expression_, where, metric_names);
+  const auto yaml = std::find_if(logical.criteria.begin(), logical.criteria.end(),
+                                 [&](const scenario::Criterion& c) { return c.name == text; });
+  if (yaml != logical.criteria.end()) {
+    name_ = yaml->name;
+    expression_ = yaml->expression;
+    where = yaml->where.empty() ? logical.sourceFile.string() + ": criteria." + yaml->name : yaml->where;
+  } else {
+    // The one syntax of a criterion flag (compare's too): "criterion" or "name: criterion".
+    const auto split = splitNamedCriterion(text, where);
+    name_ = split.name;
+    expression_ = split.criterion;
+    refuseMisspeltName(expression_, logical);
+  }
+  const CheckedCriterion checked = checkCriterion(expression_, where);
+  rejectUnknownMetrics(checked.names, where, metric_names);
   for (std::size_t m = 0; m < metric_names.size(); ++m) {
-    if (!mentions(expression_, metric_names[m])) continue;
+    if (std::find(checked.names.begin(), checked.names.end(), metric_names[m]) == checked.names.end()) continue;
     used_.push_back(metric_names[m]);
     usedColumns_.push_back(m);
   }
@@ -68,7 +72,7 @@ Criterion::Criterion(const std::string& text, const scenario::LogicalScenario& l
   for (const auto& criterion : logical.criteria) named.push_back(criterion.name);
   const std::string named_list = named.empty() ? std::string("none defined") : fmt::format("{}", fmt::join(named, ", "));
   try {
-    onAll_ = scenario::Expression::compile(expression_, metric_names, where);
+    onAll_ = scenario::Expression::compile(checked.expression, metric_names, where);
   } catch (const ConfigError& error) {
     throw ConfigError(fmt::format("{}; the scenario's named criteria: {}", error.what(), named_list));
   }
@@ -77,7 +81,7 @@ Criterion::Criterion(const std::string& text, const scenario::LogicalScenario& l
                                   "criteria ({})",
                                   where, fmt::join(metric_names, ", "), named_list));
   }
-  onUsed_ = scenario::Expression::compile(expression_, used_, where);
+  onUsed_ = scenario::Expression::compile(checked.expression, used_, where);
 }
 
 std::optional<bool> Criterion::verdict(const std::vector<double>& metric_values) const {

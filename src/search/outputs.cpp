@@ -233,6 +233,15 @@ std::string searchReportHtml(const std::vector<const SearchSummary*>& searches,
   return report::renderSearchReport(report);
 }
 
+void discardSearchState(const fs::path& folder) {
+  std::error_code ignored;
+  // The old search's outputs go first: a search resumes from whatever its folder holds.
+  for (const auto& [name, entry] : readManifestOutputs(folder)) fs::remove(folder / name, ignored);
+  fs::remove(folder / "manifest.json", ignored);
+  fs::remove(folder / "checkpoint.json", ignored);  // as checkpoint.cpp names it
+  fs::remove_all(folder / ".rounds", ignored);      // as roundFile() names them
+}
+
 fs::path detail::roundFile(const SearchContext& context, std::uint64_t round, const std::string& file) {
   return context.options.outputDir / ".rounds" / fmt::format("round-{:05d}.{}", round, file);
 }

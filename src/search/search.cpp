@@ -22,6 +22,7 @@
 #include "vsd/pipeline/run.hpp"
 #include "vsd/pipeline/scenes.hpp"
 #include "vsd/road/road_geometry.hpp"
+#include "vsd/report/numbers.hpp"
 #include "vsd/scenario/concrete_scenario.hpp"
 #include "vsd/vector/dataset.hpp"
 
@@ -469,10 +470,13 @@ std::string SearchSummary::report() const {
                       coverageCells, failedRuns);
   if (!criterionSeenInInitialDesign) text += "  note: the criterion was not met in the initial design\n";
   const auto& e = estimate;
-  text += fmt::format("  P(criterion) = {:.4f} % [{:.4f}, {:.4f}] % (95 %, {}); random stream alone: {}/{} = {:.4f} % "
-                      "[{:.4f}, {:.4f}] %; plain random sampling of the whole budget: interval width ~{:.4f} %\n",
-                      100 * e.estimate, 100 * e.low, 100 * e.high, fmt::format("{}, {} draws", e.method, e.draws), e.randomCritical, e.randomExecutions,
-                      100 * e.randomEstimate, 100 * e.randomLow, 100 * e.randomHigh, 100 * e.sameBudgetRandomWidth);
+  // As many digits as the interval makes meaningful (report::percentWithInterval).
+  text += fmt::format("  P(criterion) = {} (95 %, {}); random stream alone: {}/{} = {}; plain random sampling of the "
+                      "whole budget: interval width ~{:.{}f} %\n",
+                      report::percentWithInterval(e.estimate, e.low, e.high),
+                      fmt::format("{}, {} draws", e.method, e.draws), e.randomCritical, e.randomExecutions,
+                      report::percentWithInterval(e.randomEstimate, e.randomLow, e.randomHigh),
+                      100 * e.sameBudgetRandomWidth, report::decimalsFor(100 * e.sameBudgetRandomWidth));
   if (!outputs.empty()) {
     text += "  outputs:\n";
     for (const auto& path : outputs) text += fmt::format("    {}\n", path.string());

@@ -183,7 +183,11 @@ TEST(Baseline, RunReportsMaeAndRejectsBadInput) {
   EXPECT_EQ(report.mae.size(), 2u);
   EXPECT_GT(report.mae[1], 0.0);
   const auto predictions = CsvTable::read(dir.path() / "pred.csv");
-  EXPECT_EQ(predictions.header(), (std::vector<std::string>{"sample", "a_min", "a_min_predicted", "d_min", "d_min_predicted"}));
+  // Every column of a quantity names its unit.
+  EXPECT_EQ(predictions.header(), (std::vector<std::string>{"sample", "a_min_m_s2", "a_min_predicted_m_s2", "d_min_m",
+                                                            "d_min_predicted_m"}));
+  EXPECT_EQ(report.units, (std::vector<std::string>{"m/s^2", "m"}));
+  EXPECT_NE(report.report().find("m/s^2"), std::string::npos) << report.report();
   EXPECT_EQ(predictions.rows(), 120u);
 
   auto error_of = [&](BaselineOptions o) {
@@ -211,4 +215,11 @@ TEST(Baseline, RunReportsMaeAndRejectsBadInput) {
   bad = options;
   bad.model = "gp";
   EXPECT_NE(error_of(bad).find("--model"), std::string::npos);
+  // Run folders, like every other command; a dataset file is not what baseline learns from.
+  bad = options;
+  bad.train = dir.path() / "train" / "dataset.h5";
+  EXPECT_NE(error_of(bad).find("an HDF5 file (a dataset or traces); baseline learns from the concrete inputs of a "
+                               "run: give the run folder"),
+            std::string::npos)
+      << error_of(bad);
 }

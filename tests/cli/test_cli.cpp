@@ -33,7 +33,7 @@ TEST(Cli, HelpListsSubcommandsAndRunOptions) {
   EXPECT_NE(top.output.find("run"), std::string::npos);
   const auto run = test::run({test::vsdSumo().string(), "run", "--help"}, dir.path());
   EXPECT_EQ(run.exitCode, 0);
-  for (const char* option : {"--samples", "--seed", "--out", "--jobs", "--batch", "--keep-nets", "--fcd"}) {
+  for (const char* option : {"--samples", "--seed", "--out", "--jobs", "--net-batch", "--keep-nets", "--fcd", "--max-failures", "--force"}) {
     EXPECT_NE(run.output.find(option), std::string::npos) << option;
   }
 }
@@ -121,12 +121,12 @@ TEST(Cli, BadInputGivesOneLineNamingTheProblemAndNoOutput) {
     EXPECT_NE(result.output.find("vsd-sumo: error:"), std::string::npos) << c.name;
     EXPECT_TRUE(!fs::exists(out) || fs::is_empty(out)) << c.name << ": output left behind";
   }
-  // A missing scenario file and a bad flag are usage errors.
+  // A missing scenario file and a bad flag are usage errors (exit code 2, docs/cli.md).
   const auto missing = runForErrors({"run", (dir.path() / "nope.yaml").string()}, dir.path());
-  EXPECT_NE(missing.exitCode, 0);
+  EXPECT_EQ(missing.exitCode, 2);
   EXPECT_NE(missing.output.find("nope.yaml"), std::string::npos);
   const auto flag = runForErrors({"run", test::scenarioFile("acc.yaml").string(), "--jobs", "0"}, dir.path());
-  EXPECT_EQ(flag.exitCode, 1);
+  EXPECT_EQ(flag.exitCode, 2);
   EXPECT_NE(flag.output.find("--jobs: got '0'"), std::string::npos) << flag.output;
 }
 
@@ -134,7 +134,7 @@ TEST(Cli, FcdOutputReplaysInSumo) {
   TemporaryDirectory dir;
   const auto out = dir.path() / "out";
   const auto result = test::run({test::vsdSumo().string(), "--quiet", "run", test::scenarioFile("acc_lk.yaml").string(),
-                                 "--samples", "8", "--batch", "4", "--fcd", "--out", out.string()},
+                                 "--samples", "8", "--net-batch", "4", "--fcd", "--out", out.string()},
                                 dir.path());
   ASSERT_EQ(result.exitCode, 0) << result.output;
   const auto replay = test::run(
@@ -243,7 +243,7 @@ TEST(Cli, TrainPredictEvaluate) {
             0);
   const auto model = dir.path() / "models" / "m.pt";
   const auto trained = test::run({test::vsdSumo().string(), "train", "--data", data.string(), "--mix", "acc=30", "--out",
-                                  model.string(), "--steps", "30", "--batch", "8", "--hidden", "8", "--global-width",
+                                  model.string(), "--steps", "30", "--minibatch", "8", "--hidden", "8", "--global-width",
                                   "8", "--decoder-hidden", "16", "--decoder", "kinematic", "--decoder-option",
                                   "max_decel=8"},
                                  dir.path());
@@ -274,7 +274,7 @@ TEST(Cli, TrainPredictEvaluate) {
 
   const auto predictions = dir.path() / "pred.h5";
   const auto predicted = test::run({test::vsdSumo().string(), "predict", "--model", model.string(), "--data",
-                                    data.string(), "--out", predictions.string(), "--samples", "4"},
+                                    data.string(), "--out", predictions.string(), "--futures", "4"},
                                    dir.path());
   ASSERT_EQ(predicted.exitCode, 0) << predicted.output;
   const auto check = test::writeFile(dir.path() / "check.py", R"(
@@ -308,11 +308,11 @@ print("ok")
   EXPECT_EQ(read.exitCode, 0) << read.output;
   for (const std::string samples : {"-2", "0"}) {  // 0 would draw nothing: refused like a negative count
     const auto no_samples = runForErrors({"predict", "--model", model.string(), "--data", data.string(), "--out",
-                                          (dir.path() / "p.h5").string(), "--samples", samples},
+                                          (dir.path() / "p.h5").string(), "--futures", samples},
                                          dir.path());
-    EXPECT_EQ(no_samples.exitCode, 1);
+    EXPECT_EQ(no_samples.exitCode, 2);  // a flag's value: a usage error
     EXPECT_EQ(lineCount(no_samples.output), 1u) << no_samples.output;
-    EXPECT_NE(no_samples.output.find("--samples: got '" + samples + "', expected"), std::string::npos) << no_samples.output;
+    EXPECT_NE(no_samples.output.find("--futures: got '" + samples + "', expected"), std::string::npos) << no_samples.output;
     EXPECT_FALSE(fs::exists(dir.path() / "p.h5"));
   }
   const auto no_decoder = runForErrors({"train", "--data", data.string(), "--out", (dir.path() / "x.pt").string(),
@@ -412,7 +412,7 @@ TEST(Cli, NumbersFromFlagsAreCheckedWhereTheyEnter) {
     if (args[0] == "run" || args[0] == "export") args.insert(args.end(), {"--out", (out / args[0]).string()});
     if (args[0] == "train") args.insert(args.end(), {"--out", (out / "m.pt").string()});
     const auto result = runForErrors(args, dir.path());
-    EXPECT_EQ(result.exitCode, 1) << c.expected << ": " << result.output;
+    EXPECT_EQ(result.exitCode, 2) << c.expected << ": " << result.output;  // a flag's value: a usage error
     EXPECT_EQ(lineCount(result.output), 1u) << result.output;
     EXPECT_NE(result.output.find(c.expected), std::string::npos) << result.output;
     EXPECT_EQ(result.output.find("internal error"), std::string::npos) << result.output;

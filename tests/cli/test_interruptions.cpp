@@ -32,7 +32,7 @@ ProcessResult runVsd(const std::vector<std::string>& args, const fs::path& work,
 }
 
 std::vector<std::string> runArgs(const fs::path& out, int seed, int jobs) {
-  return {"run", test::scenarioFile("acc.yaml").string(), "--samples", "2", "--batch", "1", "--seed",
+  return {"run", test::scenarioFile("acc.yaml").string(), "--samples", "2", "--net-batch", "1", "--seed",
           std::to_string(seed), "--jobs", std::to_string(jobs), "--out", out.string()};
 }
 

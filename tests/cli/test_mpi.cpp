@@ -25,7 +25,7 @@ ProcessResult mpirun(int ranks, const std::vector<std::string>& args, const fs::
 }
 
 std::vector<std::string> runArgs(const fs::path& out) {
-  return {"run", test::scenarioFile("acc_lk.yaml").string(), "--samples", "40", "--batch", "10", "--seed", "3",
+  return {"run", test::scenarioFile("acc_lk.yaml").string(), "--samples", "40", "--net-batch", "10", "--seed", "3",
           "--out", out.string()};
 }
 
@@ -102,12 +102,12 @@ TEST(Mpi, AFailingRankEndsTheJobWithItsMessage) {
   test::writeFile(dir.path() / "sweep" / "shards" / "shard-0001-of-0002", "in the way\n");
   auto args = runArgs(dir.path() / "sweep");
   args[3] = "400";  // --samples: rank 0 has work left when rank 1 fails
-  args[5] = "100";  // --batch
+  args[5] = "100";  // --net-batch
   const auto job = mpirun(2, args, dir.path());
   EXPECT_NE(job.exitCode, 0) << job.output;
   EXPECT_NE(job.exitCode, 124) << "the job hung:\n" << job.output;
   EXPECT_NE(job.output.find("vsd-sumo: error: rank 1 of 2 (shard 1 of 2): "), std::string::npos) << job.output;
-  EXPECT_NE(job.output.find("shard-0001-of-0002: exists and is not a folder"), std::string::npos) << job.output;
+  EXPECT_NE(job.output.find("shard-0001-of-0002: exists and is a file vsd-sumo did not write, not a run folder"), std::string::npos) << job.output;
   EXPECT_FALSE(fs::exists(dir.path() / "sweep" / "shards" / "shard-0000-of-0002" / "manifest.json"));
 }
 
@@ -162,7 +162,7 @@ TEST(Slurm, ArrayScriptRunsOneShardPerTaskAndTheShardsMergeIntoOneRun) {
                       "SLURM_ARRAY_TASK_COUNT=" + std::to_string(count), "SLURM_ARRAY_TASK_MIN=0",
                       "SLURM_ARRAY_TASK_MAX=" + std::to_string(max), "bash", script,
                       test::scenarioFile("acc_lk.yaml").string(), (dir.path() / "sweep").string(), "--samples", "40",
-                      "--batch", "10", "--seed", "3"},
+                      "--net-batch", "10", "--seed", "3"},
                      dir.path());
   };
   for (int id : {1, 0}) {

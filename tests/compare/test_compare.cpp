@@ -117,13 +117,13 @@ TEST_F(CompareTest, ScenarioModeScoresLikeEvaluateOnTheSimulatedScenes) {
   for (std::size_t row = 0; row < 60; ++row) {
     EXPECT_EQ(compared.cell(row, compared.column("sample")), concrete.cell(row, concrete.column("sample")));
     EXPECT_EQ(compared.cell(row, compared.column("v_ego")), concrete.cell(row, concrete.column("v_ego")));
-    EXPECT_EQ(compared.cell(row, compared.column("d_min_simulated")), concrete.cell(row, concrete.column("d_min")));
+    EXPECT_EQ(compared.cell(row, compared.column("d_min_simulated_m")), concrete.cell(row, concrete.column("d_min")));
   }
-  const auto html = readTextFile(work_.path() / "report" / "index.html");
+  const auto html = readTextFile(work_.path() / "report" / "report.html");
   EXPECT_NE(html.find("The 3 scenarios with the largest ADE"), std::string::npos);
   EXPECT_NE(html.find("VectorNet prediction"), std::string::npos);
   EXPECT_NE(html.find(sha256OfFile(modelFile())), std::string::npos);
-  EXPECT_LT(fs::file_size(work_.path() / "report" / "index.html"), 5u * 1024 * 1024);
+  EXPECT_LT(fs::file_size(work_.path() / "report" / "report.html"), 5u * 1024 * 1024);
   // The same scoring without a report (what `vsd-sumo bench model` scores with): the same rows, nothing written.
   const auto rows = compareScenarioPredictions(scenarioOptions(work_.path() / "not written"), predictor);
   EXPECT_FALSE(fs::exists(work_.path() / "not written"));
@@ -159,7 +159,7 @@ TEST_F(CompareTest, AScenarioSumoFailsOnIsListedAndTheRestIsCompared) {
   const auto summary = runComparison(options);
   EXPECT_GT(summary.statistics.failed, 0u);
   EXPECT_GT(summary.statistics.compared, 0u);
-  const auto html = readTextFile(work_.path() / "short" / "index.html");
+  const auto html = readTextFile(work_.path() / "short" / "report.html");
   EXPECT_NE(html.find("without a simulated reference"), std::string::npos);
   EXPECT_NE(html.find("vehicle &#39;co&#39; reached the end of its road"), std::string::npos);
   const auto csv = CsvTable::read(work_.path() / "short" / "comparison.csv");
@@ -188,7 +188,7 @@ TEST_F(CompareTest, DatasetModeComparesAgainstTheRecordedFuture) {
   ASSERT_EQ(summary.statistics.criteria.size(), 2u);
   EXPECT_EQ(summary.statistics.criteria[1].name, "ttc_min < 1.5");
   const auto csv = CsvTable::read(work_.path() / "dataset_report" / "comparison.csv");
-  EXPECT_TRUE(csv.findColumn("d_min_recorded").has_value());
+  EXPECT_TRUE(csv.findColumn("d_min_recorded_m").has_value());
   EXPECT_TRUE(csv.findColumn("close_recorded_fail").has_value());
 }
 
@@ -232,24 +232,28 @@ TEST_F(CompareTest, DatasetModeWorksOnAnExportedRealMap) {
   }
   EXPECT_GT(offsets, summary.statistics.compared / 2);
   EXPECT_TRUE(std::isfinite(summary.statistics.ade.mean));
-  const auto html = readTextFile(work_.path() / "map_report" / "index.html");
+  const auto html = readTextFile(work_.path() / "map_report" / "report.html");
   EXPECT_NE(html.find("Predicted vs recorded"), std::string::npos);
   EXPECT_NE(html.find("a10.h5"), std::string::npos);
   EXPECT_NE(html.find("Ego: initial vector and recorded future"), std::string::npos);
 }
 
 TEST_F(CompareTest, BadInputGetsOneClearErrorAndLeavesNothingBehind) {
-  // An existing output folder is refused unless --force, and left untouched.
+  // The output policy (docs/output-policy.md): the user's notes are kept next to the report;
+  // a report of another scenario is replaced only with --force.
   const auto existing = work_.path() / "existing";
   test::writeFile(existing / "keep.txt", "mine");
-  EXPECT_NE(errorOf([&] { runComparison(scenarioOptions(existing, 5)); }).find("exists; choose another or pass --force"),
-            std::string::npos);
-  EXPECT_TRUE(fs::exists(existing / "keep.txt"));
-  auto forced = scenarioOptions(existing, 5);
-  forced.force = true;
-  runComparison(forced);
+  runComparison(scenarioOptions(existing, 5));
+  EXPECT_TRUE(fs::exists(existing / "report.html"));
+  auto other = scenarioOptions(existing, 5);
+  other.scenarioFile = test::scenarioFile("lk.yaml");
+  EXPECT_NE(errorOf([&] { runComparison(other); }).find("holds a comparison report folder of acc_lk with"),
+            std::string::npos)
+      << errorOf([&] { runComparison(other); });
+  other.force = true;
+  runComparison(other);
   EXPECT_TRUE(fs::exists(existing / "keep.txt"));  // the report's files replaced; a file it never wrote is kept
-  EXPECT_TRUE(fs::exists(existing / "index.html"));
+  EXPECT_NE(readTextFile(existing / "manifest.json").find("\"subject\": \"lk with"), std::string::npos);
 
   // A model for another step/horizon than the scenario's.
   const auto longer = test::writeFile(work_.path() / "longer.yaml",

@@ -155,6 +155,10 @@ TEST(OutputFolder, ReadersRefuseIncompleteOrChangedFolders) {
   test::writeFile(folder / "dataset.h5", "no manifest");
   EXPECT_THAT(checkOutputFolder(folder, false).front(), ::testing::HasSubstr("no manifest.json"));
   EXPECT_THROW(requireCompleteOutputFolder(folder, false), DatasetError);
+  // A file no manifest lists is the user's: no commit replaces it (docs/output-policy.md).
+  EXPECT_THROW(commitSet(folder, {{"dataset.h5", "0123456789"}}), ConfigError);
+  EXPECT_EQ(readTextFile(folder / "dataset.h5"), "no manifest");
+  fs::remove(folder / "dataset.h5");
 
   commitSet(folder, {{"dataset.h5", "0123456789"}});
   EXPECT_NO_THROW(requireCompleteOutputFolder(folder, true));

@@ -33,8 +33,8 @@ ProcessResult errorsOf(const std::vector<std::string>& args, const fs::path& wor
   return test::run({"sh", "-c", command + " >/dev/null"}, work);
 }
 
-void expectOneLineError(const ProcessResult& result, const std::string& expected) {
-  EXPECT_EQ(result.exitCode, 1) << result.output;
+void expectOneLineError(const ProcessResult& result, const std::string& expected, int exit_code = 1) {
+  EXPECT_EQ(result.exitCode, exit_code) << result.output;
   EXPECT_EQ(std::count(result.output.begin(), result.output.end(), '\n'), 1) << result.output;
   EXPECT_THAT(result.output, HasSubstr(expected));
 }
@@ -178,8 +178,8 @@ TEST(ScenarioCli, RunRefusesOpenScenarioFilesItCannotSimulate) {
   expectOneLineError(errorsOf({"run", xosc.string(), "--out", (dir.path() / "o2").string()}, dir.path()),
                      "netconvert rejects " + xodr.string());
 
-  // Flags that the file fixes.
-  expectOneLineError(errorsOf({"run", xosc.string(), "--samples", "5"}, dir.path()), "--samples");
+  // Flags that the file fixes: a usage error (exit code 2, docs/cli.md).
+  expectOneLineError(errorsOf({"run", xosc.string(), "--samples", "5"}, dir.path()), "--samples", 2);
   EXPECT_FALSE(fs::exists(dir.path() / "o1"));
   EXPECT_FALSE(fs::exists(dir.path() / "o2"));
 }

@@ -22,7 +22,7 @@ int freePort(int offset) { return 20000 + static_cast<int>(getpid() % 15000) * 3
 
 std::vector<std::string> trainArgs(const fs::path& data, const fs::path& out) {
   // Batch 7 of 54 training samples: uneven slices (4 + 3) and a last batch of 5 (3 + 2).
-  return {"train", "-d", data.string(), "-o", out.string(), "--steps", "24", "--batch", "7", "--threads", "1",
+  return {"train", "-d", data.string(), "-o", out.string(), "--steps", "24", "--minibatch", "7", "--threads", "1",
           "--hidden", "16", "--layers", "1", "--global-width", "16", "--heads", "1", "--decoder-hidden", "16",
           "--seed", "5"};
 }

@@ -296,7 +296,14 @@ TEST(ModelTraining, ResumeWithOtherDataOrSettingsIsRefused) {
   const auto data = writeDataset(dir.path() / "acc.h5", 20);
   auto options = tinyTraining(data, dir.path() / "m.pt");
   options.steps = 10;
-  train(options);
+  // Interrupted after its second epoch: <out>.last holds its state (a finished one leaves none).
+  installInterruptHandlers();
+  int epochs = 0;
+  EXPECT_THROW(train(options, [&](const EpochRecord&) {
+                 if (++epochs == 2) std::raise(SIGINT);
+               }),
+               InterruptedError);
+  clearInterruption();
   options.resume = true;
   const auto refused = [&](TrainOptions changed, const std::string& expected) {
     try {
@@ -315,9 +322,12 @@ TEST(ModelTraining, ResumeWithOtherDataOrSettingsIsRefused) {
   auto other_width = options;
   other_width.config.hidden = 8;
   refused(other_width, "architecture");
-  EXPECT_NO_THROW(train(options));  // the same training resumes (nothing left to do)
-  fs::remove(options.output);       // the best model of the interrupted training is gone
+  const std::string best = readTextFile(options.output);
+  fs::remove(options.output);  // the best model of the interrupted training is gone
   refused(options, "is gone");
+  writeTextFileAtomically(options.output, best);
+  EXPECT_NO_THROW(train(options));  // the same training resumes and finishes
+  EXPECT_FALSE(fs::exists(options.output.string() + ".last")) << "a finished training leaves no resume state";
 }
 
 TEST_F(ModelTest, FineTuningStartsFromTheGivenModel) {

@@ -205,3 +205,42 @@ TEST(Faults, AClosedLoopEgoWhosePluginExitsIsTakenOutAndTheExportGoesOn) {
   EXPECT_EQ(sha256OfFile(dir.path() / "exited.h5"), sha256OfFile(dir.path() / "reported.h5"));
   EXPECT_NE(exited.report().find("Egos taken out because their controller failed"), std::string::npos);
 }
+
+// Fail fast (RunOptions::maxFailures, docs/cli.md): a plugin that fails every scenario the
+// same way stops the run after the first few, naming the reason - a hanging one after a
+// few watchdog periods, not one per scenario - and nothing is written.
+TEST(Faults, ARunWhoseFirstScenariosAllFailTheSameWayStopsEarly) {
+  TemporaryDirectory dir;
+  for (const std::string controller : {"failing_ego", "hanging_ego"}) {
+    auto options = runOptions(misbehavingScenario(dir.path(), controller, "at: 0.4"), dir.path() / controller, 1);
+    options.samples = 40;
+    options.maxFailures = 3;
+    options.watchdog.stepTimeout = 0.5;
+    try {
+      runScenarios(options);
+      FAIL() << controller << ": expected SumoError";
+    } catch (const SumoError& error) {
+      const std::string message = error.what();
+      EXPECT_EQ(message.rfind("the first 3 concrete scenarios all failed the same way: ", 0), 0u) << message;
+      EXPECT_NE(message.find("Ego controller"), std::string::npos) << message;
+      EXPECT_NE(message.find("--max-failures 0 runs every scenario"), std::string::npos) << message;
+    }
+    EXPECT_FALSE(fs::exists(dir.path() / controller / "manifest.json")) << controller;
+  }
+  // Scenarios that fail for different reasons, or a first one that completes, do not stop it.
+  auto mixed = runOptions(misbehavingScenario(dir.path() / "mixed", "misbehaving_ego",
+                                              "kind: (v_ego > 12) + (v_ego > 14)"),
+                          dir.path() / "mixed", 1);
+  mixed.maxFailures = 2;
+  mixed.watchdog.stepTimeout = 10.0;
+  EXPECT_EQ(runScenarios(mixed).samples, 10u);
+  // --max-failures 0: every scenario runs.
+  auto all = runOptions(misbehavingScenario(dir.path() / "all", "failing_ego", "at: 0.4"), dir.path() / "all", 1);
+  all.maxFailures = 0;
+  try {
+    runScenarios(all);
+    FAIL() << "expected SumoError";
+  } catch (const SumoError& error) {
+    EXPECT_EQ(std::string(error.what()).rfind("every concrete scenario failed", 0), 0u) << error.what();
+  }
+}

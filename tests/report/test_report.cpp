@@ -5,6 +5,7 @@
 #include <cmath>
 #include <limits>
 #include <regex>
+#include <set>
 
 #include "../../src/report/charts.hpp"
 #include "test_support.hpp"
@@ -138,14 +139,14 @@ TEST(ReportCsv, OneRowPerScenarioWithPredictedSimulatedAndError) {
   writeComparisonCsv(c, dir.path() / "comparison.csv");
   const auto table = CsvTable::read(dir.path() / "comparison.csv");
   ASSERT_EQ(table.rows(), 40u);
-  for (const char* column : {"sample", "status", "failure", "v_ego", "ade_m", "fde_m", "d_min_predicted",
-                             "d_min_simulated", "d_min_error", "close_approach_predicted_fail",
+  for (const char* column : {"sample", "status", "failure", "v_ego", "ade_m", "fde_m", "d_min_predicted_m",
+                             "d_min_simulated_m", "d_min_error_m", "a_min_error_m_s2", "close_approach_predicted_fail",
                              "close_approach_simulated_fail"}) {
     EXPECT_TRUE(table.findColumn(column).has_value()) << column;
   }
-  EXPECT_DOUBLE_EQ(table.number(2, table.column("d_min_error")), 0.5);
-  EXPECT_EQ(table.cell(1, table.column("ttc_min_predicted")), "inf");
-  EXPECT_EQ(table.cell(1, table.column("ttc_min_error")), "");
+  EXPECT_DOUBLE_EQ(table.number(2, table.column("d_min_error_m")), 0.5);
+  EXPECT_EQ(table.cell(1, table.column("ttc_min_predicted_s")), "inf");
+  EXPECT_EQ(table.cell(1, table.column("ttc_min_error_s")), "");
   EXPECT_EQ(table.cell(39, table.column("status")), "failed");
   EXPECT_EQ(table.cell(39, table.column("ade_m")), "");
   EXPECT_EQ(table.cell(6, table.column("close_approach_simulated_fail")), "1");
@@ -230,4 +231,73 @@ print(f'{image.size[0]}x{image.size[1]} non_white={non_white / len(pixels):.4f} 
 sys.exit(0 if non_white / len(pixels) > 0.02 and colours > 20 else 1)
 )", (dir.path() / "shot.png").string()}, dir.path());
   EXPECT_EQ(check.exitCode, 0) << check.output;
+}
+
+// The reliability diagram tells every metric of a report apart (up to twelve by colour).
+TEST(ReportCharts, ReliabilityCurvesOfTenMetricsHaveTenColours) {
+  std::vector<std::pair<std::string, std::vector<double>>> curves;
+  for (int m = 0; m < 10; ++m) curves.emplace_back("metric" + std::to_string(m), std::vector<double>{0.1, 0.5, 0.9});
+  const auto svg = reliabilitySvg({0.1, 0.5, 0.9}, curves, "reliability");
+  std::set<std::string> colours;
+  const std::regex stroke(R"re(<polyline [^>]*stroke="(#[0-9a-f]{6})")re");
+  for (auto it = std::sregex_iterator(svg.begin(), svg.end(), stroke); it != std::sregex_iterator(); ++it) {
+    colours.insert((*it)[1].str());
+  }
+  colours.erase("#888888");  // the dashed diagonal
+  EXPECT_EQ(colours.size(), 10u) << svg;
+}
+
+// Scene drawings (equal-aspect canvases in metres) carry a scale bar of a round length.
+TEST(ReportCharts, SceneDrawingsHaveAScaleBar) {
+  const auto svg = sceneSvgStub();  // 110 m over 600 px
+  EXPECT_NE(svg.find("class=\"scale-bar\""), std::string::npos) << svg;
+  EXPECT_NE(svg.find(">20 m</text>"), std::string::npos) << svg;
+  // Charts (free aspect) have none.
+  EXPECT_EQ(histogramSvg({1.0, 2.0}, "ADE", "m").find("scale-bar"), std::string::npos);
+}
+
+TEST(ReportHtml, WarningsComeFirst) {
+  auto c = syntheticComparison();
+  c.warnings = {"the model never trained on label 'acc_lk'"};
+  const auto html = renderHtmlReport(c, computeStatistics(c), {});
+  const auto warning = html.find("<p class=\"warning\">Warning: the model never trained on label &#39;acc_lk&#39;");
+  ASSERT_NE(warning, std::string::npos);
+  EXPECT_LT(warning, html.find("id=\"summary\""));
+  EXPECT_NE(textSummary(c, computeStatistics(c)).find("warning: the model never trained"), std::string::npos);
+}
+
+// At 1,400 px nothing scrolls the page sideways: wide tables scroll in their own box.
+TEST(ReportHtml, NoPageWideHorizontalScrollAt1400Pixels) {
+  if (!fs::exists("/usr/bin/chromium")) GTEST_SKIP() << "chromium is not installed (tools/setup.sh installs it)";
+  TemporaryDirectory dir;
+  auto c = syntheticComparison();
+  for (int m = 0; m < 8; ++m) {  // a wide scenario table: 2 columns per metric
+    c.metricNames.push_back("long_metric_name_" + std::to_string(m));
+    c.metricUnits.push_back("m/s^2");
+    for (auto& s : c.scenarios) {
+      s.predicted.push_back(1.0);
+      s.reference.push_back(1.0);
+      s.fromReferencePositions.push_back(1.0);
+    }
+  }
+  c.provenance.push_back({"command line", std::string(400, 'x')});
+  std::string html = renderHtmlReport(c, computeStatistics(c), {{17, "caption", sceneSvgStub()}});
+  // Measured in the page: the document's width against the window's.
+  html.replace(html.rfind("</body>"), 7,
+               "<script>var d = document.createElement('div'); d.setAttribute('data-widths', "
+               "document.documentElement.scrollWidth + ' ' + window.innerWidth); document.body.appendChild(d);"
+               "</script></body>");  // at the end: the captured output is the dump's tail
+  const auto page = dir.path() / "report.html";
+  writeTextFileAtomically(page, html);
+  const auto dom = test::run({"/usr/bin/chromium", "--headless", "--no-sandbox", "--disable-gpu", "--no-first-run",
+                              "--hide-scrollbars", "--window-size=1400,900",
+                              "--user-data-dir=" + (dir.path() / "profile").string(), "--dump-dom",
+                              "file://" + page.string()},
+                             dir.path());
+  std::smatch widths;
+  const std::string output = dom.output;
+  ASSERT_TRUE(std::regex_search(output, widths, std::regex(R"re(data-widths="([0-9]+) ([0-9]+)")re")))
+      << output.substr(output.size() > 2000 ? output.size() - 2000 : 0);
+  EXPECT_LE(std::stoi(widths[1].str()), std::stoi(widths[2].str())) << "the page scrolls sideways";
+  EXPECT_EQ(std::stoi(widths[2].str()), 1400);
 }

@@ -156,6 +156,9 @@ TEST(SearchLoop, ResumesWithoutRepeatingAndMakesTheSameChoicesAsAnUninterruptedS
   TemporaryDirectory work("vsd-test-search");
   const auto resumed = work.path() / "resumed";
   runSearch(smallSearch(resumed, "extra-trees", 60));  // "interrupted" after 60 executions
+  // An interrupted search has committed nothing yet: no manifest and none of its outputs
+  // (files no manifest lists would be a user's, and a commit refuses to replace them).
+  for (const auto& [name, entry] : readManifestOutputs(resumed)) fs::remove(resumed / name);
   fs::remove(resumed / "manifest.json");
   const auto summary = runSearch(smallSearch(resumed, "extra-trees", 100));
   EXPECT_EQ(summary.resumedFrom, 60u);
@@ -241,6 +244,9 @@ TEST(SearchVectorNet, APriorPreTrainsTheModelAndTheSearchResumesWithTheSameChoic
   };
   const auto resumed = work.path() / "resumed";
   runSearch(vectornet(resumed, 40));  // "interrupted" after the initial design
+  // An interrupted search has committed nothing yet: no manifest and none of its outputs
+  // (files no manifest lists would be a user's, and a commit refuses to replace them).
+  for (const auto& [name, entry] : readManifestOutputs(resumed)) fs::remove(resumed / name);
   fs::remove(resumed / "manifest.json");
   const auto summary = runSearch(vectornet(resumed, 60));
   EXPECT_EQ(summary.resumedFrom, 40u);
@@ -368,7 +374,7 @@ TEST(SearchEstimate, WilsonIntervalMatchesTheReference) {
 namespace vsd::search {
 namespace {
 
-TEST(SearchCli, BadInputIsOneLineWithExitCodeOneAndNoFolder) {
+TEST(SearchCli, BadFlagsAreOneLineWithExitCodeTwoAndNoFolder) {
   TemporaryDirectory work("vsd-test-search-cli");
   const auto out = work.path() / "out";
   const std::string scenario = test::scenarioFile("acc_lk.yaml").string();
@@ -380,8 +386,8 @@ TEST(SearchCli, BadInputIsOneLineWithExitCodeOneAndNoFolder) {
     std::vector<std::string> argv = {test::vsdSumo().string(), "-q", "search", scenario, "--out", out.string()};
     argv.insert(argv.end(), flags.begin(), flags.end());
     const auto result = test::run(argv, work.path());
-    EXPECT_EQ(result.exitCode, 1) << result.output;
-    EXPECT_THAT(result.output, HasSubstr("vsd-sumo: error: "));
+    EXPECT_EQ(result.exitCode, 2) << result.output;  // the command line is wrong: a usage error (docs/cli.md)
+    EXPECT_THAT(result.output, HasSubstr("vsd-sumo: error: command line: "));
     EXPECT_EQ(std::count(result.output.begin(), result.output.end(), '\n'), 1) << result.output;
     EXPECT_FALSE(fs::exists(out));
   }
@@ -407,7 +413,7 @@ TEST(SearchCli, NumbersFromFlagsAreCheckedWhereTheyEnter) {
     std::vector<std::string> argv = {test::vsdSumo().string(), "-q"};
     argv.insert(argv.end(), flags.begin(), flags.end());
     const auto result = test::run(argv, work.path());
-    EXPECT_EQ(result.exitCode, 1) << result.output;
+    EXPECT_EQ(result.exitCode, 2) << result.output;  // a flag's value: a usage error (docs/cli.md)
     EXPECT_THAT(result.output, HasSubstr(expected));
     EXPECT_EQ(std::count(result.output.begin(), result.output.end(), '\n'), 1) << result.output;
     EXPECT_FALSE(fs::exists(out));

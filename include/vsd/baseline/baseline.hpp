@@ -106,6 +106,12 @@ MetricTable readMetricTable(const std::filesystem::path& csv_or_run, const std::
 /// The functional scenario of a run's concrete.csv (its first row).
 std::string functionalScenarioOf(const std::filesystem::path& csv_or_run);
 
+/// The concrete.csv of a run folder (checked against the folder's manifest, as every
+/// reader of a run folder does), or the given path if it is a table itself. Throws
+/// DatasetError naming the path for an incomplete folder or an HDF5 file (a dataset is
+/// not what baseline learns from).
+std::filesystem::path concreteTableOf(const std::filesystem::path& run);
+
 /// Mean absolute error per column.
 std::vector<double> meanAbsoluteError(const Matrix& predicted, const Matrix& truth);
 
@@ -117,9 +123,9 @@ namespace vsd::baseline {
 /// Extra trees are fitted per target (one forest per metric, as scikit-learn's single-output
 /// ExtraTreesRegressor on each column); the BNN standardises its targets and fits them jointly.
 struct BaselineOptions {
-  std::filesystem::path train;             ///< concrete.csv or run folder
-  std::filesystem::path test;              ///< concrete.csv or run folder of the same functional scenario
-  std::string model = "et";                ///< et | bnn
+  std::filesystem::path train;             ///< run folder (or its concrete.csv)
+  std::filesystem::path test;              ///< run folder (or its concrete.csv) of the same functional scenario
+  std::string model = "extra-trees";       ///< extra-trees | bnn (the names of search's surrogates; "et": old name)
   std::vector<std::string> targets;        ///< metrics to predict
   std::vector<std::string> inputs;         ///< default: every input column
   std::size_t maxTrainRows = 0;            ///< use the first N completed rows (0: all)
@@ -135,7 +141,8 @@ struct BaselineReport {
   std::size_t testRows = 0;
   std::size_t skipped = 0;
   std::vector<std::string> targets;
-  std::vector<double> mae;            ///< per target
+  std::vector<std::string> units;     ///< per target ("m", "m/s^2")
+  std::vector<double> mae;            ///< per target, in its unit
   std::vector<double> meanStd;        ///< BNN: mean predictive std per target (empty for ET)
   double fitSeconds = 0.0;
   double predictSeconds = 0.0;

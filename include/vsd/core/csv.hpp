@@ -14,6 +14,11 @@ namespace vsd {
 /// Shortest exact text of a number; "" for NaN, "inf"/"-inf" for infinities.
 std::string formatNumber(double value);
 
+/// A column name with its unit as a suffix, the convention of the results tables
+/// (comparison.csv, baseline's table, the experiment's ade.csv): ("ade", "m") -> "ade_m",
+/// ("a_min_predicted", "m/s^2") -> "a_min_predicted_m_s2"; unitless ("" or "1"): the name.
+std::string columnWithUnit(const std::string& name, const std::string& unit);
+
 class CsvWriter {
  public:
   explicit CsvWriter(std::ostream& stream) : stream_(stream) {}

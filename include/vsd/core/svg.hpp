@@ -15,7 +15,8 @@ std::string escapeXml(const std::string& text);
 class SvgCanvas {
  public:
   /// Maps the world box [lo, hi] into `width` pixels (height follows from the aspect
-  /// ratio when `equal_aspect`, else `height`), with `margin` pixels around it.
+  /// ratio when `equal_aspect`, else `height`), with `margin` pixels around it. An
+  /// equal-aspect canvas is a map in metres: str() adds a scale bar in its bottom margin.
   SvgCanvas(Vec2 lo, Vec2 hi, int width, int height, bool equal_aspect, int margin = 30);
 
   void polyline(const Polyline& points, const std::string& colour, double width_px, bool dashed = false,
@@ -40,6 +41,8 @@ class SvgCanvas {
   std::string str() const;
 
  private:
+  std::string scaleBar() const;
+
   Vec2 lo_;
   Vec2 hi_;
   double scaleX_;
@@ -47,6 +50,7 @@ class SvgCanvas {
   int width_;
   int height_;
   int margin_;
+  bool equalAspect_ = false;
   std::string body_;
 };
 

@@ -24,6 +24,7 @@ struct ExperimentOptions {
   std::filesystem::path output;  ///< default: results/<name> (results/<name>-quick with quick)
   bool quick = false;            ///< the spec's small sizes: minutes instead of most of an hour
   bool allowDirty = false;       ///< write into the repository's results/ from a dirty build
+  bool force = false;            ///< replace the results folder of another experiment (docs/output-policy.md)
   std::string commandLine;
 };
 

@@ -68,6 +68,13 @@ struct RunOptions {
   /// already (same sweep) is not run again: re-running a sweep resumes it.
   std::optional<ShardId> shard;
   WatchdogOptions watchdog;         ///< per-step time limit of controllers and libsumo (--step-timeout)
+  /// Fail fast: when each of the first `maxFailures` concrete scenarios of the run fails for
+  /// the same reason (numbers aside), the run stops with that reason (SumoError) instead of
+  /// meeting it in every scenario (e.g. an Ego plugin that hangs costs --step-timeout each).
+  /// 0: never stop early. 0 .. 100000.
+  std::uint64_t maxFailures = 8;
+  /// Replace a run folder of another functional scenario (docs/output-policy.md).
+  bool force = false;
   /// s of extra wall time per Ego step (--ego-step-cost-ms; 0: none): a slow Ego stack's
   /// cost, for benchmarks. It counts against the watchdog's per-step limit.
   double egoStepCost = 0.0;
@@ -147,6 +154,9 @@ using OutcomeCallback = std::function<void(const ScenarioOutcome&)>;
 /// earlier contents. Per-scenario faults (also crashes, exit() and hangs of the
 /// controller or libsumo) are recorded in the outcomes and concrete.csv.
 RunSummary runScenarios(const RunOptions& options, const OutcomeCallback& on_outcome = {});
+
+/// Where a run of `logical` writes without --out: out/<functional scenario>.
+std::filesystem::path defaultRunFolder(const scenario::LogicalScenario& logical);
 
 /// Reads what a finished run's manifest.json says (counts, sample range, seed, shard);
 /// metric statistics are not in it. Throws DatasetError naming the file.

@@ -76,6 +76,8 @@ struct Comparison {
   std::vector<std::pair<std::string, std::string>> provenance;
   /// Notes shown under the summary (e.g. how far planned scenes deviate from simulated ones).
   std::vector<std::string> notes;
+  /// Warnings shown first and printed (e.g. scenarios of a label the model never trained on).
+  std::vector<std::string> warnings;
   /// Sampled futures per scenario (0: a deterministic model, no intervals).
   int draws = 0;
   /// A criterion's verdict is confident when at least this share of the sampled futures agree.

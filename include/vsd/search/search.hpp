@@ -34,6 +34,8 @@
 #include <utility>
 #include <vector>
 
+#include "vsd/baseline/baseline.hpp"
+
 namespace vsd::search {
 
 struct SearchOptions {
@@ -47,10 +49,11 @@ struct SearchOptions {
   double estimateShare = 0.4;         ///< share of each later round drawn by importance sampling (0..1)
   std::uint64_t pool = 10000;         ///< candidates scored per round (and for the rate estimate)
   double diversity = 1.0;             ///< weight of the distance term in the acquisition (>= 0)
-  int trees = 50;                     ///< extra-trees surrogate: trees per metric
+  /// The surrogates' defaults are the baselines' (`baseline` fits the same models; docs/cli.md "Vocabulary").
+  int trees = baseline::ExtraTreesOptions{}.trees;  ///< extra-trees surrogate: trees per metric
   std::string probability = "shifts"; ///< extra-trees: "shifts" or "tail" (SurrogateOptions::probability)
   bool rankTargets = false;           ///< extra-trees: fit metric ranks (SurrogateOptions::rankTargets)
-  int bnnEpochs = 200;                ///< bnn surrogate: epochs per fit
+  int bnnEpochs = baseline::BnnOptions{}.epochs;    ///< bnn surrogate: epochs per fit
   /// vectornet: datasets (files or run/export folders) of other functional scenarios or
   /// maps mixed into its training from the first round; their step and horizon must be
   /// the scenario's (ConfigError naming the folder and the value otherwise).
@@ -125,6 +128,12 @@ struct SearchSummary {
 /// metric or surrogate, or a checkpoint made with other options; SumoError when a round's
 /// simulations all fail (the checkpoint keeps every finished round).
 SearchSummary runSearch(const SearchOptions& options);
+
+/// Removes a search folder's search (search --force, after the output policy recognised
+/// the folder): the files its manifest lists, the manifest, the checkpoint and the round
+/// files, so that the next search there starts afresh. Files no manifest lists stay.
+/// Throws DatasetError if the folder has no readable manifest.
+void discardSearchState(const std::filesystem::path& folder);
 
 /// The HTML report of one or more searches of one criterion (report module): their
 /// learning curves and rate estimates with intervals side by side.
