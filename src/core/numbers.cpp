@@ -167,13 +167,14 @@ double checkReal(double value, const NumberRange& range, const std::string& wher
   return value;
 }
 
-double checkStep(double step, const std::string& where, const std::string& field) {
+double checkStep(double step, const std::string& where, const std::string& field, const std::string& shown) {
   const std::string expected = fmt::format("a multiple of {0} s in {0} .. {1} s", kMinStep, kMaxStep);
-  if (!std::isfinite(step)) refuse(where, field, shortest(step), expected, std::isnan(step) ? "NaN is not a number" : "infinite");
+  const std::string text = shown.empty() ? shortest(step) : shown;
+  if (!std::isfinite(step)) refuse(where, field, text, expected, std::isnan(step) ? "NaN is not a number" : "infinite");
   // SUMO counts milliseconds.
   const double milliseconds = step / kMinStep;
   if (!(step >= kMinStep && step <= kMaxStep) || std::abs(milliseconds - std::round(milliseconds)) > 1e-6) {
-    refuse(where, field, shortest(step), expected, {});
+    refuse(where, field, text, expected, {});
   }
   return step;
 }

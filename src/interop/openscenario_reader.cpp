@@ -341,7 +341,8 @@ void readTimeBase(Document& document, const pugi::xml_node& storyboard, const Im
   const auto property = document.properties.find(names::kStep);
   if (property != document.properties.end()) {
     const std::string where = headerWhere(document);
-    const double step = checkStep(parseReal(property->second, NumberRange::any(), where, names::kStep), where, names::kStep);
+    const double step =
+        checkStep(parseReal(property->second, NumberRange::any(), where, names::kStep), where, names::kStep, property->second);
     if (options.step && std::abs(*options.step - step) > 1e-12) {
       throw ConfigError(fmt::format("{}: --step {} contradicts the file's step {} s ({})", reader.file().string(),
                                     xml::number(*options.step), property->second, names::kStep));

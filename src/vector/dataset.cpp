@@ -224,8 +224,14 @@ DatasetWriter::DatasetWriter(const fs::path& path, DatasetHeader header, const f
   impl_->name = name_in_messages.empty() ? path : name_in_messages;
   impl_->header = std::move(header);
   const auto& h = impl_->header;
-  if (!(h.step > 0.0) || !std::isfinite(h.step) || h.horizon < 1) {
-    throw Error(fmt::format("internal: dataset header with step {} s and horizon {} steps", h.step, h.horizon));
+  // The bounds every reader checks (kMinStep .. kMaxStep, kMaxWindowSteps) hold before the
+  // file is created: arrays sized by them fail here in one line, not in HDF5.
+  if (!(h.step >= kMinStep && h.step <= kMaxStep) || h.horizon < 1 || h.horizon > kMaxWindowSteps || h.history < 0 ||
+      h.history > kMaxWindowSteps) {
+    throw DatasetError(fmt::format("{}: cannot hold step {} s, horizon {} and history {} steps (expected {} .. {} s and "
+                                   "at most {} steps)",
+                                   impl_->name.string(), h.step, h.horizon, h.history, kMinStep, kMaxStep,
+                                   kMaxWindowSteps));
   }
   if (h.compression < 0 || h.compression > 9) {
     throw ConfigError::field("command line", "--compression", std::to_string(h.compression), "a deflate level 0..9");

@@ -77,7 +77,8 @@ inline constexpr std::uint64_t kMaxSampleIndex = (std::uint64_t{1} << 50) - 1;
 /// The simulation step and the number of steps of a window, checked as every format
 /// checks them (bounds in vsd/core/trace.hpp: kMinStep .. kMaxStep in whole
 /// milliseconds, at most kMaxWindowSteps steps) — before any array is sized by them.
-double checkStep(double step, const std::string& where, const std::string& field);
+/// `shown`: the text the message quotes (empty: the value's shortest form).
+double checkStep(double step, const std::string& where, const std::string& field, const std::string& shown = {});
 /// `duration` / `step` steps: a whole number 1 .. kMaxWindowSteps. Returns the count.
 int checkDurationSteps(double duration, double step, const std::string& where, const std::string& field);
 
