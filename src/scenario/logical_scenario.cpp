@@ -281,7 +281,7 @@ void parseRest(const YamlReader& reader, const YAML::Node& root, LogicalScenario
       if (!list) return;
       if (!list.IsSequence()) reader.fail(list, std::string("sumo.") + key, "expected a list of command-line options");
       for (std::size_t i = 0; i < list.size(); ++i) out.push_back(reader.scalar(list[i], fmt::format("sumo.{}[{}]", key, i)));
-      checkScenarioToolOptions(tool, out, reader.where(list, std::string("sumo.") + key), std::string("sumo.") + key);
+      checkScenarioToolOptions(tool, out, reader.where(list, "sumo"), key);
     };
     strings("netconvert_options", scenario.sumo.netconvertOptions, SumoTool::Netconvert);
     strings("sumo_options", scenario.sumo.sumoOptions, SumoTool::Sumo);
