@@ -1,12 +1,15 @@
 #include "vsd/core/files.hpp"
 
 #include <fcntl.h>
+#include <sys/stat.h>
 #include <fmt/format.h>
 #include <openssl/evp.h>
 #include <signal.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <array>
+#include <charconv>
 #include <cerrno>
 #include <cstdlib>
 #include <cstring>
@@ -156,12 +159,96 @@ void writeTextFileAtomically(const fs::path& path, const std::string& contents) 
   output.commit();
 }
 
-std::string readTextFile(const fs::path& path) {
-  std::ifstream stream(path, std::ios::binary);
-  if (!stream) throw IoError(path.string() + ": cannot open for reading (does it exist?)");
-  std::ostringstream buffer;
-  buffer << stream.rdbuf();
-  return buffer.str();
+std::uintmax_t ReadLimit::effective() const {
+  const char* text = std::getenv(variable);
+  if (text == nullptr || *text == '\0') return bytes;
+  std::uintmax_t value = 0;
+  const char* end = text + std::strlen(text);
+  const auto [stop, error] = std::from_chars(text, end, value, 10);
+  return error == std::errc() && stop == end && value > 0 ? value : bytes;
+}
+
+namespace {
+
+/// An open file descriptor, closed on destruction.
+struct Descriptor {
+  int fd = -1;
+  ~Descriptor() {
+    if (fd >= 0) ::close(fd);
+  }
+};
+
+const char* fileTypeName(mode_t mode) {
+  if (S_ISDIR(mode)) return "a folder";
+  if (S_ISCHR(mode)) return "a character device";
+  if (S_ISBLK(mode)) return "a block device";
+  if (S_ISFIFO(mode)) return "a FIFO (named pipe)";
+  if (S_ISSOCK(mode)) return "a socket";
+  return "not a regular file";
+}
+
+std::string tooLarge(const fs::path& path, const ReadLimit& limit, std::uintmax_t allowed, const std::string& size) {
+  return fmt::format("{}: {}: larger than the {} bytes a {} may have (set {} to a larger byte count if it is meant "
+                     "to be this large)",
+                     path.string(), size, allowed, limit.kind, limit.variable);
+}
+
+}  // namespace
+
+std::string readTextFile(const fs::path& path, const ReadLimit& limit) {
+  Descriptor file;
+  // O_NONBLOCK: opening a FIFO must not wait for a writer; it is refused below.
+  file.fd = ::open(path.c_str(), O_RDONLY | O_NONBLOCK | O_CLOEXEC);
+  if (file.fd < 0) {
+    throw IoError(fmt::format("{}: cannot open for reading ({})", path.string(), std::strerror(errno)));
+  }
+  struct stat status {};
+  if (::fstat(file.fd, &status) != 0) throw IoError(fmt::format("{}: cannot read: {}", path.string(), std::strerror(errno)));
+  if (!S_ISREG(status.st_mode)) {
+    throw IoError(fmt::format("{}: {}, expected a regular file", path.string(), fileTypeName(status.st_mode)));
+  }
+  const std::uintmax_t allowed = limit.effective();
+  if (static_cast<std::uintmax_t>(status.st_size) > allowed) {
+    throw IoError(tooLarge(path, limit, allowed, fmt::format("{} bytes", status.st_size)));
+  }
+  std::string text;
+  std::array<char, 1 << 16> buffer{};
+  for (;;) {
+    const ssize_t got = ::read(file.fd, buffer.data(), buffer.size());
+    if (got < 0 && errno == EINTR) continue;
+    if (got < 0) throw IoError(fmt::format("{}: read failed: {}", path.string(), std::strerror(errno)));
+    if (got == 0) break;
+    // A file that grows while it is read (or reports size 0, as /proc files do) is bounded all the same.
+    if (text.size() + static_cast<std::size_t>(got) > allowed) {
+      throw IoError(tooLarge(path, limit, allowed, "more bytes"));
+    }
+    text.append(buffer.data(), static_cast<std::size_t>(got));
+  }
+  return text;
+}
+
+fs::path requirePathInside(const fs::path& base, const fs::path& path, const std::string& where,
+                           const std::string& field) {
+  std::error_code ec;
+  const fs::path root = fs::weakly_canonical(fs::absolute(base), ec);
+  const fs::path resolved = fs::weakly_canonical(path.is_absolute() ? path : fs::absolute(base) / path, ec);
+  if (ec) throw ConfigError::field(where, field, path.string(), fmt::format("a path that can be resolved ({})", ec.message()));
+  const auto mismatch = std::mismatch(root.begin(), root.end(), resolved.begin(), resolved.end());
+  if (mismatch.first != root.end()) {
+    throw ConfigError::field(where, field, path.string(),
+                             fmt::format("a path inside {} (the file's own folder or below; it resolves to {})",
+                                         root.string(), resolved.string()));
+  }
+  return resolved;
+}
+
+void requireSafeName(const std::string& name, const std::string& where, const std::string& field) {
+  static constexpr const char* kAllowed = "abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789._-";
+  if (name.empty() || name.front() == '.' || name.size() > 200 || name.find_first_not_of(kAllowed) != std::string::npos) {
+    throw ConfigError::field(where, field, name,
+                             "a plain name (letters, digits, '.', '_', '-'; not starting with '.'; no '/'): it becomes "
+                             "a file or folder name inside the output folder");
+  }
 }
 
 namespace {
@@ -202,6 +289,11 @@ class Sha256 {
 }  // namespace
 
 std::string sha256OfFile(const fs::path& path) {
+  std::error_code ec;
+  const auto type = fs::status(path, ec).type();
+  if (type != fs::file_type::regular && type != fs::file_type::not_found) {
+    throw IoError(path.string() + ": not a regular file (a device, FIFO, socket or folder), cannot hash it");
+  }
   std::ifstream stream(path, std::ios::binary);
   if (!stream) throw IoError(path.string() + ": cannot open for hashing (does it exist?)");
   Sha256 hasher;

@@ -232,7 +232,7 @@ std::vector<fs::path> OutputFolder::commit(const json& manifest_in) {
   }
   manifest["outputs"] = outputs;
   faultPoint("folder.manifest");
-  writeJsonDurably(staging_ / kManifest, manifest);
+  writeJsonDurably(staging_ / kManifest, sealManifest(manifest));
   json obsolete = json::array();
   for (const auto& old : old_set) {
     if (!outputs.contains(old)) obsolete.push_back(old);
@@ -259,21 +259,54 @@ std::vector<fs::path> OutputFolder::commit(const json& manifest_in) {
   return paths;
 }
 
-std::map<std::string, ManifestEntry> readManifestOutputs(const fs::path& folder) {
+namespace {
+
+std::string manifestChecksum(json manifest) {
+  manifest.erase(kManifestChecksumKey);
+  return sha256OfString(manifest.dump());
+}
+
+}  // namespace
+
+json sealManifest(json manifest) {
+  manifest[kManifestChecksumKey] = manifestChecksum(manifest);
+  return manifest;
+}
+
+json readManifest(const fs::path& folder) {
   const fs::path path = folder / kManifest;
   if (!fs::exists(path)) {
     throw DatasetError(fmt::format("{}: no {}: not a complete vsd-sumo output folder (an interrupted run, or "
                                    "written by something else)",
                                    folder.string(), kManifest));
   }
+  json manifest;
+  try {
+    manifest = json::parse(readTextFile(path, read_limits::kState));
+    if (!manifest.is_object()) throw DatasetError(fmt::format("{}: damaged manifest: not a JSON object", path.string()));
+    if (manifest.contains(kManifestChecksumKey) &&
+        manifest.at(kManifestChecksumKey).get<std::string>() != manifestChecksum(manifest)) {
+      throw DatasetError(fmt::format("{}: edited after it was written (its {} does not match its contents): the "
+                                     "folder's record cannot be trusted; produce it again",
+                                     path.string(), kManifestChecksumKey));
+    }
+  } catch (const json::exception& error) {
+    throw DatasetError(fmt::format("{}: damaged manifest: {}", path.string(), error.what()));
+  } catch (const IoError& error) {
+    throw DatasetError(error.what());
+  }
+  return manifest;
+}
+
+std::map<std::string, ManifestEntry> readManifestOutputs(const fs::path& folder) {
+  const json manifest = readManifest(folder);
   std::map<std::string, ManifestEntry> entries;
   try {
-    const json manifest = json::parse(readTextFile(path));
     for (const auto& [name, entry] : manifest.at("outputs").items()) {
       entries[name] = {entry.at("sha256").get<std::string>(), entry.at("bytes").get<std::uintmax_t>()};
     }
   } catch (const json::exception& error) {
-    throw DatasetError(fmt::format("{}: damaged manifest: {}", path.string(), error.what()));
+    throw DatasetError(fmt::format("{}: damaged manifest: {}", (folder / kManifest).string(), error.what()));
   }
   return entries;
 }

@@ -38,6 +38,11 @@ const AdeSpec& Spec::row(int number) const {
 
 namespace {
 
+/// "file:line" of a node, for messages that name the field themselves.
+std::string lineOf(const fs::path& file, const YAML::Node& node) {
+  return node.Mark().line >= 0 ? fmt::format("{}:{}", file.string(), node.Mark().line + 1) : file.string();
+}
+
 /// A list of ade row numbers, each checked to exist.
 std::vector<int> rowList(const scenario::YamlReader& reader, const YAML::Node& node, const std::string& field,
                          const Spec& spec) {
@@ -65,10 +70,10 @@ ModelSpec parseModel(const scenario::YamlReader& reader, const YAML::Node& node,
   ModelSpec model;
   if (!node["name"]) reader.fail(node, field, "missing 'name' (names its rows and cache folders)");
   model.name = reader.scalar(node["name"], field + ".name");
-  if (model.name.empty() || model.name.find_first_of("/\\ ") != std::string::npos ||
-      model::Predictor::isBuiltin(model.name)) {
-    reader.fail(node["name"], field + ".name",
-                fmt::format("'{}' is not a usable name (non-empty, no spaces or slashes, not cv/ca)", model.name));
+  // It names the model's cache folders.
+  requireSafeName(model.name, lineOf(spec.file, node["name"]), field + ".name");
+  if (model::Predictor::isBuiltin(model.name)) {
+    reader.fail(node["name"], field + ".name", fmt::format("'{}' is a predictor's name (cv, ca): choose another", model.name));
   }
   if (node["decoder"]) model.decoder = reader.scalar(node["decoder"], field + ".decoder");
   if (node["frame"]) model.frame = reader.scalar(node["frame"], field + ".frame");
@@ -172,7 +177,7 @@ void applyQuickSizes(const scenario::YamlReader& reader, const YAML::Node& root,
 Spec parseSpec(const fs::path& file, bool quick) {
   std::string text;
   try {
-    text = readTextFile(file);
+    text = readTextFile(file, read_limits::kSpec);
   } catch (const IoError& error) {
     throw ConfigError(error.what());
   }
@@ -189,6 +194,8 @@ Spec parseSpec(const fs::path& file, bool quick) {
   }
   if (!root["name"]) reader.fail(root, "name", "missing (the results' folder name)");
   spec.name = reader.scalar(root["name"], "name");
+  // It becomes the results folder results/<name>: one plain name, never ../../elsewhere.
+  requireSafeName(spec.name, lineOf(file, root["name"]), "name");
   spec.seed = static_cast<std::uint64_t>(reader.integer(root, "seed", "seed", 1, 0));
   const fs::path base = file.parent_path();
   auto resolve = [&](const fs::path& path) { return path.is_absolute() ? path : base / path; };
@@ -200,6 +207,7 @@ Spec parseSpec(const fs::path& file, bool quick) {
     Source source;
     source.label = entry.first.as<std::string>();
     const std::string field = "scenarios." + source.label;
+    requireSafeName(source.label, lineOf(file, entry.first), field);  // it names cache folders
     reader.checkKeys(entry.second, field, {"scenario", "train", "test"});
     if (entry.second["scenario"]) {
       source.scenario = resolve(reader.scalar(entry.second["scenario"], field + ".scenario"));
@@ -352,6 +360,7 @@ Spec parseSpec(const fs::path& file, bool quick) {
       FigureSpec figure;
       if (!figures[i]["name"] || !figures[i]["row"]) reader.fail(figures[i], field, "needs 'name' and 'row'");
       figure.name = reader.scalar(figures[i]["name"], field + ".name");
+      requireSafeName(figure.name, lineOf(file, figures[i]["name"]), field + ".name");
       figure.row = reader.integer(figures[i], "row", field + ".row", 0, 1);
       requireRow(figures[i]["row"], field + ".row", figure.row);
       if (figures[i]["title"]) figure.title = reader.scalar(figures[i]["title"], field + ".title");

@@ -6,6 +6,7 @@
 
 #include "vsd/core/error.hpp"
 #include "vsd/core/files.hpp"
+#include "vsd/core/numbers.hpp"
 #include "xml_support.hpp"
 
 namespace fs = std::filesystem;
@@ -20,6 +21,15 @@ constexpr double kRoadMarkWidth = 0.12;  // m
 constexpr double kArcSampleSpacing = 0.5;  // m
 /// Consecutive geometries must join (OpenDRIVE requires a continuous reference line).
 constexpr double kJoinTolerance = 0.01;  // m
+/// Bounds of a road the reader accepts, checked before any point is computed: the
+/// longest road a YAML scenario can make (a 10 km region and two 10 km extensions)
+/// fits with room to spare; 50 km of arcs are 100,000 points.
+constexpr double kMaxRoadLength = 50'000.0;  // m, summed over the geometries
+constexpr std::size_t kMaxGeometries = 100'000;
+/// m: coordinates of SUMO networks (and of every road vsd-sumo writes) stay well inside.
+constexpr double kMaxCoordinate = 1e7;
+/// 1/m: a radius of at least 0.1 m.
+constexpr double kMaxCurvature = 10.0;
 
 void addRoadMark(pugi::xml_node lane, const char* type) {
   xml::child(lane, "roadMark",
@@ -114,10 +124,10 @@ namespace {
 
 /// Appends the points of one geometry (without its start point, which the caller has).
 void appendGeometry(const xml::Reader& reader, const pugi::xml_node& geometry, Polyline& points) {
-  const Vec2 start(reader.number(geometry, "x"), reader.number(geometry, "y"));
-  const double heading = reader.number(geometry, "hdg");
-  const double length = reader.number(geometry, "length");
-  if (!(length > 0.0)) reader.fail(geometry, fmt::format("length=\"{}\": expected > 0", xml::number(length)));
+  const NumberRange coordinate = NumberRange::closed(-kMaxCoordinate, kMaxCoordinate);
+  const Vec2 start(reader.number(geometry, "x", coordinate), reader.number(geometry, "y", coordinate));
+  const double heading = reader.number(geometry, "hdg", NumberRange::closed(-1e3, 1e3));
+  const double length = reader.number(geometry, "length", NumberRange::aboveUpTo(0.0, kMaxRoadLength));
   if (!points.empty() && (points.back() - start).norm() > kJoinTolerance) {
     reader.fail(geometry, fmt::format("starts at ({}, {}), {:.3f} m from where the previous geometry ends (expected a "
                                       "continuous reference line)",
@@ -130,7 +140,7 @@ void appendGeometry(const xml::Reader& reader, const pugi::xml_node& geometry, P
     points.push_back(start + length * headingVector(heading));
     return;
   }
-  const double curvature = reader.number(shape, "curvature");
+  const double curvature = reader.number(shape, "curvature", NumberRange::closed(-kMaxCurvature, kMaxCurvature));
   const int chords = std::max(1, static_cast<int>(std::ceil(length / kArcSampleSpacing)));
   for (int i = 1; i <= chords; ++i) {
     const double s = length * i / chords;
@@ -163,11 +173,17 @@ std::pair<int, double> readRightLanes(const xml::Reader& reader, const pugi::xml
   double width = 0.0;
   for (const pugi::xml_node& lane : right.children("lane")) {
     reader.requireSubset(lane, {"link", "width", "roadMark", "userData"});
-    const double id = reader.number(lane, "id");
+    if (lanes == scenario_bounds::kMaxLanes) {
+      reader.fail(lane, fmt::format("more than {} lanes (the most a scenario may have)", scenario_bounds::kMaxLanes));
+    }
+    const auto id = reader.integer(lane, "id", -scenario_bounds::kMaxLanes, scenario_bounds::kMaxLanes);
     if (id != -(lanes + 1)) reader.fail(lane, fmt::format("id=\"{}\": expected {} (right lanes numbered -1, -2, ... from the centre)", reader.text(lane, "id"), -(lanes + 1)));
     reader.oneOf(lane, "type", {"driving"});
     const double lane_width = constantPolynomial(reader, reader.only(lane, "width"));
-    if (!(lane_width > 0.5)) reader.fail(lane, fmt::format("width {} m: expected > 0.5 m", xml::number(lane_width)));
+    if (!(lane_width > 0.5 && scenario_bounds::kLaneWidth.contains(lane_width))) {
+      reader.fail(lane, fmt::format("width {} m: expected > 0.5 m and {} m", xml::number(lane_width),
+                                    scenario_bounds::kLaneWidth.text()));
+    }
     if (lanes > 0 && std::abs(lane_width - width) > 1e-9) {
       reader.fail(lane, fmt::format("width {} m differs from the first lane's {} m (the supported subset has equal "
                                     "lane widths)",
@@ -180,10 +196,27 @@ std::pair<int, double> readRightLanes(const xml::Reader& reader, const pugi::xml
   return {lanes, width};
 }
 
+/// The number of geometries and their summed length, bounded before any point is made.
+void requireBoundedPlanView(const xml::Reader& reader, const pugi::xml_node& plan_view) {
+  std::size_t count = 0;
+  double total = 0.0;
+  for (const pugi::xml_node& geometry : plan_view.children("geometry")) {
+    if (++count > kMaxGeometries) {
+      reader.fail(geometry, fmt::format("more than {} geometries (the most the reader accepts)", kMaxGeometries));
+    }
+    total += reader.number(geometry, "length", NumberRange::aboveUpTo(0.0, kMaxRoadLength));
+    if (total > kMaxRoadLength) {
+      reader.fail(geometry, fmt::format("the road is longer than {} m here (the longest the reader accepts; a "
+                                        "scenario's road is at most {} m)",
+                                        xml::number(kMaxRoadLength), xml::number(3 * scenario_bounds::kMaxExtent)));
+    }
+  }
+}
+
 }  // namespace
 
 OpenDriveRoad readOpenDrive(const fs::path& file) {
-  const xml::Reader reader(file);
+  const xml::Reader reader(file, read_limits::kRoadNetwork);
   const pugi::xml_node root = reader.root();
   if (std::string(root.name()) != "OpenDRIVE") reader.fail(root, "expected the root element <OpenDRIVE>");
   reader.requireSubset(root, {"header", "road", "userData"});
@@ -201,6 +234,7 @@ OpenDriveRoad readOpenDrive(const fs::path& file) {
   road::RoadGeometry& road = result.geometry;
   const pugi::xml_node plan_view = reader.only(road_node, "planView");
   reader.requireSubset(plan_view, {"geometry"});
+  requireBoundedPlanView(reader, plan_view);
   for (const pugi::xml_node& geometry : plan_view.children("geometry")) appendGeometry(reader, geometry, road.centre);
   if (road.centre.size() < 2) reader.fail(plan_view, "expected at least one <geometry>");
   road.regionBegin = 0;
@@ -230,7 +264,7 @@ OpenDriveRoad readOpenDrive(const fs::path& file) {
       const std::string unit = reader.optionalText(speed, "unit").value_or("m/s");
       const double factor = unit == "m/s" ? 1.0 : unit == "km/h" ? 1.0 / 3.6 : unit == "mph" ? 0.44704 : -1.0;
       if (factor < 0.0) reader.fail(speed, fmt::format("unit=\"{}\": expected m/s, km/h or mph", unit));
-      road.speedLimit = reader.number(speed, "max") * factor;
+      road.speedLimit = reader.number(speed, "max", NumberRange::aboveUpTo(0.0, 1000.0)) * factor;
     }
   }
   return result;

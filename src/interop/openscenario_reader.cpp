@@ -6,11 +6,16 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <map>
 #include <sstream>
 
 #include "openscenario_names.hpp"
 #include "vsd/core/error.hpp"
+#include "vsd/core/files.hpp"
+#include "vsd/core/numbers.hpp"
+#include "vsd/core/tool_options.hpp"
+#include "vsd/core/trace.hpp"
 #include "vsd/interop/opendrive.hpp"
 #include "vsd/interop/openscenario.hpp"
 #include "xml_support.hpp"
@@ -24,6 +29,10 @@ namespace {
 /// Start positions and controller properties are exact in exported files; hand-written
 /// ones may round. Larger deviations mean a vehicle is not where vsd-sumo can put it.
 constexpr double kOnLaneTolerance = 0.01;  // m
+/// An instant after every window's end: a condition that never holds within the simulation.
+constexpr int kNever = kMaxWindowSteps + 2;
+/// m: where the bounding box centre may lie relative to the reference point.
+constexpr NumberRange kReferenceOffset = NumberRange::closed(-100.0, 100.0);
 
 struct Entity {
   std::string name;
@@ -62,13 +71,15 @@ struct Document {
     }
     reader.fail(node, fmt::format("entityRef=\"{}\" names no entity of <Entities>", name));
   }
+  /// The instant at which a time condition becomes true; times beyond the longest
+  /// window (kMaxWindowSteps steps) are all "after the end" (kNever).
   int instantOf(const pugi::xml_node& node, double time) const {
+    if (!(time >= 0.0)) reader.fail(node, fmt::format("time {} s: expected >= 0 s", xml::number(time)));
     const double instants = time / step;
+    if (instants > kMaxWindowSteps + 1.0) return kNever;
     const double rounded = std::round(instants);
     // Times between two instants take effect at the next one (the condition becomes true there).
-    const int instant = static_cast<int>(std::abs(instants - rounded) < 1e-6 ? rounded : std::ceil(instants));
-    if (instant < 0) reader.fail(node, fmt::format("time {} s: expected >= 0", xml::number(time)));
-    return instant;
+    return static_cast<int>(std::abs(instants - rounded) < 1e-6 ? rounded : std::ceil(instants));
   }
 };
 
@@ -99,11 +110,29 @@ std::vector<std::pair<std::string, double>> readParameters(xml::Reader& reader, 
       const std::string type = reader.oneOf(declaration, "parameterType",
                                             {"double", "int", "integer", "unsignedInt", "unsignedShort", "string", "boolean"});
       values[name] = reader.text(declaration, "value");
-      if (type != "string" && type != "boolean") numeric.emplace_back(name, reader.number(declaration, "value"));
+      if (type == "double") {
+        numeric.emplace_back(name, reader.number(declaration, "value"));
+      } else if (type != "string" && type != "boolean") {
+        const std::int64_t low = type == "int" || type == "integer" ? -(std::int64_t{1} << 31) : 0;
+        const std::int64_t high = type == "unsignedShort" ? 65535 : (std::int64_t{1} << 32) - 1;
+        numeric.emplace_back(name, static_cast<double>(reader.integer(declaration, "value", low, high)));
+      }
     }
   }
   reader.setParameters(std::move(values));
   return numeric;
+}
+
+/// Performance: not simulated (vsd-sumo's vehicle model has its own limits) but checked,
+/// so that a file's nonsense is refused rather than carried on.
+void readPerformance(const xml::Reader& reader, const pugi::xml_node& performance) {
+  reader.requireSubset(performance, {});
+  for (const char* limit : {"maxSpeed", "maxAcceleration", "maxDeceleration"}) {
+    reader.optionalNumber(performance, limit, NumberRange::closed(0.0, 1000.0));
+  }
+  for (const char* rate : {"maxAccelerationRate", "maxDecelerationRate"}) {
+    reader.optionalNumber(performance, rate, NumberRange::atLeast(0.0));
+  }
 }
 
 void readEntities(Document& document, const pugi::xml_node& root) {
@@ -120,14 +149,15 @@ void readEntities(Document& document, const pugi::xml_node& root) {
     const pugi::xml_node box = reader.only(vehicle, "BoundingBox");
     reader.requireSubset(box, {"Center", "Dimensions"});
     const pugi::xml_node dimensions = reader.only(box, "Dimensions");
-    entity.length = reader.number(dimensions, "length");
-    entity.width = reader.number(dimensions, "width");
-    if (!(entity.length > 0.0) || !(entity.width > 0.0)) reader.fail(dimensions, "length and width: expected > 0 m");
+    entity.length = reader.number(dimensions, "length", scenario_bounds::kVehicleLength);
+    entity.width = reader.number(dimensions, "width", scenario_bounds::kVehicleWidth);
+    reader.optionalNumber(dimensions, "height", NumberRange::above(0.0));
     const pugi::xml_node center = reader.only(box, "Center");
-    entity.referenceAhead = reader.number(center, "x");
+    entity.referenceAhead = reader.number(center, "x", kReferenceOffset);
     if (std::abs(reader.number(center, "y")) > kOnLaneTolerance) {
       reader.fail(center, "y: expected 0 (the bounding box centred on the vehicle's axis)");
     }
+    if (const pugi::xml_node performance = vehicle.child("Performance")) readPerformance(reader, performance);
     if (const pugi::xml_node properties = vehicle.child("Properties")) {
       reader.requireSubset(properties, {"Property"});
       for (const pugi::xml_node& property : properties.children("Property")) {
@@ -159,9 +189,9 @@ void readPosition(Document& document, Entity& entity, const pugi::xml_node& posi
       reader.fail(position, fmt::format("roadId=\"{}\": the road network has road \"{}\" only",
                                         reader.text(position, "roadId"), document.road.id));
     }
-    const double lane_id = reader.number(position, "laneId");
+    const auto lane_id = reader.integer(position, "laneId", -scenario_bounds::kMaxLanes, scenario_bounds::kMaxLanes);
     const auto found = laneFromOpenDrive(static_cast<int>(lane_id), road.lanes);
-    if (!found || lane_id != std::round(lane_id)) {
+    if (!found) {
       reader.fail(position, fmt::format("laneId=\"{}\": expected a driving lane, -1 .. -{}", reader.text(position, "laneId"), road.lanes));
     }
     lane = *found;
@@ -176,10 +206,12 @@ void readPosition(Document& document, Entity& entity, const pugi::xml_node& posi
         reader.fail(orientation, "vehicles start heading along their lane (relative h = 0)");
       }
     }
-    coordinate = {reader.number(position, "s"), road.laneOffset(lane) + offset};
+    coordinate = {reader.number(position, "s", NumberRange::closed(0.0, MeasuredPolyline(road.centre).length())),
+                  road.laneOffset(lane) + offset};
   } else {
     reader.requireSubset(position, {});
-    coordinate = toRoadCoordinate(road, Vec2(reader.number(position, "x"), reader.number(position, "y")));
+    const NumberRange coordinates = NumberRange::closed(-1e7, 1e7);
+    coordinate = toRoadCoordinate(road, Vec2(reader.number(position, "x", coordinates), reader.number(position, "y", coordinates)));
     lane = static_cast<int>(std::lround((coordinate.t - road.laneOffset(0)) / road.laneWidth));
     if (lane < 0 || lane >= road.lanes || std::abs(coordinate.t - road.laneOffset(lane)) > kOnLaneTolerance) {
       reader.fail(position, fmt::format("({}, {}) is not on a lane's centre line (vehicles start there)",
@@ -200,13 +232,12 @@ Entity::SpeedChange readSpeedAction(const xml::Reader& reader, const pugi::xml_n
   const pugi::xml_node dynamics = reader.only(action, "SpeedActionDynamics");
   const pugi::xml_node target = reader.choice(reader.only(action, "SpeedActionTarget"), {"AbsoluteTargetSpeed"});
   Entity::SpeedChange change;
-  change.target = reader.number(target, "value");
-  if (change.target < 0.0) reader.fail(target, "value: expected >= 0 m/s (vehicles do not reverse)");
+  // >= 0: vehicles do not reverse.
+  change.target = reader.number(target, "value", NumberRange::closed(0.0, 1000.0));
   const std::string shape = reader.oneOf(dynamics, "dynamicsShape", {"step", "linear"});
   if (shape == "linear") {
     const std::string dimension = reader.oneOf(dynamics, "dynamicsDimension", {"time", "rate"});
-    const double value = reader.number(dynamics, "value");
-    if (!(value >= 0.0)) reader.fail(dynamics, "value: expected >= 0");
+    const double value = reader.number(dynamics, "value", NumberRange::atLeast(0.0));
     (dimension == "time" ? change.duration : change.rate) = value;
   }
   return change;
@@ -243,19 +274,21 @@ void readInit(Document& document, const pugi::xml_node& storyboard) {
   }
 }
 
-/// Instant at which a trigger made of one SimulationTimeCondition fires.
-int readTimeTrigger(const Document& document, const pugi::xml_node& trigger) {
+/// Instant at which a trigger made of one SimulationTimeCondition fires; `time` (if
+/// given) receives the condition's time in s (value + delay).
+int readTimeTrigger(const Document& document, const pugi::xml_node& trigger, double* time_out = nullptr) {
   const xml::Reader& reader = document.reader;
   reader.requireSubset(trigger, {"ConditionGroup"});
   const pugi::xml_node group = reader.only(trigger, "ConditionGroup");
   reader.requireSubset(group, {"Condition"});
   const pugi::xml_node condition = reader.only(group, "Condition");
   reader.oneOf(condition, "conditionEdge", {"none", "rising"});
-  const double delay = reader.number(condition, "delay");
+  const double delay = reader.number(condition, "delay", NumberRange::atLeast(0.0));
   const pugi::xml_node by_value = reader.choice(condition, {"ByValueCondition"});
   const pugi::xml_node time = reader.choice(by_value, {"SimulationTimeCondition"});
   const std::string rule = reader.oneOf(time, "rule", {"greaterOrEqual", "greaterThan", "equalTo"});
-  double value = reader.number(time, "value") + delay;
+  double value = reader.number(time, "value", NumberRange::atLeast(0.0)) + delay;
+  if (time_out != nullptr) *time_out = value;
   // greaterThan t holds from the first instant after t.
   const int instant = document.instantOf(time, value);
   return rule == "greaterThan" && std::abs(instant * document.step - value) < 1e-6 * document.step ? instant + 1 : instant;
@@ -299,29 +332,34 @@ void readStories(Document& document, const pugi::xml_node& storyboard) {
   }
 }
 
+std::string headerWhere(const Document& document) {
+  return fmt::format("{}: FileHeader property", document.reader.file().string());
+}
+
 void readTimeBase(Document& document, const pugi::xml_node& storyboard, const ImportOptions& options) {
   const xml::Reader& reader = document.reader;
   const auto property = document.properties.find(names::kStep);
   if (property != document.properties.end()) {
-    const double step = std::strtod(property->second.c_str(), nullptr);
-    if (!(step > 0.0)) {
-      throw ConfigError(fmt::format("{}: FileHeader property {}=\"{}\": expected a step > 0 s", reader.file().string(),
-                                    names::kStep, property->second));
-    }
+    const std::string where = headerWhere(document);
+    const double step =
+        checkStep(parseReal(property->second, NumberRange::any(), where, names::kStep), where, names::kStep, property->second);
     if (options.step && std::abs(*options.step - step) > 1e-12) {
       throw ConfigError(fmt::format("{}: --step {} contradicts the file's step {} s ({})", reader.file().string(),
                                     xml::number(*options.step), property->second, names::kStep));
     }
     document.step = step;
   } else if (options.step) {
-    document.step = *options.step;
+    document.step = checkStep(*options.step, "command line", "--step");
   } else {
     throw ConfigError(fmt::format("{}: the simulation step is not in the file (FileHeader property {}); pass --step",
                                   reader.file().string(), names::kStep));
   }
   const pugi::xml_node stop = reader.only(storyboard, "StopTrigger");
-  const int steps = readTimeTrigger(document, stop);
-  if (steps < 1) reader.fail(stop, "the scenario stops at t = 0 (expected a duration of at least one step)");
+  double stop_time = 0.0;
+  const int steps = readTimeTrigger(document, stop, &stop_time);
+  // The duration sizes every trace and dataset array: bounded here, before any is made.
+  checkDurationSteps(steps == kNever ? stop_time : steps * document.step, document.step, reader.where(stop),
+                     "duration (SimulationTimeCondition value + delay, s)");
   document.duration = steps * document.step;
 }
 
@@ -367,16 +405,19 @@ nlohmann::json jsonProperty(const Document& document, const char* name, const ch
   }
 }
 
-std::pair<double, double> numberPair(const Document& document, const char* name, std::pair<double, double> fallback) {
+/// A FileHeader property of two numbers "a b", each within `range`.
+std::pair<double, double> numberPair(const Document& document, const char* name, std::pair<double, double> fallback,
+                                     const NumberRange& range) {
   const auto it = document.properties.find(name);
   if (it == document.properties.end()) return fallback;
   std::istringstream stream(it->second);
-  std::pair<double, double> values;
-  if (!(stream >> values.first >> values.second)) {
-    throw ConfigError(fmt::format("{}: FileHeader property {}=\"{}\": expected two numbers",
-                                  document.reader.file().string(), name, it->second));
+  std::vector<std::string> words;
+  for (std::string word; stream >> word;) words.push_back(word);
+  if (words.size() != 2) {
+    throw ConfigError::field(headerWhere(document), name, it->second, "two numbers separated by a space");
   }
-  return values;
+  return {parseReal(words[0], range, headerWhere(document), fmt::format("{} (first number)", name)),
+          parseReal(words[1], range, headerWhere(document), fmt::format("{} (second number)", name))};
 }
 
 const Entity& findEgo(const Document& document) {
@@ -405,8 +446,12 @@ void readRoadSpec(const Document& document, scenario::LogicalScenario& logical) 
     lowest = std::min(lowest, point.x());
     highest = std::max(highest, point.x());
   }
-  const auto [x_min, x_max] = numberPair(document, names::kRegion, {lowest, highest});
-  const auto [before, after] = numberPair(document, names::kExtension, {0.0, 0.0});
+  const auto [x_min, x_max] = numberPair(document, names::kRegion, {lowest, highest}, scenario_bounds::kRegionEnd);
+  if (!(x_min < x_max) || x_max - x_min > scenario_bounds::kMaxExtent) {
+    throw ConfigError::field(headerWhere(document), names::kRegion, property(document, names::kRegion, ""),
+                             fmt::format("x_min < x_max, at most {} m apart", xml::number(scenario_bounds::kMaxExtent)));
+  }
+  const auto [before, after] = numberPair(document, names::kExtension, {0.0, 0.0}, scenario_bounds::kExtension);
   logical.road.xMin = x_min;
   logical.road.xMax = x_max;
   logical.road.extensionBefore = before;
@@ -421,11 +466,18 @@ void readRoadSpec(const Document& document, scenario::LogicalScenario& logical) 
 
 /// A Property holding one number per step (e.g. a heading disturbance in rad).
 std::vector<double> perStepValues(const xml::Reader& reader, const pugi::xml_node& property, int steps) {
+  const std::string name = reader.text(property, "name");
   std::istringstream stream(reader.text(property, "value"));
   std::vector<double> values;
-  for (double value = 0.0; stream >> value;) values.push_back(value);
-  if (!stream.eof() || values.size() != static_cast<std::size_t>(steps)) {
-    reader.fail(property, fmt::format("{}: expected {} numbers (one per step)", reader.text(property, "name"), steps));
+  for (std::string word; stream >> word;) {
+    if (values.size() == static_cast<std::size_t>(steps)) break;
+    // rad: a disturbance of more than a half turn per step is no disturbance.
+    values.push_back(parseReal(word, NumberRange::closed(-kPi, kPi), reader.where(property),
+                               fmt::format("{}[{}]", name, values.size())));
+  }
+  std::string rest;
+  if (values.size() != static_cast<std::size_t>(steps) || (stream >> rest)) {
+    reader.fail(property, fmt::format("{}: expected {} numbers (one per step)", name, steps));
   }
   return values;
 }
@@ -445,12 +497,13 @@ void readController(const Document& document, const Entity& ego, scenario::Logic
   for (const pugi::xml_node& property : properties.children("Property")) {
     const std::string name = reader.text(property, "name");
     if (name == names::kLibrary) {
-      spec.library = reader.text(property, "value");
-      if (spec.library.is_relative()) spec.library = fs::absolute(reader.file()).parent_path() / spec.library;
+      // A plugin is code: a file from elsewhere may load one only from its own folder.
+      spec.library = requirePathInside(fs::absolute(reader.file()).parent_path(), reader.text(property, "value"),
+                                       reader.where(property), names::kLibrary);
     } else if (name == names::kHeadingDisturbance) {
       concrete.ego.headingNoise = perStepValues(reader, property, logical.steps());
     } else if (name != names::kDescription) {
-      const double value = reader.number(property, "value");
+      const double value = parseReal(reader.text(property, "value"), NumberRange::any(), reader.where(property), name);
       spec.params.emplace_back(name, scenario::Expression::constant(value));
       concrete.controllerParams.emplace_back(name, value);
     }
@@ -483,8 +536,15 @@ void readSumoOptions(const Document& document, scenario::LogicalScenario& logica
   const std::string where = document.reader.file().string() + ": FileHeader properties";
   try {
     logical.sumo.collisionAction = property(document, names::kCollisionAction, logical.sumo.collisionAction);
+    if (!isCollisionAction(logical.sumo.collisionAction)) {
+      throw ConfigError::field(headerWhere(document), names::kCollisionAction, logical.sumo.collisionAction,
+                               collisionActionsExpected());
+    }
     logical.sumo.sumoOptions = jsonProperty(document, names::kSumoOptions, "[]").get<std::vector<std::string>>();
     logical.sumo.netconvertOptions = jsonProperty(document, names::kNetconvertOptions, "[]").get<std::vector<std::string>>();
+    checkScenarioToolOptions(SumoTool::Sumo, logical.sumo.sumoOptions, headerWhere(document), names::kSumoOptions);
+    checkScenarioToolOptions(SumoTool::Netconvert, logical.sumo.netconvertOptions, headerWhere(document),
+                             names::kNetconvertOptions);
     logical.metrics = jsonProperty(document, names::kMetrics, "[]").get<std::vector<std::string>>();
     for (const auto& criterion : jsonProperty(document, names::kCriteria, "[]")) {
       logical.criteria.push_back({criterion.at("name").get<std::string>(), criterion.at("fail_if").get<std::string>(),
@@ -531,8 +591,10 @@ ImportedScenario buildScenario(const Document& document, const fs::path& xosc) {
     concrete.others.push_back(std::move(other));
   }
 
-  concrete.seed = std::stoull(property(document, names::kSeed, "0"));
-  concrete.index = std::stoull(property(document, names::kSample, "0"));
+  concrete.seed = parseUnsigned(property(document, names::kSeed, "0"), std::numeric_limits<std::uint64_t>::max(),
+                                headerWhere(document), names::kSeed);
+  concrete.index = parseUnsigned(property(document, names::kSample, "0"), scenario_bounds::kMaxSampleIndex,
+                                 headerWhere(document), names::kSample);
   concrete.laneWidth = document.road.geometry.laneWidth;
   imported.road = document.road.geometry;
   imported.road.regionBegin = 0;
@@ -545,7 +607,7 @@ ImportedScenario buildScenario(const Document& document, const fs::path& xosc) {
 }  // namespace
 
 ImportedScenario importOpenScenario(const fs::path& xosc, const ImportOptions& options) {
-  xml::Reader reader(xosc);
+  xml::Reader reader(xosc, read_limits::kScenario);
   const pugi::xml_node root = reader.root();
   if (std::string(root.name()) != "OpenSCENARIO") reader.fail(root, "expected the root element <OpenSCENARIO>");
   if (root.child("Catalog") || root.child("ParameterValueDistribution")) {
@@ -556,8 +618,10 @@ ImportedScenario importOpenScenario(const fs::path& xosc, const ImportOptions& o
   Document document{reader, readFileHeader(reader, root), readParameters(reader, root), {}, {}, 0.0, 0.0};
   const pugi::xml_node network = reader.only(root, "RoadNetwork");
   reader.requireSubset(network, {"LogicFile", "SceneGraphFile"});
-  const fs::path logic_file = reader.text(reader.only(network, "LogicFile"), "filepath");
-  const fs::path xodr = logic_file.is_absolute() ? logic_file : xosc.parent_path() / logic_file;
+  const pugi::xml_node logic = reader.only(network, "LogicFile");
+  // The road network must lie next to the scenario file or below it (never /dev/zero, never ../../elsewhere).
+  const fs::path xodr = requirePathInside(fs::absolute(xosc).parent_path(), reader.text(logic, "filepath"),
+                                          reader.where(logic), "filepath");
   if (!fs::exists(xodr)) {
     reader.fail(network.child("LogicFile"), fmt::format("the road network {} does not exist", xodr.string()));
   }

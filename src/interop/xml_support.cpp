@@ -3,7 +3,6 @@
 #include <fmt/format.h>
 
 #include <algorithm>
-#include <charconv>
 #include <cmath>
 #include <sstream>
 
@@ -34,7 +33,7 @@ std::string toText(const pugi::xml_document& document) {
 
 void save(const pugi::xml_document& document, const fs::path& file) { writeTextFileAtomically(file, toText(document)); }
 
-Reader::Reader(const fs::path& file) : file_(file), text_(readTextFile(file)) { parse(); }
+Reader::Reader(const fs::path& file, const ReadLimit& limit) : file_(file), text_(readTextFile(file, limit)) { parse(); }
 
 Reader::Reader(const fs::path& file, std::string text) : file_(file), text_(std::move(text)) { parse(); }
 
@@ -92,26 +91,25 @@ std::string Reader::text(const pugi::xml_node& node, const char* attribute) cons
   return *value;
 }
 
-std::optional<double> Reader::optionalNumber(const pugi::xml_node& node, const char* attribute) const {
+std::optional<double> Reader::optionalNumber(const pugi::xml_node& node, const char* attribute,
+                                             const NumberRange& range) const {
   const auto value = optionalText(node, attribute);
   if (!value) return std::nullopt;
-  // from_chars: locale-independent, and it must consume the whole text.
-  double parsed = 0.0;
-  const char* begin = value->data();
-  const char* end = begin + value->size();
-  while (begin < end && *begin == ' ') ++begin;
-  if (begin < end && *begin == '+') ++begin;
-  const auto [stop, error] = std::from_chars(begin, end, parsed);
-  if (error != std::errc() || stop != end || !std::isfinite(parsed)) {
-    fail(node, fmt::format("attribute {}=\"{}\": expected a finite number", attribute, *value));
-  }
-  return parsed;
+  // XML Schema's xsd:double collapses surrounding white space; the number itself is read whole.
+  const auto first = value->find_first_not_of(" \t\r\n");
+  const auto last = value->find_last_not_of(" \t\r\n");
+  const std::string trimmed = first == std::string::npos ? std::string() : value->substr(first, last - first + 1);
+  return parseReal(trimmed, range, where(node), attribute);
 }
 
-double Reader::number(const pugi::xml_node& node, const char* attribute) const {
-  const auto value = optionalNumber(node, attribute);
+double Reader::number(const pugi::xml_node& node, const char* attribute, const NumberRange& range) const {
+  const auto value = optionalNumber(node, attribute, range);
   if (!value) fail(node, fmt::format("attribute '{}' is missing", attribute));
   return *value;
+}
+
+std::int64_t Reader::integer(const pugi::xml_node& node, const char* attribute, std::int64_t min, std::int64_t max) const {
+  return parseInteger(text(node, attribute), min, max, where(node), attribute);
 }
 
 std::string Reader::oneOf(const pugi::xml_node& node, const char* attribute,

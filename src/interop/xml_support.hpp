@@ -17,6 +17,9 @@
 #include <string>
 #include <vector>
 
+#include "vsd/core/files.hpp"
+#include "vsd/core/numbers.hpp"
+
 namespace vsd::interop::xml {
 
 /// Shortest text that parses back to exactly `value` ("0.2", "12.5", "-1e-05").
@@ -36,8 +39,9 @@ void save(const pugi::xml_document& document, const std::filesystem::path& file)
 /// when a resolver is set.
 class Reader {
  public:
-  /// Throws ConfigError "file:line: not well-formed XML (...)" or IoError.
-  explicit Reader(const std::filesystem::path& file);
+  /// Reads at most `limit` bytes of a regular file (core/files.hpp). Throws ConfigError
+  /// "file:line: not well-formed XML (...)" or IoError.
+  Reader(const std::filesystem::path& file, const ReadLimit& limit);
   /// Parses `text` as if it were `file` (messages name `file`).
   Reader(const std::filesystem::path& file, std::string text);
 
@@ -56,9 +60,13 @@ class Reader {
   /// An attribute's text with parameters resolved; throws ConfigError if absent.
   std::string text(const pugi::xml_node& node, const char* attribute) const;
   std::optional<std::string> optionalText(const pugi::xml_node& node, const char* attribute) const;
-  /// An attribute as a finite number; throws ConfigError naming element, attribute, value.
-  double number(const pugi::xml_node& node, const char* attribute) const;
-  std::optional<double> optionalNumber(const pugi::xml_node& node, const char* attribute) const;
+  /// An attribute as a finite number within `range` (vsd/core/numbers.hpp: NaN,
+  /// infinities, overflow refused by name); throws ConfigError naming element, attribute, value.
+  double number(const pugi::xml_node& node, const char* attribute, const NumberRange& range = NumberRange::any()) const;
+  std::optional<double> optionalNumber(const pugi::xml_node& node, const char* attribute,
+                                       const NumberRange& range = NumberRange::any()) const;
+  /// An attribute as a whole number min .. max (no fraction, no wrap-around).
+  std::int64_t integer(const pugi::xml_node& node, const char* attribute, std::int64_t min, std::int64_t max) const;
   /// An attribute that must be one of `allowed`.
   std::string oneOf(const pugi::xml_node& node, const char* attribute, std::initializer_list<const char*> allowed) const;
 

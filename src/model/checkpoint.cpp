@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <fstream>
 #include <unordered_map>
 
 #include "vsd/core/error.hpp"
@@ -227,7 +228,14 @@ namespace {
 void writeArchive(torch::serialize::OutputArchive& archive, const fs::path& path) {
   AtomicOutput output(path);
   try {
-    archive.save_to(output.tempPath().string());
+    // Through a stream, not a file name: torch names the zip's entries after the file it
+    // is given (".m.pt.<pid>.part/data.pkl"), which would make two identical trainings
+    // differ in bytes; a stream's entries are "archive/...", whatever the process.
+    std::ofstream stream(output.tempPath(), std::ios::binary | std::ios::trunc);
+    if (!stream) throw IoError(fmt::format("{}: cannot open for writing", path.string()));
+    archive.save_to(stream);
+    stream.close();
+    if (!stream) throw IoError(fmt::format("{}: write failed (disk full?)", path.string()));
   } catch (const c10::Error& error) {
     throw IoError(fmt::format("{}: cannot write model: {}", path.string(), error.what_without_backtrace()));
   }
@@ -236,6 +244,9 @@ void writeArchive(torch::serialize::OutputArchive& archive, const fs::path& path
 
 void openArchive(const fs::path& path, torch::serialize::InputArchive& archive) {
   if (!fs::exists(path)) throw ModelError(fmt::format("{}: model file does not exist", path.string()));
+  if (!fs::is_regular_file(path)) {
+    throw ModelError(fmt::format("{}: not a regular file (a device, FIFO or folder), expected a model file", path.string()));
+  }
   try {
     archive.load_from(path.string());
   } catch (const c10::Error&) {

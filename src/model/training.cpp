@@ -505,6 +505,12 @@ class Trainer {
   void requireCheckpointOnEveryRank() {
     auto found = torch::tensor({fs::exists(lastCheckpoint_) ? 1 : 0}, torch::kInt64);
     parallel_->sum(found);
+    if (found.item<std::int64_t>() == 0) {
+      // No rank sees it: the training stopped (a rank died, an interruption) before its first checkpoint.
+      throw ConfigError(fmt::format("--resume: no checkpoint {} to resume from (the training stopped before it wrote "
+                                    "one): start without --resume",
+                                    lastCheckpoint_.string()));
+    }
     if (found.item<std::int64_t>() != parallel_->size()) {
       throw ConfigError(fmt::format("--resume: {} of {} ranks see no checkpoint {} (every rank reads rank 0's: keep "
                                     "the model's folder on a file system all ranks share)",

@@ -133,9 +133,36 @@ void ExportOptions::validate() const {
 
 namespace {
 
+/// Bounds of physically possible motion (README "export"): a state that moves a vehicle
+/// farther than its speed allows (plus the tolerance), or that changes its velocity
+/// faster than any road vehicle can, is masked — never written as a valid instant.
+/// SUMO produces such states: continuous lane changes (--lanechange.duration) shift a
+/// vehicle sideways and back, and some maps' lane geometry makes positions jump.
+constexpr double kJumpTolerance = 0.5;               ///< m beyond speed x elapsed time
+constexpr double kMaxPlausibleAcceleration = 15.0;   ///< m/s^2, from positions (second difference)
+/// After this many masked states in a row the vehicle's motion starts afresh from where
+/// it is (it was moved by SUMO, e.g. teleported): the masking never spreads without end.
+constexpr int kMaxMaskedInARow = 3;
+
+/// One recorded state: its step, and whether it continues the vehicle's motion possibly.
+struct Recorded {
+  std::int64_t step = 0;
+  VehicleState state;
+  bool plausible = true;
+};
+
+/// The last plausible motion of a vehicle: where it was, how fast, and its velocity.
+struct Motion {
+  std::int64_t step = 0;
+  Vec2 position = Vec2::Zero();
+  double speed = 0.0;
+  std::optional<Vec2> velocity;  ///< from the two last plausible positions
+  int maskedInARow = 0;
+};
+
 /// The last window-length of states of one vehicle.
 struct History {
-  std::deque<std::pair<std::int64_t, VehicleState>> states;  ///< (step, state), increasing steps
+  std::deque<Recorded> states;  ///< increasing steps
   double length = 5.0;
   double width = 1.8;
   std::int64_t lastStep = 0;
@@ -144,15 +171,42 @@ struct History {
   std::uint64_t samples = 0;
   Vec2 windowLo = Vec2::Zero();  ///< bounding box of the states in the current window
   Vec2 windowHi = Vec2::Zero();
+  std::optional<Motion> motion;  ///< the last plausible state
 
-  const VehicleState* at(std::int64_t step) const {
-    if (states.empty() || step < states.front().first || step > states.back().first) return nullptr;
+  const Recorded* at(std::int64_t step) const {
+    if (states.empty() || step < states.front().step || step > states.back().step) return nullptr;
     // Steps are consecutive unless the vehicle was away (teleport): try the direct index first.
-    const auto offset = static_cast<std::size_t>(step - states.front().first);
-    if (offset < states.size() && states[offset].first == step) return &states[offset].second;
+    const auto offset = static_cast<std::size_t>(step - states.front().step);
+    if (offset < states.size() && states[offset].step == step) return &states[offset];
     const auto it = std::lower_bound(states.begin(), states.end(), step,
-                                     [](const auto& entry, std::int64_t value) { return entry.first < value; });
-    return it != states.end() && it->first == step ? &it->second : nullptr;
+                                     [](const Recorded& entry, std::int64_t value) { return entry.step < value; });
+    return it != states.end() && it->step == step ? &*it : nullptr;
+  }
+
+  /// Whether `state` at `step` continues the motion possibly (see kJumpTolerance);
+  /// `jumps` / `accelerations` count the refusals by cause.
+  bool plausible(std::int64_t step, const VehicleState& state, double dt, std::uint64_t& jumps,
+                 std::uint64_t& accelerations) {
+    const Vec2 position = state.position();
+    if (!motion || step - motion->step > 1 + kMaxMaskedInARow || motion->maskedInARow >= kMaxMaskedInARow) {
+      motion = Motion{step, position, state.speed, std::nullopt, 0};  // a new start (first state, or moved by SUMO)
+      return true;
+    }
+    const double elapsed = static_cast<double>(step - motion->step) * dt;
+    const Vec2 displacement = position - motion->position;
+    const Vec2 velocity = displacement / elapsed;
+    if (displacement.norm() > std::max(motion->speed, state.speed) * elapsed + kJumpTolerance) {
+      ++jumps;
+      ++motion->maskedInARow;
+      return false;
+    }
+    if (motion->velocity && (velocity - *motion->velocity).norm() / elapsed > kMaxPlausibleAcceleration) {
+      ++accelerations;
+      ++motion->maskedInARow;
+      return false;
+    }
+    motion = Motion{step, position, state.speed, velocity, 0};
+    return true;
   }
 };
 
@@ -192,8 +246,9 @@ class Exporter {
         if (history.ego) fresh.push_back(vehicle.id);
         ++vehiclesSeen_;
       }
-      history.states.emplace_back(step, vehicle.state);
-      while (history.states.front().first < step - window) history.states.pop_front();
+      const bool plausible = history.plausible(step, vehicle.state, options_.step, maskedJumps_, maskedAccelerations_);
+      history.states.push_back({step, vehicle.state, plausible});
+      while (history.states.front().step < step - window) history.states.pop_front();
       history.lastStep = step;
     }
     return fresh;
@@ -205,19 +260,21 @@ class Exporter {
     // Each vehicle's bounding box over the window, once per step (dozens of
     // windows may end in one step, each asking which vehicles came near).
     for (auto& [id, history] : histories_) {
-      history.windowLo = history.windowHi = history.states.back().second.position();
-      for (const auto& [s, state] : history.states) {
-        history.windowLo = history.windowLo.cwiseMin(state.position());
-        history.windowHi = history.windowHi.cwiseMax(state.position());
+      history.windowLo = history.windowHi = history.states.back().state.position();
+      for (const auto& recorded : history.states) {
+        history.windowLo = history.windowLo.cwiseMin(recorded.state.position());
+        history.windowHi = history.windowHi.cwiseMax(recorded.state.position());
       }
     }
     for (auto it = histories_.begin(); it != histories_.end();) {
       History& history = it->second;
       if (history.ego && history.lastStep == step && step == history.nextT0 + horizonSteps_) {
-        if (completeWindow(history, step)) {
-          emitWindow(it->first, history, step, time);
-        } else {
+        if (!completeWindow(history, step)) {
           ++skipped_;
+        } else if (!history.at(step - horizonSteps_)->plausible) {
+          ++skippedImplausible_;  // the Ego's initial state is not a possible one: no sample starts there
+        } else {
+          emitWindow(it->first, history, step, time);
         }
         history.nextT0 += strideSteps_;
       }
@@ -244,13 +301,16 @@ class Exporter {
   std::uint64_t egos() const { return egosWithSamples_; }
   std::uint64_t vehiclesSeen() const { return vehiclesSeen_; }
   std::uint64_t parkedSteps() const { return parkedSteps_; }
+  std::uint64_t maskedJumps() const { return maskedJumps_; }
+  std::uint64_t maskedAccelerations() const { return maskedAccelerations_; }
+  std::uint64_t skippedImplausible() const { return skippedImplausible_; }
 
  private:
   bool completeWindow(const History& history, std::int64_t step) const {
     const std::int64_t first = step - historySteps_ - horizonSteps_;
     std::int64_t present = 0;
-    for (const auto& [s, state] : history.states) {
-      if (s >= first && s <= step) ++present;
+    for (const auto& recorded : history.states) {
+      if (recorded.step >= first && recorded.step <= step) ++present;
     }
     return present == historySteps_ + horizonSteps_ + 1;
   }
@@ -264,7 +324,7 @@ class Exporter {
     const std::int64_t first = step - historySteps_ - horizonSteps_;
     const std::int64_t t0 = step - horizonSteps_;
     const std::size_t instants = static_cast<std::size_t>(historySteps_ + horizonSteps_ + 1);
-    const VehicleState& ego_start = *ego.at(t0);
+    const VehicleState& ego_start = ego.at(t0)->state;
     const Vec2 centre = ego_start.position();
     const double radius_sq = options_.radius * options_.radius;
 
@@ -277,8 +337,9 @@ class Exporter {
       const Vec2 nearest = centre.cwiseMax(other.windowLo).cwiseMin(other.windowHi);
       if ((nearest - centre).squaredNorm() > radius_sq) continue;  // the whole window stays away
       bool near = false;
-      for (const auto& [s, state] : other.states) {
-        if (s >= first && s <= step && (state.position() - centre).squaredNorm() <= radius_sq) {
+      for (const auto& recorded : other.states) {
+        if (recorded.step >= first && recorded.step <= step &&
+            (recorded.state.position() - centre).squaredNorm() <= radius_sq) {
           near = true;
           break;
         }
@@ -298,8 +359,8 @@ class Exporter {
     ++ego.samples;
   }
 
-  /// The states of `history` at steps first .. first + instants - 1; masked where absent
-  /// or (if `centre` is given) outside the radius.
+  /// The states of `history` at steps first .. first + instants - 1; masked where absent,
+  /// where the motion is impossible, or (if `centre` is given) outside the radius.
   static VehicleTrack trackOf(const History& history, std::int64_t first, std::size_t instants, const Vec2* centre,
                               double radius_sq) {
     VehicleTrack track;
@@ -308,10 +369,13 @@ class Exporter {
     track.states.resize(instants);
     track.valid.assign(instants, 0);
     for (std::size_t k = 0; k < instants; ++k) {
-      const VehicleState* state = history.at(first + static_cast<std::int64_t>(k));
-      if (state == nullptr) continue;
-      track.states[k] = *state;
-      track.valid[k] = centre == nullptr || (state->position() - *centre).squaredNorm() <= radius_sq ? 1 : 0;
+      const Recorded* recorded = history.at(first + static_cast<std::int64_t>(k));
+      if (recorded == nullptr) continue;
+      track.states[k] = recorded->state;
+      track.valid[k] = recorded->plausible &&
+                               (centre == nullptr || (recorded->state.position() - *centre).squaredNorm() <= radius_sq)
+                           ? 1
+                           : 0;
     }
     return track;
   }
@@ -331,6 +395,9 @@ class Exporter {
   std::uint64_t egosWithSamples_ = 0;
   std::uint64_t vehiclesSeen_ = 0;
   std::uint64_t parkedSteps_ = 0;
+  std::uint64_t maskedJumps_ = 0;
+  std::uint64_t maskedAccelerations_ = 0;
+  std::uint64_t skippedImplausible_ = 0;
 };
 
 }  // namespace
@@ -484,6 +551,10 @@ ExportSummary simulateAndWrite(const ExportJob& job, const std::function<void(do
   summary.windowsSkipped = exporter.skipped();
   summary.vehiclesSeen = exporter.vehiclesSeen();
   summary.parkedSteps = exporter.parkedSteps();
+  summary.maskedJumps = exporter.maskedJumps();
+  summary.maskedAccelerations = exporter.maskedAccelerations();
+  summary.windowsImplausible = exporter.skippedImplausible();
+  summary.egosAsked = chosen.size();
   summary.laneVectors = lanes.vectors();
   summary.simulatedSeconds = simulation.time() - begin;
   summary.failedEgos = simulation.failures();
@@ -500,6 +571,10 @@ std::vector<char> encodeSummary(const ExportSummary& summary) {
   writer.put(summary.windowsSkipped);
   writer.put(summary.vehiclesSeen);
   writer.put(summary.parkedSteps);
+  writer.put(summary.maskedJumps);
+  writer.put(summary.maskedAccelerations);
+  writer.put(summary.windowsImplausible);
+  writer.put(summary.egosAsked);
   writer.put(summary.laneVectors);
   writer.put(summary.simulatedSeconds);
   writer.put<std::uint64_t>(summary.failedEgos.size());
@@ -518,6 +593,10 @@ ExportSummary decodeSummary(ByteReader& reader) {
   summary.windowsSkipped = reader.get<std::uint64_t>();
   summary.vehiclesSeen = reader.get<std::uint64_t>();
   summary.parkedSteps = reader.get<std::uint64_t>();
+  summary.maskedJumps = reader.get<std::uint64_t>();
+  summary.maskedAccelerations = reader.get<std::uint64_t>();
+  summary.windowsImplausible = reader.get<std::uint64_t>();
+  summary.egosAsked = reader.get<std::uint64_t>();
   summary.laneVectors = reader.get<std::uint64_t>();
   summary.simulatedSeconds = reader.get<double>();
   const auto failures = reader.get<std::uint64_t>();
@@ -572,10 +651,15 @@ ExportSummary exportInWorker(ExportJob& job) {
       const auto& activity = fault.activity;
       const bool ego_fault = activity.activity == Activity::Controller || activity.activity == Activity::SumoVehicles;
       if (!ego_fault || activity.label.empty()) {
-        throw SumoError(fmt::format("{}: {} during {} at t = {:.1f} s", job.mapFile.string(),
+        // Times are SUMO's own clock (a map may start at 50,300 s); while loading there is none yet.
+        const std::string when = activity.activity == Activity::SumoLoad
+                                     ? std::string("while loading the simulation")
+                                     : fmt::format("during {} at simulation time t = {:.1f} s",
+                                                   activityName(activity.activity), activity.time);
+        throw SumoError(fmt::format("{}: {} {}", job.mapFile.string(),
                                     activity.activity == Activity::Idle ? "the export's worker process " + fault.what()
                                                                         : "libsumo " + fault.what(),
-                                    activityName(activity.activity), activity.time));
+                                    when));
       }
       const std::string who = activity.activity == Activity::Controller ? "Ego controller" : "libsumo";
       job.plannedFailures.push_back(
@@ -710,9 +794,17 @@ std::string ExportSummary::report() const {
       "{}: {} samples from {} Egos{} ({} vehicles seen, {:.0f} s simulated) in {:.2f} s = {:.0f} samples/s\n"
       "  windows skipped (Ego left the network or parked before the window ended): {}\n"
       "  vehicle steps parked (off the lane, masked): {}\n"
+      "  vehicle states masked as impossible motion: {} jumps beyond speed x step + {} m, {} accelerations beyond "
+      "{} m/s^2; windows skipped for a masked Ego start: {}\n"
       "  lane-boundary vectors in the network: {}\n",
       label, samples, egos, closedLoop ? " driven by the controller (closed loop)" : "", vehiclesSeen,
-      simulatedSeconds, seconds, samplesPerSecond, windowsSkipped, parkedSteps, laneVectors);
+      simulatedSeconds, seconds, samplesPerSecond, windowsSkipped, parkedSteps, maskedJumps, kJumpTolerance,
+      maskedAccelerations, kMaxPlausibleAcceleration, windowsImplausible, laneVectors);
+  if (egosAsked > 0 && egos < egosAsked) {
+    text += fmt::format("  only {} of the {} Egos asked for gave a sample (the others never stayed a whole window "
+                        "in the network)\n",
+                        egos, egosAsked);
+  }
   if (!failedEgos.empty()) {
     text += fmt::format("  Egos taken out because their controller failed: {}\n", failedEgos.size());
     for (const auto& failure : failedEgos) text += fmt::format("    {}: {}\n", failure.id, failure.reason);

@@ -13,6 +13,7 @@
 #include "vsd/core/progress.hpp"
 #include "vsd/core/shards.hpp"
 #include "vsd/pipeline/outcome_files.hpp"
+#include "vsd/vector/dataset.hpp"
 
 namespace fs = std::filesystem;
 
@@ -21,8 +22,6 @@ namespace vsd::pipeline {
 namespace {
 
 constexpr const char* kRunFiles[] = {"concrete.csv", "traces.h5", "dataset.h5"};
-
-nlohmann::json readManifest(const fs::path& folder) { return nlohmann::json::parse(readTextFile(folder / "manifest.json")); }
 
 /// Every output a shard's manifest lists must still have its recorded size and hash.
 void checkShardFiles(const ShardInfo& shard, const nlohmann::json& manifest) {
@@ -74,6 +73,7 @@ nlohmann::json mergedManifest(const std::vector<ShardInfo>& shards, const std::v
                               const MergeOptions& options, const std::string& started) {
   nlohmann::json manifest = manifests.front();
   manifest.erase("shard");
+  manifest.erase(kManifestChecksumKey);  // the merged manifest gets its own
   const ShardInfo& first = shards.front();
   std::uint64_t ok = 0, failed = 0, collisions = 0;
   double seconds = 0.0;
@@ -108,6 +108,9 @@ MergeSummary mergeShards(const MergeOptions& options) {
   for (const auto& shard : shards) {
     manifests.push_back(readManifest(shard.folder));
     checkShardFiles(shard, manifests.back());
+    // What the manifest says (seed, range, scenario) against what the files hold, before anything is written.
+    const auto problems = vector::runFolderRecordProblems(shard.folder);
+    if (!problems.empty()) throw DatasetError(fmt::format("{}: {}", shard.id.label(), problems.front()));
   }
   const fs::path out = options.output.empty() ? options.sweep : options.output;
   ensureDirectory(out);
@@ -135,7 +138,7 @@ MergeSummary mergeShards(const MergeOptions& options) {
     summary.outputs.push_back(out / file);
   }
   manifest["outputs"] = files;
-  writeTextFileAtomically(out / "manifest.json", manifest.dump(2) + "\n");
+  writeTextFileAtomically(out / "manifest.json", sealManifest(manifest).dump(2) + "\n");
   summary.outputs.push_back(out / "manifest.json");
   if (options.removeShards) {
     std::error_code ignored;

@@ -10,6 +10,7 @@
 
 #include "vsd/core/error.hpp"
 #include "vsd/core/files.hpp"
+#include "vsd/core/tool_options.hpp"
 #include "vsd/core/trace.hpp"
 
 namespace vsd::scenario {
@@ -275,14 +276,15 @@ void parseRest(const YamlReader& reader, const YAML::Node& root, LogicalScenario
       }
       scenario.sumo.collisionAction = action;
     }
-    auto strings = [&](const char* key, std::vector<std::string>& out) {
+    auto strings = [&](const char* key, std::vector<std::string>& out, SumoTool tool) {
       const auto list = sumo[key];
       if (!list) return;
       if (!list.IsSequence()) reader.fail(list, std::string("sumo.") + key, "expected a list of command-line options");
       for (std::size_t i = 0; i < list.size(); ++i) out.push_back(reader.scalar(list[i], fmt::format("sumo.{}[{}]", key, i)));
+      checkScenarioToolOptions(tool, out, reader.where(list, "sumo"), key);
     };
-    strings("netconvert_options", scenario.sumo.netconvertOptions);
-    strings("sumo_options", scenario.sumo.sumoOptions);
+    strings("netconvert_options", scenario.sumo.netconvertOptions, SumoTool::Netconvert);
+    strings("sumo_options", scenario.sumo.sumoOptions, SumoTool::Sumo);
   }
 }
 
@@ -319,7 +321,7 @@ std::shared_ptr<const LogicalScenario> parseLogicalScenario(const std::string& y
 std::shared_ptr<const LogicalScenario> loadLogicalScenario(const std::filesystem::path& file) {
   std::string text;
   try {
-    text = readTextFile(file);
+    text = readTextFile(file, read_limits::kScenario);
   } catch (const IoError& error) {
     throw ConfigError(error.what());
   }

@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "vsd/core/error.hpp"
+#include "vsd/core/numbers.hpp"
 
 namespace vsd::scenario {
 
@@ -39,14 +40,9 @@ std::string YamlReader::scalar(const YAML::Node& node, const std::string& field)
 }
 
 double YamlReader::number(const YAML::Node& node, const std::string& field) const {
-  const std::string text = scalar(node, field);
-  try {
-    std::size_t used = 0;
-    const double value = std::stod(text, &used);
-    if (used == text.size() && std::isfinite(value)) return value;
-  } catch (const std::exception&) {
-  }
-  throw ConfigError::field(where(node, field), field, text, "a finite number");
+  // "file:line" (the field is named once, by parseReal's message).
+  const std::string location = node.Mark().line >= 0 ? fmt::format("{}:{}", file_, node.Mark().line + 1) : file_;
+  return parseReal(scalar(node, field), NumberRange::any(), location, field);
 }
 
 double YamlReader::number(const YAML::Node& map, const std::string& key, const std::string& field, double fallback) const {
@@ -59,12 +55,8 @@ int YamlReader::integer(const YAML::Node& map, const std::string& key, const std
                         int maximum) const {
   const auto node = map[key];
   if (!node) return fallback;
-  const double value = number(node, field);
-  if (value != std::floor(value) || value < minimum || value > maximum) {
-    throw ConfigError::field(where(node, field), field, scalar(node, field),
-                             fmt::format("an integer in {} .. {}", minimum, maximum));
-  }
-  return static_cast<int>(value);
+  const std::string location = node.Mark().line >= 0 ? fmt::format("{}:{}", file_, node.Mark().line + 1) : file_;
+  return static_cast<int>(parseInteger(scalar(node, field), minimum, maximum, location, field));
 }
 
 Expression YamlReader::expression(const YAML::Node& node, const std::string& field, const std::vector<std::string>& variables) const {

@@ -1,6 +1,9 @@
 // <out>/checkpoint.json: every execution of the finished rounds, written atomically
 // after each round. Numbers are stored as exact text (formatNumber), so a resumed
 // search refits the same surrogate on the same values and makes the same choices.
+// It records what made it (identity(): scenario hash, seed, options), the SHA-256 of
+// every round's files in <out>/.rounds/ and a checksum of its own contents, all checked
+// when a search resumes, before any work.
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
@@ -18,7 +21,14 @@ namespace vsd::search::detail {
 
 namespace {
 
-constexpr const char* kSchema = "vsd-search-checkpoint/1";
+constexpr const char* kSchema = "vsd-search-checkpoint/2";
+constexpr const char* kChecksumKey = "contents_sha256";
+constexpr const char* kRoundFileNames[] = {"traces.h5", "dataset.h5"};
+
+std::string contentsChecksum(nlohmann::json json) {
+  json.erase(kChecksumKey);
+  return sha256OfString(json.dump());
+}
 
 fs::path checkpointPath(const SearchContext& context) { return context.options.outputDir / "checkpoint.json"; }
 
@@ -95,6 +105,35 @@ void requireSameOptions(const SearchContext& context, const nlohmann::json& stor
   }
 }
 
+/// Every round's files must be the ones the checkpoint recorded.
+std::vector<std::map<std::string, std::string>> checkRoundFiles(const SearchContext& context, const nlohmann::json& list,
+                                                                std::uint64_t rounds, const fs::path& path) {
+  if (list.size() != rounds) {
+    throw DatasetError(fmt::format("{}: lists {} rounds but the files of {}", path.string(), rounds, list.size()));
+  }
+  std::vector<std::map<std::string, std::string>> hashes;
+  for (std::uint64_t round = 0; round < rounds; ++round) {
+    std::map<std::string, std::string> files;
+    for (const char* name : kRoundFileNames) {
+      const fs::path file = roundFile(context, round, name);
+      if (!fs::exists(file)) {
+        throw DatasetError(fmt::format("{}: missing: the checkpoint lists round {} but its executions' {} are gone "
+                                       "(start the search in a new --out folder)",
+                                       file.string(), round, name));
+      }
+      const std::string recorded = list.at(round).at(name).get<std::string>();
+      if (sha256OfFile(file) != recorded) {
+        throw DatasetError(fmt::format("{}: not the file of round {} that {} records (its SHA-256 differs: another "
+                                       "search's, or changed since): start the search in a new --out folder",
+                                       file.string(), round, path.filename().string()));
+      }
+      files[name] = recorded;
+    }
+    hashes.push_back(std::move(files));
+  }
+  return hashes;
+}
+
 }  // namespace
 
 std::optional<SearchState> readCheckpoint(const SearchContext& context) {
@@ -109,21 +148,34 @@ std::optional<SearchState> readCheckpoint(const SearchContext& context) {
   }
   nlohmann::json json;
   try {
-    json = nlohmann::json::parse(readTextFile(path));
+    json = nlohmann::json::parse(readTextFile(path, read_limits::kState));
     if (json.at("schema").get<std::string>() != kSchema) {
-      throw DatasetError(fmt::format("{}: schema '{}', expected {}", path.string(), json.at("schema").dump(), kSchema));
+      throw DatasetError(fmt::format("{}: schema {}, expected {} (written by another vsd-sumo version): start the "
+                                     "search in a new --out folder",
+                                     path.string(), json.at("schema").dump(), kSchema));
+    }
+    if (json.at(kChecksumKey).get<std::string>() != contentsChecksum(json)) {
+      throw DatasetError(fmt::format("{}: edited after it was written (its {} does not match its contents): start "
+                                     "the search in a new --out folder",
+                                     path.string(), kChecksumKey));
     }
     requireSameOptions(context, json.at("options"), path);
     SearchState state;
     state.rounds = json.at("rounds").get<std::uint64_t>();
     for (const auto& item : json.at("executions")) state.executions.push_back(parseExecution(item));
+    state.roundFileSha256 = checkRoundFiles(context, json.at("round_files"), state.rounds, path);
     return state;
   } catch (const nlohmann::json::exception& error) {
     throw DatasetError(fmt::format("{}: not a search checkpoint ({})", path.string(), error.what()));
   }
 }
 
-void writeCheckpoint(const SearchContext& context, const SearchState& state) {
+void writeCheckpoint(const SearchContext& context, SearchState& state) {
+  for (std::uint64_t round = state.roundFileSha256.size(); round < state.rounds; ++round) {
+    std::map<std::string, std::string> files;
+    for (const char* name : kRoundFileNames) files[name] = sha256OfFile(roundFile(context, round, name));
+    state.roundFileSha256.push_back(std::move(files));
+  }
   nlohmann::json json;
   json["schema"] = kSchema;
   json["options"] = identity(context);
@@ -143,6 +195,8 @@ void writeCheckpoint(const SearchContext& context, const SearchState& state) {
                           {"weight", formatNumber(e.weight)}});
   }
   json["executions"] = std::move(executions);
+  json["round_files"] = state.roundFileSha256;
+  json[kChecksumKey] = contentsChecksum(json);
   writeTextFileAtomically(checkpointPath(context), json.dump() + "\n");
 }
 

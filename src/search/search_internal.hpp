@@ -70,11 +70,17 @@ std::unique_ptr<Surrogate> fitSurrogate(const SearchContext& context, const std:
 struct SearchState {
   std::uint64_t rounds = 0;
   std::vector<Execution> executions;
+  /// SHA-256 of each finished round's files by name ("traces.h5", "dataset.h5"), in round order.
+  std::vector<std::map<std::string, std::string>> roundFileSha256;
 };
-/// Reads <out>/checkpoint.json if present; throws ConfigError if it was made with other
-/// options (naming the option and both values), DatasetError if it is unreadable.
+/// Reads <out>/checkpoint.json if present — before any work: throws ConfigError if it was
+/// made with other options (naming the option and both values), DatasetError if it is
+/// unreadable, edited (its checksum) or if a round's files are missing or are not the
+/// ones it recorded (another search's, or changed).
 std::optional<SearchState> readCheckpoint(const SearchContext& context);
-void writeCheckpoint(const SearchContext& context, const SearchState& state);
+/// Writes the checkpoint with the SHA-256 of every round's files (hashing the rounds not
+/// yet in state.roundFileSha256) and a checksum of its own contents.
+void writeCheckpoint(const SearchContext& context, SearchState& state);
 
 RateEstimate estimateRate(const SearchContext& context, const std::vector<Execution>& executions);
 

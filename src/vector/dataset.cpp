@@ -2,18 +2,22 @@
 
 #include <fmt/format.h>
 #include <fmt/ranges.h>
+#include <nlohmann/json.hpp>
 
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <map>
 #include <tuple>
 #include <unordered_map>
 
+#include "vsd/core/csv.hpp"
 #include "vsd/core/error.hpp"
 #include "vsd/core/shards.hpp"
 #include "vsd/core/files.hpp"
 #include "vsd/core/hdf5.hpp"
 #include "vsd/core/log.hpp"
+#include "vsd/core/numbers.hpp"
 
 namespace fs = std::filesystem;
 
@@ -220,8 +224,14 @@ DatasetWriter::DatasetWriter(const fs::path& path, DatasetHeader header, const f
   impl_->name = name_in_messages.empty() ? path : name_in_messages;
   impl_->header = std::move(header);
   const auto& h = impl_->header;
-  if (!(h.step > 0.0) || !std::isfinite(h.step) || h.horizon < 1) {
-    throw Error(fmt::format("internal: dataset header with step {} s and horizon {} steps", h.step, h.horizon));
+  // The bounds every reader checks (kMinStep .. kMaxStep, kMaxWindowSteps) hold before the
+  // file is created: arrays sized by them fail here in one line, not in HDF5.
+  if (!(h.step >= kMinStep && h.step <= kMaxStep) || h.horizon < 1 || h.horizon > kMaxWindowSteps || h.history < 0 ||
+      h.history > kMaxWindowSteps) {
+    throw DatasetError(fmt::format("{}: cannot hold step {} s, horizon {} and history {} steps (expected {} .. {} s and "
+                                   "at most {} steps)",
+                                   impl_->name.string(), h.step, h.horizon, h.history, kMinStep, kMaxStep,
+                                   kMaxWindowSteps));
   }
   if (h.compression < 0 || h.compression > 9) {
     throw ConfigError::field("command line", "--compression", std::to_string(h.compression), "a deflate level 0..9");
@@ -687,6 +697,29 @@ std::vector<std::size_t> DatasetReader::samplesWithLabel(const std::string& want
   return result;
 }
 
+std::vector<DatasetReader::SampleRecord> DatasetReader::records() const {
+  const auto& d = *impl_;
+  const std::size_t inputs_per_sample = d.header.inputNames.size();
+  std::vector<double> inputs;
+  if (d.inputs && inputs_per_sample > 0 && size() > 0) {
+    try {
+      inputs = h5::readRows<double>(*d.inputs, 0, size());
+    } catch (const H5::Exception& error) {
+      d.fail(fmt::format("cannot read /inputs: {}", h5::errorCause(error)));
+    }
+  }
+  std::vector<SampleRecord> records(size());
+  for (std::size_t i = 0; i < size(); ++i) {
+    records[i].sample = static_cast<std::uint64_t>(d.sampleIndex[i]);
+    records[i].sourceSha256 = d.sourceSha.at(static_cast<std::size_t>(d.sampleSource[i]));
+    if (!inputs.empty()) {
+      const auto first = inputs.begin() + static_cast<std::ptrdiff_t>(i * inputs_per_sample);
+      records[i].inputs.assign(first, first + static_cast<std::ptrdiff_t>(inputs_per_sample));
+    }
+  }
+  return records;
+}
+
 VectorizedScene DatasetReader::scene(std::size_t sample) const {
   const auto& d = *impl_;
   if (sample >= size()) d.fail(fmt::format("sample {} out of range (the dataset has {})", sample, size()));
@@ -849,10 +882,117 @@ std::vector<std::string> outputFolderProblems(const fs::path& path) {
 
 }  // namespace
 
+namespace {
+
+/// One row of concrete.csv as the record check needs it.
+struct ConcreteRow {
+  bool ok = false;
+  std::vector<double> inputs;
+};
+
+bool sameNumbers(const std::vector<double>& a, const std::vector<double>& b) {
+  if (a.size() != b.size()) return false;
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    if (!(a[i] == b[i] || (std::isnan(a[i]) && std::isnan(b[i])))) return false;
+  }
+  return true;
+}
+
+/// concrete.csv's rows by sample index, each row's seed checked against the manifest's.
+std::map<std::uint64_t, ConcreteRow> concreteRows(const CsvTable& csv, const nlohmann::json& manifest,
+                                                  const std::vector<std::string>& input_names,
+                                                  std::vector<std::string>& problems) {
+  const std::size_t sample_column = csv.column("sample");
+  const std::size_t seed_column = csv.column("seed");
+  const std::size_t status_column = csv.column("status");
+  std::vector<std::size_t> input_columns;
+  for (const auto& name : input_names) input_columns.push_back(csv.column(name));
+  const std::string seed = manifest.contains("seed") ? manifest.at("seed").dump() : std::string();
+  std::map<std::uint64_t, ConcreteRow> rows;
+  for (std::size_t r = 0; r < csv.rows(); ++r) {
+    if (!seed.empty() && csv.cell(r, seed_column) != seed) {
+      problems.push_back(fmt::format("{}: row {} has seed {}, the manifest says {} (made by another run, or the "
+                                     "manifest was edited)",
+                                     csv.path().string(), r + 1, csv.cell(r, seed_column), seed));
+      return rows;
+    }
+    const std::uint64_t sample = parseUnsigned(csv.cell(r, sample_column), std::numeric_limits<std::uint64_t>::max(),
+                                               fmt::format("{}: row {}", csv.path().string(), r + 1), "sample");
+    ConcreteRow row;
+    row.ok = csv.cell(r, status_column) == "ok";
+    for (const std::size_t column : input_columns) row.inputs.push_back(csv.number(r, column));
+    if (!rows.emplace(sample, std::move(row)).second) {
+      problems.push_back(fmt::format("{}: sample {} is listed twice", csv.path().string(), sample));
+      return rows;
+    }
+  }
+  return rows;
+}
+
+/// The manifest's sample range (a run or shard: first_sample, samples) against concrete.csv.
+void checkSampleRange(const nlohmann::json& manifest, const std::map<std::uint64_t, ConcreteRow>& rows,
+                      const fs::path& csv, std::vector<std::string>& problems) {
+  const nlohmann::json& range = manifest.contains("shard") ? manifest.at("shard") : manifest;
+  if (!range.contains("first_sample") || !range.contains("samples")) return;
+  const auto first = range.at("first_sample").get<std::uint64_t>();
+  const auto count = range.at("samples").get<std::uint64_t>();
+  const bool inside = rows.empty() || (rows.begin()->first >= first && rows.rbegin()->first - first < count);
+  if (rows.size() != count || !inside) {
+    problems.push_back(fmt::format("{}: {} rows (samples {} .. {}), the manifest says samples {} .. {}", csv.string(),
+                                   rows.size(), rows.empty() ? 0 : rows.begin()->first,
+                                   rows.empty() ? 0 : rows.rbegin()->first, first, first + count - 1));
+  }
+}
+
+}  // namespace
+
+std::vector<std::string> runFolderRecordProblems(const fs::path& folder) {
+  if (!fs::exists(folder / "concrete.csv") || !fs::exists(folder / "dataset.h5")) return {};
+  std::vector<std::string> problems;
+  try {
+    const nlohmann::json manifest = readManifest(folder);
+    const DatasetReader reader(folder / "dataset.h5");
+    const CsvTable csv = CsvTable::read(folder / "concrete.csv");
+    const auto rows = concreteRows(csv, manifest, reader.header().inputNames, problems);
+    if (!problems.empty()) return problems;
+    checkSampleRange(manifest, rows, csv.path(), problems);
+    const std::string scenario_sha = manifest.value("scenario_sha256", std::string());
+    std::size_t completed = 0;
+    for (const auto& [sample, row] : rows) completed += row.ok ? 1 : 0;
+    for (const auto& record : reader.records()) {
+      const auto row = rows.find(record.sample);
+      if (row == rows.end() || !row->second.ok) {
+        problems.push_back(fmt::format("{}: sample {} is not a completed scenario of {} (joined from another run's "
+                                       "files?)",
+                                       reader.path().string(), record.sample, csv.path().string()));
+      } else if (!sameNumbers(record.inputs, row->second.inputs)) {
+        problems.push_back(fmt::format("{}: sample {}'s inputs differ from {}'s (made by another run: another seed "
+                                       "or scenario)",
+                                       reader.path().string(), record.sample, csv.path().string()));
+      } else if (!scenario_sha.empty() && record.sourceSha256 != scenario_sha) {
+        problems.push_back(fmt::format("{}: sample {} was made from a scenario file with SHA-256 {:.12}, the "
+                                       "manifest's has {:.12}",
+                                       reader.path().string(), record.sample, record.sourceSha256, scenario_sha));
+      }
+      if (!problems.empty()) return problems;
+    }
+    if (reader.size() != completed) {
+      problems.push_back(fmt::format("{}: {} samples, but {} lists {} completed scenarios", reader.path().string(),
+                                     reader.size(), csv.path().string(), completed));
+    }
+  } catch (const nlohmann::json::exception& error) {
+    problems.push_back(fmt::format("{}: damaged manifest: {}", (folder / "manifest.json").string(), error.what()));
+  } catch (const Error& error) {
+    problems.push_back(error.what());
+  }
+  return problems;
+}
+
 DatasetValidation validateDataset(const fs::path& path) {
   DatasetValidation result;
   result.path = fs::is_directory(path) ? path / "dataset.h5" : path;
   result.problems = outputFolderProblems(path);
+  if (result.problems.empty() && fs::is_directory(path)) result.problems = runFolderRecordProblems(path);
   if (!result.problems.empty()) return result;
   try {
     const DatasetReader reader(result.path);

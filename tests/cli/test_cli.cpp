@@ -108,7 +108,8 @@ TEST(Cli, BadInputGivesOneLineNamingTheProblemAndNoOutput) {
       {"missing_library",
        test::scenarioVariant("acc.yaml", "name: paper_ego", "name: mine\n      library: /nonexistent/libmine.so"),
        "controller library '/nonexistent/libmine.so' does not exist"},
-      {"netconvert", test::scenarioVariant("acc.yaml", "criteria:", "sumo: {netconvert_options: [--nope]}\ncriteria:"),
+      {"netconvert",
+       test::scenarioVariant("acc.yaml", "criteria:", "sumo: {netconvert_options: [--default.lanewidth, \"-1\"]}\ncriteria:"),
        "netconvert failed"},
   };
   for (const auto& c : cases) {

@@ -7,6 +7,7 @@
 #include <fstream>
 #include <regex>
 #include <stdexcept>
+#include <tuple>
 
 #include "vsd/core/error.hpp"
 #include "vsd/vector/dataset.hpp"
@@ -49,6 +50,26 @@ Fixtures buildFixtures(const fs::path& root) {
   buildWith({"train", "--data", f.run.string(), "--out", f.model.string(), "--steps", "8", "--batch", "8", "--hidden",
              "8", "--global-width", "8", "--decoder-hidden", "16", "--threads", "1"},
             work);
+  const fs::path exported = root / "fixtures" / "xosc";
+  buildWith({"scenario", "export", (sourceDir() / "scenarios" / "acc.yaml").string(), "--samples", "1", "--out",
+             exported.string()},
+            work);
+  f.xosc = exported / "acc_000000.xosc";
+  f.search = root / "fixtures" / "search";
+  f.otherSearch = root / "fixtures" / "search-seed2";
+  // Two rounds of the first search; the other's first round is all its cases need.
+  for (const auto& [folder, seed, budget] : {std::tuple{f.search, "1", "20"}, std::tuple{f.otherSearch, "2", "10"}}) {
+    buildWith({"search", (sourceDir() / "scenarios" / "acc.yaml").string(), "-c", "d_min < 8", "--surrogate", "random",
+               "--budget", budget, "--initial", "10", "--round", "10", "--pool", "100", "--seed", seed, "--out",
+               folder.string()},
+              work);
+  }
+  f.sweep = root / "fixtures" / "sweep";
+  for (const char* shard : {"0/2", "1/2"}) {
+    buildWith({"run", (sourceDir() / "scenarios" / "acc.yaml").string(), "--samples", "8", "--batch", "4", "--shard",
+               shard, "--out", f.sweep.string()},
+              work);
+  }
   return f;
 }
 

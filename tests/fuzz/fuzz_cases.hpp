@@ -20,6 +20,10 @@ struct Fixtures {
   std::filesystem::path checkpoint;   ///< its training state (<model>.last)
   std::filesystem::path openDrive;    ///< sumo_nets/opendrive_curve/curve.xodr
   std::filesystem::path routes;       ///< its demand
+  std::filesystem::path xosc;         ///< acc sample 0 exported as OpenSCENARIO (+ its .xodr next to it)
+  std::filesystem::path search;       ///< a finished small search of acc.yaml (seed 1), with .rounds/
+  std::filesystem::path otherSearch;  ///< the same search with seed 2
+  std::filesystem::path sweep;        ///< acc.yaml run as two shards (shards/shard-000K-of-0002), not merged
 };
 
 /// Builds the fixtures under `root` (throws std::runtime_error if one cannot be built).
@@ -36,6 +40,10 @@ std::vector<Case> flagCases(const Fixtures& fixtures, Random& random, std::size_
 std::vector<Case> killCases(const Fixtures& fixtures, Random& random, std::size_t count);
 /// `run` with an Ego plugin that crashes, aborts, exits, hangs or fails (tests/plugins).
 std::vector<Case> pluginCases(const Fixtures& fixtures, Random& random, std::size_t count);
+/// Hostile inputs (issue 29), one class per case in turn: numbers of an .xosc, hostile
+/// XML, special files, huge geometry, option injection, paths out of the file's folder,
+/// foreign search checkpoints and round files, foreign or edited shards.
+std::vector<Case> hostileInputCases(const Fixtures& fixtures, Random& random, std::size_t count);
 
 /// Problems of a dataset file (empty: it opens and validates).
 std::string datasetProblems(const std::filesystem::path& path);

@@ -201,10 +201,20 @@ Verdict runCase(const Case& c, const fs::path& work) {
   verdict.name = c.name;
   std::vector<Snapshot> before;
   for (const auto& output : c.outputs) before.push_back(Snapshot::of(output));
+  std::vector<Snapshot> aimed_at;
+  for (const auto& path : c.untouched) aimed_at.push_back(Snapshot::of(path));
   const RunResult run = runWatched(vsdArgv(c), work, c.timeout, c.environment);
   verdict.exitCode = run.exitCode;
   verdict.seconds = run.seconds;
   auto& problems = verdict.problems;
+  for (std::size_t i = 0; i < c.untouched.size(); ++i) {
+    if (!(Snapshot::of(c.untouched[i]) == aimed_at[i])) {
+      problems.push_back(fmt::format("{} was touched (the input aimed at it)", c.untouched[i].string()));
+    }
+  }
+  if (c.mustRefuse && run.exited && run.exitCode == 0) {
+    problems.push_back("a hostile input was accepted (exit 0, expected a refusal with exit 1)");
+  }
   if (c.expectKill && !run.timedOut && !run.exited && run.signal == SIGKILL) {
     verdict.exitCode = 128 + SIGKILL;
     checkAfterKill(c, before, problems);

@@ -71,6 +71,11 @@ struct Case {
   /// be as before or complete (checkOutputs passes), and the same command without the
   /// fault must then succeed and leave no temporary file.
   bool expectKill = false;
+  /// Paths the input aimed at (a file a scenario tried to make SUMO write, a folder out
+  /// of reach): they must be as before whatever the exit code (absent stays absent).
+  std::vector<std::filesystem::path> untouched;
+  /// The input must be refused (exit 1): a hostile file that is accepted is a failure.
+  bool mustRefuse = false;
 };
 
 /// Outcome of a case, for the summary.

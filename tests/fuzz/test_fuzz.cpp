@@ -45,6 +45,7 @@ TEST(FaultInjection, NoCrashNoHangNoSilentSuccessNoCompleteLookingPartialOutput)
   const std::vector<Category> categories = {
       {"flags", 5, flagCases},  {"yaml", 3, scenarioYamlCases}, {"dataset", 5, datasetCases},
       {"model", 3, modelCases}, {"kills", 8, killCases},        {"plugins", 6, pluginCases},
+      {"hostile", 8, hostileInputCases},  // every class of hostile input once (issue 29)
   };
   std::vector<std::string> failures;
   for (const auto& category : categories) {

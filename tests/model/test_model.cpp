@@ -145,6 +145,9 @@ TEST_F(ModelTest, SameSeedAndThreadsGiveTheSameModel) {
   std::vector<vector::VectorizedScene> scenes;
   for (std::uint64_t i = 0; i < 10; ++i) scenes.push_back(syntheticScene(i));
   EXPECT_EQ(maxDifference(Predictor(model_).predict(scenes), Predictor(options.output).predict(scenes)), 0.0);
+  // Issue 29: the same bytes too - the archive's entries never carry a temporary file name.
+  EXPECT_EQ(sha256OfFile(options.output), sha256OfFile(model_));
+  EXPECT_EQ(readTextFile(options.output).find(".part"), std::string::npos);
   options.seed = 6;
   options.output = dir_.path() / "other.pt";
   train(options);

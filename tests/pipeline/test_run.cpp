@@ -164,10 +164,26 @@ TEST(Run, RunLevelFaultsLeaveNoOutputThatLooksComplete) {
   }
   EXPECT_FALSE(fs::exists(dir.path() / "out1"));
 
-  // netconvert rejects every network: the run stops, nothing is left behind.
-  const auto broken = test::writeFile(dir.path() / "netconvert.yaml",
-                                      test::scenarioVariant("acc.yaml", "criteria:",
-                                                            "sumo: {netconvert_options: [--bogus-option]}\ncriteria:"));
+  // An option that could write files is refused before anything runs (issue 29: the allow-list).
+  const auto injected = test::writeFile(
+      dir.path() / "injected.yaml",
+      test::scenarioVariant("acc.yaml", "criteria:", "sumo: {sumo_options: [--fcd-output, /tmp/x.xml]}\ncriteria:"));
+  try {
+    runScenarios(options(injected, dir.path() / "out0", 10));
+    FAIL() << "expected ConfigError";
+  } catch (const ConfigError& error) {
+    EXPECT_NE(std::string(error.what()).find("sumo_options[0]: got '--fcd-output', expected an option a scenario file "
+                                             "may pass to SUMO"),
+              std::string::npos)
+        << error.what();
+  }
+  EXPECT_FALSE(fs::exists(dir.path() / "out0"));
+
+  // netconvert rejects every network (an allowed option, a value it refuses): the run
+  // stops, nothing is left behind.
+  const auto broken = test::writeFile(
+      dir.path() / "netconvert.yaml",
+      test::scenarioVariant("acc.yaml", "criteria:", "sumo: {netconvert_options: [--default.lanewidth, \"-1\"]}\ncriteria:"));
   try {
     runScenarios(options(broken, dir.path() / "out2", 10));
     FAIL() << "expected SumoError";

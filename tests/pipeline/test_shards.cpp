@@ -1,8 +1,12 @@
 // Sweeps split into shards (Slurm array tasks, MPI ranks) and joined again.
+#include <gmock/gmock.h>
 #include <gtest/gtest.h>
+
+#include <nlohmann/json.hpp>
 
 #include "test_support.hpp"
 #include "vsd/core/error.hpp"
+#include "vsd/core/files.hpp"
 #include "vsd/core/shards.hpp"
 #include "vsd/pipeline/merge.hpp"
 #include "vsd/pipeline/run.hpp"
@@ -127,6 +131,45 @@ TEST(Shards, MergeRefusesMissingUnfinishedForeignOrChangedShards) {
   // Nothing that looks like a merged run was left behind.
   EXPECT_FALSE(fs::exists(folder / "dataset.h5"));
   EXPECT_FALSE(fs::exists(folder / "manifest.json"));
+}
+
+// Issue 29: a shard's manifest is tied to its contents — an edited seed is refused by its
+// checksum, and (with the checksum removed too) by the records: concrete.csv's seeds, the
+// dataset's samples and inputs. `dataset validate` says the same.
+TEST(Shards, EditedManifestsAndForeignFilesAreRefusedByMergeAndValidate) {
+  TemporaryDirectory dir;
+  const auto folder = dir.path() / "sweep";
+  runShards(sweep(folder), 2, {0, 1});
+  const auto shard = folder / "shards" / "shard-0000-of-0002";
+  const auto manifest_path = shard / "manifest.json";
+  const std::string original = readTextFile(manifest_path);
+  MergeOptions merge;
+  merge.sweep = folder;
+  const auto edit = [&](bool drop_checksum) {
+    auto manifest = nlohmann::json::parse(original);
+    manifest["seed"] = 99;
+    manifest["shard"]["seed"] = 99;
+    if (drop_checksum) manifest.erase(kManifestChecksumKey);
+    test::writeFile(manifest_path, manifest.dump(2));
+  };
+  edit(false);
+  EXPECT_THAT(expectDatasetError([&] { mergeShards(merge); }), testing::HasSubstr("edited after it was written"));
+  EXPECT_FALSE(vector::validateDataset(shard).ok());
+  // With the checksums removed and both shards edited alike, the shards "agree" on seed 99.
+  edit(true);
+  auto other = nlohmann::json::parse(readTextFile(folder / "shards" / "shard-0001-of-0002" / "manifest.json"));
+  other["seed"] = 99;
+  other["shard"]["seed"] = 99;
+  other.erase(kManifestChecksumKey);
+  test::writeFile(folder / "shards" / "shard-0001-of-0002" / "manifest.json", other.dump(2));
+  EXPECT_THAT(expectDatasetError([&] { mergeShards(merge); }),
+              testing::HasSubstr("concrete.csv: row 1 has seed 5, the manifest says 99"));
+  const auto validation = vector::validateDataset(shard);
+  ASSERT_FALSE(validation.ok());
+  EXPECT_THAT(validation.problems.front(), testing::HasSubstr("has seed 5, the manifest says 99"));
+  EXPECT_FALSE(fs::exists(folder / "dataset.h5"));
+  test::writeFile(manifest_path, original);
+  EXPECT_TRUE(vector::validateDataset(shard).ok());
 }
 
 TEST(Shards, BadShardSpecificationsAreRefused) {

@@ -8,6 +8,7 @@
 #include <cmath>
 #include <filesystem>
 #include <numeric>
+#include <nlohmann/json.hpp>
 
 #include "test_support.hpp"
 #include "vsd/core/csv.hpp"
@@ -194,6 +195,67 @@ TEST(SearchLoop, ResumesWithoutRepeatingAndMakesTheSameChoicesAsAnUninterruptedS
   auto other = smallSearch(resumed, "extra-trees", 120);
   other.seed = 2;
   EXPECT_THAT(errorOf([&] { runSearch(other); }), HasSubstr("seed"));
+}
+
+/// The DatasetError message of `action`, or "no DatasetError".
+std::string datasetErrorOf(const std::function<void()>& action) {
+  try {
+    action();
+  } catch (const DatasetError& error) {
+    return error.what();
+  }
+  return "no DatasetError";
+}
+
+// Issue 29: a resumed search refuses — at once, before simulating — a checkpoint that was
+// edited and round files that are not its own; `dataset validate` refuses a search folder
+// whose dataset holds another search's samples.
+TEST(SearchLoop, ForeignOrEditedCheckpointsAndRoundFilesAreRefusedAtTheStart) {
+  TemporaryDirectory work("vsd-test-search-foreign");
+  const auto mine = work.path() / "mine";
+  const auto other = work.path() / "other";
+  runSearch(smallSearch(mine, "random", 60));
+  auto other_options = smallSearch(other, "random", 60);
+  other_options.seed = 2;
+  runSearch(other_options);
+  const auto resume = [&](const fs::path& folder) {
+    const std::string message = datasetErrorOf([&] { runSearch(smallSearch(folder, "random", 100)); });
+    // Refused before any round ran: no round 3 files appeared.
+    EXPECT_FALSE(fs::exists(folder / ".rounds" / "round-00003.dataset.h5"));
+    return message;
+  };
+
+  const auto swapped = work.path() / "swapped";
+  fs::copy(mine, swapped, fs::copy_options::recursive);
+  fs::copy_file(other / ".rounds" / "round-00000.dataset.h5", swapped / ".rounds" / "round-00000.dataset.h5",
+                fs::copy_options::overwrite_existing);
+  EXPECT_THAT(resume(swapped), HasSubstr("round-00000.dataset.h5: not the file of round 0 that checkpoint.json records"));
+
+  const auto cut = work.path() / "cut";
+  fs::copy(mine, cut, fs::copy_options::recursive);
+  fs::resize_file(cut / ".rounds" / "round-00001.traces.h5", 1000);
+  EXPECT_THAT(resume(cut), HasSubstr("round-00001.traces.h5: not the file of round 1"));
+
+  const auto edited = work.path() / "edited";
+  fs::copy(mine, edited, fs::copy_options::recursive);
+  std::string checkpoint = readTextFile(edited / "checkpoint.json");
+  const auto at = checkpoint.find("\"sample\":");
+  checkpoint.insert(at + 9, "1");
+  writeTextFileAtomically(edited / "checkpoint.json", checkpoint);
+  EXPECT_THAT(resume(edited), HasSubstr("checkpoint.json: edited after it was written"));
+
+  // A search folder whose dataset.h5 is another search's (its manifest made to match the file).
+  const auto joined = work.path() / "joined";
+  fs::copy(mine, joined, fs::copy_options::recursive);
+  fs::copy_file(other / "dataset.h5", joined / "dataset.h5", fs::copy_options::overwrite_existing);
+  auto manifest = nlohmann::json::parse(readTextFile(joined / "manifest.json"));
+  manifest["outputs"]["dataset.h5"] = {{"sha256", sha256OfFile(joined / "dataset.h5")},
+                                       {"bytes", fs::file_size(joined / "dataset.h5")}};
+  writeTextFileAtomically(joined / "manifest.json", sealManifest(manifest).dump(2));
+  const auto validation = vector::validateDataset(joined);
+  ASSERT_FALSE(validation.ok());
+  EXPECT_THAT(validation.problems.front(), HasSubstr("inputs differ from"));
+  EXPECT_TRUE(vector::validateDataset(mine).ok());
 }
 
 TEST(SearchLoop, ExtraTreesFindMoreCriticalScenariosThanRandomSampling) {

@@ -134,8 +134,20 @@ struct ManifestEntry {
   std::uintmax_t bytes = 0;
 };
 
+/// The key of a manifest's own checksum: the SHA-256 of the manifest's JSON text
+/// (compact, keys sorted) without this key. It ties what a manifest says about a folder
+/// (seed, scenario hash, sample range, shard, every file's hash) to the manifest: an
+/// edited manifest is refused wherever one is read. Manifests written before it existed
+/// carry none and are checked by their files' hashes alone.
+inline constexpr const char* kManifestChecksumKey = "manifest_sha256";
+/// `manifest` with its checksum (kManifestChecksumKey) set.
+nlohmann::json sealManifest(nlohmann::json manifest);
+/// <folder>/manifest.json, parsed and its checksum checked. Throws DatasetError naming
+/// the file if it is missing, damaged, or edited after it was written.
+nlohmann::json readManifest(const std::filesystem::path& folder);
+
 /// The "outputs" of <folder>/manifest.json. Throws DatasetError naming the folder
-/// if the manifest is missing or damaged.
+/// if the manifest is missing, damaged or edited.
 std::map<std::string, ManifestEntry> readManifestOutputs(const std::filesystem::path& folder);
 
 /// Problems of an output folder, one line each (empty: complete): no manifest
@@ -161,8 +173,47 @@ void requireFileOutputPath(const std::filesystem::path& path, const std::string&
 /// Writes a whole text file atomically.
 void writeTextFileAtomically(const std::filesystem::path& path, const std::string& contents);
 
-/// Reads a whole file; throws IoError naming the path.
-std::string readTextFile(const std::filesystem::path& path);
+/// How much of one kind of input vsd-sumo reads at most. Inputs travel between teams
+/// and tools, so none may make the tool read without end: every whole-file read has a
+/// limit fitting its kind, which the environment variable `variable` (a byte count)
+/// overrides for users who need more.
+struct ReadLimit {
+  const char* kind;       ///< "scenario file", ... (for messages)
+  std::uintmax_t bytes;   ///< default limit
+  const char* variable;   ///< environment variable that overrides it
+
+  /// The limit in force: `variable` if it holds a whole number of bytes > 0, else `bytes`.
+  std::uintmax_t effective() const;
+};
+
+/// The limits of the files vsd-sumo reads whole (README "Bad input").
+namespace read_limits {
+inline constexpr ReadLimit kScenario{"scenario file (YAML or OpenSCENARIO)", std::uintmax_t{16} << 20,
+                                     "VSD_MAX_SCENARIO_BYTES"};
+inline constexpr ReadLimit kRoadNetwork{"OpenDRIVE file", std::uintmax_t{64} << 20, "VSD_MAX_ROAD_BYTES"};
+inline constexpr ReadLimit kSpec{"experiment spec", std::uintmax_t{1} << 20, "VSD_MAX_SPEC_BYTES"};
+inline constexpr ReadLimit kState{"manifest or checkpoint", std::uintmax_t{256} << 20, "VSD_MAX_STATE_BYTES"};
+inline constexpr ReadLimit kText{"text file", std::uintmax_t{1} << 30, "VSD_MAX_TEXT_BYTES"};
+}  // namespace read_limits
+
+/// Reads a whole regular file of at most `limit` bytes. Throws IoError naming the path
+/// if it cannot be opened, is not a regular file (a device such as /dev/zero, a FIFO,
+/// a socket or a folder: refused before a byte is read, and without blocking), or is
+/// larger than the limit (refused before it is read, naming the limit and its variable).
+std::string readTextFile(const std::filesystem::path& path, const ReadLimit& limit = read_limits::kText);
+
+/// `path` resolved (symbolic links and "..") and required to lie inside `base` (itself
+/// resolved) or one of its subfolders. Relative paths are relative to `base`. Throws
+/// ConfigError "<where>: <field>: got '<path>', expected a path inside <base> (...)" otherwise.
+/// For paths that a file names (an OpenDRIVE file, a plugin): a file received from
+/// elsewhere must not make the tool read, load or write outside its own folder.
+std::filesystem::path requirePathInside(const std::filesystem::path& base, const std::filesystem::path& path,
+                                        const std::string& where, const std::string& field);
+
+/// Checks a name that becomes one file or folder name inside an output folder (an
+/// experiment's name, a figure's name): one path component of letters, digits, '.',
+/// '_' and '-', not starting with '.'. Throws ConfigError naming `where`, `field` and it.
+void requireSafeName(const std::string& name, const std::string& where, const std::string& field);
 
 /// Lower-case hex SHA-256 of a file's bytes; throws IoError naming the path.
 std::string sha256OfFile(const std::filesystem::path& path);

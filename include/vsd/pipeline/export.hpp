@@ -80,6 +80,10 @@ struct ExportSummary {
   std::uint64_t egos = 0;            ///< Egos with at least one sample
   std::uint64_t windowsSkipped = 0;  ///< windows the Ego left (or parked in) before their end
   std::uint64_t parkedSteps = 0;     ///< vehicle steps spent parked (masked: off the lane)
+  std::uint64_t maskedJumps = 0;     ///< vehicle states masked: farther from the last one than the speed allows
+  std::uint64_t maskedAccelerations = 0;  ///< vehicle states masked: velocity changed by more than 15 m/s^2
+  std::uint64_t windowsImplausible = 0;   ///< windows skipped: the Ego's state at t0 was masked
+  std::uint64_t egosAsked = 0;       ///< Egos named or drawn (--egos ids / random:K); 0 for all / vtype:
   std::uint64_t vehiclesSeen = 0;
   std::uint64_t laneVectors = 0;     ///< lane-boundary vectors of the whole network
   double simulatedSeconds = 0.0;

@@ -5,6 +5,7 @@
 // This header keeps libsumo's own headers out of other modules.
 
 #include <filesystem>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -17,13 +18,15 @@ class SumoSession {
   /// Loads a simulation with the given SUMO command-line arguments (without
   /// the program name), e.g. {"-n", "net.net.xml", "--step-length", "0.2"}.
   /// Quiet defaults (no step log, no warnings on stdout) are prepended.
-  /// Throws SumoError with SUMO's message if loading fails.
+  /// Throws SumoError "SUMO could not load <input files>: <SUMO's own error lines>"
+  /// if loading fails (SUMO's stderr is read for the reason, not shown).
   explicit SumoSession(const std::vector<std::string>& arguments);
   SumoSession(const SumoSession&) = delete;
   SumoSession& operator=(const SumoSession&) = delete;
   ~SumoSession();
 
-  /// Advances one step.
+  /// Advances one step; throws SumoError "SUMO failed at t = <simulation time> s
+  /// (simulating <input files>): <SUMO's own error lines>".
   void step();
   /// Simulation time in s.
   double time() const;
@@ -32,6 +35,9 @@ class SumoSession {
   static std::string version();
 
  private:
+  class ErrorCapture;
+  std::string inputs_;  ///< the input files, for messages
+  std::unique_ptr<ErrorCapture> capture_;
   bool open_ = false;
 };
 

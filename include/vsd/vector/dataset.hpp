@@ -106,6 +106,14 @@ class DatasetReader {
   /// Indices of the samples with `label`, in file order.
   std::vector<std::size_t> samplesWithLabel(const std::string& label) const;
 
+  /// What ties each sample to the run that made it, without reading any vector.
+  struct SampleRecord {
+    std::uint64_t sample = 0;    ///< sample index (window number for map exports)
+    std::string sourceSha256;    ///< of the scenario or map file
+    std::vector<double> inputs;  ///< concrete inputs (generated scenarios)
+  };
+  std::vector<SampleRecord> records() const;
+
  private:
   friend class DatasetWriter;  // appendCopy reads samples in stored form
   struct Impl;
@@ -125,8 +133,19 @@ struct DatasetValidation {
 /// polyline ids as documented, finite valid vectors and targets, timestamps within
 /// [-history, horizon] steps, string tables in range. Unreadable files yield one problem.
 /// A run folder (or a file its manifest lists) is first checked against its
-/// manifest: present, complete, every file's size and SHA-256 as listed.
+/// manifest: present, unedited (its checksum), complete, every file's size and SHA-256
+/// as listed, and its records consistent (runFolderRecordProblems).
 DatasetValidation validateDataset(const std::filesystem::path& path);
+
+/// Problems (one line each; empty: consistent) of the records of a run's output folder
+/// (`run`, a shard, a merged sweep, `search`): what its manifest says against what its
+/// files hold. Its concrete.csv lists exactly the manifest's seed (and, for a shard, the
+/// shard's sample range); every sample of its dataset.h5 is a completed scenario of
+/// concrete.csv with the same inputs, made from the manifest's scenario file (SHA-256),
+/// and every completed scenario is in the dataset. A dataset.h5 joined from files of
+/// another run (another seed, a round file of another search) or a manifest whose seed
+/// was edited fails here. Folders without concrete.csv (exports) have no such records.
+std::vector<std::string> runFolderRecordProblems(const std::filesystem::path& folder);
 
 /// What `vsd-sumo dataset info` prints.
 struct DatasetSummary {
