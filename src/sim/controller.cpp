@@ -8,7 +8,6 @@
 
 #include "vsd/core/activity.hpp"
 #include "vsd/core/error.hpp"
-#include "vsd/sim/builtin_controllers.hpp"
 
 namespace fs = std::filesystem;
 
@@ -45,21 +44,6 @@ void ControllerParams::rejectUnknown(const std::string& controller_name) const {
 }
 
 // --- registry --------------------------------------------------------------------------
-
-ControllerRegistry ControllerRegistry::withBuiltins() {
-  ControllerRegistry registry;
-  registry.add("paper_ego",
-               "time-gap P-term + relative-speed term, cruise cap and emergency brake (each switchable) + "
-               "pure-pursuit lane keeping",
-               [] { return std::make_unique<PaperEgoController>("paper_ego", TimeGapLongitudinal::Parts{true, true, true}); });
-  registry.add("time_gap_p", "plain time-gap P-controller (the paper's description) + pure-pursuit lane keeping",
-               [] {
-                 return std::make_unique<PaperEgoController>("time_gap_p", TimeGapLongitudinal::Parts{false, false, false});
-               });
-  registry.add("idm", "Intelligent Driver Model + pure-pursuit lane keeping",
-               [] { return std::make_unique<IdmController>(); });
-  return registry;
-}
 
 void ControllerRegistry::add(const std::string& name, const std::string& description, Factory factory) {
   if (!entries_.emplace(name, Entry{description, std::move(factory)}).second) {

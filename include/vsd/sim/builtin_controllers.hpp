@@ -1,6 +1,7 @@
 #pragma once
-// Built-in Ego controllers. Longitudinal and lateral parts are separate classes
-// so that controllers can combine them.
+// The parts the built-in Ego controllers are made of: lateral (lane keeping) and
+// longitudinal (car following) classes that a controller combines. The controllers
+// themselves live one per file in src/sim/controllers/; registry.cpp lists them all.
 
 #include "vsd/sim/controller.hpp"
 
@@ -79,37 +80,5 @@ class TimeGapLongitudinal {
 /// cannot keep the margin.
 double requiredDeceleration(double gap, double speed, double leader_speed, double leader_accel, double margin,
                             double max_decel);
-
-/// TimeGapLongitudinal + PurePursuitLateral, registered twice:
-///   `paper_ego`:  every part on (P-term, relative-speed term, cruise cap, emergency brake);
-///   `time_gap_p`: the plain time-gap P-controller the paper names (every extra part off).
-class PaperEgoController final : public EgoController {
- public:
-  PaperEgoController(std::string name, TimeGapLongitudinal::Parts parts) : name_(std::move(name)), longitudinal_(parts) {}
-  void init(const ControllerParams& params) override;
-  void reset() override { longitudinal_.reset(); }
-  Command step(const Observation& observation, double dt) override;
-
- private:
-  std::string name_;
-  TimeGapLongitudinal longitudinal_;
-  PurePursuitLateral lateral_;
-};
-
-/// `idm`: Intelligent Driver Model (Treiber et al. 2000) + PurePursuitLateral; max_accel
-/// is IDM's a, comfort_decel its b, exponent its delta, set_speed its v0.
-class IdmController final : public EgoController {
- public:
-  IdmController();
-  void init(const ControllerParams& params) override;
-  void reset() override { following_.reset(); }
-  Command step(const Observation& observation, double dt) override;
-
- private:
-  FollowingParameters following_;
-  double comfortDecel_ = 2.0;  ///< m/s^2
-  double exponent_ = 4.0;
-  PurePursuitLateral lateral_;
-};
 
 }  // namespace vsd::sim

@@ -98,7 +98,7 @@ class ControllerRegistry {
  public:
   using Factory = std::function<std::unique_ptr<EgoController>()>;
 
-  /// A registry holding the built-in controllers (paper_ego, idm).
+  /// A registry holding the built-in controllers (src/sim/controllers/registry.cpp lists them).
   static ControllerRegistry withBuiltins();
 
   void add(const std::string& name, const std::string& description, Factory factory);
