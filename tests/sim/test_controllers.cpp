@@ -279,6 +279,30 @@ TEST(PaperEgo, PartsAreSwitchableAndTimeGapPIsThePlainPController) {
 }
 
 
+// The paper's controllers follow SUMO's leader unless `leader_from_objects: 1`; then the
+// nearest road user in the Ego's path is the lead - a cut-in SUMO has not yet moved to the
+// Ego's lane included.
+TEST(PaperEgo, LeaderComesFromSumoUnlessTheObjectListIsSwitchedOn) {
+  auto registry = ControllerRegistry::withBuiltins();
+  for (const char* name : {"paper_ego", "time_gap_p", "idm"}) {
+    auto from_sumo = makeController(registry, name, "", "", ControllerParams({{"set_speed", 12.0}}, "c"));
+    auto from_objects = makeController(registry, name, "", "",
+                                       ControllerParams({{"set_speed", 12.0}, {"leader_from_objects", 1.0}}, "c"));
+    EXPECT_FALSE(from_sumo->observesObjects()) << name;
+    EXPECT_TRUE(from_objects->observesObjects()) << name;
+    Observation cut_in = straightLane(12.0, 0.0);
+    cut_in.objects.push_back(objectAhead(1, 8.0, 8.0, -0.3));  // in the path, not SUMO's leader yet
+    EXPECT_GT(from_sumo->step(cut_in, 0.2).accel, -1e-12) << name;
+    EXPECT_LT(from_objects->step(cut_in, 0.2).accel, -1.0) << name;
+    // The same numbers from either source when both report the same lead.
+    Observation both = cut_in;
+    both.leader = leaderOf(cut_in.objects[0]);
+    EXPECT_EQ(from_sumo->step(both, 0.2).accel, from_objects->step(cut_in, 0.2).accel) << name;
+  }
+  EXPECT_THROW(makeController(registry, "paper_ego", "", "", ControllerParams({{"leader_from_objects", 0.5 + 1.0}}, "c")),
+               ConfigError);
+}
+
 TEST(StepCost, TheWrappedControllerDrivesAndEachStepTakesTheExtraTime) {
   auto registry = ControllerRegistry::withBuiltins();
   const ControllerParams params({}, "controller");

@@ -3,6 +3,9 @@
 // longitudinal (car following) classes that a controller combines. The controllers
 // themselves live one per file in src/sim/controllers/; registry.cpp lists them all.
 
+#include <functional>
+#include <optional>
+
 #include "vsd/sim/controller.hpp"
 
 namespace vsd::sim {
@@ -60,18 +63,40 @@ class TimeGapLongitudinal {
     bool emergencyBrake = true;
   };
   explicit TimeGapLongitudinal(Parts defaults) : parts_(defaults) {}
-  void init(const ControllerParams& params);
+  /// Reads the scenario's parameters; `defaults` are the following parameters it does not set.
+  void init(const ControllerParams& params, const FollowingParameters& defaults = {});
+  /// Takes the desired time gap (s) as a function of the Ego's speed (m/s) instead of the
+  /// constant time_gap - UN R157's speed-dependent minimum for the `alks` controller.
+  void useTimeGap(std::function<double(double)> time_gap_of_speed) { timeGapOf_ = std::move(time_gap_of_speed); }
   void reset() { following_.reset(); }
-  double accel(const Observation& observation);
+  /// The command with SUMO's leader (Observation::leader).
+  double accel(const Observation& observation) { return accel(observation, observation.leader); }
+  /// The command with `leader` as the lead (none: cruise).
+  double accel(const Observation& observation, const std::optional<Observation::Leader>& leader);
 
  private:
   Parts parts_;
   FollowingParameters following_;
+  std::function<double(double)> timeGapOf_;
   double kGap_ = 0.3;              ///< 1/s^2
   double kSpeed_ = 0.8;            ///< 1/s
   double kCruise_ = 0.5;           ///< 1/s
   double emergencyMargin_ = 1.0;   ///< m
   double emergencyTrigger_ = 2.0;  ///< m/s^2
+};
+
+/// Where a car follower takes its lead from - the scenario's 0/1 parameter
+/// `leader_from_objects`: 0 (default) SUMO's leader (Observation::leader, what the paper's
+/// controllers have always used: their outputs stay byte for byte the same), 1 the nearest
+/// road user of the object list in the Ego's path, which sees a cut-in as it enters the path.
+class LeaderChoice {
+ public:
+  void init(const ControllerParams& params);
+  bool fromObjects() const { return fromObjects_; }
+  std::optional<Observation::Leader> leader(const Observation& observation) const;
+
+ private:
+  bool fromObjects_ = false;
 };
 
 /// Smallest constant deceleration (m/s^2, >= 0) of a follower at `speed` that keeps at

@@ -1,5 +1,6 @@
 // `idm`: the Intelligent Driver Model (Treiber et al. 2000) with pure-pursuit lane keeping;
-// max_accel is IDM's a, comfort_decel its b, exponent its delta, set_speed its v0.
+// max_accel is IDM's a, comfort_decel its b, exponent its delta, set_speed its v0. The lead
+// is SUMO's leader unless `leader_from_objects: 1` (LeaderChoice).
 
 #include <algorithm>
 #include <cmath>
@@ -23,17 +24,20 @@ class IdmController final : public EgoController {
     comfortDecel_ = params.get("comfort_decel", comfortDecel_, 0.1, 20.0);
     exponent_ = params.get("exponent", exponent_, 1.0, 10.0);
     lateral_.init(params);
+    leader_.init(params);
     params.rejectUnknown("idm");
   }
 
   void reset() override { following_.reset(); }
 
+  bool observesObjects() const override { return leader_.fromObjects(); }
+
   Command step(const Observation& observation, double /*dt*/) override {
     const double speed = observation.ego.speed;
     const double free_term = std::pow(speed / following_.setSpeed(observation), exponent_);
     double interaction = 0.0;
-    if (observation.leader) {
-      const auto& leader = *observation.leader;
+    if (const auto lead = leader_.leader(observation)) {
+      const auto& leader = *lead;
       const double approach = speed - leader.speed;
       const double dynamic_gap = speed * approach / (2.0 * std::sqrt(following_.maxAccel * comfortDecel_));
       const double desired_gap = following_.standstillGap + std::max(0.0, speed * following_.timeGap + dynamic_gap);
@@ -48,6 +52,7 @@ class IdmController final : public EgoController {
   double comfortDecel_ = 2.0;  ///< m/s^2
   double exponent_ = 4.0;
   PurePursuitLateral lateral_;
+  LeaderChoice leader_;
 };
 
 }  // namespace

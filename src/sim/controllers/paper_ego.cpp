@@ -2,6 +2,9 @@
 // (TimeGapLongitudinal) with pure-pursuit lane keeping (PurePursuitLateral).
 //   `paper_ego`:  every part on (P-term, relative-speed term, cruise cap, emergency brake);
 //   `time_gap_p`: the plain time-gap P-controller the paper names (every extra part off).
+// The lead is SUMO's leader unless `leader_from_objects: 1` (LeaderChoice): reading it from
+// the object list changes the paper's scenarios' numbers (the gap along the Ego's lane centre
+// line instead of SUMO's lane positions), so the paper's outputs keep SUMO's.
 
 #include <string>
 #include <utility>
@@ -20,17 +23,21 @@ class PaperEgoController final : public EgoController {
   void init(const ControllerParams& params) override {
     longitudinal_.init(params);
     lateral_.init(params);
+    leader_.init(params);
     params.rejectUnknown(name_);
   }
 
   void reset() override { longitudinal_.reset(); }
 
+  bool observesObjects() const override { return leader_.fromObjects(); }
+
   Command step(const Observation& observation, double /*dt*/) override {
-    return {longitudinal_.accel(observation), lateral_.curvature(observation)};
+    return {longitudinal_.accel(observation, leader_.leader(observation)), lateral_.curvature(observation)};
   }
 
  private:
   std::string name_;
+  LeaderChoice leader_;
   TimeGapLongitudinal longitudinal_;
   PurePursuitLateral lateral_;
 };

@@ -76,7 +76,8 @@ double FollowingParameters::setSpeed(const Observation& observation) {
 
 double FollowingParameters::clamp(double accel) const { return std::clamp(accel, -maxDecel, maxAccel); }
 
-void TimeGapLongitudinal::init(const ControllerParams& params) {
+void TimeGapLongitudinal::init(const ControllerParams& params, const FollowingParameters& defaults) {
+  following_ = defaults;
   following_.read(params);
   kGap_ = params.get("k_gap", kGap_, 0.0, 10.0);
   kSpeed_ = params.get("k_speed", kSpeed_, 0.0, 10.0);
@@ -91,12 +92,13 @@ void TimeGapLongitudinal::init(const ControllerParams& params) {
   parts_.emergencyBrake = part("emergency_brake", parts_.emergencyBrake);
 }
 
-double TimeGapLongitudinal::accel(const Observation& observation) {
+double TimeGapLongitudinal::accel(const Observation& observation, const std::optional<Observation::Leader>& lead) {
   const double speed = observation.ego.speed;
   const double cruise = kCruise_ * (following_.setSpeed(observation) - speed);
-  if (!observation.leader) return following_.clamp(cruise);
-  const auto& leader = *observation.leader;
-  const double desired_gap = std::max(following_.standstillGap, following_.timeGap * speed);
+  if (!lead) return following_.clamp(cruise);
+  const auto& leader = *lead;
+  const double time_gap = timeGapOf_ ? timeGapOf_(speed) : following_.timeGap;
+  const double desired_gap = std::max(following_.standstillGap, time_gap * speed);
   double command = kGap_ * (leader.gap - desired_gap);
   if (parts_.relativeSpeedTerm) command += kSpeed_ * (leader.speed - speed);
   if (parts_.cruiseCap) command = std::min(command, cruise);
@@ -107,6 +109,17 @@ double TimeGapLongitudinal::accel(const Observation& observation) {
     if (required > emergencyTrigger_) command = std::min(command, -1.1 * required);
   }
   return following_.clamp(command);
+}
+
+void LeaderChoice::init(const ControllerParams& params) {
+  fromObjects_ = params.get("leader_from_objects", 0.0, 0.0, 1.0) >= 0.5;
+}
+
+std::optional<Observation::Leader> LeaderChoice::leader(const Observation& observation) const {
+  if (!fromObjects_) return observation.leader;
+  const ObservedObject* nearest = nearestInPath(observation.objects);
+  if (nearest == nullptr) return std::nullopt;
+  return leaderOf(*nearest);
 }
 
 }  // namespace vsd::sim
