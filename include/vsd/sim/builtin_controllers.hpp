@@ -99,6 +99,11 @@ class LeaderChoice {
   bool fromObjects_ = false;
 };
 
+/// UN R157 paragraph 5.2.3.3: the minimum time gap (s) of an ALKS vehicle (M1/N1) at `speed`
+/// (m/s) - 1.0 s at 7.2 km/h rising by 0.1 s per 10 km/h to 1.6 s at 60 km/h, linear in
+/// between, 1.0 s below 7.2 km/h and 1.6 s above 60 km/h (the end of the original version's table).
+double r157MinimumTimeGap(double speed);
+
 /// Smallest constant deceleration (m/s^2, >= 0) of a follower at `speed` that keeps at
 /// least `margin` m to a leader `gap` m ahead at `leader_speed` accelerating with
 /// `leader_accel` (<= 0: braking until it stops). Returns +inf if even `max_decel`

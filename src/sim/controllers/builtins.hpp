@@ -10,5 +10,11 @@ namespace vsd::sim {
 void registerPaperEgo(ControllerRegistry& registry);
 /// idm.cpp: `idm`.
 void registerIdm(ControllerRegistry& registry);
+/// alks.cpp: `alks`.
+void registerAlks(ControllerRegistry& registry);
+/// r157_reference_driver.cpp: `r157_reference_driver`.
+void registerR157ReferenceDriver(ControllerRegistry& registry);
+/// fuzzy_safety_model.cpp: `fsm`.
+void registerFuzzySafetyModel(ControllerRegistry& registry);
 
 }  // namespace vsd::sim
