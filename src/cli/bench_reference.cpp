@@ -8,6 +8,7 @@
 #include <memory>
 
 #include "commands.hpp"
+#include "vsd/core/provenance.hpp"
 #include "vsd/sim/reference_cases.hpp"
 
 namespace fs = std::filesystem;
@@ -16,11 +17,15 @@ namespace vsd::cli {
 
 void addReferenceBench(CLI::App& bench, CommandContext& context) {
   auto out = std::make_shared<fs::path>("results/reference_driver");
+  auto allow_dirty = std::make_shared<bool>(false);
   CLI::App* reference = bench.add_subcommand(
       "reference", "UN R157's reference driver on the regulation's documented cut-ins and ASAM's cut-in grid");
   reference->add_option("--out", *out, "Output folder")->capture_default_str();
-  reference->callback([out, &context] {
-    context.action = [out, &context] {
+  reference->add_flag("--allow-dirty", *allow_dirty,
+                      "Write into the repository's results/ even though this binary was built from uncommitted changes");
+  reference->callback([out, allow_dirty, &context] {
+    context.action = [out, allow_dirty, &context] {
+      refuseDirtyCommittedResults(*out, *allow_dirty, "--allow-dirty");
       const auto registry = sim::ControllerRegistry::withBuiltins();
       std::vector<sim::CaseResult> cases;
       for (const auto& documented : sim::documentedCases()) cases.push_back(sim::runDocumentedCase(registry, documented));

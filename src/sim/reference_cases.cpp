@@ -13,7 +13,7 @@ constexpr double kKmh = 1.0 / 3.6;
 
 const char* const kTable1 =
     "UN R157 (E/ECE/TRANS/505/Rev.3/Add.156) Annex 4 Appendix 3 Table 1; 01 series Annex 3 Table 1";
-const char* const kAsam = "ASAM OSC-ALKS-scenarios, Scenarios/ALKS_Scenario_4.4_%s_TEMPLATE.xosc";
+const char* const kAsam = "ASAM OSC-ALKS-scenarios, Scenarios/ALKS_Scenario_4.4_{}_TEMPLATE.xosc";
 const char* const kParagraph5252 = "UN R157 paragraph 5.2.5.2";
 
 /// The eyes of the human driver models: 100 m ahead (esmini's ALKS_R157SM reference driver
@@ -46,8 +46,8 @@ void addTimelineCases(std::vector<DocumentedCase>& cases, double vy, int side) {
   const std::string where = fmt::format("vy{:.1f}{}", vy, side > 0 ? "" : "_right");
   DocumentedCase onset_case{"table1.onset." + where, kTable1,
                             fmt::format("perception when the cut-in's centre is 0.375 m off its lane ({:.4f} s), "
-                                        "braking 0.4 s + 0.75 s later",
-                                        perceived),
+                                        "braking 0.4 s + 0.75 s later ({:.4f} s)",
+                                        perceived, onset),
                             "r157_reference_driver", cut_in, DocumentedCase::Check::BrakeOnset, onset, 0.0};
   cases.push_back(onset_case);
   const double wrapped = cut_in.laneWidth / vy;  // equal widths: a full wrap once it is on the Ego's lane centre
@@ -55,7 +55,8 @@ void addTimelineCases(std::vector<DocumentedCase>& cases, double vy, int side) {
   if (!before && wrapped < onset + 0.6) return;  // the cap changes while rising: no single row applies
   const double g = before ? 0.85 : 0.774;
   DocumentedCase full{"table1.full_decel." + where, kTable1,
-                      fmt::format("the deceleration rises to {} g in 0.6 s{}", g, before ? " (after full wrap)" : ""),
+                      fmt::format("the deceleration rises to {} g in 0.6 s{} ({:.4f} s)", g,
+                                  before ? " (after full wrap)" : "", onset + 0.6),
                       "r157_reference_driver", cut_in, DocumentedCase::Check::FullDecel, onset + 0.6, g * kGravity};
   cases.push_back(full);
 }

@@ -9,6 +9,7 @@
 
 #include "vsd/core/csv.hpp"
 #include "vsd/core/files.hpp"
+#include "vsd/core/log.hpp"
 #include "vsd/sim/reference_cases.hpp"
 
 namespace vsd::sim {
@@ -116,12 +117,13 @@ int writeReferenceReport(const std::filesystem::path& folder, const std::vector<
   output.stageText("cases.csv", casesCsv(cases));
   output.stageText("grid.csv", gridCsv(grid));
   std::string readme = fmt::format(
-      "# The reference driver against the regulation's statements\n\nMade by `{}` (kinematic cut-ins, "
-      "src/sim/cut_in_harness.cpp, step 0.01 s; docs/controllers.md explains the models and the sources).\n\n",
-      command);
+      "# The reference driver against the regulation's statements\n\nMade by `{}` with vsd-sumo {} (kinematic "
+      "cut-ins, src/sim/cut_in_harness.cpp, step 0.01 s; docs/controllers.md explains the models and the "
+      "sources).\n\n",
+      command, toolVersion());
   readme += casesSummary(cases) + gridSummary(grid);
   output.stageText("README.md", readme);
-  output.commit(nlohmann::json{{"command", invocation}});
+  output.commit(nlohmann::json{{"command", invocation}, {"version", toolVersion()}});
   int wrong = 0;
   for (const auto& result : cases) wrong += result.pass ? 0 : 1;
   return wrong;

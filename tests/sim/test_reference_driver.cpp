@@ -106,6 +106,8 @@ TEST(Alks, FollowsAtTheRegulationsMinimumTimeGap) {
   EXPECT_NEAR(alks->step(observation, 0.2).accel, 0.0, 1e-9);
   observation.objects[0].relation.lateralGap = 0.8;
   EXPECT_LT(alks->step(observation, 0.2).accel, -0.5);
+  // Its time gap is the regulation's: a time_gap parameter is refused.
+  EXPECT_THROW(fresh("alks", {{"time_gap", 2.0}}), ConfigError);
 }
 
 // The FSM brakes in anticipation - proactively, well before a collision is near - where the

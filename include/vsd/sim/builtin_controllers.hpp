@@ -33,7 +33,8 @@ struct FollowingParameters {
   double maxAccel = 2.0;
   double maxDecel = 9.0;
 
-  void read(const ControllerParams& params);
+  /// `with_time_gap` false: time_gap is not a parameter (a controller with its own time gap).
+  void read(const ControllerParams& params, bool with_time_gap = true);
   /// Forgets the set speed taken from a previous scenario's first step.
   void reset() { setSpeed_ = configuredSetSpeed_; }
   double setSpeed(const Observation& observation);

@@ -68,9 +68,9 @@ const std::vector<std::string>& gridControllers();
 
 std::vector<GridResult> runGrid(const ControllerRegistry& registry);
 
-/// Writes cases.csv, grid.csv and README.md (the summary, naming `command`) to `folder` as
-/// one output set (OutputFolder: manifest last, recording `invocation`). Returns the number
-/// of documented cases on the wrong side.
+/// Writes cases.csv, grid.csv and README.md (the summary, naming `command` and the tool's
+/// version) to `folder` as one output set (OutputFolder: manifest last, with the full
+/// `invocation`). Returns the number of documented cases on the wrong side.
 int writeReferenceReport(const std::filesystem::path& folder, const std::vector<CaseResult>& cases,
                          const std::vector<GridResult>& grid, const std::string& command, const std::string& invocation);
 

@@ -60,8 +60,8 @@ double requiredDeceleration(double gap, double speed, double leader_speed, doubl
   return hi;
 }
 
-void FollowingParameters::read(const ControllerParams& params) {
-  timeGap = params.get("time_gap", timeGap, 0.1, 10.0);
+void FollowingParameters::read(const ControllerParams& params, bool with_time_gap) {
+  if (with_time_gap) timeGap = params.get("time_gap", timeGap, 0.1, 10.0);
   standstillGap = params.get("standstill_gap", standstillGap, 0.0, 50.0);
   maxAccel = params.get("max_accel", maxAccel, 0.1, 20.0);
   maxDecel = params.get("max_decel", maxDecel, 0.1, 20.0);
@@ -78,7 +78,7 @@ double FollowingParameters::clamp(double accel) const { return std::clamp(accel,
 
 void TimeGapLongitudinal::init(const ControllerParams& params, const FollowingParameters& defaults) {
   following_ = defaults;
-  following_.read(params);
+  following_.read(params, !timeGapOf_);
   kGap_ = params.get("k_gap", kGap_, 0.0, 10.0);
   kSpeed_ = params.get("k_speed", kSpeed_, 0.0, 10.0);
   kCruise_ = params.get("k_cruise", kCruise_, 0.0, 10.0);
