@@ -22,10 +22,10 @@
 //     risk perceived at that instant ("following distance of the ego vehicle" in Table 1);
 //   - the braking ends once the Ego no longer closes in on the road user and that one no
 //     longer brakes; the driver then drives normally again;
-//   - normal driving (no risk under evaluation): lane keeping by pure pursuit and a
-//     time-gap follower with comfortable limits (time_gap 2 s, max_decel 3 m/s^2) that
-//     ignores the road user whose risk is being evaluated or reacted to - the driver has
-//     not yet responded to it.
+//   - normal driving: lane keeping by pure pursuit and a time-gap follower with comfortable
+//     limits (time_gap 2 s, max_decel 3 m/s^2); while a risk is evaluated it ignores the road
+//     user concerned - the driver has not yet responded to it - and during the reaction the
+//     driver neither accelerates nor brakes (`release_decel`, 0: "until starting deceleration").
 // Perception instants between two observations are interpolated from the lateral speed,
 // and the braking profile is integrated over each step, so the model's timing does not
 // depend on the simulation step (a 0.2 s step would otherwise delay every reaction).
