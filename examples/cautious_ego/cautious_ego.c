@@ -9,6 +9,10 @@
  *                   k_gap (gap - (standstill_gap + time_gap v)) + k_speed (v_leader - v))
  *   curvature = kappa_lane - k_offset * lateral_offset - k_heading * heading_error
  *
+ * The leader is the nearest road user of the object list in the Ego's path
+ * (ABI version 2); built against a version-1 header (no object list) it is
+ * SUMO's leader (has_leader), as the tests do with tests/plugins/abi_v1/.
+ *
  * Use it from a scenario file:
  *   controller: {name: cautious_ego, library: path/to/libvsd_cautious_ego.so,
  *                params: {time_gap: 3.0, set_speed: v_ego}}
@@ -76,13 +80,33 @@ static vsd_controller* cautious_create(const char* const* names, const double* v
 
 static void cautious_reset(vsd_controller* self) { self->current_set_speed = self->set_speed; }
 
+/* The leader's bumper gap and speed along the lane; 0 if there is none. */
+static int find_leader(const vsd_observation* obs, double* gap, double* speed) {
+#if VSD_CONTROLLER_ABI_VERSION >= 2
+  int found = 0;
+  for (int i = 0; i < obs->object_count; ++i) {
+    const vsd_object* object = &obs->objects[i];
+    if (!object->in_path || (found && object->longitudinal_gap >= *gap)) continue;
+    *gap = object->longitudinal_gap;
+    *speed = object->speed * cos(object->relative_heading);
+    found = 1;
+  }
+  return found;
+#else
+  *gap = obs->leader_gap;
+  *speed = obs->leader_speed;
+  return obs->has_leader;
+#endif
+}
+
 static int cautious_step(vsd_controller* self, const vsd_observation* obs, double dt, vsd_command* command) {
   (void)dt;
   if (self->current_set_speed < 0.0) self->current_set_speed = obs->speed;
   double accel = self->k_speed * (self->current_set_speed - obs->speed);
-  if (obs->has_leader) {
+  double gap = 0.0, speed = 0.0;
+  if (find_leader(obs, &gap, &speed)) {
     const double desired = self->standstill_gap + self->time_gap * obs->speed;
-    const double follow = self->k_gap * (obs->leader_gap - desired) + self->k_speed * (obs->leader_speed - obs->speed);
+    const double follow = self->k_gap * (gap - desired) + self->k_speed * (speed - obs->speed);
     if (follow < accel) accel = follow;
   }
   double curvature = 0.0;

@@ -647,6 +647,7 @@ void addBenchCommand(CLI::App& app, CommandContext& context) {
   addInteropBench(*bench, context);
   addSearchBench(*bench, context);
   addTrainBench(*bench, context);
+  addReferenceBench(*bench, context);
 }
 
 }  // namespace vsd::cli

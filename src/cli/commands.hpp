@@ -52,5 +52,7 @@ void addInteropBench(CLI::App& bench, CommandContext& context);
 void addSearchBench(CLI::App& bench, CommandContext& context);
 /// `vsd-sumo bench train` (bench_train.cpp).
 void addTrainBench(CLI::App& bench, CommandContext& context);
+/// `vsd-sumo bench reference` (bench_reference.cpp).
+void addReferenceBench(CLI::App& bench, CommandContext& context);
 
 }  // namespace vsd::cli

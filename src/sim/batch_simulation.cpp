@@ -266,8 +266,17 @@ std::vector<SimulatedScenario> simulateBatch(const std::filesystem::path& net, c
         const ActivityScope in_controller(Activity::Controller);
         faultPoint(fmt::format("controller.step:{}", member.result.index));
       }
+      // The Ego's sensors see the other road users where they are at instant k (every one a
+      // car until concrete road users carry their kind).
+      std::vector<RoadUserState> road_users;
+      for (std::size_t o = 0; o < member.otherIds.size(); ++o) {
+        const auto& other = member.run->scenario->others[o];
+        road_users.push_back({static_cast<int>(o) + 1, RoadUserType::Car, member.otherPaths[o][static_cast<std::size_t>(k)],
+                              other.length, other.width});
+      }
       try {
-        member.ego->step(time, dt, member.run->scenario->ego.headingNoise[static_cast<std::size_t>(k)], lanes);
+        member.ego->step(time, dt, member.run->scenario->ego.headingNoise[static_cast<std::size_t>(k)], lanes,
+                         road_users);
       } catch (const ConfigError&) {
         throw;
       } catch (const Error& error) {

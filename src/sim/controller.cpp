@@ -8,7 +8,6 @@
 
 #include "vsd/core/activity.hpp"
 #include "vsd/core/error.hpp"
-#include "vsd/sim/builtin_controllers.hpp"
 
 namespace fs = std::filesystem;
 
@@ -46,25 +45,27 @@ void ControllerParams::rejectUnknown(const std::string& controller_name) const {
 
 // --- registry --------------------------------------------------------------------------
 
-ControllerRegistry ControllerRegistry::withBuiltins() {
-  ControllerRegistry registry;
-  registry.add("paper_ego",
-               "time-gap P-term + relative-speed term, cruise cap and emergency brake (each switchable) + "
-               "pure-pursuit lane keeping",
-               [] { return std::make_unique<PaperEgoController>("paper_ego", TimeGapLongitudinal::Parts{true, true, true}); });
-  registry.add("time_gap_p", "plain time-gap P-controller (the paper's description) + pure-pursuit lane keeping",
-               [] {
-                 return std::make_unique<PaperEgoController>("time_gap_p", TimeGapLongitudinal::Parts{false, false, false});
-               });
-  registry.add("idm", "Intelligent Driver Model + pure-pursuit lane keeping",
-               [] { return std::make_unique<IdmController>(); });
-  return registry;
-}
-
-void ControllerRegistry::add(const std::string& name, const std::string& description, Factory factory) {
-  if (!entries_.emplace(name, Entry{description, std::move(factory)}).second) {
+void ControllerRegistry::add(const std::string& name, const std::string& description, Factory factory,
+                             int abi_version) {
+  if (!entries_.emplace(name, Entry{description, std::move(factory), abi_version}).second) {
     throw ConfigError(fmt::format("controller '{}' is registered twice", name));
   }
+}
+
+int ControllerRegistry::abiVersion(const std::string& name) const { return entries_.at(name).abiVersion; }
+
+void ControllerRegistry::require(const std::string& name, const ControllerNeeds& needs) const {
+  const auto it = entries_.find(name);
+  if (it == entries_.end() || it->second.abiVersion >= needs.abiVersion) return;  // unknown: create() says so
+  std::vector<std::string> allowed;
+  for (const auto& [known, entry] : entries_) {
+    if (entry.abiVersion >= needs.abiVersion) allowed.push_back(known);
+  }
+  throw ConfigError(fmt::format(
+      "{}: {}: {}: controller '{}' reads version {} of the observation, the setting needs version {} or later "
+      "(allowed: {}, or a plugin declaring abi_version {})",
+      needs.where, needs.field, needs.value, name, it->second.abiVersion, needs.abiVersion, fmt::join(allowed, ", "),
+      needs.abiVersion));
 }
 
 std::map<std::string, std::string> ControllerRegistry::available() const {
@@ -105,6 +106,8 @@ class PluginController final : public EgoController {
  public:
   PluginController(std::shared_ptr<LibraryHandle> library, const vsd_controller_api* api)
       : library_(std::move(library)), api_(api) {}
+
+  bool observesObjects() const override { return api_->abi_version >= 2; }
   PluginController(const PluginController&) = delete;
   PluginController& operator=(const PluginController&) = delete;
   ~PluginController() override { destroy(); }
@@ -132,7 +135,7 @@ class PluginController final : public EgoController {
   }
 
   Command step(const Observation& observation, double dt) override {
-    const vsd_observation abi = toAbi(observation);
+    const vsd_observation abi = toAbi(observation, api_->abi_version, objects_);
     vsd_command command{0.0, 0.0};
     const int status = api_->step(instance_, &abi, dt, &command);
     if (status != 0) throw Error(fmt::format("controller '{}' step failed with status {}", api_->name, status));
@@ -152,6 +155,7 @@ class PluginController final : public EgoController {
   std::shared_ptr<LibraryHandle> library_;
   const vsd_controller_api* api_;
   vsd_controller* instance_ = nullptr;
+  std::vector<vsd_object> objects_;  ///< the object list's C view, kept between steps to reuse its memory
 };
 
 }  // namespace
@@ -179,9 +183,10 @@ void ControllerRegistry::loadLibrary(const fs::path& library) {
   for (int index = 0;; ++index) {
     const vsd_controller_api* api = entry(index);
     if (api == nullptr) break;
-    if (api->abi_version != VSD_CONTROLLER_ABI_VERSION) {
-      throw ConfigError(fmt::format("controller library '{}': controller #{} has ABI version {}, expected {}",
-                                    library.string(), index, api->abi_version, VSD_CONTROLLER_ABI_VERSION));
+    if (api->abi_version < VSD_CONTROLLER_ABI_MIN_VERSION || api->abi_version > VSD_CONTROLLER_ABI_VERSION) {
+      throw ConfigError(fmt::format("controller library '{}': controller #{} has ABI version {}, expected {} to {}",
+                                    library.string(), index, api->abi_version, VSD_CONTROLLER_ABI_MIN_VERSION,
+                                    VSD_CONTROLLER_ABI_VERSION));
     }
     if (api->name == nullptr || api->create == nullptr || api->step == nullptr) {
       throw ConfigError(fmt::format("controller library '{}': controller #{} lacks a name, create() or step()",
@@ -189,7 +194,7 @@ void ControllerRegistry::loadLibrary(const fs::path& library) {
     }
     if (contains(api->name)) continue;  // the same library loaded twice: keep the first registration
     add(api->name, api->description != nullptr ? api->description : "",
-        [handle, api] { return std::make_unique<PluginController>(handle, api); });
+        [handle, api] { return std::make_unique<PluginController>(handle, api); }, api->abi_version);
     ++count;
     if (index > 1000) break;
   }
@@ -200,19 +205,56 @@ void ControllerRegistry::loadLibrary(const fs::path& library) {
 
 std::unique_ptr<EgoController> makeController(ControllerRegistry& registry, const std::string& name,
                                               const fs::path& library, const fs::path& scenario_dir,
-                                              const ControllerParams& params) {
+                                              const ControllerParams& params, const ControllerNeeds& needs) {
   // Loading a plugin, creating and resetting its controller all run its code.
   const ActivityScope in_controller(Activity::Controller);
   if (!library.empty() && !registry.contains(name)) {
     registry.loadLibrary(library.is_absolute() ? library : scenario_dir / library);
   }
+  registry.require(name, needs);
   auto controller = registry.create(name);
   controller->init(params);
   controller->reset();
   return controller;
 }
 
-vsd_observation toAbi(const Observation& observation) {
+Observation::Leader leaderOf(const ObservedObject& object) {
+  return {object.relation.longitudinalGap, object.longitudinalSpeed(), object.state.accel};
+}
+
+namespace {
+
+static_assert(VSD_OBJECT_CAR == static_cast<int>(RoadUserType::Car) &&
+                  VSD_OBJECT_PEDESTRIAN == static_cast<int>(RoadUserType::Pedestrian) &&
+                  VSD_OBJECT_STATIONARY == static_cast<int>(RoadUserType::StationaryObject),
+              "controller_abi.h's object kinds follow RoadUserType");
+
+vsd_object toAbi(const ObservedObject& object) {
+  vsd_object abi{};
+  abi.id = object.id;
+  abi.type = static_cast<int>(object.type);
+  abi.x = object.state.x;
+  abi.y = object.state.y;
+  abi.heading = object.state.heading;
+  abi.speed = object.state.speed;
+  abi.accel = object.state.accel;
+  abi.length = object.length;
+  abi.width = object.width;
+  const PathRelation& relation = object.relation;
+  abi.longitudinal_distance = relation.longitudinalDistance;
+  abi.longitudinal_gap = relation.longitudinalGap;
+  abi.lateral_distance = relation.lateralDistance;
+  abi.lateral_gap = relation.lateralGap;
+  abi.lane_offset = relation.objectOffset;
+  abi.relative_heading = relation.relativeHeading;
+  abi.relative_lane = relation.relativeLane;
+  abi.in_path = relation.inPath ? 1 : 0;
+  return abi;
+}
+
+}  // namespace
+
+vsd_observation toAbi(const Observation& observation, int abi_version, std::vector<vsd_object>& objects) {
   vsd_observation abi{};
   abi.time = observation.time;
   abi.x = observation.ego.x;
@@ -238,6 +280,12 @@ vsd_observation toAbi(const Observation& observation) {
     abi.leader_gap = observation.leader->gap;
     abi.leader_speed = observation.leader->speed;
     abi.leader_accel = observation.leader->accel;
+  }
+  objects.clear();
+  if (abi_version >= 2) {
+    for (const auto& object : observation.objects) objects.push_back(toAbi(object));
+    abi.object_count = static_cast<int>(objects.size());
+    abi.objects = objects.empty() ? nullptr : objects.data();
   }
   return abi;
 }

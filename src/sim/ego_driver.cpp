@@ -92,7 +92,7 @@ Observation::Lane observeLane(const MeasuredPolyline& preview_line, const Polyli
 
 void EgoDriver::pushToSumo() const { placeInSumo(vehicleId_, state_, length_, width_, offset_, placement_); }
 
-Observation EgoDriver::observe(double time, LaneCache& lanes) const {
+Observation EgoDriver::observe(double time, LaneCache& lanes, const std::vector<RoadUserState>& road_users) const {
   Observation observation;
   observation.time = time;
   observation.ego = state_;
@@ -100,13 +100,14 @@ Observation EgoDriver::observe(double time, LaneCache& lanes) const {
   observation.egoWidth = width_;
 
   const std::string lane_id = libsumo::Vehicle::getLaneID(vehicleId_);
+  const MeasuredPolyline* centre_ptr = nullptr;
+  MeasuredPolyline extended;
   if (!lane_id.empty()) {
-    const MeasuredPolyline* centre_ptr = &lanes.centre(lane_id, offset_);
+    centre_ptr = &lanes.centre(lane_id, offset_);
     auto projection = centre_ptr->project(state_.position());
     // Near the end of the lane the preview continues along the route (through the
     // junction's internal lane); on a single long road this never happens.
     const double preview_end = projection.arcLength + Observation::Lane{}.previewSpacing * kPreviewPoints;
-    MeasuredPolyline extended;
     if (preview_end > centre_ptr->length()) {
       extended = routeAhead(lane_id, lanes, preview_end);
       centre_ptr = &extended;
@@ -121,6 +122,17 @@ Observation EgoDriver::observe(double time, LaneCache& lanes) const {
     leader.speed = libsumo::Vehicle::getSpeed(leader_id);
     leader.accel = libsumo::Vehicle::getAcceleration(leader_id);
     observation.leader = leader;
+  }
+  if (controller_->observesObjects() && !road_users.empty()) {
+    const Footprint ego{state_.position(), state_.heading, length_, width_};
+    if (observation.lane) {
+      observation.objects = observeObjects(*centre_ptr, observation.lane->width, ego, road_users, sensor_);
+    } else {
+      // Off the road the reference line is the Ego's own heading and "lanes" are as wide as the Ego.
+      const Vec2 along = headingVector(state_.heading);
+      const MeasuredPolyline heading_line(Polyline{state_.position() - along, state_.position() + along});
+      observation.objects = observeObjects(heading_line, width_, ego, road_users, sensor_);
+    }
   }
   return observation;
 }
@@ -149,8 +161,9 @@ MeasuredPolyline EgoDriver::routeAhead(const std::string& lane_id, LaneCache& la
   return MeasuredPolyline(std::move(path));
 }
 
-void EgoDriver::step(double time, double dt, double heading_noise, LaneCache& lanes) {
-  const Observation observation = observe(time, lanes);
+void EgoDriver::step(double time, double dt, double heading_noise, LaneCache& lanes,
+                     const std::vector<RoadUserState>& road_users) {
+  const Observation observation = observe(time, lanes, road_users);
   Command command;
   {
     const ActivityScope in_controller(Activity::Controller);

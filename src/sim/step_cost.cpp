@@ -16,6 +16,7 @@ class SteppingCostController final : public EgoController {
       : inner_(std::move(inner)), cost_(cost) {}
   void init(const ControllerParams& params) override { inner_->init(params); }
   void reset() override { inner_->reset(); }
+  bool observesObjects() const override { return inner_->observesObjects(); }
   Command step(const Observation& observation, double dt) override {
     std::this_thread::sleep_for(cost_);
     return inner_->step(observation, dt);

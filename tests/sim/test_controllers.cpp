@@ -24,6 +24,25 @@ std::string errorOf(const std::function<void()>& action) {
   return "";
 }
 
+std::filesystem::path pluginFile(const std::string& name) { return test::binaryDir() / "plugins" / name; }
+
+/// A car of the object list at bumper gap `gap` ahead, `lateral_gap` beside the Ego's path.
+ObservedObject objectAhead(int id, double gap, double speed, double lateral_gap) {
+  ObservedObject object;
+  object.id = id;
+  object.state = {gap + 5.0, lateral_gap + 1.8, 0.0, speed, 0.0};
+  object.length = 5.0;
+  object.width = 1.8;
+  object.relation.longitudinalDistance = gap + 5.0;
+  object.relation.longitudinalGap = gap;
+  object.relation.lateralDistance = lateral_gap + 1.8;
+  object.relation.lateralGap = lateral_gap;
+  object.relation.objectOffset = lateral_gap + 1.8;
+  object.relation.relativeLane = lateral_gap + 1.8 > 1.75 ? 1 : 0;
+  object.relation.inPath = lateral_gap < 0.0;
+  return object;
+}
+
 /// Observation on a straight lane along +x, Ego at lateral offset `offset`.
 Observation straightLane(double speed, double offset) {
   Observation observation;
@@ -69,10 +88,83 @@ TEST(ControllerPlugin, ExampleLibraryIsLoadedAndDrives) {
   auto command = controller->step(straightLane(10.0, 0.8), 0.2);
   EXPECT_LT(command.curvature, 0.0);
   EXPECT_GT(command.accel, 0.0);
-  // A leader closer than the 3 s gap: brakes.
+  // A road user in its path closer than the 3 s gap: brakes.
+  Observation close = straightLane(12.0, 0.0);
+  close.objects.push_back(objectAhead(1, 15.0, 12.0, -1.8));
+  EXPECT_LT(controller->step(close, 0.2).accel, 0.0);
+}
+
+// The example built against version 1 of the ABI (the header before the object list):
+// it loads, reads the leader and the lane as before, and never gets objects.
+TEST(ControllerPlugin, VersionOnePluginLoadsAndDrivesUnchanged) {
+  auto registry = ControllerRegistry::withBuiltins();
+  auto controller = makeController(registry, "cautious_ego", pluginFile("libvsd_cautious_ego_v1.so"), "",
+                                   ControllerParams({{"time_gap", 3.0}, {"set_speed", 12.0}}, "controller"));
+  EXPECT_EQ(registry.abiVersion("cautious_ego"), 1);
+  EXPECT_FALSE(controller->observesObjects());
+  EXPECT_LT(controller->step(straightLane(10.0, 0.8), 0.2).curvature, 0.0);
   Observation close = straightLane(12.0, 0.0);
   close.leader = Observation::Leader{15.0, 12.0, 0.0};
   EXPECT_LT(controller->step(close, 0.2).accel, 0.0);
+  // A road user in its path that SUMO does not report as leader does not exist for it.
+  Observation cut_in = straightLane(12.0, 0.0);
+  cut_in.objects.push_back(objectAhead(1, 10.0, 8.0, -0.5));
+  EXPECT_GT(controller->step(cut_in, 0.2).accel, -1e-12);
+  std::vector<vsd_object> buffer;
+  const auto abi = toAbi(cut_in, 1, buffer);
+  EXPECT_EQ(abi.object_count, 0);
+  EXPECT_EQ(abi.objects, nullptr);
+}
+
+// Built against this header, the same example reads version 2: its leader is the nearest
+// road user of the object list in its path.
+TEST(ControllerPlugin, VersionTwoPluginFollowsTheObjectList) {
+  auto registry = ControllerRegistry::withBuiltins();
+  auto controller = makeController(registry, "cautious_ego", test::cautiousEgoPlugin(), "",
+                                   ControllerParams({{"time_gap", 3.0}, {"set_speed", 12.0}}, "controller"));
+  EXPECT_EQ(registry.abiVersion("cautious_ego"), 2);
+  EXPECT_TRUE(controller->observesObjects());
+  Observation cut_in = straightLane(12.0, 0.0);
+  cut_in.objects.push_back(objectAhead(1, 30.0, 8.0, 1.5));   // beside the path
+  cut_in.objects.push_back(objectAhead(2, 10.0, 8.0, -0.5));  // in it
+  const double braking = controller->step(cut_in, 0.2).accel;
+  EXPECT_NEAR(braking, 0.25 * (10.0 - (3.0 + 3.0 * 12.0)) + 0.6 * (8.0 - 12.0), 1e-9);
+  std::vector<vsd_object> buffer;
+  const auto abi = toAbi(cut_in, 2, buffer);
+  ASSERT_EQ(abi.object_count, 2);
+  EXPECT_EQ(abi.objects[1].id, 2);
+  EXPECT_EQ(abi.objects[1].in_path, 1);
+  EXPECT_EQ(abi.objects[1].longitudinal_gap, 10.0);
+  EXPECT_EQ(abi.objects[0].relative_lane, 1);
+  EXPECT_EQ(abi.objects[0].type, VSD_OBJECT_CAR);
+}
+
+TEST(ControllerPlugin, UnknownAbiVersionIsRefusedWithTheVersionsAllowed) {
+  auto registry = ControllerRegistry::withBuiltins();
+  const auto message = errorOf([&] { registry.loadLibrary(pluginFile("libvsd_future_ego.so")); });
+  EXPECT_NE(message.find("controller #0 has ABI version 3, expected 1 to 2"), std::string::npos) << message;
+}
+
+// A scenario setting that needs the object list (the Ego's sensor) refuses a version-1
+// controller in one line: file, field, value and what would be allowed.
+TEST(ControllerPlugin, VersionTwoSettingOnAVersionOneControllerIsOneLine) {
+  auto registry = ControllerRegistry::withBuiltins();
+  const ControllerNeeds needs{2, "scenarios/alks/cut_in.yaml:21", "ego.sensor", "{forward_range: 80}"};
+  const auto message = errorOf([&] {
+    makeController(registry, "cautious_ego", pluginFile("libvsd_cautious_ego_v1.so"), "",
+                   ControllerParams({}, "controller"), needs);
+  });
+  EXPECT_EQ(message.find('\n'), std::string::npos);
+  EXPECT_NE(message.find("scenarios/alks/cut_in.yaml:21: ego.sensor: {forward_range: 80}: controller 'cautious_ego' "
+                         "reads version 1 of the observation, the setting needs version 2 or later (allowed: "),
+            std::string::npos)
+      << message;
+  EXPECT_NE(message.find("paper_ego"), std::string::npos) << message;
+  EXPECT_NE(message.find("or a plugin declaring abi_version 2)"), std::string::npos) << message;
+  // Built-ins and version-2 plugins are accepted.
+  EXPECT_NO_THROW(makeController(registry, "paper_ego", "", "", ControllerParams({}, "c"), needs));
+  auto fresh = ControllerRegistry::withBuiltins();
+  EXPECT_NO_THROW(makeController(fresh, "cautious_ego", test::cautiousEgoPlugin(), "", ControllerParams({}, "c"), needs));
 }
 
 TEST(ControllerPlugin, PluginParameterErrorsReachTheUser) {
@@ -186,6 +278,30 @@ TEST(PaperEgo, PartsAreSwitchableAndTimeGapPIsThePlainPController) {
   EXPECT_THROW(command("paper_ego", {{"cruise_cap", 2.0}}, far), ConfigError);
 }
 
+
+// The paper's controllers follow SUMO's leader unless `leader_from_objects: 1`; then the
+// nearest road user in the Ego's path is the lead - a cut-in SUMO has not yet moved to the
+// Ego's lane included.
+TEST(PaperEgo, LeaderComesFromSumoUnlessTheObjectListIsSwitchedOn) {
+  auto registry = ControllerRegistry::withBuiltins();
+  for (const char* name : {"paper_ego", "time_gap_p", "idm"}) {
+    auto from_sumo = makeController(registry, name, "", "", ControllerParams({{"set_speed", 12.0}}, "c"));
+    auto from_objects = makeController(registry, name, "", "",
+                                       ControllerParams({{"set_speed", 12.0}, {"leader_from_objects", 1.0}}, "c"));
+    EXPECT_FALSE(from_sumo->observesObjects()) << name;
+    EXPECT_TRUE(from_objects->observesObjects()) << name;
+    Observation cut_in = straightLane(12.0, 0.0);
+    cut_in.objects.push_back(objectAhead(1, 8.0, 8.0, -0.3));  // in the path, not SUMO's leader yet
+    EXPECT_GT(from_sumo->step(cut_in, 0.2).accel, -1e-12) << name;
+    EXPECT_LT(from_objects->step(cut_in, 0.2).accel, -1.0) << name;
+    // The same numbers from either source when both report the same lead.
+    Observation both = cut_in;
+    both.leader = leaderOf(cut_in.objects[0]);
+    EXPECT_EQ(from_sumo->step(both, 0.2).accel, from_objects->step(cut_in, 0.2).accel) << name;
+  }
+  EXPECT_THROW(makeController(registry, "paper_ego", "", "", ControllerParams({{"leader_from_objects", 0.5 + 1.0}}, "c")),
+               ConfigError);
+}
 
 TEST(StepCost, TheWrappedControllerDrivesAndEachStepTakesTheExtraTime) {
   auto registry = ControllerRegistry::withBuiltins();

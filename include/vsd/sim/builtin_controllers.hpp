@@ -1,6 +1,10 @@
 #pragma once
-// Built-in Ego controllers. Longitudinal and lateral parts are separate classes
-// so that controllers can combine them.
+// The parts the built-in Ego controllers are made of: lateral (lane keeping) and
+// longitudinal (car following) classes that a controller combines. The controllers
+// themselves live one per file in src/sim/controllers/; registry.cpp lists them all.
+
+#include <functional>
+#include <optional>
 
 #include "vsd/sim/controller.hpp"
 
@@ -29,7 +33,8 @@ struct FollowingParameters {
   double maxAccel = 2.0;
   double maxDecel = 9.0;
 
-  void read(const ControllerParams& params);
+  /// `with_time_gap` false: time_gap is not a parameter (a controller with its own time gap).
+  void read(const ControllerParams& params, bool with_time_gap = true);
   /// Forgets the set speed taken from a previous scenario's first step.
   void reset() { setSpeed_ = configuredSetSpeed_; }
   double setSpeed(const Observation& observation);
@@ -59,13 +64,21 @@ class TimeGapLongitudinal {
     bool emergencyBrake = true;
   };
   explicit TimeGapLongitudinal(Parts defaults) : parts_(defaults) {}
-  void init(const ControllerParams& params);
+  /// Reads the scenario's parameters; `defaults` are the following parameters it does not set.
+  void init(const ControllerParams& params, const FollowingParameters& defaults = {});
+  /// Takes the desired time gap (s) as a function of the Ego's speed (m/s) instead of the
+  /// constant time_gap - UN R157's speed-dependent minimum for the `alks` controller.
+  void useTimeGap(std::function<double(double)> time_gap_of_speed) { timeGapOf_ = std::move(time_gap_of_speed); }
   void reset() { following_.reset(); }
-  double accel(const Observation& observation);
+  /// The command with SUMO's leader (Observation::leader).
+  double accel(const Observation& observation) { return accel(observation, observation.leader); }
+  /// The command with `leader` as the lead (none: cruise).
+  double accel(const Observation& observation, const std::optional<Observation::Leader>& leader);
 
  private:
   Parts parts_;
   FollowingParameters following_;
+  std::function<double(double)> timeGapOf_;
   double kGap_ = 0.3;              ///< 1/s^2
   double kSpeed_ = 0.8;            ///< 1/s
   double kCruise_ = 0.5;           ///< 1/s
@@ -73,43 +86,30 @@ class TimeGapLongitudinal {
   double emergencyTrigger_ = 2.0;  ///< m/s^2
 };
 
+/// Where a car follower takes its lead from - the scenario's 0/1 parameter
+/// `leader_from_objects`: 0 (default) SUMO's leader (Observation::leader, what the paper's
+/// controllers have always used: their outputs stay byte for byte the same), 1 the nearest
+/// road user of the object list in the Ego's path, which sees a cut-in as it enters the path.
+class LeaderChoice {
+ public:
+  void init(const ControllerParams& params);
+  bool fromObjects() const { return fromObjects_; }
+  std::optional<Observation::Leader> leader(const Observation& observation) const;
+
+ private:
+  bool fromObjects_ = false;
+};
+
+/// UN R157 paragraph 5.2.3.3: the minimum time gap (s) of an ALKS vehicle (M1/N1) at `speed`
+/// (m/s) - 1.0 s at 7.2 km/h rising by 0.1 s per 10 km/h to 1.6 s at 60 km/h, linear in
+/// between, 1.0 s below 7.2 km/h and 1.6 s above 60 km/h (the end of the original version's table).
+double r157MinimumTimeGap(double speed);
+
 /// Smallest constant deceleration (m/s^2, >= 0) of a follower at `speed` that keeps at
 /// least `margin` m to a leader `gap` m ahead at `leader_speed` accelerating with
 /// `leader_accel` (<= 0: braking until it stops). Returns +inf if even `max_decel`
 /// cannot keep the margin.
 double requiredDeceleration(double gap, double speed, double leader_speed, double leader_accel, double margin,
                             double max_decel);
-
-/// TimeGapLongitudinal + PurePursuitLateral, registered twice:
-///   `paper_ego`:  every part on (P-term, relative-speed term, cruise cap, emergency brake);
-///   `time_gap_p`: the plain time-gap P-controller the paper names (every extra part off).
-class PaperEgoController final : public EgoController {
- public:
-  PaperEgoController(std::string name, TimeGapLongitudinal::Parts parts) : name_(std::move(name)), longitudinal_(parts) {}
-  void init(const ControllerParams& params) override;
-  void reset() override { longitudinal_.reset(); }
-  Command step(const Observation& observation, double dt) override;
-
- private:
-  std::string name_;
-  TimeGapLongitudinal longitudinal_;
-  PurePursuitLateral lateral_;
-};
-
-/// `idm`: Intelligent Driver Model (Treiber et al. 2000) + PurePursuitLateral; max_accel
-/// is IDM's a, comfort_decel its b, exponent its delta, set_speed its v0.
-class IdmController final : public EgoController {
- public:
-  IdmController();
-  void init(const ControllerParams& params) override;
-  void reset() override { following_.reset(); }
-  Command step(const Observation& observation, double dt) override;
-
- private:
-  FollowingParameters following_;
-  double comfortDecel_ = 2.0;  ///< m/s^2
-  double exponent_ = 4.0;
-  PurePursuitLateral lateral_;
-};
 
 }  // namespace vsd::sim

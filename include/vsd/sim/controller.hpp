@@ -2,8 +2,10 @@
 // Ego controllers: what drives the vehicle under test.
 //
 // A controller sees an Observation built from SUMO's state (lane geometry,
-// leader) and the Ego's own kinematic state, and returns a Command with a
-// longitudinal part (acceleration) and a lateral part (path curvature). The
+// leader), the Ego's own kinematic state and - for controllers that ask for it
+// (observesObjects) - the object list of the road users its sensors cover, and
+// returns a Command with a longitudinal part (acceleration) and a lateral part
+// (path curvature). The
 // kinematic vehicle model (vehicle_model.hpp) applies the command; the new pose
 // is then pushed into SUMO with moveToXY so that SUMO sees the Ego where the
 // controller put it.
@@ -23,6 +25,7 @@
 
 #include "vsd/core/trace.hpp"
 #include "vsd/sim/controller_abi.h"
+#include "vsd/sim/object_list.hpp"
 
 namespace vsd::sim {
 
@@ -50,8 +53,18 @@ struct Observation {
     double speed = 0.0;  ///< m/s
     double accel = 0.0;  ///< m/s^2
   };
-  std::optional<Leader> leader;  ///< absent when no vehicle is ahead within range
+  /// SUMO's leader (Vehicle::getLeader: the vehicle SUMO assigns to the Ego's lane ahead);
+  /// absent when no vehicle is ahead within range.
+  std::optional<Leader> leader;
+
+  /// The object list (ObjectSensor's coverage, in the scenario's order of road users);
+  /// filled only for a controller that observesObjects().
+  std::vector<ObservedObject> objects;
 };
+
+/// A road user of the object list as the lead of a car-following law: the bumper gap and
+/// its speed along the Ego's lane, its acceleration.
+Observation::Leader leaderOf(const ObservedObject& object);
 
 struct Command {
   double accel = 0.0;      ///< m/s^2, longitudinal
@@ -90,6 +103,19 @@ class EgoController {
   virtual void reset() = 0;
   /// Decides the command for the next `dt` seconds. Throws vsd::Error to fail the scenario.
   virtual Command step(const Observation& observation, double dt) = 0;
+  /// True if step() reads Observation::objects: the Ego's driver builds the object list
+  /// only then (after init(), so a parameter may decide it).
+  virtual bool observesObjects() const { return false; }
+};
+
+/// A setting of a scenario that only a controller observing a version of the observation
+/// (controller_abi.h) of at least `abiVersion` can honour - e.g. the Ego's sensor, which a
+/// version-1 controller never sees.
+struct ControllerNeeds {
+  int abiVersion = VSD_CONTROLLER_ABI_MIN_VERSION;  ///< the lowest version that honours the setting
+  std::string where;  ///< file (and line) of the setting
+  std::string field;  ///< the setting's key, e.g. "ego.sensor"
+  std::string value;  ///< the setting as written
 };
 
 /// Registry of controllers by name. Built-ins are added by withBuiltins();
@@ -98,15 +124,23 @@ class ControllerRegistry {
  public:
   using Factory = std::function<std::unique_ptr<EgoController>()>;
 
-  /// A registry holding the built-in controllers (paper_ego, idm).
+  /// A registry holding the built-in controllers (src/sim/controllers/registry.cpp lists them).
   static ControllerRegistry withBuiltins();
 
-  void add(const std::string& name, const std::string& description, Factory factory);
+  /// `abi_version`: the newest version of the observation the controller reads (built-ins
+  /// see the whole Observation: VSD_CONTROLLER_ABI_VERSION).
+  void add(const std::string& name, const std::string& description, Factory factory,
+           int abi_version = VSD_CONTROLLER_ABI_VERSION);
   /// Throws ConfigError naming `name` and listing every available controller.
   std::unique_ptr<EgoController> create(const std::string& name) const;
   bool contains(const std::string& name) const { return entries_.count(name) > 0; }
   /// name -> description
   std::map<std::string, std::string> available() const;
+  /// The version of the observation `name` reads (it must be registered).
+  int abiVersion(const std::string& name) const;
+  /// Throws ConfigError (one line: where, field, value, what is allowed) if `name` reads an
+  /// older observation than `needs` asks for.
+  void require(const std::string& name, const ControllerNeeds& needs) const;
 
   /// dlopen()s a plugin (see controller_abi.h) and registers its controllers.
   /// Throws ConfigError for a missing file, a library that cannot be loaded, a
@@ -117,16 +151,18 @@ class ControllerRegistry {
   struct Entry {
     std::string description;
     Factory factory;
+    int abiVersion = VSD_CONTROLLER_ABI_VERSION;
   };
   std::map<std::string, Entry> entries_;
 };
 
 /// Creates and initialises the controller a scenario asks for, loading its
-/// library first if one is named (relative to `scenario_dir`).
+/// library first if one is named (relative to `scenario_dir`). Throws ConfigError if the
+/// controller reads an older observation than `needs` asks for (ControllerRegistry::require).
 std::unique_ptr<EgoController> makeController(ControllerRegistry& registry, const std::string& name,
                                               const std::filesystem::path& library,
                                               const std::filesystem::path& scenario_dir,
-                                              const ControllerParams& params);
+                                              const ControllerParams& params, const ControllerNeeds& needs = {});
 
 /// Wraps a controller so that each of its steps takes `seconds` more wall time (it
 /// sleeps, then returns the wrapped controller's command): a stand-in for a slow Ego
@@ -134,7 +170,8 @@ std::unique_ptr<EgoController> makeController(ControllerRegistry& registry, cons
 /// seconds <= 0: the controller itself.
 std::unique_ptr<EgoController> withStepCost(std::unique_ptr<EgoController> controller, double seconds);
 
-/// The C view of an Observation (for plugins).
-vsd_observation toAbi(const Observation& observation);
+/// The C view of an Observation for a controller of ABI version `abi_version`: from
+/// version 2 on, `objects` receives the object list and the view points into it.
+vsd_observation toAbi(const Observation& observation, int abi_version, std::vector<vsd_object>& objects);
 
 }  // namespace vsd::sim

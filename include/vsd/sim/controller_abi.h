@@ -17,6 +17,17 @@
  * Lifecycle: create() once per concrete scenario with its evaluated
  * parameters, reset() before the first step, step() every time step,
  * destroy() at the end. Calls for one instance come from one thread.
+ *
+ * Versions. A controller declares the version it was written for in
+ * abi_version; vsd-sumo loads every version from VSD_CONTROLLER_ABI_MIN_VERSION
+ * to VSD_CONTROLLER_ABI_VERSION and fills what that version knows:
+ *   1  the Ego's state, its lane, SUMO's leader (has_leader ...);
+ *   2  + the object list (object_count, objects): every road user within the
+ *        scenario's sensor coverage, with its relation to the Ego's lane and path.
+ * A newer version only appends fields to vsd_observation, so a controller built
+ * against an older header reads the same fields at the same places (a version-1
+ * controller gets object_count = 0 and objects = NULL). A scenario that relies
+ * on version-2 data (e.g. sets the Ego's sensor) refuses a version-1 controller.
  */
 #ifndef VSD_SIM_CONTROLLER_ABI_H
 #define VSD_SIM_CONTROLLER_ABI_H
@@ -25,8 +36,43 @@
 extern "C" {
 #endif
 
-#define VSD_CONTROLLER_ABI_VERSION 1
+#define VSD_CONTROLLER_ABI_VERSION 2     /* the version this header describes */
+#define VSD_CONTROLLER_ABI_MIN_VERSION 1 /* the oldest version vsd-sumo still loads */
 #define VSD_PREVIEW_POINTS 10
+
+/* Kinds of road users (the order of vsd::RoadUserType, include/vsd/core/road_user.hpp). */
+enum {
+  VSD_OBJECT_CAR = 0,
+  VSD_OBJECT_VAN = 1,
+  VSD_OBJECT_TRUCK = 2,
+  VSD_OBJECT_BUS = 3,
+  VSD_OBJECT_MOTORBIKE = 4,
+  VSD_OBJECT_PEDESTRIAN = 5,
+  VSD_OBJECT_STATIONARY = 6
+};
+
+/* One road user of the object list (version 2). The relation fields follow
+ * vsd::relateToPath (include/vsd/core/path_relation.hpp): the reference line is
+ * the centre line of the Ego's lane, the Ego's path the corridor of its own
+ * width that it sweeps along that line at its own lateral offset. */
+typedef struct vsd_object {
+  int id;   /* > 0, the road user's place in its scenario (stable over the scenario) */
+  int type; /* VSD_OBJECT_* */
+  double x, y;          /* m, centre */
+  double heading;       /* rad */
+  double speed;         /* m/s, >= 0 */
+  double accel;         /* m/s^2, longitudinal */
+  double length, width; /* m */
+
+  double longitudinal_distance; /* m, along the Ego's lane, centre to centre, > 0 ahead */
+  double longitudinal_gap;      /* m, bumper to bumper along the lane; < 0 side by side */
+  double lateral_distance;      /* m, across the lane, centre to centre, > 0 left of the Ego */
+  double lateral_gap;           /* m, side to side; < 0: it reaches into the Ego's path */
+  double lane_offset;           /* m, its centre from the Ego's lane centre line, > 0 left */
+  double relative_heading;      /* rad, its heading minus the lane's direction */
+  int relative_lane;            /* lane of its centre: 0 the Ego's, +1 next left, -1 next right */
+  int in_path;                  /* 1: ahead and reaching into the Ego's path */
+} vsd_object;
 
 typedef struct vsd_observation {
   double time; /* s since the scenario started */
@@ -53,6 +99,11 @@ typedef struct vsd_observation {
   double leader_gap;   /* m, bumper to bumper along the lane */
   double leader_speed; /* m/s */
   double leader_accel; /* m/s^2 */
+
+  /* Version 2 and later: the object list (see vsd_object) in the scenario's
+   * order of road users; the array is valid only during the step() call. */
+  int object_count;
+  const vsd_object* objects;
 } vsd_observation;
 
 typedef struct vsd_command {
@@ -64,7 +115,7 @@ typedef struct vsd_command {
 typedef struct vsd_controller vsd_controller;
 
 typedef struct vsd_controller_api {
-  int abi_version;         /* VSD_CONTROLLER_ABI_VERSION */
+  int abi_version;         /* the version the controller is written for (VSD_CONTROLLER_ABI_VERSION) */
   const char* name;        /* unique name used in scenario files */
   const char* description; /* one line */
   /* Returns a new instance or NULL; on NULL writes a one-line reason into error. */

@@ -1,6 +1,7 @@
 #pragma once
 // Closed loop of one Ego in a running libsumo simulation:
-//   observe (SUMO lane geometry + leader) -> controller -> kinematic model -> moveToXY.
+//   observe (SUMO lane geometry + leader; the object list of the road users the simulation
+//   hands over) -> controller -> kinematic model -> moveToXY.
 // Used for generated scenarios and for closed-loop Egos on arbitrary maps.
 
 #include <memory>
@@ -84,14 +85,18 @@ class EgoDriver {
 
   /// How pushToSumo places the vehicle from now on (default: exactly).
   void placeBy(SumoPlacement placement) { placement_ = std::move(placement); }
+  /// The coverage of the object list from now on (default: ObjectSensor{}, UN R157's ranges).
+  void observeWith(const ObjectSensor& sensor) { sensor_ = sensor; }
   /// Places the vehicle in SUMO at the current state (moveToXY + speed).
   void pushToSumo() const;
-  /// Builds the controller's observation from SUMO's current state.
-  Observation observe(double time, LaneCache& lanes) const;
+  /// Builds the controller's observation from SUMO's current state; for a controller that
+  /// observes objects, the object list of `road_users` (the other road users at `time`).
+  Observation observe(double time, LaneCache& lanes, const std::vector<RoadUserState>& road_users = {}) const;
   /// One closed-loop step: observe, decide, advance the model by dt with the
   /// heading disturbance, push the new pose to SUMO. Throws vsd::Error if the
   /// controller fails.
-  void step(double time, double dt, double heading_noise, LaneCache& lanes);
+  void step(double time, double dt, double heading_noise, LaneCache& lanes,
+            const std::vector<RoadUserState>& road_users = {});
 
   /// Range within which a vehicle ahead counts as leader (m).
   static constexpr double kLeaderRange = 200.0;
@@ -109,6 +114,7 @@ class EgoDriver {
   VehicleLimits limits_;
   double minGap_ = 0.0;
   SumoPlacement placement_;
+  ObjectSensor sensor_;
 };
 
 }  // namespace vsd::sim

@@ -1,36 +1,14 @@
-#include "vsd/sim/builtin_controllers.hpp"
+// The longitudinal parts the car-following built-ins share: the scenario's following
+// parameters, the time-gap law with its switchable parts, and the deceleration needed to
+// keep a margin to a braking leader.
 
 #include <algorithm>
 #include <cmath>
 #include <limits>
 
+#include "vsd/sim/builtin_controllers.hpp"
+
 namespace vsd::sim {
-
-void PurePursuitLateral::init(const ControllerParams& params) {
-  lookaheadTime_ = params.get("lookahead_time", lookaheadTime_, 0.1, 10.0);
-  minLookahead_ = params.get("min_lookahead", minLookahead_, 1.0, 100.0);
-}
-
-double PurePursuitLateral::curvature(const Observation& observation) const {
-  if (!observation.lane) return 0.0;
-  const auto& lane = *observation.lane;
-  const double max_distance = lane.previewSpacing * kPreviewPoints;
-  const double lookahead = std::clamp(lookaheadTime_ * observation.ego.speed, minLookahead_, max_distance);
-  // Interpolate the lane-centre point at `lookahead` m ahead along the preview.
-  const double position = lookahead / lane.previewSpacing - 1.0;
-  Vec2 target;
-  if (position <= 0.0) {
-    target = lane.preview[0] * (lookahead / lane.previewSpacing);
-  } else {
-    const auto lower = std::min(static_cast<std::size_t>(position), static_cast<std::size_t>(kPreviewPoints - 2));
-    const double fraction = std::min(position - static_cast<double>(lower), 1.0);
-    target = lane.preview[lower] + fraction * (lane.preview[lower + 1] - lane.preview[lower]);
-  }
-  const double distance = target.norm();
-  if (distance < 1e-6) return 0.0;
-  const double sin_alpha = target.y() / distance;
-  return 2.0 * sin_alpha / distance;
-}
 
 namespace {
 
@@ -82,8 +60,8 @@ double requiredDeceleration(double gap, double speed, double leader_speed, doubl
   return hi;
 }
 
-void FollowingParameters::read(const ControllerParams& params) {
-  timeGap = params.get("time_gap", timeGap, 0.1, 10.0);
+void FollowingParameters::read(const ControllerParams& params, bool with_time_gap) {
+  if (with_time_gap) timeGap = params.get("time_gap", timeGap, 0.1, 10.0);
   standstillGap = params.get("standstill_gap", standstillGap, 0.0, 50.0);
   maxAccel = params.get("max_accel", maxAccel, 0.1, 20.0);
   maxDecel = params.get("max_decel", maxDecel, 0.1, 20.0);
@@ -98,8 +76,9 @@ double FollowingParameters::setSpeed(const Observation& observation) {
 
 double FollowingParameters::clamp(double accel) const { return std::clamp(accel, -maxDecel, maxAccel); }
 
-void TimeGapLongitudinal::init(const ControllerParams& params) {
-  following_.read(params);
+void TimeGapLongitudinal::init(const ControllerParams& params, const FollowingParameters& defaults) {
+  following_ = defaults;
+  following_.read(params, !timeGapOf_);
   kGap_ = params.get("k_gap", kGap_, 0.0, 10.0);
   kSpeed_ = params.get("k_speed", kSpeed_, 0.0, 10.0);
   kCruise_ = params.get("k_cruise", kCruise_, 0.0, 10.0);
@@ -113,12 +92,13 @@ void TimeGapLongitudinal::init(const ControllerParams& params) {
   parts_.emergencyBrake = part("emergency_brake", parts_.emergencyBrake);
 }
 
-double TimeGapLongitudinal::accel(const Observation& observation) {
+double TimeGapLongitudinal::accel(const Observation& observation, const std::optional<Observation::Leader>& lead) {
   const double speed = observation.ego.speed;
   const double cruise = kCruise_ * (following_.setSpeed(observation) - speed);
-  if (!observation.leader) return following_.clamp(cruise);
-  const auto& leader = *observation.leader;
-  const double desired_gap = std::max(following_.standstillGap, following_.timeGap * speed);
+  if (!lead) return following_.clamp(cruise);
+  const auto& leader = *lead;
+  const double time_gap = timeGapOf_ ? timeGapOf_(speed) : following_.timeGap;
+  const double desired_gap = std::max(following_.standstillGap, time_gap * speed);
   double command = kGap_ * (leader.gap - desired_gap);
   if (parts_.relativeSpeedTerm) command += kSpeed_ * (leader.speed - speed);
   if (parts_.cruiseCap) command = std::min(command, cruise);
@@ -131,42 +111,15 @@ double TimeGapLongitudinal::accel(const Observation& observation) {
   return following_.clamp(command);
 }
 
-void PaperEgoController::init(const ControllerParams& params) {
-  longitudinal_.init(params);
-  lateral_.init(params);
-  params.rejectUnknown(name_);
+void LeaderChoice::init(const ControllerParams& params) {
+  fromObjects_ = params.get("leader_from_objects", 0.0, 0.0, 1.0) >= 0.5;
 }
 
-Command PaperEgoController::step(const Observation& observation, double /*dt*/) {
-  return {longitudinal_.accel(observation), lateral_.curvature(observation)};
-}
-
-IdmController::IdmController() {
-  following_.timeGap = 1.5;
-  following_.maxAccel = 1.5;
-}
-
-void IdmController::init(const ControllerParams& params) {
-  following_.read(params);
-  comfortDecel_ = params.get("comfort_decel", comfortDecel_, 0.1, 20.0);
-  exponent_ = params.get("exponent", exponent_, 1.0, 10.0);
-  lateral_.init(params);
-  params.rejectUnknown("idm");
-}
-
-Command IdmController::step(const Observation& observation, double /*dt*/) {
-  const double speed = observation.ego.speed;
-  const double free_term = std::pow(speed / following_.setSpeed(observation), exponent_);
-  double interaction = 0.0;
-  if (observation.leader) {
-    const auto& leader = *observation.leader;
-    const double approach = speed - leader.speed;
-    const double dynamic_gap = speed * approach / (2.0 * std::sqrt(following_.maxAccel * comfortDecel_));
-    const double desired_gap = following_.standstillGap + std::max(0.0, speed * following_.timeGap + dynamic_gap);
-    const double gap = std::max(leader.gap, 0.1);
-    interaction = (desired_gap / gap) * (desired_gap / gap);
-  }
-  return {following_.clamp(following_.maxAccel * (1.0 - free_term - interaction)), lateral_.curvature(observation)};
+std::optional<Observation::Leader> LeaderChoice::leader(const Observation& observation) const {
+  if (!fromObjects_) return observation.leader;
+  const ObservedObject* nearest = nearestInPath(observation.objects);
+  if (nearest == nullptr) return std::nullopt;
+  return leaderOf(*nearest);
 }
 
 }  // namespace vsd::sim
