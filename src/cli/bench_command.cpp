@@ -643,6 +643,7 @@ void addBenchCommand(CLI::App& app, CommandContext& context) {
   });
 
   addInteropBench(*bench, context);
+  addLibraryBench(*bench, context);
   addSearchBench(*bench, context);
   addTrainBench(*bench, context);
 }

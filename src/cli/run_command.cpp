@@ -45,6 +45,9 @@ void addRunCommand(CLI::App& app, CommandContext& context) {
                   "Watchdog: longest Ego controller call or libsumo step (s); a scenario exceeding it fails")
       ->capture_default_str();
   addEgoStepCostOption(*run, options->egoStepCost);
+  run->add_option("--reference", options->reference,
+                  "Run every concrete scenario a second time with this built-in controller as the Ego (e.g. "
+                  "r157_reference_driver) and write both outcomes side by side in concrete.csv");
   run->add_flag("--keep-nets", options->keepNets, "Keep the generated networks in <out>/nets (open with sumo-gui)");
   run->add_flag("--fcd", options->fcd,
                 "Write SUMO FCD XML per batch to <out>/fcd (replay: tools/replay_fcd.py); implies --keep-nets");
