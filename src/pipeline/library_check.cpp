@@ -42,10 +42,12 @@ void checkLaneChanges(const ScenarioOutcome& outcome, const scenario::ConcreteSc
       ++lateral_actions;
       if (action.kind == scenario::ActionSpec::Kind::LaneChange) lane_change = &action;
     }
-    if (lateral_actions != 1 || lane_change == nullptr || lane_change->pace != scenario::ActionSpec::Pace::LateralSpeed ||
-        std::abs(lane_change->target) != 1.0) {
+    if (lateral_actions != 1 || lane_change == nullptr || lane_change->pace != scenario::ActionSpec::Pace::LateralSpeed) {
       continue;
     }
+    const int own_lane = concrete.others[o].lane;
+    const double target_lane = (lane_change->relativeToEgoLane ? concrete.ego.lane : own_lane) + lane_change->target;
+    if (std::abs(target_lane - own_lane) != 1.0) continue;  // one lane over: the magnitude is the lane width
     const auto& track = outcome.trace.vehicles.at(1 + o);
     std::vector<double> d;
     for (const auto& state : track.states) d.push_back(frame.coordinates(state.position()).second);

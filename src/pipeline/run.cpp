@@ -141,7 +141,7 @@ ScenarioWithRoad concreteScenario(const std::shared_ptr<const scenario::LogicalS
 /// m, SUMO's sublane resolution for a scenario: where road users move across lanes SUMO
 /// places them where they are (sublane model), unless the scenario sets it itself.
 double lateralResolutionFor(const scenario::LogicalScenario& logical) {
-  constexpr double kSublane = 0.8;  // m: a quarter of a lane; see docs/scenario-language.md "Simulation"
+  constexpr double kSublane = 1.75;  // m: half a lane; finer costs SUMO more CPU (docs/scenario-language.md)
   const auto& options = logical.sumo.sumoOptions;
   const bool given = std::find(options.begin(), options.end(), "--lateral-resolution") != options.end();
   return logical.hasLateralMotion() && !given ? kSublane : 0.0;
