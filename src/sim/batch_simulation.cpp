@@ -292,22 +292,15 @@ std::vector<SimulatedScenario> simulateBatch(const std::filesystem::path& net, c
         continue;
       }
       const auto& others = member.run->scenario->others;
-      const auto& trace = member.result.trace;
       for (std::size_t o = 0; o < member.otherIds.size() && member.active; ++o) {
         if (member.traffic->pastRoadEnd(o)) {
           fail(member, fmt::format("vehicle '{}' reached the end of its road at t = {:.1f} s", others[o].id, time + dt));
           break;
         }
-        // A road user standing where it stood (a stationary object, a waiting pedestrian, a
-        // stopped vehicle) stays there in SUMO too (speed mode 0, speed 0): no call needed.
-        const VehicleState& state = member.traffic->states()[o];
-        const VehicleState& before = trace.vehicles[1 + o].states[static_cast<std::size_t>(k)];
-        if (state.speed == 0.0 && before.speed == 0.0 && state.x == before.x && state.y == before.y &&
-            state.heading == before.heading) {
-          continue;
-        }
-        placeInSumo(member.otherIds[o], state, others[o].length, others[o].width, member.run->offset,
-                    member.placement);
+        // Placed every step, standing or not: left alone, SUMO would turn a standing road
+        // user back along its lane.
+        placeInSumo(member.otherIds[o], member.traffic->states()[o], others[o].length, others[o].width,
+                    member.run->offset, member.placement);
       }
     }
     if (faultInjectionActive()) {
