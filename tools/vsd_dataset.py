@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""Read vsd-sumo datasets (schema vsd-dataset/2, and /1) with h5py and numpy.
+"""Read vsd-sumo datasets (schema vsd-dataset/3, and /2, /1) with h5py and numpy.
 
     from vsd_dataset import Dataset
     ds = Dataset("out/acc_lk/dataset.h5")
@@ -7,6 +7,8 @@
     s["polylines"][0]["vectors"]   # (n, 7): x_start, y_start, x_end, y_end, object_type, polyline_id, timestamp
     s["target"]                    # (25, 2): the Ego's future centre positions
     s["polylines"][i]["length"]    # m, vehicle and Ego polylines (lane boundaries: 0)
+    s["polylines"][i]["road_user"] # kind: 0 car, 1 van, 2 truck, 3 bus, 4 motorbike, 5 pedestrian,
+                                   # 6 stationary object (lane boundaries: -1)
 
 Command line (used by the tests):
     tools/vsd_dataset.py info out/acc_lk/dataset.h5
@@ -21,8 +23,9 @@ import sys
 import h5py
 import numpy as np
 
-SCHEMA = "vsd-dataset/2"
-SCHEMA_V1 = "vsd-dataset/1"  # no vehicle sizes: ASSUMED_SIZE is used for every vehicle
+SCHEMA = "vsd-dataset/3"
+SCHEMA_V2 = "vsd-dataset/2"  # no road-user kinds: every vehicle is a car
+SCHEMA_V1 = "vsd-dataset/1"  # no vehicle sizes either: ASSUMED_SIZE is used for every vehicle
 ASSUMED_SIZE = (5.0, 1.8)
 FEATURES = ["x_start", "y_start", "x_end", "y_end", "object_type", "polyline_id", "timestamp"]
 LANE, VEHICLE, EGO = 1, 2, 3
@@ -35,8 +38,8 @@ class Dataset:
         self.path = path
         self.file = h5py.File(path, "r")
         schema = self.file.attrs.get("schema")
-        if schema not in (SCHEMA, SCHEMA_V1):
-            raise ValueError("%s: schema %r is not %r or %r" % (path, schema, SCHEMA, SCHEMA_V1))
+        if schema not in (SCHEMA, SCHEMA_V2, SCHEMA_V1):
+            raise ValueError("%s: schema %r is not %r, %r or %r" % (path, schema, SCHEMA, SCHEMA_V2, SCHEMA_V1))
         self.schema = schema
         f = self.file
         self.step = float(f.attrs["step"])
@@ -59,13 +62,17 @@ class Dataset:
         self.polyline_vector_start = f["polyline_vector_start"][:]
         self.polyline_vector_count = f["polyline_vector_count"][:]
         self.shared_vectors = f["shared_vectors"][:]
-        if schema == SCHEMA:
+        vehicle = self.polyline_type != LANE
+        if schema != SCHEMA_V1:
             self.polyline_length = f["polyline_length"][:].astype(np.float64)
             self.polyline_width = f["polyline_width"][:].astype(np.float64)
         else:
-            vehicle = self.polyline_type != LANE
             self.polyline_length = np.where(vehicle, ASSUMED_SIZE[0], 0.0)
             self.polyline_width = np.where(vehicle, ASSUMED_SIZE[1], 0.0)
+        if schema == SCHEMA:
+            self.polyline_road_user = f["polyline_road_user"][:].astype(np.int64)
+        else:
+            self.polyline_road_user = np.where(vehicle, 0, -1)
 
     def __len__(self):
         return len(self.label_index)
@@ -87,7 +94,8 @@ class Dataset:
                 vectors = f["vectors"][start:start + count].astype(np.float64) + shift
                 valid = f["vector_valid"][start:start + count].astype(bool)
             polylines.append({"type": int(self.polyline_type[row]), "vectors": vectors, "valid": valid,
-                              "length": float(self.polyline_length[row]), "width": float(self.polyline_width[row])})
+                              "length": float(self.polyline_length[row]), "width": float(self.polyline_width[row]),
+                              "road_user": int(self.polyline_road_user[row])})
         sample = {
             "label": self.labels[self.label_index[i]],
             "sample_index": int(f["sample_index"][i]),

@@ -32,6 +32,7 @@
 #include "vsd/compare/compare.hpp"
 #include "vsd/experiment/experiment.hpp"
 #include "vsd/model/model.hpp"
+#include "vsd/scenario/logical_scenario.hpp"
 #include "vsd/pipeline/cluster.hpp"
 #include "vsd/pipeline/outcome_codec.hpp"
 #include "vsd/pipeline/run.hpp"
@@ -171,10 +172,17 @@ void printMpiBench(const BenchOptions& options, const fs::path& work) {
              sameOutputs(plain, work / "mpi_1") && sameOutputs(plain, work / "mpi_2") ? "yes" : "NO");
 }
 
+std::string loadAverageNow() {
+  double load[3] = {0.0, 0.0, 0.0};
+  if (::getloadavg(load, 3) != 3) return "unknown";
+  return fmt::format("{:.2f} {:.2f} {:.2f}", load[0], load[1], load[2]);
+}
+
 int runBench(const BenchOptions& options) {
   TemporaryDirectory work("vsd-bench");
-  fmt::print("vsd-sumo bench run: {} (jobs {}), end to end: sample -> net -> simulate -> metrics -> files\n",
-             options.scenario.string(), options.jobs);
+  fmt::print("vsd-sumo bench run: {} (jobs {}), end to end: sample -> net -> simulate -> metrics -> files; load "
+             "average before: {}\n",
+             options.scenario.string(), options.jobs, loadAverageNow());
   const Measurement batched = measureRun(options, options.samples, options.batch, work.path());
   const Measurement netconvert =
       measureRun(options, options.samples, options.batch, work.path(), {"--net-writer", "netconvert"});
@@ -185,6 +193,12 @@ int runBench(const BenchOptions& options) {
                measurement.rate(), measurement.cpuMillisecondsPerSample());
   };
   print_row(fmt::format("batch {}", batched.batch), batched);
+  // Per road user and step, the unit of the issue-23 target (every process of the run counted).
+  const auto logical = scenario::loadLogicalScenario(options.scenario);
+  const auto vehicle_steps = static_cast<double>((1 + logical->others.size()) * static_cast<std::size_t>(logical->steps()));
+  fmt::print("  {:<36} {:>8} {:>10} {:>14} {:>16.2f}  ({} road users x {} steps)\n", "  CPU us per simulated vehicle-step",
+             "", "", "", 1000.0 * batched.cpuMillisecondsPerSample() / vehicle_steps, 1 + logical->others.size(),
+             logical->steps());
   print_row(fmt::format("batch {}, --net-writer netconvert", netconvert.batch), netconvert);
   print_row("batch 1 (net + sim each)", single);
   fmt::print("  speed-up of batching: {:.0f}x; CPU time per scenario counts every process of the run\n",
@@ -274,11 +288,6 @@ double forkMilliseconds(int forks) {
   return 1000.0 * cpu / forks;
 }
 
-std::string loadAverageNow() {
-  double load[3] = {0.0, 0.0, 0.0};
-  if (::getloadavg(load, 3) != 3) return "unknown";
-  return fmt::format("{:.2f} {:.2f} {:.2f}", load[0], load[1], load[2]);
-}
 
 double median(std::vector<double> values) {
   std::sort(values.begin(), values.end());
@@ -645,6 +654,7 @@ void addBenchCommand(CLI::App& app, CommandContext& context) {
   });
 
   addInteropBench(*bench, context);
+  addLibraryBench(*bench, context);
   addSearchBench(*bench, context);
   addTrainBench(*bench, context);
   addReferenceBench(*bench, context);

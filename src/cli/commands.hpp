@@ -50,6 +50,8 @@ void addSearchCommand(CLI::App& app, CommandContext& context);
 void addInteropBench(CLI::App& bench, CommandContext& context);
 /// `bench search` (bench_search.cpp), a subcommand of `bench`.
 void addSearchBench(CLI::App& bench, CommandContext& context);
+/// `vsd-sumo bench library` (bench_library.cpp).
+void addLibraryBench(CLI::App& bench, CommandContext& context);
 /// `vsd-sumo bench train` (bench_train.cpp).
 void addTrainBench(CLI::App& bench, CommandContext& context);
 /// `vsd-sumo bench reference` (bench_reference.cpp).

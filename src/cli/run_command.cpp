@@ -51,6 +51,9 @@ void addRunCommand(CLI::App& app, CommandContext& context) {
   addEgoStepCostOption(*run, options->egoStepCost);
   run->add_flag("--force", options->force,
                 "Replace a run folder of another functional scenario (docs/output-policy.md)");
+  run->add_option("--reference", options->reference,
+                  "Run every concrete scenario a second time with this built-in controller as the Ego (e.g. "
+                  "r157_reference_driver) and write both outcomes side by side in concrete.csv");
   run->add_flag("--keep-nets", options->keepNets, "Keep the generated networks in <out>/nets (open with sumo-gui)");
   run->add_flag("--fcd", options->fcd,
                 "Write SUMO FCD XML per batch to <out>/fcd (replay: tools/replay_fcd.py); implies --keep-nets");

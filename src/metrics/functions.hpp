@@ -18,6 +18,13 @@ double minLongitudinalGapInLane(const MetricContext& context);
 double minTimeToCollision(const MetricContext& context);
 double minTimeHeadway(const MetricContext& context);
 
+// Relative to the Ego's lane and swept path (path_metrics.cpp)
+double minInPathTimeToCollision(const MetricContext& context);
+double minInPathTimeHeadway(const MetricContext& context);
+double minLateralClearance(const MetricContext& context);
+double egoMaxDeceleration(const MetricContext& context);
+double egoMaxJerk(const MetricContext& context);
+
 // The measures SUMO's SSM device reports (criticality_metrics.cpp)
 double minPostEncroachmentTime(const MetricContext& context);
 double maxDecelerationToAvoidCrash(const MetricContext& context);

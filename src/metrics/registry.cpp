@@ -68,6 +68,27 @@ std::vector<MetricDefinition> buildRegistry() {
                    "maximum deceleration rate to avoid a crash along the Ego's lane: (v_Ego - v_leader)^2 / (2 lane "
                    "gap) (SSM's DRAC); 0 if never closing",
                    ego_lane, true, true, false, std::nullopt, maxLaneDecelerationToAvoidCrash});
+  // Relative to the Ego's lane and the path it sweeps (core/path_relation.hpp, as the Ego's object list).
+  const std::string ego_path = "the Ego's starting lane and the corridor of its own width along it";
+  table.push_back({"ttc_inpath_min", "s",
+                   "minimum time to collision with the in-path object (the nearest road user ahead reaching into the "
+                   "Ego's swept corridor, which changes during a cut-in): bumper gap along the lane / closing speed "
+                   "along it; +inf if never closing",
+                   ego_path, true, true, false, std::nullopt, minInPathTimeToCollision});
+  table.push_back({"thw_inpath_min", "s",
+                   "minimum time headway to the in-path object: bumper gap along the lane / the Ego's speed along it "
+                   "(> 0.1 m/s); +inf if there never is one",
+                   ego_path, true, true, false, std::nullopt, minInPathTimeHeadway});
+  table.push_back({"lat_clearance_min", "m",
+                   "minimum lateral clearance to road users beside the Ego (their extents along the lane overlapping "
+                   "the Ego's): distance across the lane between the footprints, negative when they reach into the "
+                   "Ego's corridor; +inf if none is ever beside it",
+                   ego_path, true, true, false, std::nullopt, minLateralClearance});
+  table.push_back({"decel_max", "m/s^2", "Ego's maximum longitudinal deceleration, max(0, -a_min)",
+                   "Ego's direction of travel", false, false, false, std::nullopt, egoMaxDeceleration});
+  table.push_back({"jerk_max", "m/s^3",
+                   "Ego's maximum longitudinal jerk, max over k>=2 of |a_k - a_{k-1}|/dt",
+                   "Ego's direction of travel", false, false, false, std::nullopt, egoMaxJerk});
   return table;
 }
 

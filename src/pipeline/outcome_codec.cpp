@@ -1,6 +1,7 @@
 #include "vsd/pipeline/outcome_codec.hpp"
 
 #include "vsd/core/bytes.hpp"
+#include "vsd/core/error.hpp"
 
 namespace vsd::pipeline {
 
@@ -35,6 +36,8 @@ std::vector<char> encodeOutcomes(const std::vector<ScenarioOutcome>& outcomes) {
     writer.putVector(outcome.metrics);
     writer.putString(outcome.failure);
     writer.put<std::int32_t>(outcome.egoLane);
+    writer.putVector(outcome.referenceMetrics);
+    writer.putString(outcome.referenceFailure);
     writer.put<double>(outcome.trace.step);
     writer.put<std::uint64_t>(outcome.trace.vehicles.size());
     for (const auto& track : outcome.trace.vehicles) {
@@ -42,6 +45,7 @@ std::vector<char> encodeOutcomes(const std::vector<ScenarioOutcome>& outcomes) {
       writer.put<VehicleRole>(track.role);
       writer.put<double>(track.length);
       writer.put<double>(track.width);
+      writer.put<RoadUserType>(track.type);
       writer.putVector(track.states);
       writer.putVector(track.valid);
     }
@@ -64,6 +68,8 @@ std::vector<ScenarioOutcome> decodeOutcomes(const std::vector<char>& bytes) {
     outcome.metrics = reader.getVector<double>();
     outcome.failure = reader.getString();
     outcome.egoLane = reader.get<std::int32_t>();
+    outcome.referenceMetrics = reader.getVector<double>();
+    outcome.referenceFailure = reader.getString();
     outcome.trace.step = reader.get<double>();
     outcome.trace.vehicles.resize(static_cast<std::size_t>(reader.get<std::uint64_t>()));
     for (auto& track : outcome.trace.vehicles) {
@@ -71,6 +77,8 @@ std::vector<ScenarioOutcome> decodeOutcomes(const std::vector<char>& bytes) {
       track.role = reader.get<VehicleRole>();
       track.length = reader.get<double>();
       track.width = reader.get<double>();
+      track.type = reader.get<RoadUserType>();
+      if (static_cast<std::size_t>(track.type) >= roadUserKinds().size()) throw Error("internal: corrupt outcome message");
       track.states = reader.getVector<VehicleState>();
       track.valid = reader.getVector<std::uint8_t>();
     }

@@ -1,5 +1,7 @@
 #include "vsd/pipeline/outcome_files.hpp"
 
+#include <limits>
+
 #include "vsd/core/files.hpp"
 #include "vsd/core/progress.hpp"
 #include "vsd/pipeline/scenes.hpp"
@@ -12,13 +14,19 @@ OutcomeFiles::OutcomeFiles(const scenario::LogicalScenario& logical, const std::
                            int compression, const fs::path& traces, const fs::path& dataset,
                            const fs::path& traces_name, const fs::path& dataset_name)
     : logical_(logical), scenarioSha256_(sha256OfFile(logical.sourceFile)) {
+  // Sizes per file where they are fixed; NaN where the type (and so the size) is drawn per sample.
+  const auto size_of = [](const scenario::VehicleSpec& vehicle, double size, bool given) {
+    return vehicle.typeCode && !given ? std::numeric_limits<double>::quiet_NaN() : size;
+  };
   std::vector<std::string> ids = {logical_.ego.id};
-  std::vector<double> lengths = {logical_.ego.length};
-  std::vector<double> widths = {logical_.ego.width};
+  std::vector<double> lengths = {size_of(logical_.ego, logical_.ego.length, logical_.ego.lengthGiven)};
+  std::vector<double> widths = {size_of(logical_.ego, logical_.ego.width, logical_.ego.widthGiven)};
+  std::vector<RoadUserType> types = {logical_.ego.type};
   for (const auto& other : logical_.others) {
     ids.push_back(other.id);
-    lengths.push_back(other.length);
-    widths.push_back(other.width);
+    lengths.push_back(size_of(other, other.length, other.lengthGiven));
+    widths.push_back(size_of(other, other.width, other.widthGiven));
+    types.push_back(other.type);
   }
   traces_.emplace(traces, logical_.name, logical_.step, static_cast<std::size_t>(logical_.steps()) + 1, ids, lengths,
                   widths, traces_name);
@@ -36,6 +44,7 @@ OutcomeFiles::OutcomeFiles(const scenario::LogicalScenario& logical, const std::
     track.id = ids[v];
     track.length = lengths[v];
     track.width = widths[v];
+    track.type = types[v];
     emptyTrace_.vehicles.push_back(track);
   }
 }

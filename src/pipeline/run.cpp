@@ -142,6 +142,15 @@ ScenarioWithRoad concreteScenario(const std::shared_ptr<const scenario::LogicalS
   return {std::move(concrete), std::move(road)};
 }
 
+/// m, SUMO's sublane resolution for a scenario: where road users move across lanes SUMO
+/// places them where they are (sublane model), unless the scenario sets it itself.
+double lateralResolutionFor(const scenario::LogicalScenario& logical) {
+  constexpr double kSublane = 1.75;  // m: half a lane; finer costs SUMO more CPU (docs/scenario-language.md)
+  const auto& options = logical.sumo.sumoOptions;
+  const bool given = std::find(options.begin(), options.end(), "--lateral-resolution") != options.end();
+  return logical.hasLateralMotion() && !given ? kSublane : 0.0;
+}
+
 /// Prepares, converts and simulates batches; one per worker process.
 class BatchProcessor {
  public:
@@ -227,10 +236,14 @@ class BatchProcessor {
       outcome.metrics.assign(context_.metricSet->names().size(), std::numeric_limits<double>::quiet_NaN());
       return outcome;
     }
-    const auto lane = static_cast<std::size_t>(outcome.egoLane);
-    const Polyline lane_centre = lane < outcome.lanes.size() ? outcome.lanes[lane].centre : Polyline{};
-    outcome.metrics = context_.metricSet->evaluate({outcome.trace, lane_centre});
+    outcome.metrics = metricsOf(outcome.trace, outcome.lanes, outcome.egoLane);
     return outcome;
+  }
+
+  std::vector<double> metricsOf(const Trace& trace, const std::vector<LaneGeometry>& lanes, int ego_lane) const {
+    const auto lane = static_cast<std::size_t>(ego_lane);
+    const Polyline lane_centre = lane < lanes.size() ? lanes[lane].centre : Polyline{};
+    return context_.metricSet->evaluate({trace, lane_centre});
   }
 
   /// Converts the batch's network. If netconvert fails, each scenario is
@@ -309,6 +322,7 @@ class BatchProcessor {
     options.sumoOptions = context_.logical->sumo.sumoOptions;
     options.scenarioDir = context_.logical->sourceFile.parent_path();
     options.egoStepCost = context_.options.egoStepCost;
+    options.lateralResolution = lateralResolutionFor(*context_.logical);
     if (context_.options.fcd) options.fcdOutput = fcd;
     auto results = sim::simulateBatch(net, runs, registry_, options);
     for (std::size_t r = 0; r < results.size(); ++r) {
@@ -316,6 +330,19 @@ class BatchProcessor {
       outcome.failure = std::move(results[r].failure);
       outcome.trace = std::move(results[r].trace);
       outcome.lanes = std::move(results[r].lanes);
+    }
+    if (context_.options.reference.empty()) return;
+    // The same scenarios with the reference driver as the Ego: only its metrics are kept.
+    options.egoControllerOverride = context_.options.reference;
+    options.fcdOutput.clear();
+    const auto reference = sim::simulateBatch(net, runs, registry_, options);
+    for (std::size_t r = 0; r < reference.size(); ++r) {
+      auto& outcome = outcomes[members[r]];
+      outcome.referenceFailure = reference[r].failure;
+      outcome.referenceMetrics = reference[r].ok()
+                                     ? metricsOf(reference[r].trace, reference[r].lanes, outcome.egoLane)
+                                     : std::vector<double>(context_.metricSet->names().size(),
+                                                           std::numeric_limits<double>::quiet_NaN());
     }
   }
 
@@ -561,6 +588,12 @@ class SummaryBuilder {
       }
     }
     if (metricSet_.collision(outcome.metrics)) ++summary_.collisions;
+    if (summary_.reference.empty()) return;
+    if (outcome.referenceFailure.empty() && metricSet_.collision(outcome.referenceMetrics)) {
+      ++summary_.referenceCollisions;
+    }
+    const auto collision = [&](const std::vector<double>& values) { return metricSet_.collision(values); };
+    if (referenceAvoidsSutCollides(outcome, collision) == 1.0) ++summary_.referenceAvoidsSutCollides;
   }
 
   void finish() {
@@ -584,13 +617,20 @@ class SummaryBuilder {
 class RunFiles {
  public:
   RunFiles(const Context& context, const OutputFolder& folder, const std::vector<std::string>& metric_names)
-      : folder_(folder), logical_(*context.logical), seed_(context.options.seed) {
+      : folder_(folder), logical_(*context.logical), seed_(context.options.seed),
+        reference_(!context.options.reference.empty()), metricSet_(*context.metricSet) {
     csvStream_.open(folder_.stage(kCsv), std::ios::binary | std::ios::trunc);
     if (!csvStream_) throw IoError((folder_.path() / kCsv).string() + ": cannot open for writing");
     csv_.emplace(csvStream_);
     std::vector<std::string> header = {"functional_scenario", "sample", "seed", "status", "failure"};
     for (const auto& input : logical_.inputs) header.push_back(input.name);
     header.insert(header.end(), metric_names.begin(), metric_names.end());
+    // With --reference only: the reference driver's outcome beside the system's.
+    if (reference_) {
+      header.insert(header.end(), {"reference_status", "reference_failure"});
+      for (const auto& name : metric_names) header.push_back("reference_" + name);
+      header.emplace_back(kReferenceCriterion);
+    }
     csv_->writeRow(header);
     outcomeFiles_.emplace(logical_, metric_names, context.options.compression, folder_.stage(kTraces),
                           folder_.stage(kDataset), folder_.path() / kTraces, folder_.path() / kDataset);
@@ -601,8 +641,20 @@ class RunFiles {
                                     outcome.ok() ? "ok" : "failed", outcome.failure};
     for (double value : outcome.inputs) row.push_back(formatNumber(value));
     for (double value : outcome.metrics) row.push_back(formatNumber(value));
+    if (reference_) appendReference(outcome, row);
     csv_->writeRow(row);
     outcomeFiles_->write(outcome);
+  }
+
+  void appendReference(const ScenarioOutcome& outcome, std::vector<std::string>& row) const {
+    const bool simulated = !outcome.referenceMetrics.empty();
+    row.push_back(!simulated ? "" : outcome.referenceFailure.empty() ? "ok" : "failed");
+    row.push_back(outcome.referenceFailure);
+    for (std::size_t m = 0; m < metricSet_.names().size(); ++m) {
+      row.push_back(simulated ? formatNumber(outcome.referenceMetrics[m]) : "");
+    }
+    const auto collision = [&](const std::vector<double>& values) { return metricSet_.collision(values); };
+    row.push_back(formatNumber(referenceAvoidsSutCollides(outcome, collision)));
   }
 
   /// Completes and closes the three files (still staged).
@@ -624,6 +676,8 @@ class RunFiles {
   const OutputFolder& folder_;
   const scenario::LogicalScenario& logical_;
   std::uint64_t seed_;
+  bool reference_;
+  const metrics::MetricSet& metricSet_;
   std::ofstream csvStream_;
   std::optional<CsvWriter> csv_;
   std::optional<OutcomeFiles> outcomeFiles_;
@@ -642,6 +696,7 @@ nlohmann::json runManifest(const Context& context, const RunSummary& summary, co
   manifest["scenario_sha256"] = sha256OfFile(context.logical->sourceFile);
   manifest["functional_scenario"] = context.logical->name;
   manifest["seed"] = context.options.seed;
+  if (!context.options.reference.empty()) manifest["reference"] = context.options.reference;
   manifest["first_sample"] = context.options.firstSample;
   manifest["samples"] = context.options.samples;
   manifest["batch"] = context.options.batch;
@@ -696,6 +751,10 @@ void probeController(const std::shared_ptr<const scenario::LogicalScenario>& log
     sim::makeController(registry, logical->ego.controller.name, logical->ego.controller.library,
                         logical->sourceFile.parent_path(),
                         sim::ControllerParams(concrete.controllerParams, logical->ego.controller.where));
+    if (!options.reference.empty()) {
+      sim::makeController(registry, options.reference, {}, logical->sourceFile.parent_path(),
+                          sim::ControllerParams({}, "--reference " + options.reference));
+    }
   };
   if (options.isolation == RunOptions::Isolation::None) {
     make_controller();
@@ -888,6 +947,12 @@ RunSummary runRange(const std::shared_ptr<const scenario::LogicalScenario>& logi
   context.metricSet = std::make_unique<metrics::MetricSet>(
       logical->metrics, scenarioAvailability(*logical),
       logical->sourceFile.string() + ": metrics");
+  if (!options.reference.empty() && context.metricSet->collisionRule().empty()) {
+    throw ConfigError::field("command line", "--reference", options.reference,
+                             fmt::format("a scenario whose metrics tell a collision ({}: metrics lists none with a "
+                                         "collision rule, such as d_min)",
+                                         logical->sourceFile.string()));
+  }
   context.batches = static_cast<std::size_t>((options.samples + options.batch - 1) / options.batch);
   context.keepBatchFiles = context.options.keepNets;
   context.layout = road::BatchLayout(road::BatchLayout::cellSizeFor(logical->road));
@@ -916,6 +981,7 @@ RunSummary runRange(const std::shared_ptr<const scenario::LogicalScenario>& logi
   summary.outputDir = out;
   summary.samples = options.samples;
   summary.seed = options.seed;
+  summary.reference = options.reference;
   summary.firstSample = options.firstSample;
   summary.jobs = context.options.jobs;
   summary.batch = options.batch;
@@ -961,6 +1027,14 @@ RunSummary runRange(const std::shared_ptr<const scenario::LogicalScenario>& logi
 
 }  // namespace
 
+double referenceAvoidsSutCollides(const ScenarioOutcome& outcome,
+                                  const std::function<bool(const std::vector<double>&)>& collision) {
+  if (!outcome.ok() || outcome.referenceMetrics.empty() || !outcome.referenceFailure.empty()) {
+    return std::numeric_limits<double>::quiet_NaN();
+  }
+  return collision(outcome.metrics) && !collision(outcome.referenceMetrics) ? 1.0 : 0.0;
+}
+
 std::string RunSummary::report() const {
   std::string text;
   if (shard) {
@@ -973,6 +1047,10 @@ std::string RunSummary::report() const {
   text += fmt::format("  completed {}, failed {}", ok, failed);
   if (!collisionRule.empty()) text += fmt::format(", collisions ({}) {}", collisionRule, collisions);
   text += "\n";
+  if (!reference.empty()) {
+    text += fmt::format("  reference driver {}: collisions {}; {} (the system collides where it does not) {}\n",
+                        reference, referenceCollisions, kReferenceCriterion, referenceAvoidsSutCollides);
+  }
   for (const auto& [kind, count] : failureReasons) {
     text += fmt::format("    {} x {}\n", count, count == 1 ? failureExamples.at(kind) : kind);
   }

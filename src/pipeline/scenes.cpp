@@ -9,9 +9,10 @@ namespace vsd::pipeline {
 
 namespace {
 
-vector::VectorizedScene generatedScene(const scenario::LogicalScenario& logical, const Trace& trace,
-                                       const std::vector<LaneGeometry>& lanes) {
-  return vector::buildScene(logical.name, trace, 0, vector::regionLanePolylines(lanes, logical.road.xMin, logical.road.xMax));
+vector::VectorizedScene generatedScene(const scenario::LogicalScenario& logical, const std::vector<double>& inputs,
+                                       const Trace& trace, const std::vector<LaneGeometry>& lanes) {
+  const auto [x_min, x_max] = road::regionXRange(logical, inputs);
+  return vector::buildScene(logical.name, trace, 0, vector::regionLanePolylines(lanes, x_min, x_max));
 }
 
 VehicleTrack emptyTrack(const scenario::ConcreteVehicle& vehicle, VehicleRole role, std::size_t instants) {
@@ -20,6 +21,7 @@ VehicleTrack emptyTrack(const scenario::ConcreteVehicle& vehicle, VehicleRole ro
   track.role = role;
   track.length = vehicle.length;
   track.width = vehicle.width;
+  track.type = vehicle.type;
   track.states.assign(instants, VehicleState{});
   track.valid.assign(instants, 0);
   return track;
@@ -28,7 +30,7 @@ VehicleTrack emptyTrack(const scenario::ConcreteVehicle& vehicle, VehicleRole ro
 }  // namespace
 
 vector::VectorizedScene simulatedScene(const scenario::LogicalScenario& logical, const ScenarioOutcome& outcome) {
-  auto scene = generatedScene(logical, outcome.trace, outcome.lanes);
+  auto scene = generatedScene(logical, outcome.inputs, outcome.trace, outcome.lanes);
   scene.sample = outcome.index;
   scene.inputs = outcome.inputs;
   scene.metrics = outcome.metrics;
@@ -50,14 +52,17 @@ Trace plannedTrace(const scenario::ConcreteScenario& concrete, const road::RoadG
   trace.step = dt;
 
   VehicleTrack ego = emptyTrack(concrete.ego, VehicleRole::Ego, instants);
-  const auto ego_start = road::startPoseOnLane(road, concrete.ego.lane, concrete.ego.x, concrete.ego.id);
+  const road::LaneFrame frame(road.centre);
+  const auto ego_start = road::roadUserStart(road, frame, concrete, concrete.ego, 0.0, 0.0);
   ego.states[0] = {ego_start.position.x(), ego_start.position.y(), ego_start.heading, concrete.ego.speed, 0.0};
   ego.valid[0] = 1;
   trace.vehicles.push_back(std::move(ego));
 
-  for (const auto& other : concrete.others) {
-    VehicleTrack track = emptyTrack(other, VehicleRole::Other, instants);
-    track.states = sim::scriptedPath(other, road, dt, concrete.steps());  // the path the simulation places it on
+  // The paths the simulation moves them on, with the Ego's stand-in for the Ego (sim/scripted_vehicle.hpp).
+  auto paths = sim::plannedPaths(concrete, road);
+  for (std::size_t o = 0; o < concrete.others.size(); ++o) {
+    VehicleTrack track = emptyTrack(concrete.others[o], VehicleRole::Other, instants);
+    track.states = std::move(paths[o]);
     track.valid.assign(instants, 1);
     fillAccelerationFromSpeed(track, dt);
     trace.vehicles.push_back(std::move(track));
@@ -67,7 +72,7 @@ Trace plannedTrace(const scenario::ConcreteScenario& concrete, const road::RoadG
 
 vector::VectorizedScene plannedScene(const scenario::ConcreteScenario& concrete) {
   const auto road = road::buildRoadGeometry(concrete);
-  auto scene = generatedScene(*concrete.logical, plannedTrace(concrete, road), plannedLanes(road));
+  auto scene = generatedScene(*concrete.logical, concrete.inputs, plannedTrace(concrete, road), plannedLanes(road));
   scene.sample = concrete.index;
   scene.inputs = concrete.inputs;
   return scene;

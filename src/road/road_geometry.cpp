@@ -8,9 +8,12 @@
 
 namespace vsd::road {
 
-double RoadGeometry::laneOffset(int lane) const {
-  // Lanes are spread symmetrically around the road centre; lane 0 is rightmost.
-  return (static_cast<double>(lane) - 0.5 * static_cast<double>(lanes - 1)) * laneWidth;
+double RoadGeometry::laneOffset(int lane) const { return scenario::laneCentreOffset(lane, lanes, laneWidth); }
+
+double RoadGeometry::regionStart() const {
+  double s = 0.0;
+  for (std::size_t i = 1; i <= regionBegin && i < centre.size(); ++i) s += (centre[i] - centre[i - 1]).norm();
+  return s;
 }
 
 Polyline RoadGeometry::laneCentre(int lane) const {
@@ -29,7 +32,13 @@ std::pair<Vec2, Vec2> RoadGeometry::bounds() const {
   return {lo.array() - half_width, hi.array() + half_width};
 }
 
-RoadGeometry buildRoadGeometry(const scenario::ConcreteScenario& concrete) {
+namespace {
+
+constexpr double kArcSpacing = 10.0;       ///< m, longest segment of an arc road's polyline
+constexpr double kArcChordError = 0.01;    ///< m, largest distance between the polyline and its circle
+
+/// The region's points of a polynomial road (noise included) and the noise-free tangents at its ends.
+Polyline polynomialRegion(const scenario::ConcreteScenario& concrete, Vec2& tangent_begin, Vec2& tangent_end) {
   const auto& spec = concrete.logical->road;
   std::vector<double> variables = concrete.inputs;
   variables.push_back(0.0);  // 'x' is the last variable of the centre expression
@@ -37,12 +46,6 @@ RoadGeometry buildRoadGeometry(const scenario::ConcreteScenario& concrete) {
     variables.back() = x;
     return spec.centre.evaluate(variables);
   };
-
-  RoadGeometry road;
-  road.lanes = spec.lanes;
-  road.laneWidth = concrete.laneWidth;
-  road.speedLimit = spec.speedLimit;
-
   Polyline region;
   region.reserve(static_cast<std::size_t>(spec.points));
   for (int i = 0; i < spec.points; ++i) {
@@ -54,7 +57,6 @@ RoadGeometry buildRoadGeometry(const scenario::ConcreteScenario& concrete) {
     }
     region.emplace_back(x, y);
   }
-
   // Tangents of the noise-free centre line (central differences) give the
   // extension directions, so noise at the end points does not tilt the extensions.
   constexpr double kH = 1e-3;
@@ -62,12 +64,70 @@ RoadGeometry buildRoadGeometry(const scenario::ConcreteScenario& concrete) {
     const Vec2 direction(2.0 * kH, centre_at(x + kH) - centre_at(x - kH));
     return Vec2(direction / direction.norm());
   };
+  tangent_begin = tangent_at(spec.xMin);
+  tangent_end = tangent_at(spec.xMax);
+  return region;
+}
+
+/// Curvature and length of an arc road, checked.
+std::pair<double, double> arcOf(const scenario::LogicalScenario& logical, const std::vector<double>& inputs) {
+  const auto& spec = logical.road;
+  const double curvature = spec.curvature.evaluate(inputs);
+  const double length = spec.length.evaluate(inputs);
+  if (!std::isfinite(curvature) || !std::isfinite(length) || !(length > 0.0) ||
+      !(std::abs(curvature * length) <= scenario::kMaxArcTurn)) {
+    throw ConfigError(fmt::format("{}: road.curvature '{}' = {} 1/m, road.length '{}' = {} m: expected a length > 0 "
+                                  "and a turn |curvature| * length of at most {} rad",
+                                  logical.sourceFile.string(), spec.curvature.text(), formatValue(curvature),
+                                  spec.length.text(), formatValue(length), scenario::kMaxArcTurn));
+  }
+  return {curvature, length};
+}
+
+Vec2 arcPoint(double curvature, double s) {
+  if (std::abs(curvature) < 1e-12) return {s, 0.0};
+  return {std::sin(curvature * s) / curvature, (1.0 - std::cos(curvature * s)) / curvature};
+}
+
+Polyline arcRegion(const scenario::ConcreteScenario& concrete, Vec2& tangent_begin, Vec2& tangent_end) {
+  const auto [curvature, length] = arcOf(*concrete.logical, concrete.inputs);
+  // A chord c of a circle of radius R lies c^2 / (8 R) from it at most.
+  double spacing = kArcSpacing;
+  if (std::abs(curvature) > 0.0) spacing = std::min(spacing, std::sqrt(8.0 * kArcChordError / std::abs(curvature)));
+  const auto segments = static_cast<int>(std::ceil(length / spacing));
+  Polyline region;
+  for (int i = 0; i <= segments; ++i) region.push_back(arcPoint(curvature, length * i / segments));
+  tangent_begin = headingVector(0.0);
+  tangent_end = headingVector(curvature * length);
+  return region;
+}
+
+}  // namespace
+
+std::pair<double, double> regionXRange(const scenario::LogicalScenario& logical, const std::vector<double>& inputs) {
+  if (logical.road.shape == scenario::RoadSpec::Shape::Polynomial) return {logical.road.xMin, logical.road.xMax};
+  const auto [curvature, length] = arcOf(logical, inputs);
+  return {0.0, arcPoint(curvature, length).x()};
+}
+
+RoadGeometry buildRoadGeometry(const scenario::ConcreteScenario& concrete) {
+  const auto& spec = concrete.logical->road;
+  RoadGeometry road;
+  road.lanes = spec.lanes;
+  road.laneWidth = concrete.laneWidth;
+  road.speedLimit = spec.speedLimit;
+
+  Vec2 tangent_begin;
+  Vec2 tangent_end;
+  const Polyline region = spec.shape == scenario::RoadSpec::Shape::Polynomial
+                              ? polynomialRegion(concrete, tangent_begin, tangent_end)
+                              : arcRegion(concrete, tangent_begin, tangent_end);
   road.centre.reserve(region.size() + 2);
-  if (spec.extensionBefore > 0.0) road.centre.push_back(region.front() - spec.extensionBefore * tangent_at(spec.xMin));
+  if (spec.extensionBefore > 0.0) road.centre.push_back(region.front() - spec.extensionBefore * tangent_begin);
   road.regionBegin = road.centre.size();
   road.centre.insert(road.centre.end(), region.begin(), region.end());
   road.regionEnd = road.centre.size();
-  if (spec.extensionAfter > 0.0) road.centre.push_back(region.back() + spec.extensionAfter * tangent_at(spec.xMax));
+  if (spec.extensionAfter > 0.0) road.centre.push_back(region.back() + spec.extensionAfter * tangent_end);
   return road;
 }
 
@@ -80,6 +140,34 @@ StartPose startPoseOnLane(const RoadGeometry& road, int lane, double x, const st
   }
   const auto projection = centre.project(*point);
   return {*point, projection.heading};
+}
+
+RoadUserStart roadUserStart(const RoadGeometry& road, const LaneFrame& frame, const scenario::ConcreteScenario& concrete,
+                            const scenario::ConcreteVehicle& vehicle, double from_s, double from_length) {
+  RoadUserStart start;
+  start.d = road.laneOffset(vehicle.lane) + vehicle.offset;
+  if (vehicle.along == scenario::VehicleSpec::Along::X) {
+    const StartPose on_lane = startPoseOnLane(road, vehicle.lane, vehicle.x, vehicle.id);
+    start.s = frame.coordinates(on_lane.position).first;
+    if (vehicle.offset == 0.0) {
+      start.position = on_lane.position;
+      start.heading = vehicle.heading == 0.0 ? on_lane.heading : wrapAngle(on_lane.heading + vehicle.heading);
+      return start;
+    }
+  } else {
+    using Along = scenario::VehicleSpec::Along;
+    start.s = vehicle.along == Along::S             ? road.regionStart() + vehicle.alongValue
+              : vehicle.along == Along::EgoRelative ? from_s + vehicle.alongValue
+                                                    : from_s + vehicle.alongValue + 0.5 * (from_length + vehicle.length);
+    if (start.s < 0.0 || start.s > frame.length()) {
+      throw ConfigError(fmt::format("{}: road user '{}' starts {:.1f} m along a road of {:.1f} m (lead-in and "
+                                    "lead-out included): expected a start on its road",
+                                    concrete.where(), vehicle.id, start.s - road.regionStart(), frame.length()));
+    }
+  }
+  start.position = frame.point(start.s, start.d);
+  start.heading = wrapAngle(frame.heading(start.s, start.d) + vehicle.heading);
+  return start;
 }
 
 }  // namespace vsd::road

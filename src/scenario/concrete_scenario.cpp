@@ -6,6 +6,7 @@
 #include <cmath>
 
 #include "vsd/core/error.hpp"
+#include "vsd/core/geometry.hpp"
 #include "vsd/core/random.hpp"
 
 namespace vsd::scenario {
@@ -69,17 +70,197 @@ double sampleDistribution(const Distribution& distribution, Rng& rng, const std:
   return draw * distribution.unitScale;
 }
 
-ConcreteVehicle placeVehicle(const VehicleSpec& spec, const std::vector<double>& inputs) {
+/// A lane index from an expression: a whole number of the road (relative ones from `base`).
+int evaluateLane(const Expression& expression, const std::vector<double>& inputs, int base, int lanes,
+                 const std::string& where, const std::string& field, std::uint64_t sample) {
+  const double value = evaluateFinite(expression, inputs, where, field);
+  const double lane = base + value;
+  if (value != std::round(value) || lane < 0 || lane >= lanes) {
+    throw ConfigError(fmt::format("{}.{}: got '{}' = {} in sample {}{}, expected a lane the road has (0 .. {})", where,
+                                  field, expression.text(), formatValue(value), sample,
+                                  base == 0 ? "" : fmt::format(" (lane {} from lane {})", lane, base), lanes - 1));
+  }
+  return static_cast<int>(lane);
+}
+
+ConcreteVehicle placeVehicle(const VehicleSpec& spec, const std::vector<double>& inputs, int ego_lane, int lanes,
+                             std::uint64_t sample) {
   ConcreteVehicle vehicle;
   vehicle.id = spec.id;
-  vehicle.lane = spec.lane;
+  vehicle.type = spec.type;
   vehicle.length = spec.length;
   vehicle.width = spec.width;
-  vehicle.x = evaluateFinite(spec.x, inputs, spec.where, "x");
+  if (spec.typeCode) {
+    const double code = evaluateFinite(*spec.typeCode, inputs, spec.where, "type");
+    if (code != std::round(code) || code < 0 || code >= static_cast<double>(roadUserKinds().size())) {
+      throw ConfigError(fmt::format("{}.type: got '{}' = {} in sample {}, expected the code of a road-user type "
+                                    "(an input whose choices name types: {})",
+                                    spec.where, spec.typeCode->text(), formatValue(code), sample, roadUserTypeList()));
+    }
+    vehicle.type = static_cast<RoadUserType>(static_cast<int>(code));
+    if (!spec.lengthGiven) vehicle.length = roadUserKind(vehicle.type).length;
+    if (!spec.widthGiven) vehicle.width = roadUserKind(vehicle.type).width;
+  }
+  vehicle.lane = spec.lane;
+  if (spec.laneExpression) {
+    vehicle.lane = evaluateLane(*spec.laneExpression, inputs, spec.laneRelativeToEgo ? ego_lane : 0, lanes, spec.where,
+                                spec.laneRelativeToEgo ? "relative_lane" : "lane", sample);
+  }
+  vehicle.along = spec.along;
+  if (spec.along == VehicleSpec::Along::X) vehicle.x = evaluateFinite(spec.x, inputs, spec.where, "x");
+  else vehicle.alongValue = evaluateFinite(spec.alongValue, inputs, spec.where, "s, ds or gap");
+  vehicle.offset = evaluateFinite(spec.offset, inputs, spec.where, "offset");
+  vehicle.heading = evaluateFinite(spec.headingDeg, inputs, spec.where, "heading_deg") * kPi / 180.0;
+  vehicle.purePursuit = spec.keepsLaneByPurePursuit();
   return vehicle;
 }
 
+/// A speed that must be a finite number >= 0 m/s.
+void checkSpeed(double speed, const std::string& where, const std::string& field, const std::string& text,
+                std::uint64_t sample) {
+  if (!(speed >= 0.0) || !std::isfinite(speed)) {
+    throw ConfigError(fmt::format("{}.{}: got '{}' = {} m/s in sample {}, expected a finite speed >= 0 m/s", where,
+                                  field, text, formatValue(speed), sample));
+  }
+}
+
+/// The others' initial speeds: a speed profile (the paper's Co), or a speed absolute or
+/// relative to the Ego's, constant until a speed action; plus speed noise at every instant.
+void sampleSpeeds(const VehicleSpec& spec, const ConcreteScenario& concrete, Rng& vehicle_rng, ConcreteVehicle& other) {
+  const auto& inputs = concrete.inputs;
+  const double step = concrete.step();
+  const int steps = concrete.steps();
+  std::vector<std::pair<double, double>> phases;
+  double initial = 0.0;
+  if (spec.hasSpeedProfile) {
+    for (std::size_t p = 0; p < spec.speedProfile.phases.size(); ++p) {
+      const auto& phase = spec.speedProfile.phases[p];
+      const double duration = evaluateFinite(phase.duration, inputs, spec.where, "phase duration");
+      if (duration < 0.0) {
+        throw ConfigError(fmt::format("{}: speed_profile.phases[{}].duration '{}' = {} (expected >= 0 s)", spec.where, p,
+                                      phase.duration.text(), duration));
+      }
+      phases.emplace_back(duration, evaluateFinite(phase.accel, inputs, spec.where, "phase accel"));
+    }
+    initial = evaluateFinite(spec.speedProfile.initial, inputs, spec.where, "initial speed");
+  } else {
+    initial = spec.speed.evaluate(inputs) + (spec.speedRelativeToEgo ? concrete.ego.speed : 0.0);
+    checkSpeed(initial, spec.where, spec.speedRelativeToEgo ? "relative_speed" : "speed", spec.speed.text(),
+               concrete.index);
+  }
+  other.scriptedSpeed.resize(static_cast<std::size_t>(steps) + 1);
+  other.speedNoise.resize(static_cast<std::size_t>(steps) + 1);
+  for (int k = 0; k <= steps; ++k) {
+    const double nominal = spec.hasSpeedProfile ? scriptedSpeedAt(initial, phases, k * step) : initial;
+    const double noise = sampleDistribution(spec.speedNoise, vehicle_rng, inputs);
+    other.scriptedSpeed[static_cast<std::size_t>(k)] = std::max(0.0, nominal + noise);
+    other.speedNoise[static_cast<std::size_t>(k)] = noise;
+  }
+  other.speed = other.scriptedSpeed.front();
+}
+
+/// A pedestrian stands, and crosses to, places on the road's lanes or shoulders.
+void checkOnPavedGround(const ConcreteScenario& concrete, const ConcreteVehicle& user, double offset,
+                        const std::string& where, const std::string& field) {
+  const auto& road = concrete.logical->road;
+  const double half = 0.5 * road.lanes * concrete.laneWidth;
+  const double d = laneCentreOffset(user.lane, road.lanes, concrete.laneWidth) + offset;
+  if (d < -(half + road.shoulderRight) - 1e-9 || d > half + road.shoulderLeft + 1e-9) {
+    const bool right = d < 0.0;
+    throw ConfigError(fmt::format(
+        "{}.{}: got {} m from lane {}'s centre in sample {}, {:.2f} m beyond the road's {} edge where road.shoulders.{} "
+        "is {} m: a pedestrian on a road without a place to cross (expected a place on the lanes or shoulders)",
+        where, field, formatValue(offset), user.lane, concrete.index, std::abs(d) - half, right ? "right" : "left",
+        right ? "right" : "left", formatValue(right ? road.shoulderRight : road.shoulderLeft)));
+  }
+}
+
+/// Index of action `id` in ConcreteScenario::actions (road user by road user, in file order).
+int actionIndex(const LogicalScenario& logical, const std::string& id) {
+  int index = 0;
+  for (const auto& other : logical.others) {
+    for (const auto& action : other.actions) {
+      if (action.id == id) return index;
+      ++index;
+    }
+  }
+  return -1;
+}
+
+ConcreteTrigger evaluateTrigger(const TriggerSpec& spec, const LogicalScenario& logical, const ConcreteScenario& concrete) {
+  ConcreteTrigger trigger;
+  trigger.kind = spec.kind;
+  if (spec.kind != TriggerSpec::Kind::After) {
+    trigger.value = evaluateFinite(spec.value, concrete.inputs, spec.where, "value");
+  }
+  trigger.delay = evaluateFinite(spec.delay, concrete.inputs, spec.where, "delay");
+  if (trigger.value < 0.0 || trigger.delay < 0.0) {
+    throw ConfigError(fmt::format("{}: got value {} and delay {} s in sample {}, expected both >= 0", spec.where,
+                                  formatValue(trigger.value), formatValue(trigger.delay), concrete.index));
+  }
+  for (std::size_t o = 0; o < logical.others.size(); ++o) {
+    if (logical.others[o].id == spec.reference) trigger.reference = static_cast<int>(o);
+  }
+  if (spec.kind == TriggerSpec::Kind::After) trigger.action = actionIndex(logical, spec.action);
+  return trigger;
+}
+
+ConcreteAction evaluateAction(const ActionSpec& spec, int owner, const LogicalScenario& logical,
+                              const ConcreteScenario& concrete) {
+  ConcreteAction action;
+  action.id = spec.id;
+  action.owner = owner;
+  action.kind = spec.kind;
+  action.trigger = evaluateTrigger(spec.trigger, logical, concrete);
+  action.shape = spec.shape;
+  action.speedTarget = spec.speedTarget;
+  action.target = evaluateFinite(spec.target, concrete.inputs, spec.where, "target");
+  action.relativeToEgoLane = spec.relativeToEgoLane;
+  action.pace = spec.pace;
+  action.paceValue = evaluateFinite(spec.paceValue, concrete.inputs, spec.where, "pace");
+  action.where = spec.where;
+  const bool duration = spec.pace == ActionSpec::Pace::Duration;
+  if (duration ? action.paceValue < 0.0 : !(action.paceValue > 0.0)) {
+    throw ConfigError(fmt::format("{}: got a {} of {} in sample {}, expected {}", spec.where,
+                                  duration ? "duration" : "rate", formatValue(action.paceValue), concrete.index,
+                                  duration ? "a duration >= 0 s" : "a rate > 0"));
+  }
+  if (spec.kind == ActionSpec::Kind::Speed && spec.speedTarget == ActionSpec::SpeedTarget::Absolute) {
+    checkSpeed(action.target, spec.where, "speed.target", spec.target.text(), concrete.index);
+  }
+  return action;
+}
+
+/// Lane changes and crossings of one road user, followed in file order, stay on the road.
+void checkLateralTargets(const ConcreteScenario& concrete, std::size_t first_action, const ConcreteVehicle& user) {
+  const int lanes = concrete.logical->road.lanes;
+  int lane = user.lane;
+  for (std::size_t a = first_action; a < concrete.actions.size(); ++a) {
+    const auto& action = concrete.actions[a];
+    if (action.kind == ActionSpec::Kind::Cross) checkOnPavedGround(concrete, user, action.target, action.where, "cross.to_offset");
+    if (action.kind != ActionSpec::Kind::LaneChange) continue;
+    const double target = (action.relativeToEgoLane ? concrete.ego.lane : lane) + action.target;
+    if (action.target != std::round(action.target) || target < 0 || target >= lanes) {
+      throw ConfigError(fmt::format("{}.lane_change: got {} lanes from lane {} in sample {}, that is lane {}; expected "
+                                    "a lane the road has (0 .. {})",
+                                    action.where, formatValue(action.target),
+                                    action.relativeToEgoLane ? concrete.ego.lane : lane, concrete.index,
+                                    formatValue(target), lanes - 1));
+    }
+    lane = static_cast<int>(target);
+  }
+}
+
 }  // namespace
+
+double laneCentreOffset(int lane, int lanes, double lane_width) {
+  // Lanes are spread symmetrically around the road centre; lane 0 is rightmost.
+  return (static_cast<double>(lane) - 0.5 * static_cast<double>(lanes - 1)) * lane_width;
+}
+
+std::string ConcreteScenario::where() const {
+  return fmt::format("{}: sample {}", logical->sourceFile.string(), index);
+}
 
 double scriptedSpeedAt(double initial, const std::vector<std::pair<double, double>>& duration_accel_phases, double t) {
   double speed = initial;
@@ -122,42 +303,32 @@ ConcreteScenario sampleConcreteScenario(const std::shared_ptr<const LogicalScena
 
   const int steps = spec.steps();
   Rng vehicle_rng = Rng::derive(seed, index, RandomStream::VehicleNoise);
-  concrete.ego = placeVehicle(spec.ego, inputs);
-  concrete.ego.speed = evaluateFinite(spec.ego.speed, inputs, spec.ego.where, "speed");
-  if (concrete.ego.speed < 0.0) {
-    throw ConfigError(fmt::format("{}: speed '{}' = {} (expected >= 0 m/s)", spec.ego.where, spec.ego.speed.text(),
-                                  concrete.ego.speed));
-  }
+  concrete.ego = placeVehicle(spec.ego, inputs, 0, spec.road.lanes, index);
+  concrete.ego.speed = spec.ego.speed.evaluate(inputs);
+  checkSpeed(concrete.ego.speed, spec.ego.where, "speed", spec.ego.speed.text(), index);
   concrete.ego.headingNoise.resize(static_cast<std::size_t>(steps));
   for (auto& noise : concrete.ego.headingNoise) noise = sampleDistribution(spec.ego.headingNoise, vehicle_rng, inputs);
   // The others' heading noise has its own stream: adding it leaves every other draw as it was.
   Rng heading_rng = Rng::derive(seed, index, RandomStream::OtherHeadingNoise);
 
   for (const auto& other_spec : spec.others) {
-    ConcreteVehicle other = placeVehicle(other_spec, inputs);
-    std::vector<std::pair<double, double>> phases;
-    for (std::size_t p = 0; p < other_spec.speedProfile.phases.size(); ++p) {
-      const auto& phase = other_spec.speedProfile.phases[p];
-      const double duration = evaluateFinite(phase.duration, inputs, other_spec.where, "phase duration");
-      if (duration < 0.0) {
-        throw ConfigError(fmt::format("{}: speed_profile.phases[{}].duration '{}' = {} (expected >= 0 s)",
-                                      other_spec.where, p, phase.duration.text(), duration));
-      }
-      phases.emplace_back(duration, evaluateFinite(phase.accel, inputs, other_spec.where, "phase accel"));
+    ConcreteVehicle other = placeVehicle(other_spec, inputs, concrete.ego.lane, spec.road.lanes, index);
+    for (std::size_t o = 0; o < concrete.others.size(); ++o) {
+      if (spec.others[o].id == other_spec.alongFrom) other.alongFrom = static_cast<int>(o);
     }
-    const double initial = evaluateFinite(other_spec.speedProfile.initial, inputs, other_spec.where, "initial speed");
-    other.scriptedSpeed.resize(static_cast<std::size_t>(steps) + 1);
-    for (int k = 0; k <= steps; ++k) {
-      const double nominal = scriptedSpeedAt(initial, phases, k * spec.step);
-      const double noise = sampleDistribution(other_spec.speedNoise, vehicle_rng, inputs);
-      other.scriptedSpeed[static_cast<std::size_t>(k)] = std::max(0.0, nominal + noise);
-    }
-    other.speed = other.scriptedSpeed.front();
+    sampleSpeeds(other_spec, concrete, vehicle_rng, other);
     other.headingNoise.resize(static_cast<std::size_t>(steps));
     for (auto& noise : other.headingNoise) noise = sampleDistribution(other_spec.headingNoise, heading_rng, inputs);
+    if (other.type == RoadUserType::Pedestrian) checkOnPavedGround(concrete, other, other.offset, other_spec.where, "offset");
     concrete.others.push_back(std::move(other));
   }
-
+  for (std::size_t o = 0; o < spec.others.size(); ++o) {
+    const std::size_t first_action = concrete.actions.size();
+    for (const auto& action : spec.others[o].actions) {
+      concrete.actions.push_back(evaluateAction(action, static_cast<int>(o), spec, concrete));
+    }
+    checkLateralTargets(concrete, first_action, concrete.others[o]);
+  }
   for (const auto& [name, expression] : spec.ego.controller.params) {
     concrete.controllerParams.emplace_back(
         name, evaluateFinite(expression, inputs, spec.ego.controller.where, "parameter " + name));

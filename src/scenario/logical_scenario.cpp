@@ -1,11 +1,12 @@
 #include "vsd/scenario/logical_scenario.hpp"
 #include "vsd/scenario/yaml_reader.hpp"
 
+#include "parsing.hpp"
+
 #include <fmt/format.h>
 #include <yaml-cpp/yaml.h>
 
 #include <cmath>
-#include <regex>
 #include <set>
 
 #include "vsd/core/error.hpp"
@@ -31,16 +32,22 @@ std::optional<std::size_t> LogicalScenario::inputIndex(const std::string& input_
   return std::nullopt;
 }
 
+bool LogicalScenario::hasLateralMotion() const {
+  for (const auto& other : others) {
+    if (!other.offset.isConstant() || other.offset.evaluate({}) != 0.0) return true;
+    for (const auto& action : other.actions) {
+      if (action.kind != ActionSpec::Kind::Speed) return true;
+    }
+  }
+  return false;
+}
+
 namespace {
 
-constexpr double kDegree = 3.14159265358979323846 / 180.0;
 /// m: bound of the scenario region and of the road extensions (keeps net coordinates sane).
 constexpr double kMaxRoadLength = 10'000.0;
 
-bool isIdentifier(const std::string& name) {
-  static const std::regex pattern("[A-Za-z][A-Za-z0-9_]*");
-  return std::regex_match(name, pattern);
-}
+using detail::isIdentifier;
 
 void parseTime(const YamlReader& reader, const YAML::Node& node, LogicalScenario& scenario) {
   if (!node) return;
@@ -94,14 +101,11 @@ void parseInputs(const YamlReader& reader, const YAML::Node& node, LogicalScenar
   }
 }
 
-void parseRoad(const YamlReader& reader, const YAML::Node& node, LogicalScenario& scenario) {
-  if (!node) reader.fail(YAML::Node(), "road", "missing section 'road'");
-  reader.checkKeys(node, "road", {"x_range", "points", "centre", "centre_noise", "lanes", "lane_width",
-                                  "lane_width_noise", "speed_limit", "extension"});
-  const auto inputs = scenario.inputNames();
+/// x_range, points, centre, centre_noise: the paper's road.
+void parsePolynomialRoad(const YamlReader& reader, const YAML::Node& node, const std::vector<std::string>& inputs,
+                         RoadSpec& road) {
   auto with_x = inputs;
   with_x.emplace_back("x");
-  RoadSpec& road = scenario.road;
   if (const auto range = node["x_range"]) {
     if (!range.IsSequence() || range.size() != 2) reader.fail(range, "road.x_range", "expected [x_min, x_max] in m");
     road.xMin = reader.number(range[0], "road.x_range[0]");
@@ -120,6 +124,59 @@ void parseRoad(const YamlReader& reader, const YAML::Node& node, LogicalScenario
   road.points = reader.integer(node, "points", "road.points", road.points, 2, 10'000);
   road.centre = node["centre"] ? reader.expression(node["centre"], "road.centre", with_x) : Expression::constant(0.0);
   if (node["centre_noise"]) road.centreNoise = reader.distribution(node["centre_noise"], "road.centre_noise", inputs);
+}
+
+/// curvature, length: a straight road or a constant radius.
+void parseArcRoad(const YamlReader& reader, const YAML::Node& node, const std::vector<std::string>& inputs,
+                  RoadSpec& road) {
+  for (const char* key : {"x_range", "points", "centre", "centre_noise"}) {
+    if (node[key]) reader.fail(node[key], std::string("road.") + key, "belongs to a polynomial road, not an arc");
+  }
+  if (!node["length"]) reader.fail(node, "road", "an arc road needs 'length' (m of scenario region along the road)");
+  road.length = reader.expression(node["length"], "road.length", inputs);
+  road.curvature = node["curvature"] ? reader.expression(node["curvature"], "road.curvature", inputs)
+                                     : Expression::constant(0.0);
+  if (!road.length.isConstant()) {
+    reader.fail(node["length"], "road.length",
+                fmt::format("got '{}', expected a number: networks are laid out before sampling", road.length.text()));
+  }
+  if (!(road.length.evaluate({}) > 0.0 && road.length.evaluate({}) <= kMaxRoadLength)) {
+    throw ConfigError::field(reader.where(node["length"], "road.length"), "road.length", road.length.text(),
+                             fmt::format("a length in (0, {}] m", kMaxRoadLength));
+  }
+  if (road.length.isConstant() && road.curvature.isConstant() &&
+      !(std::abs(road.curvature.evaluate({}) * road.length.evaluate({})) <= kMaxArcTurn)) {
+    throw ConfigError::field(reader.where(node["curvature"], "road.curvature"), "road.curvature",
+                             road.curvature.text(),
+                             fmt::format("a turn |curvature| * length of at most {} rad over the region", kMaxArcTurn));
+  }
+}
+
+void parseShoulders(const YamlReader& reader, const YAML::Node& node, RoadSpec& road) {
+  reader.checkKeys(node, "road.shoulders", {"left", "right"});
+  road.shoulderLeft = reader.number(node, "left", "road.shoulders.left", 0.0);
+  road.shoulderRight = reader.number(node, "right", "road.shoulders.right", 0.0);
+  if (!(road.shoulderLeft >= 0.0 && road.shoulderLeft <= 50.0) || !(road.shoulderRight >= 0.0 && road.shoulderRight <= 50.0)) {
+    reader.fail(node, "road.shoulders", "expected widths in 0 .. 50 m");
+  }
+}
+
+void parseRoad(const YamlReader& reader, const YAML::Node& node, LogicalScenario& scenario) {
+  if (!node) reader.fail(YAML::Node(), "road", "missing section 'road'");
+  reader.checkKeys(node, "road", {"shape", "x_range", "points", "centre", "centre_noise", "curvature", "length", "lanes",
+                                  "lane_width", "lane_width_noise", "speed_limit", "extension", "shoulders"});
+  const auto inputs = scenario.inputNames();
+  RoadSpec& road = scenario.road;
+  const std::string shape = node["shape"] ? reader.scalar(node["shape"], "road.shape") : "polynomial";
+  if (shape == "polynomial") {
+    parsePolynomialRoad(reader, node, inputs, road);
+  } else if (shape == "arc") {
+    road.shape = RoadSpec::Shape::Arc;
+    parseArcRoad(reader, node, inputs, road);
+  } else {
+    throw ConfigError::field(reader.where(node["shape"], "road.shape"), "road.shape", shape, "polynomial or arc");
+  }
+  if (node["shoulders"]) parseShoulders(reader, node["shoulders"], road);
   road.lanes = reader.integer(node, "lanes", "road.lanes", road.lanes, 1, 16);
   if (node["lane_width"]) road.laneWidth = reader.expression(node["lane_width"], "road.lane_width", inputs);
   if (road.laneWidth.isConstant() && !(road.laneWidth.evaluate({}) > 0.0 && road.laneWidth.evaluate({}) <= 50.0)) {
@@ -141,108 +198,6 @@ void parseRoad(const YamlReader& reader, const YAML::Node& node, LogicalScenario
     if (!(road.extensionBefore >= 0.0 && road.extensionBefore <= kMaxRoadLength) ||
         !(road.extensionAfter >= 0.0 && road.extensionAfter <= kMaxRoadLength)) {
       reader.fail(extension, "road.extension", fmt::format("expected lengths in 0 .. {} m", kMaxRoadLength));
-    }
-  }
-}
-
-void parseCommonVehicle(const YamlReader& reader, const YAML::Node& node, const std::string& field,
-                        const std::vector<std::string>& inputs, const LogicalScenario& scenario, VehicleSpec& vehicle) {
-  vehicle.where = reader.where(node, field);
-  if (!node["x"]) reader.fail(node, field, "missing 'x' (initial x of the vehicle's centre, m)");
-  vehicle.x = reader.expression(node["x"], field + ".x", inputs);
-  vehicle.lane = reader.integer(node, "lane", field + ".lane", 0, 0);
-  if (vehicle.lane >= scenario.road.lanes) {
-    throw ConfigError::field(reader.where(node["lane"], field + ".lane"), field + ".lane", std::to_string(vehicle.lane),
-                             fmt::format("a lane index below road.lanes = {}", scenario.road.lanes));
-  }
-  vehicle.length = reader.number(node, "length", field + ".length", vehicle.length);
-  vehicle.width = reader.number(node, "width", field + ".width", vehicle.width);
-  if (!(vehicle.length > 0.0 && vehicle.length <= 100.0) || !(vehicle.width > 0.0 && vehicle.width <= 20.0)) {
-    reader.fail(node, field, "expected a length in (0, 100] m and a width in (0, 20] m");
-  }
-}
-
-void parseController(const YamlReader& reader, const YAML::Node& node, const std::string& field,
-                     const std::vector<std::string>& inputs, ControllerSpec& controller) {
-  controller.where = reader.where(node, field);
-  reader.checkKeys(node, field, {"name", "library", "params"});
-  if (!node["name"]) reader.fail(node, field, "missing 'name' (a built-in controller or one exported by 'library')");
-  controller.name = reader.scalar(node["name"], field + ".name");
-  if (node["library"]) controller.library = reader.scalar(node["library"], field + ".library");
-  if (const auto params = node["params"]) {
-    reader.requireMap(params, field + ".params");
-    for (const auto& entry : params) {
-      const auto key = entry.first.as<std::string>();
-      controller.params.emplace_back(key, reader.expression(entry.second, field + ".params." + key, inputs));
-    }
-  }
-}
-
-/// `heading_noise_deg`: the paper's per-step orientation variation (degrees in the YAML).
-void parseHeadingNoise(const YamlReader& reader, const YAML::Node& vehicle, const std::string& field,
-                       const std::vector<std::string>& inputs, VehicleSpec& spec) {
-  if (!vehicle["heading_noise_deg"]) return;
-  spec.headingNoise = reader.distribution(vehicle["heading_noise_deg"], field + ".heading_noise_deg", inputs);
-  spec.headingNoise.unitScale = kDegree;
-}
-
-void parseVehicles(const YamlReader& reader, const YAML::Node& node, LogicalScenario& scenario) {
-  if (!node) reader.fail(YAML::Node(), "vehicles", "missing section 'vehicles' (at least 'ego')");
-  reader.checkKeys(node, "vehicles", {"ego", "others"});
-  const auto inputs = scenario.inputNames();
-  const auto ego = node["ego"];
-  if (!ego) reader.fail(node, "vehicles.ego", "missing: every scenario needs an Ego (the vehicle under test)");
-  reader.checkKeys(ego, "vehicles.ego", {"x", "lane", "speed", "length", "width", "heading_noise_deg", "controller"});
-  VehicleSpec& spec = scenario.ego;
-  spec.id = "ego";
-  parseCommonVehicle(reader, ego, "vehicles.ego", inputs, scenario, spec);
-  if (!ego["speed"]) reader.fail(ego, "vehicles.ego", "missing 'speed' (initial speed, m/s)");
-  spec.speed = reader.expression(ego["speed"], "vehicles.ego.speed", inputs);
-  parseHeadingNoise(reader, ego, "vehicles.ego", inputs, spec);
-  if (!ego["controller"]) reader.fail(ego, "vehicles.ego", "missing 'controller'");
-  parseController(reader, ego["controller"], "vehicles.ego.controller", inputs, spec.controller);
-
-  std::set<std::string> ids = {"ego"};
-  if (const auto others = node["others"]) {
-    if (!others.IsSequence()) reader.fail(others, "vehicles.others", "expected a list of vehicles");
-    for (std::size_t i = 0; i < others.size(); ++i) {
-      const auto item = others[i];
-      const std::string field = fmt::format("vehicles.others[{}]", i);
-      reader.checkKeys(item, field,
-                       {"id", "x", "lane", "length", "width", "speed_profile", "speed_noise", "heading_noise_deg"});
-      VehicleSpec other;
-      other.id = item["id"] ? reader.scalar(item["id"], field + ".id") : fmt::format("other{}", i);
-      if (!isIdentifier(other.id) || !ids.insert(other.id).second) {
-        throw ConfigError::field(reader.where(item["id"], field + ".id"), field + ".id", other.id,
-                                 "a unique identifier (letters, digits, _)");
-      }
-      parseCommonVehicle(reader, item, field, inputs, scenario, other);
-      const auto profile = item["speed_profile"];
-      if (!profile) reader.fail(item, field, "missing 'speed_profile' (initial speed and phases)");
-      reader.checkKeys(profile, field + ".speed_profile", {"initial", "phases"});
-      if (!profile["initial"]) reader.fail(profile, field + ".speed_profile", "missing 'initial' (m/s)");
-      other.speedProfile.initial = reader.expression(profile["initial"], field + ".speed_profile.initial", inputs);
-      if (const auto phases = profile["phases"]) {
-        if (!phases.IsSequence()) reader.fail(phases, field + ".speed_profile.phases", "expected a list of phases");
-        for (std::size_t p = 0; p < phases.size(); ++p) {
-          const std::string phase_field = fmt::format("{}.speed_profile.phases[{}]", field, p);
-          reader.checkKeys(phases[p], phase_field, {"duration", "accel"});
-          if (!phases[p]["duration"] || !phases[p]["accel"]) {
-            reader.fail(phases[p], phase_field, "needs 'duration' (s) and 'accel' (m/s^2)");
-          }
-          SpeedPhase phase;
-          phase.duration = reader.expression(phases[p]["duration"], phase_field + ".duration", inputs);
-          phase.accel = reader.expression(phases[p]["accel"], phase_field + ".accel", inputs);
-          if (phase.duration.isConstant() && phase.duration.evaluate({}) < 0.0) {
-            throw ConfigError::field(reader.where(phases[p]["duration"], phase_field + ".duration"),
-                                     phase_field + ".duration", phase.duration.text(), "a duration >= 0 s");
-          }
-          other.speedProfile.phases.push_back(std::move(phase));
-        }
-      }
-      if (item["speed_noise"]) other.speedNoise = reader.distribution(item["speed_noise"], field + ".speed_noise", inputs);
-      parseHeadingNoise(reader, item, field, inputs, other);
-      scenario.others.push_back(std::move(other));
     }
   }
 }
@@ -313,7 +268,7 @@ std::shared_ptr<const LogicalScenario> parseLogicalScenario(const std::string& y
   parseTime(reader, root["time"], *scenario);
   parseInputs(reader, root["inputs"], *scenario);
   parseRoad(reader, root["road"], *scenario);
-  parseVehicles(reader, root["vehicles"], *scenario);
+  detail::parseRoadUsers(reader, root["vehicles"], *scenario);
   parseRest(reader, root, *scenario);
   return scenario;
 }

@@ -6,6 +6,7 @@
 
 #include "vsd/core/error.hpp"
 #include "vsd/core/numbers.hpp"
+#include "vsd/core/road_user.hpp"
 
 namespace vsd::scenario {
 
@@ -124,7 +125,10 @@ Distribution YamlReader::distribution(const YAML::Node& node, const std::string&
       fail(choices, field + ".choices", "expected a non-empty list of numbers");
     }
     for (std::size_t i = 0; i < choices.size(); ++i) {
-      result.choices.push_back(number(choices[i], fmt::format("{}.choices[{}]", field, i)));
+      // A road-user type name stands for its code (`type: lead_type` draws a type).
+      const auto type = choices[i].IsScalar() ? findRoadUserType(choices[i].Scalar()) : std::nullopt;
+      result.choices.push_back(type ? static_cast<double>(*type)
+                                    : number(choices[i], fmt::format("{}.choices[{}]", field, i)));
     }
   } else {
     throw ConfigError::field(where(node["distribution"], field + ".distribution"), field + ".distribution", kind,

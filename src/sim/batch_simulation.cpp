@@ -7,6 +7,7 @@
 #include <cmath>
 #include <map>
 #include <optional>
+#include <tuple>
 #include <unordered_map>
 #include <unordered_set>
 
@@ -23,29 +24,51 @@ namespace vsd::sim {
 
 namespace {
 
-/// SUMO vehicle types by (length, width); scripted vehicles ignore SUMO's
+/// SUMO's vehicle class of a road user (also what sumo-gui draws): pedestrians and objects
+/// are SUMO vehicles too, so that SUMO's collision checks and SSM devices see them.
+const char* sumoClassOf(RoadUserType type) {
+  switch (type) {
+    case RoadUserType::Car: return "passenger";
+    case RoadUserType::Van: return "delivery";
+    case RoadUserType::Truck: return "truck";
+    case RoadUserType::Bus: return "bus";
+    case RoadUserType::Motorbike: return "motorcycle";
+    case RoadUserType::Pedestrian: return "pedestrian";
+    case RoadUserType::StationaryObject: return "ignoring";
+  }
+  return "passenger";
+}
+
+/// SUMO vehicle types by (length, width, kind); scripted vehicles ignore SUMO's
 /// car-following, so only the dimensions matter (minGap 0: gaps are bumper to bumper).
 class VehicleTypes {
  public:
-  const std::string& get(double length, double width) {
-    const auto key = std::make_pair(length, width);
+  const std::string& get(const scenario::ConcreteVehicle& vehicle) {
+    const auto key = std::make_tuple(vehicle.length, vehicle.width, vehicle.type);
     auto it = types_.find(key);
     if (it != types_.end()) return it->second;
-    const std::string id = fmt::format("vsd_{}x{}", length, width);
+    // Cars keep the type ids of the paper's runs (FCD files name them).
+    const std::string id = vehicle.type == RoadUserType::Car
+                               ? fmt::format("vsd_{}x{}", vehicle.length, vehicle.width)
+                               : fmt::format("vsd_{}_{}x{}", roadUserKind(vehicle.type).name, vehicle.length, vehicle.width);
     libsumo::VehicleType::copy("DEFAULT_VEHTYPE", id);
-    libsumo::VehicleType::setLength(id, length);
-    libsumo::VehicleType::setWidth(id, width);
+    libsumo::VehicleType::setLength(id, vehicle.length);
+    libsumo::VehicleType::setWidth(id, vehicle.width);
     libsumo::VehicleType::setMinGap(id, 0.0);
     libsumo::VehicleType::setMaxSpeed(id, 100.0);
     libsumo::VehicleType::setSpeedFactor(id, 1.0);
     libsumo::VehicleType::setAccel(id, 20.0);
     libsumo::VehicleType::setDecel(id, 20.0);
     libsumo::VehicleType::setEmergencyDecel(id, 20.0);
+    if (vehicle.type != RoadUserType::Car) {
+      libsumo::VehicleType::setVehicleClass(id, sumoClassOf(vehicle.type));
+      libsumo::VehicleType::setShapeClass(id, sumoClassOf(vehicle.type));
+    }
     return types_.emplace(key, id).first->second;
   }
 
  private:
-  std::map<std::pair<double, double>, std::string> types_;
+  std::map<std::tuple<double, double, RoadUserType>, std::string> types_;
 };
 
 struct Member {
@@ -53,20 +76,21 @@ struct Member {
   std::string edge;
   std::string egoId;
   std::vector<std::string> otherIds;
-  std::vector<std::vector<VehicleState>> otherPaths;  ///< scripted vehicles' states at every instant
-  std::vector<std::size_t> otherRoadEnds;  ///< per scripted vehicle: first instant past its road's end (or never)
+  /// The scripted road users, stepped with the Ego: traffic->states() are every other road
+  /// user's states at the current instant (their types and sizes: run->scenario->others).
+  std::optional<ScriptedTraffic> traffic;
   std::optional<EgoDriver> ego;
   SumoPlacement placement;  ///< how this scenario's vehicles are put on its road in SUMO
   SimulatedScenario result;
   bool active = true;
 };
 
-void initTrack(VehicleTrack& track, const std::string& id, VehicleRole role, double length, double width,
-               std::size_t instants) {
-  track.id = id;
+void initTrack(VehicleTrack& track, const scenario::ConcreteVehicle& vehicle, VehicleRole role, std::size_t instants) {
+  track.id = vehicle.id;
   track.role = role;
-  track.length = length;
-  track.width = width;
+  track.length = vehicle.length;
+  track.width = vehicle.width;
+  track.type = vehicle.type;
   track.states.assign(instants, VehicleState{});
   track.valid.assign(instants, 0);
 }
@@ -84,6 +108,9 @@ std::vector<std::string> sessionArguments(const std::filesystem::path& net, cons
   if (!options.fcdOutput.empty()) {
     args.insert(args.end(), {"--fcd-output", options.fcdOutput.string()});
   }
+  if (options.lateralResolution > 0.0) {
+    args.insert(args.end(), {"--lateral-resolution", fmt::format("{}", options.lateralResolution)});
+  }
   args.insert(args.end(), options.sumoOptions.begin(), options.sumoOptions.end());
   return args;
 }
@@ -99,17 +126,6 @@ std::string removalReason(const std::string& id, const std::unordered_set<std::s
 }
 
 std::unordered_set<std::string> asSet(const std::vector<std::string>& ids) { return {ids.begin(), ids.end()}; }
-
-/// The first instant at which a scripted vehicle's front bumper is at or beyond the end of
-/// its lane (SUMO would let it arrive there); the path's size if never.
-std::size_t firstInstantPastRoadEnd(const std::vector<VehicleState>& path, const road::RoadGeometry& road,
-                                    const scenario::ConcreteVehicle& vehicle) {
-  const MeasuredPolyline lane(road.laneCentre(vehicle.lane));
-  for (std::size_t k = 0; k < path.size(); ++k) {
-    if (lane.project(path[k].position()).arcLength + 0.5 * vehicle.length >= lane.length()) return k;
-  }
-  return path.size();
-}
 
 }  // namespace
 
@@ -154,24 +170,25 @@ std::vector<SimulatedScenario> simulateBatch(const std::filesystem::path& net, c
     }
     if (match_to_lanes) member.placement = SumoPlacement(member.result.lanes);
 
-    // Ego: starts on its lane's centre line at its x, heading along the lane.
+    // The scripted road users start where the scenario puts them; the Ego on its lane's
+    // centre line at its x or s, heading along the lane.
+    member.traffic.emplace(concrete, *run.road);
     const auto& ego_spec = concrete.ego;
-    const auto ego_start = road::startPoseOnLane(*run.road, ego_spec.lane, ego_spec.x, ego_spec.id);
     member.egoId = member.edge + "." + ego_spec.id;
-    libsumo::Vehicle::add(member.egoId, route, types.get(ego_spec.length, ego_spec.width), "now",
-                          std::to_string(ego_spec.lane), "base", fmt::format("{}", ego_spec.speed));
+    libsumo::Vehicle::add(member.egoId, route, types.get(ego_spec), "now", std::to_string(ego_spec.lane), "base",
+                          fmt::format("{}", ego_spec.speed));
     libsumo::Vehicle::setSpeedMode(member.egoId, 0);
     libsumo::Vehicle::setLaneChangeMode(member.egoId, 0);
-    VehicleState initial;
-    initial.x = ego_start.position.x();
-    initial.y = ego_start.position.y();
-    initial.heading = ego_start.heading;
-    initial.speed = ego_spec.speed;
-    const ControllerParams params(concrete.controllerParams, spec.ego.controller.where);
-    auto controller = withStepCost(makeController(registry, spec.ego.controller.name, spec.ego.controller.library,
-                                                  options.scenarioDir, params),
-                                   options.egoStepCost);
-    member.ego.emplace(member.egoId, std::move(controller), initial, ego_spec.length, ego_spec.width, run.offset);
+    const bool overridden = !options.egoControllerOverride.empty();
+    const ControllerParams params(overridden ? std::vector<std::pair<std::string, double>>{} : concrete.controllerParams,
+                                  overridden ? "--reference " + options.egoControllerOverride : spec.ego.controller.where);
+    auto controller = withStepCost(
+        overridden ? makeController(registry, options.egoControllerOverride, {}, options.scenarioDir, params)
+                   : makeController(registry, spec.ego.controller.name, spec.ego.controller.library,
+                                    options.scenarioDir, params),
+        options.egoStepCost);
+    member.ego.emplace(member.egoId, std::move(controller), member.traffic->egoStart(), ego_spec.length,
+                       ego_spec.width, run.offset);
     member.ego->placeBy(member.placement);
     member.ego->pushToSumo();
     owner.emplace(member.egoId, m);
@@ -179,24 +196,22 @@ std::vector<SimulatedScenario> simulateBatch(const std::filesystem::path& net, c
 
     auto& trace = member.result.trace;
     trace.vehicles.resize(1 + concrete.others.size());
-    initTrack(trace.vehicles[0], ego_spec.id, VehicleRole::Ego, ego_spec.length, ego_spec.width, instants);
+    initTrack(trace.vehicles[0], ego_spec, VehicleRole::Ego, instants);
 
     for (std::size_t o = 0; o < concrete.others.size(); ++o) {
       const auto& other = concrete.others[o];
-      // Scripted vehicles follow a path fixed before the simulation (scripted_vehicle.hpp)
-      // and are placed on it like the Ego, so SUMO and the Ego's sensors see them there.
-      member.otherPaths.push_back(scriptedPath(other, *run.road, dt, options.steps));
-      member.otherRoadEnds.push_back(firstInstantPastRoadEnd(member.otherPaths.back(), *run.road, other));
+      // Scripted road users are placed where the stepper moves them, like the Ego, so SUMO
+      // and the Ego's sensors see them there.
       const std::string id = member.edge + "." + other.id;
-      libsumo::Vehicle::add(id, route, types.get(other.length, other.width), "now", std::to_string(other.lane), "base",
+      libsumo::Vehicle::add(id, route, types.get(other), "now", std::to_string(other.lane), "base",
                             fmt::format("{}", other.speed));
       libsumo::Vehicle::setSpeedMode(id, 0);
       libsumo::Vehicle::setLaneChangeMode(id, 0);
-      placeInSumo(id, member.otherPaths.back().front(), other.length, other.width, run.offset, member.placement);
+      placeInSumo(id, member.traffic->states()[o], other.length, other.width, run.offset, member.placement);
       member.otherIds.push_back(id);
       owner.emplace(id, m);
       expected.insert(id);
-      initTrack(trace.vehicles[1 + o], other.id, VehicleRole::Other, other.length, other.width, instants);
+      initTrack(trace.vehicles[1 + o], other, VehicleRole::Other, instants);
     }
   }
 
@@ -209,7 +224,7 @@ std::vector<SimulatedScenario> simulateBatch(const std::filesystem::path& net, c
       trace.vehicles[0].states[k] = member.ego->state();
       trace.vehicles[0].valid[k] = 1;
       for (std::size_t o = 0; o < member.otherIds.size(); ++o) {
-        trace.vehicles[1 + o].states[k] = member.otherPaths[o][k];
+        trace.vehicles[1 + o].states[k] = member.traffic->states()[o];
         trace.vehicles[1 + o].valid[k] = 1;
       }
     }
@@ -266,14 +281,15 @@ std::vector<SimulatedScenario> simulateBatch(const std::filesystem::path& net, c
         const ActivityScope in_controller(Activity::Controller);
         faultPoint(fmt::format("controller.step:{}", member.result.index));
       }
-      // The Ego's sensors see the other road users where they are at instant k (every one a
-      // car until concrete road users carry their kind).
+      // The Ego's sensors see the other road users where they are at instant k.
       std::vector<RoadUserState> road_users;
       for (std::size_t o = 0; o < member.otherIds.size(); ++o) {
         const auto& other = member.run->scenario->others[o];
-        road_users.push_back({static_cast<int>(o) + 1, RoadUserType::Car, member.otherPaths[o][static_cast<std::size_t>(k)],
-                              other.length, other.width});
+        road_users.push_back({static_cast<int>(o) + 1, other.type, member.traffic->states()[o], other.length,
+                              other.width});
       }
+      // The others move on from instant k with the Ego where it is at k (triggers see it there).
+      member.traffic->step(member.ego->state());
       try {
         member.ego->step(time, dt, member.run->scenario->ego.headingNoise[static_cast<std::size_t>(k)], lanes,
                          road_users);
@@ -284,13 +300,14 @@ std::vector<SimulatedScenario> simulateBatch(const std::filesystem::path& net, c
         continue;
       }
       const auto& others = member.run->scenario->others;
-      const auto next = static_cast<std::size_t>(k) + 1;
       for (std::size_t o = 0; o < member.otherIds.size() && member.active; ++o) {
-        if (member.otherRoadEnds[o] <= next) {
+        if (member.traffic->pastRoadEnd(o)) {
           fail(member, fmt::format("vehicle '{}' reached the end of its road at t = {:.1f} s", others[o].id, time + dt));
           break;
         }
-        placeInSumo(member.otherIds[o], member.otherPaths[o][next], others[o].length, others[o].width,
+        // Placed every step, standing or not: left alone, SUMO would turn a standing road
+        // user back along its lane.
+        placeInSumo(member.otherIds[o], member.traffic->states()[o], others[o].length, others[o].width,
                     member.run->offset, member.placement);
       }
     }

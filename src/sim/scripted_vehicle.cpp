@@ -1,40 +1,381 @@
 #include "vsd/sim/scripted_vehicle.hpp"
 
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <optional>
+
+#include "vsd/core/error.hpp"
+#include "vsd/core/path_relation.hpp"
 #include "vsd/sim/builtin_controllers.hpp"
 #include "vsd/sim/ego_driver.hpp"
 #include "vsd/sim/vehicle_model.hpp"
 
 namespace vsd::sim {
 
-std::vector<VehicleState> scriptedPath(const scenario::ConcreteVehicle& vehicle, const road::RoadGeometry& road,
-                                       double step, int steps) {
-  const auto start = road::startPoseOnLane(road, vehicle.lane, vehicle.x, vehicle.id);
-  const MeasuredPolyline centre(road.laneCentre(vehicle.lane));
+namespace {
+
+using scenario::ActionSpec;
+using scenario::ConcreteAction;
+using scenario::TransitionShape;
+using scenario::TriggerSpec;
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+/// A transition of a speed or a lateral offset from `from` to `to` over [start, start + duration].
+struct Transition {
+  double start = 0.0;
+  double duration = 0.0;
+  double from = 0.0;
+  double to = 0.0;
+  TransitionShape shape = TransitionShape::Linear;
+
+  double end() const { return start + duration; }
+  double at(double t) const {
+    if (t >= end()) return to;
+    if (t <= start) return from;
+    const double tau = (t - start) / duration;
+    const double share = shape == TransitionShape::Smooth ? 0.5 * (1.0 - std::cos(kPi * tau)) : tau;
+    return from + (to - from) * share;
+  }
+  double rate(double t) const {
+    if (t < start || t >= end() || duration <= 0.0) return 0.0;
+    const double tau = (t - start) / duration;
+    const double mean = (to - from) / duration;
+    return shape == TransitionShape::Smooth ? mean * 0.5 * kPi * std::sin(kPi * tau) : mean;
+  }
+};
+
+/// The duration of a transition over `change` (m/s or m) at an action's pace.
+double durationOf(const ConcreteAction& action, double change) {
+  const double magnitude = std::abs(change);
+  // A smooth (half-cosine) profile peaks at pi/2 times its mean rate.
+  const double peak_factor = action.shape == TransitionShape::Smooth ? 0.5 * kPi : 1.0;
+  switch (action.pace) {
+    case ActionSpec::Pace::Duration: return action.shape == TransitionShape::Step ? 0.0 : action.paceValue;
+    case ActionSpec::Pace::Rate:
+    case ActionSpec::Pace::LateralSpeed: return peak_factor * magnitude / action.paceValue;
+    case ActionSpec::Pace::LateralAccel: return kPi * std::sqrt(magnitude / (2.0 * action.paceValue));
+  }
+  return 0.0;
+}
+
+/// One scripted road user as the stepper moves it.
+struct Mover {
+  const scenario::ConcreteVehicle* spec = nullptr;
+  VehicleState state;
+  // Pure pursuit: its lane's centre line.
+  MeasuredPolyline lane;
+  // Exact: its place in the lane frame and its current lane.
+  double s = 0.0;
+  double d = 0.0;
+  int laneIndex = 0;
+  std::optional<Transition> speed;    ///< the latest speed action (none: the scripted speed)
+  std::optional<Transition> lateral;  ///< the latest lateral action (none: stays at d)
+  double speedAlong = 0.0;            ///< m/s, longitudinal speed at the current instant
+
+  /// Nominal (noise-free) longitudinal speed at t.
+  double nominalSpeed(double t, double step) const {
+    if (speed) return speed->at(t);
+    // Before any speed action: the scripted speed without its noise, between instants linearly.
+    const auto& scripted = spec->scriptedSpeed;
+    const double position = std::clamp(t / step, 0.0, static_cast<double>(scripted.size() - 1));
+    const auto k = std::min(static_cast<std::size_t>(position), scripted.size() - 2);
+    const double f = position - static_cast<double>(k);
+    const double a = scripted[k] - spec->speedNoise[k];
+    const double b = scripted[k + 1] - spec->speedNoise[k + 1];
+    return a + f * (b - a);
+  }
+  /// Longitudinal speed at instant k (noise included, never below 0).
+  double speedAt(std::size_t k, double step) const {
+    if (!speed) return spec->scriptedSpeed[k];
+    return std::max(0.0, speed->at(static_cast<double>(k) * step) + spec->speedNoise[k]);
+  }
+};
+
+Footprint footprintOf(const VehicleState& state, double length, double width) {
+  return {state.position(), state.heading, length, width};
+}
+
+}  // namespace
+
+EgoStandIn::EgoStandIn(const scenario::ConcreteScenario& concrete, const road::RoadGeometry& road)
+    : lane_(road.laneCentre(concrete.ego.lane)), speed_(concrete.ego.speed) {
+  const road::LaneFrame frame(road.centre);
+  const auto start = road::roadUserStart(road, frame, concrete, concrete.ego, 0.0, 0.0);
+  startArcLength_ = lane_.project(start.position).arcLength;
+}
+
+VehicleState EgoStandIn::at(double time) const {
+  const double s = startArcLength_ + speed_ * time;
+  const Vec2 position = lane_.pointAt(s);
+  return {position.x(), position.y(), lane_.headingAt(s), speed_, 0.0};
+}
+
+struct ScriptedTraffic::Impl {
+  const scenario::ConcreteScenario* concrete = nullptr;
+  const road::RoadGeometry* road = nullptr;
+  road::LaneFrame frame;
+  MeasuredPolyline egoLane;  ///< the Ego's starting lane: the reference line of triggers
+  VehicleState egoStart;
+  std::size_t k = 0;
+  double step = 0.0;
+  std::vector<Mover> movers;
+  std::vector<VehicleState> states;
+  std::vector<ActionTiming> timings;
+  std::vector<double> scheduled;  ///< per action: start time once its trigger fired (NaN before)
+  PurePursuitLateral laneKeeping;  // the Ego's defaults: lookahead max(4 m, 0.4 s * v)
+
+  void init();
+  void checkOverlaps() const;
+  double relationValue(const scenario::ConcreteTrigger& trigger, std::size_t owner, const VehicleState& ego) const;
+  void fireTriggers(const VehicleState& ego);
+  void activate(std::size_t a, const VehicleState& ego);
+  void activateDue(const VehicleState& ego);
+  VehicleState advancePurePursuit(Mover& mover);
+  VehicleState advanceExact(Mover& mover);
+};
+
+void ScriptedTraffic::Impl::init() {
+  frame = road::LaneFrame(road->centre);
+  const auto ego = road::roadUserStart(*road, frame, *concrete, concrete->ego, 0.0, 0.0);
+  egoStart = {ego.position.x(), ego.position.y(), ego.heading, concrete->ego.speed, 0.0};
+  egoLane = MeasuredPolyline(road->laneCentre(concrete->ego.lane));
+  step = concrete->step();
+  for (const auto& other : concrete->others) {
+    Mover mover;
+    mover.spec = &other;
+    const bool from_ego = other.alongFrom < 0;
+    const double from_s = from_ego ? ego.s : movers[static_cast<std::size_t>(other.alongFrom)].s;
+    const double from_length = from_ego ? concrete->ego.length : concrete->others[static_cast<std::size_t>(other.alongFrom)].length;
+    const auto start = road::roadUserStart(*road, frame, *concrete, other, from_s, from_length);
+    mover.state = {start.position.x(), start.position.y(), start.heading, other.scriptedSpeed.at(0), 0.0};
+    mover.s = start.s;
+    mover.d = start.d;
+    mover.laneIndex = other.lane;
+    mover.speedAlong = other.scriptedSpeed.at(0);
+    if (other.purePursuit) mover.lane = MeasuredPolyline(road->laneCentre(other.lane));
+    movers.push_back(std::move(mover));
+    states.push_back(movers.back().state);
+  }
+  timings.assign(concrete->actions.size(), {kNaN, kNaN});
+  scheduled.assign(concrete->actions.size(), kNaN);
+  for (std::size_t a = 0; a < concrete->actions.size(); ++a) {
+    const auto& trigger = concrete->actions[a].trigger;
+    if (trigger.kind == TriggerSpec::Kind::Time) scheduled[a] = trigger.value + trigger.delay;
+  }
+  checkOverlaps();
+}
+
+void ScriptedTraffic::Impl::checkOverlaps() const {
+  std::vector<Footprint> footprints = {footprintOf(egoStart, concrete->ego.length, concrete->ego.width)};
+  std::vector<const scenario::ConcreteVehicle*> users = {&concrete->ego};
+  for (const auto& mover : movers) {
+    footprints.push_back(footprintOf(mover.state, mover.spec->length, mover.spec->width));
+    users.push_back(mover.spec);
+  }
+  for (std::size_t i = 0; i < footprints.size(); ++i) {
+    for (std::size_t j = i + 1; j < footprints.size(); ++j) {
+      const double clearance = footprintGap(footprints[i], footprints[j]);
+      if (clearance >= 0.0) continue;
+      throw ConfigError(fmt::format("{}: road user '{}' starts overlapping '{}' (clearance {:.2f} m): expected road "
+                                    "users apart at t = 0 (check their x/s/ds, lane and offset)",
+                                    concrete->where(), users[j]->id, users[i]->id, clearance));
+    }
+  }
+}
+
+/// The value a gap, headway or ttc trigger of road user `owner` compares (inf: never).
+double ScriptedTraffic::Impl::relationValue(const scenario::ConcreteTrigger& trigger, std::size_t owner,
+                                            const VehicleState& ego) const {
+  const bool to_ego = trigger.reference < 0;
+  const VehicleState& other = to_ego ? ego : states[static_cast<std::size_t>(trigger.reference)];
+  const auto& other_spec = to_ego ? concrete->ego : concrete->others[static_cast<std::size_t>(trigger.reference)];
+  const auto& self_spec = concrete->others[owner];
+  const PathRelation relation =
+      relateToPath(egoLane, road->laneWidth, footprintOf(other, other_spec.length, other_spec.width),
+                   footprintOf(states[owner], self_spec.length, self_spec.width));
+  const double gap = std::max(relation.longitudinalGap, 0.0);
+  if (trigger.kind == TriggerSpec::Kind::Gap) return relation.longitudinalGap;
+  // Speeds along the line; the rear one of the two closes in on the front one.
+  const auto along = [&](const VehicleState& state) {
+    return state.speed * std::cos(state.heading - projectExtended(egoLane, state.position()).heading);
+  };
+  const bool self_ahead = relation.longitudinalDistance > 0.0;
+  const double rear = self_ahead ? along(other) : along(states[owner]);
+  const double front = self_ahead ? along(states[owner]) : along(other);
+  if (trigger.kind == TriggerSpec::Kind::Headway) return rear > 0.1 ? gap / rear : kInf;
+  return rear - front > 1e-9 ? gap / (rear - front) : kInf;  // Ttc
+}
+
+void ScriptedTraffic::Impl::fireTriggers(const VehicleState& ego) {
+  const double now = static_cast<double>(k) * step;
+  for (std::size_t a = 0; a < concrete->actions.size(); ++a) {
+    if (!std::isnan(scheduled[a])) continue;
+    const auto& action = concrete->actions[a];
+    const auto& trigger = action.trigger;
+    if (trigger.kind == TriggerSpec::Kind::After || trigger.kind == TriggerSpec::Kind::Time) continue;
+    if (relationValue(trigger, static_cast<std::size_t>(action.owner), ego) <= trigger.value) {
+      scheduled[a] = now + trigger.delay;
+    }
+  }
+}
+
+void ScriptedTraffic::Impl::activate(std::size_t a, const VehicleState& ego) {
+  const auto& action = concrete->actions[a];
+  Mover& mover = movers[static_cast<std::size_t>(action.owner)];
+  const double t0 = scheduled[a];
+  Transition transition;
+  transition.start = t0;
+  transition.shape = action.shape;
+  if (action.kind == ActionSpec::Kind::Speed) {
+    transition.from = mover.nominalSpeed(t0, step);
+    switch (action.speedTarget) {
+      case ActionSpec::SpeedTarget::Absolute: transition.to = action.target; break;
+      case ActionSpec::SpeedTarget::RelativeToEgo: transition.to = ego.speed + action.target; break;
+      case ActionSpec::SpeedTarget::Delta: transition.to = transition.from + action.target; break;
+    }
+    transition.to = std::max(0.0, transition.to);  // a relative target below 0 means: stop
+    transition.duration = durationOf(action, transition.to - transition.from);
+    mover.speed = transition;
+  } else {
+    transition.from = mover.lateral ? mover.lateral->at(t0) : mover.d;
+    if (action.kind == ActionSpec::Kind::LaneChange) {
+      const int ego_lane = concrete->ego.lane +
+                           static_cast<int>(std::lround(projectExtended(egoLane, ego.position()).lateralOffset / road->laneWidth));
+      const int target = (action.relativeToEgoLane ? ego_lane : mover.laneIndex) + static_cast<int>(std::lround(action.target));
+      if (target < 0 || target >= road->lanes) {
+        throw ConfigError(fmt::format("{}: {}.lane_change: at t = {:.1f} s that is lane {}, expected a lane the road "
+                                      "has (0 .. {})",
+                                      concrete->where(), action.where, t0, target, road->lanes - 1));
+      }
+      mover.laneIndex = target;
+      transition.to = road->laneOffset(target);
+    } else {
+      // Lateral offsets count from the current lane's centre, crossings from the starting lane's.
+      transition.to = road->laneOffset(mover.laneIndex) + action.target;
+    }
+    transition.duration = durationOf(action, transition.to - transition.from);
+    mover.lateral = transition;
+  }
+  timings[a] = {t0, transition.end()};
+  // Actions waiting for this one's end can be scheduled now.
+  for (std::size_t b = 0; b < concrete->actions.size(); ++b) {
+    const auto& trigger = concrete->actions[b].trigger;
+    if (trigger.kind == TriggerSpec::Kind::After && trigger.action == static_cast<int>(a) && std::isnan(scheduled[b])) {
+      scheduled[b] = transition.end() + trigger.delay;
+    }
+  }
+}
+
+void ScriptedTraffic::Impl::activateDue(const VehicleState& ego) {
+  const double next = static_cast<double>(k + 1) * step;
+  // In order of their start (a chain of `after` triggers may start several in one step).
+  for (;;) {
+    std::size_t first = scheduled.size();
+    for (std::size_t a = 0; a < scheduled.size(); ++a) {
+      if (std::isnan(timings[a].start) && !std::isnan(scheduled[a]) && scheduled[a] <= next + 1e-9 &&
+          (first == scheduled.size() || scheduled[a] < scheduled[first])) {
+        first = a;
+      }
+    }
+    if (first == scheduled.size()) return;
+    activate(first, ego);
+  }
+}
+
+VehicleState ScriptedTraffic::Impl::advancePurePursuit(Mover& mover) {
   // The script sets the speed at every instant; limits must not bend it. Curvature keeps
   // the Ego's bound, which lane keeping on the generated roads never reaches.
   VehicleLimits limits;
   limits.maxAccel = 1e6;
   limits.maxDecel = 1e6;
-  const PurePursuitLateral lane_keeping;  // the Ego's defaults: lookahead max(4 m, 0.4 s * v)
+  Observation observation;
+  observation.ego = mover.state;
+  observation.lane = observeLane(mover.lane, mover.lane.project(mover.state.position()), mover.state, road->laneWidth);
+  Command command;
+  command.accel = (mover.speedAt(k + 1, step) - mover.state.speed) / step;
+  command.curvature = laneKeeping.curvature(observation);
+  const auto& noise = mover.spec->headingNoise;
+  const double disturbance = k < noise.size() ? noise[k] : 0.0;
+  return advanceKinematic(mover.state, command, step, disturbance, limits);
+}
 
-  std::vector<VehicleState> path;
-  path.reserve(static_cast<std::size_t>(steps) + 1);
-  VehicleState state{start.position.x(), start.position.y(), start.heading, vehicle.scriptedSpeed.at(0), 0.0};
-  path.push_back(state);
-  for (int k = 0; k < steps; ++k) {
-    const auto index = static_cast<std::size_t>(k);
-    Observation observation;
-    observation.ego = state;
-    observation.lane = observeLane(centre, centre.project(state.position()), state, road.laneWidth);
-    Command command;
-    command.accel = (vehicle.scriptedSpeed.at(index + 1) - state.speed) / step;
-    command.curvature = lane_keeping.curvature(observation);
-    const double disturbance = index < vehicle.headingNoise.size() ? vehicle.headingNoise[index] : 0.0;
-    state = advanceKinematic(state, command, step, disturbance, limits);
-    path.push_back(state);
+VehicleState ScriptedTraffic::Impl::advanceExact(Mover& mover) {
+  const double t1 = static_cast<double>(k + 1) * step;
+  const double speed_along = mover.speedAt(k + 1, step);
+  const double d1 = mover.lateral ? mover.lateral->at(t1) : mover.d;
+  // s advances with the mean of the speeds at both instants (trapezoid, as the Ego's model),
+  // measured along the line at the mean offset (on a bend, lanes differ in length).
+  mover.s += frame.sRate(mover.s, 0.5 * (mover.d + d1), 0.5 * (mover.speedAlong + speed_along)) * step;
+  mover.d = d1;
+  mover.speedAlong = speed_along;
+  const double lateral_rate = mover.lateral ? mover.lateral->rate(t1) : 0.0;
+  const Vec2 velocity = frame.velocity(mover.s, mover.d, speed_along, lateral_rate);
+  const Vec2 position = frame.point(mover.s, mover.d);
+  VehicleState next;
+  next.x = position.x();
+  next.y = position.y();
+  next.speed = velocity.norm();
+  // Standing still, it keeps the heading it had (a pedestrian that crossed faces across).
+  next.heading = next.speed > 1e-9 ? headingOf(velocity) : mover.state.heading;
+  next.accel = (next.speed - mover.state.speed) / step;
+  return next;
+}
+
+ScriptedTraffic::ScriptedTraffic(const scenario::ConcreteScenario& concrete, const road::RoadGeometry& road)
+    : impl_(std::make_unique<Impl>()) {
+  impl_->concrete = &concrete;
+  impl_->road = &road;
+  impl_->init();
+}
+
+ScriptedTraffic::ScriptedTraffic(ScriptedTraffic&&) noexcept = default;
+ScriptedTraffic& ScriptedTraffic::operator=(ScriptedTraffic&&) noexcept = default;
+ScriptedTraffic::~ScriptedTraffic() = default;
+
+const VehicleState& ScriptedTraffic::egoStart() const { return impl_->egoStart; }
+std::size_t ScriptedTraffic::instant() const { return impl_->k; }
+const std::vector<VehicleState>& ScriptedTraffic::states() const { return impl_->states; }
+const std::vector<ScriptedTraffic::ActionTiming>& ScriptedTraffic::timings() const { return impl_->timings; }
+
+void ScriptedTraffic::step(const VehicleState& ego) {
+  Impl& impl = *impl_;
+  impl.fireTriggers(ego);
+  impl.activateDue(ego);
+  for (std::size_t o = 0; o < impl.movers.size(); ++o) {
+    Mover& mover = impl.movers[o];
+    mover.state = mover.spec->purePursuit ? impl.advancePurePursuit(mover) : impl.advanceExact(mover);
+    impl.states[o] = mover.state;
   }
-  if (path.size() > 1) path[0].accel = path[1].accel;  // as fillAccelerationFromSpeed does for every track
-  return path;
+  ++impl.k;
+}
+
+bool ScriptedTraffic::pastRoadEnd(std::size_t other) const {
+  const Mover& mover = impl_->movers.at(other);
+  const double front = 0.5 * mover.spec->length;
+  if (mover.spec->purePursuit) return mover.lane.project(mover.state.position()).arcLength + front >= mover.lane.length();
+  return mover.s + front >= impl_->frame.length();
+}
+
+std::vector<std::vector<VehicleState>> plannedPaths(const scenario::ConcreteScenario& concrete,
+                                                    const road::RoadGeometry& road) {
+  ScriptedTraffic traffic(concrete, road);
+  const EgoStandIn ego(concrete, road);
+  const auto instants = static_cast<std::size_t>(concrete.steps()) + 1;
+  std::vector<std::vector<VehicleState>> paths(concrete.others.size());
+  for (auto& path : paths) path.reserve(instants);
+  for (std::size_t k = 0; k < instants; ++k) {
+    if (k > 0) traffic.step(ego.at(static_cast<double>(k - 1) * concrete.step()));
+    for (std::size_t o = 0; o < paths.size(); ++o) paths[o].push_back(traffic.states()[o]);
+  }
+  for (auto& path : paths) {
+    if (path.size() > 1) path[0].accel = path[1].accel;  // as fillAccelerationFromSpeed does for every track
+  }
+  return paths;
 }
 
 }  // namespace vsd::sim

@@ -21,13 +21,16 @@ struct TraceFileWriter::Impl {
   h5::Appendable<std::uint8_t> ok;
   h5::Appendable<double> states;
   h5::Appendable<std::uint8_t> valid;
+  h5::Appendable<double> sampleLength;
+  h5::Appendable<double> sampleWidth;
+  h5::Appendable<std::int8_t> sampleType;
   std::size_t buffered = 0;
   bool open = true;
   std::filesystem::path name;  ///< the file as messages name it (its final name)
 
   void flush() {
     try {
-      h5::flushAll(sample, ok, states, valid);
+      h5::flushAll(sample, ok, states, valid, sampleLength, sampleWidth, sampleType);
     } catch (const H5::Exception& error) {
       failed(error);
     }
@@ -67,6 +70,9 @@ TraceFileWriter::TraceFileWriter(const std::filesystem::path& path, const std::s
     impl_->ok = h5::Appendable<std::uint8_t>(root, "ok", {}, kChunkRows, kDeflateLevel);
     impl_->states = h5::Appendable<double>(root, "states", {v, t, kTraceFields}, kChunkRows, kDeflateLevel);
     impl_->valid = h5::Appendable<std::uint8_t>(root, "valid", {v, t}, kChunkRows, kDeflateLevel);
+    impl_->sampleLength = h5::Appendable<double>(root, "sample_vehicle_length", {v}, kChunkRows, kDeflateLevel);
+    impl_->sampleWidth = h5::Appendable<double>(root, "sample_vehicle_width", {v}, kChunkRows, kDeflateLevel);
+    impl_->sampleType = h5::Appendable<std::int8_t>(root, "sample_vehicle_type", {v}, kChunkRows, kDeflateLevel);
   } catch (const H5::Exception& error) {
     throw IoError(fmt::format("{}: cannot create trace file: {}", impl_->name.string(), h5::errorCause(error)));
   }
@@ -88,6 +94,9 @@ void TraceFileWriter::append(std::uint64_t sample, const Trace& trace, bool ok) 
   impl_->sample.push(static_cast<std::int64_t>(sample));
   impl_->ok.push(ok ? 1 : 0);
   for (const auto& track : trace.vehicles) {
+    impl_->sampleLength.push(track.length);
+    impl_->sampleWidth.push(track.width);
+    impl_->sampleType.push(static_cast<std::int8_t>(track.type));
     for (std::size_t k = 0; k < impl_->instants; ++k) {
       const bool present = k < track.states.size();
       const VehicleState state = present ? track.states[k] : VehicleState{};
@@ -118,6 +127,10 @@ struct TraceFileReader::Impl {
   std::vector<std::string> vehicleIds;
   std::vector<double> lengths;
   std::vector<double> widths;
+  bool perSample = false;  ///< vsd-traces/2: sizes and types per sample
+  H5::DataSet sampleLength;
+  H5::DataSet sampleWidth;
+  H5::DataSet sampleType;
   std::vector<std::int64_t> samples;
   std::vector<std::uint8_t> ok;
   H5::DataSet states;
@@ -137,9 +150,15 @@ TraceFileReader::TraceFileReader(const std::filesystem::path& path) : impl_(std:
     H5::Group root = impl_->file.openGroup("/");
     if (!h5::hasAttribute(root, "schema")) throw DatasetError(path.string() + ": not a vsd-sumo trace file (no schema)");
     const auto schema = h5::readStringAttribute(root, "schema");
-    if (schema != kTraceSchema) {
-      throw DatasetError(fmt::format("{}: trace schema '{}' is not supported (expected '{}')", path.string(), schema,
-                                     kTraceSchema));
+    if (schema != kTraceSchema && schema != kTraceSchemaVersion1) {
+      throw DatasetError(fmt::format("{}: trace schema '{}' is not supported (expected '{}' or '{}')", path.string(),
+                                     schema, kTraceSchema, kTraceSchemaVersion1));
+    }
+    impl_->perSample = schema == kTraceSchema;
+    if (impl_->perSample) {
+      impl_->sampleLength = root.openDataSet("sample_vehicle_length");
+      impl_->sampleWidth = root.openDataSet("sample_vehicle_width");
+      impl_->sampleType = root.openDataSet("sample_vehicle_type");
     }
     impl_->functionalScenario = h5::readStringAttribute(root, "functional_scenario");
     impl_->step = h5::readDoubleAttribute(root, "step");
@@ -168,7 +187,10 @@ void TraceFileReader::checkShapes() const {
   const bool ok = d.ok.size() == n && d.lengths.size() == v && d.widths.size() == v &&
                   h5::shapeOf(d.states) == std::vector<hsize_t>{n, v, t, kTraceFields} &&
                   h5::shapeOf(d.valid) == std::vector<hsize_t>{n, v, t};
-  if (!ok) {
+  const bool sizes_ok = !d.perSample || (h5::shapeOf(d.sampleLength) == std::vector<hsize_t>{n, v} &&
+                                          h5::shapeOf(d.sampleWidth) == std::vector<hsize_t>{n, v} &&
+                                          h5::shapeOf(d.sampleType) == std::vector<hsize_t>{n, v});
+  if (!ok || !sizes_ok) {
     throw DatasetError(fmt::format("{}: damaged trace file: array shapes do not match {} samples x {} vehicles x {} "
                                    "instants",
                                    d.path.string(), n, v, t));
@@ -188,6 +210,10 @@ Trace TraceFileReader::trace(std::size_t row) const {
   if (row >= size()) throw DatasetError(fmt::format("{}: row {} out of range (size {})", impl_->path.string(), row, size()));
   const auto states = h5::readRows<double>(impl_->states, row, 1);
   const auto valid = h5::readRows<std::uint8_t>(impl_->valid, row, 1);
+  const auto lengths = impl_->perSample ? h5::readRows<double>(impl_->sampleLength, row, 1) : impl_->lengths;
+  const auto widths = impl_->perSample ? h5::readRows<double>(impl_->sampleWidth, row, 1) : impl_->widths;
+  const auto types = impl_->perSample ? h5::readRows<std::int8_t>(impl_->sampleType, row, 1)
+                                      : std::vector<std::int8_t>(impl_->vehicleIds.size(), 0);
   Trace trace;
   trace.step = impl_->step;
   const std::size_t t = impl_->instants;
@@ -195,8 +221,13 @@ Trace TraceFileReader::trace(std::size_t row) const {
     VehicleTrack track;
     track.id = impl_->vehicleIds[v];
     track.role = v == 0 ? VehicleRole::Ego : VehicleRole::Other;
-    track.length = impl_->lengths[v];
-    track.width = impl_->widths[v];
+    track.length = lengths[v];
+    track.width = widths[v];
+    if (types[v] < 0 || static_cast<std::size_t>(types[v]) >= roadUserKinds().size()) {
+      throw DatasetError(fmt::format("{}: damaged trace file: sample row {} vehicle {} has road-user type {}",
+                                     impl_->path.string(), row, v, types[v]));
+    }
+    track.type = static_cast<RoadUserType>(types[v]);
     for (std::size_t k = 0; k < t; ++k) {
       const double* s = &states[(v * t + k) * kTraceFields];
       track.states.push_back({s[0], s[1], s[2], s[3], s[4]});

@@ -63,6 +63,7 @@ struct StoredSample {
   std::vector<std::int32_t> polylineVectorCount;
   std::vector<double> polylineLength;     ///< m, per polyline (0 for lanes)
   std::vector<double> polylineWidth;
+  std::vector<std::int8_t> polylineRoadUser;  ///< RoadUserType code per polyline (-1 for lanes)
   std::vector<float> vectors;             ///< inline vectors, kFeatures per vector
   std::vector<std::uint8_t> vectorValid;
   std::string label;
@@ -92,6 +93,9 @@ StoredSample storedSample(const VectorizedScene& scene, bool share) {
     stored.polylineVectorCount.push_back(static_cast<std::int32_t>(polyline.vectors.size()));
     stored.polylineLength.push_back(polyline.length);
     stored.polylineWidth.push_back(polyline.width);
+    stored.polylineRoadUser.push_back(polyline.type == ObjectType::LaneBoundary
+                                          ? std::int8_t{-1}
+                                          : static_cast<std::int8_t>(polyline.roadUser));
     if (shared) continue;
     for (std::size_t v = 0; v < polyline.vectors.size(); ++v) {
       const auto& f = polyline.vectors[v];
@@ -140,6 +144,7 @@ struct DatasetWriter::Impl {
   h5::Appendable<std::int32_t> polylineVectorCount;
   h5::Appendable<double> polylineLength;
   h5::Appendable<double> polylineWidth;
+  h5::Appendable<std::int8_t> polylineRoadUser;
   h5::Appendable<std::int64_t> samplePolylineStart;
   h5::Appendable<std::int32_t> samplePolylineCount;
   h5::Appendable<std::int32_t> sampleEgoPolyline;
@@ -176,6 +181,7 @@ struct DatasetWriter::Impl {
       polylineVectorCount.push(stored.polylineVectorCount[p]);
       polylineLength.push(stored.polylineLength[p]);
       polylineWidth.push(stored.polylineWidth[p]);
+      polylineRoadUser.push(stored.polylineRoadUser[p]);
       polylineShared.push(stored.polylineShared[p]);
       if (stored.polylineShared[p]) {
         polylineVectorStart.push(stored.sharedStart[p]);
@@ -210,7 +216,7 @@ struct DatasetWriter::Impl {
 
   void flush() {
     h5::flushAll(vectors, vectorValid, polylineType, polylineShared, polylineVectorStart, polylineVectorCount,
-                 polylineLength, polylineWidth, samplePolylineStart, samplePolylineCount, sampleEgoPolyline,
+                 polylineLength, polylineWidth, polylineRoadUser, samplePolylineStart, samplePolylineCount, sampleEgoPolyline,
                  sampleOrigin, sampleLabel, sampleIndex, sampleSource, sampleEgo, sampleT0, targets, targetValid);
     if (inputs) inputs->flush();
     if (metrics) metrics->flush();
@@ -259,6 +265,7 @@ DatasetWriter::DatasetWriter(const fs::path& path, DatasetHeader header, const f
     impl_->polylineVectorCount = h5::Appendable<std::int32_t>(root, "polyline_vector_count", {}, kChunkVectors, kDeflate);
     impl_->polylineLength = h5::Appendable<double>(root, "polyline_length", {}, kChunkVectors, kDeflate);
     impl_->polylineWidth = h5::Appendable<double>(root, "polyline_width", {}, kChunkVectors, kDeflate);
+    impl_->polylineRoadUser = h5::Appendable<std::int8_t>(root, "polyline_road_user", {}, kChunkVectors, kDeflate);
     impl_->samplePolylineStart = h5::Appendable<std::int64_t>(root, "sample_polyline_start", {}, kChunkSamples, kDeflate);
     impl_->samplePolylineCount = h5::Appendable<std::int32_t>(root, "sample_polyline_count", {}, kChunkSamples, kDeflate);
     impl_->sampleEgoPolyline = h5::Appendable<std::int32_t>(root, "sample_ego_polyline", {}, kChunkSamples, kDeflate);
@@ -361,6 +368,7 @@ struct DatasetReader::Impl {
   H5::DataSet vectors, vectorValid, polylineType, polylineShared, polylineVectorStart, polylineVectorCount, targets,
       targetValid;
   std::optional<H5::DataSet> polylineLength, polylineWidth;  ///< absent in version-1 files
+  std::optional<H5::DataSet> polylineRoadUser;               ///< absent in version-1 and -2 files
   std::vector<double> sharedVectors;  ///< the map's lane vectors (read eagerly: small)
   std::optional<H5::DataSet> inputs, metrics;
 
@@ -388,12 +396,31 @@ struct DatasetReader::Impl {
       sizes.second = h5::readRows<double>(*polylineWidth, first, count);
       return sizes;
     }
+    const RoadUserKind& car = roadUserKind(RoadUserType::Car);
     for (auto type : types) {
       const bool vehicle = type != static_cast<std::int8_t>(ObjectType::LaneBoundary);
-      sizes.first.push_back(vehicle ? kAssumedVehicleLength : 0.0);
-      sizes.second.push_back(vehicle ? kAssumedVehicleWidth : 0.0);
+      sizes.first.push_back(vehicle ? car.length : 0.0);
+      sizes.second.push_back(vehicle ? car.width : 0.0);
     }
     return sizes;
+  }
+  /// Road-user kinds of polylines [first, first + count): stored in version 3, cars for the
+  /// vehicles of older files; -1 for lanes. Checked against the table.
+  std::vector<std::int8_t> polylineRoadUsers(const std::vector<std::int8_t>& types, hsize_t first, hsize_t count) const {
+    std::vector<std::int8_t> kinds;
+    if (polylineRoadUser) {
+      kinds = h5::readRows<std::int8_t>(*polylineRoadUser, first, count);
+    } else {
+      for (auto type : types) kinds.push_back(type == static_cast<std::int8_t>(ObjectType::LaneBoundary) ? -1 : 0);
+    }
+    for (std::size_t p = 0; p < kinds.size(); ++p) {
+      const bool lane = types[p] == static_cast<std::int8_t>(ObjectType::LaneBoundary);
+      if (lane ? kinds[p] != -1 : kinds[p] < 0 || static_cast<std::size_t>(kinds[p]) >= roadUserKinds().size()) {
+        fail(fmt::format("array 'polyline_road_user': polyline {} has road-user kind {} (expected {})", first + p,
+                         kinds[p], lane ? "-1 for a lane boundary" : "a code of " + roadUserTypeList()));
+      }
+    }
+    return kinds;
   }
 
   /// Sample `i` exactly as stored.
@@ -412,6 +439,7 @@ StoredSample DatasetReader::Impl::stored(std::size_t i) const {
     stored.polylineVectorCount = h5::readRows<std::int32_t>(polylineVectorCount, first_polyline, polylines);
     std::tie(stored.polylineLength, stored.polylineWidth) =
         polylineSizes(stored.polylineType, first_polyline, polylines);
+    stored.polylineRoadUser = polylineRoadUsers(stored.polylineType, first_polyline, polylines);
     const auto [first_vector, vector_count] =
         inlineVectorRange(i, stored.polylineShared, stored.sharedStart, stored.polylineVectorCount);
     stored.vectors = h5::readRows<float>(vectors, first_vector, vector_count);
@@ -487,11 +515,12 @@ void DatasetReader::Impl::readHeader(const H5::Group& root) {
   reading = "attributes";
   if (!h5::hasAttribute(root, "schema")) fail("not a vsd-sumo dataset (no 'schema' attribute)");
   const auto schema = h5::readStringAttribute(root, "schema");
-  if (schema != kDatasetSchema && schema != kDatasetSchemaVersion1) {
-    fail(fmt::format("dataset schema '{}' is not supported by this version (expected '{}' or '{}')", schema,
-                     kDatasetSchema, kDatasetSchemaVersion1));
+  if (schema != kDatasetSchema && schema != kDatasetSchemaVersion2 && schema != kDatasetSchemaVersion1) {
+    fail(fmt::format("dataset schema '{}' is not supported by this version (expected '{}', '{}' or '{}')", schema,
+                     kDatasetSchema, kDatasetSchemaVersion2, kDatasetSchemaVersion1));
   }
   header.vehicleSizesAssumed = schema == kDatasetSchemaVersion1;
+  header.roadUsersAssumed = schema != kDatasetSchema;
   const auto features = h5::readIntAttribute(root, "feature_version");
   if (features != kFeatureVersion) {
     fail(fmt::format("feature version {} is not supported (expected {})", features, kFeatureVersion));
@@ -546,6 +575,7 @@ void DatasetReader::Impl::openArrays(const H5::Group& root) {
     if (!header.vehicleSizesAssumed) {
       for (const char* name : {"polyline_length", "polyline_width"}) result.emplace(name, open(name));
     }
+    if (!header.roadUsersAssumed) result.emplace("polyline_road_user", open("polyline_road_user"));
     return result;
   }();
   reading = "input_names";
@@ -565,10 +595,12 @@ void DatasetReader::Impl::openArrays(const H5::Group& root) {
       {"polyline_shared", {p}},       {"shared_vectors", {shared, kFeatures}},
       {"polyline_vector_start", {p}}, {"polyline_vector_count", {p}}, {"targets", {n, f, 2}},
       {"target_valid", {n, f}},       {"inputs", {n, header.inputNames.size()}},
-      {"metrics", {n, header.metricNames.size()}}, {"polyline_length", {p}}, {"polyline_width", {p}}};
+      {"metrics", {n, header.metricNames.size()}}, {"polyline_length", {p}}, {"polyline_width", {p}},
+      {"polyline_road_user", {p}}};
   for (const auto& [name, shape] : expected) {
     const bool sizes = name == "polyline_length" || name == "polyline_width";
     if (sizes && header.vehicleSizesAssumed) continue;  // version 1 stores none
+    if (name == "polyline_road_user" && header.roadUsersAssumed) continue;  // versions 1 and 2 store none
     const auto it = arrays.find(name);
     if (it == arrays.end()) {
       // inputs/metrics are left out when the header names none.
@@ -596,6 +628,7 @@ void DatasetReader::Impl::openArrays(const H5::Group& root) {
     polylineLength = arrays.at("polyline_length");
     polylineWidth = arrays.at("polyline_width");
   }
+  if (!header.roadUsersAssumed) polylineRoadUser = arrays.at("polyline_road_user");
 }
 
 void DatasetReader::Impl::readIndex(const H5::Group& root) {
@@ -673,8 +706,8 @@ DatasetReader::DatasetReader(const fs::path& path) : impl_(std::make_unique<Impl
   }
   d.checkIndex();
   if (d.header.vehicleSizesAssumed) {
-    spdlog::warn("{}: a {} file stores no vehicle sizes; assuming {} m x {} m for every vehicle", path.string(),
-                 kDatasetSchemaVersion1, kAssumedVehicleLength, kAssumedVehicleWidth);
+    spdlog::warn("{}: a {} file stores no vehicle sizes; assuming a car's {} m x {} m for every vehicle", path.string(),
+                 kDatasetSchemaVersion1, roadUserKind(RoadUserType::Car).length, roadUserKind(RoadUserType::Car).width);
   }
 }
 
@@ -732,6 +765,7 @@ VectorizedScene DatasetReader::scene(std::size_t sample) const {
     const auto starts = h5::readRows<std::int64_t>(d.polylineVectorStart, first_polyline, polylines);
     const auto counts = h5::readRows<std::int32_t>(d.polylineVectorCount, first_polyline, polylines);
     const auto sizes = d.polylineSizes(types, first_polyline, polylines);
+    const auto road_users = d.polylineRoadUsers(types, first_polyline, polylines);
     const auto [first_vector, vector_count] = d.inlineVectorRange(sample, shared, starts, counts);
     const auto raw = h5::readRows<float>(d.vectors, first_vector, vector_count);
     const auto valid = h5::readRows<std::uint8_t>(d.vectorValid, first_vector, vector_count);
@@ -744,6 +778,7 @@ VectorizedScene DatasetReader::scene(std::size_t sample) const {
       polyline.type = static_cast<ObjectType>(types[p]);
       polyline.length = sizes.first[p];
       polyline.width = sizes.second[p];
+      if (road_users[p] >= 0) polyline.roadUser = static_cast<RoadUserType>(road_users[p]);
       if (shared[p]) {
         const auto start = static_cast<std::size_t>(starts[p]);
         const auto count = static_cast<std::size_t>(counts[p]);
@@ -1010,7 +1045,9 @@ DatasetSummary summarizeDataset(const fs::path& path) {
   const DatasetReader reader(path);
   DatasetSummary summary;
   summary.path = path;
-  summary.schema = reader.header().vehicleSizesAssumed ? kDatasetSchemaVersion1 : kDatasetSchema;
+  summary.schema = reader.header().vehicleSizesAssumed ? kDatasetSchemaVersion1
+                   : reader.header().roadUsersAssumed  ? kDatasetSchemaVersion2
+                                                       : kDatasetSchema;
   summary.header = reader.header();
   summary.samples = reader.size();
   summary.bytes = fs::file_size(path);

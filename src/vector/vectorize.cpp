@@ -57,6 +57,7 @@ VectorizedScene buildScene(const std::string& label, const Trace& trace, std::si
     ScenePolyline polyline;
     polyline.type = type;
     polyline.length = track.length;
+    polyline.roadUser = track.type;
     polyline.width = track.width;
     for (std::size_t k = first + 1; k <= last && k < track.states.size(); ++k) {
       const auto& from = track.states[k - 1];
@@ -213,6 +214,7 @@ Trace sceneTrace(const VectorizedScene& scene, const Polyline& ego_future) {
   ego.role = VehicleRole::Ego;
   ego.length = scene.polylines.at(scene.egoPolyline).length;
   ego.width = scene.polylines.at(scene.egoPolyline).width;
+  ego.type = scene.polylines.at(scene.egoPolyline).roadUser;
   for (std::size_t k = 1; k < instants && k - 1 < scene.targetValid.size(); ++k) ego.valid[k] = scene.targetValid[k - 1];
   trace.vehicles.push_back(std::move(ego));
 
@@ -221,6 +223,7 @@ Trace sceneTrace(const VectorizedScene& scene, const Polyline& ego_future) {
     VehicleTrack track;
     track.length = polyline.length;
     track.width = polyline.width;
+    track.type = polyline.roadUser;
     track.states.assign(instants, VehicleState{});
     track.valid.assign(instants, 0);
     for (std::size_t v = 0; v < polyline.vectors.size(); ++v) {

@@ -73,7 +73,7 @@ TEST(Cli, RunPrintsASummaryAndWritesTheOutputs) {
   const auto python = test::writeFile(dir.path() / "read.py", R"(
 import sys, h5py, numpy as np
 with h5py.File(sys.argv[1], "r") as f:
-    assert f.attrs["schema"] == "vsd-traces/1", f.attrs["schema"]
+    assert f.attrs["schema"] == "vsd-traces/2", f.attrs["schema"]
     assert f.attrs["functional_scenario"] == "acc_lk"
     assert list(f["vehicle_ids"].asstr()[:]) == ["ego", "co"]
     assert list(f["fields"].asstr()[:]) == ["x", "y", "heading", "speed", "accel"]
@@ -169,7 +169,7 @@ TEST(Cli, DatasetsFromRunAndExportValidateAndLoadInPython) {
 
   const auto info = test::run({test::vsdSumo().string(), "dataset", "info", map.string()}, dir.path());
   EXPECT_EQ(info.exitCode, 0);
-  for (const char* text : {"schema vsd-dataset/2", "kind map", "curve.xodr", "bytes per sample", "timestamp"}) {
+  for (const char* text : {"schema vsd-dataset/3", "kind map", "curve.xodr", "bytes per sample", "timestamp"}) {
     EXPECT_NE(info.output.find(text), std::string::npos) << text << "\n" << info.output;
   }
   const auto svg = dir.path() / "s3.svg";

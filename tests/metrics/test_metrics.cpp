@@ -1,5 +1,6 @@
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <set>
 
@@ -224,11 +225,11 @@ TEST(MetricSet, DefaultsFollowWhatTheSourceProvides) {
   const Availability generated{/*otherVehicles=*/true, /*egoLane=*/true, /*scenarioFrame=*/true};
   const Availability map{/*otherVehicles=*/true, /*egoLane=*/false, /*scenarioFrame=*/false};
   EXPECT_EQ(MetricSet({}, ego_alone, "w").names(),
-            (std::vector<std::string>{"a_min", "p_lat_max", "y_max", "lane_offset_max"}));
+            (std::vector<std::string>{"a_min", "p_lat_max", "y_max", "lane_offset_max", "decel_max", "jerk_max"}));
   EXPECT_EQ(MetricSet({}, generated, "w").names(), metricNames());
   EXPECT_EQ(MetricSet({}, map, "w").names(),
             (std::vector<std::string>{"a_min", "d_min", "d_lon_min", "ttc_min", "thw_min", "lane_offset_max", "pet_min",
-                                      "drac_max"}));
+                                      "drac_max", "decel_max", "jerk_max"}));
   EXPECT_THROW(MetricSet({"y_max"}, map, "--metrics"), ConfigError);
   EXPECT_THROW(MetricSet({"d_min"}, ego_alone, "lk.yaml: metrics"), ConfigError);
   EXPECT_THROW(MetricSet({"p_lat_max"}, map, "--metrics"), ConfigError);
@@ -249,4 +250,74 @@ TEST(MetricSet, CollisionRuleComesFromTheRegistry) {
   const MetricSet without_gap({"a_min", "ttc_min"}, generated, "w");
   EXPECT_EQ(without_gap.collisionRule(), "");
   EXPECT_FALSE(without_gap.collision({-3.0, 0.0}));
+}
+
+namespace {
+
+/// The Ego at 10 m/s along y = 0; another car 25 m ahead (centres) at 5 m/s that moves from
+/// the next lane (y = 3.5) into the Ego's between t = 1 s and t = 3 s.
+Trace cutIn() {
+  Trace trace;
+  trace.step = 0.2;
+  VehicleTrack ego;
+  ego.role = VehicleRole::Ego;
+  ego.length = 5.0;
+  ego.width = 1.8;
+  VehicleTrack other;
+  other.length = 5.0;
+  other.width = 1.8;
+  for (int k = 0; k <= 25; ++k) {
+    const double t = 0.2 * k;
+    const double y = 3.5 * (1.0 - std::clamp((t - 1.0) / 2.0, 0.0, 1.0));
+    ego.states.push_back({10.0 * t, 0.0, 0.0, 10.0, 0.0});
+    other.states.push_back({25.0 + 5.0 * t, y, 0.0, 5.0, 0.0});
+    ego.valid.push_back(1);
+    other.valid.push_back(1);
+  }
+  trace.vehicles = {ego, other};
+  return trace;
+}
+
+}  // namespace
+
+// In path from the instant it reaches into the Ego's corridor (|y| < 1.8 m, from t = 2.0 s):
+// the in-path TTC is the gap then over the closing speed, not the one of the whole run.
+TEST(Metrics, InPathTimeToCollisionFollowsACutIn) {
+  const Trace trace = cutIn();
+  const Polyline lane = {{-50.0, 0.0}, {200.0, 0.0}};
+  // First instant in path: t = 2.0 s (y = 1.75 m); gap 25 + 10 - 20 - 5 = 10 m at 5 m/s closing,
+  // shrinking to 25 + 25 - 50 - 5 = -5 (collision) at t = 5 s: the minimum is 0.
+  EXPECT_NEAR(value("ttc_inpath_min", trace, lane), 0.0, 1e-9);
+  Trace early = trace;
+  for (auto* track : {&early.vehicles[0], &early.vehicles[1]}) {
+    track->states.resize(11);  // up to t = 2.0 s
+    track->valid.resize(11);
+  }
+  EXPECT_NEAR(value("ttc_inpath_min", early, lane), 10.0 / 5.0, 1e-9);
+  EXPECT_NEAR(value("thw_inpath_min", early, lane), 10.0 / 10.0, 1e-9);
+  // Before it enters the path there is no in-path object at all.
+  for (auto* track : {&early.vehicles[0], &early.vehicles[1]}) {
+    track->states.resize(10);
+    track->valid.resize(10);
+  }
+  EXPECT_TRUE(std::isinf(value("ttc_inpath_min", early, lane)));
+}
+
+TEST(Metrics, LateralClearanceCountsRoadUsersBesideTheEgo) {
+  Trace trace = following(10.0, 10.0, 0.0);
+  for (auto& state : trace.vehicles[1].states) {
+    state.x -= 5.0;  // beside the Ego: centres level
+    state.y = 2.5;
+  }
+  const Polyline lane = {{-50.0, 0.0}, {200.0, 0.0}};
+  EXPECT_NEAR(value("lat_clearance_min", trace, lane), 2.5 - 0.9 - 1.25, 1e-9);  // leader 2.5 m wide
+  EXPECT_TRUE(std::isinf(value("lat_clearance_min", following(10.0, 10.0, 20.0), lane)));  // never beside
+}
+
+TEST(Metrics, EgoDecelerationAndJerk) {
+  Trace trace = following(10.0, 10.0, 20.0);
+  auto& ego = trace.vehicles[0];
+  for (std::size_t k = 0; k < ego.states.size(); ++k) ego.states[k].accel = k >= 10 ? -4.0 : 0.0;
+  EXPECT_NEAR(value("decel_max", trace), 4.0, 1e-12);
+  EXPECT_NEAR(value("jerk_max", trace), 4.0 / 0.2, 1e-9);
 }

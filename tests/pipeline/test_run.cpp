@@ -1,6 +1,7 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <cmath>
 
 #include "test_support.hpp"
@@ -314,4 +315,65 @@ TEST(Run, VehicleSizesTravelIntoTheDatasetAndItsMetrics) {
     const auto values = pipeline::metricsOfFuture(metric_set, scene, scene.target);
     EXPECT_NEAR(values[0], csv.number(i, csv.column("d_min")), 0.25) << "sample " << i;
   }
+}
+
+// --reference: every concrete scenario again with the reference driver as the Ego, both
+// outcomes side by side; without it concrete.csv keeps its columns.
+TEST(Run, ReferenceRunsEveryScenarioAgainBesideTheSystem) {
+  TemporaryDirectory dir;
+  auto run_options = options(test::scenarioFile("alks/cut_in_unavoidable.yaml"), dir.path() / "ref", 6);
+  run_options.reference = "paper_ego";
+  const auto summary = runScenarios(run_options);
+  EXPECT_EQ(summary.ok, 6u);
+  const auto csv = CsvTable::read(dir.path() / "ref" / "concrete.csv");
+  const auto& header = csv.header();
+  const auto column = [&](const std::string& name) {
+    const auto it = std::find(header.begin(), header.end(), name);
+    EXPECT_NE(it, header.end()) << name;
+    return static_cast<std::size_t>(std::distance(header.begin(), it));
+  };
+  const std::size_t d_min = column("d_min");
+  const std::size_t reference_d_min = column("reference_d_min");
+  const std::size_t criterion = column(kReferenceCriterion);
+  EXPECT_EQ(header.back(), kReferenceCriterion);
+  std::uint64_t avoided = 0;
+  for (std::size_t row = 0; row < csv.rows(); ++row) {
+    EXPECT_EQ(csv.cell(row, column("reference_status")), "ok");
+    const bool sut = std::stod(csv.cell(row, d_min)) <= 0.0;
+    const bool reference = std::stod(csv.cell(row, reference_d_min)) <= 0.0;
+    EXPECT_EQ(csv.cell(row, criterion), sut && !reference ? "1" : "0") << row;
+    avoided += sut && !reference ? 1 : 0;
+  }
+  EXPECT_EQ(summary.referenceAvoidsSutCollides, avoided);
+
+  run_options.reference.clear();
+  run_options.outputDir = dir.path() / "plain";
+  runScenarios(run_options);
+  const auto plain = CsvTable::read(dir.path() / "plain" / "concrete.csv");
+  EXPECT_EQ(plain.header().back(), "lane_offset_max");
+  for (std::size_t row = 0; row < plain.rows(); ++row) {
+    EXPECT_EQ(plain.cell(row, d_min), csv.cell(row, d_min));  // the system's outcome is the same
+  }
+}
+
+TEST(Run, ABadSampleStopsTheRunWithOneLineAndWritesNothing) {
+  TemporaryDirectory dir;
+  const auto scenario = test::writeFile(dir.path() / "overlap.yaml", R"(
+name: overlap
+inputs: [{name: g, min: -30, max: 30}]
+road: {shape: arc, length: 200, lanes: 2}
+vehicles:
+  ego: {s: 40, lane: 0, speed: 10, controller: {name: idm}}
+  others:
+    - {id: a, ds: g, lane: 0, speed: 10}
+)");
+  try {
+    runScenarios(options(scenario, dir.path() / "out", 50));
+    FAIL() << "expected a ConfigError";
+  } catch (const ConfigError& error) {
+    EXPECT_NE(std::string(error.what()).find("overlap.yaml: sample "), std::string::npos) << error.what();
+    EXPECT_NE(std::string(error.what()).find("road user 'a' starts overlapping 'ego'"), std::string::npos)
+        << error.what();
+  }
+  EXPECT_FALSE(fs::exists(dir.path() / "out"));
 }

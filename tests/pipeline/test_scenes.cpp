@@ -78,3 +78,24 @@ TEST(PlannedScene, MatchesTheSceneTheSimulationProduces) {
                 worst.lanes, worst.vehicles, worst.ego);
   }
 }
+
+// A library scenario's planned scene: every lane of the arc road, and the road user with its
+// drawn kind and size along its whole path (moved with the Ego's stand-in).
+TEST(PlannedScene, HoldsEveryLaneAndRoadUserOfALibraryScenario) {
+  const auto logical = scenario::loadLogicalScenario(test::scenarioFile("alks/cut_in.yaml"));
+  for (std::uint64_t i = 0; i < 5; ++i) {
+    const auto concrete = scenario::sampleConcreteScenario(logical, 3, i);
+    const auto scene = plannedScene(concrete);
+    std::size_t lanes = 0;
+    const vector::ScenePolyline* other = nullptr;
+    for (const auto& polyline : scene.polylines) {
+      if (polyline.type == vector::ObjectType::LaneBoundary) ++lanes;
+      if (polyline.type == vector::ObjectType::Vehicle) other = &polyline;
+    }
+    EXPECT_EQ(lanes, 6u);  // three lanes, two boundaries each
+    ASSERT_NE(other, nullptr);
+    EXPECT_EQ(other->roadUser, concrete.others[0].type);
+    EXPECT_EQ(other->length, roadUserKind(concrete.others[0].type).length);
+    EXPECT_EQ(other->vectors.size(), 25u);
+  }
+}

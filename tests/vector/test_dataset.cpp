@@ -5,6 +5,7 @@
 #include "test_support.hpp"
 #include "vsd/core/error.hpp"
 #include "vsd/core/files.hpp"
+#include "vsd/core/hdf5.hpp"
 #include "vsd/vector/dataset.hpp"
 #include "vsd/vector/vectorize.hpp"
 
@@ -135,8 +136,11 @@ TEST(Dataset, SharedLanePoolIsStoredOnceAndReadBack) {
   const DatasetReader reader(path);
   expectSame(scene, reader.scene(49), 1e-3);
   EXPECT_TRUE(validateDataset(path).ok());
-  // 50 samples of ~50 lane vectors each, but the lane vectors are stored once.
-  EXPECT_LT(fs::file_size(path), 50u * 50u * 7u * 4u);
+  // 50 samples of ~50 lane vectors each, but the lane vectors are stored once: the inline
+  // vectors are only each sample's Ego vector.
+  H5::H5File file(path.string(), H5F_ACC_RDONLY);
+  EXPECT_EQ(h5::shapeOf(file.openDataSet("vectors")).front(), 50u * scene.polylines.at(scene.egoPolyline).vectors.size());
+  EXPECT_GT(h5::shapeOf(file.openDataSet("shared_vectors")).front(), 20u);
 }
 
 TEST(Dataset, ForeignCorruptAndUnknownFilesAreRejectedByName) {
@@ -158,13 +162,13 @@ TEST(Dataset, ForeignCorruptAndUnknownFilesAreRejectedByName) {
   }
   const auto script = test::writeFile(dir.path() / "bump.py",
                                       "import h5py, sys\nwith h5py.File(sys.argv[1], 'a') as f:\n"
-                                      "    f.attrs['schema'] = 'vsd-dataset/3'\n");
+                                      "    f.attrs['schema'] = 'vsd-dataset/4'\n");
   ASSERT_EQ(test::run({test::python(), script.string(), path.string()}, dir.path()).exitCode, 0);
   try {
     DatasetReader reader(path);
     FAIL();
   } catch (const DatasetError& error) {
-    EXPECT_NE(std::string(error.what()).find("'vsd-dataset/3' is not supported"), std::string::npos) << error.what();
+    EXPECT_NE(std::string(error.what()).find("'vsd-dataset/4' is not supported"), std::string::npos) << error.what();
   }
   const auto validation = validateDataset(path);
   EXPECT_FALSE(validation.ok());
@@ -183,7 +187,8 @@ TEST(Dataset, VersionOneFilesStillReadWithAssumedVehicleSizes) {
   const auto script = test::writeFile(dir.path() / "downgrade.py",
                                       "import h5py, sys\nwith h5py.File(sys.argv[1], 'a') as f:\n"
                                       "    f.attrs['schema'] = 'vsd-dataset/1'\n"
-                                      "    del f['polyline_length']\n    del f['polyline_width']\n");
+                                      "    del f['polyline_length']\n    del f['polyline_width']\n"
+                                      "    del f['polyline_road_user']\n");
   ASSERT_EQ(test::run({test::python(), script.string(), path.string()}, dir.path()).exitCode, 0);
   const DatasetReader reader(path);
   EXPECT_TRUE(reader.header().vehicleSizesAssumed);
@@ -195,6 +200,40 @@ TEST(Dataset, VersionOneFilesStillReadWithAssumedVehicleSizes) {
   }
   EXPECT_TRUE(validateDataset(path).ok());
   EXPECT_NE(summarizeDataset(path).report().find("vsd-dataset/1"), std::string::npos);
+}
+
+// Road-user kinds travel with their polylines (vsd-dataset/3); files of version 2, which
+// store none, are read with every road user a car.
+TEST(Dataset, RoadUserKindsAreStoredAndVersionTwoFilesReadAsCars) {
+  TemporaryDirectory dir;
+  auto scene = sceneAt(Vec2(0, 0), 0, "acc");
+  for (auto& polyline : scene.polylines) {
+    if (polyline.type == ObjectType::Vehicle) polyline.roadUser = RoadUserType::Pedestrian;
+  }
+  const auto path = dir.path() / "kinds.h5";
+  {
+    DatasetWriter writer(path, header());
+    writer.append(scene);
+    writer.close();
+  }
+  const auto expect_kinds = [&](RoadUserType other) {
+    const auto read = DatasetReader(path).scene(0);
+    for (const auto& polyline : read.polylines) {
+      if (polyline.type == ObjectType::Vehicle) {
+        EXPECT_EQ(polyline.roadUser, other);
+      } else if (polyline.type == ObjectType::Ego) {
+        EXPECT_EQ(polyline.roadUser, RoadUserType::Car);
+      }
+    }
+  };
+  expect_kinds(RoadUserType::Pedestrian);
+  const auto script = test::writeFile(dir.path() / "downgrade.py",
+                                      "import h5py, sys\nwith h5py.File(sys.argv[1], 'a') as f:\n"
+                                      "    f.attrs['schema'] = 'vsd-dataset/2'\n    del f['polyline_road_user']\n");
+  ASSERT_EQ(test::run({test::python(), script.string(), path.string()}, dir.path()).exitCode, 0);
+  EXPECT_TRUE(DatasetReader(path).header().roadUsersAssumed);
+  expect_kinds(RoadUserType::Car);
+  EXPECT_TRUE(validateDataset(path).ok());
 }
 
 TEST(Dataset, ValidationFindsBrokenInvariants) {

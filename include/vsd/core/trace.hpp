@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "vsd/core/geometry.hpp"
+#include "vsd/core/road_user.hpp"
 
 namespace vsd {
 
@@ -40,6 +41,7 @@ struct VehicleTrack {
   VehicleRole role = VehicleRole::Other;
   double length = 0.0;  ///< m, bounding box; no default: from the scenario, the map or the dataset
   double width = 0.0;   ///< m
+  RoadUserType type = RoadUserType::Car;  ///< what kind of road user (core/road_user.hpp)
   std::vector<VehicleState> states;
   std::vector<std::uint8_t> valid;  ///< 1 where the vehicle existed at t_k (same size as states)
 

@@ -86,6 +86,10 @@ struct RunOptions {
   /// `vsd-sumo bench isolation` can measure what the worker processes cost.
   enum class Isolation { Process, None };
   Isolation isolation = Isolation::Process;
+  /// `--reference NAME`: every concrete scenario runs a second time with this built-in
+  /// controller (its default parameters) as the Ego, e.g. UN R157's reference driver; both
+  /// outcomes go side by side into concrete.csv (README "--reference"). Empty: none.
+  std::string reference;
   std::string commandLine;          ///< recorded in the manifest
   /// Empty: scenarios are sampled from the logical scenario (seed, index) and their roads
   /// generated. Set for scenarios read from elsewhere (`vsd-sumo run FILE.xosc`).
@@ -104,8 +108,19 @@ struct ScenarioOutcome {
   Trace trace;
   std::vector<LaneGeometry> lanes;  ///< the road's lanes as SUMO built them (scenario frame)
   int egoLane = 0;
+  /// With --reference: the same scenario with the reference driver as the Ego.
+  std::vector<double> referenceMetrics;  ///< RunSummary::metricNames order; NaN when it failed
+  std::string referenceFailure;          ///< empty when the reference run completed
   bool ok() const { return failure.empty(); }
 };
+
+/// The regulation's pass criterion as a value of a scenario run with --reference
+/// (UN R157 5.2.5.2: the system avoids a collision wherever the reference driver does):
+/// 1 if the reference driver avoided a collision the system under test had, 0 if not,
+/// NaN if either run failed. `collision` tells a run's metrics collide (MetricSet::collision).
+inline constexpr const char* kReferenceCriterion = "reference_avoids_sut_collides";
+double referenceAvoidsSutCollides(const ScenarioOutcome& outcome,
+                                  const std::function<bool(const std::vector<double>&)>& collision);
 
 struct MetricSummary {
   std::string name;
@@ -125,6 +140,9 @@ struct RunSummary {
   std::uint64_t ok = 0;
   std::uint64_t failed = 0;
   std::uint64_t collisions = 0;  ///< completed runs that meet the metrics' collision rule
+  std::string reference;         ///< --reference controller; empty: none
+  std::uint64_t referenceCollisions = 0;      ///< completed reference runs that collide
+  std::uint64_t referenceAvoidsSutCollides = 0;  ///< scenarios where kReferenceCriterion is 1
   std::string collisionRule;     ///< e.g. "d_min <= 0"; empty when no metric of the run defines one
   std::map<std::string, std::uint64_t> failureReasons;  ///< reason (numbers replaced by #) -> count
   std::map<std::string, std::string> failureExamples;   ///< reason (numbers replaced by #) -> first message

@@ -29,9 +29,12 @@ vector::VectorizedScene simulatedScene(const scenario::LogicalScenario& logical,
 std::vector<LaneGeometry> plannedLanes(const road::RoadGeometry& road);
 
 /// Trace of a concrete scenario before simulation, in its scenario frame: the Ego valid
-/// at t = 0 only (start pose on its lane, sampled speed); every other vehicle valid at
-/// every instant along its scripted path (sim/scripted_vehicle.hpp), the same path the
-/// simulation places it on. Throws ConfigError if a vehicle starts outside its road.
+/// at t = 0 only (start pose on its lane, sampled speed); every other road user valid at
+/// every instant, moved by the simulation's stepper (sim/scripted_vehicle.hpp) with the
+/// Ego's stand-in - the Ego carrying on along its lane at its initial speed - wherever a
+/// trigger relates to the Ego. Without such triggers these are exactly the paths the
+/// simulation places them on. Throws ConfigError if a road user starts outside its road or
+/// overlapping another.
 Trace plannedTrace(const scenario::ConcreteScenario& concrete, const road::RoadGeometry& road);
 
 /// The scene of a concrete scenario before simulation (targets all invalid), with

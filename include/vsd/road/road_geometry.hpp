@@ -4,6 +4,7 @@
 #include <vector>
 
 #include "vsd/core/geometry.hpp"
+#include "vsd/road/lane_frame.hpp"
 #include "vsd/scenario/concrete_scenario.hpp"
 
 namespace vsd::road {
@@ -15,7 +16,7 @@ struct RoadGeometry {
   std::size_t regionBegin = 0;  ///< index in `centre` of the first scenario-region point
   std::size_t regionEnd = 0;    ///< one past the last scenario-region point
   int lanes = 1;
-  double laneWidth = 3.5;   ///< m, every lane
+  double laneWidth = 0.0;   ///< m, every lane; no default: from the concrete scenario
   double speedLimit = 50.0; ///< m/s
 
   /// Centre line of lane `lane` (0 = rightmost) over the whole edge.
@@ -24,12 +25,21 @@ struct RoadGeometry {
   double laneOffset(int lane) const;
   /// Axis-aligned bounds of the road including its width: {min corner, max corner}.
   std::pair<Vec2, Vec2> bounds() const;
+  /// m along `centre` from its first point to the scenario region's start (s = 0 there).
+  double regionStart() const;
 };
 
-/// Evaluates the centre expression at the lane points x_min + (x_max - x_min) / (points - 1) * i,
+/// The x range of the scenario region: x_range for polynomial roads; for arc roads the x
+/// of the region's start (0) and end (a pure function of the inputs: arcs have no noise).
+std::pair<double, double> regionXRange(const scenario::LogicalScenario& logical, const std::vector<double>& inputs);
+
+/// Polynomial roads: evaluates the centre expression at the lane points x_min + (x_max - x_min) / (points - 1) * i,
 /// adds the drawn centre noise and appends straight extensions along the end
-/// tangents of the noise-free centre line. Throws ConfigError if the centre
-/// expression is not finite at a lane point.
+/// tangents of the noise-free centre line. Arc roads: points along the circle (or line)
+/// from the origin heading +x, spaced at most 10 m and close enough that the polyline
+/// stays within 1 cm of the circle, then the straight extensions. Throws ConfigError if
+/// the centre expression is not finite at a lane point, or an arc's curvature or length
+/// is out of range.
 RoadGeometry buildRoadGeometry(const scenario::ConcreteScenario& concrete);
 
 /// Where a vehicle starts: the point on its lane's centre line whose x equals `x`,
@@ -40,5 +50,20 @@ struct StartPose {
 };
 /// Throws ConfigError if x lies outside the road.
 StartPose startPoseOnLane(const RoadGeometry& road, int lane, double x, const std::string& vehicle_id);
+
+/// Where a road user of a concrete scenario starts: in the scenario frame and in the road's
+/// lane frame (s from the centre line's first point, d = its lane's offset + its offset).
+struct RoadUserStart {
+  Vec2 position;
+  double heading = 0.0;  ///< rad: its lane's direction plus its own relative heading
+  double s = 0.0;        ///< m
+  double d = 0.0;        ///< m, > 0 left
+};
+/// `from_s`, `from_length`: s and length of the road user `ds` and `gap` count from (the
+/// Ego, or an earlier one; ignored for x or s positions). A vehicle placed by x with no
+/// offset starts exactly where startPoseOnLane puts it (the paper's Co). Throws ConfigError
+/// naming the road user and the sample if it lies outside its road.
+RoadUserStart roadUserStart(const RoadGeometry& road, const LaneFrame& frame, const scenario::ConcreteScenario& concrete,
+                            const scenario::ConcreteVehicle& vehicle, double from_s, double from_length);
 
 }  // namespace vsd::road

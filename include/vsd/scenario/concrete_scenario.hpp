@@ -13,17 +13,54 @@
 
 namespace vsd::scenario {
 
+/// A trigger with its numbers evaluated and its references resolved.
+struct ConcreteTrigger {
+  TriggerSpec::Kind kind = TriggerSpec::Kind::Time;
+  double value = 0.0;   ///< s or m
+  double delay = 0.0;   ///< s
+  int reference = -1;   ///< road user the condition relates to: -1 = the Ego, else index into `others`
+  int action = -1;      ///< After: index into ConcreteScenario::actions
+};
+
+/// An action with its numbers evaluated (see ActionSpec).
+struct ConcreteAction {
+  std::string id;
+  int owner = 0;  ///< index into ConcreteScenario::others
+  ActionSpec::Kind kind = ActionSpec::Kind::Speed;
+  ConcreteTrigger trigger;
+  TransitionShape shape = TransitionShape::Smooth;
+  ActionSpec::SpeedTarget speedTarget = ActionSpec::SpeedTarget::Absolute;
+  double target = 0.0;  ///< m/s | lanes | m
+  bool relativeToEgoLane = false;
+  ActionSpec::Pace pace = ActionSpec::Pace::Duration;
+  double paceValue = 0.0;  ///< > 0 (a duration may be 0)
+  std::string where;
+};
+
 struct ConcreteVehicle {
   std::string id;
-  int lane = 0;
-  double length = 5.0;  ///< m
-  double width = 1.8;   ///< m
-  double x = 0.0;       ///< m, initial x of the centre (on the lane's centre line)
+  RoadUserType type = RoadUserType::Car;
+  int lane = 0;         ///< starting lane, resolved (relative lanes counted from the Ego's)
+  double length = 0.0;  ///< m; no default: from the scenario (which takes it from the type's table entry)
+  double width = 0.0;   ///< m
+  VehicleSpec::Along along = VehicleSpec::Along::X;
+  double x = 0.0;       ///< m, initial x of the centre (on the lane's centre line; Along::X)
+  double alongValue = 0.0;  ///< m, s, ds or gap (VehicleSpec::Along)
+  int alongFrom = -1;       ///< ds and gap count from: -1 = the Ego, else an earlier index into `others`
+  double offset = 0.0;  ///< m, lateral offset from the lane centre at the start, > 0 left
+  double heading = 0.0; ///< rad, relative to the road's direction at the start
   double speed = 0.0;   ///< m/s, initial speed
-  /// Non-Ego vehicles: scripted speed (m/s, >= 0, noise included) at every instant t_k, k = 0..steps.
+  /// Non-Ego vehicles: scripted speed (m/s, >= 0, noise included) at every instant t_k, k = 0..steps,
+  /// before any speed action.
   std::vector<double> scriptedSpeed;
+  /// Non-Ego vehicles: the speed noise (m/s) in scriptedSpeed at every instant, added to a
+  /// speed action's speed too (zeros without speed noise).
+  std::vector<double> speedNoise;
   /// rad, disturbance of the vehicle's heading in step k (steps values; all 0 without heading noise).
   std::vector<double> headingNoise;
+  /// Keeps its lane by pure pursuit (VehicleSpec::keepsLaneByPurePursuit). True by default:
+  /// vehicles built elsewhere (imported from OpenSCENARIO) drive as the paper's Co.
+  bool purePursuit = true;
 };
 
 struct ConcreteScenario {
@@ -32,20 +69,28 @@ struct ConcreteScenario {
   std::uint64_t index = 0;  ///< sample index within the run
   std::vector<double> inputs;        ///< values in logical->inputs order
   std::vector<double> centreNoise;   ///< m, lateral shift at each road point (logical->road.points values)
-  double laneWidth = 3.5;            ///< m, realised (nominal + noise)
+  double laneWidth = 0.0;            ///< m, realised (nominal + noise)
   ConcreteVehicle ego;
   std::vector<ConcreteVehicle> others;
+  std::vector<ConcreteAction> actions;  ///< every road user's actions, road user by road user, in file order
   std::vector<std::pair<std::string, double>> controllerParams;  ///< evaluated
 
   double step() const { return logical->step; }
   int steps() const { return logical->steps(); }
+  /// "<scenario file>: sample <index>" for messages about one concrete scenario.
+  std::string where() const;
 };
 
 /// Samples concrete scenario `index` of a run with `seed`. Throws ConfigError if a
 /// distribution is invalid for the drawn values (e.g. min > max after evaluating
-/// `min: v_ego + 4, max: v_ego - 4`, or a negative phase duration).
+/// `min: v_ego + 4, max: v_ego - 4`, or a negative phase duration), or a drawn value is
+/// out of its range (a negative or NaN speed, a lane the road does not have).
 ConcreteScenario sampleConcreteScenario(const std::shared_ptr<const LogicalScenario>& logical, std::uint64_t seed,
                                         std::uint64_t index);
+
+/// Lateral offset (m, left positive) of lane `lane`'s centre from the road centre, for
+/// `lanes` lanes of `lane_width` spread symmetrically around it (lane 0 is rightmost).
+double laneCentreOffset(int lane, int lanes, double lane_width);
 
 /// Scripted speed of a profile at time t (s), without noise; never below 0.
 double scriptedSpeedAt(double initial, const std::vector<std::pair<double, double>>& duration_accel_phases, double t);

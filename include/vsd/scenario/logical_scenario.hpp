@@ -14,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include "vsd/core/road_user.hpp"
 #include "vsd/scenario/expression.hpp"
 
 namespace vsd::scenario {
@@ -45,23 +46,42 @@ struct InputSpec {
   Distribution distribution;
 };
 
-/// Road: a centre line y = f(x, inputs) sampled at `points` equally spaced x in
-/// x_range, each shifted laterally by centre_noise; `lanes` lanes of
-/// lane_width + lane_width_noise each. Straight extensions along the end
-/// tangents keep vehicles on the road beyond the scenario region.
+/// Lane width (m) where a scenario gives none: the one source of this default.
+inline constexpr double kDefaultLaneWidth = 3.5;
+
+/// Road: a centre line of one of two shapes, `lanes` lanes of lane_width + lane_width_noise
+/// each, and straight extensions along the end tangents that keep vehicles on the road
+/// beyond the scenario region.
+///   polynomial (the paper's): y = f(x, inputs) sampled at `points` equally spaced x in
+///              x_range, each point shifted laterally by centre_noise;
+///   arc:       constant curvature (0: straight), `length` m along the road from the
+///              origin heading +x, sampled densely enough that the polyline stays within
+///              1 cm of the circle.
+/// Positions "along the road" (s) are arc lengths on the centre line from the region's start.
 struct RoadSpec {
-  double xMin = -55.0;   ///< m
-  double xMax = 55.0;    ///< m
-  int points = 25;       ///< lane points; vectors per boundary = points - 1
-  Expression centre;     ///< y of the road centre (m) as a function of x and the inputs
-  Distribution centreNoise;     ///< m, drawn independently at every point
+  enum class Shape { Polynomial, Arc };
+  Shape shape = Shape::Polynomial;
+  double xMin = -55.0;   ///< m (polynomial)
+  double xMax = 55.0;    ///< m (polynomial)
+  int points = 25;       ///< lane points (polynomial); vectors per boundary = points - 1
+  Expression centre;     ///< y of the road centre (m) as a function of x and the inputs (polynomial)
+  Distribution centreNoise;     ///< m, drawn independently at every point (polynomial)
+  Expression curvature;  ///< 1/m, > 0 turns left (arc); |curvature| * length <= kMaxArcTurn
+  Expression length;     ///< m, the scenario region along the road (arc), > 0
   int lanes = 1;
-  Expression laneWidth = Expression::constant(3.5);  ///< m
+  Expression laneWidth = Expression::constant(kDefaultLaneWidth);  ///< m
   Distribution laneWidthNoise;  ///< m, drawn once per concrete scenario
   double speedLimit = 50.0;     ///< m/s (SUMO edge speed; scripted vehicles ignore it)
-  double extensionBefore = 30.0;  ///< m, straight lead-in before x_min
-  double extensionAfter = 150.0;  ///< m, straight lead-out after x_max
+  double extensionBefore = 30.0;  ///< m, straight lead-in before the region
+  double extensionAfter = 150.0;  ///< m, straight lead-out after the region
+  /// m of paved ground beyond the outer lanes (right of lane 0, left of the last lane)
+  /// where pedestrians may stand; not part of SUMO's network or of the vectors.
+  double shoulderRight = 0.0;
+  double shoulderLeft = 0.0;
 };
+/// rad: the largest turn of an arc road's region. Scenes clip lanes by x (as the paper's
+/// region is an x range), which needs x to advance along the whole region.
+inline constexpr double kMaxArcTurn = 1.4;
 
 /// Scripted speed of a non-Ego vehicle: `initial`, then each phase accelerates
 /// with `accel` for `duration`; afterwards constant. Braking stops at 0 (no
@@ -83,20 +103,101 @@ struct ControllerSpec {
   std::string where;
 };
 
+/// When an action starts (README / docs/scenario-language.md "Triggers"). Conditions
+/// relative to another road user (the Ego unless `reference` names one) are checked at
+/// every recorded instant; the action starts at the first instant the condition holds,
+/// plus `delay`.
+struct TriggerSpec {
+  enum class Kind {
+    Time,     ///< simulation time >= value (s); not quantised to instants
+    Gap,      ///< bumper-to-bumper gap along the Ego's lane to `reference` <= value (m)
+    Headway,  ///< time headway of the rear one of the two (gap / its speed) <= value (s)
+    Ttc,      ///< time to collision along the Ego's lane (gap / closing speed) <= value (s)
+    After,    ///< `action` ended (+ delay)
+  };
+  Kind kind = Kind::Time;
+  Expression value;
+  Expression delay;           ///< s, >= 0
+  std::string reference = "ego";  ///< road user the condition relates to (Gap, Headway, Ttc)
+  std::string action;         ///< After: id of the action whose end starts this one
+  std::string where;
+};
+
+/// Shape of a speed or lateral transition over its duration.
+enum class TransitionShape {
+  Step,    ///< at once (speed only)
+  Linear,  ///< constant rate
+  Smooth,  ///< half a cosine: zero rate at both ends, peak rate pi/2 times the mean rate
+};
+
+/// One scripted manoeuvre of a road user. Numbers are expressions over the inputs.
+struct ActionSpec {
+  enum class Kind {
+    Speed,          ///< change the longitudinal speed
+    LaneChange,     ///< move to the centre of another lane
+    LateralOffset,  ///< move to an offset from the current lane's centre (0: back)
+    Cross,          ///< walk across the road at a speed to an offset (pedestrians)
+  };
+  std::string id;
+  Kind kind = Kind::Speed;
+  TriggerSpec trigger;
+  TransitionShape shape = TransitionShape::Smooth;
+  // Speed: target = value (absolute), the Ego's speed at the start + value, or own speed + value.
+  enum class SpeedTarget { Absolute, RelativeToEgo, Delta };
+  SpeedTarget speedTarget = SpeedTarget::Absolute;
+  Expression target;     ///< m/s (Speed); lanes (LaneChange); m (LateralOffset, Cross)
+  /// LaneChange: target is relative to the road user's own lane (false) or the Ego's (true).
+  bool relativeToEgoLane = false;
+  // How fast: exactly one of these (Speed: rate or duration; lateral: lateral speed,
+  // lateral acceleration (smooth only) or duration; Cross: speed).
+  enum class Pace { Rate, Duration, LateralSpeed, LateralAccel };
+  Pace pace = Pace::Duration;
+  Expression paceValue;  ///< m/s^2 | s | m/s | m/s^2
+  std::string where;
+};
+
 struct VehicleSpec {
   std::string id;
-  int lane = 0;            ///< 0 = rightmost
+  RoadUserType type = RoadUserType::Car;
+  /// The type drawn per concrete scenario: an expression giving a RoadUserType code (an input
+  /// whose choices name types, e.g. `choices: [car, truck]`); absent: `type`.
+  std::optional<Expression> typeCode;
+  bool lengthGiven = false;  ///< else the length comes from the (drawn) type's table entry
+  bool widthGiven = false;   ///< else the width does
+  int lane = 0;            ///< 0 = rightmost (when given as a number; see laneExpression)
   Distribution headingNoise;  ///< rad, added to the heading at every step (Ego and others)
-  Expression x;            ///< m, initial x of the vehicle's centre (on its lane's centre line)
-  double length = 5.0;     ///< m
-  double width = 1.8;      ///< m
-  // Ego only:
+  /// Where along the road it starts: scenario-frame x on its lane's centre line (the
+  /// paper's `x`), arc length `s` along the road centre, `ds` m along the road from the
+  /// Ego's start (centre to centre, > 0 ahead; others only), or `gap` m ahead of the Ego
+  /// (bumper to bumper along the road, whatever the two lengths; others only).
+  enum class Along { X, S, EgoRelative, EgoGap };
+  Along along = Along::X;
+  Expression x;            ///< m, initial x of the vehicle's centre (Along::X)
+  Expression alongValue;   ///< m, s, ds or gap
+  /// `ds` and `gap` count from this road user ("ego", or one listed before this one).
+  std::string alongFrom = "ego";
+  /// The lane as an expression (e.g. an input drawn from choices); absent: `lane`.
+  std::optional<Expression> laneExpression;
+  bool laneRelativeToEgo = false;  ///< laneExpression counts from the Ego's lane (+1: left of it)
+  Expression offset;       ///< m, lateral offset from the lane centre, > 0 left
+  Expression headingDeg;   ///< deg, heading relative to the road's direction (pedestrians, objects)
+  double length = 0.0;     ///< m, from the type's table entry unless given
+  double width = 0.0;      ///< m
+  // Ego, and others without a speed_profile:
   Expression speed;                   ///< m/s, initial speed
+  bool speedRelativeToEgo = false;    ///< others: `relative_speed`, added to the Ego's initial speed
   ControllerSpec controller;
   // Others only:
+  bool hasSpeedProfile = false;
   SpeedProfile speedProfile;
   Distribution speedNoise;            ///< m/s, added to the scripted speed at every instant
+  std::vector<ActionSpec> actions;
   std::string where;
+
+  /// Lane keeping by pure pursuit (the paper's Co): a road user with a heading disturbance
+  /// needs a controller that brings it back. Everything else moves exactly in the lane
+  /// frame (lateral actions are exact, with no controller lag).
+  bool keepsLaneByPurePursuit() const { return !headingNoise.isZero(); }
 };
 
 /// Pass/fail criterion over metrics, e.g. `d_min < 2` (true = critical).
@@ -132,6 +233,8 @@ struct LogicalScenario {
   std::vector<std::string> inputNames() const;
   /// Index of an input by name, if any.
   std::optional<std::size_t> inputIndex(const std::string& input_name) const;
+  /// True if some road user moves across lanes (lateral actions, start offsets, crossing).
+  bool hasLateralMotion() const;
 };
 
 /// Loads and validates a logical scenario. Throws ConfigError with

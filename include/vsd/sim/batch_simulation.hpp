@@ -42,6 +42,13 @@ struct BatchOptions {
   std::filesystem::path fcdOutput;       ///< SUMO FCD XML for this batch (empty: none)
   std::filesystem::path scenarioDir;     ///< base for relative controller library paths
   double egoStepCost = 0.0;              ///< s of extra wall time per Ego step (withStepCost; 0: none)
+  /// A built-in controller (with its default parameters) to drive every Ego instead of the
+  /// scenario's own, e.g. the reference driver of --reference. Empty: the scenario's.
+  std::string egoControllerOverride;
+  /// m, SUMO's --lateral-resolution (its sublane model; 0: off). With it SUMO places a road
+  /// user across lanes where it is - half-way through a lane change it occupies both - so
+  /// its leaders, collisions and SSM devices see what the metrics see.
+  double lateralResolution = 0.0;
 };
 
 /// Runs all `runs` in one simulation of `net`. Per-scenario faults (a vehicle

@@ -1,16 +1,25 @@
 #pragma once
-// Scripted (non-Ego) vehicles of generated scenarios, such as the paper's Co.
+// Scripted (non-Ego) road users of generated scenarios: the paper's Co, and the vehicles,
+// pedestrians and objects of docs/scenario-language.md with their triggered actions.
 //
-// The paper: "Ego and Co use a lane keeping controller; the resulting vehicle
-// orientations are varied randomly with U(-2.9 deg, 2.9 deg)". A scripted vehicle
-// therefore drives like the Ego's kinematic model, with
-//   longitudinal: its scripted speed (profile + speed noise) at every instant, exactly;
-//   lateral:      pure-pursuit lane keeping on its lane's centre line (the Ego's default
-//                 lateral controller), plus its per-step heading disturbance.
-// Nothing it does depends on other vehicles, so its whole path is a pure function of the
-// concrete scenario and the road geometry: the simulation places it with moveToXY along
-// this path, and planned scenes (built before simulating) use the very same path.
+// One stepper (ScriptedTraffic) moves them instant by instant, in the simulation (with the
+// real Ego, which triggers can relate to) and in planning (plannedPaths: with the Ego's
+// stand-in, for scenes of scenarios nobody simulated). Each road user moves by one of two
+// lateral models:
+//   pure pursuit (a road user with heading_noise_deg, such as the paper's Co): "Ego and Co
+//     use a lane keeping controller; the resulting vehicle orientations are varied randomly
+//     with U(-2.9 deg, 2.9 deg)" - it drives like the Ego's kinematic model, with its
+//     scripted speed exactly, pure-pursuit lane keeping on its lane's centre line (the Ego's
+//     default lateral controller) and its per-step heading disturbance;
+//   exact (everything else): it moves in the road's lane frame (road/lane_frame.hpp), its
+//     offset d across the road following the commanded lateral profile exactly and its
+//     position s along the road advancing with its longitudinal speed - so a lane change
+//     reaches its lane with the commanded lateral speed, with no controller lag.
+// Its speed at every instant is its scripted speed (profile + noise) until a speed action
+// starts, then the action's speed (+ the same noise).
 
+#include <cstddef>
+#include <memory>
 #include <vector>
 
 #include "vsd/core/trace.hpp"
@@ -19,10 +28,59 @@
 
 namespace vsd::sim {
 
-/// States at t_0 .. t_steps (scenario frame, centre of the vehicle; `step` s apart).
-/// t_0: on its lane's centre line at its x, heading along the lane, its initial speed.
-/// Throws ConfigError if the vehicle starts outside its road.
-std::vector<VehicleState> scriptedPath(const scenario::ConcreteVehicle& vehicle, const road::RoadGeometry& road,
-                                       double step, int steps);
+/// Where no simulation drives the Ego (planned scenes), triggers relate to this stand-in:
+/// the Ego carrying on from its start along its lane's centre line at its initial speed.
+class EgoStandIn {
+ public:
+  EgoStandIn(const scenario::ConcreteScenario& concrete, const road::RoadGeometry& road);
+  /// Its state at t = time (s).
+  VehicleState at(double time) const;
+
+ private:
+  MeasuredPolyline lane_;
+  double startArcLength_ = 0.0;
+  double speed_ = 0.0;
+};
+
+/// The scripted road users of one concrete scenario, stepped instant by instant.
+class ScriptedTraffic {
+ public:
+  /// At t = 0. Throws ConfigError (naming the file, the road user and the sample) if a road
+  /// user starts outside its road or overlapping another road user (the Ego included).
+  ScriptedTraffic(const scenario::ConcreteScenario& concrete, const road::RoadGeometry& road);
+  ScriptedTraffic(ScriptedTraffic&&) noexcept;
+  ScriptedTraffic& operator=(ScriptedTraffic&&) noexcept;
+  ~ScriptedTraffic();
+
+  /// The Ego's start: centre on its lane (at its x or s), heading along the lane, initial speed.
+  const VehicleState& egoStart() const;
+  /// The current instant k (t = k * step).
+  std::size_t instant() const;
+  /// Every other road user's state at the current instant, in scenario order.
+  const std::vector<VehicleState>& states() const;
+  /// Advances every road user to the next instant. `ego`: the Ego's state at the current
+  /// instant, which triggers relating to it see.
+  void step(const VehicleState& ego);
+  /// True if road user `other`'s front is at or beyond the end of its road at the current
+  /// instant (SUMO would let it arrive there).
+  bool pastRoadEnd(std::size_t other) const;
+
+  /// When an action started and ended (s; NaN while not started).
+  struct ActionTiming {
+    double start;
+    double end;
+  };
+  /// Per action of ConcreteScenario::actions.
+  const std::vector<ActionTiming>& timings() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+/// The other road users' states at every instant t_0 .. t_steps ([road user][instant]) with
+/// the Ego's stand-in (EgoStandIn): what a planned scene assumes. Throws like ScriptedTraffic.
+std::vector<std::vector<VehicleState>> plannedPaths(const scenario::ConcreteScenario& concrete,
+                                                    const road::RoadGeometry& road);
 
 }  // namespace vsd::sim

@@ -1,11 +1,14 @@
 #pragma once
 // traces.h5: the full traces of every vehicle of every concrete scenario of a
-// run. Schema "vsd-traces/1" (see README, "Trace file"):
+// run. Schema "vsd-traces/2" (see README, "Trace file"; /1 files, without the per-sample
+// sizes and types, are still read: every road user a car of the file's sizes):
 //
 //   /            attrs: schema, functional_scenario, step [s], instants, tool_version
 //   /vehicle_ids       [V] strings, vehicle 0 = the Ego
-//   /vehicle_length    [V] float64, m
+//   /vehicle_length    [V] float64, m (NaN where a road user's type, and so its size, is drawn per sample)
 //   /vehicle_width     [V] float64, m
+//   /sample_vehicle_length, /sample_vehicle_width [N, V] float64, m: each sample's sizes
+//   /sample_vehicle_type [N, V] int8: each sample's road-user types (core/road_user.hpp codes)
 //   /fields            [5] strings: x, y, heading, speed, accel
 //   /sample            [N] int64, sample index of the run
 //   /ok                [N] uint8, 1 = the run completed
@@ -24,7 +27,8 @@
 
 namespace vsd::sim {
 
-inline constexpr const char* kTraceSchema = "vsd-traces/1";
+inline constexpr const char* kTraceSchema = "vsd-traces/2";
+inline constexpr const char* kTraceSchemaVersion1 = "vsd-traces/1";
 inline constexpr std::size_t kTraceFields = 5;
 
 class TraceFileWriter {

@@ -1,5 +1,5 @@
 #pragma once
-// Datasets of vectorized scenes (HDF5, schema "vsd-dataset/2", documented in
+// Datasets of vectorized scenes (HDF5, schema "vsd-dataset/3", documented in
 // the README): written streaming (memory flat in the number of samples), read
 // per sample, validated, summarised, and combined across files without copying.
 //
@@ -13,6 +13,7 @@
 //   /polyline_type [P] int8, /polyline_shared [P] uint8 (1: vectors in /shared_vectors),
 //   /polyline_vector_start [P] int64 (into /vectors or /shared_vectors), /polyline_vector_count [P] int32
 //   /polyline_length [P], /polyline_width [P] float64   vehicle size (m; 0 for lane boundaries)
+//   /polyline_road_user [P] int8   road-user kind of vehicle polylines (core/road_user.hpp codes; -1 for lanes)
 //   /sample_polyline_start [N] int64, /sample_polyline_count [N] int32, /sample_ego_polyline [N] int32
 //   /sample_origin [N, 2] float64  (the Ego's initial position)
 //   /sample_label [N] int32, /sample_index [N] int64, /sample_source [N] int32,
@@ -27,16 +28,20 @@
 #include <string>
 #include <vector>
 
+#include "vsd/core/road_user.hpp"
 #include "vsd/vector/scene.hpp"
 
 namespace vsd::vector {
 
-inline constexpr const char* kDatasetSchema = "vsd-dataset/2";
-/// The previous schema, still read: it stores no vehicle sizes, so readers assume
-/// kAssumedVehicleLength x kAssumedVehicleWidth for every vehicle and say so.
+inline constexpr const char* kDatasetSchema = "vsd-dataset/3";
+/// Older schemas, still read. Version 2 stores no road-user kinds: every vehicle is read as
+/// a car. Version 1 stores no vehicle sizes either: readers assume a car's (the road-user
+/// table's) for every vehicle and say so.
+inline constexpr const char* kDatasetSchemaVersion2 = "vsd-dataset/2";
 inline constexpr const char* kDatasetSchemaVersion1 = "vsd-dataset/1";
-inline constexpr double kAssumedVehicleLength = 5.0;  ///< m, version-1 files only
-inline constexpr double kAssumedVehicleWidth = 1.8;   ///< m, version-1 files only
+/// m, what version-1 files are read with: a car's size from the road-user table.
+inline const double kAssumedVehicleLength = roadUserKind(RoadUserType::Car).length;
+inline const double kAssumedVehicleWidth = roadUserKind(RoadUserType::Car).width;
 
 /// What every sample of a file shares.
 struct DatasetHeader {
@@ -51,6 +56,8 @@ struct DatasetHeader {
   int compression = 1;
   /// Set by readers of version-1 files: vehicle sizes are not stored there and were assumed.
   bool vehicleSizesAssumed = false;
+  /// Set by readers of version-1 and -2 files: every vehicle is read as a car.
+  bool roadUsersAssumed = false;
 };
 
 class DatasetReader;

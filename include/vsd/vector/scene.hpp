@@ -13,7 +13,9 @@
 //     (the 1 cm keeps the heading at standstill); timestamp 0. With a history,
 //     its past steps come first (timestamps -H+dt .. 0), then the initial vector.
 // polyline_id is the polyline's position in the scene. Vehicle and Ego polylines
-// also carry the vehicle's length and width (m), which gaps between vehicles need. Coordinates are in the
+// also carry the road user's length and width (m), which gaps between vehicles need, and
+// its kind (car, truck, pedestrian, stationary object, ...; core/road_user.hpp) - outside
+// the 7 features, so the feature layout, and models trained on it, stay as they are. Coordinates are in the
 // scene's frame (scenario frame for generated scenarios, network frame for maps),
 // metres. The target is the Ego's centre at t_1 .. t_F.
 
@@ -52,6 +54,9 @@ struct ScenePolyline {
   /// Vehicles and the Ego: the vehicle's bounding box (m, > 0); lane boundaries: 0.
   double length = 0.0;
   double width = 0.0;
+  /// Vehicles and the Ego: what kind of road user it is (a pedestrian, a stationary object
+  /// are "vehicle" polylines too, object_type 2); lane boundaries: unused.
+  RoadUserType roadUser = RoadUserType::Car;
 };
 
 /// Where a sample came from.

@@ -1,0 +1,118 @@
+// Metrics relative to the Ego's lane and the path it sweeps along it (core/path_relation.hpp):
+// the same relateToPath the Ego's object list uses, so a cut-in is "in path" at the same
+// instant for the controller and for these metrics. And the Ego's deceleration and jerk.
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "functions.hpp"
+#include "vsd/core/path_relation.hpp"
+
+namespace vsd::metrics::detail {
+
+namespace {
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+constexpr double kInf = std::numeric_limits<double>::infinity();
+/// relateToPath's relative lanes are not used here: an infinite lane width keeps them 0.
+constexpr double kAnyLaneWidth = std::numeric_limits<double>::infinity();
+
+Footprint footprintAt(const VehicleTrack& track, std::size_t k) {
+  return {track.states[k].position(), track.states[k].heading, track.length, track.width};
+}
+
+/// Speed along the line at the state's foot point.
+double speedAlong(const MeasuredPolyline& line, const VehicleState& state) {
+  return state.speed * std::cos(state.heading - projectExtended(line, state.position()).heading);
+}
+
+/// Calls visit(k, gap, ego_speed_along, object_speed_along) for the in-path object at each
+/// instant where there is one: the nearest (smallest bumper gap along the Ego's lane) of the
+/// road users ahead that reach into the corridor the Ego sweeps. Returns false if the trace
+/// has no valid pair of instants at all.
+template <typename Visitor>
+bool forEachInPathObject(const MetricContext& context, Visitor&& visit) {
+  const VehicleTrack& ego = context.trace.ego();
+  const MeasuredPolyline line(context.egoLaneCentre);
+  bool any = false;
+  for (std::size_t k = 0; k < ego.states.size(); ++k) {
+    if (!ego.validAt(k)) continue;
+    const Footprint ego_footprint = footprintAt(ego, k);
+    const VehicleTrack* nearest = nullptr;
+    double nearest_gap = kInf;
+    for (std::size_t v = 1; v < context.trace.vehicles.size(); ++v) {
+      const VehicleTrack& other = context.trace.vehicles[v];
+      if (!other.validAt(k)) continue;
+      any = true;
+      const PathRelation relation = relateToPath(line, kAnyLaneWidth, ego_footprint, footprintAt(other, k));
+      if (relation.inPath && relation.longitudinalGap < nearest_gap) {
+        nearest_gap = relation.longitudinalGap;
+        nearest = &other;
+      }
+    }
+    if (nearest != nullptr) {
+      visit(k, std::max(nearest_gap, 0.0), speedAlong(line, ego.states[k]), speedAlong(line, nearest->states[k]));
+    }
+  }
+  return any;
+}
+
+}  // namespace
+
+double minInPathTimeToCollision(const MetricContext& context) {
+  if (context.egoLaneCentre.size() < 2) return kNaN;
+  double result = kInf;
+  const bool any = forEachInPathObject(context, [&](std::size_t, double gap, double ego_speed, double object_speed) {
+    const double closing = ego_speed - object_speed;
+    if (closing > 1e-9) result = std::min(result, gap / closing);
+  });
+  return any ? result : kNaN;
+}
+
+double minInPathTimeHeadway(const MetricContext& context) {
+  if (context.egoLaneCentre.size() < 2) return kNaN;
+  double result = kInf;
+  const bool any = forEachInPathObject(context, [&](std::size_t, double gap, double ego_speed, double) {
+    if (ego_speed > 0.1) result = std::min(result, gap / ego_speed);
+  });
+  return any ? result : kNaN;
+}
+
+double minLateralClearance(const MetricContext& context) {
+  if (context.egoLaneCentre.size() < 2) return kNaN;
+  const VehicleTrack& ego = context.trace.ego();
+  const MeasuredPolyline line(context.egoLaneCentre);
+  bool any = false;
+  double result = kInf;
+  for (std::size_t v = 1; v < context.trace.vehicles.size(); ++v) {
+    const VehicleTrack& other = context.trace.vehicles[v];
+    for (std::size_t k = 0; k < ego.states.size() && k < other.states.size(); ++k) {
+      if (!ego.validAt(k) || !other.validAt(k)) continue;
+      any = true;
+      const PathRelation relation = relateToPath(line, kAnyLaneWidth, footprintAt(ego, k), footprintAt(other, k));
+      // Beside the Ego: their extents along the lane overlap.
+      if (relation.longitudinalGap < 0.0) result = std::min(result, relation.lateralGap);
+    }
+  }
+  return any ? result : kNaN;
+}
+
+double egoMaxDeceleration(const MetricContext& context) {
+  const double a_min = egoMinAcceleration(context);
+  return std::isnan(a_min) ? kNaN : std::max(0.0, -a_min);
+}
+
+double egoMaxJerk(const MetricContext& context) {
+  const VehicleTrack& ego = context.trace.ego();
+  const double dt = context.trace.step;
+  double result = -kInf;
+  // Accelerations are (v_k - v_{k-1}) / dt for k >= 1; a_0 only repeats a_1.
+  for (std::size_t k = 2; k < ego.states.size(); ++k) {
+    if (ego.validAt(k) && ego.validAt(k - 1) && ego.validAt(k - 2)) {
+      result = std::max(result, std::abs(ego.states[k].accel - ego.states[k - 1].accel) / dt);
+    }
+  }
+  return std::isinf(result) ? kNaN : result;
+}
+
+}  // namespace vsd::metrics::detail

@@ -1,0 +1,480 @@
+// Parsing of `vehicles`: the Ego, the other road users, their actions and triggers
+// (docs/scenario-language.md).
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <functional>
+#include <map>
+#include <regex>
+#include <set>
+
+#include "parsing.hpp"
+#include "vsd/core/error.hpp"
+
+namespace vsd::scenario::detail {
+
+bool isIdentifier(const std::string& name) {
+  static const std::regex pattern("[A-Za-z][A-Za-z0-9_]*");
+  return std::regex_match(name, pattern);
+}
+
+namespace {
+
+constexpr double kDegree = 3.14159265358979323846 / 180.0;
+
+/// Exactly one of `keys` is present in `node`: returns it ("" when none and !required).
+std::string oneOf(const YamlReader& reader, const YAML::Node& node, const std::string& field,
+                  const std::vector<std::string>& keys, bool required) {
+  std::string found;
+  for (const auto& key : keys) {
+    if (!node[key]) continue;
+    if (!found.empty()) {
+      reader.fail(node[key], field + "." + key, fmt::format("'{}' and '{}' exclude each other", found, key));
+    }
+    found = key;
+  }
+  if (found.empty() && required) {
+    reader.fail(node, field, fmt::format("needs one of: {}", fmt::join(keys, ", ")));
+  }
+  return found;
+}
+
+Expression optionalExpression(const YamlReader& reader, const YAML::Node& node, const std::string& key,
+                              const std::string& field, const std::vector<std::string>& inputs, double fallback) {
+  return node[key] ? reader.expression(node[key], field + "." + key, inputs) : Expression::constant(fallback);
+}
+
+void parseType(const YamlReader& reader, const YAML::Node& node, const std::string& field,
+               const std::vector<std::string>& inputs, VehicleSpec& vehicle) {
+  if (node["type"]) {
+    const std::string name = reader.scalar(node["type"], field + ".type");
+    if (const auto type = findRoadUserType(name)) {
+      vehicle.type = *type;
+    } else {
+      // An expression over inputs: the type drawn per concrete scenario (its code).
+      const Expression code = reader.expression(node["type"], field + ".type", inputs);
+      if (code.isConstant() || inputs.empty()) {
+        throw ConfigError::field(reader.where(node["type"], field + ".type"), field + ".type", name,
+                                 "one of " + roadUserTypeList() + ", or an input whose choices name types");
+      }
+      vehicle.typeCode = code;
+    }
+  }
+  const RoadUserKind& kind = roadUserKind(vehicle.type);
+  vehicle.lengthGiven = static_cast<bool>(node["length"]);
+  vehicle.widthGiven = static_cast<bool>(node["width"]);
+  vehicle.length = reader.number(node, "length", field + ".length", kind.length);
+  vehicle.width = reader.number(node, "width", field + ".width", kind.width);
+  if (!(vehicle.length > 0.0 && vehicle.length <= 100.0) || !(vehicle.width > 0.0 && vehicle.width <= 20.0)) {
+    reader.fail(node, field, "expected a length in (0, 100] m and a width in (0, 20] m");
+  }
+}
+
+/// x | s | ds, lane | relative_lane, offset, heading_deg.
+void parsePlacement(const YamlReader& reader, const YAML::Node& node, const std::string& field, bool is_ego,
+                    const std::vector<std::string>& inputs, const LogicalScenario& scenario, VehicleSpec& vehicle) {
+  std::vector<std::string> along_keys = {"x", "s"};
+  if (!is_ego) along_keys.insert(along_keys.end(), {"ds", "gap"});
+  const std::string along = oneOf(reader, node, field, along_keys, true);
+  if (along == "x") {
+    vehicle.along = VehicleSpec::Along::X;
+    vehicle.x = reader.expression(node["x"], field + ".x", inputs);
+    if (scenario.road.shape != RoadSpec::Shape::Polynomial) {
+      reader.fail(node["x"], field + ".x", "x places a road user on a polynomial road; an arc road takes 's' or 'ds'");
+    }
+  } else {
+    vehicle.along = along == "s"    ? VehicleSpec::Along::S
+                    : along == "ds" ? VehicleSpec::Along::EgoRelative
+                                    : VehicleSpec::Along::EgoGap;
+    vehicle.alongValue = reader.expression(node[along], field + "." + along, inputs);
+  }
+  if (node["from"]) {
+    if (along != "ds" && along != "gap") reader.fail(node["from"], field + ".from", "'from' goes with 'ds' or 'gap'");
+    vehicle.alongFrom = reader.scalar(node["from"], field + ".from");
+    const bool earlier = std::any_of(scenario.others.begin(), scenario.others.end(),
+                                     [&](const VehicleSpec& other) { return other.id == vehicle.alongFrom; });
+    if (vehicle.alongFrom != "ego" && !earlier) {
+      std::vector<std::string> ids = {"ego"};
+      for (const auto& other : scenario.others) ids.push_back(other.id);
+      throw ConfigError::field(reader.where(node["from"], field + ".from"), field + ".from", vehicle.alongFrom,
+                               fmt::format("a road user listed before this one: {}", fmt::join(ids, ", ")));
+    }
+  }
+  const std::string lane_key = oneOf(reader, node, field, is_ego ? std::vector<std::string>{"lane"}
+                                                                 : std::vector<std::string>{"lane", "relative_lane"},
+                                     false);
+  const bool constant_lane =
+      lane_key == "lane" && reader.expression(node["lane"], field + ".lane", inputs).isConstant();
+  if (constant_lane) {
+    vehicle.lane = reader.integer(node, "lane", field + ".lane", 0, 0);
+    if (vehicle.lane >= scenario.road.lanes) {
+      throw ConfigError::field(reader.where(node["lane"], field + ".lane"), field + ".lane",
+                               std::to_string(vehicle.lane),
+                               fmt::format("a lane index below road.lanes = {}", scenario.road.lanes));
+    }
+  } else if (!lane_key.empty()) {
+    vehicle.laneExpression = reader.expression(node[lane_key], field + "." + lane_key, inputs);
+    vehicle.laneRelativeToEgo = lane_key == "relative_lane";
+  }
+  vehicle.offset = optionalExpression(reader, node, "offset", field, inputs, 0.0);
+  if (node["heading_deg"]) {
+    if (roadUserKind(vehicle.type).drivesInLanes) {
+      reader.fail(node["heading_deg"], field + ".heading_deg",
+                  "a vehicle heads along its lane; heading_deg is for pedestrians and stationary objects");
+    }
+    vehicle.headingDeg = reader.expression(node["heading_deg"], field + ".heading_deg", inputs);
+  }
+}
+
+void parseController(const YamlReader& reader, const YAML::Node& node, const std::string& field,
+                     const std::vector<std::string>& inputs, ControllerSpec& controller) {
+  controller.where = reader.where(node, field);
+  reader.checkKeys(node, field, {"name", "library", "params"});
+  if (!node["name"]) reader.fail(node, field, "missing 'name' (a built-in controller or one exported by 'library')");
+  controller.name = reader.scalar(node["name"], field + ".name");
+  if (node["library"]) controller.library = reader.scalar(node["library"], field + ".library");
+  if (const auto params = node["params"]) {
+    reader.requireMap(params, field + ".params");
+    for (const auto& entry : params) {
+      const auto key = entry.first.as<std::string>();
+      controller.params.emplace_back(key, reader.expression(entry.second, field + ".params." + key, inputs));
+    }
+  }
+}
+
+/// `heading_noise_deg`: the paper's per-step orientation variation (degrees in the YAML).
+void parseHeadingNoise(const YamlReader& reader, const YAML::Node& vehicle, const std::string& field,
+                       const std::vector<std::string>& inputs, VehicleSpec& spec) {
+  if (!vehicle["heading_noise_deg"]) return;
+  spec.headingNoise = reader.distribution(vehicle["heading_noise_deg"], field + ".heading_noise_deg", inputs);
+  spec.headingNoise.unitScale = kDegree;
+  if (!spec.headingNoise.isZero() && !roadUserKind(spec.type).drivesInLanes) {
+    reader.fail(vehicle["heading_noise_deg"], field + ".heading_noise_deg",
+                fmt::format("a heading disturbance needs a vehicle that keeps a lane, not a {}",
+                            roadUserKind(spec.type).name));
+  }
+}
+
+void parseSpeedProfile(const YamlReader& reader, const YAML::Node& profile, const std::string& field,
+                       const std::vector<std::string>& inputs, VehicleSpec& other) {
+  reader.checkKeys(profile, field, {"initial", "phases"});
+  if (!profile["initial"]) reader.fail(profile, field, "missing 'initial' (m/s)");
+  other.hasSpeedProfile = true;
+  other.speedProfile.initial = reader.expression(profile["initial"], field + ".initial", inputs);
+  const auto phases = profile["phases"];
+  if (!phases) return;
+  if (!phases.IsSequence()) reader.fail(phases, field + ".phases", "expected a list of phases");
+  for (std::size_t p = 0; p < phases.size(); ++p) {
+    const std::string phase_field = fmt::format("{}.phases[{}]", field, p);
+    reader.checkKeys(phases[p], phase_field, {"duration", "accel"});
+    if (!phases[p]["duration"] || !phases[p]["accel"]) {
+      reader.fail(phases[p], phase_field, "needs 'duration' (s) and 'accel' (m/s^2)");
+    }
+    SpeedPhase phase;
+    phase.duration = reader.expression(phases[p]["duration"], phase_field + ".duration", inputs);
+    phase.accel = reader.expression(phases[p]["accel"], phase_field + ".accel", inputs);
+    if (phase.duration.isConstant() && phase.duration.evaluate({}) < 0.0) {
+      throw ConfigError::field(reader.where(phases[p]["duration"], phase_field + ".duration"),
+                               phase_field + ".duration", phase.duration.text(), "a duration >= 0 s");
+    }
+    other.speedProfile.phases.push_back(std::move(phase));
+  }
+}
+
+/// A constant that must be a finite number >= 0 (or > 0): checked where it is read.
+void requireNonNegative(const YamlReader& reader, const YAML::Node& node, const std::string& field,
+                        const Expression& value, bool strictly_positive, const std::string& unit) {
+  if (!value.isConstant()) return;
+  const double v = value.evaluate({});
+  if (!(strictly_positive ? v > 0.0 : v >= 0.0)) {
+    throw ConfigError::field(reader.where(node, field), field, value.text(),
+                             fmt::format("a number {} 0 {}", strictly_positive ? ">" : ">=", unit));
+  }
+}
+
+void parseTrigger(const YamlReader& reader, const YAML::Node& node, const std::string& field,
+                  const std::vector<std::string>& inputs, TriggerSpec& trigger) {
+  trigger.where = reader.where(node, field);
+  reader.checkKeys(node, field, {"time", "gap", "headway", "ttc", "after", "to", "delay"});
+  const std::string kind = oneOf(reader, node, field, {"time", "gap", "headway", "ttc", "after"}, true);
+  static const std::map<std::string, TriggerSpec::Kind> kinds = {{"time", TriggerSpec::Kind::Time},
+                                                                 {"gap", TriggerSpec::Kind::Gap},
+                                                                 {"headway", TriggerSpec::Kind::Headway},
+                                                                 {"ttc", TriggerSpec::Kind::Ttc},
+                                                                 {"after", TriggerSpec::Kind::After}};
+  trigger.kind = kinds.at(kind);
+  if (trigger.kind == TriggerSpec::Kind::After) {
+    trigger.action = reader.scalar(node["after"], field + ".after");
+  } else {
+    trigger.value = reader.expression(node[kind], field + "." + kind, inputs);
+    requireNonNegative(reader, node[kind], field + "." + kind, trigger.value, false, kind == "gap" ? "m" : "s");
+  }
+  if (node["to"]) {
+    if (trigger.kind == TriggerSpec::Kind::Time || trigger.kind == TriggerSpec::Kind::After) {
+      reader.fail(node["to"], field + ".to", "'to' names the road user of a gap, headway or ttc condition");
+    }
+    trigger.reference = reader.scalar(node["to"], field + ".to");
+  }
+  trigger.delay = optionalExpression(reader, node, "delay", field, inputs, 0.0);
+  if (node["delay"]) requireNonNegative(reader, node["delay"], field + ".delay", trigger.delay, false, "s");
+}
+
+TransitionShape parseShape(const YamlReader& reader, const YAML::Node& node, const std::string& field,
+                           TransitionShape fallback, bool step_allowed) {
+  if (!node["shape"]) return fallback;
+  const std::string name = reader.scalar(node["shape"], field + ".shape");
+  if (name == "linear") return TransitionShape::Linear;
+  if (name == "smooth") return TransitionShape::Smooth;
+  if (name == "step" && step_allowed) return TransitionShape::Step;
+  throw ConfigError::field(reader.where(node["shape"], field + ".shape"), field + ".shape", name,
+                           step_allowed ? "one of step, linear, smooth" : "one of linear, smooth");
+}
+
+/// The pace keys of `node` (exactly one of `keys`, each mapped to a Pace).
+void parsePace(const YamlReader& reader, const YAML::Node& node, const std::string& field,
+               const std::vector<std::pair<std::string, ActionSpec::Pace>>& keys,
+               const std::vector<std::string>& inputs, ActionSpec& action) {
+  std::vector<std::string> names;
+  for (const auto& [key, pace] : keys) names.push_back(key);
+  const std::string key = oneOf(reader, node, field, names, true);
+  for (const auto& [name, pace] : keys) {
+    if (name == key) action.pace = pace;
+  }
+  action.paceValue = reader.expression(node[key], field + "." + key, inputs);
+  requireNonNegative(reader, node[key], field + "." + key, action.paceValue, action.pace != ActionSpec::Pace::Duration,
+                     key == "duration" ? "s" : "");
+}
+
+void parseSpeedAction(const YamlReader& reader, const YAML::Node& node, const std::string& field, bool stop,
+                      const std::vector<std::string>& inputs, ActionSpec& action) {
+  action.kind = ActionSpec::Kind::Speed;
+  if (stop) {
+    reader.checkKeys(node, field, {"decel", "duration", "shape"});
+    action.target = Expression::constant(0.0);
+    parsePace(reader, node, field, {{"decel", ActionSpec::Pace::Rate}, {"duration", ActionSpec::Pace::Duration}},
+              inputs, action);
+  } else {
+    reader.checkKeys(node, field, {"target", "relative_target", "delta", "shape", "rate", "duration"});
+    const std::string target = oneOf(reader, node, field, {"target", "relative_target", "delta"}, true);
+    action.speedTarget = target == "target"            ? ActionSpec::SpeedTarget::Absolute
+                         : target == "relative_target" ? ActionSpec::SpeedTarget::RelativeToEgo
+                                                       : ActionSpec::SpeedTarget::Delta;
+    action.target = reader.expression(node[target], field + "." + target, inputs);
+    if (target == "target") requireNonNegative(reader, node[target], field + ".target", action.target, false, "m/s");
+  }
+  action.shape = parseShape(reader, node, field, TransitionShape::Linear, true);
+  if (action.shape == TransitionShape::Step) {
+    for (const char* key : {"rate", "decel", "duration"}) {
+      if (node[key]) reader.fail(node[key], field + "." + key, "a step changes the speed at once: no rate or duration");
+    }
+    action.pace = ActionSpec::Pace::Duration;
+    action.paceValue = Expression::constant(0.0);
+  } else if (!stop) {
+    parsePace(reader, node, field, {{"rate", ActionSpec::Pace::Rate}, {"duration", ActionSpec::Pace::Duration}},
+              inputs, action);
+  }
+}
+
+void parseLateralAction(const YamlReader& reader, const YAML::Node& node, const std::string& field,
+                        const std::string& kind, const std::vector<std::string>& inputs, ActionSpec& action) {
+  if (kind == "cross") {
+    reader.checkKeys(node, field, {"speed", "to_offset"});
+    action.kind = ActionSpec::Kind::Cross;
+    if (!node["to_offset"]) reader.fail(node, field, "missing 'to_offset' (m from its lane's centre, > 0 left)");
+    action.target = reader.expression(node["to_offset"], field + ".to_offset", inputs);
+    action.shape = TransitionShape::Linear;
+    parsePace(reader, node, field, {{"speed", ActionSpec::Pace::LateralSpeed}}, inputs, action);
+    return;
+  }
+  std::vector<std::pair<std::string, ActionSpec::Pace>> paces = {{"lateral_speed", ActionSpec::Pace::LateralSpeed},
+                                                                 {"duration", ActionSpec::Pace::Duration}};
+  if (kind == "lane_change") {
+    reader.checkKeys(node, field, {"lanes", "ego_lane", "lateral_speed", "duration", "shape"});
+    action.kind = ActionSpec::Kind::LaneChange;
+    const std::string target = oneOf(reader, node, field, {"lanes", "ego_lane"}, true);
+    action.relativeToEgoLane = target == "ego_lane";
+    action.target = reader.expression(node[target], field + "." + target, inputs);
+  } else {
+    reader.checkKeys(node, field, {"offset", "lateral_speed", "lateral_accel", "duration", "shape"});
+    action.kind = ActionSpec::Kind::LateralOffset;
+    if (!node["offset"]) reader.fail(node, field, "missing 'offset' (m from the lane's centre, > 0 left; 0: back)");
+    action.target = reader.expression(node["offset"], field + ".offset", inputs);
+    paces.emplace_back("lateral_accel", ActionSpec::Pace::LateralAccel);
+  }
+  action.shape = parseShape(reader, node, field, TransitionShape::Smooth, false);
+  parsePace(reader, node, field, paces, inputs, action);
+  if (action.pace == ActionSpec::Pace::LateralAccel && action.shape != TransitionShape::Smooth) {
+    reader.fail(node["lateral_accel"], field + ".lateral_accel", "a lateral acceleration paces a smooth shape only");
+  }
+}
+
+void parseAction(const YamlReader& reader, const YAML::Node& node, const std::string& field,
+                 const std::vector<std::string>& inputs, const VehicleSpec& owner, std::size_t index,
+                 ActionSpec& action) {
+  action.where = reader.where(node, field);
+  reader.checkKeys(node, field, {"id", "trigger", "speed", "stop", "lane_change", "lateral_offset", "cross"});
+  action.id = node["id"] ? reader.scalar(node["id"], field + ".id") : fmt::format("{}_{}", owner.id, index);
+  if (!isIdentifier(action.id)) {
+    throw ConfigError::field(reader.where(node["id"], field + ".id"), field + ".id", action.id,
+                             "an identifier (letters, digits, _)");
+  }
+  if (node["trigger"]) {
+    parseTrigger(reader, node["trigger"], field + ".trigger", inputs, action.trigger);
+  } else {
+    action.trigger.where = action.where;
+    action.trigger.value = Expression::constant(0.0);
+  }
+  const std::string kind = oneOf(reader, node, field, {"speed", "stop", "lane_change", "lateral_offset", "cross"}, true);
+  const auto& type = roadUserKind(owner.type);
+  if (type.stationary) reader.fail(node[kind], field + "." + kind, "a stationary object does not move");
+  if ((kind == "lane_change" || kind == "lateral_offset") && !type.drivesInLanes) {
+    reader.fail(node[kind], field + "." + kind, fmt::format("a {} does not drive in lanes", type.name));
+  }
+  if (kind == "cross" && owner.type != RoadUserType::Pedestrian) {
+    reader.fail(node[kind], field + ".cross", "only pedestrians cross the road");
+  }
+  if (kind != "speed" && kind != "stop" && owner.keepsLaneByPurePursuit()) {
+    reader.fail(node[kind], field + "." + kind,
+                "a road user with heading_noise_deg keeps its lane by pure pursuit: lateral actions need one "
+                "without (they move it exactly in the lane frame)");
+  }
+  if (kind == "speed" || kind == "stop") parseSpeedAction(reader, node[kind], field + "." + kind, kind == "stop", inputs, action);
+  else parseLateralAction(reader, node[kind], field + "." + kind, kind, inputs, action);
+}
+
+void parseOtherSpeed(const YamlReader& reader, const YAML::Node& item, const std::string& field,
+                     const std::vector<std::string>& inputs, VehicleSpec& other) {
+  const bool moves = !roadUserKind(other.type).stationary;
+  const std::string key = oneOf(reader, item, field, {"speed_profile", "speed", "relative_speed"}, false);
+  if (!moves && !key.empty()) reader.fail(item[key], field + "." + key, "a stationary object does not move");
+  if (key.empty()) {
+    if (roadUserKind(other.type).drivesInLanes) {
+      reader.fail(item, field, "needs one of: speed_profile, speed, relative_speed");
+    }
+    other.speed = Expression::constant(0.0);
+  } else if (key == "speed_profile") {
+    parseSpeedProfile(reader, item[key], field + ".speed_profile", inputs, other);
+  } else {
+    other.speed = reader.expression(item[key], field + "." + key, inputs);
+    other.speedRelativeToEgo = key == "relative_speed";
+    if (key == "speed") requireNonNegative(reader, item[key], field + ".speed", other.speed, false, "m/s");
+  }
+  if (item["speed_noise"]) other.speedNoise = reader.distribution(item["speed_noise"], field + ".speed_noise", inputs);
+}
+
+void parseOther(const YamlReader& reader, const YAML::Node& item, const std::string& field,
+                const std::vector<std::string>& inputs, const LogicalScenario& scenario, VehicleSpec& other) {
+  other.where = reader.where(item, field);
+  parseType(reader, item, field, inputs, other);
+  parsePlacement(reader, item, field, /*is_ego=*/false, inputs, scenario, other);
+  parseOtherSpeed(reader, item, field, inputs, other);
+  parseHeadingNoise(reader, item, field, inputs, other);
+  if (const auto actions = item["actions"]) {
+    if (!actions.IsSequence()) reader.fail(actions, field + ".actions", "expected a list of actions");
+    for (std::size_t a = 0; a < actions.size(); ++a) {
+      ActionSpec action;
+      parseAction(reader, actions[a], fmt::format("{}.actions[{}]", field, a), inputs, other, a, action);
+      other.actions.push_back(std::move(action));
+    }
+  }
+}
+
+void parseEgo(const YamlReader& reader, const YAML::Node& ego, const std::vector<std::string>& inputs,
+              LogicalScenario& scenario) {
+  const std::string field = "vehicles.ego";
+  reader.checkKeys(ego, field, {"type", "x", "s", "lane", "speed", "length", "width", "heading_noise_deg", "controller"});
+  VehicleSpec& spec = scenario.ego;
+  spec.id = "ego";
+  spec.where = reader.where(ego, field);
+  parseType(reader, ego, field, inputs, spec);
+  if (!roadUserKind(spec.type).drivesInLanes) {
+    reader.fail(ego["type"], field + ".type", "the Ego is a vehicle: one of car, van, truck, bus, motorbike");
+  }
+  parsePlacement(reader, ego, field, /*is_ego=*/true, inputs, scenario, spec);
+  if (!ego["speed"]) reader.fail(ego, field, "missing 'speed' (initial speed, m/s)");
+  spec.speed = reader.expression(ego["speed"], field + ".speed", inputs);
+  requireNonNegative(reader, ego["speed"], field + ".speed", spec.speed, false, "m/s");
+  parseHeadingNoise(reader, ego, field, inputs, spec);
+  if (!ego["controller"]) reader.fail(ego, field, "missing 'controller'");
+  parseController(reader, ego["controller"], field + ".controller", inputs, spec.controller);
+}
+
+/// Trigger references name existing road users and actions; `after` chains have no cycle.
+void resolveReferences(const LogicalScenario& scenario) {
+  std::vector<std::string> users = {"ego"};
+  for (const auto& other : scenario.others) users.push_back(other.id);
+  std::map<std::string, const ActionSpec*> actions;
+  for (const auto& other : scenario.others) {
+    for (const auto& action : other.actions) {
+      if (!actions.emplace(action.id, &action).second) {
+        throw ConfigError(fmt::format("{}.id: got '{}', expected an action id used once in the file", action.where,
+                                      action.id));
+      }
+    }
+  }
+  std::vector<std::string> action_ids;
+  for (const auto& [id, action] : actions) action_ids.push_back(id);
+  for (const auto& other : scenario.others) {
+    for (const auto& action : other.actions) {
+      const auto& trigger = action.trigger;
+      if (std::find(users.begin(), users.end(), trigger.reference) == users.end() || trigger.reference == other.id) {
+        throw ConfigError(fmt::format("{}.to: got '{}', expected another road user of the file: {}", trigger.where,
+                                      trigger.reference, fmt::join(users, ", ")));
+      }
+      if (trigger.kind == TriggerSpec::Kind::After && !actions.count(trigger.action)) {
+        throw ConfigError(fmt::format("{}.after: got '{}', expected the id of an action of the file: {}", trigger.where,
+                                      trigger.action, action_ids.empty() ? "none" : fmt::format("{}", fmt::join(action_ids, ", "))));
+      }
+    }
+  }
+  // `after` edges form chains; following one from any action must not come back to it.
+  for (const auto& [id, start] : actions) {
+    std::vector<std::string> chain = {id};
+    const ActionSpec* current = start;
+    while (current->trigger.kind == TriggerSpec::Kind::After) {
+      const std::string& next = current->trigger.action;
+      chain.push_back(next);
+      if (next == id) {
+        throw ConfigError(fmt::format("{}.after: got '{}', a cycle of triggers ({}); expected a chain that starts "
+                                      "with a time or a condition",
+                                      start->trigger.where, start->trigger.action, fmt::join(chain, " -> ")));
+      }
+      if (chain.size() > actions.size() + 1) break;  // a cycle not through `id`: reported from its own members
+      current = actions.at(next);
+    }
+  }
+}
+
+}  // namespace
+
+void parseRoadUsers(const YamlReader& reader, const YAML::Node& node, LogicalScenario& scenario) {
+  if (!node) reader.fail(YAML::Node(), "vehicles", "missing section 'vehicles' (at least 'ego')");
+  reader.checkKeys(node, "vehicles", {"ego", "others"});
+  const auto inputs = scenario.inputNames();
+  if (!node["ego"]) reader.fail(node, "vehicles.ego", "missing: every scenario needs an Ego (the vehicle under test)");
+  parseEgo(reader, node["ego"], inputs, scenario);
+
+  std::set<std::string> ids = {"ego"};
+  const auto others = node["others"];
+  if (!others) return;
+  if (!others.IsSequence()) reader.fail(others, "vehicles.others", "expected a list of road users");
+  for (std::size_t i = 0; i < others.size(); ++i) {
+    const auto item = others[i];
+    const std::string field = fmt::format("vehicles.others[{}]", i);
+    reader.checkKeys(item, field,
+                     {"id", "type", "x", "s", "ds", "gap", "from", "lane", "relative_lane", "offset", "heading_deg", "length", "width",
+                      "speed_profile", "speed", "relative_speed", "speed_noise", "heading_noise_deg", "actions"});
+    VehicleSpec other;
+    other.id = item["id"] ? reader.scalar(item["id"], field + ".id") : fmt::format("other{}", i);
+    if (!isIdentifier(other.id) || !ids.insert(other.id).second) {
+      throw ConfigError::field(reader.where(item["id"], field + ".id"), field + ".id", other.id,
+                               "a unique identifier (letters, digits, _)");
+    }
+    parseOther(reader, item, field, inputs, scenario, other);
+    scenario.others.push_back(std::move(other));
+  }
+  resolveReferences(scenario);
+}
+
+}  // namespace vsd::scenario::detail

@@ -1,0 +1,128 @@
+#include <gtest/gtest.h>
+
+#include <fmt/format.h>
+
+#include "test_support.hpp"
+#include "vsd/core/error.hpp"
+#include "vsd/scenario/concrete_scenario.hpp"
+
+using namespace vsd;
+using namespace vsd::scenario;
+
+namespace {
+
+std::string yamlWith(const std::string& others, const std::string& inputs = "", const std::string& road = "") {
+  return fmt::format(R"(
+name: users
+inputs: [{}]
+road: {{shape: arc, length: 200, lanes: 3{}}}
+vehicles:
+  ego: {{s: 20, lane: 1, speed: 10, controller: {{name: idm}}}}
+  others:
+{}
+)",
+                     inputs, road, others);
+}
+
+/// The message of the ConfigError loading (and sampling sample 0 of) a file with these other
+/// road users throws; "" if none.
+std::string errorOf(const std::string& others, const std::string& road = "") {
+  try {
+    const auto logical = parseLogicalScenario(yamlWith(others, "", road), "bad.yaml");
+    sampleConcreteScenario(logical, 1, 0);
+  } catch (const ConfigError& error) {
+    return error.what();
+  }
+  return "";
+}
+
+}  // namespace
+
+TEST(RoadUsers, EveryLibraryScenarioLoadsAndSamples) {
+  std::size_t files = 0;
+  for (const auto& entry : std::filesystem::directory_iterator(test::sourceDir() / "scenarios" / "alks")) {
+    const auto logical = loadLogicalScenario(entry.path());
+    for (std::uint64_t i = 0; i < 50; ++i) {
+      const auto concrete = sampleConcreteScenario(logical, 1, i);
+      EXPECT_EQ(concrete.others.size(), logical->others.size()) << entry.path();
+    }
+    ++files;
+  }
+  EXPECT_EQ(files, 15u);  // the fifteen functional scenarios of docs/alks-scenarios.md
+}
+
+TEST(RoadUsers, TypesSizesAndRelativePlacesResolvePerSample) {
+  const auto logical = parseLogicalScenario(
+      yamlWith("    - {id: t, type: truck, gap: 12, relative_lane: side, relative_speed: -2, width: 2.4}",
+               "{name: side, choices: [1, -1]}"),
+      "ok.yaml");
+  const auto concrete = sampleConcreteScenario(logical, 1, 0);
+  const auto& truck = concrete.others[0];
+  EXPECT_EQ(truck.type, RoadUserType::Truck);
+  EXPECT_EQ(truck.length, roadUserKind(RoadUserType::Truck).length);  // from the table
+  EXPECT_EQ(truck.width, 2.4);                                        // given
+  EXPECT_EQ(truck.lane, 1 + static_cast<int>(concrete.inputs[0]));
+  EXPECT_EQ(truck.speed, 8.0);
+  EXPECT_EQ(truck.along, VehicleSpec::Along::EgoGap);
+}
+
+// The issue's list of bad input: one line naming file, field, value and what is allowed.
+TEST(RoadUsers, ATriggerNamingAMissingRoadUserOrActionIsRefused) {
+  const auto missing_user = errorOf(R"(    - {id: a, gap: 20, relative_lane: 0, speed: 5,
+       actions: [{trigger: {gap: 10, to: ghost}, stop: {decel: 3}}]})");
+  EXPECT_NE(missing_user.find("bad.yaml:"), std::string::npos) << missing_user;
+  EXPECT_NE(missing_user.find("vehicles.others[0].actions[0].trigger.to: got 'ghost', expected another road user of "
+                              "the file: ego, a"),
+            std::string::npos)
+      << missing_user;
+  const auto missing_action = errorOf(R"(    - {id: a, gap: 20, relative_lane: 0, speed: 5,
+       actions: [{trigger: {after: nothing}, stop: {decel: 3}}]})");
+  EXPECT_NE(missing_action.find("trigger.after: got 'nothing'"), std::string::npos) << missing_action;
+}
+
+TEST(RoadUsers, ACycleOfTriggersIsRefused) {
+  const auto error = errorOf(R"(    - {id: a, gap: 20, relative_lane: 0, speed: 5,
+       actions: [{id: one, trigger: {after: two}, stop: {decel: 3}},
+                 {id: two, trigger: {after: one}, speed: {target: 4, rate: 1}}]})");
+  EXPECT_NE(error.find("a cycle of triggers (one -> two -> one)"), std::string::npos) << error;
+}
+
+TEST(RoadUsers, ALaneChangeToALaneTheRoadDoesNotHaveIsRefused) {
+  const auto error = errorOf(R"(    - {id: a, gap: 20, relative_lane: 1, speed: 5,
+       actions: [{trigger: {time: 1}, lane_change: {lanes: 1, duration: 3}}]})");
+  EXPECT_NE(error.find("vehicles.others[0].actions[0].lane_change: got 1 lanes from lane 2 in sample 0, that is lane "
+                       "3; expected a lane the road has (0 .. 2)"),
+            std::string::npos)
+      << error;
+  const auto start = errorOf("    - {id: a, gap: 20, relative_lane: 2, speed: 5}");
+  EXPECT_NE(start.find("relative_lane: got '2' = 2 in sample 0 (lane 3 from lane 1), expected a lane the road has"),
+            std::string::npos)
+      << start;
+}
+
+TEST(RoadUsers, NegativeOrNaNSpeedsAreRefused) {
+  EXPECT_NE(errorOf("    - {id: a, gap: 20, relative_lane: 0, speed: -1}").find("speed: got '-1'"), std::string::npos);
+  const auto relative = errorOf("    - {id: a, gap: 20, relative_lane: 0, relative_speed: -12}");
+  EXPECT_NE(relative.find("relative_speed: got '-12' = -2 m/s in sample 0, expected a finite speed >= 0 m/s"),
+            std::string::npos)
+      << relative;
+  const auto nan = errorOf("    - {id: a, gap: 20, relative_lane: 0, speed: sqrt(-1)}");
+  EXPECT_NE(nan.find("speed"), std::string::npos) << nan;
+}
+
+TEST(RoadUsers, APedestrianNeedsAPlaceToCross) {
+  const std::string walker = R"(    - {id: p, type: pedestrian, gap: 20, relative_lane: 0, offset: -6, heading_deg: 90,
+       actions: [{trigger: {time: 1}, cross: {speed: 1.4, to_offset: 5}}]})";
+  const auto error = errorOf(walker);
+  EXPECT_NE(error.find("offset: got -6 m from lane 1's centre in sample 0, 0.75 m beyond the road's right edge where "
+                       "road.shoulders.right is 0 m: a pedestrian on a road without a place to cross"),
+            std::string::npos)
+      << error;
+  EXPECT_EQ(errorOf(walker, ", shoulders: {right: 1}"), "");
+}
+
+TEST(RoadUsers, LateralActionsNeedTheExactModel) {
+  const auto error = errorOf(R"(    - {id: a, gap: 20, relative_lane: 0, speed: 5, heading_noise_deg: {min: -1, max: 1},
+       actions: [{trigger: {time: 1}, lane_change: {lanes: 1, duration: 3}}]})");
+  EXPECT_NE(error.find("keeps its lane by pure pursuit"), std::string::npos) << error;
+}
