@@ -360,18 +360,18 @@ print("ok")
   EXPECT_FALSE(fs::exists(dir.path() / "r"));
   EXPECT_FALSE(fs::exists(dir.path() / "p0.h5"));
 
-  // An existing folder where a file is expected is refused before the work starts: the
-  // data is never opened (a missing dataset would be the error otherwise).
+  // An existing folder where a file is expected is refused by the output policy before the
+  // work starts (docs/output-policy.md): a folder is never replaced by a file.
   const auto folder = dir.path() / "a_folder";
-  const auto missing = (dir.path() / "missing.h5").string();
   fs::create_directories(folder);
   for (const auto& command : std::vector<std::vector<std::string>>{
-           {"train", "--data", missing, "--out", folder.string(), "--steps", "3"},
-           {"predict", "--model", model.string(), "--data", missing, "--out", folder.string()},
-           {"evaluate", "--model", model.string(), "--data", missing, "--csv", folder.string()}}) {
+           {"train", "--data", data.string(), "--out", folder.string(), "--steps", "3"},
+           {"predict", "--model", model.string(), "--data", data.string(), "--out", folder.string()},
+           {"evaluate", "--model", model.string(), "--data", data.string(), "--csv", folder.string()}}) {
     const auto refused = runForErrors(command, dir.path());
     EXPECT_EQ(refused.exitCode, 1) << command[0] << ": " << refused.output;
-    EXPECT_NE(refused.output.find("a_folder', expected a file name (this is an existing folder)"), std::string::npos)
+    EXPECT_EQ(lineCount(refused.output), 1u) << refused.output;
+    EXPECT_NE(refused.output.find("a_folder: exists and is a folder vsd-sumo did not write"), std::string::npos)
         << command[0] << ": " << refused.output;
   }
   EXPECT_TRUE(fs::is_empty(folder));

@@ -209,8 +209,9 @@ TEST_F(CompareTest, DatasetModeWorksOnAnExportedRealMap) {
   options.criteria = {"close: d_min < 2"};
   const auto summary = runComparison(options);
   EXPECT_GT(summary.statistics.compared, 20u);
-  const std::vector<std::string> names = {"a_min",   "d_min",           "d_lon_min", "ttc_min",
-                                          "thw_min", "lane_offset_max", "pet_min",   "drac_max"};
+  // Every default metric a recorded Ego future allows (the Ego's own deceleration and jerk too).
+  const std::vector<std::string> names = {"a_min",   "d_min",           "d_lon_min", "ttc_min",  "thw_min",
+                                          "lane_offset_max", "pet_min", "drac_max", "decel_max", "jerk_max"};
   EXPECT_EQ(summary.comparison.metricNames, names);
   // The recorded futures of SUMO's drivers: they keep to their lanes (offsets within half
   // a lane, lane changes included) and do not collide - a car side by side in the next

@@ -165,10 +165,10 @@ void checkRun(const Case& c, const RunResult& run, const std::vector<Snapshot>& 
     if (problems.empty() && c.checkOutputs) {
       if (auto problem = c.checkOutputs(); !problem.empty()) problems.push_back("exit 0 but " + problem);
     }
-  } else if (run.exitCode == 1) {
+  } else if (run.exitCode == 1 || run.exitCode == 2) {  // 2: a usage error (docs/cli.md), refused the same way
     checkRefusal(c, run, before, problems);
   } else {
-    problems.push_back(fmt::format("exit code {} (expected 0 or 1): {}", run.exitCode, run.stderrText));
+    problems.push_back(fmt::format("exit code {} (expected 0, 1 or 2): {}", run.exitCode, run.stderrText));
   }
 }
 
