@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <map>
+#include <optional>
 #include <regex>
 
 #include "vsd/core/error.hpp"
@@ -18,9 +19,10 @@ namespace {
 
 constexpr std::uint64_t kMaxShards = 100000;
 
-std::uint64_t parseCount(const std::string& text) {
+/// A shard index or count: up to nine decimal digits, nothing else (no sign, no space).
+std::optional<std::uint64_t> parseCount(const std::string& text) {
   if (text.empty() || text.size() > 9 || text.find_first_not_of("0123456789") != std::string::npos) {
-    throw std::invalid_argument(text);
+    return std::nullopt;
   }
   return std::stoull(text);
 }
@@ -31,13 +33,12 @@ ShardId ShardId::parse(const std::string& text, const std::string& where) {
   const std::string expected = fmt::format("K/N with 0 <= K < N <= {} (shard K of N, counted from 0)", kMaxShards);
   const auto slash = text.find('/');
   if (slash == std::string::npos) throw ConfigError::field(where, "--shard", text, expected);
+  const auto index = parseCount(text.substr(0, slash));
+  const auto count = parseCount(text.substr(slash + 1));
+  if (!index || !count) throw ConfigError::field(where, "--shard", text, expected);
   ShardId id;
-  try {
-    id.index = parseCount(text.substr(0, slash));
-    id.count = parseCount(text.substr(slash + 1));
-  } catch (const std::exception&) {
-    throw ConfigError::field(where, "--shard", text, expected);
-  }
+  id.index = *index;
+  id.count = *count;
   if (id.count < 1 || id.count > kMaxShards || id.index >= id.count) {
     throw ConfigError::field(where, "--shard", text, expected);
   }

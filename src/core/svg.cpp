@@ -7,6 +7,8 @@
 #include <regex>
 #include <stdexcept>
 
+#include "vsd/core/error.hpp"
+
 namespace vsd {
 
 std::string escapeXml(const std::string& text) {
@@ -158,7 +160,7 @@ std::string composeSvgRow(const std::vector<std::string>& panels, const std::str
   for (const auto& panel : panels) {
     std::smatch match;
     if (!std::regex_search(panel, match, size_pattern)) {
-      throw std::invalid_argument("composeSvgRow: a panel is not an <svg> element with width and height");
+      throw Error("internal: composeSvgRow: a panel is not an <svg> element with width and height");
     }
     const double panel_width = std::stod(match[1].str());
     const double panel_height = std::stod(match[2].str());

@@ -56,7 +56,7 @@ class SvgCanvas {
 
 /// Places complete <svg> elements (as SvgCanvas::str() writes them, with width and
 /// height attributes in pixels) side by side in one <svg>, under an optional title.
-/// Throws std::invalid_argument for an element without width/height.
+/// Throws vsd::Error for an element without width/height.
 std::string composeSvgRow(const std::vector<std::string>& panels, const std::string& title = "", int gap_px = 10);
 
 }  // namespace vsd
