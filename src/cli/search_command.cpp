@@ -52,7 +52,9 @@ void addSearchCommand(CLI::App& app, CommandContext& context) {
   command->add_option("--surrogate", options->surrogate, surrogateHelp())
       ->capture_default_str()
       ->check(CLI::IsMember(surrogateNames()));  // a name the registry lacks is a usage error
-  addNumber(command, "--budget", options->budget, "Executions (SUMO simulations) in total")->capture_default_str();
+  addNumber(command, "--budget", options->budget,
+            "SUMO simulations in total (an execution with --reference costs two)")
+      ->capture_default_str();
   addNumber(command, "--initial", options->initial, "Executions of the initial random design")->capture_default_str();
   addNumber(command, "--round", options->roundSize, "Executions per later round")->capture_default_str();
   addNumber(command, "--estimate-share", options->estimateShare,
@@ -63,6 +65,10 @@ void addSearchCommand(CLI::App& app, CommandContext& context) {
   addNumber(command, "--diversity", options->diversity,
                       "Weight of the distance to critical scenarios already found in the acquisition")
       ->capture_default_str();
+  command->add_option("--reference", options->reference,
+                      "Run every execution a second time with this built-in controller as the Ego (e.g. "
+                      "r157_reference_driver); the criterion may then read reference_<metric> and "
+                      "reference_avoids_sut_collides (UN R157's pass criterion fails)");
   addNumber(command, "--trees", options->trees, "extra-trees: trees per criterion metric")->capture_default_str();
   command->add_option("--probability", options->probability,
                       "extra-trees: probability from the trees' predictions shifted by -1/0/+1 spreads (shifts) or the "
@@ -99,7 +105,8 @@ void addSearchCommand(CLI::App& app, CommandContext& context) {
         options->validate();
         const metrics::MetricSet metric_set(logical->metrics, pipeline::scenarioAvailability(*logical),
                                             logical->sourceFile.string() + ": metrics");
-        search::Criterion(options->criterion, *logical, metric_set.names());
+        search::Criterion(options->criterion, *logical,
+                          search::executionColumns(metric_set.names(), options->reference));
         search::discardSearchState(options->outputDir);
       }
       fmt::print("{}", search::runSearch(*options).report());

@@ -48,7 +48,8 @@ nlohmann::json identity(const SearchContext& context) {
           {"bnn_epochs", o.bnnEpochs}};
   if (o.probability != "shifts") json["probability"] = o.probability;  // checkpoints from before it stay valid
   if (o.rankTargets) json["rank_targets"] = true;
-  if (o.surrogate == "vectornet") {
+  if (!o.reference.empty()) json["reference"] = o.reference;  // absent: searches without one
+  if (context.surrogate->learnsFromScenes) {
     nlohmann::json priors = nlohmann::json::array();
     for (const auto& file : context.priors) priors.push_back({{"file", file.string()}, {"sha256", sha256OfFile(file)}});
     json["prior"] = priors;

@@ -9,6 +9,7 @@
 #include "vsd/core/criterion_syntax.hpp"
 #include "vsd/core/error.hpp"
 #include "vsd/metrics/metrics.hpp"
+#include "vsd/pipeline/run.hpp"
 
 namespace vsd::search {
 
@@ -50,7 +51,16 @@ Criterion::Criterion(const std::string& text, const scenario::LogicalScenario& l
   }
   const auto yaml = std::find_if(logical.criteria.begin(), logical.criteria.end(),
                                  [&](const scenario::Criterion& c) { return c.name == text; });
-  if (yaml != logical.criteria.end()) {
+  if (text == pipeline::kReferenceCriterion) {
+    // The regulation's pass criterion by its name: a column only a search with --reference has.
+    if (std::find(metric_names.begin(), metric_names.end(), text) == metric_names.end()) {
+      throw ConfigError(fmt::format("{} '{}': needs --reference NAME (e.g. --reference r157_reference_driver): "
+                                    "it compares the system under test with the reference driver",
+                                    where, text));
+    }
+    name_ = text;
+    expression_ = text + " > 0.5";  // 1: the reference driver avoided a collision the system had
+  } else if (yaml != logical.criteria.end()) {
     name_ = yaml->name;
     expression_ = yaml->expression;
     where = yaml->where.empty() ? logical.sourceFile.string() + ": criteria." + yaml->name : yaml->where;

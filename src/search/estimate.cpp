@@ -120,7 +120,7 @@ RateEstimate estimateRate(const SearchContext& context, const std::vector<Execut
   } else {
     result.draws = result.randomExecutions;
   }
-  result.sameBudgetRandomWidth = wilsonWidth(result.estimate, static_cast<double>(context.options.budget));
+  result.sameBudgetRandomWidth = wilsonWidth(result.estimate, static_cast<double>(context.options.executionBudget()));
   return result;
 }
 

@@ -29,7 +29,7 @@ std::vector<std::string> executionHeader(const detail::SearchContext& context) {
                                      "acquisition", "predicted_probability", "estimate_draws", "estimate_weight",
                                      "status", "failure", "critical"};
   for (const auto& input : context.logical->inputs) header.push_back(input.name);
-  header.insert(header.end(), context.metricNames.begin(), context.metricNames.end());
+  header.insert(header.end(), context.columnNames.begin(), context.columnNames.end());
   return header;
 }
 
@@ -151,6 +151,10 @@ nlohmann::json searchManifest(const detail::SearchContext& context, const Search
   manifest["expression"] = summary.expression;
   manifest["surrogate"] = o.surrogate;
   manifest["budget"] = o.budget;
+  if (!o.reference.empty()) {
+    manifest["reference"] = o.reference;
+    manifest["simulations_per_execution"] = o.simulationsPerExecution();
+  }
   manifest["executions"] = summary.executions;
   manifest["critical"] = summary.critical;
   manifest["failed"] = summary.failedRuns;
@@ -158,7 +162,7 @@ nlohmann::json searchManifest(const detail::SearchContext& context, const Search
   manifest["finished"] = utcTimestamp();
   manifest["seconds"] = summary.seconds;
   manifest["inputs"] = context.logical->inputNames();
-  manifest["metrics"] = context.metricNames;
+  manifest["metrics"] = context.columnNames;
   return manifest;
 }
 

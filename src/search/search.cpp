@@ -33,14 +33,22 @@ namespace vsd::search {
 using detail::SearchContext;
 using detail::SearchState;
 
+std::vector<std::string> executionColumns(const std::vector<std::string>& metricNames, const std::string& reference) {
+  std::vector<std::string> columns = metricNames;
+  if (reference.empty()) return columns;
+  for (const auto& name : metricNames) columns.push_back("reference_" + name);
+  columns.emplace_back(pipeline::kReferenceCriterion);
+  return columns;
+}
+
 void SearchOptions::validate() const {
   const std::string where = "command line";
   if (outputDir.empty()) throw ConfigError::field(where, "--out", "''", "an output folder");
   if (initial < 2) throw ConfigError::field(where, "--initial", std::to_string(initial), ">= 2");
-  if (budget < initial) {
+  if (budget < initial * simulationsPerExecution()) {
     throw ConfigError::field(where, "--budget", std::to_string(budget),
-                             fmt::format(">= --initial ({}): the initial design alone needs that many executions",
-                                         initial));
+                             fmt::format(">= --initial ({}) x {}: the initial design alone needs that many simulations",
+                                         initial, simulationsPerExecution()));
   }
   if (budget > 10'000'000) throw ConfigError::field(where, "--budget", std::to_string(budget), "<= 10000000");
   if (roundSize < 1 || roundSize > 100'000) {
@@ -66,9 +74,16 @@ void SearchOptions::validate() const {
   if (futureSamples < 1 || futureSamples > 1000) {
     throw ConfigError::field(where, "--future-samples", std::to_string(futureSamples), "1 .. 1000");
   }
-  if (!priors.empty() && surrogate != "vectornet") {
+  const auto& entry = findSurrogate(surrogate);
+  if (!priors.empty() && !entry.learnsFromScenes) {
     throw ConfigError::field(where, "--prior", priors.front().string(),
-                             fmt::format("no --prior with --surrogate {}: only vectornet learns from scenes", surrogate));
+                             fmt::format("no --prior with --surrogate {}: it does not learn from scenes", surrogate));
+  }
+  if (!reference.empty() && entry.learnsFromScenes) {
+    throw ConfigError::field(where, "--reference", reference,
+                             fmt::format("no --reference with --surrogate {}: it predicts only the Ego's own futures, "
+                                         "not the reference driver's outcome (use extra-trees, bnn or random)",
+                                         surrogate));
   }
   if (jobs < 1 || jobs > 256) throw ConfigError::field(where, "--jobs", std::to_string(jobs), "1 .. 256");
   if (threads < 1 || threads > 256) throw ConfigError::field(where, "--threads", std::to_string(threads), "1 .. 256");
@@ -155,6 +170,21 @@ std::vector<fs::path> priorDatasets(const std::vector<fs::path>& priors, const s
   return files;
 }
 
+/// An execution's values in executionColumns() order: the system's metrics, then with
+/// --reference the reference driver's and the regulation's pass criterion (NaN where a run failed).
+std::vector<double> executionValues(const SearchContext& context, const pipeline::ScenarioOutcome& outcome) {
+  std::vector<double> values = outcome.metrics;
+  if (context.options.reference.empty()) return values;
+  const auto& reference = outcome.referenceMetrics;
+  for (std::size_t m = 0; m < context.metricNames.size(); ++m) {
+    values.push_back(m < reference.size() ? reference[m] : std::numeric_limits<double>::quiet_NaN());
+  }
+  const auto& metric_set = *context.metricSet;
+  values.push_back(pipeline::referenceAvoidsSutCollides(
+      outcome, [&metric_set](const std::vector<double>& metrics) { return metric_set.collision(metrics); }));
+  return values;
+}
+
 SearchContext makeContext(const SearchOptions& options) {
   options.validate();
   SearchContext context;
@@ -166,7 +196,8 @@ SearchContext makeContext(const SearchOptions& options) {
       context.logical->metrics, pipeline::scenarioAvailability(*context.logical),
       context.logical->sourceFile.string() + ": metrics");
   context.metricNames = context.metricSet->names();
-  context.criterion = std::make_unique<Criterion>(options.criterion, *context.logical, context.metricNames);
+  context.columnNames = executionColumns(context.metricNames, options.reference);
+  context.criterion = std::make_unique<Criterion>(options.criterion, *context.logical, context.columnNames);
   context.scenarioSha256 = sha256OfFile(context.logical->sourceFile);
   context.priors = priorDatasets(options.priors, *context.logical);
   context.normaliser =
@@ -312,7 +343,7 @@ RoundPlan planRound(const SearchContext& context, const SearchState& state, doub
     addRandomStream(plan, next_random, context.options.initial, "initial");
     return plan;
   }
-  const std::uint64_t size = std::min(context.options.roundSize, context.options.budget - done);
+  const std::uint64_t size = std::min(context.options.roundSize, context.options.executionBudget() - done);
   if (!context.guides) {
     addRandomStream(plan, next_random, size, "random");
     return plan;
@@ -336,6 +367,7 @@ void executePlan(const SearchContext& context, std::uint64_t round, RoundPlan& p
   run.seed = context.options.seed;
   run.jobs = context.options.jobs;
   run.egoStepCost = context.options.egoStepCost;
+  run.reference = context.options.reference;
   run.writeFiles = false;
   const auto logical = context.logical;
   const std::uint64_t seed = context.options.seed;
@@ -356,9 +388,9 @@ void executePlan(const SearchContext& context, std::uint64_t round, RoundPlan& p
   pipeline::runScenarios(logical, run, [&](const pipeline::ScenarioOutcome& outcome) {
     auto& execution = plan.chosen[outcome.index];
     execution.inputs = outcome.inputs;
-    execution.metrics = outcome.metrics;
+    execution.metrics = executionValues(context, outcome);
     execution.failure = outcome.failure;
-    const auto verdict = outcome.ok() ? context.criterion->verdict(outcome.metrics) : std::nullopt;
+    const auto verdict = outcome.ok() ? context.criterion->verdict(execution.metrics) : std::nullopt;
     execution.verdict = verdict ? (*verdict ? 1 : 0) : -1;
     pipeline::ScenarioOutcome stored = outcome;  // stored under its sample index, not its layout cell
     stored.index = execution.sample;
@@ -396,9 +428,9 @@ std::uint64_t countCritical(const std::vector<Execution>& executions) {
 }
 
 void runRounds(const SearchContext& context, SearchState& state, SearchSummary& summary) {
-  Progress progress(fmt::format("search {}", context.logical->name), context.options.budget, "executions");
+  Progress progress(fmt::format("search {}", context.logical->name), context.options.executionBudget(), "executions");
   progress.advance(state.executions.size());
-  while (state.executions.size() < context.options.budget) {
+  while (state.executions.size() < context.options.executionBudget()) {
     throwIfInterrupted();
     RoundPlan plan = planRound(context, state, summary.surrogateSeconds);
     const auto start = std::chrono::steady_clock::now();
@@ -437,6 +469,7 @@ SearchSummary runSearch(const SearchOptions& options) {
   summary.criterion = context.criterion->name();
   summary.expression = context.criterion->expression();
   summary.surrogate = options.surrogate;
+  summary.reference = options.reference;
   summary.seed = options.seed;
   summary.resumedFrom = state.executions.size();
   runRounds(context, state, summary);
@@ -464,6 +497,10 @@ std::string SearchSummary::report() const {
                                  "(simulation {:.1f} s, surrogate {:.1f} s)\n",
                                  functionalScenario, criterion, criterion == expression ? "" : " (" + expression + ")",
                                  surrogate, executions, rounds, seconds, simulationSeconds, surrogateSeconds);
+  if (!reference.empty()) {
+    text += fmt::format("  each execution ran twice: the system under test and {} as the Ego ({} simulations)\n",
+                        reference, 2 * executions);
+  }
   if (resumedFrom > 0) text += fmt::format("  resumed after {} executions of an earlier run\n", resumedFrom);
   text += fmt::format("  critical: {} ({:.2f} % of executions), in {} input cells; failed simulations: {}\n", critical,
                       executions == 0 ? 0.0 : 100.0 * static_cast<double>(critical) / static_cast<double>(executions),

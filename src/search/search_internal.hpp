@@ -49,7 +49,10 @@ struct SearchContext {
   SearchOptions options;
   std::shared_ptr<const scenario::LogicalScenario> logical;
   std::shared_ptr<const metrics::MetricSet> metricSet;
-  std::vector<std::string> metricNames;  ///< metricSet->names()
+  std::vector<std::string> metricNames;  ///< metricSet->names(): what a run computes and its files hold
+  /// Execution::metrics' columns: metricNames, then with --reference the reference driver's
+  /// metrics (`reference_<name>`) and pipeline::kReferenceCriterion. The criterion reads these.
+  std::vector<std::string> columnNames;
   std::unique_ptr<Criterion> criterion;
   const SurrogateEntry* surrogate = nullptr;
   bool guides = false;  ///< the surrogate selects (false: Monte Carlo)

@@ -41,7 +41,7 @@ class VectorNetSurrogate final : public Surrogate {
   bool guidesSelection() const override { return true; }
 
   void fit(const TrainingSet& data) override {
-    if (!options_.metricSet) throw std::logic_error("vectornet surrogate: no metric set");
+    if (!options_.metricSet) throw Error("internal: vectornet surrogate without a metric set");
     model::TrainOptions train = trainingOptions(options_.seed);
     setOwnLabelData(data, train);
     if (!data.priorScenes.empty()) train.initialModel = priorModel(data.priorScenes);

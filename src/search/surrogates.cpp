@@ -22,7 +22,7 @@ const std::vector<SurrogateEntry>& surrogateRegistry() {
       {"vectornet",
        "VectorNet (kinematic decoder) on the vectorized scenes, retrained each round; probability = share of its "
        "sampled futures whose metrics meet the criterion",
-       makeVectorNetSurrogate},
+       makeVectorNetSurrogate, /*learnsFromScenes=*/true},
   };
   return entries;
 }

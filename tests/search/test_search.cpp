@@ -346,8 +346,69 @@ TEST(SearchVectorNet, APriorPreTrainsTheModelAndTheSearchResumesWithTheSameChoic
   EXPECT_EQ(std::count(message.begin(), message.end(), '\n'), 0) << message;
   refused.priors = {prior};
   refused.surrogate = "extra-trees";
-  EXPECT_THAT(errorOf([&] { runSearch(refused); }), HasSubstr("only vectornet learns from scenes"));
+  EXPECT_THAT(errorOf([&] { runSearch(refused); }), HasSubstr("it does not learn from scenes"));
   EXPECT_FALSE(fs::exists(work.path() / "refused"));
+}
+
+// UN R157's pass criterion in a search: with --reference every execution runs twice (both
+// count against the budget), the reference driver's metrics and the criterion's value are
+// columns of executions.csv, and the criterion marks exactly the scenarios where the
+// system under test collides and the reference driver does not.
+TEST(SearchReference, TheRegulationsCriterionCostsTwoSimulationsAndMarksWhereOnlyTheSystemCollides) {
+  TemporaryDirectory work("vsd-test-search");
+  // A system under test that brakes weakly (0.5 m/s^2): it collides in many cut-ins the
+  // reference driver avoids (11 of 100 in a run of this variant).
+  const auto weak = work.path() / "weak_cut_in.yaml";
+  test::writeFile(weak, test::scenarioVariant("alks/cut_in.yaml", "set_speed: Ego_InitSpeed_Ve0_kph / 3.6}",
+                                              "set_speed: Ego_InitSpeed_Ve0_kph / 3.6, max_decel: 0.5, "
+                                              "emergency_trigger: 5}"));
+  SearchOptions options;
+  options.scenarioFile = weak;
+  options.outputDir = work.path() / "out";
+  options.criterion = "reference_avoids_sut_collides";
+  options.reference = "r157_reference_driver";
+  options.budget = 60;
+  options.initial = 10;
+  options.roundSize = 5;
+  options.pool = 200;
+  options.trees = 10;
+  const auto summary = runSearch(options);
+  EXPECT_EQ(summary.executions, 30u) << "60 simulations buy 30 executions with a reference driver";
+  const auto csv = options.outputDir / "concrete.csv";
+  const auto table = CsvTable::read(csv);
+  ASSERT_EQ(table.rows(), 30u);
+  std::size_t critical = 0;
+  for (std::size_t r = 0; r < table.rows(); ++r) {
+    const std::string verdict = table.cell(r, table.column("critical"));
+    const std::string value = table.cell(r, table.column("reference_avoids_sut_collides"));
+    if (verdict.empty()) continue;  // a failed run
+    EXPECT_EQ(verdict == "1", value == "1") << "row " << r;
+    const double sut = std::stod(table.cell(r, table.column("d_min")));
+    const double reference = std::stod(table.cell(r, table.column("reference_d_min")));
+    EXPECT_EQ(verdict == "1", sut <= 0.0 && reference > 0.0) << "row " << r << ": " << sut << " vs " << reference;
+    critical += verdict == "1" ? 1 : 0;
+  }
+  EXPECT_GT(critical, 0u);
+  EXPECT_EQ(critical, summary.critical);
+  EXPECT_THAT(summary.report(), HasSubstr("r157_reference_driver as the Ego (60 simulations)"));
+}
+
+TEST(SearchReference, TheCriterionNeedsAReferenceAndASurrogateThatCanPredictIt) {
+  TemporaryDirectory work("vsd-test-search");
+  SearchOptions options;
+  options.scenarioFile = test::scenarioFile("alks/cut_in.yaml");
+  options.outputDir = work.path() / "out";
+  options.criterion = "reference_avoids_sut_collides";
+  options.budget = 40;
+  options.initial = 10;
+  EXPECT_THAT(errorOf([&] { runSearch(options); }), HasSubstr("needs --reference NAME"));
+  options.reference = "r157_reference_driver";
+  options.surrogate = "vectornet";
+  EXPECT_THAT(errorOf([&] { runSearch(options); }), HasSubstr("no --reference with --surrogate vectornet"));
+  options.surrogate = "extra-trees";
+  options.budget = 15;  // 10 initial executions need 20 simulations
+  EXPECT_THAT(errorOf([&] { runSearch(options); }), HasSubstr(">= --initial (10) x 2"));
+  EXPECT_FALSE(fs::exists(options.outputDir));
 }
 
 TEST(SearchEstimate, TheImportanceProposalFollowsThePredictedProbabilityWithAnEvenShare) {

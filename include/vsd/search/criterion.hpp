@@ -2,7 +2,9 @@
 // A search criterion: a boolean expression over registered metrics that marks a
 // concrete scenario as critical ("d_min < 2", "ttc_min < 1 or d_min < 0.5" written
 // in muparser syntax: `ttc_min < 1 || d_min < 0.5`), or the name of a criterion the
-// logical scenario's YAML defines (`criteria: [{name: close_approach, fail_if: d_min < 2}]`).
+// logical scenario's YAML defines (`criteria: [{name: close_approach, fail_if: d_min < 2}]`),
+// or, in a search with --reference, `reference_avoids_sut_collides`: UN R157's pass
+// criterion fails (the reference driver avoided a collision the system under test had).
 
 #include <optional>
 #include <string>

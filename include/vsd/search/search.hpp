@@ -43,7 +43,7 @@ struct SearchOptions {
   std::filesystem::path outputDir;    ///< required
   std::string criterion;              ///< expression over metrics or a criterion name of the scenario
   std::string surrogate = "extra-trees";
-  std::uint64_t budget = 2000;        ///< executions in total, initial design included
+  std::uint64_t budget = 2000;        ///< simulations in total, initial design included (executionBudget())
   std::uint64_t initial = 200;        ///< executions of the initial design (random stream)
   std::uint64_t roundSize = 100;      ///< executions per later round
   double estimateShare = 0.4;         ///< share of each later round drawn by importance sampling (0..1)
@@ -64,10 +64,24 @@ struct SearchOptions {
   int jobs = 1;                       ///< worker processes for the simulations
   int threads = 2;                    ///< libtorch threads (bnn, vectornet)
   double egoStepCost = 0.0;           ///< s of extra wall time per Ego step (pipeline::RunOptions::egoStepCost)
+  /// `--reference NAME`: every execution also runs with this built-in controller as the
+  /// Ego (pipeline::RunOptions::reference), so each costs two simulations of the budget and
+  /// the criterion may read the reference columns (`reference_<metric>`, and
+  /// pipeline::kReferenceCriterion, the regulation's pass criterion). Empty: none.
+  std::string reference;
   std::string commandLine;            ///< recorded in the manifest
   /// Throws ConfigError naming the flag and the accepted range (e.g. budget < initial).
   void validate() const;
+  /// Simulations one execution costs: 2 with --reference (the system and the reference driver), else 1.
+  std::uint64_t simulationsPerExecution() const { return reference.empty() ? 1 : 2; }
+  /// Executions the budget pays for.
+  std::uint64_t executionBudget() const { return budget / simulationsPerExecution(); }
 };
+
+/// The columns of an execution's values (Execution::metrics) for a scenario computing
+/// `metricNames`: those, then with a `reference` controller `reference_<metric>` for each
+/// and pipeline::kReferenceCriterion. A criterion is checked against these names.
+std::vector<std::string> executionColumns(const std::vector<std::string>& metricNames, const std::string& reference);
 
 /// One executed concrete scenario.
 struct Execution {
@@ -107,8 +121,9 @@ struct SearchSummary {
   std::string criterion;          ///< name
   std::string expression;
   std::string surrogate;
+  std::string reference;          ///< --reference controller; empty: none
   std::uint64_t seed = 0;
-  std::uint64_t executions = 0;
+  std::uint64_t executions = 0;   ///< concrete scenarios executed (with a reference: two simulations each)
   std::uint64_t critical = 0;     ///< executions meeting the criterion
   std::uint64_t failedRuns = 0;   ///< simulations that did not complete
   std::uint64_t resumedFrom = 0;  ///< executions already in the checkpoint when started

@@ -84,6 +84,10 @@ struct SurrogateEntry {
   std::string name;
   std::string description;  ///< one line: what it fits and where its probability comes from
   std::function<std::unique_ptr<Surrogate>(const SurrogateOptions&)> make;
+  /// It learns from the vectorized scenes (the rounds' datasets and --prior) and judges the
+  /// criterion on the Ego's predicted futures: it cannot predict values that are not
+  /// metrics of the Ego's own trajectory (e.g. the --reference driver's outcome).
+  bool learnsFromScenes = false;
 };
 
 /// Every surrogate, in a fixed order.
