@@ -77,7 +77,7 @@ SampleRange shardRange(std::uint64_t sweep_first, std::uint64_t sweep_samples, s
   const std::uint64_t batches = (sweep_samples + batch - 1) / batch;
   if (id.count > batches) {
     throw ConfigError(fmt::format("{} shards (or ranks) but the sweep has only {} batch{} of {} samples: use at most {} "
-                                  "shards, or a smaller --batch",
+                                  "shards, or a smaller --net-batch",
                                   id.count, batches, batches == 1 ? "" : "es", batch, batches));
   }
   // Batches [b0, b1) of this shard: the first (batches % count) shards get one more.

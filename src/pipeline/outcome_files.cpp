@@ -75,15 +75,9 @@ void concatenateTraces(const std::vector<fs::path>& files, const fs::path& targe
     const sim::TraceFileReader reader(file);
     for (std::size_t row = 0; row < reader.size(); ++row) {
       const Trace trace = reader.trace(row);
-      if (!writer) {
-        std::vector<double> lengths;
-        std::vector<double> widths;
-        for (const auto& track : trace.vehicles) {
-          lengths.push_back(track.length);
-          widths.push_back(track.width);
-        }
+      if (!writer) {  // the file's own sizes: NaN where they are drawn per sample, as one process writes them
         writer.emplace(target, reader.functionalScenario(), reader.step(), trace.instants(), reader.vehicleIds(),
-                       lengths, widths);
+                       reader.vehicleLengths(), reader.vehicleWidths());
       }
       writer->append(reader.sample(row), trace, reader.ok(row));
     }

@@ -203,6 +203,8 @@ std::size_t TraceFileReader::size() const { return impl_->samples.size(); }
 const std::string& TraceFileReader::functionalScenario() const { return impl_->functionalScenario; }
 double TraceFileReader::step() const { return impl_->step; }
 const std::vector<std::string>& TraceFileReader::vehicleIds() const { return impl_->vehicleIds; }
+const std::vector<double>& TraceFileReader::vehicleLengths() const { return impl_->lengths; }
+const std::vector<double>& TraceFileReader::vehicleWidths() const { return impl_->widths; }
 std::uint64_t TraceFileReader::sample(std::size_t row) const { return static_cast<std::uint64_t>(impl_->samples.at(row)); }
 bool TraceFileReader::ok(std::size_t row) const { return impl_->ok.at(row) != 0; }
 

@@ -79,6 +79,25 @@ TEST(Shards, MergedShardsHaveTheBytesOfOneRunAndReadAsOneRunBefore) {
   EXPECT_TRUE(fs::exists(dir.path() / "sweep" / "manifest.json"));
 }
 
+// A scenario whose road users' kinds (and so sizes) are drawn per sample: the merged
+// traces keep the file's sizes as one process writes them (NaN where drawn per sample).
+TEST(Shards, MergedShardsOfRoadUsersOfDrawnKindsHaveTheBytesOfOneRun) {
+  TemporaryDirectory dir;
+  auto whole = sweep(dir.path() / "whole");
+  whole.scenarioFile = test::scenarioFile("alks/cut_in.yaml");
+  whole.samples = 20;
+  runScenarios(whole);
+  auto sharded = whole;
+  sharded.outputDir = dir.path() / "sweep";
+  runShards(sharded, 2, {1, 0});
+  MergeOptions merge;
+  merge.sweep = dir.path() / "sweep";
+  mergeShards(merge);
+  for (const char* file : {"concrete.csv", "traces.h5", "dataset.h5"}) {
+    EXPECT_EQ(sha256OfFile(dir.path() / "sweep" / file), sha256OfFile(dir.path() / "whole" / file)) << file;
+  }
+}
+
 TEST(Shards, FinishedShardsAreNotRunAgain) {
   TemporaryDirectory dir;
   auto options = sweep(dir.path() / "sweep");

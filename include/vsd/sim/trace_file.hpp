@@ -66,6 +66,10 @@ class TraceFileReader {
   const std::string& functionalScenario() const;
   double step() const;
   const std::vector<std::string>& vehicleIds() const;
+  /// m, per vehicle: the file's fixed sizes (`vehicle_length`/`vehicle_width`); NaN where
+  /// the size is drawn per sample (then each trace carries its own).
+  const std::vector<double>& vehicleLengths() const;
+  const std::vector<double>& vehicleWidths() const;
   std::uint64_t sample(std::size_t row) const;
   bool ok(std::size_t row) const;
   Trace trace(std::size_t row) const;
