@@ -908,6 +908,12 @@ RunSummary readRunManifest(const fs::path& run_folder) {
   RunSummary summary;
   try {
     const auto manifest = nlohmann::json::parse(readTextFile(path));
+    const std::string command = manifest.value("command", std::string("run"));
+    if (command != "run" && command != "merge") {  // e.g. a search folder: say what it is, not a missing key
+      throw DatasetError(fmt::format("{}: a folder of `vsd-sumo {}`, not a run folder (expected the --out of "
+                                     "`vsd-sumo run`)",
+                                     run_folder.string(), command));
+    }
     summary.functionalScenario = manifest.at("functional_scenario").get<std::string>();
     summary.outputDir = run_folder;
     summary.samples = manifest.at("samples").get<std::uint64_t>();
