@@ -576,7 +576,7 @@ int runCompareBench(const CompareBenchOptions& options) {
 }  // namespace
 
 void addBenchCommand(CLI::App& app, CommandContext& context) {
-  CLI::App* bench = app.add_subcommand("bench", "Benchmarks whose output is recorded in the README");
+  CLI::App* bench = app.add_subcommand("bench", "Benchmarks whose output is recorded under results/ (docs/benchmarks.md)");
   bench->require_subcommand(1);
   auto options = std::make_shared<BenchOptions>();
   CLI::App* run = bench->add_subcommand("run", "Throughput and peak memory of `vsd-sumo run`");

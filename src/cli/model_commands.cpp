@@ -123,7 +123,7 @@ void addTrainCommand(CLI::App& app, CommandContext& context) {
   addNumber(command, "--decoder-hidden", options->config.decoderHidden, "Decoder width")->capture_default_str();
   command->add_option("--decoder", options->config.decoder, "Decoder: " + decoderNames())->capture_default_str();
   command->add_option("--decoder-option", *decoder_options,
-                      "A decoder option name=value (repeatable; README \"Decoders\" lists them)");
+                      "A decoder option name=value (repeatable; docs/models.md \"Decoders\" lists them)");
   command->add_option("--frame", options->config.frame, "Model frame: ego or lane")->capture_default_str();
   addNumber(command, "--lane-smoothing", options->config.laneSmoothing,
             "m: half-width of the lane frame's smoothing of its reference line")

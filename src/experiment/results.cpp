@@ -193,7 +193,7 @@ std::pair<std::string, std::string> maeFiles(const Spec& spec, const std::vector
   std::string md =
       "# MAE of evaluation metrics: ours (paper's Table III)\n\n" + sizesLine(spec) +
       fmt::format("\n\nExtra trees and the BNN are trained on the first {} training scenarios' concrete inputs; "
-                  "VectorNet's metrics come from its predicted Ego trajectory (README: metrics from predictions; a "
+                  "VectorNet's metrics come from its predicted Ego trajectory (docs/models.md: metrics from predicted trajectories; a "
                   "kinematic model's own speeds and accelerations), with the first seed's model of the ADE row "
                   "named in the spec, for every model of the spec that trains that row: the MAE (the paper's value "
                   "in brackets for the main model), the bias (mean of predicted − simulated) and, for probabilistic "
