@@ -52,7 +52,9 @@ struct DeviationsBenchOptions {
   double share = 0.3;        ///< of the field scenes that carry the factor
   double maxDecel = 3.0;     ///< m/s^2: the friction limit (the controller's max_decel)
   double level = 0.05;
-  int threads = 2;
+  /// Scored metrics: along the road (a_min, d_min) and across it (lane_offset_max).
+  std::vector<std::string> metrics = {"a_min", "d_min", "lane_offset_max"};
+  int threads = 1;  ///< on a loaded machine, libtorch's second thread spins against other processes
   int jobs = 1;
 };
 
@@ -186,8 +188,7 @@ Counts benchSeed(const DeviationsBenchOptions& options, std::uint64_t seed, cons
     injected.push_back(inject ? 1 : 0);
     index.push_back(i);
   }
-  const compare::DeviationScorer scorer(predictor, options.model.string(),
-                                        metrics::defaultMetrics(pipeline::sceneAvailability("generated")),
+  const compare::DeviationScorer scorer(predictor, options.model.string(), options.metrics,
                                         pipeline::sceneAvailability("generated"), /*seed=*/1);
   compare::DeviationResult result;
   result.level = options.level;
@@ -282,6 +283,7 @@ void addDeviationsBench(CLI::App& bench, CommandContext& context) {
   addNumber(command, "--max-decel", options->maxDecel, "The friction limit: the Ego controller's max_decel (m/s^2)")
       ->capture_default_str();
   addNumber(command, "--level", options->level, "Level of `deviations`")->capture_default_str();
+  command->add_option("--metrics", options->metrics, "Metrics scored")->delimiter(',')->capture_default_str();
   addNumber(command, "--threads", options->threads, "libtorch threads")->capture_default_str();
   addNumber(command, "--jobs", options->jobs, "SUMO worker processes")->capture_default_str();
   command->callback([options, &context] { context.action = [options] { return runDeviationsBench(*options); }; });

@@ -21,6 +21,10 @@ void addDeviationsCommand(CLI::App& app, CommandContext& context) {
   command->add_option("-o,--out", options->output, "Report folder (deviations.csv, report.html)")->required();
   addNumber(command, "--level", options->level, "Flag scenes whose tail probability is below this, in (0, 1)")
       ->capture_default_str();
+  command->add_option("--metrics", options->metrics,
+                      "Metrics to score, e.g. a_min,d_min,lane_offset_max (default: those the data stores, else all "
+                      "that apply)")
+      ->delimiter(',');
   command->add_flag("--force", options->force,
                     "Replace a deviations report of other data or another model (docs/output-policy.md)");
   addNumber(command, "--threads", options->threads, "libtorch threads")->capture_default_str();

@@ -217,7 +217,9 @@ report::DeviationReport buildReport(const DeviationSummary& summary, const std::
   }
   out.notes.push_back(fmt::format(
       "Metrics scored: {}. Per metric, p = 1 - the smallest calibrated central interval of the {} sampled futures' "
-      "metric holding the recorded value (0 beyond the 99 % interval); a scene's p combines them by Simes' rule.",
+      "metric holding the recorded value (no smaller than the calibration resolves: 0.01, or 1 / (n + 1) for n "
+      "held-out scenes; not scored where the recorded value or the draws' 5-95 % range is infinite); a scene's p "
+      "combines them by Simes' rule.",
       fmt::join(result.metricNames, ", "), model::kCalibrationDraws));
   for (const auto& scene : result.scenes) {
     if (scene.status == SceneStatus::Scored) out.pValues.push_back(scene.p);

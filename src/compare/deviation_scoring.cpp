@@ -39,6 +39,21 @@ double simes(const std::vector<MetricTail>& tails) {
   return combined;
 }
 
+/// 1 - the smallest calibrated level holding `value`, no smaller than the smallest tail the
+/// calibration resolves: the highest level it was fitted at, and no more than n / (n + 1) of
+/// its n held-out scenes (beyond, a conformal interval is their largest score, which holds a
+/// new scene with probability n / (n + 1) only). NaN where the calibration does not hold:
+/// a non-finite recorded value or 5 % / 95 % draw (such scenes were left out of its fit).
+double tailProbability(const std::vector<double>& draws, double value, const model::IntervalWidening* widening) {
+  if (!std::isfinite(value) || widening == nullptr) return kNaN;
+  const double q05 = model::sampleQuantile(draws, 0.05);
+  const double q95 = model::sampleQuantile(draws, 0.95);
+  if (!std::isfinite(q05) || !std::isfinite(q95)) return kNaN;
+  const double n = static_cast<double>(widening->scenes);
+  const double floor = std::max(1.0 - widening->levels.back(), 1.0 / (n + 1.0));
+  return std::max(1.0 - model::containingLevel(draws, value, widening), floor);
+}
+
 /// The semi-axes (a >= b, m) and the angle of a (rad) of {r : r' S^-1 r <= r2}.
 std::array<double, 3> ellipseOf(const Eigen::Matrix2d& covariance, double r2) {
   const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> solver(covariance);
@@ -136,7 +151,7 @@ struct DeviationScorer::Impl {
       const auto interval = model::centralInterval(draws[m], 0.9, widening);
       tail.p05 = interval[0];
       tail.p95 = interval[1];
-      tail.p = 1.0 - model::containingLevel(draws[m], reference[m], widening);
+      tail.p = tailProbability(draws[m], reference[m], widening);
       row.metrics.push_back(tail);
     }
     row.p = simes(row.metrics);

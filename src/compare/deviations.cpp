@@ -163,7 +163,11 @@ Field openField(const DeviationOptions& options, const model::Predictor& predict
   for (std::size_t f = 1; f < field.collection.files(); ++f) {
     if (field.collection.reader(f).header().inputNames != field.inputNames) field.inputNames.clear();
   }
-  field.metricNames = metrics::defaultMetrics(field.available);
+  const auto& stored = field.collection.reader(0).header().metricNames;
+  field.metricNames = !options.metrics.empty() ? options.metrics
+                      : !stored.empty()        ? stored
+                                               : metrics::defaultMetrics(field.available);
+  field.metricNames = metrics::MetricSet(field.metricNames, field.available, "--metrics").names();  // checked once
   return field;
 }
 

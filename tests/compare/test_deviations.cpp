@@ -122,6 +122,12 @@ TEST_F(DeviationsTest, FlagsChangedBehaviourAndSaysAlongWhichAxisItDeviates) {
     EXPECT_GE(c.p, 0.0);
     EXPECT_LE(c.p, 1.0);
     clean_flagged += c.flagged ? 1 : 0;
+    for (const auto& tail : b.metrics) {
+      // No smaller than the 60 held-out scenes resolve: beyond their largest score, 1 / 61.
+      if (!std::isnan(tail.p)) {
+        EXPECT_GE(tail.p, 1.0 / 61.0 - 1e-12);
+      }
+    }
     brakes_flagged += b.flagged ? 1 : 0;
     swerves_flagged += s.flagged ? 1 : 0;
     EXPECT_GT(b.regionExcess, 1.0);  // its path leaves the calibrated 90 % region

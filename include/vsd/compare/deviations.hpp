@@ -133,6 +133,10 @@ struct DeviationOptions {
   std::vector<std::filesystem::path> data;  ///< field data: dataset files or run folders
   std::filesystem::path output;             ///< required
   double level = 0.05;                      ///< flag scenes with p < level; in (0, 1)
+  /// Metrics to score (those the model's calibration covers are kept). Empty: the metrics
+  /// the field data stores (generated runs: the scenario's list), else every metric that
+  /// applies to it. Fewer metrics keep Simes' combination sharp (docs/deviations.md).
+  std::vector<std::string> metrics;
   bool force = false;
   bool allowDirty = false;
   int threads = 2;                          ///< libtorch threads, 1 .. 256
