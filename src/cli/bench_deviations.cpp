@@ -176,7 +176,8 @@ Counts benchSeed(const DeviationsBenchOptions& options, std::uint64_t seed, cons
   const auto clean_scenes = simulate(clean, options.fieldSamples, seed, options.jobs, stored);
   const auto factor_scenes = simulate(factor, options.fieldSamples, seed, options.jobs, stored);
   std::vector<std::string> ood_stored;
-  auto ood_scenes = simulate(ood, options.oodSamples, seed, options.jobs, ood_stored);
+  std::vector<vector::VectorizedScene> ood_scenes;
+  if (options.oodSamples > 0) ood_scenes = simulate(ood, options.oodSamples, seed, options.jobs, ood_stored);
   Rng rng(seed);  // which scenes carry the factor: a function of the seed only
   std::vector<vector::VectorizedScene> field;
   std::vector<int> injected;  // per field scene: 1 injected, 0 clean
