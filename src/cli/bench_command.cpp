@@ -656,6 +656,7 @@ void addBenchCommand(CLI::App& app, CommandContext& context) {
   addInteropBench(*bench, context);
   addLibraryBench(*bench, context);
   addSearchBench(*bench, context);
+  addDeviationsBench(*bench, context);
   addTrainBench(*bench, context);
   addReferenceBench(*bench, context);
 }

@@ -39,6 +39,8 @@ void addEvaluateCommand(CLI::App& app, CommandContext& context);
 void addBaselineCommand(CLI::App& app, CommandContext& context);
 void addExperimentCommand(CLI::App& app, CommandContext& context);
 void addCompareCommand(CLI::App& app, CommandContext& context);
+/// `vsd-sumo deviations` (deviations_command.cpp).
+void addDeviationsCommand(CLI::App& app, CommandContext& context);
 void addBenchCommand(CLI::App& app, CommandContext& context);
 void addMergeCommand(CLI::App& app, CommandContext& context);
 void addScenarioCommand(CLI::App& app, CommandContext& context);
@@ -56,5 +58,7 @@ void addLibraryBench(CLI::App& bench, CommandContext& context);
 void addTrainBench(CLI::App& bench, CommandContext& context);
 /// `vsd-sumo bench reference` (bench_reference.cpp).
 void addReferenceBench(CLI::App& bench, CommandContext& context);
+/// `vsd-sumo bench deviations` (bench_deviations.cpp).
+void addDeviationsBench(CLI::App& bench, CommandContext& context);
 
 }  // namespace vsd::cli

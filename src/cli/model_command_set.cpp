@@ -11,6 +11,7 @@ bool addModelCommands(CLI::App& app, CommandContext& context) {
   addBaselineCommand(app, context);
   addExperimentCommand(app, context);
   addCompareCommand(app, context);
+  addDeviationsCommand(app, context);
   addBenchCommand(app, context);
   addSearchCommand(app, context);
   return true;

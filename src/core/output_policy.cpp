@@ -291,6 +291,13 @@ const OutputKind& comparisonFolder() {
   return kind;
 }
 
+const OutputKind& deviationsFolder() {
+  static const OutputKind kind =
+      folderKind("deviations report folder", {"report.html", "deviations.csv"},
+                 byManifest([](const json& m) { return stringField(m, "kind") == "deviations"; }, field("subject")));
+  return kind;
+}
+
 const OutputKind& experimentFolder() {
   static const OutputKind kind = folderKind(
       "experiment results folder", {"ade.csv", "ade.md", "mae.csv", "mae.md", "findings.md"},
@@ -356,8 +363,8 @@ const OutputKind& sceneDrawing() {
 
 const std::vector<const OutputKind*>& all() {
   static const std::vector<const OutputKind*> kinds = {
-      &runFolder(), &searchFolder(), &comparisonFolder(), &experimentFolder(), &scenarioExportFolder(),
-      &datasetFile(), &predictionsFile(), &modelFile(), &distributionFile(), &sceneDrawing()};
+      &runFolder(),   &searchFolder(), &comparisonFolder(), &deviationsFolder(), &experimentFolder(),
+      &scenarioExportFolder(), &datasetFile(), &predictionsFile(), &modelFile(), &distributionFile(), &sceneDrawing()};
   return kinds;
 }
 

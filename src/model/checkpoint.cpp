@@ -10,6 +10,7 @@
 #include <unordered_map>
 
 #include "vsd/core/error.hpp"
+#include "vsd/core/road_user.hpp"
 #include "vsd/core/files.hpp"
 
 namespace fs = std::filesystem;
@@ -140,6 +141,7 @@ std::string infoToJson(const ModelInfo& info) {
       {"labels", info.labels},
       {"tool_version", info.toolVersion},
   };
+  if (!info.roadUsers.empty()) json["road_users"] = info.roadUsers;
   auto calibration = calibrationToJson(info);
   if (!calibration.empty()) json["calibration"] = std::move(calibration);
   return json.dump();
@@ -213,6 +215,13 @@ ModelInfo infoFromJson(const std::string& text, const fs::path& file) {
     info.validationAde = json.at("validation_ade");
     info.labels = json.at("labels").get<std::vector<std::string>>();
     info.toolVersion = json.at("tool_version");
+    info.roadUsers = json.value("road_users", std::vector<std::string>{});
+    for (const auto& kind : info.roadUsers) {
+      if (!findRoadUserType(kind)) {
+        throw ModelError(fmt::format("{}: damaged model description: road_users: '{}' is not a kind of road user ({})",
+                                     file.string(), kind, roadUserTypeList()));
+      }
+    }
     if (const auto calibration = json.find("calibration"); calibration != json.end()) {
       calibrationFromJson(*calibration, info, file);
     }

@@ -14,10 +14,6 @@
 
 namespace vsd::model {
 
-/// Sampled futures per held-out scene from which metric intervals are calibrated (the
-/// default `--draws` of compare and `mae.draws` of experiment).
-inline constexpr int kCalibrationDraws = 32;
-
 struct ConformalFit {
   PositionRegions positionRegions;
   IntervalCalibration metricIntervals;

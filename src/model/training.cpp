@@ -22,6 +22,7 @@
 #include "vsd/core/log.hpp"
 #include "vsd/core/progress.hpp"
 #include "vsd/core/random.hpp"
+#include "vsd/core/road_user.hpp"
 #include "vsd/model/model.hpp"
 
 namespace fs = std::filesystem;
@@ -39,7 +40,15 @@ struct Selection {
   std::map<std::string, std::size_t> validationCounts;
   vector::DatasetHeader header;
   std::vector<std::string> labels;
+  std::set<std::string> roadUsers;  ///< kinds of the road users in the selected scenes
 };
+
+/// Records the kinds of road users in `scene` (what `deviations` refuses others than).
+void addRoadUsers(const vector::VectorizedScene& scene, std::set<std::string>& kinds) {
+  for (const auto& polyline : scene.polylines) {
+    if (polyline.type != vector::ObjectType::LaneBoundary) kinds.insert(roadUserKind(polyline.roadUser).name);
+  }
+}
 
 /// The mix's samples, split per label into training and validation sets.
 Selection selectSamples(const TrainOptions& options) {
@@ -93,6 +102,7 @@ Selection selectSamples(const TrainOptions& options) {
         1, static_cast<std::size_t>(std::lround(options.validationFraction * static_cast<double>(count))));
     for (std::size_t i = 0; i < count; ++i) {
       auto scene = data.scene(refs[order[i]]);
+      addRoadUsers(scene, selection.roadUsers);
       if (i < validation) {
         selection.validation.push_back(std::move(scene));
         selection.validationMetricNames.push_back(metric_names[refs[order[i]].file]);
@@ -321,6 +331,7 @@ class Trainer {
     info_.mix = options.mix.str();
     info_.seed = options.seed;
     info_.labels = selection_.labels;
+    info_.roadUsers.assign(selection_.roadUsers.begin(), selection_.roadUsers.end());
     info_.toolVersion = toolVersion();
     summary_.output = options.output;
     summary_.decoder = config_.decoder;

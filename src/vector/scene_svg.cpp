@@ -86,7 +86,9 @@ std::string renderSceneSvg(const VectorizedScene& scene, const std::vector<Traje
   std::vector<Entry> legend = {{kLaneColour, "lane boundaries"},
                                {kVehicleColour, "other vehicles (timestamps in s)"},
                                {kEgoColour, "Ego: initial vector and " + target_label}};
-  for (const auto& overlay : overlays) legend.push_back({overlay.colour, overlay.label});
+  for (const auto& overlay : overlays) {
+    if (!overlay.label.empty()) legend.push_back({overlay.colour, overlay.label});  // "": drawn, not listed (a second part of one overlay)
+  }
   std::vector<std::pair<Vec2, Entry>> legend_layout;
   double legend_x = 10.0;
   double legend_row = 0.0;

@@ -49,6 +49,7 @@ namespace output_kinds {
 const OutputKind& runFolder();          ///< run, merge: concrete.csv, traces.h5, dataset.h5; subject: functional scenario
 const OutputKind& searchFolder();       ///< search; subject: "<functional scenario>: <criterion as given>"
 const OutputKind& comparisonFolder();   ///< compare; subject: "<scenario or data> with <model>"
+const OutputKind& deviationsFolder();   ///< deviations; subject: "<data> with <model>"
 const OutputKind& experimentFolder();   ///< experiment; subject: the spec's name
 const OutputKind& scenarioExportFolder();  ///< scenario export; subject: functional scenario
 const OutputKind& datasetFile();        ///< export; HDF5 vsd-dataset/*; subject: its labels

@@ -40,6 +40,11 @@ struct IntervalWidening {
   double wideningAt(double level) const;
 };
 
+/// Sampled futures per held-out scene from which metric intervals are calibrated (the
+/// default `--futures` of compare and `mae.draws` of experiment). Raw levels depend on
+/// the number of draws: a calibrated interval holds its level for this many draws.
+inline constexpr int kCalibrationDraws = 32;
+
 /// Levels the metric calibration is fitted at (the reliability diagram's range).
 inline constexpr std::array<double, 12> kCalibratedLevels = {0.1, 0.2, 0.3, 0.4, 0.5, 0.6,
                                                              0.7, 0.8, 0.9, 0.95, 0.98, 0.99};

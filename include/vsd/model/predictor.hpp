@@ -51,6 +51,9 @@ struct ModelInfo {
   int epoch = 0;
   double validationAde = 0.0;
   std::vector<std::string> labels;  ///< labels it was trained on
+  /// Kinds of road users (core/road_user.hpp names: "car", "truck", ...) in the scenes it was
+  /// trained and calibrated on, sorted; empty in model files written before it was recorded.
+  std::vector<std::string> roadUsers;
   std::string toolVersion;
   bool trained = true;              ///< false for cv/ca
   /// Calibration fitted after training (decoder option `calibrate`); empty otherwise.

@@ -12,7 +12,7 @@
 namespace vsd::vector {
 
 struct TrajectoryOverlay {
-  std::string label;   ///< legend text
+  std::string label;   ///< legend text ("": not listed, e.g. further parts of one overlay)
   Polyline points;     ///< scene frame, one point per instant
   std::string colour;  ///< CSS colour
   bool dashed = true;

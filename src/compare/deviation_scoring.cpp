@@ -1,0 +1,245 @@
+// Scoring recorded scenes against a calibrated probabilistic model (compare/deviations.hpp).
+#include <fmt/format.h>
+
+#include <Eigen/Eigenvalues>
+#include <Eigen/LU>
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+
+#include "vsd/compare/deviations.hpp"
+#include "vsd/core/error.hpp"
+#include "vsd/core/interrupt.hpp"
+#include "vsd/metrics/metrics.hpp"
+#include "vsd/model/intervals.hpp"
+#include "vsd/model/predictor.hpp"
+#include "vsd/pipeline/scenes.hpp"
+
+namespace vsd::compare {
+
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+/// Index of the 90 % level in model::kCoverageLevels.
+constexpr std::size_t kRegion90 = 1;
+static_assert(model::kCoverageLevels[kRegion90] == 0.9, "the 90 % region is the second coverage level");
+
+/// Simes' combination of p-values: min over k of M p_(k) / k (NaN ones left out).
+double simes(const std::vector<MetricTail>& tails) {
+  std::vector<double> p;
+  for (const auto& tail : tails) {
+    if (!std::isnan(tail.p)) p.push_back(tail.p);
+  }
+  if (p.empty()) return kNaN;
+  std::sort(p.begin(), p.end());
+  const double m = static_cast<double>(p.size());
+  double combined = 1.0;
+  for (std::size_t k = 0; k < p.size(); ++k) combined = std::min(combined, m * p[k] / static_cast<double>(k + 1));
+  return combined;
+}
+
+/// 1 - the smallest calibrated level holding `value`, no smaller than the smallest tail the
+/// calibration resolves: the highest level it was fitted at, and no more than n / (n + 1) of
+/// its n held-out scenes (beyond, a conformal interval is their largest score, which holds a
+/// new scene with probability n / (n + 1) only). NaN where the calibration does not hold:
+/// a non-finite recorded value or 5 % / 95 % draw (such scenes were left out of its fit).
+double tailProbability(const std::vector<double>& draws, double value, const model::IntervalWidening* widening) {
+  if (!std::isfinite(value) || widening == nullptr) return kNaN;
+  const double q05 = model::sampleQuantile(draws, 0.05);
+  const double q95 = model::sampleQuantile(draws, 0.95);
+  if (!std::isfinite(q05) || !std::isfinite(q95)) return kNaN;
+  const double n = static_cast<double>(widening->scenes);
+  const double floor = std::max(1.0 - widening->levels.back(), 1.0 / (n + 1.0));
+  return std::max(1.0 - model::containingLevel(draws, value, widening), floor);
+}
+
+/// The semi-axes (a >= b, m) and the angle of a (rad) of {r : r' S^-1 r <= r2}.
+std::array<double, 3> ellipseOf(const Eigen::Matrix2d& covariance, double r2) {
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> solver(covariance);
+  const auto values = solver.eigenvalues();  // ascending
+  const Eigen::Vector2d major = solver.eigenvectors().col(1);
+  return {std::sqrt(std::max(values(1), 0.0) * r2), std::sqrt(std::max(values(0), 0.0) * r2),
+          std::atan2(major.y(), major.x())};
+}
+
+/// The predicted heading at step k: the model's state where it has one, else the direction
+/// from the previous predicted position (the Ego's start for k = 0).
+double predictedHeading(const model::Prediction& prediction, const vector::VectorizedScene& scene, std::size_t k) {
+  const auto& states = prediction.mostLikely.states;
+  if (k < states.size()) return states[k].heading;
+  const auto& positions = prediction.mostLikely.positions;
+  const Vec2 from = k == 0 ? scene.egoInitialState().position() : positions[k - 1];
+  const Vec2 d = positions[k] - from;
+  return d.norm() > 1e-6 ? std::atan2(d.y(), d.x()) : scene.egoInitialState().heading;
+}
+
+/// Where the recorded path leaves its calibrated 90 % region furthest, split along and
+/// across the predicted heading; the region ellipses for drawing.
+void scorePath(SceneDeviation& row, const model::Prediction& prediction, const vector::VectorizedScene& scene) {
+  const std::size_t steps = std::min(prediction.positionCovariance.size(), scene.target.size());
+  double worst = -1.0;
+  for (std::size_t k = 0; k < steps; ++k) {
+    const auto& covariance = prediction.positionCovariance[k];
+    const double r2 = prediction.regionRadius2[k][kRegion90];
+    row.region90.push_back(ellipseOf(covariance, r2));
+    if (!scene.targetValid[k]) continue;
+    const Vec2 r = scene.target[k] - prediction.mostLikely.positions[k];
+    const double d2 = r.dot(covariance.inverse() * r);
+    if (!(d2 / r2 > worst)) continue;
+    worst = d2 / r2;
+    const double h = predictedHeading(prediction, scene, k);
+    const Vec2 along(std::cos(h), std::sin(h));
+    const Vec2 across(-std::sin(h), std::cos(h));
+    row.regionStep = static_cast<int>(k) + 1;
+    row.longitudinal = r.dot(along);
+    row.lateral = r.dot(across);
+    const double sd_along = std::sqrt(std::max(along.dot(covariance * along), 1e-12));
+    const double sd_across = std::sqrt(std::max(across.dot(covariance * across), 1e-12));
+    row.axis = std::abs(row.longitudinal) / sd_along >= std::abs(row.lateral) / sd_across ? "longitudinal" : "lateral";
+  }
+  row.regionExcess = worst >= 0.0 ? worst : kNaN;
+  row.predicted = prediction.mostLikely.positions;
+}
+
+}  // namespace
+
+const char* statusName(SceneStatus status) {
+  switch (status) {
+    case SceneStatus::Scored:
+      return "scored";
+    case SceneStatus::OutOfDistribution:
+      return "out_of_distribution";
+    case SceneStatus::NotScored:
+      return "not_scored";
+  }
+  return "";
+}
+
+struct DeviationScorer::Impl {
+  const model::Predictor& predictor;
+  std::unique_ptr<metrics::MetricSet> scored;  ///< the calibrated metrics among the field data's
+  std::uint64_t seed = 1;
+
+  /// The recorded values: stored where the data stores them (the calibration's references), else
+  /// from the recorded future.
+  std::vector<double> recorded(const vector::VectorizedScene& scene, const std::vector<std::string>& stored) const {
+    auto values = pipeline::metricsOfFuture(*scored, scene, scene.target);
+    for (std::size_t m = 0; m < scored->names().size(); ++m) {
+      const auto found = std::find(stored.begin(), stored.end(), scored->names()[m]);
+      const auto index = static_cast<std::size_t>(found - stored.begin());
+      if (found != stored.end() && index < scene.metrics.size()) values[m] = scene.metrics[index];
+    }
+    return values;
+  }
+
+  void scoreMetrics(SceneDeviation& row, const model::Prediction& prediction, const vector::VectorizedScene& scene,
+                    const std::vector<std::string>& stored) const {
+    const auto& names = scored->names();
+    std::vector<std::vector<double>> draws(names.size());
+    for (const auto& future : prediction.samples) {
+      const auto values = pipeline::metricsOfFuture(*scored, scene, future.positions, future.states);
+      for (std::size_t m = 0; m < names.size(); ++m) draws[m].push_back(values[m]);
+    }
+    const auto reference = recorded(scene, stored);
+    const auto& calibration = predictor.info().metricIntervals;
+    for (std::size_t m = 0; m < names.size(); ++m) {
+      const auto* widening = calibration.find(scene.label, names[m]);
+      MetricTail tail;
+      tail.recorded = reference[m];
+      tail.median = model::sampleQuantile(draws[m], 0.5);
+      const auto interval = model::centralInterval(draws[m], 0.9, widening);
+      tail.p05 = interval[0];
+      tail.p95 = interval[1];
+      tail.p = tailProbability(draws[m], reference[m], widening);
+      row.metrics.push_back(tail);
+    }
+    row.p = simes(row.metrics);
+    for (std::size_t m = 0; m < row.metrics.size(); ++m) {
+      const double p = row.metrics[m].p;
+      if (!std::isnan(p) && (std::isnan(row.metrics[row.worstMetric].p) || p < row.metrics[row.worstMetric].p)) {
+        row.worstMetric = m;
+      }
+    }
+    if (std::isnan(row.p)) {
+      row.status = SceneStatus::NotScored;
+      row.reason = "no metric is defined on both the recorded and the predicted futures";
+    }
+  }
+};
+
+DeviationScorer::DeviationScorer(const model::Predictor& predictor, const std::string& model_name,
+                                 const std::vector<std::string>& metrics, const metrics::Availability& available,
+                                 std::uint64_t seed)
+    : impl_(new Impl{predictor, nullptr, seed}) {
+  if (!predictor.probabilistic()) {
+    throw ModelError(fmt::format("--model {}: the '{}' predictor draws no futures: deviations needs a probabilistic "
+                                 "model (e.g. --decoder kinematic) trained with --decoder-option calibrate=1",
+                                 model_name, predictor.name()));
+  }
+  const auto& calibration = predictor.info().metricIntervals;
+  const auto pooled = calibration.byLabel.find("");
+  if (pooled == calibration.byLabel.end()) {
+    throw ModelError(fmt::format("--model {}: its metric intervals are not calibrated: train it with "
+                                 "--decoder-option calibrate=1 (docs/deviations.md)",
+                                 model_name));
+  }
+  std::vector<std::string> names;
+  for (const auto& name : metrics) {
+    if (pooled->second.count(name) != 0) names.push_back(name);
+  }
+  if (names.empty()) {
+    std::vector<std::string> calibrated;
+    for (const auto& [name, widening] : pooled->second) calibrated.push_back(name);
+    throw ModelError(fmt::format("--model {}: none of the field data's metrics ({}) is calibrated in the model ({})",
+                                 model_name, fmt::join(metrics, ", "), fmt::join(calibrated, ", ")));
+  }
+  impl_->scored = std::make_unique<metrics::MetricSet>(names, available, "--data");
+}
+
+DeviationScorer::~DeviationScorer() = default;
+
+const std::vector<std::string>& DeviationScorer::metricNames() const { return impl_->scored->names(); }
+std::vector<std::string> DeviationScorer::metricUnits() const { return impl_->scored->units(); }
+
+std::vector<SceneDeviation> DeviationScorer::score(const std::vector<vector::VectorizedScene>& scenes,
+                                                   const std::vector<std::string>& stored,
+                                                   const std::string& source) const {
+  const auto& labels = impl_->predictor.info().labels;
+  std::vector<SceneDeviation> rows(scenes.size());
+  std::vector<vector::VectorizedScene> to_predict;
+  std::vector<std::size_t> which;
+  for (std::size_t i = 0; i < scenes.size(); ++i) {
+    auto& row = rows[i];
+    const auto& scene = scenes[i];
+    row.source = source;
+    row.sample = scene.sample;
+    row.label = scene.label;
+    row.features = scene.inputs;
+    row.features.push_back(scene.egoInitialState().speed);
+    if (!labels.empty() && std::find(labels.begin(), labels.end(), scene.label) == labels.end()) {
+      row.status = SceneStatus::OutOfDistribution;
+      row.reason = fmt::format("label '{}': the model never trained on it (it trained on {})", scene.label,
+                               fmt::join(labels, ", "));
+    } else if (std::none_of(scene.targetValid.begin(), scene.targetValid.end(), [](std::uint8_t v) { return v != 0; })) {
+      row.status = SceneStatus::NotScored;
+      row.reason = "no recorded future (the Ego left the map at once)";
+    } else {
+      which.push_back(i);
+      to_predict.push_back(scene);
+    }
+  }
+  model::PredictOptions options;
+  options.samples = model::kCalibrationDraws;  // the draws the calibration was fitted for
+  options.seed = impl_->seed;
+  const auto predictions = impl_->predictor.predictDistribution(to_predict, options);
+  for (std::size_t j = 0; j < which.size(); ++j) {
+    throwIfInterrupted();
+    auto& row = rows[which[j]];
+    impl_->scoreMetrics(row, predictions[j], to_predict[j], stored);
+    scorePath(row, predictions[j], to_predict[j]);
+  }
+  return rows;
+}
+
+}  // namespace vsd::compare

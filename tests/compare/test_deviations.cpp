@@ -1,0 +1,255 @@
+// `vsd-sumo deviations`: recorded Ego behaviour scored against a small calibrated model
+// trained once on synthetic ACC-like scenes (tests/model/synthetic_scenes.hpp). The tests
+// check what a user relies on - a changed behaviour is flagged and said to be longitudinal
+// or lateral, unseen labels are apart, outputs and bad input - not the model's accuracy.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <fstream>
+
+#include "../model/synthetic_scenes.hpp"
+#include "test_support.hpp"
+#include "vsd/compare/deviations.hpp"
+#include "vsd/core/csv.hpp"
+#include "vsd/core/error.hpp"
+#include "vsd/core/files.hpp"
+#include "vsd/model/model.hpp"
+#include "vsd/pipeline/scenes.hpp"
+
+using namespace vsd;
+using namespace vsd::compare;
+namespace fs = std::filesystem;
+
+namespace {
+
+/// How a field scene's recorded Ego future is changed from the synthetic one.
+enum class Change { None, Brakes, Swerves };
+
+/// The recorded future of the synthetic scene `i`, changed: Brakes travels half the
+/// distance along the lane (a deceleration the scenes never had), Swerves drifts 3 m across.
+vector::VectorizedScene fieldScene(std::uint64_t i, Change change, const std::string& label = "acc") {
+  auto scene = test::syntheticScene(i, label);
+  const auto start = scene.egoInitialState();
+  const Vec2 u = headingVector(start.heading);
+  const Vec2 n(-u.y(), u.x());
+  for (std::size_t k = 0; k < scene.target.size(); ++k) {
+    const double t = static_cast<double>(k + 1) / static_cast<double>(scene.target.size());
+    if (change == Change::Brakes) scene.target[k] = start.position() + 0.5 * (scene.target[k] - start.position());
+    if (change == Change::Swerves) scene.target[k] += 3.0 * t * n;
+  }
+  return scene;
+}
+
+fs::path writeField(const fs::path& path, const std::vector<vector::VectorizedScene>& scenes, int horizon = 25) {
+  vector::DatasetHeader header;
+  header.step = 0.2;
+  header.horizon = horizon;
+  vector::DatasetWriter writer(path, header);
+  for (auto scene : scenes) {
+    scene.target.resize(static_cast<std::size_t>(horizon));
+    scene.targetValid.resize(static_cast<std::size_t>(horizon));
+    writer.append(scene);
+  }
+  writer.close();
+  return path;
+}
+
+/// One calibrated kinematic model per test process (a few seconds).
+class DeviationsTest : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    dir_ = new TemporaryDirectory();
+    auto options = test::tinyTraining(test::writeDataset(dir_->path() / "acc.h5", 120), dir_->path() / "k.pt");
+    options.config.decoder = "kinematic";
+    options.config.decoderOptions = {{"calibrate", 1.0}};
+    options.steps = 40;
+    options.validationFraction = 0.5;  // 60 held-out scenes calibrate it
+    auto metric_set = std::make_shared<const metrics::MetricSet>(std::vector<std::string>{"a_min", "d_min", "lane_offset_max"},
+                                                                 pipeline::sceneAvailability("generated"), "test");
+    auto binding = std::make_shared<model::MetricBinding>();
+    binding->names = metric_set->names();
+    binding->compute = [metric_set](const vector::VectorizedScene& scene, const model::Trajectory& future) {
+      return pipeline::metricsOfFuture(*metric_set, scene, future.positions, future.states);
+    };
+    options.metrics = binding;
+    model::train(options);
+    model_ = options.output;
+  }
+  static void TearDownTestSuite() { delete dir_; }
+
+  static DeviationOptions optionsFor(const fs::path& data, const fs::path& out) {
+    DeviationOptions options;
+    options.model = model_;
+    options.data = {data};
+    options.output = out;
+    options.threads = 1;
+    options.drawn = 2;
+    return options;
+  }
+
+  static TemporaryDirectory* dir_;
+  static fs::path model_;
+};
+TemporaryDirectory* DeviationsTest::dir_ = nullptr;
+fs::path DeviationsTest::model_;
+
+TEST_F(DeviationsTest, FlagsChangedBehaviourAndSaysAlongWhichAxisItDeviates) {
+  const model::Predictor predictor(model_, 1);
+  EXPECT_EQ(predictor.info().roadUsers, std::vector<std::string>{"car"});  // what it trained on is recorded
+  const auto available = pipeline::sceneAvailability("generated");
+  const DeviationScorer scorer(predictor, "k.pt", metrics::defaultMetrics(available), available, 1);
+  EXPECT_EQ(scorer.metricNames(), (std::vector<std::string>{"a_min", "d_min", "lane_offset_max"}));  // the calibrated ones
+  std::vector<vector::VectorizedScene> clean, brakes, swerves;
+  for (std::uint64_t i = 200; i < 240; ++i) {
+    clean.push_back(fieldScene(i, Change::None));
+    brakes.push_back(fieldScene(i, Change::Brakes));
+    swerves.push_back(fieldScene(i, Change::Swerves));
+  }
+  DeviationResult result;
+  result.metricNames = scorer.metricNames();
+  result.metricUnits = scorer.metricUnits();
+  result.step = 0.2;
+  for (const auto* set : {&clean, &brakes, &swerves}) {
+    for (auto& row : scorer.score(*set, {}, "field")) result.scenes.push_back(std::move(row));
+  }
+  const auto ranked = rankDeviations(result);
+  std::size_t clean_flagged = 0, brakes_flagged = 0, swerves_flagged = 0, brakes_longitudinal = 0, swerves_lateral = 0;
+  for (std::size_t i = 0; i < 40; ++i) {
+    const auto& c = result.scenes[i];
+    const auto& b = result.scenes[40 + i];
+    const auto& s = result.scenes[80 + i];
+    ASSERT_EQ(c.status, SceneStatus::Scored);
+    EXPECT_GE(c.p, 0.0);
+    EXPECT_LE(c.p, 1.0);
+    clean_flagged += c.flagged ? 1 : 0;
+    for (const auto& tail : b.metrics) {
+      // No smaller than the 60 held-out scenes resolve: beyond their largest score, 1 / 61.
+      if (!std::isnan(tail.p)) {
+        EXPECT_GE(tail.p, 1.0 / 61.0 - 1e-12);
+      }
+    }
+    brakes_flagged += b.flagged ? 1 : 0;
+    swerves_flagged += s.flagged ? 1 : 0;
+    EXPECT_GT(b.regionExcess, 1.0);  // its path leaves the calibrated 90 % region
+    brakes_longitudinal += b.axis == "longitudinal" && b.longitudinal < 0.0 ? 1 : 0;
+    swerves_lateral += s.axis == "lateral" && s.lateral > 0.0 ? 1 : 0;
+    if (b.flagged) {
+      EXPECT_NE(b.reason.find("calibrated 90 % interval"), std::string::npos) << b.reason;
+      EXPECT_NE(b.group.find("acc: "), std::string::npos) << b.group;
+    }
+  }
+  EXPECT_LE(clean_flagged, 8u);  // level 0.05 of 40: a handful at most on scenes like the tests'
+  EXPECT_GE(brakes_flagged, 36u);  // a tiny model's intervals are wide: most, not all
+  EXPECT_GE(swerves_flagged, 36u);
+  EXPECT_GE(brakes_longitudinal, 36u);
+  EXPECT_GE(swerves_lateral, 36u);
+  // Ranked most surprising first, flagged only.
+  for (std::size_t r = 1; r < ranked.size(); ++r) EXPECT_LE(result.scenes[ranked[r - 1]].p, result.scenes[ranked[r]].p);
+  for (const auto i : ranked) EXPECT_TRUE(result.scenes[i].flagged);
+}
+
+TEST_F(DeviationsTest, WritesATableWithUnitsAndAReportAndSetsUnseenLabelsApart) {
+  TemporaryDirectory dir;
+  std::vector<vector::VectorizedScene> scenes;
+  for (std::uint64_t i = 300; i < 310; ++i) scenes.push_back(fieldScene(i, i % 2 ? Change::Brakes : Change::None));
+  for (std::uint64_t i = 310; i < 313; ++i) scenes.push_back(fieldScene(i, Change::None, "lk"));  // never trained on
+  const auto field = writeField(dir.path() / "field.h5", scenes);
+  const auto out = dir.path() / "report";
+  const auto summary = findDeviations(optionsFor(field, out));
+  EXPECT_EQ(summary.scored(), 10u);
+  EXPECT_EQ(summary.outOfDistribution(), 3u);
+  EXPECT_GE(summary.ranked.size(), 5u);  // the five braking scenes at least
+  for (const auto i : summary.ranked) EXPECT_EQ(summary.result.scenes[i].label, "acc");
+
+  const auto table = CsvTable::read(out / "deviations.csv");
+  EXPECT_EQ(table.rows(), 13u);
+  for (const std::string column : {"p", "flagged", "rank", "group", "axis", "along_m", "across_m", "region_time_s",
+                                   "a_min_recorded_m_s2", "a_min_p05_m_s2", "a_min_p", "d_min_median_m", "v0_ego_m_s",
+                                   "status", "reason"}) {
+    EXPECT_TRUE(table.findColumn(column)) << column;
+  }
+  const auto status = *table.findColumn("status");
+  std::size_t apart = 0;
+  for (std::size_t r = 0; r < table.rows(); ++r) apart += table.cell(r, status) == "out_of_distribution" ? 1 : 0;
+  EXPECT_EQ(apart, 3u);
+  const auto html = readTextFile(out / "report.html");
+  EXPECT_NE(html.find("What deviates"), std::string::npos);
+  EXPECT_NE(html.find("calibrated 90 % region"), std::string::npos);  // the drawn region's legend
+  EXPECT_NE(html.find("Out of the model&#39;s distribution"), std::string::npos);
+  EXPECT_TRUE(fs::exists(out / "manifest.json"));
+  // The same data and model again: its own report is replaced.
+  EXPECT_NO_THROW(findDeviations(optionsFor(field, out)));
+}
+
+/// Runs `options` expecting an error of type E whose one line holds `needle`, and nothing written.
+template <typename E>
+void expectRefused(const DeviationOptions& options, const std::string& needle) {
+  try {
+    findDeviations(options);
+    ADD_FAILURE() << "accepted; expected: " << needle;
+  } catch (const E& error) {
+    const std::string message = error.what();
+    EXPECT_NE(message.find(needle), std::string::npos) << message;
+    EXPECT_EQ(message.find('\n'), std::string::npos) << message;
+  }
+  EXPECT_FALSE(fs::exists(options.output)) << options.output;
+}
+
+TEST_F(DeviationsTest, BadInputIsOneLineAndWritesNothing) {
+  TemporaryDirectory dir;
+  std::vector<vector::VectorizedScene> scenes = {fieldScene(400, Change::None), fieldScene(401, Change::None)};
+  const auto field = writeField(dir.path() / "field.h5", scenes);
+  const auto out = dir.path() / "out";
+  for (const double level : {0.0, 1.0, -0.1, 1.5}) {
+    auto options = optionsFor(field, out);
+    options.level = level;
+    expectRefused<ConfigError>(options, "--level");
+  }
+  expectRefused<ModelError>(optionsFor(writeField(dir.path() / "short.h5", scenes, 20), out), "20 steps of 0.2 s");
+  fs::create_directories(dir.path() / "empty");
+  expectRefused<DatasetError>(optionsFor(dir.path() / "empty", out), "empty");
+  auto pedestrian = scenes;
+  pedestrian[1].polylines[pedestrian[1].egoPolyline == 0 ? 1 : 0].roadUser = RoadUserType::Pedestrian;
+  for (auto& polyline : pedestrian[1].polylines) {
+    if (polyline.type == vector::ObjectType::Vehicle) polyline.roadUser = RoadUserType::Pedestrian;
+  }
+  expectRefused<ModelError>(optionsFor(writeField(dir.path() / "pedestrian.h5", pedestrian), out), "'pedestrian'");
+  // A model without calibrated metric intervals.
+  auto plain = test::tinyTraining(test::writeDataset(dir.path() / "acc.h5", 20), dir.path() / "plain.pt");
+  plain.config.decoder = "kinematic";
+  plain.steps = 2;
+  model::train(plain);
+  auto options = optionsFor(field, out);
+  options.model = plain.output;
+  expectRefused<ModelError>(options, "calibrate=1");
+}
+
+TEST(DeviationRanking, MostSurprisingFirstGroupedByLabelAxisAndMetric) {
+  DeviationResult result;
+  result.metricNames = {"a_min", "y_max"};
+  result.metricUnits = {"m/s^2", "m"};
+  result.step = 0.2;
+  const auto scene = [](double p, std::size_t worst, double recorded, const std::string& axis) {
+    SceneDeviation s;
+    s.label = "acc_lk";
+    s.p = p;
+    s.worstMetric = worst;
+    s.axis = axis;
+    s.metrics = {{recorded, 0.0, -1.0, 1.0, p}, {recorded, 0.0, -1.0, 1.0, p}};
+    return s;
+  };
+  result.scenes = {scene(0.2, 0, -3.0, "longitudinal"), scene(0.001, 0, -3.0, "longitudinal"),
+                   scene(0.01, 1, 2.0, "lateral"), scene(0.04, 0, 2.0, "longitudinal")};
+  result.scenes.push_back(scene(0.0, 0, -3.0, "longitudinal"));
+  result.scenes.back().status = SceneStatus::OutOfDistribution;  // never flagged
+  const auto ranked = rankDeviations(result);
+  EXPECT_EQ(ranked, (std::vector<std::size_t>{1, 2, 3}));
+  EXPECT_EQ(result.scenes[1].group, "acc_lk: longitudinal, a_min lower than predicted");
+  EXPECT_EQ(result.scenes[2].group, "acc_lk: lateral, y_max higher than predicted");
+  EXPECT_NE(result.scenes[1].reason.find("below its calibrated 90 % interval"), std::string::npos)
+      << result.scenes[1].reason;
+  EXPECT_FALSE(result.scenes[0].flagged);
+  EXPECT_FALSE(result.scenes[4].flagged);
+}
+
+}  // namespace
