@@ -7,6 +7,8 @@
 #include <functional>
 #include <string>
 
+#include "vsd/interop/openscenario_import.hpp"
+
 namespace vsd::cli {
 
 using Action = std::function<int()>;
@@ -46,6 +48,8 @@ void addMergeCommand(CLI::App& app, CommandContext& context);
 void addScenarioCommand(CLI::App& app, CommandContext& context);
 /// --ego-step-cost-ms: extra wall time per Ego step (stored in seconds in `seconds`).
 void addEgoStepCostOption(CLI::App& command, double& seconds);
+/// --duration, --ego, --controller, --controller-map (OpenSCENARIO input), for `run` and `scenario check`.
+void addImportOptions(CLI::App& command, interop::OscImportOptions& import);
 
 void addSearchCommand(CLI::App& app, CommandContext& context);
 /// `bench interop` (bench_interop.cpp), a subcommand of `bench`.

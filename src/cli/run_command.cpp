@@ -1,5 +1,6 @@
 #include <fmt/format.h>
 
+#include <cmath>
 #include <memory>
 #include <string>
 #include <vector>
@@ -7,7 +8,7 @@
 #include "commands.hpp"
 #include "flags.hpp"
 #include "vsd/core/error.hpp"
-#include "vsd/interop/run_openscenario.hpp"
+#include "vsd/interop/scenario_formats.hpp"
 #include "vsd/pipeline/cluster.hpp"
 #include "vsd/pipeline/run.hpp"
 
@@ -22,13 +23,64 @@ void addEgoStepCostOption(CLI::App& command, double& seconds) {
       ->default_str("0");
 }
 
+void addImportOptions(CLI::App& command, interop::OscImportOptions& import) {
+  command.add_option_function<double>(
+      "--duration",
+      [&import](double seconds) {
+        if (!(seconds > 0.0 && std::isfinite(seconds))) {
+          throw ConfigError::field("command line", "--duration", fmt::format("{}", seconds), "seconds > 0");
+        }
+        import.duration = seconds;
+      },
+      "OpenSCENARIO input: seconds to simulate (needed when the StopTrigger is not a simulation time)");
+  command.add_option("--ego", import.ego, "OpenSCENARIO input without controllers: the entity that is the Ego")
+      ->capture_default_str();
+  command.add_option("--controller", import.controller,
+                     "OpenSCENARIO input without controllers: the Ego's vsd-sumo controller")
+      ->capture_default_str();
+  command.add_option("--controller-map", import.controllerMap,
+                     "OpenSCENARIO input: YAML map from the file's controller names to vsd-sumo controllers")
+      ->check(CLI::ExistingFile);
+}
+
+namespace {
+
+std::vector<std::string> givenFlags(const CLI::App& command) {
+  std::vector<std::string> given;
+  for (const CLI::Option* option : command.get_options()) {
+    if (option->count() > 0 && !option->get_lnames().empty()) given.push_back("--" + option->get_lnames().front());
+  }
+  return given;
+}
+
+/// A flag the file's format cannot use is refused by name (never ignored).
+void checkFlagsFor(const interop::ScenarioFormat& format, const interop::ScenarioRunRequest& request) {
+  const std::string file = request.options.scenarioFile.string();
+  if (!format.can.run) {
+    throw ConfigError(fmt::format("{}: {} files are not run ({})", file, format.name, format.description));
+  }
+  const auto refuse = [&](const std::string& flag) {
+    throw ConfigError::field("command line", flag, file, fmt::format("a flag for other formats than {}", format.name));
+  };
+  if (request.given("--step") && !format.can.step) refuse("--step");
+  for (const char* flag : {"--duration", "--ego", "--controller", "--controller-map"}) {
+    if (request.given(flag) && !format.can.importOptions) refuse(flag);
+  }
+  for (const char* flag : {"--shard", "--merge"}) {
+    if (request.given(flag) && !format.can.distributed) refuse(flag);
+  }
+}
+
+}  // namespace
+
 void addRunCommand(CLI::App& app, CommandContext& context) {
   auto options = std::make_shared<pipeline::RunOptions>();
   CLI::App* run = app.add_subcommand(
       "run", "Sample concrete scenarios from a logical scenario, simulate them with SUMO and write concrete.csv, "
              "traces.h5 and manifest.json");
   run->add_option("scenario", options->scenarioFile,
-                  "Logical scenario (YAML), e.g. scenarios/acc_lk.yaml, or a concrete scenario (OpenSCENARIO .xosc)")
+                  "Scenario file: a logical scenario (YAML, e.g. scenarios/acc_lk.yaml), an OpenSCENARIO scenario or "
+                  "parameter distribution (.xosc); `vsd-sumo scenario check FILE` says what it holds")
       ->required()
       ->check(CLI::ExistingFile);
   addNumber(run, "-n,--samples", options->samples, "Number of concrete scenarios")->capture_default_str();
@@ -68,37 +120,28 @@ void addRunCommand(CLI::App& app, CommandContext& context) {
                   "How networks are built: direct (written by vsd-sumo) or netconvert; default: direct unless the "
                   "scenario gives sumo.netconvert_options")
       ->check(CLI::IsMember({"direct", "netconvert"}));
-  auto import = std::make_shared<interop::ImportOptions>();
+  auto import = std::make_shared<interop::OscImportOptions>();
   auto step = std::make_shared<double>(0.0);
   CLI::Option* step_option =
       addNumber(run, "--step", *step, "OpenSCENARIO input: simulation step (s) if the file does not set one");
+  addImportOptions(*run, *import);
   run->callback([options, &context, run, import, step, step_option, net_writer, shard, merge] {
     context.action = [options, &context, run, import, step, step_option, net_writer, shard, merge] {
       options->commandLine = context.commandLine;
       if (!net_writer->empty()) options->netWriter = road::parseNetWriter(*net_writer, "command line: --net-writer");
       if (!shard->empty()) options->shard = ShardId::parse(*shard, "command line");
-      if (options->scenarioFile.extension() == ".xosc") {
-        if (step_option->count() > 0) import->step = *step;
-        std::vector<std::string> fixed_by_file;
-        for (const char* flag : {"--samples", "--seed", "--first-sample"}) {
-          if (run->count(flag) > 0) fixed_by_file.push_back(flag);
-        }
-        fmt::print("{}", interop::runOpenScenario(*options, *import, fixed_by_file).report());
-        return 0;
-      }
-      if (step_option->count() > 0) {
-        throw ConfigError::field("command line", "--step", options->scenarioFile.string(),
-                                 "an OpenSCENARIO file (a logical scenario sets its step in time.step)");
-      }
-      if (pipeline::launchedAsMpiRank()) {
+      if (step_option->count() > 0) import->step = *step;
+      const interop::ScenarioFormat& format = interop::scenarioFormatOf(options->scenarioFile);
+      interop::ScenarioRunRequest request{*options, *import, givenFlags(*run)};
+      checkFlagsFor(format, request);
+      if (format.can.distributed && pipeline::launchedAsMpiRank()) {
         const auto communicator = pipeline::joinMpiJob();
         const auto result = pipeline::runOnCluster(*options, *merge, *communicator);
         fmt::print("{}", result.report);
         return result.exitCode;
       }
       if (*merge) throw ConfigError("--merge is for mpirun; join shards with `vsd-sumo merge <out>`");
-      const auto summary = pipeline::runScenarios(*options);
-      fmt::print("{}", summary.report());
+      fmt::print("{}", format.run(request));
       return 0;
     };
   });

@@ -13,6 +13,7 @@
 #include "vsd/core/output_policy.hpp"
 #include "vsd/interop/distribution.hpp"
 #include "vsd/interop/export.hpp"
+#include "vsd/interop/scenario_formats.hpp"
 #include "vsd/pipeline/run.hpp"
 #include "vsd/scenario/logical_scenario.hpp"
 
@@ -111,6 +112,34 @@ void addDistribution(CLI::App& scenario, CommandContext& context) {
   });
 }
 
+void addCheck(CLI::App& scenario, CommandContext& context) {
+  auto file = std::make_shared<std::filesystem::path>();
+  auto import = std::make_shared<interop::OscImportOptions>();
+  auto step = std::make_shared<double>(0.0);
+  auto yaml = std::make_shared<bool>(false);
+  CLI::App* command = scenario.add_subcommand(
+      "check", "What a scenario file holds and whether `run` would take it, element by element, without running; "
+               "exit status 0 if it would run");
+  command->add_option("file", *file, "Scenario file (any format `run` reads)")->required()->check(CLI::ExistingFile);
+  CLI::Option* step_option = addNumber(command, "--step", *step, "OpenSCENARIO input: simulation step (s)");
+  addImportOptions(*command, *import);
+  command->add_flag("--yaml", *yaml, "OpenSCENARIO input: print the translation into the scenario language too");
+  command->callback([file, import, step, step_option, yaml, &context] {
+    context.action = [file, import, step, step_option, yaml] {
+      if (step_option->count() > 0) import->step = *step;
+      const interop::ScenarioFormat& format = interop::scenarioFormatOf(*file);
+      if (!format.can.check) {
+        throw ConfigError(fmt::format("{}: {} files are not checked on their own ({})", file->string(), format.name,
+                                      format.description));
+      }
+      const interop::ScenarioCheck check = format.check(*file, *import);
+      fmt::print("format: {} ({})\n{}", format.name, format.description, check.report());
+      if (*yaml && !check.yaml.empty()) fmt::print("--- the scenario in the scenario language:\n{}", check.yaml);
+      return check.runnable() ? 0 : 1;
+    };
+  });
+}
+
 }  // namespace
 
 void addScenarioCommand(CLI::App& app, CommandContext& context) {
@@ -118,6 +147,7 @@ void addScenarioCommand(CLI::App& app, CommandContext& context) {
   scenario->require_subcommand(1);
   addExport(*scenario, context);
   addDistribution(*scenario, context);
+  addCheck(*scenario, context);
 }
 
 }  // namespace vsd::cli

@@ -8,6 +8,7 @@
 
 #include "vsd/core/error.hpp"
 #include "vsd/core/files.hpp"
+#include "osc_expression.hpp"
 
 namespace fs = std::filesystem;
 
@@ -69,20 +70,8 @@ void Reader::fail(const pugi::xml_node& node, const std::string& message) const 
 std::optional<std::string> Reader::optionalText(const pugi::xml_node& node, const char* attribute) const {
   const pugi::xml_attribute found = node.attribute(attribute);
   if (!found) return std::nullopt;
-  std::string value = found.value();
-  if (value.rfind("${", 0) == 0) {
-    fail(node, fmt::format("attribute {}=\"{}\": expressions are outside the supported subset (use a literal or a "
-                           "$parameter)",
-                           attribute, value));
-  }
-  if (!value.empty() && value[0] == '$') {
-    const auto it = parameters_.find(value.substr(1));
-    if (it == parameters_.end()) {
-      fail(node, fmt::format("attribute {}=\"{}\" refers to an undeclared parameter", attribute, value));
-    }
-    value = it->second;
-  }
-  return value;
+  // "$name" and "${expression}" (OpenSCENARIO parameters); literal text otherwise.
+  return osc::resolveValue(found.value(), parameters_, fmt::format("{}: attribute {}", where(node), attribute));
 }
 
 std::string Reader::text(const pugi::xml_node& node, const char* attribute) const {

@@ -35,8 +35,8 @@ std::string toText(const pugi::xml_document& document);
 void save(const pugi::xml_document& document, const std::filesystem::path& file);
 
 /// A parsed file that remembers where its elements are. Attribute values of the
-/// form `$name` are replaced by the parameter `name` (OpenSCENARIO parameters)
-/// when a resolver is set.
+/// form `$name` are replaced by the parameter `name`, and `${...}` by the value of the
+/// expression (OpenSCENARIO parameters, osc_expression.hpp).
 class Reader {
  public:
   /// Reads at most `limit` bytes of a regular file (core/files.hpp). Throws ConfigError
@@ -56,6 +56,7 @@ class Reader {
 
   /// Parameter values for `$name` references (OpenSCENARIO ParameterDeclarations).
   void setParameters(std::map<std::string, std::string> parameters) { parameters_ = std::move(parameters); }
+  const std::map<std::string, std::string>& parameters() const { return parameters_; }
 
   /// An attribute's text with parameters resolved; throws ConfigError if absent.
   std::string text(const pugi::xml_node& node, const char* attribute) const;

@@ -1,0 +1,95 @@
+#pragma once
+// OpenSCENARIO 1.0-1.2 as validation teams write it, imported into the scenario
+// language (docs/openscenario-import.md): parameters with ${...} expressions and
+// constraints, catalogs, vehicles/pedestrians/misc objects, positions, speed, lane-change,
+// lane-offset and controller actions, Story/Act/ManeuverGroup/Maneuver/Event with their
+// conditions; ParameterValueDistribution files as sweeps. What cannot be mapped is
+// refused with one line naming file, line and element (`vsd-sumo scenario check` lists
+// every such line at once).
+//
+// This is the import of files written elsewhere. Files vsd-sumo exported itself are read
+// back by importOpenScenario (openscenario.hpp), which knows their per-step scripts.
+
+#include <cstdint>
+#include <filesystem>
+#include <map>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "vsd/pipeline/run.hpp"
+#include "vsd/scenario/logical_scenario.hpp"
+
+namespace vsd::interop {
+
+struct OscImportOptions {
+  std::optional<double> step;      ///< s; unset: the scenario language's default step
+  /// s simulated; unset: the file's StopTrigger when it is a simulation time that fits the
+  /// window (at most kMaxWindowSteps steps). A StopTrigger of another kind needs it.
+  std::optional<double> duration;
+  /// The Ego when no entity has a controller: this entity, driven by `controller`.
+  std::string ego = "Ego";
+  std::string controller = "alks";
+  /// YAML map from the file's controller names to vsd-sumo controllers (empty: the defaults).
+  std::filesystem::path controllerMap;
+};
+
+/// The file's controller names that map onto a built-in controller by default
+/// (name in the file -> vsd-sumo controller).
+const std::map<std::string, std::string>& defaultControllerMap();
+
+/// What `scenario check` found: one line per element, in file order.
+struct ScenarioCheck {
+  struct Line {
+    enum class Kind { Mapped, Note, Refused } kind;
+    std::string text;
+  };
+  std::vector<Line> lines;
+  std::string yaml;            ///< the translation into the scenario language (if it would run)
+  bool runnable() const;
+  /// The lines prefixed "ok", "note", "REFUSED" and a closing count.
+  std::string report() const;
+};
+
+/// Checks a scenario template or a parameter distribution (its template at every parameter
+/// set it defines is not run: the template is checked at its declared values, and each set's
+/// constraints are counted). Never throws ConfigError for the file's content: refusals are lines.
+ScenarioCheck checkOpenScenario(const std::filesystem::path& file, const OscImportOptions& options);
+
+/// The template as a logical scenario of the language, at its declared parameter values
+/// with `assigned` replacing some (text values, typed by the declarations). Throws
+/// ConfigError (one line) at the first refusal or violated constraint.
+std::shared_ptr<const scenario::LogicalScenario> importTemplate(const std::filesystem::path& xosc,
+                                                                const OscImportOptions& options,
+                                                                const std::map<std::string, std::string>& assigned = {});
+
+/// `vsd-sumo run TEMPLATE.xosc`: one concrete scenario. Throws ConfigError if a flag that the
+/// file fixes was given (`fixed_by_file`: --samples, --seed, --first-sample).
+pipeline::RunSummary runTemplate(pipeline::RunOptions options, const OscImportOptions& import,
+                                 const std::vector<std::string>& fixed_by_file);
+
+/// The parameter sets of a ParameterValueDistribution file (Deterministic: the product of
+/// its single distributions and value-set distributions, in file order, last varying
+/// fastest) and its template. Throws ConfigError for elements outside that (naming them).
+struct ParameterGrid {
+  std::filesystem::path file;
+  std::filesystem::path scenarioFile;  ///< the template
+  std::vector<std::map<std::string, std::string>> sets;
+};
+ParameterGrid readParameterDistribution(const std::filesystem::path& file);
+
+/// `vsd-sumo run VARIATION.xosc`: the template at every parameter set that satisfies its
+/// ConstraintGroups, one concrete scenario (row of concrete.csv) each; the others are
+/// skipped and counted in the report. --samples (if given) takes that many sets from the
+/// start of the grid; --seed is recorded.
+struct SweepSummary {
+  pipeline::RunSummary run;
+  std::uint64_t sets = 0;     ///< in the grid
+  std::uint64_t skipped = 0;  ///< violating a constraint
+  std::string firstSkipped;   ///< the first violation, as reported
+  std::string report() const;
+};
+SweepSummary runVariation(pipeline::RunOptions options, const OscImportOptions& import, bool samples_given);
+
+}  // namespace vsd::interop

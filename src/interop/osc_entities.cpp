@@ -1,0 +1,179 @@
+// Entities and the Init of an OpenSCENARIO file, translated into the scenario language.
+
+#include <fmt/format.h>
+
+#include <cmath>
+
+#include "osc_template.hpp"
+#include "vsd/core/numbers.hpp"
+
+namespace vsd::interop::osc {
+
+namespace {
+
+/// m: a bounding box off the entity's axis by more than this is refused (the language's
+/// road users are centred on their reference line).
+constexpr double kAxisTolerance = 0.01;
+
+RoadUserType categoryType(const xml::Reader& reader, const pugi::xml_node& object) {
+  const std::string kind = object.name();
+  if (kind == "MiscObject") return RoadUserType::StationaryObject;
+  if (kind == "Pedestrian") {
+    const std::string category = reader.text(object, "pedestrianCategory");
+    if (category != "pedestrian") {
+      reader.fail(object, fmt::format("pedestrianCategory=\"{}\": the language's road users are {}", category,
+                                      roadUserTypeList()));
+    }
+    return RoadUserType::Pedestrian;
+  }
+  const std::string category = reader.text(object, "vehicleCategory");
+  const auto type = findRoadUserType(category);
+  if (!type || *type == RoadUserType::Pedestrian || *type == RoadUserType::StationaryObject) {
+    reader.fail(object, fmt::format("vehicleCategory=\"{}\": vehicles of the language are car, van, truck, bus, "
+                                    "motorbike", category));
+  }
+  return *type;
+}
+
+/// Type and bounding box of a <Vehicle>, <Pedestrian> or <MiscObject>.
+void readObject(const xml::Reader& reader, const pugi::xml_node& object, Entity& entity) {
+  const std::string kind = object.name();
+  if (kind == "Vehicle") {
+    reader.requireSubset(object, {"ParameterDeclarations", "BoundingBox", "Performance", "Axles", "Properties"});
+  } else {
+    reader.requireSubset(object, {"ParameterDeclarations", "BoundingBox", "Properties"});
+  }
+  entity.type = categoryType(reader, object);
+  const pugi::xml_node box = reader.only(object, "BoundingBox");
+  reader.requireSubset(box, {"Center", "Dimensions"});
+  const pugi::xml_node dimensions = reader.only(box, "Dimensions");
+  entity.length = reader.number(dimensions, "length", scenario_bounds::kVehicleLength);
+  entity.width = reader.number(dimensions, "width", scenario_bounds::kVehicleWidth);
+  const pugi::xml_node centre = reader.only(box, "Center");
+  entity.centreAhead = reader.number(centre, "x", NumberRange::closed(-100.0, 100.0));
+  if (std::abs(reader.number(centre, "y")) > kAxisTolerance) {
+    reader.fail(centre, "y: expected 0 (the language's road users are centred on their axis)");
+  }
+}
+
+std::string controllerName(Translation& translation, Catalogs& catalogs, const pugi::xml_node& parent,
+                           std::string& where) {
+  const xml::Reader& reader = translation.reader;
+  reader.requireSubset(parent, {"Controller", "CatalogReference"});
+  if (const pugi::xml_node reference = parent.child("CatalogReference")) {
+    const CatalogEntry entry = catalogs.resolve(translation.reader, reference, {"Controller"});
+    where = reader.where(reference);
+    return entry.reader->text(entry.node, "name");
+  }
+  const pugi::xml_node controller = reader.only(parent, "Controller");
+  where = reader.where(controller);
+  return reader.text(controller, "name");
+}
+
+void readScenarioObject(Translation& translation, Catalogs& catalogs, const pugi::xml_node& object) {
+  const xml::Reader& reader = translation.reader;
+  reader.requireSubset(object, {"Vehicle", "Pedestrian", "MiscObject", "CatalogReference", "ObjectController"});
+  Entity entity;
+  entity.name = reader.text(object, "name");
+  entity.where = reader.where(object);
+  for (const auto& other : translation.entities) {
+    if (other.name == entity.name) reader.fail(object, fmt::format("entity name '{}' is used twice", entity.name));
+  }
+  if (const pugi::xml_node reference = object.child("CatalogReference")) {
+    const CatalogEntry entry = catalogs.resolve(translation.reader, reference, {"Vehicle", "Pedestrian", "MiscObject"});
+    readObject(*entry.reader, entry.node, entity);
+  } else {
+    readObject(reader, reader.choice(object, {"Vehicle", "Pedestrian", "MiscObject", "ObjectController"}), entity);
+  }
+  if (const pugi::xml_node controller = object.child("ObjectController")) {
+    entity.controller = controllerName(translation, catalogs, controller, entity.controllerWhere);
+  }
+  translation.findings.mapped(entity.where, fmt::format("{} '{}', {} x {} m (Performance, Axles and Properties are "
+                                                        "not simulated)",
+                                                        roadUserKind(entity.type).name, entity.name,
+                                                        xml::number(entity.length), xml::number(entity.width)));
+  translation.entities.push_back(std::move(entity));
+}
+
+}  // namespace
+
+Entity& Translation::entity(const pugi::xml_node& node, const std::string& name) {
+  for (auto& candidate : entities) {
+    if (candidate.name == name) return candidate;
+  }
+  reader.fail(node, fmt::format("entityRef=\"{}\" names no entity of <Entities>", name));
+}
+
+void readEntities(Translation& translation, const pugi::xml_node& root, Catalogs& catalogs) {
+  const xml::Reader& reader = translation.reader;
+  const pugi::xml_node entities = reader.only(root, "Entities");
+  reader.requireSubset(entities, {"ScenarioObject"});
+  for (const pugi::xml_node& object : entities.children("ScenarioObject")) {
+    translation.findings.attempt([&] { readScenarioObject(translation, catalogs, object); });
+  }
+  if (translation.entities.empty()) reader.fail(entities, "expected at least one <ScenarioObject> the import can use");
+}
+
+namespace {
+
+void readInitAction(Translation& translation, Entity& entity, const pugi::xml_node& private_action) {
+  const xml::Reader& reader = translation.reader;
+  const pugi::xml_node action = reader.choice(private_action, {"TeleportAction", "LongitudinalAction",
+                                                               "LateralAction", "ControllerAction",
+                                                               "ActivateControllerAction"});
+  const std::string kind = action.name();
+  if (kind == "TeleportAction") {
+    reader.requireSubset(action, {"Position"});
+    entity.position = reader.only(action, "Position");
+  } else if (kind == "LongitudinalAction" && action.child("LongitudinalDistanceAction")) {
+    // In the Init, a distance action with no dynamic constraints is a place: it holds from t = 0.
+    entity.distanceAction = reader.choice(action, {"LongitudinalDistanceAction"});
+  } else if (kind == "LongitudinalAction") {
+    const pugi::xml_node speed = reader.choice(action, {"SpeedAction"});
+    const pugi::xml_node dynamics = reader.only(speed, "SpeedActionDynamics");
+    if (reader.text(dynamics, "dynamicsShape") == "step") {
+      entity.speedTarget = reader.only(speed, "SpeedActionTarget");
+    } else {
+      // A gradual change from the start: the language's speed action at t = 0.
+      YAML::Node item = speedAction(translation, entity, speed);
+      item["trigger"]["time"] = "0";
+      entity.actions.push_back(item);
+    }
+  } else if (kind == "ControllerAction") {
+    reader.requireSubset(action, {"AssignControllerAction", "ActivateControllerAction"});
+    if (const pugi::xml_node assign = action.child("AssignControllerAction")) {
+      reader.requireSubset(assign, {"Controller"});
+      entity.controller = reader.text(reader.only(assign, "Controller"), "name");
+      entity.controllerWhere = reader.where(assign);
+    }
+    if (action.child("ActivateControllerAction")) {
+      translation.findings.note(reader.where(action), "the Ego's controller drives from t = 0 in any case");
+    }
+    return;
+  } else if (kind == "ActivateControllerAction") {
+    translation.findings.note(reader.where(action), "the Ego's controller drives from t = 0 in any case");
+    return;
+  } else {
+    reader.fail(action, "lateral actions in the Init: start the action at t = 0 in a Story instead");
+  }
+  translation.findings.mapped(reader.where(action), fmt::format("start of '{}'", entity.name));
+}
+
+}  // namespace
+
+void readInit(Translation& translation, const pugi::xml_node& storyboard) {
+  const xml::Reader& reader = translation.reader;
+  const pugi::xml_node actions = reader.only(reader.only(storyboard, "Init"), "Actions");
+  reader.requireSubset(actions, {"Private"});
+  for (const pugi::xml_node& private_node : actions.children("Private")) {
+    translation.findings.attempt([&] {
+      Entity& entity = translation.entity(private_node, reader.text(private_node, "entityRef"));
+      reader.requireSubset(private_node, {"PrivateAction"});
+      for (const pugi::xml_node& action : private_node.children("PrivateAction")) {
+        translation.findings.attempt([&] { readInitAction(translation, entity, action); });
+      }
+    });
+  }
+}
+
+}  // namespace vsd::interop::osc

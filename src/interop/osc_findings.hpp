@@ -1,0 +1,63 @@
+#pragma once
+// What an OpenSCENARIO import made of each element (private to the interop module).
+//
+// One code path serves `vsd-sumo run` and `vsd-sumo scenario check`: the readers report
+// every element they map (and onto what), every deviation from the file, and every
+// refusal. A run stops at the first refusal (ConfigError, one line); a check collects
+// them all and goes on with the next element.
+
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "vsd/core/error.hpp"
+
+namespace vsd::interop::osc {
+
+class Findings {
+ public:
+  enum class Kind { Mapped, Note, Refused };
+  struct Line {
+    Kind kind;
+    std::string text;  ///< "file:line: <Element>: ..."
+  };
+
+  /// `collect`: record refusals and go on (scenario check); else throw at the first.
+  explicit Findings(bool collect) : collect_(collect) {}
+
+  /// A supported element and what it became.
+  void mapped(const std::string& where, const std::string& what) { lines_.push_back({Kind::Mapped, where + ": " + what}); }
+  /// Supported, but not exactly as the file says (or not simulated at all): said once, here.
+  void note(const std::string& where, const std::string& what) { lines_.push_back({Kind::Note, where + ": " + what}); }
+  /// A refusal: ConfigError now (run), or recorded (check).
+  void refuse(const std::string& message) {
+    if (!collect_) throw ConfigError(message);
+    lines_.push_back({Kind::Refused, message});
+  }
+  /// Runs `read`; a ConfigError it throws becomes a refusal. Returns false if it threw.
+  template <class Read>
+  bool attempt(Read&& read) {
+    try {
+      read();
+      return true;
+    } catch (const ConfigError& error) {
+      refuse(error.what());
+      return false;
+    }
+  }
+
+  bool collecting() const { return collect_; }
+  bool anyRefused() const {
+    for (const auto& line : lines_) {
+      if (line.kind == Kind::Refused) return true;
+    }
+    return false;
+  }
+  const std::vector<Line>& lines() const { return lines_; }
+
+ private:
+  bool collect_;
+  std::vector<Line> lines_;
+};
+
+}  // namespace vsd::interop::osc

@@ -1,0 +1,210 @@
+// Positions and initial speeds of an OpenSCENARIO file's entities, resolved into road
+// coordinates (relative ones after the entity they refer to).
+
+#include <fmt/format.h>
+
+#include <cmath>
+
+#include "osc_template.hpp"
+
+namespace vsd::interop::osc {
+
+namespace {
+
+Placement placementOf(Translation& translation, Entity& entity);
+
+/// The heading (rad, relative to the road) an <Orientation> under `position` gives,
+/// `base` when it has none. Relative orientations count from `base`.
+double orientation(const Translation& translation, const pugi::xml_node& position, double s, double base) {
+  const xml::Reader& reader = translation.reader;
+  const pugi::xml_node node = position.child("Orientation");
+  if (!node) return base;
+  reader.requireSubset(node, {});
+  for (const char* unsupported : {"p", "r"}) {
+    if (reader.optionalNumber(node, unsupported).value_or(0.0) != 0.0) {
+      reader.fail(node, fmt::format("{}: vsd-sumo is planar (pitch and roll 0)", unsupported));
+    }
+  }
+  const double h = reader.optionalNumber(node, "h").value_or(0.0);
+  if (reader.optionalText(node, "type").value_or("relative") == "absolute") {
+    return std::remainder(h - translation.road.headingAt(s), 2.0 * kPi);
+  }
+  return base + h;
+}
+
+Placement onRoad(const Translation& translation, const pugi::xml_node& position, double s, double t) {
+  const CarriagewayRoad& road = translation.road;
+  if (!(s >= 0.0 && s <= road.length)) {
+    translation.reader.fail(position, fmt::format("s = {} m is off the road (0 .. {} m)", xml::number(s),
+                                                  xml::number(road.length)));
+  }
+  return {s, t, orientation(translation, position, s, 0.0), road.nearestLane(t)};
+}
+
+void checkRoad(const Translation& translation, const pugi::xml_node& position) {
+  const std::string road_id = translation.reader.text(position, "roadId");
+  if (road_id != translation.road.id) {
+    translation.reader.fail(position, fmt::format("roadId=\"{}\": the road network has road \"{}\" only", road_id,
+                                                  translation.road.id));
+  }
+}
+
+Placement lanePosition(const Translation& translation, const pugi::xml_node& position) {
+  const xml::Reader& reader = translation.reader;
+  checkRoad(translation, position);
+  const long lane_id = static_cast<long>(reader.integer(position, "laneId", -100, 100));
+  const int lane = translation.road.languageLane(lane_id, reader.where(position));
+  const double offset = reader.optionalNumber(position, "offset").value_or(0.0);
+  Placement placement = onRoad(translation, position, reader.number(position, "s"),
+                               translation.road.laneCentreT(lane) + offset);
+  placement.lane = lane;
+  return placement;
+}
+
+Placement relativeLanePosition(Translation& translation, const pugi::xml_node& position) {
+  const xml::Reader& reader = translation.reader;
+  if (position.attribute("dsLane")) reader.fail(position, "dsLane: use ds (along the road's reference line)");
+  const Placement base = placementOf(translation, translation.entity(position, reader.text(position, "entityRef")));
+  const long lane = base.lane + reader.integer(position, "dLane", -100, 100);
+  if (lane < 0 || lane >= translation.road.lanes) {
+    reader.fail(position, fmt::format("dLane={} from lane {} leaves the road's {} driving lanes",
+                                      reader.text(position, "dLane"), base.lane, translation.road.lanes));
+  }
+  const double offset = reader.optionalNumber(position, "offset").value_or(0.0);
+  const double s = base.s + reader.optionalNumber(position, "ds").value_or(0.0);
+  Placement placement = onRoad(translation, position, s, translation.road.laneCentreT(static_cast<int>(lane)) + offset);
+  placement.lane = static_cast<int>(lane);
+  return placement;
+}
+
+/// Positions in the plane: WorldPosition, RelativeWorldPosition, RelativeObjectPosition.
+Placement planePosition(Translation& translation, const pugi::xml_node& position) {
+  const xml::Reader& reader = translation.reader;
+  const CarriagewayRoad& road = translation.road;
+  const std::string kind = position.name();
+  Vec2 point;
+  double heading = 0.0;  // absolute, of the reference (relative orientations count from it)
+  if (kind == "WorldPosition") {
+    point = Vec2(reader.number(position, "x"), reader.number(position, "y"));
+  } else {
+    const Placement base = placementOf(translation, translation.entity(position, reader.text(position, "entityRef")));
+    const Vec2 offset(reader.number(position, "dx"), reader.number(position, "dy"));
+    heading = road.headingAt(base.s) + base.heading;
+    const Vec2 along(std::cos(heading), std::sin(heading));
+    const Vec2 across(-along.y(), along.x());
+    point = road.point(base.s, base.t) +
+            (kind == "RelativeObjectPosition" ? Vec2(offset.x() * along + offset.y() * across) : offset);
+  }
+  const auto [s, t] = road.coordinates(point);
+  Placement placement = onRoad(translation, position, s, t);
+  if (kind == "WorldPosition") {
+    const auto h = reader.optionalNumber(position, "h");
+    placement.heading = h ? std::remainder(*h - road.headingAt(s), 2.0 * kPi) : 0.0;
+  } else {
+    placement.heading = orientation(translation, position, s, heading - road.headingAt(s));
+  }
+  return placement;
+}
+
+Placement resolvePosition(Translation& translation, const pugi::xml_node& position_node) {
+  const xml::Reader& reader = translation.reader;
+  const pugi::xml_node position = reader.choice(
+      position_node, {"WorldPosition", "LanePosition", "RelativeLanePosition", "RoadPosition", "RelativeRoadPosition",
+                      "RelativeObjectPosition", "RelativeWorldPosition"});
+  const std::string kind = position.name();
+  reader.requireSubset(position, {"Orientation"});
+  if (kind == "LanePosition") return lanePosition(translation, position);
+  if (kind == "RelativeLanePosition") return relativeLanePosition(translation, position);
+  if (kind == "RoadPosition") {
+    checkRoad(translation, position);
+    return onRoad(translation, position, reader.number(position, "s"), reader.number(position, "t"));
+  }
+  if (kind == "RelativeRoadPosition") {
+    const Placement base = placementOf(translation, translation.entity(position, reader.text(position, "entityRef")));
+    return onRoad(translation, position, base.s + reader.number(position, "ds"), base.t + reader.number(position, "dt"));
+  }
+  return planePosition(translation, position);
+}
+
+double speedOf(Translation& translation, Entity& entity);
+
+/// An Init LongitudinalDistanceAction (continuous="false", no DynamicConstraints): the actor
+/// moves along the road to the gap (freespace) or distance from the referenced entity, as a
+/// player executes it at once at t = 0.
+void applyDistance(Translation& translation, Entity& entity, Placement& placement) {
+  const xml::Reader& reader = translation.reader;
+  const pugi::xml_node action = entity.distanceAction;
+  reader.requireSubset(action, {});
+  if (reader.optionalText(action, "continuous").value_or("false") == "true") {
+    reader.fail(action, "continuous=\"true\": the language does not keep a distance (in the Init: continuous=\"false\")");
+  }
+  Entity& other = translation.entity(action, reader.text(action, "entityRef"));
+  const Placement base = placementOf(translation, other);
+  const auto time_gap = reader.optionalNumber(action, "timeGap", NumberRange::atLeast(0.0));
+  const auto distance = reader.optionalNumber(action, "distance", NumberRange::atLeast(0.0));
+  if (time_gap.has_value() == distance.has_value()) reader.fail(action, "expected one of timeGap and distance");
+  double gap = distance ? *distance : *time_gap * speedOf(translation, other);
+  const bool freespace = reader.text(action, "freespace") == "true";
+  // Centre to centre along the road; reference points are what positions give.
+  const double centres = freespace ? gap + (entity.length + other.length) / 2.0 : gap;
+  const std::string side = reader.optionalText(action, "displacement").value_or("any");
+  const double sign = side == "trailingReferencedEntity" ? -1.0
+                      : side == "leadingReferencedEntity" ? 1.0
+                      : (placement.s + entity.centreAhead >= base.s + other.centreAhead ? 1.0 : -1.0);
+  const double stretch = 1.0 - translation.road.curvature * placement.t;
+  placement.s = base.s + other.centreAhead + sign * centres / stretch - entity.centreAhead;
+  translation.findings.mapped(reader.where(action), fmt::format("'{}' placed {} m ({}) {} '{}'", entity.name,
+                                                                xml::number(gap), freespace ? "bumper to bumper" : "centres",
+                                                                sign > 0 ? "ahead of" : "behind", other.name));
+  if (!entity.speedTarget) entity.speed = speedOf(translation, other);
+}
+
+Placement placementOf(Translation& translation, Entity& entity) {
+  if (entity.placement) return *entity.placement;
+  if (!entity.position) {
+    translation.reader.fail(translation.reader.root(),
+                            fmt::format("entity '{}' has no TeleportAction in the Init (where does it start?)", entity.name));
+  }
+  if (entity.placing) {
+    translation.reader.fail(entity.position, fmt::format("the position of '{}' refers back to itself", entity.name));
+  }
+  entity.placing = true;
+  Placement placement = resolvePosition(translation, entity.position);
+  if (entity.distanceAction) applyDistance(translation, entity, placement);
+  entity.placement = placement;
+  entity.placing = false;
+  return *entity.placement;
+}
+
+double speedOf(Translation& translation, Entity& entity) {
+  if (entity.speed) return *entity.speed;
+  if (!entity.speedTarget) return 0.0;  // no speed in the Init: standing
+  const xml::Reader& reader = translation.reader;
+  if (entity.speeding) reader.fail(entity.speedTarget, fmt::format("the speed of '{}' refers back to itself", entity.name));
+  entity.speeding = true;
+  const pugi::xml_node target = reader.choice(entity.speedTarget, {"AbsoluteTargetSpeed", "RelativeTargetSpeed"});
+  double speed = 0.0;
+  if (std::string(target.name()) == "AbsoluteTargetSpeed") {
+    speed = reader.number(target, "value");
+  } else {
+    const double base = speedOf(translation, translation.entity(target, reader.text(target, "entityRef")));
+    const std::string type = reader.oneOf(target, "speedTargetValueType", {"delta", "factor"});
+    speed = type == "delta" ? base + reader.number(target, "value") : base * reader.number(target, "value");
+  }
+  entity.speeding = false;
+  entity.speed = speed;
+  return speed;
+}
+
+}  // namespace
+
+void placeEntities(Translation& translation) {
+  for (auto& entity : translation.entities) {
+    translation.findings.attempt([&] {
+      placementOf(translation, entity);
+      speedOf(translation, entity);
+    });
+  }
+}
+
+}  // namespace vsd::interop::osc

@@ -1,0 +1,111 @@
+// `vsd-sumo run TEMPLATE.xosc` and `vsd-sumo scenario check FILE.xosc`.
+
+#include <fmt/format.h>
+
+#include "osc_template.hpp"
+#include "vsd/core/error.hpp"
+#include "vsd/core/files.hpp"
+#include "vsd/core/log.hpp"
+#include "vsd/scenario/concrete_scenario.hpp"
+
+namespace fs = std::filesystem;
+
+namespace vsd::interop {
+
+bool ScenarioCheck::runnable() const {
+  for (const auto& line : lines) {
+    if (line.kind == Line::Kind::Refused) return false;
+  }
+  return true;
+}
+
+std::string ScenarioCheck::report() const {
+  std::string text;
+  std::size_t refused = 0;
+  std::size_t notes = 0;
+  for (const auto& line : lines) {
+    const char* tag = line.kind == Line::Kind::Mapped ? "ok     " : line.kind == Line::Kind::Note ? "note   " : "REFUSED";
+    refused += line.kind == Line::Kind::Refused;
+    notes += line.kind == Line::Kind::Note;
+    text += fmt::format("{} {}\n", tag, line.text);
+  }
+  text += refused == 0 ? fmt::format("would run ({} notes)\n", notes)
+                       : fmt::format("would not run: {} element(s) refused\n", refused);
+  return text;
+}
+
+namespace {
+
+ScenarioCheck::Line::Kind kindOf(osc::Findings::Kind kind) {
+  switch (kind) {
+    case osc::Findings::Kind::Mapped:
+      return ScenarioCheck::Line::Kind::Mapped;
+    case osc::Findings::Kind::Note:
+      return ScenarioCheck::Line::Kind::Note;
+    case osc::Findings::Kind::Refused:
+      break;
+  }
+  return ScenarioCheck::Line::Kind::Refused;
+}
+
+/// Loads the language YAML of a translation (the language's own checks apply).
+std::shared_ptr<const scenario::LogicalScenario> loadTranslation(const fs::path& xosc, const std::string& yaml) {
+  return osc::loadLanguage(xosc, yaml);
+}
+
+}  // namespace
+
+ScenarioCheck checkOpenScenario(const fs::path& file, const OscImportOptions& options) {
+  osc::Findings findings(/*collect=*/true);
+  ScenarioCheck check;
+  fs::path scenario_file = file;
+  const bool distribution = findings.attempt([&] {
+    if (!xml::Reader(file, read_limits::kScenario).root().child("ParameterValueDistribution")) return;
+    const ParameterGrid grid = readParameterDistribution(file);
+    // A distribution: its template at the declared values (`run` imports every set).
+    findings.mapped(file.string(), fmt::format("ParameterValueDistribution of {} parameter sets over {}",
+                                               grid.sets.size(), grid.scenarioFile.string()));
+    scenario_file = grid.scenarioFile;
+  });
+  if (!distribution) {
+    for (const auto& line : findings.lines()) check.lines.push_back({kindOf(line.kind), line.text});
+    return check;
+  }
+  osc::TranslationResult result;
+  findings.attempt([&] { result = osc::translate(scenario_file, options, {}, "", findings); });
+  if (!result.yaml.empty()) {
+    findings.attempt([&] {
+      const auto logical = loadTranslation(scenario_file, result.yaml);
+      // Per-sample checks (lanes that exist, road users that do not overlap) on the one scenario.
+      scenario::sampleConcreteScenario(logical, 1, 0);
+      check.yaml = result.yaml;
+    });
+  }
+  for (const auto& line : findings.lines()) check.lines.push_back({kindOf(line.kind), line.text});
+  return check;
+}
+
+std::shared_ptr<const scenario::LogicalScenario> importTemplate(const fs::path& xosc, const OscImportOptions& options,
+                                                                const std::map<std::string, std::string>& assigned) {
+  osc::Findings findings(/*collect=*/false);
+  const auto result = osc::translate(xosc, options, assigned, xosc.string(), findings);
+  if (result.violated) throw ConfigError(*result.violated);
+  for (const auto& line : findings.lines()) {
+    if (line.kind == osc::Findings::Kind::Note) spdlog::debug("{}", line.text);
+  }
+  return loadTranslation(xosc, result.yaml);
+}
+
+pipeline::RunSummary runTemplate(pipeline::RunOptions options, const OscImportOptions& import,
+                                 const std::vector<std::string>& fixed_by_file) {
+  if (!fixed_by_file.empty()) {
+    throw ConfigError::field("command line", fixed_by_file.front(), options.scenarioFile.string(),
+                             "no such flag for an OpenSCENARIO scenario (it is one concrete scenario)");
+  }
+  const auto logical = importTemplate(options.scenarioFile, import);
+  options.samples = 1;
+  options.firstSample = 0;
+  return pipeline::runScenarios(logical, options);
+}
+
+}  // namespace vsd::interop

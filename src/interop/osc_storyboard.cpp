@@ -1,0 +1,483 @@
+// The Storyboard of an OpenSCENARIO file: actions with their start conditions, in the
+// scenario language (docs/openscenario-import.md "Storyboard").
+
+#include <fmt/format.h>
+
+#include <cmath>
+
+#include "osc_template.hpp"
+#include "vsd/core/numbers.hpp"
+#include "vsd/core/trace.hpp"
+
+namespace vsd::interop::osc {
+
+namespace {
+
+std::string num(double value) { return xml::number(value); }
+
+/// The language's shape of a transition ("shape"); cubic becomes smooth (said once per use).
+std::string shapeOf(Translation& translation, const pugi::xml_node& dynamics, bool step_allowed) {
+  const xml::Reader& reader = translation.reader;
+  const std::string shape = reader.oneOf(dynamics, "dynamicsShape", {"step", "linear", "cubic", "sinusoidal"});
+  if (shape == "step") {
+    if (!step_allowed) reader.fail(dynamics, "dynamicsShape=\"step\": a lateral jump; use linear or sinusoidal");
+    return "step";
+  }
+  if (shape == "cubic") {
+    translation.findings.note(reader.where(dynamics), "cubic becomes the language's smooth (half-cosine) shape: "
+                                                      "same duration (or peak rate), slightly different profile");
+  }
+  return shape == "linear" ? "linear" : "smooth";
+}
+
+/// A pace (rate or time) of a TransitionDynamics: the key and value of the language.
+void pace(Translation& translation, const pugi::xml_node& dynamics, const char* rate_key, YAML::Node& action) {
+  const xml::Reader& reader = translation.reader;
+  const std::string dimension = reader.oneOf(dynamics, "dynamicsDimension", {"time", "rate", "distance"});
+  if (dimension == "distance") {
+    reader.fail(dynamics, "dynamicsDimension=\"distance\": the language paces a change by time or rate");
+  }
+  double value = reader.number(dynamics, "value");
+  if (dimension == "rate" && value < 0) {
+    // The standard's range is [0, inf[; published files write signed rates, meaning the magnitude.
+    translation.findings.note(reader.where(dynamics), fmt::format("rate {} read as its magnitude", num(value)));
+    value = -value;
+  }
+  if (dimension == "rate" && value == 0) reader.fail(dynamics, "rate 0: the change would never end");
+  if (value < 0) reader.fail(dynamics, fmt::format("time {} s: expected >= 0", num(value)));
+  action[dimension == "rate" ? rate_key : "duration"] = num(value);
+}
+
+YAML::Node laneChange(Translation& translation, const Entity& actor, const pugi::xml_node& action) {
+  const xml::Reader& reader = translation.reader;
+  reader.requireSubset(action, {"LaneChangeActionDynamics", "LaneChangeTarget"});
+  if (reader.optionalNumber(action, "targetLaneOffset").value_or(0.0) != 0.0) {
+    reader.fail(action, "targetLaneOffset: the language's lane changes end on the lane's centre");
+  }
+  if (!actor.isVehicle()) reader.fail(action, "lane changes are for vehicles (the language's rule)");
+  YAML::Node item;
+  const pugi::xml_node dynamics = reader.only(action, "LaneChangeActionDynamics");
+  item["shape"] = shapeOf(translation, dynamics, false);
+  pace(translation, dynamics, "lateral_speed", item);
+  const pugi::xml_node target = reader.choice(reader.only(action, "LaneChangeTarget"),
+                                              {"RelativeTargetLane", "AbsoluteTargetLane"});
+  if (std::string(target.name()) == "AbsoluteTargetLane") {
+    const int lane = translation.road.languageLane(reader.integer(target, "value", -100, 100), reader.where(target));
+    item["ego_lane"] = std::to_string(lane - translation.ego->placement->lane);
+    translation.findings.note(reader.where(target), "an absolute lane, counted from the Ego's starting lane");
+    return item;
+  }
+  const std::string reference = reader.text(target, "entityRef");
+  const long lanes = reader.integer(target, "value", -100, 100);
+  if (reference == actor.name) {
+    item["lanes"] = std::to_string(lanes);
+  } else if (reference == translation.ego->name) {
+    item["ego_lane"] = std::to_string(lanes);
+  } else {
+    Entity& other = translation.entity(target, reference);
+    if (other.movesLaterally) reader.fail(target, fmt::format("a lane relative to '{}', who changes lanes", reference));
+    item["ego_lane"] = std::to_string(other.placement->lane + lanes - translation.ego->placement->lane);
+    translation.findings.note(reader.where(target), fmt::format("the lane of '{}' counted from the Ego's starting lane",
+                                                                reference));
+  }
+  return item;
+}
+
+YAML::Node laneOffset(Translation& translation, const Entity& actor, const pugi::xml_node& action) {
+  const xml::Reader& reader = translation.reader;
+  reader.requireSubset(action, {"LaneOffsetActionDynamics", "LaneOffsetTarget"});
+  if (reader.text(action, "continuous") == "true") reader.fail(action, "continuous=\"true\": the language's offsets end");
+  YAML::Node item;
+  const pugi::xml_node dynamics = reader.only(action, "LaneOffsetActionDynamics");
+  reader.requireSubset(dynamics, {});
+  item["shape"] = shapeOf(translation, dynamics, false);
+  const auto accel = reader.optionalNumber(dynamics, "maxLateralAcc", NumberRange::above(0.0));
+  if (!accel) reader.fail(dynamics, "no maxLateralAcc: the language needs a pace for a lateral offset");
+  if (item["shape"].as<std::string>() != "smooth") reader.fail(dynamics, "maxLateralAcc paces sinusoidal offsets only");
+  item["lateral_accel"] = num(*accel);
+  const pugi::xml_node target = reader.choice(reader.only(action, "LaneOffsetTarget"),
+                                              {"AbsoluteTargetLaneOffset", "RelativeTargetLaneOffset"});
+  double offset = reader.number(target, "value");
+  if (std::string(target.name()) == "RelativeTargetLaneOffset") {
+    const Entity& other = translation.entity(target, reader.text(target, "entityRef"));
+    if (&other == &actor || other.placement->lane != actor.placement->lane || other.movesLaterally) {
+      reader.fail(target, "an offset relative to another road user's: the language needs one that keeps the "
+                          "actor's starting lane and its own offset");
+    }
+    const double other_offset = other.placement->t - translation.road.laneCentreT(other.placement->lane);
+    offset += other_offset;
+    if (&other == translation.ego) {
+      translation.findings.note(reader.where(target), "relative to the Ego's starting offset (its controller keeps its lane)");
+    }
+  }
+  item["offset"] = num(offset);
+  return item;
+}
+
+}  // namespace
+
+YAML::Node speedAction(Translation& translation, const Entity& actor, const pugi::xml_node& action) {
+  const xml::Reader& reader = translation.reader;
+  reader.requireSubset(action, {"SpeedActionDynamics", "SpeedActionTarget"});
+  if (actor.type == RoadUserType::StationaryObject) reader.fail(action, "stationary objects never move (the language's rule)");
+  YAML::Node item;
+  const pugi::xml_node dynamics = reader.only(action, "SpeedActionDynamics");
+  reader.requireSubset(dynamics, {});
+  item["shape"] = shapeOf(translation, dynamics, true);
+  if (item["shape"].as<std::string>() != "step") pace(translation, dynamics, "rate", item);
+  const pugi::xml_node target = reader.choice(reader.only(action, "SpeedActionTarget"),
+                                              {"AbsoluteTargetSpeed", "RelativeTargetSpeed"});
+  const double value = reader.number(target, "value");
+  if (std::string(target.name()) == "AbsoluteTargetSpeed") {
+    item["target"] = num(value);
+    return item;
+  }
+  if (reader.text(target, "continuous") == "true") {
+    reader.fail(target, "continuous=\"true\": the language's speed actions end at their target");
+  }
+  if (reader.oneOf(target, "speedTargetValueType", {"delta", "factor"}) != "delta") {
+    reader.fail(target, "speedTargetValueType=\"factor\": the language adds to a speed");
+  }
+  const std::string reference = reader.text(target, "entityRef");
+  if (reference == actor.name) {
+    item["delta"] = num(value);
+  } else if (translation.ego && reference == translation.ego->name) {
+    item["relative_target"] = num(value);
+  } else {
+    reader.fail(target, fmt::format("a speed relative to '{}': the language relates speeds to the Ego's or the "
+                                    "road user's own", reference));
+  }
+  return item;
+}
+
+namespace {
+
+/// The language's action (without trigger) for one <PrivateAction> of `actor`.
+std::optional<YAML::Node> privateAction(Translation& translation, Entity& actor, const pugi::xml_node& node) {
+  const xml::Reader& reader = translation.reader;
+  const pugi::xml_node action = reader.choice(node, {"LongitudinalAction", "LateralAction", "ControllerAction"});
+  const std::string kind = action.name();
+  if (&actor == translation.ego) {
+    if (kind == "ControllerAction" && action.child("ActivateControllerAction")) {
+      translation.findings.note(reader.where(action), "the Ego's controller drives from t = 0 in any case");
+      return std::nullopt;
+    }
+    reader.fail(action, "an action of the Ego: its controller drives it (the language scripts other road users only)");
+  }
+  YAML::Node item;
+  if (kind == "LongitudinalAction") {
+    const pugi::xml_node speed = reader.choice(action, {"SpeedAction"});
+    const pugi::xml_node dynamics = speed.child("SpeedActionDynamics");
+    if (dynamics && reader.optionalText(dynamics, "dynamicsDimension") == std::optional<std::string>("rate") &&
+        reader.optionalNumber(dynamics, "value") == std::optional<double>(0.0) &&
+        reader.optionalText(dynamics, "dynamicsShape") != std::optional<std::string>("step")) {
+      // A rate of 0 never changes the speed: the action would run without effect and never end.
+      translation.findings.note(reader.where(dynamics), "rate 0: the speed never changes, the action is left out");
+      return std::nullopt;
+    }
+    item["speed"] = speedAction(translation, actor, speed);
+  } else if (kind == "LateralAction") {
+    const pugi::xml_node lateral = reader.choice(action, {"LaneChangeAction", "LaneOffsetAction"});
+    if (std::string(lateral.name()) == "LaneChangeAction") {
+      item["lane_change"] = laneChange(translation, actor, lateral);
+    } else {
+      item["lateral_offset"] = laneOffset(translation, actor, lateral);
+    }
+    actor.movesLaterally = true;
+  } else {
+    reader.fail(action, "a controller action on a scripted road user (only the Ego has a controller)");
+  }
+  return item;
+}
+
+}  // namespace
+
+namespace {
+
+/// The one <Condition> of a trigger; refuses OR-groups and AND-conditions (the language
+/// has one condition per trigger).
+pugi::xml_node onlyCondition(const xml::Reader& reader, const pugi::xml_node& trigger) {
+  reader.requireSubset(trigger, {"ConditionGroup"});
+  const pugi::xml_node group = reader.only(trigger, "ConditionGroup");
+  reader.requireSubset(group, {"Condition"});
+  return reader.only(group, "Condition");
+}
+
+/// A relation between two road users (gap, headway, TTC) as seen from `actor`: the other
+/// one's language id, or a refusal if neither is the actor.
+std::string counterpart(Translation& translation, const Entity& actor, const pugi::xml_node& condition,
+                        const std::string& reference) {
+  const xml::Reader& reader = translation.reader;
+  const pugi::xml_node triggering = reader.only(condition, "TriggeringEntities");
+  reader.requireSubset(triggering, {"EntityRef"});
+  const std::string rule = reader.oneOf(triggering, "triggeringEntitiesRule", {"any", "all"});
+  (void)rule;  // one entity: any = all
+  const std::string trigger_name = reader.text(reader.only(triggering, "EntityRef"), "entityRef");
+  const Entity& triggering_entity = translation.entity(triggering, trigger_name);
+  const Entity& reference_entity = translation.entity(condition, reference);
+  if (&triggering_entity == &actor) return reference_entity.id;
+  if (&reference_entity == &actor) return triggering_entity.id;
+  reader.fail(condition, fmt::format("a condition between '{}' and '{}' starts an action of '{}': the language relates "
+                                     "the acting road user to another",
+                                     trigger_name, reference, actor.name));
+}
+
+void requireBelow(const xml::Reader& reader, const pugi::xml_node& node) {
+  const std::string rule = reader.oneOf(node, "rule", {"lessThan", "lessOrEqual", "greaterThan", "greaterOrEqual",
+                                                       "equalTo", "notEqualTo"});
+  if (rule != "lessThan" && rule != "lessOrEqual") {
+    reader.fail(node, fmt::format("rule=\"{}\": the language's relation triggers fire when the value falls to a bound", rule));
+  }
+}
+
+void requireFreespace(const xml::Reader& reader, const pugi::xml_node& node) {
+  if (reader.text(node, "freespace") != "true") {
+    reader.fail(node, "freespace=\"false\": the language measures bumper to bumper (freespace)");
+  }
+}
+
+std::optional<YAML::Node> entityCondition(Translation& translation, const Entity& actor, const pugi::xml_node& by_entity) {
+  const xml::Reader& reader = translation.reader;
+  reader.requireSubset(by_entity, {"TriggeringEntities", "EntityCondition"});
+  const pugi::xml_node condition = reader.choice(
+      reader.only(by_entity, "EntityCondition"),
+      {"RelativeDistanceCondition", "TimeHeadwayCondition", "TimeToCollisionCondition"});
+  reader.requireSubset(condition, {"TimeToCollisionConditionTarget"});
+  requireBelow(reader, condition);
+  const std::string kind = condition.name();
+  YAML::Node trigger;
+  std::string reference;
+  if (kind == "TimeToCollisionCondition") {
+    const pugi::xml_node target = reader.choice(reader.only(condition, "TimeToCollisionConditionTarget"), {"EntityRef"});
+    reference = reader.text(target, "entityRef");
+  } else {
+    reference = reader.text(condition, "entityRef");
+  }
+  requireFreespace(reader, condition);
+  for (const char* attribute : {"relativeDistanceType", "coordinateSystem"}) {
+    const auto value = reader.optionalText(condition, attribute);
+    if (value && *value != "longitudinal" && *value != "entity" && *value != "road" && *value != "lane") {
+      reader.fail(condition, fmt::format("{}=\"{}\": the language measures along the Ego's lane", attribute, *value));
+    }
+  }
+  const std::string key = kind == "RelativeDistanceCondition" ? "gap" : kind == "TimeHeadwayCondition" ? "headway" : "ttc";
+  trigger[key] = num(reader.number(condition, "value", NumberRange::atLeast(0.0)));
+  const std::string other = counterpart(translation, actor, by_entity, reference);
+  if (other != "ego") trigger["to"] = other;
+  return trigger;
+}
+
+std::optional<YAML::Node> valueCondition(Translation& translation, const pugi::xml_node& by_value) {
+  const xml::Reader& reader = translation.reader;
+  const pugi::xml_node condition = reader.choice(by_value, {"SimulationTimeCondition", "StoryboardElementStateCondition",
+                                                            "ParameterCondition"});
+  reader.requireSubset(condition, {});
+  const std::string kind = condition.name();
+  YAML::Node trigger;
+  if (kind == "SimulationTimeCondition") {
+    const std::string rule = reader.oneOf(condition, "rule", {"greaterThan", "greaterOrEqual", "lessThan", "lessOrEqual",
+                                                              "equalTo", "notEqualTo"});
+    if (rule != "greaterThan" && rule != "greaterOrEqual") {
+      reader.fail(condition, fmt::format("rule=\"{}\": the language's time trigger fires once time reaches a value", rule));
+    }
+    trigger["time"] = num(reader.number(condition, "value", NumberRange::atLeast(0.0)));
+  } else if (kind == "StoryboardElementStateCondition") {
+    if (reader.text(condition, "storyboardElementType") != "action") {
+      reader.fail(condition, "storyboardElementType: the language's `after` refers to an action");
+    }
+    const std::string state = reader.text(condition, "state");
+    if (state != "endTransition" && state != "completeState") {
+      reader.fail(condition, fmt::format("state=\"{}\": the language's `after` fires when an action ends", state));
+    }
+    const std::string name = reader.text(condition, "storyboardElementRef");
+    const auto ids = translation.actionIds.find(name);
+    if (ids == translation.actionIds.end() || ids->second.size() != 1) {
+      reader.fail(condition, fmt::format("storyboardElementRef=\"{}\": expected one action of a scripted road user",
+                                         name));
+    }
+    trigger["after"] = ids->second.front();
+  } else {
+    // Parameters are constants of a concrete scenario: the condition is decided here.
+    const std::string rule = reader.oneOf(condition, "rule", {"equalTo", "greaterThan", "lessThan", "greaterOrEqual",
+                                                              "lessOrEqual", "notEqualTo"});
+    const std::string value = reader.text(condition, "value");
+    const auto parameter = reader.parameters().find(reader.text(condition, "parameterRef"));
+    if (parameter == reader.parameters().end()) reader.fail(condition, "parameterRef names no declared parameter");
+    bool holds = false;
+    if (rule == "equalTo" || rule == "notEqualTo") {
+      holds = (parameter->second == value) == (rule == "equalTo");
+    } else {
+      const double left = parseReal(parameter->second, NumberRange::any(), reader.where(condition), "parameter");
+      const double right = parseReal(value, NumberRange::any(), reader.where(condition), "value");
+      holds = rule == "greaterThan" ? left > right : rule == "lessThan" ? left < right
+              : rule == "greaterOrEqual" ? left >= right : left <= right;
+    }
+    if (!holds) return std::nullopt;
+    trigger["time"] = "0";
+  }
+  return trigger;
+}
+
+/// The language trigger of a StartTrigger; nullopt: it never fires.
+std::optional<YAML::Node> startTrigger(Translation& translation, const Entity& actor, const pugi::xml_node& start) {
+  const xml::Reader& reader = translation.reader;
+  const pugi::xml_node condition = onlyCondition(reader, start);
+  const std::string edge = reader.oneOf(condition, "conditionEdge", {"none", "rising", "falling", "risingOrFalling"});
+  if (edge != "none" && edge != "rising") {
+    reader.fail(condition, fmt::format("conditionEdge=\"{}\": the language fires when a condition becomes true", edge));
+  }
+  const double delay = reader.number(condition, "delay", NumberRange::atLeast(0.0));
+  reader.requireSubset(condition, {"ByValueCondition", "ByEntityCondition"});
+  const pugi::xml_node by = reader.choice(condition, {"ByValueCondition", "ByEntityCondition"});
+  auto trigger = std::string(by.name()) == "ByValueCondition" ? valueCondition(translation, by)
+                                                               : entityCondition(translation, actor, by);
+  if (trigger && delay > 0) (*trigger)["delay"] = num(delay);
+  return trigger;
+}
+
+/// An Act's or Story's start must hold from t = 0 (the language has no nested triggers).
+void requireStartsAtZero(Translation& translation, const pugi::xml_node& parent) {
+  const xml::Reader& reader = translation.reader;
+  const pugi::xml_node start = parent.child("StartTrigger");
+  if (!start) return;
+  const pugi::xml_node condition = onlyCondition(reader, start);
+  const pugi::xml_node time = condition.child("ByValueCondition").child("SimulationTimeCondition");
+  if (!time || reader.number(time, "value") > 0 || reader.number(condition, "delay") > 0) {
+    reader.fail(condition, "an Act that starts later than t = 0: the language starts each action by its own "
+                           "condition (move the condition to the Events)");
+  }
+}
+
+struct PendingAction {
+  Entity* actor;
+  YAML::Node item;
+};
+struct PendingEvent {
+  pugi::xml_node node;
+  std::vector<PendingAction> actions;
+};
+
+void readEvent(Translation& translation, const std::vector<Entity*>& actors, const pugi::xml_node& event,
+               std::vector<PendingEvent>& events) {
+  const xml::Reader& reader = translation.reader;
+  reader.requireSubset(event, {"Action", "StartTrigger"});
+  const std::string priority = reader.oneOf(event, "priority", {"overwrite", "override", "parallel", "skip"});
+  if (priority == "skip") reader.fail(event, "priority=\"skip\": the language starts every triggered action");
+  if (reader.optionalNumber(event, "maximumExecutionCount").value_or(1.0) != 1.0) {
+    reader.fail(event, "maximumExecutionCount: the language runs each action once");
+  }
+  PendingEvent pending{event, {}};
+  for (const pugi::xml_node& action : event.children("Action")) {
+    translation.findings.attempt([&] {
+      reader.requireSubset(action, {"PrivateAction"});
+      const std::string name = reader.text(action, "name");
+      for (Entity* actor : actors) {
+        const auto item = privateAction(translation, *actor, reader.only(action, "PrivateAction"));
+        if (!item) continue;
+        YAML::Node copy = *item;
+        copy["id"] = identifier(actors.size() == 1 ? name : name + "_" + actor->name, translation.usedIds);
+        translation.actionIds[name].push_back(copy["id"].as<std::string>());
+        pending.actions.push_back({actor, copy});
+        translation.findings.mapped(reader.where(action), fmt::format("action '{}' of '{}'", copy["id"].as<std::string>(),
+                                                                      actor->name));
+      }
+    });
+  }
+  events.push_back(std::move(pending));
+}
+
+void readManeuverGroup(Translation& translation, const pugi::xml_node& group, std::vector<PendingEvent>& events) {
+  const xml::Reader& reader = translation.reader;
+  reader.requireSubset(group, {"Actors", "Maneuver"});
+  if (reader.number(group, "maximumExecutionCount") != 1.0) {
+    reader.fail(group, "maximumExecutionCount: the language runs each action once (expected 1)");
+  }
+  const pugi::xml_node actors_node = reader.only(group, "Actors");
+  reader.requireSubset(actors_node, {"EntityRef"});
+  if (reader.text(actors_node, "selectTriggeringEntities") == "true") {
+    reader.fail(actors_node, "selectTriggeringEntities=\"true\": name the actors");
+  }
+  std::vector<Entity*> actors;
+  for (const pugi::xml_node& ref : actors_node.children("EntityRef")) {
+    actors.push_back(&translation.entity(ref, reader.text(ref, "entityRef")));
+  }
+  for (const pugi::xml_node& maneuver : group.children("Maneuver")) {
+    reader.requireSubset(maneuver, {"Event"});
+    for (const pugi::xml_node& event : maneuver.children("Event")) {
+      translation.findings.attempt([&] { readEvent(translation, actors, event, events); });
+    }
+  }
+}
+
+/// Marks the road users that move across lanes in the file (relative lane and offset targets need to know).
+void markLateralMotion(Translation& translation, const pugi::xml_node& storyboard) {
+  for (const pugi::xpath_node& found : storyboard.select_nodes(".//ManeuverGroup[.//LateralAction]/Actors/EntityRef")) {
+    for (auto& entity : translation.entities) {
+      if (entity.name == found.node().attribute("entityRef").value()) entity.movesLaterally = true;
+    }
+  }
+}
+
+}  // namespace
+
+void readStories(Translation& translation, const pugi::xml_node& storyboard) {
+  const xml::Reader& reader = translation.reader;
+  markLateralMotion(translation, storyboard);
+  std::vector<PendingEvent> events;
+  for (const pugi::xml_node& story : storyboard.children("Story")) {
+    translation.findings.attempt([&] {
+      reader.requireSubset(story, {"Act"});
+      requireStartsAtZero(translation, story);
+      for (const pugi::xml_node& act : story.children("Act")) {
+        translation.findings.attempt([&] {
+          reader.requireSubset(act, {"ManeuverGroup", "StartTrigger"});
+          requireStartsAtZero(translation, act);
+          for (const pugi::xml_node& group : act.children("ManeuverGroup")) {
+            translation.findings.attempt([&] { readManeuverGroup(translation, group, events); });
+          }
+        });
+      }
+    });
+  }
+  // Triggers after all actions have ids (a condition may name an action of a later Story).
+  for (auto& event : events) {
+    translation.findings.attempt([&] {
+      for (auto& pending : event.actions) {
+        const auto trigger = startTrigger(translation, *pending.actor, reader.only(event.node, "StartTrigger"));
+        if (!trigger) {
+          translation.findings.note(reader.where(event.node), "its condition never holds: the event never starts");
+          return;
+        }
+        pending.item["trigger"] = *trigger;
+        pending.actor->actions.push_back(pending.item);
+      }
+    });
+  }
+}
+
+void readStopTrigger(Translation& translation, const pugi::xml_node& storyboard) {
+  const xml::Reader& reader = translation.reader;
+  const pugi::xml_node stop = storyboard.child("StopTrigger");
+  const double longest = translation.options.step.value_or(scenario::LogicalScenario{}.step) * kMaxWindowSteps;
+  if (translation.options.duration) {
+    translation.duration = *translation.options.duration;
+    if (stop) translation.findings.note(reader.where(stop), fmt::format("--duration {} s replaces it", num(translation.duration)));
+    return;
+  }
+  if (!stop) reader.fail(storyboard, "no StopTrigger: pass --duration (s)");
+  const pugi::xml_node condition = onlyCondition(reader, stop);
+  const pugi::xml_node time = condition.child("ByValueCondition").child("SimulationTimeCondition");
+  if (!time) {
+    reader.fail(condition, "a StopTrigger other than a simulation time: pass --duration (s) to say how long to simulate");
+  }
+  const double end = reader.number(time, "value", NumberRange::atLeast(0.0)) +
+                     reader.number(condition, "delay", NumberRange::atLeast(0.0));
+  if (end > longest) {
+    reader.fail(time, fmt::format("the scenario ends at {} s, beyond the longest window ({} steps, {} s): pass "
+                                  "--duration (s)", num(end), kMaxWindowSteps, num(longest)));
+  }
+  translation.duration = end;
+  translation.findings.mapped(reader.where(stop), fmt::format("simulated for {} s", num(end)));
+}
+
+}  // namespace vsd::interop::osc

@@ -1,0 +1,291 @@
+// An OpenSCENARIO scenario file translated into the scenario language (YAML text),
+// loaded by the language's reader; `scenario check` and `run TEMPLATE.xosc`.
+
+#include <fmt/format.h>
+#include <fmt/ranges.h>
+
+#include <algorithm>
+
+#include <cctype>
+#include <cmath>
+
+#include "osc_template.hpp"
+#include "vsd/core/error.hpp"
+#include "vsd/core/files.hpp"
+#include "vsd/core/log.hpp"
+#include "vsd/scenario/yaml_reader.hpp"
+
+namespace fs = std::filesystem;
+
+namespace vsd::interop {
+
+const std::map<std::string, std::string>& defaultControllerMap() {
+  // Controller names of published files (ASAM's ALKS set, esmini's examples).
+  static const std::map<std::string, std::string> kDefaults = {
+      {"ALKSController", "alks"},
+      {"ALKS_R157SM_Controller", "r157_reference_driver"},
+      {"ECE_ALKS_RefDriverController", "r157_reference_driver"},
+      {"ACCController", "paper_ego"},
+  };
+  return kDefaults;
+}
+
+namespace osc {
+
+namespace {
+
+std::string num(double value) { return xml::number(value); }
+
+/// Region of the language's road (m along its centre line): the whole OpenDRIVE road
+/// where the language allows it; beyond, the road goes on straight (said in a note).
+constexpr double kMaxRegion = 1000.0;
+constexpr double kMaxExtension = 10'000.0;
+
+ControllerChoice mapController(const OscImportOptions& options, const std::string& name, const std::string& where) {
+  if (!options.controllerMap.empty()) {
+    const std::string file = options.controllerMap.string();
+    const YAML::Node map = scenario::loadYaml(readTextFile(options.controllerMap, read_limits::kSpec), file);
+    if (!map.IsMap()) throw ConfigError(fmt::format("{}: expected a map from controller names to vsd-sumo controllers", file));
+    if (const YAML::Node entry = map[name]) {
+      if (entry.IsScalar()) return {entry.as<std::string>(), {}};
+      if (entry.IsMap() && entry["controller"]) return {entry["controller"].as<std::string>(), entry["params"]};
+      throw ConfigError(fmt::format("{}: {}: expected a controller name or {{controller: NAME, params: {{...}}}}", file, name));
+    }
+  }
+  const auto& defaults = defaultControllerMap();
+  const auto found = defaults.find(name);
+  if (found == defaults.end()) {
+    throw ConfigError(fmt::format("{}: controller '{}' maps onto no vsd-sumo controller: name it in a --controller-map "
+                                  "file (defaults: ALKSController, ALKS_R157SM_Controller, "
+                                  "ECE_ALKS_RefDriverController, ACCController)",
+                                  where, name));
+  }
+  return {found->second, {}};
+}
+
+Entity& findEgo(Translation& translation, ControllerChoice& controller) {
+  Entity* ego = nullptr;
+  for (auto& entity : translation.entities) {
+    if (!entity.controller) continue;
+    if (ego) {
+      throw ConfigError(fmt::format("{}: '{}' and '{}' both have a controller: the language has one controller-driven "
+                                    "road user (the Ego)", entity.controllerWhere, ego->name, entity.name));
+    }
+    ego = &entity;
+  }
+  if (ego) {
+    controller = mapController(translation.options, *ego->controller, ego->controllerWhere);
+    translation.findings.mapped(ego->controllerWhere, fmt::format("the Ego '{}' is driven by vsd-sumo's '{}' (the file's "
+                                                                  "controller '{}'; its properties are not passed on)",
+                                                                  ego->name, controller.name, *ego->controller));
+    return *ego;
+  }
+  for (auto& entity : translation.entities) {
+    if (entity.name == translation.options.ego) ego = &entity;
+  }
+  if (!ego) {
+    throw ConfigError(fmt::format("{}: no entity has a controller and none is named '{}' (--ego NAME: which is the Ego?)",
+                                  translation.reader.file().string(), translation.options.ego));
+  }
+  controller = {translation.options.controller, {}};
+  translation.findings.note(ego->where, fmt::format("no controller in the file: '{}' is the Ego, driven by '{}' "
+                                                    "(--ego, --controller)", ego->name, controller.name));
+  return *ego;
+}
+
+/// The language's along/lane/offset of an entity's bounding-box centre.
+struct LanguagePlace {
+  double s = 0.0;
+  int lane = 0;
+  double offset = 0.0;
+};
+
+LanguagePlace languagePlace(const CarriagewayRoad& road, const Entity& entity, bool keep_lane) {
+  const Placement& p = *entity.placement;
+  const double stretch = 1.0 - road.curvature * p.t;  // reference-line s per m along the entity's line
+  const double s = p.s + entity.centreAhead * std::cos(p.heading) / stretch;
+  const double t = p.t + entity.centreAhead * std::sin(p.heading);
+  const int lane = keep_lane ? p.lane : road.nearestLane(t);
+  return {road.languageS(s), lane, t - road.laneCentreT(lane)};
+}
+
+YAML::Node roadNode(Translation& translation) {
+  const CarriagewayRoad& road = translation.road;
+  const double curvature = road.languageCurvature();
+  const double length = road.languageS(road.length);
+  double region = std::min(length, kMaxRegion);
+  if (curvature != 0.0) region = std::min(region, scenario::kMaxArcTurn / std::abs(curvature));
+  YAML::Node node;
+  node["shape"] = "arc";
+  node["curvature"] = num(curvature);
+  node["length"] = num(region);
+  node["lanes"] = std::to_string(road.lanes);
+  node["lane_width"] = num(road.laneWidth);
+  node["shoulders"]["left"] = num(road.shoulderLeft);
+  node["shoulders"]["right"] = num(road.shoulderRight);
+  node["extension"]["before"] = "0";
+  node["extension"]["after"] = num(std::clamp(length - region, 150.0, kMaxExtension));
+  if (curvature != 0.0 && length > region + 1e-6) {
+    translation.findings.note(fmt::format("{}", road.file.string()),
+                              fmt::format("the road curves for {} m; vsd-sumo's road has {} m of curve (at most {} rad) "
+                                          "and goes on straight", num(length), num(region), scenario::kMaxArcTurn));
+  }
+  return node;
+}
+
+YAML::Node roadUserNode(Translation& translation, const Entity& entity, bool ego) {
+  const CarriagewayRoad& road = translation.road;
+  const LanguagePlace place = languagePlace(road, entity, true);
+  YAML::Node node;
+  if (!ego) node["id"] = entity.id;
+  node["type"] = roadUserKind(entity.type).name;
+  node["length"] = num(entity.length);
+  node["width"] = num(entity.width);
+  node["s"] = num(place.s);
+  node["lane"] = std::to_string(place.lane);
+  const double heading_deg = entity.placement->heading * 180.0 / kPi;
+  if (ego || entity.isVehicle()) {
+    if (std::abs(heading_deg) > 0.01) {
+      throw ConfigError(fmt::format("{}: '{}' starts {} deg off the road's direction: the language's vehicles start "
+                                    "along it", entity.where, entity.name, num(heading_deg)));
+    }
+  } else if (heading_deg != 0.0) {
+    node["heading_deg"] = num(heading_deg);
+  }
+  if (ego && std::abs(place.offset) > 0.01) {
+    throw ConfigError(fmt::format("{}: the Ego '{}' starts {} m off its lane's centre: the language's Ego starts on it",
+                                  entity.where, entity.name, num(place.offset)));
+  }
+  if (!ego && place.offset != 0.0) node["offset"] = num(place.offset);
+  const double speed = entity.speed.value_or(0.0);
+  if (entity.type != RoadUserType::StationaryObject && (ego || entity.isVehicle() || speed != 0.0)) {
+    node["speed"] = num(speed);
+  }
+  if (!ego && entity.actions.size() > 0) node["actions"] = entity.actions;
+  return node;
+}
+
+std::string scenarioName(const fs::path& file) {
+  std::set<std::string> used;
+  return identifier(file.stem().string(), used);
+}
+
+/// The language YAML of the translation (after every element was read).
+std::string languageYaml(Translation& translation, const Parameters& parameters, const StringCodes& codes) {
+  const Entity& ego = *translation.ego;
+  const ControllerChoice& controller = translation.controller;
+  YAML::Node root;
+  root["schema"] = "vsd-scenario/1";
+  root["name"] = scenarioName(translation.reader.file());
+  root["description"] = "imported from " + translation.reader.file().filename().string();
+  const double step = translation.options.step.value_or(scenario::LogicalScenario{}.step);
+  root["time"]["step"] = num(step);
+  root["time"]["duration"] = num(std::ceil(translation.duration / step - 1e-9) * step);
+  YAML::Node inputs(YAML::NodeType::Sequence);
+  std::set<std::string> input_names;
+  for (const auto& [name, value] : parameters.numeric) {
+    YAML::Node input;
+    input["name"] = identifier(name, input_names);
+    input["value"] = num(value);
+    inputs.push_back(input);
+  }
+  for (const auto& [name, value] : parameters.strings) {
+    // A string parameter a sweep varies: its value's position in the sweep's list (concrete.csv is numeric).
+    const auto coded = codes.find(name);
+    if (coded == codes.end()) continue;
+    const auto at = std::find(coded->second.begin(), coded->second.end(), value);
+    YAML::Node input;
+    input["name"] = identifier(name, input_names);
+    input["value"] = std::to_string(at - coded->second.begin());
+    input["description"] = fmt::format("code of the value in {}", fmt::join(coded->second, ", "));
+    inputs.push_back(input);
+  }
+  if (inputs.size() > 0) root["inputs"] = inputs;
+  root["road"] = roadNode(translation);
+  root["vehicles"]["ego"] = roadUserNode(translation, ego, true);
+  root["vehicles"]["ego"]["controller"]["name"] = controller.name;
+  if (controller.params && controller.params.IsMap()) root["vehicles"]["ego"]["controller"]["params"] = controller.params;
+  YAML::Node others(YAML::NodeType::Sequence);
+  for (const auto& entity : translation.entities) {
+    if (&entity != &ego) others.push_back(roadUserNode(translation, entity, false));
+  }
+  if (others.size() > 0) root["vehicles"]["others"] = others;
+  root["sumo"]["collision_action"] = "warn";
+  YAML::Emitter out;
+  out << root;
+  return std::string(out.c_str()) + "\n";
+}
+
+}  // namespace
+
+std::string identifier(const std::string& name, std::set<std::string>& used) {
+  std::string id;
+  for (const char c : name) id += std::isalnum(static_cast<unsigned char>(c)) ? c : '_';
+  if (id.empty() || !std::isalpha(static_cast<unsigned char>(id[0]))) id = "n" + id;
+  if (id == "x") id = "x_";
+  std::string unique = id;
+  for (int k = 2; used.count(unique) > 0; ++k) unique = fmt::format("{}_{}", id, k);
+  used.insert(unique);
+  return unique;
+}
+
+/// Reads the whole file into the language. Refusals go to `findings` (and throw unless it collects).
+TranslationResult translate(const fs::path& xosc, const OscImportOptions& options, const ParameterValues& assigned,
+                            const std::string& assigned_where, Findings& findings, const StringCodes& codes) {
+  xml::Reader reader(xosc, read_limits::kScenario);
+  const pugi::xml_node root = reader.root();
+  if (std::string(root.name()) != "OpenSCENARIO") reader.fail(root, "expected the root element <OpenSCENARIO>");
+  reader.requireSubset(root, {"FileHeader", "ParameterDeclarations", "CatalogLocations", "RoadNetwork", "Entities",
+                              "Storyboard"});
+  const pugi::xml_node header = reader.only(root, "FileHeader");
+  if (reader.number(header, "revMajor") != 1.0) reader.fail(header, "revMajor: expected OpenSCENARIO 1.x");
+  const Parameters parameters = readParameters(reader, root, {}, assigned, assigned_where);
+  TranslationResult result;
+  result.inputs = parameters.numeric;
+  result.violated = violatedConstraint(reader, root, parameters.values);
+  // A violated constraint is the caller's to report: a run refuses, a sweep skips and counts.
+  if (result.violated) return result;
+  Translation translation{reader, findings, options};
+  Catalogs catalogs(reader, root, findings);
+  const pugi::xml_node network = reader.only(root, "RoadNetwork");
+  reader.requireSubset(network, {"LogicFile", "SceneGraphFile"});
+  if (network.child("SceneGraphFile")) findings.note(reader.where(network.child("SceneGraphFile")), "3D models are not used");
+  const pugi::xml_node logic = reader.only(network, "LogicFile");
+  // The road network must lie next to the scenario file or below it.
+  const fs::path xodr = requirePathInside(fs::absolute(xosc).parent_path(), reader.text(logic, "filepath"),
+                                          reader.where(logic), "filepath");
+  if (!fs::exists(xodr)) reader.fail(logic, fmt::format("the road network {} does not exist", xodr.string()));
+  translation.road = readCarriagewayRoad(xodr, findings);
+  findings.mapped(reader.where(logic), fmt::format("road '{}': {} driving lanes of {} m, curvature {} 1/m",
+                                                   translation.road.id, translation.road.lanes,
+                                                   num(translation.road.laneWidth), num(translation.road.curvature)));
+  readEntities(translation, root, catalogs);
+  for (auto& entity : translation.entities) entity.id = identifier(entity.name, translation.usedIds);
+  const pugi::xml_node storyboard = reader.only(root, "Storyboard");
+  reader.requireSubset(storyboard, {"Init", "Story", "StopTrigger"});
+  readInit(translation, storyboard);
+  placeEntities(translation);
+  findings.attempt([&] {
+    translation.ego = &findEgo(translation, translation.controller);
+    translation.ego->id = "ego";
+  });
+  if (!translation.ego) return result;
+  readStories(translation, storyboard);
+  findings.attempt([&] { readStopTrigger(translation, storyboard); });
+  if (findings.anyRefused()) return result;
+  result.yaml = languageYaml(translation, parameters, codes);
+  return result;
+}
+
+std::shared_ptr<const scenario::LogicalScenario> loadLanguage(const fs::path& file, const std::string& yaml) {
+  // Messages about the translation name it ("F.xosc as the scenario language:LINE: field"; `scenario
+  // check --yaml` shows those lines); the run records the file itself.
+  const auto parsed = scenario::parseLogicalScenario(yaml, file.string() + " as the scenario language");
+  auto logical = std::make_shared<scenario::LogicalScenario>(*parsed);
+  logical->sourceFile = file;
+  return logical;
+}
+
+}  // namespace osc
+
+}  // namespace vsd::interop

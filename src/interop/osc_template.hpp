@@ -1,0 +1,119 @@
+#pragma once
+// An OpenSCENARIO scenario translated into the scenario language (private to the
+// interop module; docs/openscenario-import.md). The translation is YAML text in the
+// language (`vsd-scenario/1`), which the language's own reader then loads and checks:
+// an imported scenario is sampled, simulated, vectorised and predicted exactly like a
+// YAML one, and `scenario check --yaml` shows what a file became.
+//
+// Every number is resolved at import (parameters are constants of one concrete
+// scenario; a ParameterValueDistribution imports the template once per parameter set),
+// so relative positions and references become absolute ones in the language.
+
+#include <yaml-cpp/yaml.h>
+
+#include <filesystem>
+#include <map>
+#include <memory>
+#include <optional>
+#include <set>
+#include <string>
+#include <vector>
+
+#include "osc_catalogs.hpp"
+#include "osc_findings.hpp"
+#include "osc_parameters.hpp"
+#include "osc_road.hpp"
+#include "vsd/core/road_user.hpp"
+#include "vsd/interop/openscenario_import.hpp"
+#include "xml_support.hpp"
+
+namespace vsd::interop::osc {
+
+/// Where an entity's reference point is (reference-line coordinates of the road).
+struct Placement {
+  double s = 0.0;        ///< m along the reference line
+  double t = 0.0;        ///< m across it, > 0 left
+  double heading = 0.0;  ///< rad, relative to the road's direction
+  int lane = 0;          ///< language lane (0 = rightmost driving lane)
+};
+
+struct Entity {
+  std::string name;  ///< as in the file
+  std::string id;    ///< in the language ("ego" for the Ego)
+  std::string where;
+  RoadUserType type = RoadUserType::Car;
+  double length = 0.0;
+  double width = 0.0;
+  double centreAhead = 0.0;  ///< m the bounding box centre lies ahead of the reference point
+  std::optional<std::string> controller;  ///< the controller's name (ObjectController / AssignControllerAction)
+  std::string controllerWhere;
+  pugi::xml_node position;      ///< the Init's <Position>
+  std::optional<Placement> placement;
+  bool placing = false;         ///< cycle guard while resolving relative positions
+  pugi::xml_node speedTarget;   ///< the Init's <SpeedActionTarget> (step)
+  pugi::xml_node distanceAction;  ///< the Init's <LongitudinalDistanceAction>: a place relative to another
+  std::optional<double> speed;  ///< m/s, initial
+  bool speeding = false;
+  YAML::Node actions = YAML::Node(YAML::NodeType::Sequence);
+  bool movesLaterally = false;
+
+  bool isVehicle() const { return type != RoadUserType::Pedestrian && type != RoadUserType::StationaryObject; }
+};
+
+/// The vsd-sumo controller that drives the Ego.
+struct ControllerChoice {
+  std::string name;
+  YAML::Node params;  ///< null: its defaults
+};
+
+/// One file's translation in progress.
+struct Translation {
+  Translation(xml::Reader& r, Findings& f, const OscImportOptions& o) : reader(r), findings(f), options(o) {}
+
+  xml::Reader& reader;
+  Findings& findings;
+  const OscImportOptions& options;
+  CarriagewayRoad road;
+  std::vector<Entity> entities;
+  Entity* ego = nullptr;
+  ControllerChoice controller;
+  /// Language action ids by the file's Action name (an Action with several actors has several).
+  std::map<std::string, std::vector<std::string>> actionIds;
+  std::set<std::string> usedIds = {"ego"};
+  double duration = 0.0;  ///< s; 0: not known from the file
+
+  Entity& entity(const pugi::xml_node& node, const std::string& name);
+  std::string where(const pugi::xml_node& node) const { return reader.where(node); }
+};
+
+/// A name as a language identifier (letters, digits, _; letter first), unique in `used`.
+std::string identifier(const std::string& name, std::set<std::string>& used);
+
+// osc_entities.cpp
+void readEntities(Translation& translation, const pugi::xml_node& root, Catalogs& catalogs);
+void readInit(Translation& translation, const pugi::xml_node& storyboard);
+/// Resolves every entity's start (relative positions and speeds after their references).
+void placeEntities(Translation& translation);
+
+// osc_storyboard.cpp
+void readStories(Translation& translation, const pugi::xml_node& storyboard);
+void readStopTrigger(Translation& translation, const pugi::xml_node& storyboard);
+// osc_template.cpp
+struct TranslationResult {
+  std::string yaml;                    ///< empty if refused
+  std::optional<std::string> violated; ///< a violated constraint
+  std::vector<std::pair<std::string, double>> inputs;
+};
+/// String parameters a sweep varies, with the values in the order that codes them.
+using StringCodes = std::map<std::string, std::vector<std::string>>;
+TranslationResult translate(const std::filesystem::path& xosc, const OscImportOptions& options,
+                            const ParameterValues& assigned, const std::string& assigned_where, Findings& findings,
+                            const StringCodes& codes = {});
+
+/// The language's reading of a translation, recorded as coming from `file`.
+std::shared_ptr<const scenario::LogicalScenario> loadLanguage(const std::filesystem::path& file, const std::string& yaml);
+
+/// A speed action's YAML (`speed:` item) from <SpeedAction>, for Init and Story.
+YAML::Node speedAction(Translation& translation, const Entity& actor, const pugi::xml_node& action);
+
+}  // namespace vsd::interop::osc

@@ -1,0 +1,201 @@
+// ParameterValueDistribution files: the parameter grid, and `vsd-sumo run VARIATION.xosc`
+// (the template once per parameter set that satisfies its ConstraintGroups).
+
+#include <fmt/format.h>
+
+#include <cmath>
+
+#include "osc_template.hpp"
+#include "vsd/core/error.hpp"
+#include "vsd/core/files.hpp"
+#include "vsd/road/road_geometry.hpp"
+#include "vsd/scenario/concrete_scenario.hpp"
+
+namespace fs = std::filesystem;
+
+namespace vsd::interop {
+
+namespace {
+
+/// Parameter sets a grid may hold: the product of its distributions is checked before it is built.
+constexpr double kMaxSets = 10'000'000.0;
+/// Range points per distribution (a step width of 1e-300 is no grid).
+constexpr double kMaxPoints = 1'000'000.0;
+
+using Axis = std::vector<std::map<std::string, std::string>>;  ///< the alternatives one distribution offers
+
+Axis singleDistribution(const xml::Reader& reader, const pugi::xml_node& single) {
+  reader.requireSubset(single, {"DistributionSet", "DistributionRange"});
+  const std::string name = reader.text(single, "parameterName");
+  const pugi::xml_node choice = reader.choice(single, {"DistributionSet", "DistributionRange"});
+  Axis axis;
+  if (std::string(choice.name()) == "DistributionSet") {
+    reader.requireSubset(choice, {"Element"});
+    for (const pugi::xml_node& element : choice.children("Element")) axis.push_back({{name, reader.text(element, "value")}});
+    if (axis.empty()) reader.fail(choice, "expected at least one <Element>");
+    return axis;
+  }
+  reader.requireSubset(choice, {"Range"});
+  const double step = reader.number(choice, "stepWidth", NumberRange::above(0.0));
+  const pugi::xml_node range = reader.only(choice, "Range");
+  const double low = reader.number(range, "lowerLimit");
+  const double high = reader.number(range, "upperLimit");
+  const double points = std::floor((high - low) / step + 1e-9) + 1.0;
+  if (!(points >= 1.0 && points <= kMaxPoints)) {
+    reader.fail(range, fmt::format("[{}, {}] in steps of {}: expected 1 .. {} points", xml::number(low),
+                                   xml::number(high), xml::number(step), kMaxPoints));
+  }
+  for (double k = 0; k < points; ++k) {
+    // Computed, not accumulated; rounded to 1e-9 so that 1.1 + 2 * 0.2 is the 1.5 the file means.
+    axis.push_back({{name, xml::number(std::round((low + k * step) * 1e9) / 1e9)}});
+  }
+  return axis;
+}
+
+Axis multiDistribution(const xml::Reader& reader, const pugi::xml_node& multi) {
+  reader.requireSubset(multi, {"ValueSetDistribution"});
+  const pugi::xml_node sets = reader.only(multi, "ValueSetDistribution");
+  reader.requireSubset(sets, {"ParameterValueSet"});
+  Axis axis;
+  for (const pugi::xml_node& set : sets.children("ParameterValueSet")) {
+    reader.requireSubset(set, {"ParameterAssignment"});
+    std::map<std::string, std::string> values;
+    for (const pugi::xml_node& assignment : set.children("ParameterAssignment")) {
+      values[reader.text(assignment, "parameterRef")] = reader.text(assignment, "value");
+    }
+    axis.push_back(values);
+  }
+  if (axis.empty()) reader.fail(sets, "expected at least one <ParameterValueSet>");
+  return axis;
+}
+
+}  // namespace
+
+ParameterGrid readParameterDistribution(const fs::path& file) {
+  xml::Reader reader(file, read_limits::kScenario);
+  const pugi::xml_node root = reader.root();
+  const pugi::xml_node distribution = root.child("ParameterValueDistribution");
+  if (std::string(root.name()) != "OpenSCENARIO" || !distribution) {
+    reader.fail(root, "expected <OpenSCENARIO> with a <ParameterValueDistribution>");
+  }
+  reader.requireSubset(root, {"FileHeader", "ParameterValueDistribution"});
+  reader.requireSubset(distribution, {"ScenarioFile", "Deterministic", "Stochastic"});
+  ParameterGrid grid;
+  grid.file = file;
+  const pugi::xml_node scenario = reader.only(distribution, "ScenarioFile");
+  grid.scenarioFile = requirePathInside(fs::absolute(file).parent_path(), reader.text(scenario, "filepath"),
+                                        reader.where(scenario), "filepath");
+  if (!fs::exists(grid.scenarioFile)) reader.fail(scenario, fmt::format("{} does not exist", grid.scenarioFile.string()));
+  if (const pugi::xml_node stochastic = distribution.child("Stochastic")) {
+    reader.fail(stochastic, "stochastic distributions are not imported (docs/openscenario-import.md: deterministic "
+                            "sets, ranges and value sets)");
+  }
+  const pugi::xml_node deterministic = reader.only(distribution, "Deterministic");
+  reader.requireSubset(deterministic, {"DeterministicSingleParameterDistribution", "DeterministicMultiParameterDistribution"});
+  std::vector<Axis> axes;
+  double product = 1.0;
+  for (const pugi::xml_node& node : deterministic.children()) {
+    if (node.type() != pugi::node_element) continue;
+    axes.push_back(std::string(node.name()) == "DeterministicSingleParameterDistribution" ? singleDistribution(reader, node)
+                                                                                          : multiDistribution(reader, node));
+    product *= static_cast<double>(axes.back().size());
+    if (product > kMaxSets) reader.fail(node, fmt::format("more than {} parameter sets", kMaxSets));
+  }
+  // The product, the last distribution varying fastest.
+  grid.sets.push_back({});
+  for (const auto& axis : axes) {
+    std::vector<std::map<std::string, std::string>> next;
+    next.reserve(grid.sets.size() * axis.size());
+    for (const auto& set : grid.sets) {
+      for (const auto& values : axis) {
+        auto combined = set;
+        for (const auto& [name, value] : values) combined[name] = value;
+        next.push_back(std::move(combined));
+      }
+    }
+    grid.sets = std::move(next);
+  }
+  return grid;
+}
+
+std::string SweepSummary::report() const {
+  std::string text = run.report();
+  text += fmt::format("parameter sets: {} in the grid, {} skipped by the template's constraints, {} run\n", sets, skipped,
+                      sets - skipped);
+  if (!firstSkipped.empty()) text += fmt::format("first skipped: {}\n", firstSkipped);
+  return text;
+}
+
+namespace {
+
+/// For each string parameter the grid varies, its values in order of appearance (their codes).
+osc::StringCodes stringCodes(const ParameterGrid& grid) {
+  osc::StringCodes codes;
+  for (const auto& set : grid.sets) {
+    for (const auto& [name, value] : set) {
+      auto& values = codes[name];
+      if (std::find(values.begin(), values.end(), value) == values.end()) values.push_back(value);
+    }
+  }
+  return codes;
+}
+
+/// The language scenario of one parameter set; nullopt (and `violation`) if a constraint fails.
+std::shared_ptr<const scenario::LogicalScenario> importSet(const ParameterGrid& grid, const OscImportOptions& import,
+                                                           const osc::StringCodes& codes, std::size_t set,
+                                                           std::string* violation) {
+  osc::Findings findings(/*collect=*/false);
+  const auto result = osc::translate(grid.scenarioFile, import, grid.sets[set], fmt::format("{}: parameter set {}",
+                                     grid.file.string(), set), findings, codes);
+  if (result.violated) {
+    if (!violation) throw ConfigError(*result.violated);
+    *violation = *result.violated;
+    return nullptr;
+  }
+  return osc::loadLanguage(grid.file, result.yaml);
+}
+
+}  // namespace
+
+SweepSummary runVariation(pipeline::RunOptions options, const OscImportOptions& import, bool samples_given) {
+  const ParameterGrid grid = readParameterDistribution(options.scenarioFile);
+  osc::StringCodes codes = stringCodes(grid);
+  // Numeric-looking strings are numbers in concrete.csv already; only names need codes.
+  SweepSummary summary;
+  summary.sets = grid.sets.size();
+  std::vector<std::size_t> accepted;
+  std::shared_ptr<const scenario::LogicalScenario> first;
+  for (std::size_t set = 0; set < grid.sets.size(); ++set) {
+    std::string violation;
+    auto logical = importSet(grid, import, codes, set, &violation);
+    if (!logical) {
+      ++summary.skipped;
+      if (summary.firstSkipped.empty()) summary.firstSkipped = fmt::format("parameter set {}: {}", set, violation);
+      continue;
+    }
+    if (!first) first = logical;
+    accepted.push_back(set);
+  }
+  if (accepted.empty()) {
+    throw ConfigError(fmt::format("{}: none of the {} parameter sets satisfies the template's constraints (first: {})",
+                                  grid.file.string(), grid.sets.size(), summary.firstSkipped));
+  }
+  if (samples_given && options.samples < accepted.size()) {
+    // Evenly spaced over the grid: every distribution's range is still covered.
+    std::vector<std::size_t> chosen;
+    for (std::uint64_t k = 0; k < options.samples; ++k) chosen.push_back(accepted[k * accepted.size() / options.samples]);
+    accepted = std::move(chosen);
+  }
+  options.samples = accepted.size();
+  options.firstSample = 0;
+  options.source = [grid, import, codes, accepted, seed = options.seed](std::uint64_t index) {
+    const auto logical = importSet(grid, import, codes, accepted.at(index), nullptr);
+    auto concrete = scenario::sampleConcreteScenario(logical, seed, index);
+    auto road = road::buildRoadGeometry(concrete);
+    return pipeline::ScenarioWithRoad{std::move(concrete), std::move(road)};
+  };
+  summary.run = pipeline::runScenarios(first, options);
+  return summary;
+}
+
+}  // namespace vsd::interop

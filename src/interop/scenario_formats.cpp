@@ -1,0 +1,154 @@
+#include "vsd/interop/scenario_formats.hpp"
+
+#include <fmt/format.h>
+#include <fmt/ranges.h>
+
+#include <algorithm>
+#include <cctype>
+#include <fstream>
+
+#include "vsd/core/error.hpp"
+#include "vsd/interop/run_openscenario.hpp"
+#include "vsd/scenario/concrete_scenario.hpp"
+
+namespace fs = std::filesystem;
+
+namespace vsd::interop {
+
+namespace {
+
+/// Bytes of a file its format is judged by: an OpenSCENARIO file names its kind near the top.
+constexpr std::size_t kHeadBytes = 64 * 1024;
+
+bool contains(const std::string& head, const char* text) { return head.find(text) != std::string::npos; }
+
+/// An OpenSCENARIO document's kind: the element after the FileHeader.
+bool isDistribution(const std::string& head) { return contains(head, "<ParameterValueDistribution"); }
+bool isCatalog(const std::string& head) { return contains(head, "<Catalog ") || contains(head, "<Catalog>"); }
+bool isExport(const std::string& head) { return contains(head, "name=\"vsd-sumo."); }
+
+ScenarioCheck checkYaml(const fs::path& file, const OscImportOptions&) {
+  ScenarioCheck check;
+  try {
+    const auto logical = scenario::loadLogicalScenario(file);
+    check.lines.push_back({ScenarioCheck::Line::Kind::Mapped,
+                           fmt::format("{}: logical scenario '{}' with {} inputs", file.string(), logical->name,
+                                       logical->inputs.size())});
+  } catch (const ConfigError& error) {
+    check.lines.push_back({ScenarioCheck::Line::Kind::Refused, error.what()});
+  }
+  return check;
+}
+
+ScenarioCheck checkExport(const fs::path& file, const OscImportOptions& options) {
+  ScenarioCheck check;
+  try {
+    ImportOptions import;
+    import.step = options.step;
+    importOpenScenario(file, import);
+    check.lines.push_back({ScenarioCheck::Line::Kind::Mapped, fmt::format("{}: a concrete scenario vsd-sumo exported",
+                                                                          file.string())});
+  } catch (const ConfigError& error) {
+    check.lines.push_back({ScenarioCheck::Line::Kind::Refused, error.what()});
+  }
+  return check;
+}
+
+/// The sampling flags given for a file that is one concrete scenario (they are refused by name).
+std::vector<std::string> fixedByFile(const ScenarioRunRequest& request) {
+  std::vector<std::string> fixed;
+  for (const char* flag : {"--samples", "--seed", "--first-sample"}) {
+    if (request.given(flag)) fixed.push_back(flag);
+  }
+  return fixed;
+}
+
+std::string runExport(const ScenarioRunRequest& request) {
+  ImportOptions import;
+  import.step = request.import.step;
+  return runOpenScenario(request.options, import, fixedByFile(request)).report();
+}
+
+std::string runTemplateFile(const ScenarioRunRequest& request) {
+  return runTemplate(request.options, request.import, fixedByFile(request)).report();
+}
+
+std::string runDistribution(const ScenarioRunRequest& request) {
+  if (request.given("--first-sample")) {
+    throw ConfigError::field("command line", "--first-sample", request.options.scenarioFile.string(),
+                             "no such flag for a parameter distribution (it runs its grid)");
+  }
+  return runVariation(request.options, request.import, request.given("--samples")).report();
+}
+
+std::vector<ScenarioFormat> makeFormats() {
+  std::vector<ScenarioFormat> formats;
+  ScenarioFormat yaml{"vsd-scenario", "logical scenario in the scenario language (docs/scenario-language.md)",
+                      {".yaml", ".yml"}, nullptr, {}, nullptr, checkYaml};
+  yaml.can = {true, true, true, true, false, false, true};
+  yaml.run = [](const ScenarioRunRequest& request) { return pipeline::runScenarios(request.options).report(); };
+  ScenarioFormat exported{"openscenario-export", "a concrete scenario `vsd-sumo scenario export` wrote (read back exactly)",
+                          {".xosc"}, isExport, {}, runExport, checkExport};
+  exported.can = {true, false, false, false, true, false, true};
+  ScenarioFormat distribution{"openscenario-distribution",
+                              "OpenSCENARIO ParameterValueDistribution: its template over the parameter grid",
+                              {".xosc"}, isDistribution, {}, runDistribution, checkOpenScenario};
+  distribution.can = {true, true, true, false, true, true, true};
+  ScenarioFormat catalog{"openscenario-catalog", "OpenSCENARIO catalog (read through the scenarios that reference it)",
+                         {".xosc"}, isCatalog, {}, nullptr, nullptr};
+  ScenarioFormat openscenario{"openscenario", "OpenSCENARIO 1.0-1.2 scenario (docs/openscenario-import.md)",
+                              {".xosc"}, nullptr, {}, runTemplateFile, checkOpenScenario};
+  openscenario.can = {true, false, false, false, true, true, true};
+  for (auto* format : {&yaml, &exported, &distribution, &catalog, &openscenario}) formats.push_back(std::move(*format));
+  return formats;
+}
+
+std::string head(const fs::path& file) {
+  if (!fs::is_regular_file(file)) throw IoError(fmt::format("{}: not a regular file", file.string()));
+  std::ifstream stream(file, std::ios::binary);
+  if (!stream) throw IoError(fmt::format("{}: cannot be opened", file.string()));
+  std::string bytes(kHeadBytes, '\0');
+  stream.read(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+  bytes.resize(static_cast<std::size_t>(stream.gcount()));
+  return bytes;
+}
+
+}  // namespace
+
+bool ScenarioRunRequest::given(const std::string& flag) const {
+  return std::find(givenFlags.begin(), givenFlags.end(), flag) != givenFlags.end();
+}
+
+const std::vector<ScenarioFormat>& scenarioFormats() {
+  static const std::vector<ScenarioFormat> kFormats = makeFormats();
+  return kFormats;
+}
+
+const ScenarioFormat& scenarioFormatOf(const fs::path& file) {
+  std::string extension = file.extension().string();
+  std::transform(extension.begin(), extension.end(), extension.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  std::string bytes;
+  bool read = false;
+  for (const auto& format : scenarioFormats()) {
+    if (std::find(format.extensions.begin(), format.extensions.end(), extension) == format.extensions.end()) continue;
+    if (!format.recognises) return format;
+    if (!read) {
+      bytes = head(file);
+      read = true;
+    }
+    if (format.recognises(bytes)) return format;
+  }
+  throw ConfigError(fmt::format("{}: not a scenario file vsd-sumo reads (formats: {})", file.string(),
+                                scenarioFormatList()));
+}
+
+std::string scenarioFormatList() {
+  std::vector<std::string> entries;
+  for (const auto& format : scenarioFormats()) {
+    entries.push_back(fmt::format("{} ({})", format.name, fmt::join(format.extensions, ", ")));
+  }
+  return fmt::format("{}", fmt::join(entries, "; "));
+}
+
+}  // namespace vsd::interop

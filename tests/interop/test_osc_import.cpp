@@ -1,0 +1,302 @@
+// OpenSCENARIO import (docs/openscenario-import.md) on files written for these tests
+// (tests/interop/data/osc): expected values are derived by hand from the files' numbers.
+
+#include <fmt/format.h>
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <regex>
+
+#include "osc_expression.hpp"
+#include "test_support.hpp"
+#include "vsd/core/csv.hpp"
+#include "vsd/core/error.hpp"
+#include "vsd/core/files.hpp"
+#include "vsd/interop/openscenario_import.hpp"
+#include "vsd/interop/scenario_formats.hpp"
+#include "vsd/pipeline/run.hpp"
+
+using namespace vsd;
+using namespace vsd::interop;
+using ::testing::HasSubstr;
+
+namespace fs = std::filesystem;
+
+namespace {
+
+fs::path data(const std::string& name) { return test::sourceDir() / "tests" / "interop" / "data" / "osc" / name; }
+
+/// A copy of the test data folder (road and catalogs) with `files` added, for files that differ per test.
+std::unique_ptr<TemporaryDirectory> folderWith(const std::map<std::string, std::string>& files) {
+  auto dir = std::make_unique<TemporaryDirectory>("vsd-osc");
+  fs::copy(data(""), dir->path(), fs::copy_options::recursive);
+  for (const auto& [name, text] : files) test::writeFile(dir->path() / name, text);
+  return dir;
+}
+
+/// cut_in.xosc with one piece of text replaced (the test's variation of it).
+std::string cutInWith(const std::string& from, const std::string& to) {
+  std::string text = readTextFile(data("cut_in.xosc"));
+  const auto at = text.find(from);
+  EXPECT_NE(at, std::string::npos) << from;
+  return text.replace(at, from.size(), to);
+}
+
+const scenario::VehicleSpec& other(const scenario::LogicalScenario& logical, const std::string& id) {
+  for (const auto& candidate : logical.others) {
+    if (candidate.id == id) return candidate;
+  }
+  throw std::runtime_error("no road user " + id);
+}
+
+std::string configErrorOf(const std::function<void()>& work) {
+  try {
+    work();
+  } catch (const ConfigError& error) {
+    return error.what();
+  }
+  return "(no ConfigError)";
+}
+
+}  // namespace
+
+TEST(OscExpression, TranslatesOpenScenarioSyntaxForMuparser) {
+  const osc::ParameterValues p = {{"v", "72"}, {"side", "-1"}, {"on", "true"}, {"name", "sedan"}};
+  EXPECT_DOUBLE_EQ(osc::evaluateExpression("$v / 3.6", p, "t"), 20.0);
+  EXPECT_DOUBLE_EQ(osc::evaluateExpression("$side * -$v", p, "t"), 72.0);
+  EXPECT_DOUBLE_EQ(osc::evaluateExpression("2 * sqrt($v * $v) + round(2.4) + floor(-0.5) + ceil(0.2)", p, "t"), 146.0);
+  EXPECT_DOUBLE_EQ(osc::evaluateExpression("pow(2, 3) + 7 % 3", p, "t"), 9.0);
+  EXPECT_DOUBLE_EQ(osc::evaluateExpression("$on and not(0) or false", p, "t"), 1.0);
+  EXPECT_EQ(osc::resolveValue("${$v / 3.6}", p, "t"), "20");
+  EXPECT_EQ(osc::resolveValue("$name", p, "t"), "sedan");
+  EXPECT_THAT(configErrorOf([&] { osc::evaluateExpression("$speed + 1", p, "f.xosc:3"); }),
+              HasSubstr("f.xosc:3: expression ${$speed + 1}: $speed is not a declared parameter"));
+  EXPECT_THAT(configErrorOf([&] { osc::evaluateExpression("$name * 2", p, "w"); }), HasSubstr("'sedan', not a number"));
+  EXPECT_THAT(configErrorOf([&] { osc::evaluateExpression("(1 + ", p, "w"); }), HasSubstr("expression ${(1 + }"));
+  EXPECT_THAT(configErrorOf([&] { osc::evaluateExpression("1 / 0", p, "w"); }), HasSubstr("expected a finite number"));
+}
+
+TEST(OscImport, TemplateMapsOntoTheScenarioLanguage) {
+  const auto logical = importTemplate(data("cut_in.xosc"), {});
+  // Road 7: three 3.5 m driving lanes (-2, -3, -4 -> language lanes 2, 1, 0), 1 m border inside, 2.5 m shoulder outside.
+  EXPECT_EQ(logical->road.shape, scenario::RoadSpec::Shape::Arc);
+  EXPECT_EQ(logical->road.lanes, 3);
+  EXPECT_DOUBLE_EQ(logical->road.shoulderLeft, 1.0);
+  EXPECT_DOUBLE_EQ(logical->road.shoulderRight, 2.5);
+  EXPECT_DOUBLE_EQ(logical->duration, 8.0);  // ${4 + 4}
+  // Ego: sedan with Length assigned 5.0, reference point 1.25 m behind the box centre, at s = 20 on lane -3.
+  EXPECT_EQ(logical->ego.controller.name, "alks");  // ALKSController by default
+  EXPECT_DOUBLE_EQ(logical->ego.length, 5.0);
+  EXPECT_DOUBLE_EQ(logical->ego.alongValue.evaluate({}), 21.25);
+  EXPECT_EQ(logical->ego.lane, 1);
+  EXPECT_DOUBLE_EQ(logical->ego.speed.evaluate({}), 20.0);  // 72 km/h
+  // Cutter: dLane -1 and ds 40 from the Ego, 18 km/h slower; default Length 4.5.
+  const auto& cutter = other(*logical, "Cutter");
+  EXPECT_EQ(cutter.lane, 0);
+  EXPECT_DOUBLE_EQ(cutter.length, 4.5);
+  EXPECT_DOUBLE_EQ(cutter.alongValue.evaluate({}), 61.25);
+  EXPECT_DOUBLE_EQ(cutter.speed.evaluate({}), 15.0);
+  ASSERT_EQ(cutter.actions.size(), 3u);
+  EXPECT_EQ(cutter.actions[0].kind, scenario::ActionSpec::Kind::LaneChange);
+  EXPECT_TRUE(cutter.actions[0].relativeToEgoLane);
+  EXPECT_EQ(cutter.actions[0].trigger.kind, scenario::TriggerSpec::Kind::Gap);
+  EXPECT_DOUBLE_EQ(cutter.actions[0].trigger.value.evaluate({}), 30.0);
+  EXPECT_EQ(cutter.actions[0].pace, scenario::ActionSpec::Pace::LateralSpeed);
+  EXPECT_EQ(cutter.actions[1].kind, scenario::ActionSpec::Kind::Speed);
+  EXPECT_DOUBLE_EQ(cutter.actions[1].paceValue.evaluate({}), 2.0);  // rate -2 read as its magnitude
+  EXPECT_EQ(cutter.actions[1].shape, scenario::TransitionShape::Linear);
+  EXPECT_EQ(cutter.actions[2].kind, scenario::ActionSpec::Kind::LateralOffset);
+  EXPECT_EQ(cutter.actions[2].trigger.kind, scenario::TriggerSpec::Kind::After);
+  EXPECT_EQ(cutter.actions[2].trigger.action, "CutInChange");
+  EXPECT_DOUBLE_EQ(cutter.actions[2].trigger.delay.evaluate({}), 1.0);
+  // Walker: a WorldPosition on the right shoulder (t = -12.75: 3 m right of lane 0's centre), facing across.
+  const auto& walker = other(*logical, "Walker");
+  EXPECT_EQ(walker.type, RoadUserType::Pedestrian);
+  EXPECT_DOUBLE_EQ(walker.offset.evaluate({}), -3.0);
+  EXPECT_NEAR(walker.headingDeg.evaluate({}), 90.0, 1e-9);
+  // Inputs: the numeric parameters, in declaration order.
+  EXPECT_EQ(logical->inputNames(),
+            (std::vector<std::string>{"Ego_Speed_kph", "Cutter_Side", "Cutter_Ahead_m", "Cutter_RelSpeed_kph", "LaneChange_Vy"}));
+}
+
+TEST(OscImport, AssignedParametersAndCatalogEntriesChangeTheScenario) {
+  const auto logical = importTemplate(data("cut_in.xosc"), {}, {{"Cutter_Side", "1"}, {"Vehicle_Model", "lorry"}});
+  const auto& cutter = other(*logical, "Cutter");
+  EXPECT_EQ(cutter.type, RoadUserType::Truck);
+  EXPECT_EQ(cutter.lane, 2);
+  EXPECT_DOUBLE_EQ(cutter.length, 12.0);
+  EXPECT_DOUBLE_EQ(cutter.alongValue.evaluate({}), 65.0);  // reference at 20 + 40, box centre 5 m ahead of it
+}
+
+TEST(OscImport, ViolatedConstraintIsReportedWithItsDeclaration) {
+  const std::string message = configErrorOf([] { importTemplate(data("cut_in.xosc"), {}, {{"LaneChange_Vy", "25"}}); });
+  EXPECT_THAT(message, HasSubstr("cut_in.xosc:19: <ParameterDeclaration>: parameter 'LaneChange_Vy' = '25' violates "
+                                 "its constraints (greaterThan 0 and lessThan 20)"));
+  EXPECT_THAT(configErrorOf([] { importTemplate(data("cut_in.xosc"), {}, {{"Cutter_Side", "0"}}); }),
+              HasSubstr("(equalTo -1) or (equalTo 1)"));
+  EXPECT_THAT(configErrorOf([] { importTemplate(data("cut_in.xosc"), {}, {{"Unknown", "0"}}); }),
+              HasSubstr("assigns parameter 'Unknown'"));
+}
+
+TEST(OscImport, BadReferencesAreOneLineEach) {
+  const auto dir = folderWith({
+      {"outside.xosc", cutInWith("./catalogs/vehicles", "../vehicles")},
+      {"no_entry.xosc", cutInWith("entryName=\"walker\"", "entryName=\"runner\"")},
+      {"forward.xosc", cutInWith("value=\"40\"/>", "value=\"${$Cutter_RelSpeed_kph * 2}\"/>")},
+      {"no_ego.xosc", cutInWith("<ObjectController><CatalogReference catalogName=\"drivers\" entryName=\"ALKSController\"/></ObjectController>",
+                                "<ObjectController><CatalogReference catalogName=\"drivers\" entryName=\"TeleoperatedDriver\"/></ObjectController>")},
+  });
+  EXPECT_THAT(configErrorOf([&] { importTemplate(dir->path() / "outside.xosc", {}); }), HasSubstr("outside.xosc:28: <Directory>"));
+  EXPECT_THAT(configErrorOf([&] { importTemplate(dir->path() / "no_entry.xosc", {}); }),
+              HasSubstr("no_entry.xosc:46: <CatalogReference>: entryName=\"runner\": catalog 'people'"));
+  EXPECT_THAT(configErrorOf([&] { importTemplate(dir->path() / "forward.xosc", {}); }),
+              HasSubstr("$Cutter_RelSpeed_kph is not a declared parameter"));
+  EXPECT_THAT(configErrorOf([&] { importTemplate(dir->path() / "no_ego.xosc", {}); }),
+              HasSubstr("controller 'TeleoperatedDriver' maps onto no vsd-sumo controller"));
+  // A mapping file names it; without controllers the entity named Ego (or --ego) is the Ego.
+  test::writeFile(dir->path() / "map.yaml", "TeleoperatedDriver: {controller: idm, params: {time_gap: 2}}\n");
+  OscImportOptions mapped;
+  mapped.controllerMap = dir->path() / "map.yaml";
+  EXPECT_EQ(importTemplate(dir->path() / "no_ego.xosc", mapped)->ego.controller.name, "idm");
+}
+
+TEST(OscImport, CheckListsEveryRefusalWithItsLine) {
+  std::string text = cutInWith("<Private entityRef=\"Walker\">",
+                               "<Private entityRef=\"Walker\"><PrivateAction><RoutingAction><AssignRouteAction/>"
+                               "</RoutingAction></PrivateAction></Private>\n        <Private entityRef=\"Walker\">");
+  const std::string speed_condition =
+      "<SpeedCondition value=\"5\" rule=\"lessThan\"/>";
+  const auto at = text.find("<RelativeDistanceCondition");
+  text.replace(at, text.find("/>", at) + 2 - at, speed_condition);
+  const auto dir = folderWith({{"unsupported.xosc", text}});
+  const ScenarioCheck check = checkOpenScenario(dir->path() / "unsupported.xosc", {});
+  EXPECT_FALSE(check.runnable());
+  const std::string report = check.report();
+  const std::string file = (dir->path() / "unsupported.xosc").string();
+  EXPECT_THAT(report, HasSubstr("REFUSED " + file + ":78: element <RoutingAction> is outside the supported subset"));
+  EXPECT_THAT(report, HasSubstr("REFUSED " + file + ":109: element <SpeedCondition> is outside the supported subset"));
+  EXPECT_THAT(report, HasSubstr("would not run: 2 element(s) refused"));
+  EXPECT_TRUE(checkOpenScenario(data("cut_in.xosc"), {}).runnable());
+}
+
+TEST(OscImport, MiscObjectsAndRoadPositions) {
+  const auto dir = folderWith({{"cone.xosc", cutInWith("</Entities>",
+                                                       "<ScenarioObject name=\"Cone\"><MiscObject miscObjectCategory=\"obstacle\" "
+                                                       "mass=\"5\" name=\"cone\"><BoundingBox><Center x=\"0\" y=\"0\" z=\"0.4\"/>"
+                                                       "<Dimensions width=\"0.4\" length=\"0.4\" height=\"0.8\"/></BoundingBox>"
+                                                       "</MiscObject></ScenarioObject></Entities>")
+                                                  .replace(0, 0, "")}});
+  std::string text = readTextFile(dir->path() / "cone.xosc");
+  const std::string init = "<Private entityRef=\"Walker\">";
+  text.replace(text.find(init), 0, "<Private entityRef=\"Cone\"><PrivateAction><TeleportAction><Position><RoadPosition roadId=\"7\" "
+                                   "s=\"600\" t=\"-13\"/></Position></TeleportAction></PrivateAction></Private>");
+  test::writeFile(dir->path() / "cone.xosc", text);
+  const auto logical = importTemplate(dir->path() / "cone.xosc", {});
+  const auto& cone = other(*logical, "Cone");
+  EXPECT_EQ(cone.type, RoadUserType::StationaryObject);
+  EXPECT_DOUBLE_EQ(cone.alongValue.evaluate({}), 600.0);
+  EXPECT_DOUBLE_EQ(cone.offset.evaluate({}), -3.25);  // t = -13, lane 0's centre at -9.75
+}
+
+TEST(OscImport, InitDistanceActionPlacesAndRateZeroLeavesTheSpeed) {
+  // The Walker's place is replaced by a 2 s freespace time gap ahead of the Ego (20 m/s: 40 m
+  // bumper to bumper); the Cutter's slow-down at rate 0 never changes its speed.
+  std::string text = cutInWith("<Private entityRef=\"Walker\">",
+                               "<Private entityRef=\"Walker\"><PrivateAction><LongitudinalAction><LongitudinalDistanceAction "
+                               "entityRef=\"Ego\" timeGap=\"2\" freespace=\"true\" continuous=\"false\" "
+                               "displacement=\"leadingReferencedEntity\"/></LongitudinalAction></PrivateAction></Private>\n"
+                               "        <Private entityRef=\"Walker\">");
+  text.replace(text.find("value=\"-2\""), 10, "value=\"0\"");
+  const auto dir = folderWith({{"distance.xosc", text}});
+  const auto logical = importTemplate(dir->path() / "distance.xosc", {});
+  // Ego centre at 21.25 (5 m long), walker 0.4 m long: 21.25 + 2.5 + 40 + 0.2.
+  EXPECT_DOUBLE_EQ(other(*logical, "Walker").alongValue.evaluate({}), 63.95);
+  const auto& cutter = other(*logical, "Cutter");
+  ASSERT_EQ(cutter.actions.size(), 2u);
+  EXPECT_EQ(cutter.actions[0].kind, scenario::ActionSpec::Kind::LaneChange);
+  EXPECT_EQ(cutter.actions[1].kind, scenario::ActionSpec::Kind::LateralOffset);
+}
+
+TEST(OscVariation, GridIsTheProductInFileOrder) {
+  const ParameterGrid grid = readParameterDistribution(data("cut_in_variation.xosc"));
+  ASSERT_EQ(grid.sets.size(), 12u);  // 3 speeds x 2 value sets x 2 lateral speeds
+  EXPECT_EQ(grid.sets[0], (std::map<std::string, std::string>{
+                              {"Ego_Speed_kph", "60"}, {"Cutter_Side", "-1"}, {"Vehicle_Model", "sedan"}, {"LaneChange_Vy", "1.5"}}));
+  EXPECT_EQ(grid.sets[1].at("LaneChange_Vy"), "25");
+  EXPECT_EQ(grid.sets[2].at("Vehicle_Model"), "lorry");
+  EXPECT_EQ(grid.sets[11].at("Ego_Speed_kph"), "80");
+  const auto dir = folderWith({{"steps.xosc", std::regex_replace(readTextFile(data("cut_in_variation.xosc")),
+                                                                 std::regex("stepWidth=\"10\"><Range lowerLimit=\"60\" upperLimit=\"80\""),
+                                                                 "stepWidth=\"0.2\"><Range lowerLimit=\"1.1\" upperLimit=\"1.5\"")}});
+  const ParameterGrid steps = readParameterDistribution(dir->path() / "steps.xosc");
+  EXPECT_EQ(steps.sets[8].at("Ego_Speed_kph"), "1.5");  // 1.1 + 2 * 0.2, the upper bound kept
+}
+
+TEST(OscFormats, RegistryChoosesByExtensionAndContent) {
+  EXPECT_EQ(scenarioFormatOf(test::scenarioFile("acc.yaml")).name, "vsd-scenario");
+  EXPECT_EQ(scenarioFormatOf(data("cut_in.xosc")).name, "openscenario");
+  EXPECT_EQ(scenarioFormatOf(data("cut_in_variation.xosc")).name, "openscenario-distribution");
+  EXPECT_EQ(scenarioFormatOf(data("catalogs/vehicles/fleet.xosc")).name, "openscenario-catalog");
+  EXPECT_FALSE(scenarioFormatOf(data("catalogs/vehicles/fleet.xosc")).can.run);
+  EXPECT_THAT(configErrorOf([] { scenarioFormatOf(data("roads/three_lanes.xodr")); }),
+              HasSubstr("not a scenario file vsd-sumo reads (formats: vsd-scenario (.yaml, .yml)"));
+}
+
+TEST(OscRun, ScriptedRoadUsersEndWhereTheFileSays) {
+  const auto logical = importTemplate(data("cut_in.xosc"), {});
+  TemporaryDirectory dir("vsd-osc-run");
+  pipeline::RunOptions options;
+  options.samples = 1;
+  options.outputDir = dir.path() / "run";
+  options.writeFiles = false;
+  std::optional<Trace> trace;
+  pipeline::runScenarios(logical, options, [&](const pipeline::ScenarioOutcome& outcome) {
+    ASSERT_TRUE(outcome.ok()) << outcome.failure;
+    trace = outcome.trace;
+  });
+  ASSERT_TRUE(trace);
+  const VehicleTrack* cutter = nullptr;
+  for (const auto& track : trace->vehicles) {
+    if (track.id == "Cutter") cutter = &track;
+  }
+  ASSERT_NE(cutter, nullptr);
+  // By hand: the gap (35.25 m at 5 m/s closing) reaches 30 m at 1.05 s; the lane change to the
+  // Ego's lane (3.5 m at a peak 1.5 m/s: 3.67 s) and the slow-down to 10 m/s (2.5 s at 2 m/s^2)
+  // end before 5 s; 1 s later the 0.5 m offset (pi * sqrt(0.5 / 2) = 1.57 s) ends before 8 s.
+  // The language's road centre is the middle lane's centre line (y = 0): the cutter ends at y = 0.5.
+  const VehicleState& end = cutter->states.back();
+  EXPECT_NEAR(end.speed, 10.0, 0.2);
+  EXPECT_NEAR(end.y, 0.5, 0.2);
+}
+
+TEST(OscRun, VariationRunsTheGridAndSkipsViolatedSets) {
+  TemporaryDirectory dir("vsd-osc-sweep");
+  pipeline::RunOptions options;
+  options.scenarioFile = data("cut_in_variation.xosc");
+  options.outputDir = dir.path() / "sweep";
+  const SweepSummary summary = runVariation(options, {}, /*samples_given=*/false);
+  EXPECT_EQ(summary.sets, 12u);
+  EXPECT_EQ(summary.skipped, 6u);  // lateral speed 25 m/s is not below 60..80 km/h
+  EXPECT_EQ(summary.run.ok, 6u);
+  EXPECT_THAT(summary.firstSkipped, HasSubstr("parameter set 1:"));
+  const std::string csv = readTextFile(dir.path() / "sweep" / "concrete.csv");
+  EXPECT_THAT(csv, HasSubstr("Vehicle_Model"));  // string parameters the grid varies: their code
+  EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 7);
+}
+
+TEST(OscCli, ScenarioCheckExitStatusSaysWhetherItWouldRun) {
+  TemporaryDirectory dir("vsd-osc-cli");
+  const auto ok = test::run({test::vsdSumo().string(), "--quiet", "scenario", "check", data("cut_in.xosc").string()}, dir.path());
+  EXPECT_EQ(ok.exitCode, 0) << ok.output;
+  EXPECT_THAT(ok.output, HasSubstr("would run"));
+  const auto catalog = test::run({test::vsdSumo().string(), "--quiet", "run", data("catalogs/vehicles/fleet.xosc").string()},
+                                 dir.path());
+  EXPECT_EQ(catalog.exitCode, 1);
+  EXPECT_THAT(catalog.output, HasSubstr("openscenario-catalog files are not run"));
+  const auto flag = test::run({test::vsdSumo().string(), "--quiet", "run", test::scenarioFile("acc.yaml").string(),
+                               "--duration", "3"}, dir.path());
+  EXPECT_NE(flag.exitCode, 0);
+  EXPECT_THAT(flag.output, HasSubstr("--duration"));
+  EXPECT_THAT(flag.output, HasSubstr("a flag for other formats than vsd-scenario"));
+}
