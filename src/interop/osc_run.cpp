@@ -53,24 +53,55 @@ std::shared_ptr<const scenario::LogicalScenario> loadTranslation(const fs::path&
   return osc::loadLanguage(xosc, yaml);
 }
 
+/// Every set of a grid imported (not simulated): how many satisfy the constraints, how many
+/// the import refuses (the first named), as `run` would meet them.
+void countSets(const ParameterGrid& grid, const OscImportOptions& options, osc::Findings& findings) {
+  std::size_t skipped = 0;
+  std::size_t refused = 0;
+  std::string first_skipped;
+  std::string first_refused;
+  for (std::size_t set = 0; set < grid.sets.size(); ++set) {
+    osc::Findings quiet(/*collect=*/false);
+    try {
+      const auto result = osc::translate(grid.scenarioFile, options, grid.sets[set],
+                                         fmt::format("{}: parameter set {}", grid.file.string(), set), quiet);
+      if (result.violated) {
+        if (skipped++ == 0) first_skipped = fmt::format("set {}: {}", set, *result.violated);
+        continue;
+      }
+      scenario::sampleConcreteScenario(osc::loadLanguage(grid.scenarioFile, result.yaml), 1, 0);
+    } catch (const ConfigError& error) {
+      if (refused++ == 0) first_refused = fmt::format("set {}: {}", set, error.what());
+    }
+  }
+  findings.mapped(grid.file.string(), fmt::format("{} parameter sets: {} skipped by the template's constraints{}, {} "
+                                                  "refused, {} would run",
+                                                  grid.sets.size(), skipped,
+                                                  first_skipped.empty() ? "" : " (first: " + first_skipped + ")",
+                                                  refused, grid.sets.size() - skipped - refused));
+  if (refused > 0) findings.refuse(fmt::format("{}: {} parameter sets refused, the first: {}", grid.file.string(), refused,
+                                               first_refused));
+}
+
 }  // namespace
 
 ScenarioCheck checkOpenScenario(const fs::path& file, const OscImportOptions& options) {
   osc::Findings findings(/*collect=*/true);
   ScenarioCheck check;
   fs::path scenario_file = file;
-  const bool distribution = findings.attempt([&] {
+  std::optional<ParameterGrid> grid;
+  const bool readable = findings.attempt([&] {
     if (!xml::Reader(file, read_limits::kScenario).root().child("ParameterValueDistribution")) return;
-    const ParameterGrid grid = readParameterDistribution(file);
-    // A distribution: its template at the declared values (`run` imports every set).
+    grid = readParameterDistribution(file);
     findings.mapped(file.string(), fmt::format("ParameterValueDistribution of {} parameter sets over {}",
-                                               grid.sets.size(), grid.scenarioFile.string()));
-    scenario_file = grid.scenarioFile;
+                                               grid->sets.size(), grid->scenarioFile.string()));
+    scenario_file = grid->scenarioFile;
   });
-  if (!distribution) {
+  if (!readable) {
     for (const auto& line : findings.lines()) check.lines.push_back({kindOf(line.kind), line.text});
     return check;
   }
+  if (grid) countSets(*grid, options, findings);
   osc::TranslationResult result;
   findings.attempt([&] { result = osc::translate(scenario_file, options, {}, "", findings); });
   if (!result.yaml.empty()) {

@@ -233,6 +233,13 @@ TEST(OscVariation, GridIsTheProductInFileOrder) {
   EXPECT_EQ(steps.sets[8].at("Ego_Speed_kph"), "1.5");  // 1.1 + 2 * 0.2, the upper bound kept
 }
 
+TEST(OscVariation, CheckCountsTheSetsWithoutRunning) {
+  const ScenarioCheck check = checkOpenScenario(data("cut_in_variation.xosc"), {});
+  EXPECT_TRUE(check.runnable());
+  EXPECT_THAT(check.report(), HasSubstr("12 parameter sets: 6 skipped by the template's constraints (first: set 1: "));
+  EXPECT_THAT(check.report(), HasSubstr("0 refused, 6 would run"));
+}
+
 TEST(OscFormats, RegistryChoosesByExtensionAndContent) {
   EXPECT_EQ(scenarioFormatOf(test::scenarioFile("acc.yaml")).name, "vsd-scenario");
   EXPECT_EQ(scenarioFormatOf(data("cut_in.xosc")).name, "openscenario");

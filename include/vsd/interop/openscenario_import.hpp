@@ -52,9 +52,11 @@ struct ScenarioCheck {
   std::string report() const;
 };
 
-/// Checks a scenario template or a parameter distribution (its template at every parameter
-/// set it defines is not run: the template is checked at its declared values, and each set's
-/// constraints are counted). Never throws ConfigError for the file's content: refusals are lines.
+/// Checks a scenario template or a parameter distribution without simulating: a template
+/// element by element at its declared values; a distribution's template likewise, then every
+/// parameter set imported and counted (skipped by a constraint, refused, would run; a refused
+/// set is a refusal line naming the first). Never throws ConfigError for the files' content:
+/// refusals are lines.
 ScenarioCheck checkOpenScenario(const std::filesystem::path& file, const OscImportOptions& options);
 
 /// The template as a logical scenario of the language, at its declared parameter values
