@@ -62,7 +62,10 @@ class VehicleTypes {
     libsumo::VehicleType::setEmergencyDecel(id, 20.0);
     if (vehicle.type != RoadUserType::Car) {
       libsumo::VehicleType::setVehicleClass(id, sumoClassOf(vehicle.type));
-      libsumo::VehicleType::setShapeClass(id, sumoClassOf(vehicle.type));
+      // SUMO has no drawing shape for its "ignoring" class: objects keep the default shape.
+      if (vehicle.type != RoadUserType::StationaryObject) {
+        libsumo::VehicleType::setShapeClass(id, sumoClassOf(vehicle.type));
+      }
     }
     return types_.emplace(key, id).first->second;
   }

@@ -317,6 +317,19 @@ TEST(Run, VehicleSizesTravelIntoTheDatasetAndItsMetrics) {
   }
 }
 
+// A stationary object is a road user SUMO loads and sees like the others (its type has a
+// shape SUMO knows), so a scenario with one simulates.
+TEST(Run, AStationaryObjectSimulates) {
+  TemporaryDirectory dir;
+  const auto file = dir.path() / "object.yaml";
+  test::writeFile(file, test::scenarioVariant("alks/fully_blocking_target.yaml",
+                                              "choices: [pedestrian, car, truck, van, bus, motorbike]",
+                                              "choices: [stationary_object]"));
+  const auto summary = runScenarios(options(file, dir.path() / "out", 3));
+  EXPECT_EQ(summary.ok, 3u);
+  EXPECT_EQ(summary.failed, 0u);
+}
+
 // --reference: every concrete scenario again with the reference driver as the Ego, both
 // outcomes side by side; without it concrete.csv keeps its columns.
 TEST(Run, ReferenceRunsEveryScenarioAgainBesideTheSystem) {
