@@ -50,15 +50,6 @@ const scenario::VehicleSpec& other(const scenario::LogicalScenario& logical, con
   throw std::runtime_error("no road user " + id);
 }
 
-std::string configErrorOf(const std::function<void()>& work) {
-  try {
-    work();
-  } catch (const ConfigError& error) {
-    return error.what();
-  }
-  return "(no ConfigError)";
-}
-
 }  // namespace
 
 TEST(OscExpression, TranslatesOpenScenarioSyntaxForMuparser) {
@@ -70,11 +61,11 @@ TEST(OscExpression, TranslatesOpenScenarioSyntaxForMuparser) {
   EXPECT_DOUBLE_EQ(osc::evaluateExpression("$on and not(0) or false", p, "t"), 1.0);
   EXPECT_EQ(osc::resolveValue("${$v / 3.6}", p, "t"), "20");
   EXPECT_EQ(osc::resolveValue("$name", p, "t"), "sedan");
-  EXPECT_THAT(configErrorOf([&] { osc::evaluateExpression("$speed + 1", p, "f.xosc:3"); }),
+  EXPECT_THAT(test::configErrorOf([&] { osc::evaluateExpression("$speed + 1", p, "f.xosc:3"); }),
               HasSubstr("f.xosc:3: expression ${$speed + 1}: $speed is not a declared parameter"));
-  EXPECT_THAT(configErrorOf([&] { osc::evaluateExpression("$name * 2", p, "w"); }), HasSubstr("'sedan', not a number"));
-  EXPECT_THAT(configErrorOf([&] { osc::evaluateExpression("(1 + ", p, "w"); }), HasSubstr("expression ${(1 + }"));
-  EXPECT_THAT(configErrorOf([&] { osc::evaluateExpression("1 / 0", p, "w"); }), HasSubstr("expected a finite number"));
+  EXPECT_THAT(test::configErrorOf([&] { osc::evaluateExpression("$name * 2", p, "w"); }), HasSubstr("'sedan', not a number"));
+  EXPECT_THAT(test::configErrorOf([&] { osc::evaluateExpression("(1 + ", p, "w"); }), HasSubstr("expression ${(1 + }"));
+  EXPECT_THAT(test::configErrorOf([&] { osc::evaluateExpression("1 / 0", p, "w"); }), HasSubstr("expected a finite number"));
 }
 
 TEST(OscImport, TemplateMapsOntoTheScenarioLanguage) {
@@ -130,12 +121,12 @@ TEST(OscImport, AssignedParametersAndCatalogEntriesChangeTheScenario) {
 }
 
 TEST(OscImport, ViolatedConstraintIsReportedWithItsDeclaration) {
-  const std::string message = configErrorOf([] { importTemplate(data("cut_in.xosc"), {}, {{"LaneChange_Vy", "25"}}); });
+  const std::string message = test::configErrorOf([] { importTemplate(data("cut_in.xosc"), {}, {{"LaneChange_Vy", "25"}}); });
   EXPECT_THAT(message, HasSubstr("cut_in.xosc:19: <ParameterDeclaration>: parameter 'LaneChange_Vy' = '25' violates "
                                  "its constraints (greaterThan 0 and lessThan 20)"));
-  EXPECT_THAT(configErrorOf([] { importTemplate(data("cut_in.xosc"), {}, {{"Cutter_Side", "0"}}); }),
+  EXPECT_THAT(test::configErrorOf([] { importTemplate(data("cut_in.xosc"), {}, {{"Cutter_Side", "0"}}); }),
               HasSubstr("(equalTo -1) or (equalTo 1)"));
-  EXPECT_THAT(configErrorOf([] { importTemplate(data("cut_in.xosc"), {}, {{"Unknown", "0"}}); }),
+  EXPECT_THAT(test::configErrorOf([] { importTemplate(data("cut_in.xosc"), {}, {{"Unknown", "0"}}); }),
               HasSubstr("assigns parameter 'Unknown'"));
 }
 
@@ -147,12 +138,12 @@ TEST(OscImport, BadReferencesAreOneLineEach) {
       {"no_ego.xosc", cutInWith("<ObjectController><CatalogReference catalogName=\"drivers\" entryName=\"ALKSController\"/></ObjectController>",
                                 "<ObjectController><CatalogReference catalogName=\"drivers\" entryName=\"TeleoperatedDriver\"/></ObjectController>")},
   });
-  EXPECT_THAT(configErrorOf([&] { importTemplate(dir->path() / "outside.xosc", {}); }), HasSubstr("outside.xosc:28: <Directory>"));
-  EXPECT_THAT(configErrorOf([&] { importTemplate(dir->path() / "no_entry.xosc", {}); }),
+  EXPECT_THAT(test::configErrorOf([&] { importTemplate(dir->path() / "outside.xosc", {}); }), HasSubstr("outside.xosc:28: <Directory>"));
+  EXPECT_THAT(test::configErrorOf([&] { importTemplate(dir->path() / "no_entry.xosc", {}); }),
               HasSubstr("no_entry.xosc:46: <CatalogReference>: entryName=\"runner\": catalog 'people'"));
-  EXPECT_THAT(configErrorOf([&] { importTemplate(dir->path() / "forward.xosc", {}); }),
+  EXPECT_THAT(test::configErrorOf([&] { importTemplate(dir->path() / "forward.xosc", {}); }),
               HasSubstr("$Cutter_RelSpeed_kph is not a declared parameter"));
-  EXPECT_THAT(configErrorOf([&] { importTemplate(dir->path() / "no_ego.xosc", {}); }),
+  EXPECT_THAT(test::configErrorOf([&] { importTemplate(dir->path() / "no_ego.xosc", {}); }),
               HasSubstr("controller 'TeleoperatedDriver' maps onto no vsd-sumo controller"));
   // A mapping file names it; without controllers the entity named Ego (or --ego) is the Ego.
   test::writeFile(dir->path() / "map.yaml", "TeleoperatedDriver: {controller: idm, params: {time_gap: 2}}\n");
@@ -246,7 +237,7 @@ TEST(OscFormats, RegistryChoosesByExtensionAndContent) {
   EXPECT_EQ(scenarioFormatOf(data("cut_in_variation.xosc")).name, "openscenario-distribution");
   EXPECT_EQ(scenarioFormatOf(data("catalogs/vehicles/fleet.xosc")).name, "openscenario-catalog");
   EXPECT_FALSE(scenarioFormatOf(data("catalogs/vehicles/fleet.xosc")).can.run);
-  EXPECT_THAT(configErrorOf([] { scenarioFormatOf(data("roads/three_lanes.xodr")); }),
+  EXPECT_THAT(test::configErrorOf([] { scenarioFormatOf(data("roads/three_lanes.xodr")); }),
               HasSubstr("not a scenario file vsd-sumo reads (formats: vsd-scenario (.yaml, .yml)"));
 }
 

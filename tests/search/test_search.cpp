@@ -32,15 +32,6 @@ namespace {
 const std::vector<std::string> kMetrics = {"a_min", "d_min", "p_lat_max", "y_max", "ttc_min", "thw_min",
                                            "lane_offset_max"};
 
-std::string errorOf(const std::function<void()>& action) {
-  try {
-    action();
-  } catch (const ConfigError& error) {
-    return error.what();
-  }
-  return "no ConfigError";
-}
-
 TEST(SearchCriterion, ExpressionReadsItsMetricsAndJudges) {
   const auto logical = scenario::loadLogicalScenario(test::scenarioFile("acc_lk.yaml"));
   const Criterion criterion("ttc_min < 1 || d_min < 0.5", *logical, kMetrics);
@@ -63,20 +54,20 @@ TEST(SearchCriterion, NamedCriterionComesFromTheScenario) {
 
 TEST(SearchCriterion, BadCriteriaGetOneLineNamingWhatIsKnown) {
   const auto logical = scenario::loadLogicalScenario(test::scenarioFile("acc_lk.yaml"));
-  const std::string unknown = errorOf([&] { Criterion("dmin < 2", *logical, kMetrics); });
+  const std::string unknown = test::configErrorOf([&] { Criterion("dmin < 2", *logical, kMetrics); });
   EXPECT_THAT(unknown, HasSubstr("dmin"));
   EXPECT_THAT(unknown, HasSubstr("ttc_min"));
   EXPECT_THAT(unknown, HasSubstr("close_approach"));
   EXPECT_EQ(unknown.find('\n'), std::string::npos);
   // A registered metric the scenario does not compute is named as such.
-  const std::string not_computed = errorOf([&] { Criterion("ttc_min < 1", *logical, {"a_min", "d_min"}); });
+  const std::string not_computed = test::configErrorOf([&] { Criterion("ttc_min < 1", *logical, {"a_min", "d_min"}); });
   EXPECT_THAT(not_computed, HasSubstr("'ttc_min' is not computed by this scenario"));
-  EXPECT_THAT(errorOf([&] { Criterion("d_min < (2", *logical, kMetrics); }), HasSubstr("d_min < (2"));
-  EXPECT_THAT(errorOf([&] { Criterion("1 < 2", *logical, kMetrics); }), HasSubstr("uses no metric"));
+  EXPECT_THAT(test::configErrorOf([&] { Criterion("d_min < (2", *logical, kMetrics); }), HasSubstr("d_min < (2"));
+  EXPECT_THAT(test::configErrorOf([&] { Criterion("1 < 2", *logical, kMetrics); }), HasSubstr("uses no metric"));
 }
 
 TEST(SearchSurrogates, UnknownNameListsTheKnownOnes) {
-  const std::string message = errorOf([] { findSurrogate("gaussian-process"); });
+  const std::string message = test::configErrorOf([] { findSurrogate("gaussian-process"); });
   EXPECT_THAT(message, HasSubstr("random, extra-trees, bnn"));
 }
 
@@ -136,13 +127,13 @@ SearchOptions smallSearch(const fs::path& out, const std::string& surrogate, std
 TEST(SearchOptions, BudgetBelowTheInitialDesignIsRefusedBeforeAnythingIsWritten) {
   TemporaryDirectory work("vsd-test-search");
   auto options = smallSearch(work.path() / "out", "extra-trees", 30);
-  const std::string message = errorOf([&] { runSearch(options); });
+  const std::string message = test::configErrorOf([&] { runSearch(options); });
   EXPECT_THAT(message, HasSubstr("--budget"));
   EXPECT_THAT(message, HasSubstr("--initial (40)"));
   EXPECT_FALSE(fs::exists(work.path() / "out"));
   options.budget = 100;
   options.surrogate = "gp";
-  EXPECT_THAT(errorOf([&] { runSearch(options); }), HasSubstr("unknown surrogate"));
+  EXPECT_THAT(test::configErrorOf([&] { runSearch(options); }), HasSubstr("unknown surrogate"));
   EXPECT_FALSE(fs::exists(work.path() / "out"));
 }
 
@@ -194,7 +185,7 @@ TEST(SearchLoop, ResumesWithoutRepeatingAndMakesTheSameChoicesAsAnUninterruptedS
 
   auto other = smallSearch(resumed, "extra-trees", 120);
   other.seed = 2;
-  EXPECT_THAT(errorOf([&] { runSearch(other); }), HasSubstr("seed"));
+  EXPECT_THAT(test::configErrorOf([&] { runSearch(other); }), HasSubstr("seed"));
 }
 
 /// The DatasetError message of `action`, or "no DatasetError".
@@ -341,12 +332,12 @@ TEST(SearchVectorNet, APriorPreTrainsTheModelAndTheSearchResumesWithTheSameChoic
             0);
   auto refused = vectornet(work.path() / "refused", 60);
   refused.priors = {fine_run};
-  const auto message = errorOf([&] { runSearch(refused); });
+  const auto message = test::configErrorOf([&] { runSearch(refused); });
   EXPECT_THAT(message, HasSubstr("--prior " + fine_run.string() + ": step 0.1 s"));
   EXPECT_EQ(std::count(message.begin(), message.end(), '\n'), 0) << message;
   refused.priors = {prior};
   refused.surrogate = "extra-trees";
-  EXPECT_THAT(errorOf([&] { runSearch(refused); }), HasSubstr("it does not learn from scenes"));
+  EXPECT_THAT(test::configErrorOf([&] { runSearch(refused); }), HasSubstr("it does not learn from scenes"));
   EXPECT_FALSE(fs::exists(work.path() / "refused"));
 }
 
@@ -401,13 +392,13 @@ TEST(SearchReference, TheCriterionNeedsAReferenceAndASurrogateThatCanPredictIt) 
   options.criterion = "reference_avoids_sut_collides";
   options.budget = 40;
   options.initial = 10;
-  EXPECT_THAT(errorOf([&] { runSearch(options); }), HasSubstr("needs --reference NAME"));
+  EXPECT_THAT(test::configErrorOf([&] { runSearch(options); }), HasSubstr("needs --reference NAME"));
   options.reference = "r157_reference_driver";
   options.surrogate = "vectornet";
-  EXPECT_THAT(errorOf([&] { runSearch(options); }), HasSubstr("no --reference with --surrogate vectornet"));
+  EXPECT_THAT(test::configErrorOf([&] { runSearch(options); }), HasSubstr("no --reference with --surrogate vectornet"));
   options.surrogate = "extra-trees";
   options.budget = 15;  // 10 initial executions need 20 simulations
-  EXPECT_THAT(errorOf([&] { runSearch(options); }), HasSubstr(">= --initial (10) x 2"));
+  EXPECT_THAT(test::configErrorOf([&] { runSearch(options); }), HasSubstr(">= --initial (10) x 2"));
   EXPECT_FALSE(fs::exists(options.outputDir));
 }
 

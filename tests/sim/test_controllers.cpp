@@ -15,15 +15,6 @@ using namespace vsd::sim;
 
 namespace {
 
-std::string errorOf(const std::function<void()>& action) {
-  try {
-    action();
-  } catch (const ConfigError& error) {
-    return error.what();
-  }
-  return "";
-}
-
 std::filesystem::path pluginFile(const std::string& name) { return test::binaryDir() / "plugins" / name; }
 
 /// A car of the object list at bumper gap `gap` ahead, `lateral_gap` beside the Ego's path.
@@ -60,19 +51,19 @@ Observation straightLane(double speed, double offset) {
 
 TEST(ControllerRegistry, UnknownNameListsTheAvailableControllers) {
   const auto registry = ControllerRegistry::withBuiltins();
-  const auto message = errorOf([&] { registry.create("paper_eggo"); });
+  const auto message = test::configErrorOf([&] { registry.create("paper_eggo"); });
   EXPECT_NE(message.find("unknown controller 'paper_eggo'"), std::string::npos) << message;
   EXPECT_NE(message.find("idm, paper_ego"), std::string::npos) << message;
 }
 
 TEST(ControllerParams, OutOfRangeAndUnknownParametersAreNamed) {
   auto registry = ControllerRegistry::withBuiltins();
-  const auto range = errorOf([&] {
+  const auto range = test::configErrorOf([&] {
     makeController(registry, "paper_ego", "", "", ControllerParams({{"time_gap", -2.0}}, "acc.yaml:40: controller"));
   });
   EXPECT_NE(range.find("params.time_gap: got -2"), std::string::npos) << range;
   EXPECT_NE(range.find("acc.yaml:40"), std::string::npos) << range;
-  const auto unknown = errorOf([&] {
+  const auto unknown = test::configErrorOf([&] {
     makeController(registry, "paper_ego", "", "", ControllerParams({{"time_gapp", 2.0}}, "controller"));
   });
   EXPECT_NE(unknown.find("params.time_gapp: unknown parameter"), std::string::npos) << unknown;
@@ -141,7 +132,7 @@ TEST(ControllerPlugin, VersionTwoPluginFollowsTheObjectList) {
 
 TEST(ControllerPlugin, UnknownAbiVersionIsRefusedWithTheVersionsAllowed) {
   auto registry = ControllerRegistry::withBuiltins();
-  const auto message = errorOf([&] { registry.loadLibrary(pluginFile("libvsd_future_ego.so")); });
+  const auto message = test::configErrorOf([&] { registry.loadLibrary(pluginFile("libvsd_future_ego.so")); });
   EXPECT_NE(message.find("controller #0 has ABI version 3, expected 1 to 2"), std::string::npos) << message;
 }
 
@@ -150,7 +141,7 @@ TEST(ControllerPlugin, UnknownAbiVersionIsRefusedWithTheVersionsAllowed) {
 TEST(ControllerPlugin, VersionTwoSettingOnAVersionOneControllerIsOneLine) {
   auto registry = ControllerRegistry::withBuiltins();
   const ControllerNeeds needs{2, "scenarios/alks/cut_in.yaml:21", "ego.sensor", "{forward_range: 80}"};
-  const auto message = errorOf([&] {
+  const auto message = test::configErrorOf([&] {
     makeController(registry, "cautious_ego", pluginFile("libvsd_cautious_ego_v1.so"), "",
                    ControllerParams({}, "controller"), needs);
   });
@@ -169,7 +160,7 @@ TEST(ControllerPlugin, VersionTwoSettingOnAVersionOneControllerIsOneLine) {
 
 TEST(ControllerPlugin, PluginParameterErrorsReachTheUser) {
   auto registry = ControllerRegistry::withBuiltins();
-  const auto message = errorOf([&] {
+  const auto message = test::configErrorOf([&] {
     makeController(registry, "cautious_ego", test::cautiousEgoPlugin(), "", ControllerParams({{"gain", 1.0}}, "c"));
   });
   EXPECT_NE(message.find("unknown parameter 'gain'"), std::string::npos) << message;
@@ -178,10 +169,10 @@ TEST(ControllerPlugin, PluginParameterErrorsReachTheUser) {
 TEST(ControllerPlugin, MissingBrokenAndForeignLibrariesAreRejected) {
   TemporaryDirectory dir;
   auto registry = ControllerRegistry::withBuiltins();
-  EXPECT_NE(errorOf([&] { registry.loadLibrary(dir.path() / "nope.so"); }).find("does not exist"), std::string::npos);
+  EXPECT_NE(test::configErrorOf([&] { registry.loadLibrary(dir.path() / "nope.so"); }).find("does not exist"), std::string::npos);
   const auto broken = test::writeFile(dir.path() / "broken.so", "this is not an ELF file");
-  EXPECT_NE(errorOf([&] { registry.loadLibrary(broken); }).find("cannot be loaded"), std::string::npos);
-  const auto foreign = errorOf([&] { registry.loadLibrary("/usr/lib/x86_64-linux-gnu/libyaml-cpp.so"); });
+  EXPECT_NE(test::configErrorOf([&] { registry.loadLibrary(broken); }).find("cannot be loaded"), std::string::npos);
+  const auto foreign = test::configErrorOf([&] { registry.loadLibrary("/usr/lib/x86_64-linux-gnu/libyaml-cpp.so"); });
   EXPECT_NE(foreign.find("does not export vsd_controller_entry"), std::string::npos) << foreign;
 }
 

@@ -53,15 +53,6 @@ double offsetOf(const road::RoadGeometry& road, const VehicleState& state) {
   return road::LaneFrame(road.centre).coordinates(state.position()).second;
 }
 
-std::string errorOf(const std::function<void()>& action) {
-  try {
-    action();
-  } catch (const ConfigError& error) {
-    return error.what();
-  }
-  return "";
-}
-
 }  // namespace
 
 // The issue's number: a scripted lane change reaches the target lane with the commanded
@@ -160,7 +151,7 @@ TEST(ScriptedTraffic, RoadUsersOverlappingAtTheStartAreRefused) {
     - {id: twin, ds: 1, from: lead, relative_lane: 0, relative_speed: 0})");
   const auto concrete = scenario::sampleConcreteScenario(logical, 1, 3);
   const auto road = road::buildRoadGeometry(concrete);
-  const std::string error = errorOf([&] { ScriptedTraffic traffic(concrete, road); });
+  const std::string error = test::configErrorOf([&] { ScriptedTraffic traffic(concrete, road); });
   EXPECT_NE(error.find("stepper.yaml: sample 3: road user 'twin' starts overlapping 'lead'"), std::string::npos)
       << error;
 }

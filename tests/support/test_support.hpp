@@ -2,11 +2,13 @@
 // Paths and helpers shared by the tests.
 
 #include <filesystem>
+#include <functional>
 #include <fstream>
 #include <map>
 #include <string>
 #include <vector>
 
+#include "vsd/core/error.hpp"
 #include "vsd/core/files.hpp"
 #include "vsd/core/process.hpp"
 
@@ -98,6 +100,16 @@ inline std::vector<std::string> hiddenEntries(const std::filesystem::path& folde
 }
 
 /// Reads a scenario file and replaces `from` by `to` (to derive variants of the paper's scenarios).
+/// The message of the ConfigError `action` throws; "(no ConfigError)" when it throws none.
+inline std::string configErrorOf(const std::function<void()>& action) {
+  try {
+    action();
+  } catch (const vsd::ConfigError& error) {
+    return error.what();
+  }
+  return "(no ConfigError)";
+}
+
 inline std::string scenarioVariant(const std::string& name, const std::string& from, const std::string& to) {
   std::string text = readTextFile(scenarioFile(name));
   const auto at = text.find(from);
