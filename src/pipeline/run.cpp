@@ -142,13 +142,19 @@ ScenarioWithRoad concreteScenario(const std::shared_ptr<const scenario::LogicalS
   return {std::move(concrete), std::move(road)};
 }
 
-/// m, SUMO's sublane resolution for a scenario: where road users move across lanes SUMO
-/// places them where they are (sublane model), unless the scenario sets it itself.
-double lateralResolutionFor(const scenario::LogicalScenario& logical) {
-  constexpr double kSublane = 1.75;  // m: half a lane; finer costs SUMO more CPU (docs/scenario-language.md)
+/// m, SUMO's sublane resolution for a scenario. vsd-sumo moves every road user itself and
+/// takes the metrics from its own states, so SUMO's picture of lateral positions reaches an
+/// output only through what SUMO reports itself: its FCD, or devices and outputs a user adds
+/// with sumo_options. Only then, and only where road users move across lanes, SUMO runs its
+/// sublane model, which costs it CPU (docs/benchmarks.md); a scenario that sets the
+/// resolution itself keeps its own. (SUMO's collision checks do not fire between road users
+/// placed with moveToXY, sublane model or not, so they do not need it either.)
+double lateralResolutionFor(const scenario::LogicalScenario& logical, bool fcd) {
+  constexpr double kSublane = 1.75;  // m: half a lane; finer costs SUMO more CPU
   const auto& options = logical.sumo.sumoOptions;
   const bool given = std::find(options.begin(), options.end(), "--lateral-resolution") != options.end();
-  return logical.hasLateralMotion() && !given ? kSublane : 0.0;
+  const bool sumo_reports_positions = fcd || !options.empty();
+  return logical.hasLateralMotion() && sumo_reports_positions && !given ? kSublane : 0.0;
 }
 
 /// Prepares, converts and simulates batches; one per worker process.
@@ -322,7 +328,7 @@ class BatchProcessor {
     options.sumoOptions = context_.logical->sumo.sumoOptions;
     options.scenarioDir = context_.logical->sourceFile.parent_path();
     options.egoStepCost = context_.options.egoStepCost;
-    options.lateralResolution = lateralResolutionFor(*context_.logical);
+    options.lateralResolution = lateralResolutionFor(*context_.logical, context_.options.fcd);
     if (context_.options.fcd) options.fcdOutput = fcd;
     auto results = sim::simulateBatch(net, runs, registry_, options);
     for (std::size_t r = 0; r < results.size(); ++r) {

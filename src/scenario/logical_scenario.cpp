@@ -224,10 +224,9 @@ void parseRest(const YamlReader& reader, const YAML::Node& root, LogicalScenario
     reader.checkKeys(sumo, "sumo", {"collision_action", "netconvert_options", "sumo_options"});
     if (sumo["collision_action"]) {
       const auto action = reader.scalar(sumo["collision_action"], "sumo.collision_action");
-      static const std::set<std::string> kActions = {"none", "warn", "teleport", "remove"};
-      if (kActions.count(action) == 0) {
+      if (!isCollisionAction(action)) {
         throw ConfigError::field(reader.where(sumo["collision_action"], "sumo.collision_action"),
-                                 "sumo.collision_action", action, "one of none, warn, teleport, remove");
+                                 "sumo.collision_action", action, collisionActionsExpected());
       }
       scenario.sumo.collisionAction = action;
     }

@@ -1,8 +1,10 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
+#include <pugixml.hpp>
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "test_support.hpp"
 #include "vsd/core/csv.hpp"
@@ -215,6 +217,36 @@ TEST(Run, KeepsNetsAndWritesFcdOnRequest) {
   }
   const auto fcd = readTextFile(dir.path() / "out" / "fcd" / "batch_00002.fcd.xml");
   EXPECT_NE(fcd.find("id=\"s10.ego\""), std::string::npos);
+}
+
+// Asking for SUMO's FCD switches SUMO's sublane model on where road users move across
+// lanes (FCD shows a vehicle half-way through its lane change, between the lane centres),
+// and it changes no outcome: vsd-sumo's metrics come from its own states either way.
+TEST(Run, FcdShowsLaneChangesHalfWayAndChangesNoOutcome) {
+  TemporaryDirectory dir;
+  auto run_options = options(test::scenarioFile("alks/cut_in.yaml"), dir.path() / "plain", 4);
+  runScenarios(run_options);
+  run_options.outputDir = dir.path() / "fcd";
+  run_options.fcd = true;
+  runScenarios(run_options);
+  EXPECT_EQ(readTextFile(dir.path() / "plain" / "concrete.csv"), readTextFile(dir.path() / "fcd" / "concrete.csv"));
+
+  pugi::xml_document fcd;
+  ASSERT_TRUE(fcd.load_file((dir.path() / "fcd" / "fcd" / "batch_00000.fcd.xml").c_str()));
+  constexpr double kLaneWidth = 3.5;  // m, scenarios/alks/cut_in.yaml
+  double farthest_from_a_centre = 0.0;
+  double first_y = std::numeric_limits<double>::quiet_NaN();
+  for (const auto& step : fcd.child("fcd-export").children("timestep")) {
+    for (const auto& vehicle : step.children("vehicle")) {
+      if (std::string(vehicle.attribute("id").value()) != "s0.cut_in_vehicle") continue;
+      const double y = vehicle.attribute("y").as_double();
+      if (std::isnan(first_y)) first_y = y;  // starts on a lane centre
+      const double lanes_away = (y - first_y) / kLaneWidth;
+      farthest_from_a_centre =
+          std::max(farthest_from_a_centre, kLaneWidth * std::abs(lanes_away - std::round(lanes_away)));
+    }
+  }
+  EXPECT_GT(farthest_from_a_centre, 1.0);
 }
 
 TEST(Run, ExternalControllerPluginDrivesTheEgo) {
