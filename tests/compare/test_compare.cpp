@@ -29,25 +29,24 @@ void simulate(const std::string& scenario, const fs::path& out, std::uint64_t sa
   pipeline::runScenarios(run);
 }
 
-/// One small model per test process: acc_lk, 300 scenarios, a short schedule (~5 s). The
-/// tests check consistency (compare vs evaluate, failures, errors), not accuracy.
+/// One small model for all of the suite's test processes: acc_lk, 300 scenarios, a short
+/// schedule (~15 s, built once per build of this test). The tests check consistency
+/// (compare vs evaluate, failures, errors), not accuracy.
 class CompareTest : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
-    dir_ = new TemporaryDirectory();
-    simulate("acc_lk.yaml", dir_->path() / "train", 300, 5);
-    model::TrainOptions train;
-    train.data = {dir_->path() / "train"};
-    train.output = dir_->path() / "m.pt";
-    train.steps = 300;
-    train.patience = 1000;
-    model::train(train);
+    fixture_ = test::sharedFixture("compare-acc_lk-model", [](const fs::path& dir) {
+      simulate("acc_lk.yaml", dir / "train", 300, 5);
+      model::TrainOptions train;
+      train.data = {dir / "train"};
+      train.output = dir / "m.pt";
+      train.steps = 300;
+      train.patience = 1000;
+      model::train(train);
+    });
   }
-  static void TearDownTestSuite() {
-    delete dir_;
-    dir_ = nullptr;
-  }
-  static fs::path modelFile() { return dir_->path() / "m.pt"; }
+  static fs::path modelFile() { return fixture_ / "m.pt"; }
+  static fs::path trainingData() { return fixture_ / "train"; }
 
   CompareOptions scenarioOptions(const fs::path& out, std::uint64_t samples = 60) const {
     CompareOptions options;
@@ -60,10 +59,10 @@ class CompareTest : public ::testing::Test {
     return options;
   }
 
-  static TemporaryDirectory* dir_;
+  static fs::path fixture_;
   TemporaryDirectory work_;
 };
-TemporaryDirectory* CompareTest::dir_ = nullptr;
+fs::path CompareTest::fixture_;
 
 std::string errorOf(const std::function<void()>& call) {
   try {
@@ -276,7 +275,7 @@ TEST_F(CompareTest, BadInputGetsOneClearErrorAndLeavesNothingBehind) {
   // A criterion over a metric the run does not compute.
   options = CompareOptions{};
   options.model = modelFile();
-  options.data = {dir_->path() / "train"};
+  options.data = {trainingData()};
   options.output = work_.path() / "out_criterion";
   options.criteria = {"close: gap_min < 2"};
   EXPECT_NE(errorOf([&] { runComparison(options); }).find("gap_min"), std::string::npos);

@@ -5,6 +5,8 @@
 #include <functional>
 #include <fstream>
 #include <map>
+#include <system_error>
+#include <unistd.h>
 #include <string>
 #include <vector>
 
@@ -21,6 +23,36 @@ inline std::filesystem::path vsdSumo() { return binaryDir() / "vsd-sumo"; }
 inline std::filesystem::path cautiousEgoPlugin() { return binaryDir() / "plugins" / "libvsd_cautious_ego.so"; }
 /// Debian's python3 (with h5py, numpy, sklearn, traci), not a pyenv one from PATH.
 inline std::string python() { return VSD_PYTHON; }
+
+/// A fixture folder built once per build of the test executable and shared by its test
+/// processes (ctest runs every TEST in a process of its own, so a per-suite fixture would
+/// otherwise be rebuilt for each). Keyed by the executable's size and time: a rebuilt test
+/// rebuilds its fixture and drops the older ones. Built under a temporary name and renamed,
+/// so no process sees half of one; where two build it at once, the first rename wins.
+inline std::filesystem::path sharedFixture(const std::string& name,
+                                           const std::function<void(const std::filesystem::path&)>& build) {
+  namespace fs = std::filesystem;
+  const fs::path exe = fs::read_symlink("/proc/self/exe");
+  const auto stamp = fs::last_write_time(exe).time_since_epoch().count();
+  const fs::path root = binaryDir() / "test-fixtures";
+  const std::string prefix = name + "-";
+  const fs::path folder = root / (prefix + std::to_string(fs::file_size(exe)) + "-" + std::to_string(stamp));
+  if (fs::exists(folder)) return folder;
+  fs::create_directories(root);
+  for (const auto& entry : fs::directory_iterator(root)) {
+    const auto entry_name = entry.path().filename().string();
+    std::error_code ignored;  // another process may be removing it too
+    if (entry_name.rfind(prefix, 0) == 0 && entry_name.find(".partial-") == std::string::npos) fs::remove_all(entry, ignored);
+  }
+  const fs::path partial = folder.string() + ".partial-" + std::to_string(::getpid());
+  fs::remove_all(partial);
+  fs::create_directories(partial);
+  build(partial);
+  std::error_code lost;
+  fs::rename(partial, folder, lost);
+  if (lost) fs::remove_all(partial);  // another process renamed its copy first: use that
+  return folder;
+}
 
 inline std::filesystem::path writeFile(const std::filesystem::path& path, const std::string& contents) {
   std::filesystem::create_directories(path.parent_path());
