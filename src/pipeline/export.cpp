@@ -694,6 +694,7 @@ void finishSummary(ExportSummary& summary, const ExportOptions& options, const s
   summary.output = options.output;
   summary.label = label;
   summary.closedLoop = options.closedLoop;
+  summary.maxSamples = options.maxSamples;
   summary.seconds = secondsSince(start);
   summary.samplesPerSecond = static_cast<double>(summary.samples) / std::max(summary.seconds, 1e-9);
   summary.bytesPerSample = static_cast<double>(fs::file_size(options.output)) /
@@ -801,9 +802,10 @@ std::string ExportSummary::report() const {
       simulatedSeconds, seconds, samplesPerSecond, windowsSkipped, parkedSteps, maskedJumps, kJumpTolerance,
       maskedAccelerations, kMaxPlausibleAcceleration, windowsImplausible, laneVectors);
   if (egosAsked > 0 && egos < egosAsked) {
-    text += fmt::format("  only {} of the {} Egos asked for gave a sample (the others never stayed a whole window "
-                        "in the network)\n",
-                        egos, egosAsked);
+    const bool limited = maxSamples > 0 && samples >= maxSamples;
+    text += fmt::format("  only {} of the {} Egos asked for gave a sample ({})\n", egos, egosAsked,
+                        limited ? fmt::format("--max-samples {} ended the export before the others", maxSamples)
+                                : "the others never stayed a whole window in the network");
   }
   if (!failedEgos.empty()) {
     text += fmt::format("  Egos taken out because their controller failed: {}\n", failedEgos.size());

@@ -141,8 +141,22 @@ TEST(Export, FewerEgosThanAskedAreSaid) {
   const auto summary = exportMap(options);
   EXPECT_EQ(summary.egosAsked, 2u);
   EXPECT_EQ(summary.egos, 1u);
-  EXPECT_NE(summary.report().find("only 1 of the 2 Egos asked for gave a sample"), std::string::npos) << summary.report();
+  EXPECT_NE(summary.report().find("only 1 of the 2 Egos asked for gave a sample (the others never stayed a whole "
+                                  "window in the network)"),
+            std::string::npos)
+      << summary.report();
   checkPossibleMotion(vector::DatasetReader(options.output));
+
+  // Where --max-samples ended the export, that is the reason given.
+  options.output = dir.path() / "limited.h5";
+  options.egos = "east.0,east.1";
+  options.maxSamples = 1;
+  const auto limited = exportMap(options);
+  EXPECT_EQ(limited.egos, 1u);
+  EXPECT_NE(limited.report().find("only 1 of the 2 Egos asked for gave a sample (--max-samples 1 ended the export "
+                                  "before the others)"),
+            std::string::npos)
+      << limited.report();
 }
 
 TEST(Export, OpenDriveMapWithHistoryAndClosedLoop) {

@@ -84,6 +84,7 @@ struct ExportSummary {
   std::uint64_t maskedAccelerations = 0;  ///< vehicle states masked: velocity changed by more than 15 m/s^2
   std::uint64_t windowsImplausible = 0;   ///< windows skipped: the Ego's state at t0 was masked
   std::uint64_t egosAsked = 0;       ///< Egos named or drawn (--egos ids / random:K); 0 for all / vtype:
+  std::uint64_t maxSamples = 0;      ///< --max-samples the export stopped at (0: no limit)
   std::uint64_t vehiclesSeen = 0;
   std::uint64_t laneVectors = 0;     ///< lane-boundary vectors of the whole network
   double simulatedSeconds = 0.0;
