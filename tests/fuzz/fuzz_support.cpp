@@ -3,6 +3,7 @@
 #include <fcntl.h>
 #include <fmt/format.h>
 #include <signal.h>
+#include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -64,10 +65,11 @@ RunResult runWatched(const std::vector<std::string>& argv, const fs::path& work,
 
   RunResult result;
   int status = 0;
+  struct rusage usage {};
   bool terminated = false;
   auto deadline = start + timeout;
   while (true) {
-    const pid_t waited = ::waitpid(pid, &status, WNOHANG);
+    const pid_t waited = ::wait4(pid, &status, WNOHANG, &usage);
     if (waited == pid) break;
     if (waited < 0 && errno != EINTR) throw std::runtime_error("waitpid failed");
     if (std::chrono::steady_clock::now() > deadline) {
@@ -81,6 +83,7 @@ RunResult runWatched(const std::vector<std::string>& argv, const fs::path& work,
   // Workers the tool forked must not outlive it.
   ::kill(-pid, SIGKILL);
   result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  result.peakMiB = static_cast<double>(usage.ru_maxrss) / 1024.0;  // Linux: KiB
   result.exited = WIFEXITED(status);
   result.exitCode = result.exited ? WEXITSTATUS(status) : -1;
   result.signal = WIFSIGNALED(status) ? WTERMSIG(status) : 0;
@@ -206,6 +209,7 @@ Verdict runCase(const Case& c, const fs::path& work) {
   const RunResult run = runWatched(vsdArgv(c), work, c.timeout, c.environment);
   verdict.exitCode = run.exitCode;
   verdict.seconds = run.seconds;
+  verdict.peakMiB = run.peakMiB;
   auto& problems = verdict.problems;
   for (std::size_t i = 0; i < c.untouched.size(); ++i) {
     if (!(Snapshot::of(c.untouched[i]) == aimed_at[i])) {
@@ -226,6 +230,7 @@ Verdict runCase(const Case& c, const fs::path& work) {
     for (const auto& output : c.outputs) now.push_back(Snapshot::of(output));
     const RunResult next = runWatched(vsdArgv(again), work / "next", c.timeout);
     verdict.seconds += next.seconds;
+    verdict.peakMiB = std::max(verdict.peakMiB, next.peakMiB);
     if (!next.exited || next.exitCode != 0) {
       problems.push_back(fmt::format("the run after the kill failed (exit {}): {}", next.exitCode, next.stderrText));
     }

@@ -31,6 +31,7 @@ struct RunResult {
   std::string stdoutText;
   std::string stderrText;
   double seconds = 0.0;
+  double peakMiB = 0.0;     ///< largest resident set of the process (and the workers it waited for)
 };
 
 /// Runs argv in its own process group with stdout/stderr captured separately; after
@@ -84,6 +85,7 @@ struct Verdict {
   std::vector<std::string> problems;  ///< empty: the oracle holds
   int exitCode = -1;
   double seconds = 0.0;
+  double peakMiB = 0.0;  ///< the largest resident set of the case's runs
 };
 
 /// Runs a case and applies the oracle. `work` is the case's scratch folder.
