@@ -120,8 +120,12 @@ ParameterGrid readParameterDistribution(const fs::path& file) {
 
 std::string SweepSummary::report() const {
   std::string text = run.report();
-  text += fmt::format("parameter sets: {} in the grid, {} skipped by the template's constraints, {} run\n", sets, skipped,
-                      sets - skipped);
+  const std::uint64_t satisfying = sets - skipped;
+  text += fmt::format("parameter sets: {} in the grid, {} skipped by the template's constraints, {} run{}\n", sets,
+                      skipped, simulated,
+                      simulated < satisfying
+                          ? fmt::format(" (--samples: evenly spaced over the {} that satisfy them)", satisfying)
+                          : "");
   if (!firstSkipped.empty()) text += fmt::format("first skipped: {}\n", firstSkipped);
   return text;
 }
@@ -187,6 +191,7 @@ SweepSummary runVariation(pipeline::RunOptions options, const OscImportOptions& 
     accepted = std::move(chosen);
   }
   options.samples = accepted.size();
+  summary.simulated = accepted.size();
   options.firstSample = 0;
   options.source = [grid, import, codes, accepted, seed = options.seed](std::uint64_t index) {
     const auto logical = importSet(grid, import, codes, accepted.at(index), nullptr);

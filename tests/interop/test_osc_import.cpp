@@ -281,6 +281,16 @@ TEST(OscRun, VariationRunsTheGridAndSkipsViolatedSets) {
   const std::string csv = readTextFile(dir.path() / "sweep" / "concrete.csv");
   EXPECT_THAT(csv, HasSubstr("Vehicle_Model"));  // string parameters the grid varies: their code
   EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 7);
+  EXPECT_THAT(summary.report(), HasSubstr("12 in the grid, 6 skipped by the template's constraints, 6 run\n"));
+
+  // --samples below the sets that satisfy the constraints: evenly spaced over them, and said.
+  options.outputDir = dir.path() / "fewer";
+  options.samples = 2;
+  const SweepSummary fewer = runVariation(options, {}, /*samples_given=*/true);
+  EXPECT_EQ(fewer.simulated, 2u);
+  EXPECT_EQ(fewer.run.ok, 2u);
+  EXPECT_THAT(fewer.report(), HasSubstr("6 skipped by the template's constraints, 2 run (--samples: evenly spaced over "
+                                        "the 6 that satisfy them)"));
 }
 
 TEST(OscCli, ScenarioCheckExitStatusSaysWhetherItWouldRun) {

@@ -89,6 +89,7 @@ struct SweepSummary {
   pipeline::RunSummary run;
   std::uint64_t sets = 0;     ///< in the grid
   std::uint64_t skipped = 0;  ///< violating a constraint
+  std::uint64_t simulated = 0;  ///< sets run: all that satisfy the constraints, or --samples of them
   std::string firstSkipped;   ///< the first violation, as reported
   std::string report() const;
 };
