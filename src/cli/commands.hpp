@@ -9,6 +9,10 @@
 
 #include "vsd/interop/openscenario_import.hpp"
 
+namespace vsd::bench {
+struct Tool;  // vsd/bench/measure.hpp
+}  // namespace vsd::bench
+
 namespace vsd::cli {
 
 using Action = std::function<int()>;
@@ -52,15 +56,17 @@ void addEgoStepCostOption(CLI::App& command, double& seconds);
 void addImportOptions(CLI::App& command, interop::OscImportOptions& import);
 
 void addSearchCommand(CLI::App& app, CommandContext& context);
-/// `bench interop` (bench_interop.cpp), a subcommand of `bench`.
+/// The `vsd-sumo` next to this executable, which benchmarks start as separate processes.
+bench::Tool benchTool();
+/// `bench interop` (bench_scenarios.cpp), a subcommand of `bench`.
 void addInteropBench(CLI::App& bench, CommandContext& context);
 /// `bench search` (bench_search.cpp), a subcommand of `bench`.
 void addSearchBench(CLI::App& bench, CommandContext& context);
-/// `vsd-sumo bench library` (bench_library.cpp).
+/// `vsd-sumo bench library` (bench_scenarios.cpp).
 void addLibraryBench(CLI::App& bench, CommandContext& context);
 /// `vsd-sumo bench train` (bench_train.cpp).
 void addTrainBench(CLI::App& bench, CommandContext& context);
-/// `vsd-sumo bench reference` (bench_reference.cpp).
+/// `vsd-sumo bench reference` (bench_scenarios.cpp).
 void addReferenceBench(CLI::App& bench, CommandContext& context);
 /// `vsd-sumo bench deviations` (bench_deviations.cpp).
 void addDeviationsBench(CLI::App& bench, CommandContext& context);

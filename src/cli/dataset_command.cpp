@@ -11,7 +11,7 @@
 #include "vsd/core/error.hpp"
 #include "vsd/core/files.hpp"
 #include "vsd/core/output_policy.hpp"
-#include "vsd/core/shards.hpp"
+#include "vsd/run_folder/shards.hpp"
 #include "vsd/metrics/metrics.hpp"
 #include "vsd/pipeline/run.hpp"
 #include "vsd/scenario/logical_scenario.hpp"

@@ -7,7 +7,7 @@
 #include "vsd/core/error.hpp"
 #include "vsd/core/output_policy.hpp"
 #include "vsd/pipeline/cluster.hpp"
-#include "vsd/pipeline/export.hpp"
+#include "vsd/pipeline/map_export.hpp"
 
 namespace vsd::cli {
 

@@ -4,7 +4,7 @@
 
 #include "commands.hpp"
 #include "vsd/core/output_policy.hpp"
-#include "vsd/core/shards.hpp"
+#include "vsd/run_folder/shards.hpp"
 #include "vsd/pipeline/merge.hpp"
 
 namespace vsd::cli {

@@ -12,7 +12,7 @@
 #include "vsd/core/files.hpp"
 #include "vsd/core/output_policy.hpp"
 #include "vsd/interop/distribution.hpp"
-#include "vsd/interop/export.hpp"
+#include "vsd/interop/openscenario_export.hpp"
 #include "vsd/interop/scenario_formats.hpp"
 #include "vsd/pipeline/run.hpp"
 #include "vsd/scenario/logical_scenario.hpp"

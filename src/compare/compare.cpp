@@ -23,12 +23,12 @@
 #include "vsd/core/progress.hpp"
 #include "vsd/core/provenance.hpp"
 #include "vsd/model/model.hpp"
+#include "vsd/pipeline/provenance.hpp"
 #include "vsd/pipeline/run.hpp"
 #include "vsd/pipeline/scenes.hpp"
 #include "vsd/scenario/concrete_scenario.hpp"
 #include "vsd/scenario/expression.hpp"
 #include "vsd/scenario/logical_scenario.hpp"
-#include "vsd/sim/sumo_session.hpp"
 #include "vsd/vector/dataset.hpp"
 #include "vsd/vector/scene_svg.hpp"
 
@@ -350,7 +350,7 @@ Run compareScenario(const CompareOptions& options, const model::Predictor& predi
   comparison.provenance.push_back({"scenario SHA-256", sha256OfFile(options.scenarioFile)});
   comparison.provenance.push_back({"seed", std::to_string(options.seed)});
   comparison.provenance.push_back({"scenarios", std::to_string(options.samples)});
-  comparison.provenance.push_back({"SUMO", sim::SumoSession::version()});
+  comparison.provenance.push_back({"SUMO", pipeline::provenance().sumoVersion});
   run.worst = drawWorst(comparison, futures, options.worst, [&](std::size_t i) { return planned[i]; });
   return run;
 }
@@ -510,7 +510,7 @@ CompareSummary runComparison(const CompareOptions& options_in) {
     comparison.provenance.push_back({"sampled futures", fmt::format("{} per scenario, seed {}", comparison.draws,
                                                                     options.drawSeed)});
   }
-  comparison.provenance.push_back({"vsd-sumo", toolVersion()});
+  comparison.provenance.push_back({"vsd-sumo", pipeline::provenance().toolVersion});
   comparison.provenance.push_back({"libtorch threads", std::to_string(options.threads)});
   comparison.provenance.push_back({"command line", options.commandLine});
   comparison.provenance.push_back({"written", utcTimestamp()});

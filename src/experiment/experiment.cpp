@@ -154,15 +154,15 @@ class ExperimentRunner {
 
   // The modules each kind of artefact depends on (src/CMakeLists.txt's link graph).
   static const std::vector<std::string>& simulationModules() {
-    static const std::vector<std::string> modules = {"core", "scenario", "road", "sim", "metrics", "vector", "pipeline"};
+    static const std::vector<std::string> modules = {"core", "run_folder", "scenario", "road", "sim", "metrics", "vector", "pipeline"};
     return modules;
   }
   static const std::vector<std::string>& modelModules() {
-    static const std::vector<std::string> modules = {"core", "vector", "model"};
+    static const std::vector<std::string> modules = {"core", "run_folder", "vector", "model"};
     return modules;
   }
   static const std::vector<std::string>& maeModules() {
-    static const std::vector<std::string> modules = {"core", "vector", "model", "baseline", "metrics", "pipeline"};
+    static const std::vector<std::string> modules = {"core", "run_folder", "vector", "model", "baseline", "metrics", "pipeline"};
     return modules;
   }
 

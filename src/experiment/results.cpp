@@ -14,7 +14,7 @@
 #include "vsd/core/csv.hpp"
 #include "vsd/core/files.hpp"
 #include "vsd/core/log.hpp"
-#include "vsd/sim/sumo_session.hpp"
+#include "vsd/pipeline/provenance.hpp"
 
 namespace fs = std::filesystem;
 
@@ -433,8 +433,7 @@ void writeResults(const Spec& spec, const ExperimentOptions& options, Experiment
   manifest["spec"] = spec.file.string();
   manifest["spec_sha256"] = sha256OfFile(spec.file);
   manifest["quick"] = spec.quick;
-  manifest["tool_version"] = toolVersion();
-  manifest["sumo_version"] = sim::SumoSession::version();
+  pipeline::provenance().addTo(manifest);
   manifest["command_line"] = options.commandLine;
   manifest["finished_utc"] = utcTimestamp();
   manifest["seconds"] = summary.seconds;

@@ -85,7 +85,7 @@ std::vector<ScenarioFormat> makeFormats() {
   std::vector<ScenarioFormat> formats;
   ScenarioFormat yaml{"vsd-scenario", "logical scenario in the scenario language (docs/scenario-language.md)",
                       {".yaml", ".yml"}, nullptr, {}, nullptr, checkYaml};
-  yaml.can = {true, true, true, true, false, false, true};
+  yaml.can = {true, true, true, true, false, false, true, true};
   yaml.run = [](const ScenarioRunRequest& request) { return pipeline::runScenarios(request.options).report(); };
   ScenarioFormat exported{"openscenario-export", "a concrete scenario `vsd-sumo scenario export` wrote (read back exactly)",
                           {".xosc"}, isExport, {}, runExport, checkExport};

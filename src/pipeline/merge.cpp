@@ -11,7 +11,7 @@
 #include "vsd/core/files.hpp"
 #include "vsd/core/log.hpp"
 #include "vsd/core/progress.hpp"
-#include "vsd/core/shards.hpp"
+#include "vsd/run_folder/shards.hpp"
 #include "vsd/pipeline/outcome_files.hpp"
 #include "vsd/vector/dataset.hpp"
 

@@ -15,7 +15,6 @@
 #include <regex>
 #include <set>
 
-#include "vsd/core/activity.hpp"
 #include "vsd/core/csv.hpp"
 #include "vsd/core/error.hpp"
 #include "vsd/core/fault.hpp"
@@ -25,15 +24,17 @@
 #include "vsd/core/output_policy.hpp"
 #include "vsd/core/progress.hpp"
 #include "vsd/metrics/metrics.hpp"
-#include "vsd/pipeline/outcome_codec.hpp"
 #include "vsd/pipeline/outcome_files.hpp"
+#include "vsd/pipeline/provenance.hpp"
 #include "vsd/pipeline/scenes.hpp"
 #include "vsd/pipeline/worker_pool.hpp"
 #include "vsd/road/network.hpp"
 #include "vsd/scenario/concrete_scenario.hpp"
+#include "vsd/sim/activity.hpp"
 #include "vsd/sim/batch_simulation.hpp"
 #include "vsd/sim/trace_file.hpp"
 #include "vsd/vector/dataset.hpp"
+#include "outcome_codec.hpp"
 
 namespace fs = std::filesystem;
 
@@ -695,8 +696,7 @@ class RunFiles {
 nlohmann::json runManifest(const Context& context, const RunSummary& summary, const std::string& started) {
   nlohmann::json manifest;
   manifest["tool"] = "vsd-sumo";
-  manifest["tool_version"] = toolVersion();
-  manifest["sumo_version"] = sim::SumoSession::version();
+  provenance().addTo(manifest);
   manifest["command_line"] = context.options.commandLine;
   manifest["scenario_file"] = context.logical->sourceFile.string();
   manifest["scenario_sha256"] = sha256OfFile(context.logical->sourceFile);
@@ -944,11 +944,10 @@ RunSummary readRunManifest(const fs::path& run_folder) {
 
 namespace {
 
-RunSummary runRange(const std::shared_ptr<const scenario::LogicalScenario>& logical, const RunOptions& options,
-                    const std::optional<ShardInfo>& shard, const OutcomeCallback& on_outcome) {
-  const auto start = std::chrono::steady_clock::now();
-  const std::string started = utcTimestamp();
-
+/// The run as its workers see it: --fcd implies --keep-nets, jobs capped by the batches, the
+/// metric set (--reference needs a collision rule), the batch layout and the network writer.
+Context makeContext(const std::shared_ptr<const scenario::LogicalScenario>& logical, const RunOptions& options,
+                    const std::optional<ShardInfo>& shard) {
   Context context;
   context.logical = logical;
   context.options = options;
@@ -969,7 +968,30 @@ RunSummary runRange(const std::shared_ptr<const scenario::LogicalScenario>& logi
   context.keepBatchFiles = context.options.keepNets;
   context.layout = road::BatchLayout(road::BatchLayout::cellSizeFor(logical->road));
   context.netWriter = chooseNetWriter(*logical, options);
+  return context;
+}
 
+/// The summary before any scenario ran: what the run was asked for.
+RunSummary plannedSummary(const Context& context, const fs::path& out) {
+  const RunOptions& options = context.options;
+  RunSummary summary;
+  summary.functionalScenario = context.logical->name;
+  summary.outputDir = out;
+  summary.samples = options.samples;
+  summary.seed = options.seed;
+  summary.reference = options.reference;
+  summary.firstSample = options.firstSample;
+  summary.jobs = options.jobs;
+  summary.batch = options.batch;
+  summary.inputNames = context.logical->inputNames();
+  return summary;
+}
+
+RunSummary runRange(const std::shared_ptr<const scenario::LogicalScenario>& logical, const RunOptions& options,
+                    const std::optional<ShardInfo>& shard, const OutcomeCallback& on_outcome) {
+  const auto start = std::chrono::steady_clock::now();
+  const std::string started = utcTimestamp();
+  Context context = makeContext(logical, options, shard);
   probeController(logical, options);
 
   const fs::path out = outputFolder(*logical, options);
@@ -988,16 +1010,7 @@ RunSummary runRange(const std::shared_ptr<const scenario::LogicalScenario>& logi
     context.workDir = temporary_work->path();
   }
 
-  RunSummary summary;
-  summary.functionalScenario = logical->name;
-  summary.outputDir = out;
-  summary.samples = options.samples;
-  summary.seed = options.seed;
-  summary.reference = options.reference;
-  summary.firstSample = options.firstSample;
-  summary.jobs = context.options.jobs;
-  summary.batch = options.batch;
-  summary.inputNames = logical->inputNames();
+  RunSummary summary = plannedSummary(context, out);
   SummaryBuilder summary_builder(summary, *context.metricSet);
 
   std::optional<RunFiles> files;

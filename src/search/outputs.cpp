@@ -14,9 +14,9 @@
 #include "vsd/core/files.hpp"
 #include "vsd/core/log.hpp"
 #include "vsd/pipeline/outcome_files.hpp"
+#include "vsd/pipeline/provenance.hpp"
 #include "vsd/pipeline/run.hpp"
 #include "vsd/report/search_report.hpp"
-#include "vsd/sim/sumo_session.hpp"
 
 namespace fs = std::filesystem;
 
@@ -139,8 +139,7 @@ nlohmann::json searchManifest(const detail::SearchContext& context, const Search
   const auto& o = context.options;
   nlohmann::json manifest;
   manifest["tool"] = "vsd-sumo";
-  manifest["tool_version"] = toolVersion();
-  manifest["sumo_version"] = sim::SumoSession::version();
+  pipeline::provenance().addTo(manifest);
   manifest["command"] = "search";
   manifest["command_line"] = o.commandLine;
   manifest["scenario_file"] = context.logical->sourceFile.string();
@@ -192,11 +191,12 @@ void stageRoundData(const detail::SearchContext& context, OutputFolder& folder, 
 }
 
 std::vector<std::pair<std::string, std::string>> provenance(const detail::SearchContext& context) {
+  const auto versions = pipeline::provenance();
   return {{"scenario", context.logical->sourceFile.string()},
           {"scenario SHA-256", context.scenarioSha256},
           {"seed", std::to_string(context.options.seed)},
-          {"vsd-sumo", toolVersion()},
-          {"SUMO", sim::SumoSession::version()},
+          {"vsd-sumo", versions.toolVersion},
+          {"SUMO", versions.sumoVersion},
           {"command line", context.options.commandLine}};
 }
 

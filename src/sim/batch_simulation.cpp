@@ -11,7 +11,7 @@
 #include <unordered_map>
 #include <unordered_set>
 
-#include "vsd/core/activity.hpp"
+#include "vsd/sim/activity.hpp"
 #include "vsd/core/error.hpp"
 #include "vsd/core/fault.hpp"
 #include "vsd/core/log.hpp"

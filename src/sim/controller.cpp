@@ -6,7 +6,7 @@
 #include <algorithm>
 #include <cmath>
 
-#include "vsd/core/activity.hpp"
+#include "vsd/sim/activity.hpp"
 #include "vsd/core/error.hpp"
 
 namespace fs = std::filesystem;

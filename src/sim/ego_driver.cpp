@@ -6,7 +6,7 @@
 #include <cmath>
 #include <limits>
 
-#include "vsd/core/activity.hpp"
+#include "vsd/sim/activity.hpp"
 #include "vsd/core/error.hpp"
 
 namespace vsd::sim {

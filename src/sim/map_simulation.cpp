@@ -7,7 +7,7 @@
 #include <cmath>
 #include <unordered_set>
 
-#include "vsd/core/activity.hpp"
+#include "vsd/sim/activity.hpp"
 #include "vsd/core/error.hpp"
 #include "vsd/core/fault.hpp"
 #include "vsd/sim/ego_driver.hpp"

@@ -9,7 +9,7 @@
 #include <set>
 #include <sstream>
 
-#include "vsd/core/activity.hpp"
+#include "vsd/sim/activity.hpp"
 #include "vsd/core/error.hpp"
 #include "vsd/core/fault.hpp"
 #include "vsd/road/network.hpp"

@@ -13,7 +13,7 @@
 
 #include "vsd/core/csv.hpp"
 #include "vsd/core/error.hpp"
-#include "vsd/core/shards.hpp"
+#include "vsd/run_folder/shards.hpp"
 #include "vsd/core/files.hpp"
 #include "vsd/core/hdf5.hpp"
 #include "vsd/core/log.hpp"

@@ -10,7 +10,7 @@
 #include "vsd/core/error.hpp"
 #include "vsd/core/files.hpp"
 #include "vsd/model/model.hpp"
-#include "vsd/pipeline/export.hpp"
+#include "vsd/pipeline/map_export.hpp"
 #include "vsd/pipeline/run.hpp"
 
 using namespace vsd;

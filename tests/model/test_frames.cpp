@@ -8,7 +8,7 @@
 #include "synthetic_scenes.hpp"
 #include "test_support.hpp"
 #include "vsd/model/model.hpp"
-#include "vsd/pipeline/export.hpp"
+#include "vsd/pipeline/map_export.hpp"
 #include "vsd/pipeline/scenes.hpp"
 #include "vsd/scenario/concrete_scenario.hpp"
 #include "vsd/scenario/logical_scenario.hpp"

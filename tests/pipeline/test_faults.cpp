@@ -13,7 +13,7 @@
 #include "vsd/core/csv.hpp"
 #include "vsd/core/error.hpp"
 #include "vsd/core/fault.hpp"
-#include "vsd/pipeline/export.hpp"
+#include "vsd/pipeline/map_export.hpp"
 #include "vsd/pipeline/run.hpp"
 #include "vsd/vector/dataset.hpp"
 

@@ -23,7 +23,7 @@
 #include "vsd/core/fault.hpp"
 #include "vsd/core/interrupt.hpp"
 #include "vsd/core/progress.hpp"
-#include "vsd/pipeline/export.hpp"
+#include "vsd/pipeline/map_export.hpp"
 #include "vsd/pipeline/run.hpp"
 #include "vsd/vector/dataset.hpp"
 

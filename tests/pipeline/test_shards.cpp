@@ -7,7 +7,7 @@
 #include "test_support.hpp"
 #include "vsd/core/error.hpp"
 #include "vsd/core/files.hpp"
-#include "vsd/core/shards.hpp"
+#include "vsd/run_folder/shards.hpp"
 #include "vsd/pipeline/merge.hpp"
 #include "vsd/pipeline/run.hpp"
 #include "vsd/vector/dataset.hpp"

@@ -8,7 +8,7 @@
 #include <thread>
 
 #include "test_support.hpp"
-#include "vsd/core/activity.hpp"
+#include "vsd/sim/activity.hpp"
 #include "vsd/core/bytes.hpp"
 #include "vsd/core/interrupt.hpp"
 #include "vsd/pipeline/worker_pool.hpp"

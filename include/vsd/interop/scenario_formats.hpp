@@ -24,6 +24,9 @@ struct ScenarioFormatAbilities {
   bool step = false;          ///< --step applies
   bool importOptions = false; ///< --duration, --ego, --controller, --controller-map apply
   bool check = false;         ///< `vsd-sumo scenario check FILE`
+  /// `vsd-sumo scenario export` can re-sample a run of it into OpenSCENARIO files (a logical
+  /// scenario; a file that is already OpenSCENARIO is its own export).
+  bool exportable = false;
 };
 
 /// A `run` as the command line gave it.

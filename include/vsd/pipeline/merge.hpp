@@ -1,5 +1,5 @@
 #pragma once
-// `vsd-sumo merge`: joins the shards of a sweep (vsd/core/shards.hpp) into one run
+// `vsd-sumo merge`: joins the shards of a sweep (vsd/run_folder/shards.hpp) into one run
 // folder — concrete.csv, traces.h5 and dataset.h5 with the same bytes as one
 // unsharded run of the same scenario, seed and samples — plus its manifest.json.
 

@@ -25,14 +25,13 @@
 #include <string>
 #include <vector>
 
-#include "vsd/core/shards.hpp"
+#include "vsd/run_folder/shards.hpp"
 #include "vsd/core/trace.hpp"
 #include "vsd/road/network.hpp"
 #include "vsd/pipeline/worker_pool.hpp"
 #include "vsd/road/road_geometry.hpp"
 #include "vsd/scenario/concrete_scenario.hpp"
 #include "vsd/scenario/logical_scenario.hpp"
-#include "vsd/sim/sumo_session.hpp"
 
 namespace vsd::pipeline {
 
@@ -64,7 +63,7 @@ struct RunOptions {
   /// netconvert options (sumo.netconvert_options), which need netconvert.
   std::optional<road::NetWriter> netWriter;
   /// Run only shard K of N of the sweep [firstSample, firstSample + samples) into
-  /// <out>/shards/shard-K-of-N/ (see vsd/core/shards.hpp). A shard that is finished
+  /// <out>/shards/shard-K-of-N/ (see vsd/run_folder/shards.hpp). A shard that is finished
   /// already (same sweep) is not run again: re-running a sweep resumes it.
   std::optional<ShardId> shard;
   WatchdogOptions watchdog;         ///< per-step time limit of controllers and libsumo (--step-timeout)
@@ -113,6 +112,11 @@ struct ScenarioOutcome {
   std::string referenceFailure;          ///< empty when the reference run completed
   bool ok() const { return failure.empty(); }
 };
+
+/// Passes `outcomes` through the encoding a worker process sends its results to the parent
+/// with, and decodes them as the parent does; returns the message's size in bytes. Throws
+/// Error if outcomes are lost. What the pipe costs beyond the simulation (`bench isolation`).
+std::size_t passThroughWorkerPipe(const std::vector<ScenarioOutcome>& outcomes);
 
 /// The regulation's pass criterion as a value of a scenario run with --reference
 /// (UN R157 5.2.5.2: the system avoids a collision wherever the reference driver does):

@@ -2,7 +2,7 @@
 // Worker processes. Code we do not control — Ego controller plugins, libsumo on
 // a foreign map — runs in forked workers, whatever --jobs is, so that its crash,
 // exit() or hang is contained: the parent stays alive, learns what the worker
-// was doing (vsd/core/activity.hpp: whose controller, which SUMO step), records
+// was doing (vsd/sim/activity.hpp: whose controller, which SUMO step), records
 // the fault and starts a fresh worker to go on.
 //
 // Each worker runs a body that sends framed messages back through a pipe; the
@@ -30,7 +30,7 @@
 #include <utility>
 #include <vector>
 
-#include "vsd/core/activity.hpp"
+#include "vsd/sim/activity.hpp"
 #include "vsd/core/error.hpp"
 
 namespace vsd::pipeline {

@@ -1,4 +1,4 @@
-#include "vsd/core/activity.hpp"
+#include "vsd/sim/activity.hpp"
 
 #include <algorithm>
 #include <chrono>

@@ -1,4 +1,4 @@
-#include "vsd/core/shards.hpp"
+#include "vsd/run_folder/shards.hpp"
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>

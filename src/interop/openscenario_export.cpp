@@ -1,4 +1,4 @@
-#include "vsd/interop/export.hpp"
+#include "vsd/interop/openscenario_export.hpp"
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
@@ -12,6 +12,7 @@
 #include "vsd/core/log.hpp"
 #include "vsd/core/progress.hpp"
 #include "vsd/interop/openscenario.hpp"
+#include "vsd/interop/scenario_formats.hpp"
 #include "vsd/scenario/concrete_scenario.hpp"
 #include "vsd/scenario/expression.hpp"
 #include "vsd/sim/controller.hpp"
@@ -59,9 +60,10 @@ std::shared_ptr<const scenario::LogicalScenario> runScenario(const fs::path& fol
                                   "was made from, at the path the run was given)",
                                   manifest_file.string(), scenario_file.string()));
   }
-  if (scenario_file.extension() == ".xosc") {
-    throw ConfigError(fmt::format("{}: the run simulated an OpenSCENARIO file ({}); it is its own export",
-                                  manifest_file.string(), scenario_file.string()));
+  const ScenarioFormat& format = scenarioFormatOf(scenario_file);
+  if (!format.can.exportable) {
+    throw ConfigError(fmt::format("{}: the run simulated {} (format {}); it is its own export",
+                                  manifest_file.string(), scenario_file.string(), format.name));
   }
   const std::string recorded = manifest.value("scenario_sha256", std::string());
   if (!recorded.empty() && recorded != sha256OfFile(scenario_file)) {

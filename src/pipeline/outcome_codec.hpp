@@ -1,6 +1,7 @@
 #pragma once
 // Binary encoding of scenario outcomes for the pipe between worker processes
-// and the parent (same binary on both ends).
+// and the parent (same binary on both ends). Private to the pipeline: others measure it
+// through passThroughWorkerPipe() (run.hpp).
 
 #include <vector>
 

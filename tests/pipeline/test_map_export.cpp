@@ -6,7 +6,7 @@
 
 #include "test_support.hpp"
 #include "vsd/core/error.hpp"
-#include "vsd/pipeline/export.hpp"
+#include "vsd/pipeline/map_export.hpp"
 #include "vsd/pipeline/run.hpp"
 #include "vsd/vector/dataset.hpp"
 

@@ -1,4 +1,4 @@
-#include "vsd/pipeline/export.hpp"
+#include "vsd/pipeline/map_export.hpp"
 
 #include <fmt/format.h>
 
@@ -11,7 +11,7 @@
 #include <unordered_map>
 #include <unordered_set>
 
-#include "vsd/core/activity.hpp"
+#include "vsd/sim/activity.hpp"
 #include "vsd/core/bytes.hpp"
 #include "vsd/core/error.hpp"
 #include "vsd/pipeline/cluster.hpp"
@@ -464,6 +464,25 @@ void checkSelectionWasSeen(const EgoSelection& selection, const ExportJob& job, 
   }
 }
 
+/// What an export wrote and skipped, once its simulation (started at `begin`) has ended.
+ExportSummary exportSummary(const Exporter& exporter, const vector::LaneIndex& lanes,
+                            const sim::MapSimulation& simulation, std::uint64_t egos_asked, double begin) {
+  ExportSummary summary;
+  summary.samples = exporter.samples();
+  summary.egos = exporter.egos();
+  summary.windowsSkipped = exporter.skipped();
+  summary.vehiclesSeen = exporter.vehiclesSeen();
+  summary.parkedSteps = exporter.parkedSteps();
+  summary.maskedJumps = exporter.maskedJumps();
+  summary.maskedAccelerations = exporter.maskedAccelerations();
+  summary.windowsImplausible = exporter.skippedImplausible();
+  summary.egosAsked = egos_asked;
+  summary.laneVectors = lanes.vectors();
+  summary.simulatedSeconds = simulation.time() - begin;
+  summary.failedEgos = simulation.failures();
+  return summary;
+}
+
 /// Simulates the map and writes the dataset to job.datasetPath (in a worker
 /// process: libsumo and the controllers run here). `progress` gets the
 /// simulated seconds so far and the seconds to simulate (0 if unknown).
@@ -545,20 +564,7 @@ ExportSummary simulateAndWrite(const ExportJob& job, const std::function<void(do
   checkSelectionWasSeen(selection, job, exporter, seen_egos, seen_types, begin, simulation.time());
   writer.close();
 
-  ExportSummary summary;
-  summary.samples = exporter.samples();
-  summary.egos = exporter.egos();
-  summary.windowsSkipped = exporter.skipped();
-  summary.vehiclesSeen = exporter.vehiclesSeen();
-  summary.parkedSteps = exporter.parkedSteps();
-  summary.maskedJumps = exporter.maskedJumps();
-  summary.maskedAccelerations = exporter.maskedAccelerations();
-  summary.windowsImplausible = exporter.skippedImplausible();
-  summary.egosAsked = chosen.size();
-  summary.laneVectors = lanes.vectors();
-  summary.simulatedSeconds = simulation.time() - begin;
-  summary.failedEgos = simulation.failures();
-  return summary;
+  return exportSummary(exporter, lanes, simulation, chosen.size(), begin);
 }
 
 enum class ExportMessage : char { Progress = 'P', Summary = 'S' };

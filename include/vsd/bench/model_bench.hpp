@@ -1,0 +1,88 @@
+#pragma once
+// `vsd-sumo bench model`: VectorNet trained on the three functional scenarios (acc, lk,
+// acc_lk) and tested on fresh scenarios of each: training and inference throughput, test
+// ADE per label, and the metrics of the predictions against fresh SUMO runs (as `vsd-sumo
+// compare`). The steps are separate calls so that their results can be shown as they come.
+
+#include <cstdint>
+#include <filesystem>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "vsd/bench/measure.hpp"
+#include "vsd/model/evaluation.hpp"
+#include "vsd/model/model.hpp"
+#include "vsd/report/comparison.hpp"
+
+namespace vsd::bench {
+
+/// Seeds of `bench model`'s training and test scenarios (test: fresh scenarios).
+inline constexpr std::uint64_t kModelBenchTrainSeed = 1;
+inline constexpr std::uint64_t kModelBenchTestSeed = 2;
+
+struct ModelBenchOptions {
+  std::filesystem::path work;  ///< keeps the generated data and models here (default: a temporary folder)
+  std::filesystem::path scenarios;  ///< folder of acc.yaml, lk.yaml, acc_lk.yaml (default: the repository's)
+  std::uint64_t samples = 2000;
+  std::uint64_t testSamples = 2000;
+  bool singles = false;        ///< also train one model per functional scenario
+  bool row4 = false;           ///< also train on acc + lk only and test on acc_lk (the paper's row 4)
+  bool resume = false;         ///< continue trainings from <model>.last where it exists
+  int threads = 2;
+  int steps = 6000;            ///< optimizer steps of every training
+  std::string decoder = "kinematic";
+  std::vector<std::string> decoderOptions;  ///< name=value
+  std::string frame = "ego";
+  int draws = 32;              ///< sampled futures per scene for the inference and interval benchmarks
+  Tool tool;
+};
+
+/// The functional scenarios of the benchmark, in the order they are reported.
+const std::vector<std::string>& modelBenchLabels();
+
+/// One trained model and its test errors.
+struct MixResult {
+  std::string mix;  ///< e.g. "acc=2000,lk=2000"
+  model::TrainSummary summary;  ///< empty if a finished model was reused (--resume)
+  model::Evaluation evaluation;
+};
+
+/// The metrics of one label's predictions against fresh SUMO runs.
+struct MetricAccuracy {
+  std::string label;
+  report::ComparisonStatistics statistics;
+};
+
+class ModelBench {
+ public:
+  explicit ModelBench(ModelBenchOptions options);
+  ~ModelBench();
+
+  const ModelBenchOptions& options() const { return options_; }
+  /// Simulates the training and test data that is not in the work folder yet; returns
+  /// acc_lk's simulation throughput (scenarios/s; 0 when its data was there).
+  double generateData();
+  /// The model on all three scenarios (the benchmark's main model).
+  MixResult trainAll();
+  /// One model on `label` alone.
+  MixResult trainSingle(const std::string& label);
+  /// The paper's row 4: acc + lk only.
+  MixResult trainRow4();
+  /// The main model's metrics against fresh SUMO runs of each label's test scenarios.
+  std::vector<MetricAccuracy> metricAccuracy() const;
+  /// Scenes/s of predicting `draws` sampled futures of every test scene with the main
+  /// model; none if its decoder is not probabilistic or draws is 0.
+  std::optional<double> samplingRate() const;
+
+ private:
+  MixResult trainAndEvaluate(const std::string& mix, const std::vector<std::string>& labels, const std::string& name);
+  std::filesystem::path modelPath(const std::string& name) const;
+
+  ModelBenchOptions options_;
+  struct Work;
+  std::unique_ptr<Work> work_;
+};
+
+}  // namespace vsd::bench
