@@ -705,6 +705,15 @@ TEST(Intervals, ConformalWideningBringsOverConfidentAndOverCautiousIntervalsToTh
   EXPECT_EQ(calibration.find("acc", "d_min"), nullptr);
 }
 
+TEST(Calibration, PointsFollowTheHorizon) {
+  // The paper's 5 s of 0.2 s steps: 1 s, 3 s, 5 s (target indices 4, 14, 24).
+  EXPECT_EQ(calibrationSteps(25), (std::array<std::size_t, kCalibrationPoints>{4, 14, 24}));
+  // A 3 s horizon of 0.2 s steps: 0.6 s, 1.8 s, 3 s - the end is always the horizon's.
+  EXPECT_EQ(calibrationSteps(15), (std::array<std::size_t, kCalibrationPoints>{2, 8, 14}));
+  // A one-step horizon: every point is that step.
+  EXPECT_EQ(calibrationSteps(1), (std::array<std::size_t, kCalibrationPoints>{0, 0, 0}));
+}
+
 TEST(Calibration, NllAndCoverageOfAPredictedGaussian) {
   auto scene = syntheticScene(3);
   Prediction prediction;
