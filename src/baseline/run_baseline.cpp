@@ -1,7 +1,9 @@
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <chrono>
 #include <fstream>
+#include <functional>
 
 #include "vsd/baseline/baseline.hpp"
 #include "vsd/core/csv.hpp"
@@ -35,13 +37,70 @@ Matrix predictPerTarget(const std::vector<ExtraTrees>& forests, const Matrix& x)
 }  // namespace
 
 namespace {
-bool extraTrees(const std::string& model) { return model == "extra-trees" || model == "et"; }  // "et": the old name
+
+/// Predicted means (and, for probabilistic models, standard deviations) of the test rows.
+struct Predicted {
+  Matrix mean;
+  Matrix std;  ///< empty for point predictors
+};
+
+Predicted fitExtraTrees(const BaselineOptions& options, const MetricTable& train, const MetricTable& test,
+                        BaselineReport& report) {
+  const auto start = std::chrono::steady_clock::now();
+  const auto forests = fitPerTarget(options.extraTrees, train.inputs, train.targets);
+  report.fitSeconds = secondsSince(start);
+  const auto predict_start = std::chrono::steady_clock::now();
+  Predicted predicted{predictPerTarget(forests, test.inputs), Matrix()};
+  report.predictSeconds = secondsSince(predict_start);
+  return predicted;
+}
+
+Predicted fitBnn(const BaselineOptions& options, const MetricTable& train, const MetricTable& test,
+                 BaselineReport& report) {
+  const auto start = std::chrono::steady_clock::now();
+  BayesianNetwork bnn(options.bnn);
+  bnn.fit(train.inputs, train.targets);
+  report.fitSeconds = secondsSince(start);
+  const auto predict_start = std::chrono::steady_clock::now();
+  auto prediction = bnn.predict(test.inputs);
+  report.predictSeconds = secondsSince(predict_start);
+  return {std::move(prediction.mean), std::move(prediction.std)};
+}
+
+/// One entry per baseline model: its names, its title in reports and how it fits and predicts.
+struct BaselineModelEntry {
+  BaselineModel model;
+  std::function<Predicted(const BaselineOptions&, const MetricTable&, const MetricTable&, BaselineReport&)> fitAndPredict;
+};
+
+const std::vector<BaselineModelEntry>& modelRegistry() {
+  static const std::vector<BaselineModelEntry> kEntries = {
+      {{"extra-trees", {"et"}, "extra trees"}, fitExtraTrees},
+      {{"bnn", {}, "Bayesian neural network"}, fitBnn},
+  };
+  return kEntries;
+}
+
+const BaselineModelEntry& modelEntry(const std::string& name) {
+  for (const auto& entry : modelRegistry()) {
+    const auto& old = entry.model.oldNames;
+    if (entry.model.name == name || std::find(old.begin(), old.end(), name) != old.end()) return entry;
+  }
+  std::vector<std::string> known;
+  for (const auto& entry : modelRegistry()) known.push_back(entry.model.name);
+  throw ConfigError::field("command line", "--model", name, fmt::format("{}", fmt::join(known, " or ")));
+}
+
 }  // namespace
 
+std::vector<BaselineModel> baselineModels() {
+  std::vector<BaselineModel> models;
+  for (const auto& entry : modelRegistry()) models.push_back(entry.model);
+  return models;
+}
+
 BaselineReport runBaseline(const BaselineOptions& options) {
-  if (!extraTrees(options.model) && options.model != "bnn") {
-    throw ConfigError::field("command line", "--model", options.model, "extra-trees or bnn");
-  }
+  const auto& entry = modelEntry(options.model);
   if (!options.predictionsCsv.empty()) requireFileOutputPath(options.predictionsCsv, "--out");
   options.extraTrees.validate();
   options.bnn.validate();
@@ -60,7 +119,8 @@ BaselineReport runBaseline(const BaselineOptions& options) {
     train.targets = Matrix(train.targets.topRows(n));
   }
   BaselineReport report;
-  report.model = extraTrees(options.model) ? "extra-trees" : options.model;
+  report.model = entry.model.name;
+  report.modelTitle = entry.model.title;
   report.functionalScenario = train.functionalScenario;
   report.trainRows = static_cast<std::size_t>(train.inputs.rows());
   report.testRows = static_cast<std::size_t>(test.inputs.rows());
@@ -68,26 +128,8 @@ BaselineReport runBaseline(const BaselineOptions& options) {
   report.targets = options.targets;
   for (const auto& target : options.targets) report.units.push_back(metrics::metric(target, "--targets").unit);
 
-  Matrix mean;
-  Matrix std;
-  const auto start = std::chrono::steady_clock::now();
-  if (extraTrees(options.model)) {
-    const auto forests = fitPerTarget(options.extraTrees, train.inputs, train.targets);
-    report.fitSeconds = secondsSince(start);
-    const auto predict_start = std::chrono::steady_clock::now();
-    mean = predictPerTarget(forests, test.inputs);
-    report.predictSeconds = secondsSince(predict_start);
-  } else {
-    BayesianNetwork bnn(options.bnn);
-    bnn.fit(train.inputs, train.targets);
-    report.fitSeconds = secondsSince(start);
-    const auto predict_start = std::chrono::steady_clock::now();
-    auto prediction = bnn.predict(test.inputs);
-    report.predictSeconds = secondsSince(predict_start);
-    mean = std::move(prediction.mean);
-    std = std::move(prediction.std);
-    for (Eigen::Index c = 0; c < std.cols(); ++c) report.meanStd.push_back(std.col(c).mean());
-  }
+  auto [mean, std] = entry.fitAndPredict(options, train, test, report);
+  for (Eigen::Index c = 0; c < std.cols(); ++c) report.meanStd.push_back(std.col(c).mean());
   report.mae = meanAbsoluteError(mean, test.targets);
 
   if (!options.predictionsCsv.empty()) {
@@ -122,7 +164,7 @@ BaselineReport runBaseline(const BaselineOptions& options) {
 std::string BaselineReport::report() const {
   std::string text = fmt::format(
       "{} on {}: {} training rows, {} test rows ({} failed or non-finite rows left out); fit {:.2f} s, predict {:.2f} s\n",
-      model == "extra-trees" ? "extra trees" : "Bayesian neural network", functionalScenario, trainRows, testRows, skipped,
+      modelTitle, functionalScenario, trainRows, testRows, skipped,
       fitSeconds, predictSeconds);
   text += fmt::format("  {:<16} {:>10}{}  {}\n", "metric", "MAE", meanStd.empty() ? "" : "   mean std", "unit");
   for (std::size_t i = 0; i < targets.size(); ++i) {

@@ -1,5 +1,6 @@
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <memory>
 
@@ -23,10 +24,12 @@ void addBaselineCommand(CLI::App& app, CommandContext& context) {
       ->capture_default_str()
       ->transform(CLI::Validator(
           [](std::string& name) {
-            if (name == "et") {  // the old name
-              std::fprintf(stderr, "vsd-sumo: note: baseline --model et is deprecated; use extra-trees (the old "
-                                   "spelling still works for now)\n");
-              name = "extra-trees";
+            for (const auto& model : baseline::baselineModels()) {
+              const auto& old = model.oldNames;
+              if (std::find(old.begin(), old.end(), name) == old.end()) continue;
+              std::fprintf(stderr, "vsd-sumo: note: baseline --model %s is deprecated; use %s (the old spelling still "
+                                   "works for now)\n", name.c_str(), model.name.c_str());
+              name = model.name;
             }
             return std::string();
           },

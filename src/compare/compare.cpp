@@ -242,6 +242,88 @@ struct Run {
   std::vector<report::SceneDrawing> worst;
 };
 
+/// Scenes built from the concrete scenarios before simulation (what the model sees).
+struct PlannedScenes {
+  std::vector<vector::VectorizedScene> scenes;
+  std::vector<std::string> failure;  ///< per scenario: why it could not be planned ("" if it could)
+};
+
+PlannedScenes planScenes(const std::shared_ptr<const scenario::LogicalScenario>& logical, const CompareOptions& options) {
+  PlannedScenes planned;
+  planned.failure.resize(options.samples);
+  planned.scenes.reserve(options.samples);
+  for (std::uint64_t index = 0; index < options.samples; ++index) {
+    throwIfInterrupted();
+    const auto concrete = scenario::sampleConcreteScenario(logical, options.seed, index);
+    try {
+      planned.scenes.push_back(pipeline::plannedScene(concrete));
+    } catch (const ConfigError& error) {  // e.g. a vehicle starting off its road: SUMO fails it too
+      planned.failure[index] = error.what();
+      planned.scenes.emplace_back();
+    }
+  }
+  return planned;
+}
+
+/// Predictions of every scene that could be planned; `indexOf[i]` is scenario i's.
+struct PlannedPredictions {
+  std::vector<model::Prediction> predictions;
+  std::vector<std::size_t> indexOf;
+};
+
+PlannedPredictions predictPlanned(const model::Predictor& predictor, const PlannedScenes& planned,
+                                  const CompareOptions& options) {
+  PlannedPredictions result;
+  std::vector<std::size_t> to_predict;
+  result.indexOf.assign(planned.scenes.size(), std::numeric_limits<std::size_t>::max());
+  for (std::size_t i = 0; i < planned.scenes.size(); ++i) {
+    if (!planned.failure[i].empty()) continue;
+    result.indexOf[i] = to_predict.size();
+    to_predict.push_back(i);
+  }
+  result.predictions = predictInChunks(predictor, planned.scenes, to_predict, drawOptions(options, predictor));
+  return result;
+}
+
+/// How far the scenes the model saw are from the ones SUMO produced (m, largest coordinate difference).
+struct PlanDeviation {
+  double lanes = 0.0;     ///< lane boundaries
+  double vehicles = 0.0;  ///< other road users (the Ego's future is what is predicted)
+
+  void add(const vector::VectorizedScene& planned, const vector::VectorizedScene& simulated) {
+    for (std::size_t p = 0; p < std::min(planned.polylines.size(), simulated.polylines.size()); ++p) {
+      const auto& a = planned.polylines[p];
+      const auto& b = simulated.polylines[p];
+      if (a.type == vector::ObjectType::Ego || a.vectors.size() != b.vectors.size()) continue;
+      double& worst = a.type == vector::ObjectType::LaneBoundary ? lanes : vehicles;
+      for (std::size_t v = 0; v < a.vectors.size(); ++v) {
+        for (std::size_t f = 0; f < 4; ++f) worst = std::max(worst, std::abs(a.vectors[v][f] - b.vectors[v][f]));
+      }
+    }
+  }
+};
+
+/// The comparison's headings for a logical scenario: title, inputs, metrics and criteria.
+report::Comparison comparisonOf(const scenario::LogicalScenario& logical, const metrics::MetricSet& metric_set,
+                                const CompareOptions& options, std::vector<std::string>& criteria_where) {
+  report::Comparison comparison;
+  comparison.title = fmt::format("{}, {} fresh scenarios (seed {})", logical.name, options.samples, options.seed);
+  comparison.referenceName = "simulated";
+  comparison.inputNames = logical.inputNames();
+  comparison.metricNames = metric_set.names();
+  comparison.metricUnits = metric_set.units();
+  addCriteria(options, &logical, comparison, criteria_where);
+  return comparison;
+}
+
+void addScenarioProvenance(const CompareOptions& options, report::Comparison& comparison) {
+  comparison.provenance.push_back({"scenario file", options.scenarioFile.string()});
+  comparison.provenance.push_back({"scenario SHA-256", sha256OfFile(options.scenarioFile)});
+  comparison.provenance.push_back({"seed", std::to_string(options.seed)});
+  comparison.provenance.push_back({"scenarios", std::to_string(options.samples)});
+  comparison.provenance.push_back({"SUMO", pipeline::provenance().sumoVersion});
+}
+
 Run compareScenario(const CompareOptions& options, const model::Predictor& predictor) {
   const auto logical = scenario::loadLogicalScenario(options.scenarioFile);
   vector::DatasetHeader header;
@@ -251,47 +333,23 @@ Run compareScenario(const CompareOptions& options, const model::Predictor& predi
   const metrics::MetricSet metric_set(logical->metrics, pipeline::scenarioAvailability(*logical),
                                       logical->sourceFile.string() + ": metrics");
   Run run;
-  auto& comparison = run.comparison;
-  comparison.title = fmt::format("{}, {} fresh scenarios (seed {})", logical->name, options.samples, options.seed);
-  comparison.referenceName = "simulated";
-  comparison.inputNames = logical->inputNames();
-  comparison.metricNames = metric_set.names();
-  comparison.metricUnits = metric_set.units();
   std::vector<std::string> where;
-  addCriteria(options, logical.get(), comparison, where);
+  run.comparison = comparisonOf(*logical, metric_set, options, where);
+  auto& comparison = run.comparison;
   const Criteria criteria(comparison.criteria, where, comparison.metricNames);
 
   // 1. Scenes before simulation.
   auto start = std::chrono::steady_clock::now();
-  std::vector<vector::VectorizedScene> planned;
-  std::vector<std::string> plan_failure(options.samples);
-  planned.reserve(options.samples);
-  for (std::uint64_t index = 0; index < options.samples; ++index) {
-    throwIfInterrupted();
-    const auto concrete = scenario::sampleConcreteScenario(logical, options.seed, index);
-    try {
-      planned.push_back(pipeline::plannedScene(concrete));
-    } catch (const ConfigError& error) {  // e.g. a vehicle starting off its road: SUMO fails it too
-      plan_failure[index] = error.what();
-      planned.emplace_back();
-    }
-  }
+  const auto planned = planScenes(logical, options);
   comparison.timings.push_back({"vectorize", secondsSince(start)});
   spdlog::info("vectorized {} scenarios without simulating them", options.samples);
 
   // 2. Predictions of every scene that could be planned.
   start = std::chrono::steady_clock::now();
-  std::vector<std::size_t> to_predict;
-  std::vector<std::size_t> predicted_index(options.samples, std::numeric_limits<std::size_t>::max());
-  for (std::size_t i = 0; i < planned.size(); ++i) {
-    if (!plan_failure[i].empty()) continue;
-    predicted_index[i] = to_predict.size();
-    to_predict.push_back(i);
-  }
-  const auto predictions = predictInChunks(predictor, planned, to_predict, drawOptions(options, predictor));
+  const auto predicted = predictPlanned(predictor, planned, options);
   comparison.timings.push_back({"predict", secondsSince(start)});
   const PredictionScorer scorer(metric_set, criteria, predictor.info().metricIntervals);
-  spdlog::info("predicted the Ego in {} scenarios", predictions.size());
+  spdlog::info("predicted the Ego in {} scenarios", predicted.predictions.size());
 
   // 3. Simulation of the same concrete scenarios, compared as they arrive.
   pipeline::RunOptions run_options;
@@ -303,35 +361,26 @@ Run compareScenario(const CompareOptions& options, const model::Predictor& predi
   run_options.writeFiles = false;
   std::vector<std::optional<Futures>> futures(options.samples);
   comparison.scenarios.resize(options.samples);
-  double lane_deviation = 0.0;
-  double vehicle_deviation = 0.0;
+  PlanDeviation deviation;
   start = std::chrono::steady_clock::now();
   pipeline::runScenarios(logical, run_options, [&](const pipeline::ScenarioOutcome& outcome) {
     auto& row = comparison.scenarios[outcome.index];
     row.sample = outcome.index;
     row.label = logical->name;
     row.inputs = outcome.inputs;
-    if (!plan_failure[outcome.index].empty()) {
-      row.failure = outcome.ok() ? "could not be vectorized: " + plan_failure[outcome.index] : outcome.failure;
+    const auto& plan_failure = planned.failure[outcome.index];
+    if (!plan_failure.empty()) {
+      row.failure = outcome.ok() ? "could not be vectorized: " + plan_failure : outcome.failure;
       return;
     }
     if (!outcome.ok()) {
       row.failure = outcome.failure;
       return;
     }
-    const auto& scene = planned[outcome.index];
-    const auto& prediction = predictions[predicted_index[outcome.index]];
+    const auto& scene = planned.scenes[outcome.index];
+    const auto& prediction = predicted.predictions[predicted.indexOf[outcome.index]];
     auto simulated = pipeline::simulatedScene(*logical, outcome);
-    // How far the scene the model saw is from the one SUMO produced (lanes, the Co).
-    for (std::size_t p = 0; p < std::min(scene.polylines.size(), simulated.polylines.size()); ++p) {
-      const auto& a = scene.polylines[p];
-      const auto& b = simulated.polylines[p];
-      if (a.type == vector::ObjectType::Ego || a.vectors.size() != b.vectors.size()) continue;
-      double& worst = a.type == vector::ObjectType::LaneBoundary ? lane_deviation : vehicle_deviation;
-      for (std::size_t v = 0; v < a.vectors.size(); ++v) {
-        for (std::size_t f = 0; f < 4; ++f) worst = std::max(worst, std::abs(a.vectors[v][f] - b.vectors[v][f]));
-      }
-    }
+    deviation.add(scene, simulated);
     // The scene the model saw, now with the future the simulation produced.
     vector::VectorizedScene scored = scene;
     scored.target = simulated.target;
@@ -345,13 +394,9 @@ Run compareScenario(const CompareOptions& options, const model::Predictor& predi
   comparison.notes.push_back(fmt::format(
       "The model saw scenes built before simulation; they deviate from the simulated scenes by at most {:.3f} m "
       "(lane boundaries) and {:.3f} m (other vehicles): netconvert stores coordinates to 0.01 m.",
-      lane_deviation, vehicle_deviation));
-  comparison.provenance.push_back({"scenario file", options.scenarioFile.string()});
-  comparison.provenance.push_back({"scenario SHA-256", sha256OfFile(options.scenarioFile)});
-  comparison.provenance.push_back({"seed", std::to_string(options.seed)});
-  comparison.provenance.push_back({"scenarios", std::to_string(options.samples)});
-  comparison.provenance.push_back({"SUMO", pipeline::provenance().sumoVersion});
-  run.worst = drawWorst(comparison, futures, options.worst, [&](std::size_t i) { return planned[i]; });
+      deviation.lanes, deviation.vehicles));
+  addScenarioProvenance(options, comparison);
+  run.worst = drawWorst(comparison, futures, options.worst, [&](std::size_t i) { return planned.scenes[i]; });
   return run;
 }
 

@@ -7,7 +7,7 @@ const std::vector<RoadUserKind>& roadUserKinds() {
   // (Directive 96/53/EC) and a 12 m rigid vehicle. Pedestrian: 0.5 m deep along the walking
   // direction, 0.7 m across the shoulders and swinging arms.
   static const std::vector<RoadUserKind> kinds = {
-      {RoadUserType::Car, "car", "passenger car", 5.0, 1.8, true, false},
+      {RoadUserType::Car, "car", "passenger car", kCarLength, kCarWidth, true, false},
       {RoadUserType::Van, "van", "light commercial vehicle", 5.5, 2.0, true, false},
       {RoadUserType::Truck, "truck", "heavy goods vehicle", 12.0, 2.55, true, false},
       {RoadUserType::Bus, "bus", "bus or coach", 12.0, 2.55, true, false},

@@ -266,121 +266,134 @@ std::string adeMarkdown(const Spec& spec, const std::vector<AdeRow>& rows) {
   return md;
 }
 
-}  // namespace
-
-std::vector<Finding> checkFindings(const std::vector<AdeRow>& rows) {
-  std::vector<Finding> findings;
-  const std::string generalise_rule = fmt::format(
+/// The rule that classifies a transfer, as the findings state it.
+std::string generaliseRule() {
+  return fmt::format(
       "ADE on a functional scenario not trained on 'generalises' if <= {} m and <= {}x the in-distribution ADE, "
       "'does not generalise' if >= {} m and >= {}x it",
       kGeneralisesAde, kGeneralisesFactor, kFailsAde, kFailsFactor);
+}
 
-  {
-    Finding finding{"a", "Good in-distribution ADE: trained on one functional scenario, VectorNet predicts the Ego well "
-                         "on fresh scenarios of the same one.",
-                    fmt::format("rows 1 (acc), 2 (lk) and 3 (acc_lk): in-distribution ADE <= {} m each", kGoodAde), "",
-                    ""};
-    const AdeRow* acc = paperRow(rows, 1, {"acc"});
-    const AdeRow* lk = paperRow(rows, 2, {"lk"});
-    const AdeRow* acc_lk = paperRow(rows, 3, {"acc_lk"});
-    if (!acc || !lk || !acc_lk) {
-      finding.verdict = "not checked";
-      finding.evidence = "rows 1-3 missing or with another mix";
-    } else {
-      const double values[] = {adeOf(*acc, "acc"), adeOf(*lk, "lk"), adeOf(*acc_lk, "acc_lk")};
-      bool good = true;
-      for (const double value : values) good = good && value <= kGoodAde;
-      finding.verdict = good ? "holds" : "does not hold";
-      finding.evidence = fmt::format("row 1 on acc {} m, row 2 on lk {} m, row 3 on acc_lk {} m", adeText(*acc, "acc"),
-                                     adeText(*lk, "lk"), adeText(*acc_lk, "acc_lk"));
-    }
-    findings.push_back(finding);
+/// row 1-3: in-distribution ADE is good on each functional scenario.
+Finding findingA(const std::vector<AdeRow>& rows) {
+  Finding finding{"a", "Good in-distribution ADE: trained on one functional scenario, VectorNet predicts the Ego well "
+                       "on fresh scenarios of the same one.",
+                  fmt::format("rows 1 (acc), 2 (lk) and 3 (acc_lk): in-distribution ADE <= {} m each", kGoodAde), "",
+                  ""};
+  const AdeRow* acc = paperRow(rows, 1, {"acc"});
+  const AdeRow* lk = paperRow(rows, 2, {"lk"});
+  const AdeRow* acc_lk = paperRow(rows, 3, {"acc_lk"});
+  if (!acc || !lk || !acc_lk) {
+    finding.verdict = "not checked";
+    finding.evidence = "rows 1-3 missing or with another mix";
+  } else {
+    const double values[] = {adeOf(*acc, "acc"), adeOf(*lk, "lk"), adeOf(*acc_lk, "acc_lk")};
+    bool good = true;
+    for (const double value : values) good = good && value <= kGoodAde;
+    finding.verdict = good ? "holds" : "does not hold";
+    finding.evidence = fmt::format("row 1 on acc {} m, row 2 on lk {} m, row 3 on acc_lk {} m", adeText(*acc, "acc"),
+                                   adeText(*lk, "lk"), adeText(*acc_lk, "acc_lk"));
   }
-  {
-    Finding finding{"b", "Trained on ACC&LK, VectorNet generalises to ACC but not to LK.",
-                    "row 3 (acc_lk): " + generalise_rule + " (in-distribution: its ADE on acc_lk)", "", ""};
-    if (const AdeRow* row = paperRow(rows, 3, {"acc_lk"})) {
-      const double in = adeOf(*row, "acc_lk");
-      const auto to_acc = classify(adeOf(*row, "acc"), in);
-      const auto to_lk = classify(adeOf(*row, "lk"), in);
-      if (to_acc == Transfer::Generalises && to_lk == Transfer::Fails) {
-        finding.verdict = "holds";
-      } else if (to_acc == Transfer::Fails || to_lk == Transfer::Generalises) {
-        finding.verdict = "does not hold";
-      } else {
-        finding.verdict = "inconclusive";
-      }
-      finding.evidence = fmt::format("acc_lk {} m; acc {} m ({}); lk {} m ({})", adeText(*row, "acc_lk"),
-                                     adeText(*row, "acc"), transferText(to_acc), adeText(*row, "lk"), transferText(to_lk));
+  return finding;
+}
+
+/// Row 3: trained on ACC&LK, generalises to ACC but not to LK.
+Finding findingB(const std::vector<AdeRow>& rows, const std::string& generalise_rule) {
+  Finding finding{"b", "Trained on ACC&LK, VectorNet generalises to ACC but not to LK.",
+                  "row 3 (acc_lk): " + generalise_rule + " (in-distribution: its ADE on acc_lk)", "", ""};
+  if (const AdeRow* row = paperRow(rows, 3, {"acc_lk"})) {
+    const double in = adeOf(*row, "acc_lk");
+    const auto to_acc = classify(adeOf(*row, "acc"), in);
+    const auto to_lk = classify(adeOf(*row, "lk"), in);
+    if (to_acc == Transfer::Generalises && to_lk == Transfer::Fails) {
+      finding.verdict = "holds";
+    } else if (to_acc == Transfer::Fails || to_lk == Transfer::Generalises) {
+      finding.verdict = "does not hold";
     } else {
-      finding.verdict = "not checked";
-      finding.evidence = "row 3 missing or with another mix";
+      finding.verdict = "inconclusive";
     }
-    findings.push_back(finding);
+    finding.evidence = fmt::format("acc_lk {} m; acc {} m ({}); lk {} m ({})", adeText(*row, "acc_lk"),
+                                   adeText(*row, "acc"), transferText(to_acc), adeText(*row, "lk"), transferText(to_lk));
+  } else {
+    finding.verdict = "not checked";
+    finding.evidence = "row 3 missing or with another mix";
   }
-  {
-    Finding finding{"c", "Trained on ACC and LK (without ACC&LK samples), VectorNet does not generalise to ACC&LK.",
-                    "row 4 (acc + lk): " + generalise_rule + " (in-distribution: the larger of its ADEs on acc and lk)",
-                    "", ""};
-    if (const AdeRow* row = paperRow(rows, 4, {"acc", "lk"})) {
-      const double in = std::max(adeOf(*row, "acc"), adeOf(*row, "lk"));
-      const auto to_acc_lk = classify(adeOf(*row, "acc_lk"), in);
-      finding.verdict = to_acc_lk == Transfer::Fails         ? "holds"
-                        : to_acc_lk == Transfer::Generalises ? "does not hold"
-                                                             : "inconclusive";
-      finding.evidence = fmt::format("acc {} m, lk {} m; acc_lk {} m ({})", adeText(*row, "acc"), adeText(*row, "lk"),
-                                     adeText(*row, "acc_lk"), transferText(to_acc_lk));
-    } else {
-      finding.verdict = "not checked";
-      finding.evidence = "row 4 missing or with another mix";
-    }
-    findings.push_back(finding);
+  return finding;
+}
+
+/// Row 4: trained on ACC and LK, does not generalise to ACC&LK.
+Finding findingC(const std::vector<AdeRow>& rows, const std::string& generalise_rule) {
+  Finding finding{"c", "Trained on ACC and LK (without ACC&LK samples), VectorNet does not generalise to ACC&LK.",
+                  "row 4 (acc + lk): " + generalise_rule + " (in-distribution: the larger of its ADEs on acc and lk)",
+                  "", ""};
+  if (const AdeRow* row = paperRow(rows, 4, {"acc", "lk"})) {
+    const double in = std::max(adeOf(*row, "acc"), adeOf(*row, "lk"));
+    const auto to_acc_lk = classify(adeOf(*row, "acc_lk"), in);
+    finding.verdict = to_acc_lk == Transfer::Fails         ? "holds"
+                      : to_acc_lk == Transfer::Generalises ? "does not hold"
+                                                           : "inconclusive";
+    finding.evidence = fmt::format("acc {} m, lk {} m; acc_lk {} m ({})", adeText(*row, "acc"), adeText(*row, "lk"),
+                                   adeText(*row, "acc_lk"), transferText(to_acc_lk));
+  } else {
+    finding.verdict = "not checked";
+    finding.evidence = "row 4 missing or with another mix";
   }
-  {
-    Finding finding{"d", "Adding 200 ACC&LK samples to ACC + LK predicts ACC&LK better than the 200 ACC&LK samples alone.",
-                    "ADE on acc_lk of row 9 (acc + lk + acc_lk 200) < that of row 10 (acc_lk 200)", "", ""};
-    const AdeRow* with = paperRow(rows, 9, {"acc", "lk", "acc_lk"});
-    const AdeRow* alone = paperRow(rows, 10, {"acc_lk"});
-    if (with && alone) {
-      const double a = adeOf(*with, "acc_lk");
-      const double b = adeOf(*alone, "acc_lk");
-      finding.verdict = a < b ? "holds" : "does not hold";
-      const double spread = std::max(stdOf(*with, "acc_lk"), stdOf(*alone, "acc_lk"));
-      finding.evidence = fmt::format("row 9 {} m vs row 10 {} m; margin {} m", adeText(*with, "acc_lk"),
-                                     adeText(*alone, "acc_lk"), metres(b - a)) +
-                         (spread > 0.0 ? fmt::format(" = {:.1f}x the larger seed spread", (b - a) / spread) : "");
-    } else {
-      finding.verdict = "not checked";
-      finding.evidence = "rows 9 or 10 missing or with another mix";
-    }
-    findings.push_back(finding);
+  return finding;
+}
+
+/// Rows 9 and 10: adding ACC + LK helps ACC&LK.
+Finding findingD(const std::vector<AdeRow>& rows) {
+  Finding finding{"d", "Adding 200 ACC&LK samples to ACC + LK predicts ACC&LK better than the 200 ACC&LK samples alone.",
+                  "ADE on acc_lk of row 9 (acc + lk + acc_lk 200) < that of row 10 (acc_lk 200)", "", ""};
+  const AdeRow* with = paperRow(rows, 9, {"acc", "lk", "acc_lk"});
+  const AdeRow* alone = paperRow(rows, 10, {"acc_lk"});
+  if (with && alone) {
+    const double a = adeOf(*with, "acc_lk");
+    const double b = adeOf(*alone, "acc_lk");
+    finding.verdict = a < b ? "holds" : "does not hold";
+    const double spread = std::max(stdOf(*with, "acc_lk"), stdOf(*alone, "acc_lk"));
+    finding.evidence = fmt::format("row 9 {} m vs row 10 {} m; margin {} m", adeText(*with, "acc_lk"),
+                                   adeText(*alone, "acc_lk"), metres(b - a)) +
+                       (spread > 0.0 ? fmt::format(" = {:.1f}x the larger seed spread", (b - a) / spread) : "");
+  } else {
+    finding.verdict = "not checked";
+    finding.evidence = "rows 9 or 10 missing or with another mix";
   }
-  {
-    Finding finding{"e", "Combining LK and ACC&LK needs 3000 samples of each: with 2000 each (row 5) they are not "
-                         "predicted well, with 3000 each (row 6) they are.",
-                    fmt::format("holds if row 6's ADEs on lk and acc_lk are <= {0} m and one of row 5's is above {0} m; "
-                                "does not hold if row 5's are both <= {0} m (2000 each suffice)",
-                                kGoodAde),
-                    "", ""};
-    const AdeRow* two = paperRow(rows, 5, {"lk", "acc_lk"});
-    const AdeRow* three = paperRow(rows, 6, {"lk", "acc_lk"});
-    if (two && three) {
-      const bool two_good = adeOf(*two, "lk") <= kGoodAde && adeOf(*two, "acc_lk") <= kGoodAde;
-      const bool three_good = adeOf(*three, "lk") <= kGoodAde && adeOf(*three, "acc_lk") <= kGoodAde;
-      finding.verdict = two_good ? "does not hold" : three_good ? "holds" : "inconclusive";
-      finding.evidence = fmt::format(
-          "row 5 lk {} m, acc_lk {} m (acc {} m) vs row 6 lk {} m, acc_lk {} m (acc {} m); row 5's largest margin to "
-          "{} m: {} m",
-          adeText(*two, "lk"), adeText(*two, "acc_lk"), adeText(*two, "acc"), adeText(*three, "lk"),
-          adeText(*three, "acc_lk"), adeText(*three, "acc"), kGoodAde,
-          metres(std::max(adeOf(*two, "lk"), adeOf(*two, "acc_lk")) - kGoodAde));
-    } else {
-      finding.verdict = "not checked";
-      finding.evidence = "rows 5 or 6 missing or with another mix";
-    }
-    findings.push_back(finding);
+  return finding;
+}
+
+/// Rows 5 and 6: LK with ACC&LK needs 3000 samples of each.
+Finding findingE(const std::vector<AdeRow>& rows) {
+  Finding finding{"e", "Combining LK and ACC&LK needs 3000 samples of each: with 2000 each (row 5) they are not "
+                       "predicted well, with 3000 each (row 6) they are.",
+                  fmt::format("holds if row 6's ADEs on lk and acc_lk are <= {0} m and one of row 5's is above {0} m; "
+                              "does not hold if row 5's are both <= {0} m (2000 each suffice)",
+                              kGoodAde),
+                  "", ""};
+  const AdeRow* two = paperRow(rows, 5, {"lk", "acc_lk"});
+  const AdeRow* three = paperRow(rows, 6, {"lk", "acc_lk"});
+  if (two && three) {
+    const bool two_good = adeOf(*two, "lk") <= kGoodAde && adeOf(*two, "acc_lk") <= kGoodAde;
+    const bool three_good = adeOf(*three, "lk") <= kGoodAde && adeOf(*three, "acc_lk") <= kGoodAde;
+    finding.verdict = two_good ? "does not hold" : three_good ? "holds" : "inconclusive";
+    finding.evidence = fmt::format(
+        "row 5 lk {} m, acc_lk {} m (acc {} m) vs row 6 lk {} m, acc_lk {} m (acc {} m); row 5's largest margin to "
+        "{} m: {} m",
+        adeText(*two, "lk"), adeText(*two, "acc_lk"), adeText(*two, "acc"), adeText(*three, "lk"),
+        adeText(*three, "acc_lk"), adeText(*three, "acc"), kGoodAde,
+        metres(std::max(adeOf(*two, "lk"), adeOf(*two, "acc_lk")) - kGoodAde));
+  } else {
+    finding.verdict = "not checked";
+    finding.evidence = "rows 5 or 6 missing or with another mix";
   }
-  return findings;
+  return finding;
+}
+
+}  // namespace
+
+std::vector<Finding> checkFindings(const std::vector<AdeRow>& rows) {
+  const std::string generalise_rule = generaliseRule();
+  return {findingA(rows), findingB(rows, generalise_rule), findingC(rows, generalise_rule), findingD(rows), findingE(rows)};
 }
 
 void writeResults(const Spec& spec, const ExperimentOptions& options, ExperimentSummary& summary,

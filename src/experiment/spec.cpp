@@ -172,22 +172,8 @@ void applyQuickSizes(const scenario::YamlReader& reader, const YAML::Node& root,
   }
 }
 
-}  // namespace
-
-Spec parseSpec(const fs::path& file, bool quick) {
-  std::string text;
-  try {
-    text = readTextFile(file, read_limits::kSpec);
-  } catch (const IoError& error) {
-    throw ConfigError(error.what());
-  }
-  const scenario::YamlReader reader(file.string());
-  const auto root = scenario::loadYaml(text, file.string());
-  reader.checkKeys(root, "", {"schema", "name", "seed", "scenarios", "data", "training", "ade", "models", "seeds", "predictors", "mae",
-                          "figures", "quick"});
-  Spec spec;
-  spec.file = file;
-  spec.quick = quick;
+/// The spec's header: schema, name (its results folder) and seed.
+void parseHeader(const scenario::YamlReader& reader, const YAML::Node& root, Spec& spec) {
   if (root["schema"] && reader.scalar(root["schema"], "schema") != "vsd-experiment/1") {
     throw ConfigError::field(reader.where(root["schema"], "schema"), "schema", reader.scalar(root["schema"], "schema"),
                              "vsd-experiment/1");
@@ -195,43 +181,51 @@ Spec parseSpec(const fs::path& file, bool quick) {
   if (!root["name"]) reader.fail(root, "name", "missing (the results' folder name)");
   spec.name = reader.scalar(root["name"], "name");
   // It becomes the results folder results/<name>: one plain name, never ../../elsewhere.
-  requireSafeName(spec.name, lineOf(file, root["name"]), "name");
+  requireSafeName(spec.name, lineOf(spec.file, root["name"]), "name");
   spec.seed = static_cast<std::uint64_t>(reader.integer(root, "seed", "seed", 1, 0));
-  const fs::path base = file.parent_path();
-  auto resolve = [&](const fs::path& path) { return path.is_absolute() ? path : base / path; };
+}
 
+/// One functional scenario: a logical scenario to simulate, or two existing run folders.
+Source parseSource(const scenario::YamlReader& reader, const YAML::Node& label_node, const YAML::Node& value, const Spec& spec) {
+  const fs::path base = spec.file.parent_path();
+  auto resolve = [&](const fs::path& path) { return path.is_absolute() ? path : base / path; };
+  Source source;
+  source.label = label_node.as<std::string>();
+  const std::string field = "scenarios." + source.label;
+  requireSafeName(source.label, lineOf(spec.file, label_node), field);  // it names cache folders
+  reader.checkKeys(value, field, {"scenario", "train", "test"});
+  if (value["scenario"]) {
+    source.scenario = resolve(reader.scalar(value["scenario"], field + ".scenario"));
+    if (!fs::is_regular_file(source.scenario)) {
+      reader.fail(value["scenario"], field + ".scenario",
+                  fmt::format("'{}' does not exist (a logical scenario file)", source.scenario.string()));
+    }
+  } else if (value["train"] && value["test"]) {
+    source.trainRun = resolve(reader.scalar(value["train"], field + ".train"));
+    source.testRun = resolve(reader.scalar(value["test"], field + ".test"));
+    for (const auto& [path, key] : {std::pair{source.trainRun, "train"}, std::pair{source.testRun, "test"}}) {
+      for (const char* needed : {"dataset.h5", "concrete.csv"}) {
+        if (!fs::is_regular_file(path / needed)) {
+          reader.fail(value[key], field + "." + key,
+                      fmt::format("'{}' is not a run folder of vsd-sumo run (no {})", path.string(), needed));
+        }
+      }
+    }
+  } else {
+    reader.fail(value, field, "needs 'scenario' (to simulate) or 'train' and 'test' (existing runs)");
+  }
+  return source;
+}
+
+void parseSources(const scenario::YamlReader& reader, const YAML::Node& root, Spec& spec) {
   const auto scenarios = root["scenarios"];
   if (!scenarios) reader.fail(root, "scenarios", "missing (functional scenarios by label)");
   reader.requireMap(scenarios, "scenarios");
-  for (const auto& entry : scenarios) {
-    Source source;
-    source.label = entry.first.as<std::string>();
-    const std::string field = "scenarios." + source.label;
-    requireSafeName(source.label, lineOf(file, entry.first), field);  // it names cache folders
-    reader.checkKeys(entry.second, field, {"scenario", "train", "test"});
-    if (entry.second["scenario"]) {
-      source.scenario = resolve(reader.scalar(entry.second["scenario"], field + ".scenario"));
-      if (!fs::is_regular_file(source.scenario)) {
-        reader.fail(entry.second["scenario"], field + ".scenario",
-                    fmt::format("'{}' does not exist (a logical scenario file)", source.scenario.string()));
-      }
-    } else if (entry.second["train"] && entry.second["test"]) {
-      source.trainRun = resolve(reader.scalar(entry.second["train"], field + ".train"));
-      source.testRun = resolve(reader.scalar(entry.second["test"], field + ".test"));
-      for (const auto& [path, key] : {std::pair{source.trainRun, "train"}, std::pair{source.testRun, "test"}}) {
-        for (const char* needed : {"dataset.h5", "concrete.csv"}) {
-          if (!fs::is_regular_file(path / needed)) {
-            reader.fail(entry.second[key], field + "." + key,
-                        fmt::format("'{}' is not a run folder of vsd-sumo run (no {})", path.string(), needed));
-          }
-        }
-      }
-    } else {
-      reader.fail(entry.second, field, "needs 'scenario' (to simulate) or 'train' and 'test' (existing runs)");
-    }
-    spec.sources.push_back(source);
-  }
+  for (const auto& entry : scenarios) spec.sources.push_back(parseSource(reader, entry.first, entry.second, spec));
+}
 
+/// `data` (sample counts and seeds of the runs) and `training` (the optimiser's settings).
+void parseDataAndTraining(const scenario::YamlReader& reader, const YAML::Node& root, Spec& spec) {
   if (const auto data = root["data"]) {
     reader.checkKeys(data, "data", {"train_samples", "test_samples", "train_seed", "test_seed", "jobs"});
     spec.trainSamples = static_cast<std::uint64_t>(reader.integer(data, "train_samples", "data.train_samples", 3000, 2));
@@ -248,43 +242,54 @@ Spec parseSpec(const fs::path& file, bool quick) {
     spec.threads = reader.integer(training, "threads", "training.threads", spec.threads, 1, 256);
     spec.parallel = reader.integer(training, "parallel", "training.parallel", spec.parallel, 1, 64);
   }
+}
 
-  auto requireLabel = [&](const YAML::Node& node, const std::string& field, const std::string& label) {
-    for (const auto& source : spec.sources) {
-      if (source.label == label) return;
-    }
-    std::vector<std::string> known;
-    for (const auto& source : spec.sources) known.push_back(source.label);
-    reader.fail(node, field, fmt::format("unknown functional scenario '{}' (defined under scenarios: {})", label,
-                                         fmt::join(known, ", ")));
-  };
-  auto labelled_counts = [&](const YAML::Node& node, const std::string& field) {
-    std::vector<std::pair<std::string, std::size_t>> counts;
-    reader.requireMap(node, field);
-    for (const auto& entry : node) {
-      const auto label = entry.first.as<std::string>();
-      requireLabel(entry.first, field + "." + label, label);
-      counts.emplace_back(label, static_cast<std::size_t>(reader.integer(node, label, field + "." + label, 0, 0)));
-    }
-    return counts;
-  };
-  auto labelled_numbers = [&](const YAML::Node& node, const std::string& field) {
-    std::map<std::string, double> numbers;
-    reader.requireMap(node, field);
-    for (const auto& entry : node) {
-      const auto key = entry.first.as<std::string>();
-      numbers[key] = reader.number(entry.second, field + "." + key);
-    }
-    return numbers;
-  };
+void requireLabel(const scenario::YamlReader& reader, const Spec& spec, const YAML::Node& node, const std::string& field,
+                  const std::string& label) {
+  for (const auto& source : spec.sources) {
+    if (source.label == label) return;
+  }
+  std::vector<std::string> known;
+  for (const auto& source : spec.sources) known.push_back(source.label);
+  reader.fail(node, field, fmt::format("unknown functional scenario '{}' (defined under scenarios: {})", label,
+                                       fmt::join(known, ", ")));
+}
 
-  auto requireRow = [&](const YAML::Node& node, const std::string& field, int number) {
-    for (const auto& row : spec.ade) {
-      if (row.row == number) return;
-    }
-    reader.fail(node, field, fmt::format("no ade row {}", number));
-  };
+/// A map from functional-scenario labels to counts (>= 0).
+std::vector<std::pair<std::string, std::size_t>> labelledCounts(const scenario::YamlReader& reader, const Spec& spec,
+                                                                const YAML::Node& node, const std::string& field) {
+  std::vector<std::pair<std::string, std::size_t>> counts;
+  reader.requireMap(node, field);
+  for (const auto& entry : node) {
+    const auto label = entry.first.as<std::string>();
+    requireLabel(reader, spec, entry.first, field + "." + label, label);
+    counts.emplace_back(label, static_cast<std::size_t>(reader.integer(node, label, field + "." + label, 0, 0)));
+  }
+  return counts;
+}
 
+/// A map from names to numbers (the paper's figures to compare with).
+std::map<std::string, double> labelledNumbers(const scenario::YamlReader& reader, const YAML::Node& node,
+                                              const std::string& field) {
+  std::map<std::string, double> numbers;
+  reader.requireMap(node, field);
+  for (const auto& entry : node) {
+    const auto key = entry.first.as<std::string>();
+    numbers[key] = reader.number(entry.second, field + "." + key);
+  }
+  return numbers;
+}
+
+void requireRow(const scenario::YamlReader& reader, const Spec& spec, const YAML::Node& node, const std::string& field,
+                int number) {
+  for (const auto& row : spec.ade) {
+    if (row.row == number) return;
+  }
+  reader.fail(node, field, fmt::format("no ade row {}", number));
+}
+
+/// `ade`: the training mixes, one row each, numbered uniquely.
+void parseAdeRows(const scenario::YamlReader& reader, const YAML::Node& root, Spec& spec) {
   const auto ade = root["ade"];
   if (!ade || !ade.IsSequence()) reader.fail(root, "ade", "expected a list of training mixes");
   std::set<int> rows;
@@ -295,79 +300,115 @@ Spec parseSpec(const fs::path& file, bool quick) {
     row.row = reader.integer(ade[i], "row", field + ".row", static_cast<int>(i) + 1, 1);
     if (!rows.insert(row.row).second) reader.fail(ade[i], field + ".row", fmt::format("row {} appears twice", row.row));
     if (!ade[i]["mix"]) reader.fail(ade[i], field, "missing 'mix'");
-    row.mix = labelled_counts(ade[i]["mix"], field + ".mix");
+    row.mix = labelledCounts(reader, spec, ade[i]["mix"], field + ".mix");
     for (const auto& [label, count] : row.mix) {
       if (!spec.sources.empty() && spec.source(label).scenario.empty()) continue;  // existing runs: checked at training
-      if (count > spec.trainSamples && !quick) {
+      if (count > spec.trainSamples && !spec.quick) {
         reader.fail(ade[i]["mix"], field + ".mix." + label,
                     fmt::format("{} samples, but data.train_samples is {}", count, spec.trainSamples));
       }
     }
-    if (ade[i]["paper"]) row.paper = labelled_numbers(ade[i]["paper"], field + ".paper");
+    if (ade[i]["paper"]) row.paper = labelledNumbers(reader, ade[i]["paper"], field + ".paper");
     spec.ade.push_back(row);
   }
+}
 
-  parseModels(reader, root, spec);
+/// `mae.metrics`: per functional scenario, the metrics whose MAE is reported.
+void parseMaeMetrics(const scenario::YamlReader& reader, const YAML::Node& metrics, Spec& spec) {
+  reader.requireMap(metrics, "mae.metrics");
+  for (const auto& by_label : metrics) {
+    const auto label = by_label.first.as<std::string>();
+    requireLabel(reader, spec, by_label.first, "mae.metrics." + label, label);
+    if (!spec.vectornetRows.count(label)) {
+      reader.fail(by_label.first, "mae.metrics." + label, "has no entry in mae.vectornet_rows");
+    }
+    reader.requireMap(by_label.second, "mae.metrics." + label);
+    for (const auto& by_metric : by_label.second) {
+      const auto metric = by_metric.first.as<std::string>();
+      const std::string field = "mae.metrics." + label + "." + metric;
+      if (!metrics::findMetric(metric)) reader.fail(by_metric.first, field, fmt::format("unknown metric '{}'", metric));
+      MaeMetricSpec item{label, metric, {}};
+      if (by_metric.second && by_metric.second.IsMap()) item.paper = labelledNumbers(reader, by_metric.second, field);
+      spec.maeMetrics.push_back(item);
+    }
+  }
+}
 
+/// `mae.extra_trees` and `mae.bnn`: the baselines' settings.
+void parseBaselines(const scenario::YamlReader& reader, const YAML::Node& mae, Spec& spec) {
+  if (const auto trees = mae["extra_trees"]) {
+    reader.checkKeys(trees, "mae.extra_trees", {"trees", "max_features", "min_samples_split"});
+    spec.extraTrees.trees = reader.integer(trees, "trees", "mae.extra_trees.trees", 100, 1);
+    spec.extraTrees.maxFeatures = reader.number(trees, "max_features", "mae.extra_trees.max_features", 1.0);
+    spec.extraTrees.minSamplesSplit = reader.integer(trees, "min_samples_split", "mae.extra_trees.min_samples_split", 2, 2);
+  }
+  if (const auto bnn = mae["bnn"]) {
+    reader.checkKeys(bnn, "mae.bnn", {"hidden", "layers", "epochs"});
+    spec.bnn.hidden = reader.integer(bnn, "hidden", "mae.bnn.hidden", spec.bnn.hidden, 1);
+    spec.bnn.layers = reader.integer(bnn, "layers", "mae.bnn.layers", spec.bnn.layers, 1);
+    spec.bnn.epochs = reader.integer(bnn, "epochs", "mae.bnn.epochs", spec.bnn.epochs, 1);
+  }
+}
+
+/// `mae`: the metric-MAE comparison of VectorNet and the baselines.
+void parseMae(const scenario::YamlReader& reader, const YAML::Node& root, Spec& spec) {
   if (const auto mae = root["mae"]) {
     reader.checkKeys(mae, "mae", {"samples", "draws", "vectornet_rows", "metrics", "extra_trees", "bnn"});
     spec.maeSamples = static_cast<std::size_t>(reader.integer(mae, "samples", "mae.samples", 2000, 2));
     spec.maeDraws = reader.integer(mae, "draws", "mae.draws", spec.maeDraws, 2, 1000);
     if (const auto rows_node = mae["vectornet_rows"]) {
-      for (const auto& [label, row] : labelled_counts(rows_node, "mae.vectornet_rows")) {
-        requireRow(rows_node[label], "mae.vectornet_rows." + label, static_cast<int>(row));
+      for (const auto& [label, row] : labelledCounts(reader, spec, rows_node, "mae.vectornet_rows")) {
+        requireRow(reader, spec, rows_node[label], "mae.vectornet_rows." + label, static_cast<int>(row));
         spec.vectornetRows[label] = static_cast<int>(row);
       }
     }
-    if (const auto metrics = mae["metrics"]) {
-      reader.requireMap(metrics, "mae.metrics");
-      for (const auto& by_label : metrics) {
-        const auto label = by_label.first.as<std::string>();
-        requireLabel(by_label.first, "mae.metrics." + label, label);
-        if (!spec.vectornetRows.count(label)) {
-          reader.fail(by_label.first, "mae.metrics." + label, "has no entry in mae.vectornet_rows");
-        }
-        reader.requireMap(by_label.second, "mae.metrics." + label);
-        for (const auto& by_metric : by_label.second) {
-          const auto metric = by_metric.first.as<std::string>();
-          const std::string field = "mae.metrics." + label + "." + metric;
-          if (!metrics::findMetric(metric)) reader.fail(by_metric.first, field, fmt::format("unknown metric '{}'", metric));
-          MaeMetricSpec item{label, metric, {}};
-          if (by_metric.second && by_metric.second.IsMap()) item.paper = labelled_numbers(by_metric.second, field);
-          spec.maeMetrics.push_back(item);
-        }
-      }
-    }
-    if (const auto trees = mae["extra_trees"]) {
-      reader.checkKeys(trees, "mae.extra_trees", {"trees", "max_features", "min_samples_split"});
-      spec.extraTrees.trees = reader.integer(trees, "trees", "mae.extra_trees.trees", 100, 1);
-      spec.extraTrees.maxFeatures = reader.number(trees, "max_features", "mae.extra_trees.max_features", 1.0);
-      spec.extraTrees.minSamplesSplit = reader.integer(trees, "min_samples_split", "mae.extra_trees.min_samples_split", 2, 2);
-    }
-    if (const auto bnn = mae["bnn"]) {
-      reader.checkKeys(bnn, "mae.bnn", {"hidden", "layers", "epochs"});
-      spec.bnn.hidden = reader.integer(bnn, "hidden", "mae.bnn.hidden", spec.bnn.hidden, 1);
-      spec.bnn.layers = reader.integer(bnn, "layers", "mae.bnn.layers", spec.bnn.layers, 1);
-      spec.bnn.epochs = reader.integer(bnn, "epochs", "mae.bnn.epochs", spec.bnn.epochs, 1);
-    }
+    if (const auto metrics = mae["metrics"]) parseMaeMetrics(reader, metrics, spec);
+    parseBaselines(reader, mae, spec);
   }
   spec.extraTrees.seed = spec.bnn.seed = spec.seed;
+}
 
-  if (const auto figures = root["figures"]) {
-    for (std::size_t i = 0; i < figures.size(); ++i) {
-      const std::string field = fmt::format("figures[{}]", i);
-      reader.checkKeys(figures[i], field, {"name", "row", "title"});
-      FigureSpec figure;
-      if (!figures[i]["name"] || !figures[i]["row"]) reader.fail(figures[i], field, "needs 'name' and 'row'");
-      figure.name = reader.scalar(figures[i]["name"], field + ".name");
-      requireSafeName(figure.name, lineOf(file, figures[i]["name"]), field + ".name");
-      figure.row = reader.integer(figures[i], "row", field + ".row", 0, 1);
-      requireRow(figures[i]["row"], field + ".row", figure.row);
-      if (figures[i]["title"]) figure.title = reader.scalar(figures[i]["title"], field + ".title");
-      spec.figures.push_back(figure);
-    }
+/// `figures`: the scenes drawn, each from one ade row's model.
+void parseFigures(const scenario::YamlReader& reader, const YAML::Node& root, Spec& spec) {
+  const auto figures = root["figures"];
+  if (!figures) return;
+  for (std::size_t i = 0; i < figures.size(); ++i) {
+    const std::string field = fmt::format("figures[{}]", i);
+    reader.checkKeys(figures[i], field, {"name", "row", "title"});
+    FigureSpec figure;
+    if (!figures[i]["name"] || !figures[i]["row"]) reader.fail(figures[i], field, "needs 'name' and 'row'");
+    figure.name = reader.scalar(figures[i]["name"], field + ".name");
+    requireSafeName(figure.name, lineOf(spec.file, figures[i]["name"]), field + ".name");
+    figure.row = reader.integer(figures[i], "row", field + ".row", 0, 1);
+    requireRow(reader, spec, figures[i]["row"], field + ".row", figure.row);
+    if (figures[i]["title"]) figure.title = reader.scalar(figures[i]["title"], field + ".title");
+    spec.figures.push_back(figure);
   }
+}
 
+}  // namespace
+
+Spec parseSpec(const fs::path& file, bool quick) {
+  std::string text;
+  try {
+    text = readTextFile(file, read_limits::kSpec);
+  } catch (const IoError& error) {
+    throw ConfigError(error.what());
+  }
+  const scenario::YamlReader reader(file.string());
+  const auto root = scenario::loadYaml(text, file.string());
+  reader.checkKeys(root, "", {"schema", "name", "seed", "scenarios", "data", "training", "ade", "models", "seeds", "predictors", "mae",
+                          "figures", "quick"});
+  Spec spec;
+  spec.file = file;
+  spec.quick = quick;
+  parseHeader(reader, root, spec);
+  parseSources(reader, root, spec);
+  parseDataAndTraining(reader, root, spec);
+  parseAdeRows(reader, root, spec);
+  parseModels(reader, root, spec);
+  parseMae(reader, root, spec);
+  parseFigures(reader, root, spec);
   if (quick) applyQuickSizes(reader, root, spec);
   return spec;
 }

@@ -26,6 +26,15 @@ namespace {
 constexpr const char* kModelFormat = "vsd-model/4";
 constexpr const char* kModelFormatVersion3 = "vsd-model/3";
 constexpr const char* kModelFormatVersion2 = "vsd-model/2";
+
+/// Options a vsd-model/2 file lacks because its decoder gained them later, as that file's
+/// decoder behaved (each decoder's registry entry says which and how).
+void addOptionsOfModelFormat2(VectorNetConfig& config) {
+  for (const auto& decoder : availableDecoders()) {
+    if (decoder.name != config.decoder) continue;
+    for (const auto& [name, value] : decoder.optionsBeforeModelFormat3) config.decoderOptions.emplace(name, value);
+  }
+}
 constexpr double kLaneSmoothingBeforeVersion4 = 4.0;  ///< m
 constexpr const char* kLegacyModelFormat = "vsd-model/1";
 constexpr const char* kInfoKey = "vsd_model_info";
@@ -203,9 +212,7 @@ ModelInfo infoFromJson(const std::string& text, const fs::path& file) {
       info.config.decoder = json.at("decoder").at("name");
       info.config.decoderOptions = json.at("decoder").at("options").get<std::map<std::string, double>>();
       info.config.frame = json.at("frame");
-      if (format == kModelFormatVersion2 && info.config.decoder == "kinematic") {
-        info.config.decoderOptions.emplace("heading_control", 0.0);  // written before heading control existed
-      }
+      if (format == kModelFormatVersion2) addOptionsOfModelFormat2(info.config);
     }
     info.featureVersion = json.at("feature_version");
     info.datasetSchema = json.at("dataset_schema");

@@ -5,8 +5,8 @@
 // for (outputWidth); the decoder turns them into the Ego's future: its most likely
 // positions and, depending on the decoder, speeds and accelerations, a position
 // covariance per step and a way to draw samples. It also defines the training loss.
-// Adding a decoder: one source file with its class and a factory, one entry in
-// decoder_registry.cpp.
+// Adding a decoder: one source file with its class and a function returning its
+// DecoderEntry, one line in decoder_registry.cpp (or one addDecoder() call; docs/design.md).
 //
 // Everything here is in the model's frame (README "Representations"): metres, radians,
 // the Ego starting at `EgoStart`.
@@ -65,8 +65,12 @@ struct DecoderEntry {
   std::function<std::unique_ptr<Decoder>(const VectorNetConfig&)> create;
 };
 
-/// Every decoder, one entry each (decoder_registry.cpp).
+/// Every decoder, one entry each: the built-ins (decoder_registry.cpp), then the added ones.
 const std::vector<DecoderEntry>& decoderRegistry();
+/// Adds a decoder written outside this module (its own file and this one call, before any
+/// model is built or loaded with it). Throws ConfigError for a name that is taken or an
+/// entry without a factory.
+void addDecoder(DecoderEntry entry);
 /// The decoder of a validated configuration.
 std::unique_ptr<Decoder> makeDecoder(const VectorNetConfig& config);
 

@@ -8,22 +8,44 @@
 
 namespace vsd::model {
 
-const std::vector<DecoderEntry>& decoderRegistry() {
-  static const std::vector<DecoderEntry> kEntries = {
+namespace {
+
+/// The built-ins (one line each), then what addDecoder() added.
+std::vector<DecoderEntry>& entries() {
+  static std::vector<DecoderEntry> registered = {
       offsetsDecoderEntry(),
       kinematicDecoderEntry(),
   };
-  return kEntries;
+  return registered;
 }
 
-const std::vector<DecoderInfo>& availableDecoders() {
-  static const std::vector<DecoderInfo> kInfos = [] {
-    std::vector<DecoderInfo> infos;
-    for (const auto& entry : decoderRegistry()) infos.push_back(entry.info);
-    return infos;
+/// The public descriptions, in registry order (kept beside the entries).
+std::vector<DecoderInfo>& infos() {
+  static std::vector<DecoderInfo> described = [] {
+    std::vector<DecoderInfo> result;
+    for (const auto& entry : entries()) result.push_back(entry.info);
+    return result;
   }();
-  return kInfos;
+  return described;
 }
+
+}  // namespace
+
+const std::vector<DecoderEntry>& decoderRegistry() { return entries(); }
+
+void addDecoder(DecoderEntry entry) {
+  if (entry.info.name.empty() || !entry.create) throw ConfigError("a decoder entry needs a name and a factory");
+  for (const auto& existing : entries()) {
+    if (existing.info.name == entry.info.name) {
+      throw ConfigError(fmt::format("decoder '{}' is registered twice", entry.info.name));
+    }
+  }
+  infos();  // described before the entry is added, so that it is added to both once
+  infos().push_back(entry.info);
+  entries().push_back(std::move(entry));
+}
+
+const std::vector<DecoderInfo>& availableDecoders() { return infos(); }
 
 const DecoderInfo& findDecoder(const std::string& name, const std::string& where) {
   std::vector<std::string> known;

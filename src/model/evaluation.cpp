@@ -3,9 +3,11 @@
 
 #include <Eigen/LU>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <fstream>
+#include <optional>
 
 #include "vsd/core/csv.hpp"
 #include "vsd/core/error.hpp"
@@ -41,14 +43,16 @@ GaussianScore scorePosition(const Vec2& truth, const Vec2& mean, const Eigen::Ma
   return score;
 }
 
-/// Index of the step at `seconds` after t0 (t_1 is index 0), if within the horizon.
-std::optional<std::size_t> stepAt(double seconds, double step, std::size_t steps) {
-  const long index = std::lround(seconds / step) - 1;
-  if (index < 0 || static_cast<std::size_t>(index) >= steps) return std::nullopt;
-  return static_cast<std::size_t>(index);
-}
-
 }  // namespace
+
+std::array<std::size_t, kCalibrationPoints> calibrationSteps(std::size_t horizon_steps) {
+  std::array<std::size_t, kCalibrationPoints> steps{};
+  for (std::size_t t = 0; t < kCalibrationPoints; ++t) {
+    const long rounded = std::lround(kCalibrationShares[t] * static_cast<double>(horizon_steps));
+    steps[t] = static_cast<std::size_t>(std::max(1L, rounded)) - 1;
+  }
+  return steps;
+}
 
 void LabelErrors::add(const LabelErrors& one) {
   if (one.samples == 0) return;
@@ -59,7 +63,7 @@ void LabelErrors::add(const LabelErrors& one) {
     addToMean(nll, scored, one.nll);
     ++scored;
   }
-  for (std::size_t t = 0; t < kCalibrationTimes.size(); ++t) {
+  for (std::size_t t = 0; t < kCalibrationPoints; ++t) {
     if (one.countAt[t] == 0) continue;
     addToMean(nllAt[t], countAt[t], one.nllAt[t]);
     for (std::size_t l = 0; l < kCoverageLevels.size(); ++l) addToMean(coverageAt[t][l], countAt[t], one.coverageAt[t][l]);
@@ -96,15 +100,16 @@ LabelErrors predictionErrors(const Prediction& prediction, const vector::Vectori
   }
   errors.scored = 1;
   errors.nll = sum / static_cast<double>(valid);
-  for (std::size_t t = 0; t < kCalibrationTimes.size(); ++t) {
-    const auto k = stepAt(kCalibrationTimes[t], scene.step, mean.size());
-    if (!k || !scene.targetValid[*k]) continue;
-    const auto score = scorePosition(scene.target[*k], mean[*k], prediction.positionCovariance[*k]);
+  const auto steps = calibrationSteps(scene.target.size());
+  for (std::size_t t = 0; t < kCalibrationPoints; ++t) {
+    const std::size_t k = steps[t];
+    if (k >= mean.size() || !scene.targetValid[k]) continue;
+    const auto score = scorePosition(scene.target[k], mean[k], prediction.positionCovariance[k]);
     errors.countAt[t] = 1;
     errors.nllAt[t] = score.nll;
     for (std::size_t l = 0; l < kCoverageLevels.size(); ++l) {
       // The region of level p: r' S^-1 r <= r2, the Gaussian's -2 ln(1 - p) unless calibrated.
-      const double radius2 = *k < prediction.regionRadius2.size() ? prediction.regionRadius2[*k][l]
+      const double radius2 = k < prediction.regionRadius2.size() ? prediction.regionRadius2[k][l]
                                                                   : gaussianRegionRadius2(kCoverageLevels[l]);
       errors.coverageAt[t][l] = score.mahalanobis2 <= radius2 ? 1.0 : 0.0;
     }
@@ -112,14 +117,41 @@ LabelErrors predictionErrors(const Prediction& prediction, const vector::Vectori
   return errors;
 }
 
+namespace {
+
+/// s after t0 of each calibration point of a dataset's horizon.
+std::array<double, kCalibrationPoints> calibrationTimes(const vector::DatasetHeader& header) {
+  std::array<double, kCalibrationPoints> times{};
+  const auto steps = calibrationSteps(static_cast<std::size_t>(header.horizon));
+  for (std::size_t t = 0; t < kCalibrationPoints; ++t) times[t] = header.step * static_cast<double>(steps[t] + 1);
+  return times;
+}
+
+/// One evaluation reports its calibration points at one set of times.
+void requireSameTimeGrid(const vector::DatasetHeader& first, const vector::DatasetHeader& header, const std::string& file) {
+  if (std::abs(header.step - first.step) > 1e-9 || header.horizon != first.horizon) {
+    throw DatasetError(fmt::format("{}: step {} s and horizon {} steps, expected {} s and {} steps like the first dataset",
+                                   file, header.step, header.horizon, first.step, first.horizon));
+  }
+}
+
+}  // namespace
+
 Evaluation evaluate(const Predictor& predictor, const std::vector<fs::path>& data) {
   if (data.empty()) throw ConfigError("--data: no dataset given");
   Evaluation evaluation;
   evaluation.predictor = predictor.name();
+  std::optional<vector::DatasetHeader> first_header;
   for (const auto& given : data) {
     for (const auto& path : vector::datasetFiles(given)) {  // a sharded sweep: every shard
       const vector::DatasetReader reader(path);
       predictor.checkCompatible(reader.header(), reader.path().string());
+      if (!first_header) {
+        first_header = reader.header();
+        evaluation.calibrationTimes = calibrationTimes(reader.header());
+      } else {
+        requireSameTimeGrid(*first_header, reader.header(), reader.path().string());
+      }
       // An ADE over nothing would print as 0.000 m: nothing to predict is an error.
       if (reader.size() == 0) throw DatasetError(fmt::format("{}: the dataset holds no sample", reader.path().string()));
       for (std::size_t first = 0; first < reader.size(); first += kReadChunk) {
@@ -152,11 +184,11 @@ std::string calibrationTable(const Evaluation& evaluation) {
   std::string text = fmt::format(
       "  positions: NLL [nats] and share inside the predicted {:.0f} % / {:.0f} % region\n  {:<20}",
       100.0 * kCoverageLevels[0], 100.0 * kCoverageLevels[1], "functional scenario");
-  for (const double t : kCalibrationTimes) text += fmt::format(" {:>22}", "at " + timeName(t));
+  for (const double t : evaluation.calibrationTimes) text += fmt::format(" {:>22}", "at " + timeName(t));
   text += "\n";
   auto row = [&](const std::string& label, const LabelErrors& errors) {
     text += fmt::format("  {:<20}", label);
-    for (std::size_t t = 0; t < kCalibrationTimes.size(); ++t) {
+    for (std::size_t t = 0; t < kCalibrationPoints; ++t) {
       if (errors.countAt[t] == 0) {
         text += fmt::format(" {:>22}", "-");
         continue;
@@ -195,18 +227,18 @@ void Evaluation::writeCsv(const fs::path& path) const {
     std::ofstream stream(output.tempPath());
     CsvWriter csv(stream);
     std::vector<std::string> header = {"label", "samples", "ade_m", "fde_m", "nll"};
-    for (const double t : kCalibrationTimes) header.push_back("nll_" + timeName(t));
-    for (const double t : kCalibrationTimes) {
+    for (const double t : calibrationTimes) header.push_back("nll_" + timeName(t));
+    for (const double t : calibrationTimes) {
       for (const double level : kCoverageLevels) header.push_back(fmt::format("coverage{:.0f}_{}", 100.0 * level, timeName(t)));
     }
     csv.writeRow(header);
     auto row = [&](const std::string& label, const LabelErrors& errors) {
       std::vector<std::string> cells = {label, std::to_string(errors.samples), formatNumber(errors.ade),
                                         formatNumber(errors.fde), errors.scored > 0 ? formatNumber(errors.nll) : ""};
-      for (std::size_t t = 0; t < kCalibrationTimes.size(); ++t) {
+      for (std::size_t t = 0; t < kCalibrationPoints; ++t) {
         cells.push_back(errors.countAt[t] > 0 ? formatNumber(errors.nllAt[t]) : "");
       }
-      for (std::size_t t = 0; t < kCalibrationTimes.size(); ++t) {
+      for (std::size_t t = 0; t < kCalibrationPoints; ++t) {
         for (std::size_t l = 0; l < kCoverageLevels.size(); ++l) {
           cells.push_back(errors.countAt[t] > 0 ? formatNumber(errors.coverageAt[t][l]) : "");
         }

@@ -5,6 +5,7 @@
 #include <optional>
 #include <vector>
 
+#include "vsd/core/defaults.hpp"
 #include "vsd/core/error.hpp"
 
 namespace vsd::model {
@@ -68,7 +69,7 @@ class LaneTracer {
   static constexpr double kBehind = 60.0;          ///< m traced behind it (the export radius)
   static constexpr double kMaxOffset = 6.0;        ///< m: boundaries farther to the side do not count
   static constexpr double kMinAlignment = 0.82;    ///< cos 35 deg: boundaries must run roughly along
-  static constexpr double kDefaultWidth = 3.5;     ///< m, until a lane with both boundaries is seen
+  static constexpr double kDefaultWidth = kDefaultLaneWidth;  ///< m, until a lane with both boundaries is seen
 
   explicit LaneTracer(std::vector<BoundarySegment> segments) : segments_(std::move(segments)) {}
 

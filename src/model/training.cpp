@@ -31,6 +31,10 @@ namespace vsd::model {
 
 namespace {
 
+/// Largest L2 norm of the whole gradient per optimizer step (one- and many-rank steps
+/// alike): keeps an early step on a badly scaled scene from throwing the weights off.
+constexpr double kGradientClipNorm = 5.0;
+
 struct Selection {
   std::vector<vector::VectorizedScene> train;
   std::vector<vector::VectorizedScene> validation;
@@ -463,7 +467,7 @@ class Trainer {
                        stepsPerEpoch_, decoded.covariance.defined());
     }
     loss.backward();
-    torch::nn::utils::clip_grad_norm_(model_.network->parameters(), 5.0);
+    torch::nn::utils::clip_grad_norm_(model_.network->parameters(), kGradientClipNorm);
     optimizer_.step();
     return value;
   }
@@ -482,7 +486,7 @@ class Trainer {
       throw divergence(options_, summary_, epoch * stepsPerEpoch_ + batch_index + 1, epoch + 1, batch_index + 1,
                        stepsPerEpoch_, !step.varianceFinite);
     }
-    torch::nn::utils::clip_grad_norm_(model_.network->parameters(), 5.0);
+    torch::nn::utils::clip_grad_norm_(model_.network->parameters(), kGradientClipNorm);
     optimizer_.step();
     return step.loss;
   }

@@ -20,7 +20,9 @@
 #include "vsd/core/interrupt.hpp"
 #include "vsd/core/log.hpp"
 #include "vsd/core/progress.hpp"
+#include "vsd/core/road_user.hpp"
 #include "vsd/core/random.hpp"
+#include "vsd/road/map_importers.hpp"
 #include "vsd/road/network.hpp"
 #include "vsd/sim/controller.hpp"
 #include "vsd/vector/dataset.hpp"
@@ -163,8 +165,8 @@ struct Motion {
 /// The last window-length of states of one vehicle.
 struct History {
   std::deque<Recorded> states;  ///< increasing steps
-  double length = 5.0;
-  double width = 1.8;
+  double length = kCarLength;  // overwritten from the snapshot before use
+  double width = kCarWidth;
   std::int64_t lastStep = 0;
   bool ego = false;
   std::int64_t nextT0 = 0;  ///< Egos: step of the next window start
@@ -686,8 +688,8 @@ ExportJob makeJob(const ExportOptions& options, const TemporaryDirectory& work) 
   job.simulation.seed = options.seed;
   job.simulation.laneChangeDuration = options.laneChangeDuration;
   if (!options.openDrive.empty()) {
-    job.simulation.source.net = work.path() / "opendrive.net.xml";
-    road::convertOpenDrive(options.openDrive, job.simulation.source.net);
+    job.simulation.source.net =
+        road::MapImporterRegistry::withBuiltins().forFile(options.openDrive).toNet(options.openDrive, work.path());
     job.mapFile = options.openDrive;
   }
   job.label = options.label.empty() ? job.mapFile.stem().string() : options.label;

@@ -111,6 +111,74 @@ void judgeConfidence(CriterionStatistics& stats, const Comparison& comparison, s
   }
 }
 
+/// Errors of the predicted metric m against the reference (simulated or recorded) values.
+MetricStatistics metricStatistics(const Comparison& comparison, std::size_t m) {
+  MetricStatistics stats;
+  stats.name = comparison.metricNames[m];
+  stats.unit = m < comparison.metricUnits.size() ? comparison.metricUnits[m] : "";
+  std::vector<double> absolute_errors;
+  double error_sum = 0.0;
+  double floor_sum = 0.0;
+  std::size_t floor_pairs = 0;
+  for (const auto& scenario : comparison.scenarios) {
+    if (!scenario.ok()) continue;
+    const double predicted = scenario.predicted.at(m);
+    const double reference = scenario.reference.at(m);
+    if (std::isfinite(predicted) && std::isfinite(reference)) {
+      absolute_errors.push_back(std::abs(predicted - reference));
+      error_sum += predicted - reference;
+      if (m < scenario.fromReferencePositions.size() && std::isfinite(scenario.fromReferencePositions[m])) {
+        floor_sum += std::abs(scenario.fromReferencePositions[m] - reference);
+        ++floor_pairs;
+      }
+    } else if (std::isinf(predicted) && std::isinf(reference) && (predicted > 0) == (reference > 0)) {
+      ++stats.bothInfinite;
+    } else if (!(std::isnan(predicted) && std::isnan(reference))) {
+      ++stats.finitenessMismatch;
+    }
+  }
+  stats.pairs = absolute_errors.size();
+  if (stats.pairs > 0) {
+    double sum = 0.0;
+    for (double e : absolute_errors) sum += e;
+    stats.mae = sum / static_cast<double>(stats.pairs);
+    stats.bias = error_sum / static_cast<double>(stats.pairs);
+    std::sort(absolute_errors.begin(), absolute_errors.end());
+    stats.medianAbsoluteError = quantile(absolute_errors, 0.5);
+    stats.p90AbsoluteError = quantile(absolute_errors, 0.9);
+  } else {
+    stats.mae = stats.bias = stats.medianAbsoluteError = stats.p90AbsoluteError = kNaN;
+  }
+  if (floor_pairs > 0) stats.floorMae = floor_sum / static_cast<double>(floor_pairs);
+  calibrate(stats, comparison, m);
+  return stats;
+}
+
+/// How often the predicted verdicts of criterion c agree with the reference ones.
+CriterionStatistics criterionStatistics(const Comparison& comparison, std::size_t c) {
+  CriterionStatistics stats;
+  stats.name = comparison.criteria[c].name;
+  stats.expression = comparison.criteria[c].expression;
+  for (const auto& scenario : comparison.scenarios) {
+    if (!scenario.ok()) continue;
+    const int predicted = scenario.predictedFails.at(c);
+    const int reference = scenario.referenceFails.at(c);
+    if (predicted < 0 || reference < 0) {
+      ++stats.undefined;
+    } else if (predicted && reference) {
+      ++stats.bothFail;
+    } else if (predicted) {
+      ++stats.falseAlarm;
+    } else if (reference) {
+      ++stats.missed;
+    } else {
+      ++stats.bothPass;
+    }
+  }
+  judgeConfidence(stats, comparison, c);
+  return stats;
+}
+
 }  // namespace
 
 double CriterionStatistics::agreement() const { return ratio(bothFail + bothPass, bothFail + bothPass + falseAlarm + missed); }
@@ -131,72 +199,8 @@ ComparisonStatistics computeStatistics(const Comparison& comparison) {
   }
   s.ade = describe(ades);
   s.fde = describe(fdes);
-
-  for (std::size_t m = 0; m < comparison.metricNames.size(); ++m) {
-    MetricStatistics stats;
-    stats.name = comparison.metricNames[m];
-    stats.unit = m < comparison.metricUnits.size() ? comparison.metricUnits[m] : "";
-    std::vector<double> absolute_errors;
-    double error_sum = 0.0;
-    double floor_sum = 0.0;
-    std::size_t floor_pairs = 0;
-    for (const auto& scenario : comparison.scenarios) {
-      if (!scenario.ok()) continue;
-      const double predicted = scenario.predicted.at(m);
-      const double reference = scenario.reference.at(m);
-      if (std::isfinite(predicted) && std::isfinite(reference)) {
-        absolute_errors.push_back(std::abs(predicted - reference));
-        error_sum += predicted - reference;
-        if (m < scenario.fromReferencePositions.size() && std::isfinite(scenario.fromReferencePositions[m])) {
-          floor_sum += std::abs(scenario.fromReferencePositions[m] - reference);
-          ++floor_pairs;
-        }
-      } else if (std::isinf(predicted) && std::isinf(reference) && (predicted > 0) == (reference > 0)) {
-        ++stats.bothInfinite;
-      } else if (!(std::isnan(predicted) && std::isnan(reference))) {
-        ++stats.finitenessMismatch;
-      }
-    }
-    stats.pairs = absolute_errors.size();
-    if (stats.pairs > 0) {
-      double sum = 0.0;
-      for (double e : absolute_errors) sum += e;
-      stats.mae = sum / static_cast<double>(stats.pairs);
-      stats.bias = error_sum / static_cast<double>(stats.pairs);
-      std::sort(absolute_errors.begin(), absolute_errors.end());
-      stats.medianAbsoluteError = quantile(absolute_errors, 0.5);
-      stats.p90AbsoluteError = quantile(absolute_errors, 0.9);
-    } else {
-      stats.mae = stats.bias = stats.medianAbsoluteError = stats.p90AbsoluteError = kNaN;
-    }
-    if (floor_pairs > 0) stats.floorMae = floor_sum / static_cast<double>(floor_pairs);
-    calibrate(stats, comparison, m);
-    s.metrics.push_back(stats);
-  }
-
-  for (std::size_t c = 0; c < comparison.criteria.size(); ++c) {
-    CriterionStatistics stats;
-    stats.name = comparison.criteria[c].name;
-    stats.expression = comparison.criteria[c].expression;
-    for (const auto& scenario : comparison.scenarios) {
-      if (!scenario.ok()) continue;
-      const int predicted = scenario.predictedFails.at(c);
-      const int reference = scenario.referenceFails.at(c);
-      if (predicted < 0 || reference < 0) {
-        ++stats.undefined;
-      } else if (predicted && reference) {
-        ++stats.bothFail;
-      } else if (predicted) {
-        ++stats.falseAlarm;
-      } else if (reference) {
-        ++stats.missed;
-      } else {
-        ++stats.bothPass;
-      }
-    }
-    judgeConfidence(stats, comparison, c);
-    s.criteria.push_back(stats);
-  }
+  for (std::size_t m = 0; m < comparison.metricNames.size(); ++m) s.metrics.push_back(metricStatistics(comparison, m));
+  for (std::size_t c = 0; c < comparison.criteria.size(); ++c) s.criteria.push_back(criterionStatistics(comparison, c));
   return s;
 }
 

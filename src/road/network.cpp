@@ -113,22 +113,6 @@ void NetworkBuilder::writePlainXml(const fs::path& stem) const {
   write(fs::path(stem.string() + ".edg.xml"), edges);
 }
 
-void convertOpenDrive(const fs::path& xodr, const fs::path& net) {
-  ensureSumoHome();
-  if (!fs::exists(xodr)) throw ConfigError(fmt::format("{}: OpenDRIVE file does not exist", xodr.string()));
-  const fs::path log = net.string() + ".netconvert.log";
-  const auto result = runProcess({"netconvert", "--opendrive-files", xodr.string(), "--output-file", net.string(),
-                                  "--no-warnings", "true"},
-                                 log);
-  std::error_code ignored;
-  fs::remove(log, ignored);
-  if (result.exitCode != 0 || !fs::exists(net)) {
-    fs::remove(net, ignored);
-    throw SumoError(fmt::format("netconvert cannot import OpenDRIVE map {} (exit code {}): {}", xodr.string(),
-                                result.exitCode, firstErrorLine(result.output)));
-  }
-}
-
 std::vector<std::string> baseNetconvertOptions() {
   return {
       "--offset.disable-normalization", "true",  // net coordinates = generator coordinates + our offsets

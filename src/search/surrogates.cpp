@@ -11,8 +11,11 @@
 
 namespace vsd::search {
 
-const std::vector<SurrogateEntry>& surrogateRegistry() {
-  static const std::vector<SurrogateEntry> entries = {
+namespace {
+
+/// The built-ins first (one line each), then what addSurrogate() added.
+std::vector<SurrogateEntry>& entries() {
+  static std::vector<SurrogateEntry> registered = {
       {"random", "plain Monte Carlo: executes the logical scenario's random stream (the reference)",
        makeRandomSurrogate},
       {"extra-trees", "extra trees per criterion metric on the inputs; probability from the spread over the trees",
@@ -24,7 +27,19 @@ const std::vector<SurrogateEntry>& surrogateRegistry() {
        "sampled futures whose metrics meet the criterion",
        makeVectorNetSurrogate, /*learnsFromScenes=*/true},
   };
-  return entries;
+  return registered;
+}
+
+}  // namespace
+
+const std::vector<SurrogateEntry>& surrogateRegistry() { return entries(); }
+
+void addSurrogate(SurrogateEntry entry) {
+  if (entry.name.empty() || !entry.make) throw ConfigError("a surrogate entry needs a name and a factory");
+  for (const auto& existing : entries()) {
+    if (existing.name == entry.name) throw ConfigError(fmt::format("surrogate '{}' is registered twice", entry.name));
+  }
+  entries().push_back(std::move(entry));
 }
 
 const SurrogateEntry& findSurrogate(const std::string& name) {

@@ -77,6 +77,7 @@ class VehicleTypes {
 struct Member {
   const ScenarioRun* run = nullptr;
   std::string edge;
+  std::string route;  ///< SUMO route over the scenario's edge
   std::string egoId;
   std::vector<std::string> otherIds;
   /// The scripted road users, stepped with the Ego: traffic->states() are every other road
@@ -132,94 +133,182 @@ std::unordered_set<std::string> asSet(const std::vector<std::string>& ids) { ret
 
 }  // namespace
 
-std::vector<SimulatedScenario> simulateBatch(const std::filesystem::path& net, const std::vector<ScenarioRun>& runs,
-                                             ControllerRegistry& registry, const BatchOptions& options) {
-  if (!(options.step > 0.0) || options.steps < 1) {
-    throw Error(fmt::format("internal: batch simulation with step {} s and {} steps", options.step, options.steps));
+namespace {
+
+/// One SUMO simulation of a batch of concrete scenarios, each on its own edge: the Egos and
+/// scripted road users are stepped here and placed in SUMO, which steps them all at once.
+class BatchRun {
+ public:
+  /// Adds every scenario's vehicles to `session` (loaded with the batch's network).
+  BatchRun(SumoSession& session, const std::vector<ScenarioRun>& runs, ControllerRegistry& registry,
+           const BatchOptions& options)
+      : session_(session), registry_(registry), options_(options), instants_(static_cast<std::size_t>(options.steps) + 1),
+        matchToLanes_(sumoIgnoresLateralPositions()), members_(runs.size()) {
+    for (std::size_t m = 0; m < runs.size(); ++m) addScenario(m, runs[m]);
   }
-  const auto t_start = std::chrono::steady_clock::now();
-  // Outside the per-scenario parts below, faults belong to the simulation as a whole.
-  reportSubject(-1);
-  reportSimulationTime(0.0);
-  const ActivityScope whole_batch(Activity::SumoStep);
-  SumoSession session(sessionArguments(net, options));
-  const double load_seconds = secondsSince(t_start);
-  const std::size_t instants = static_cast<std::size_t>(options.steps) + 1;
-  const double dt = options.step;
 
-  VehicleTypes types;
-  LaneCache lanes;
-  const bool match_to_lanes = sumoIgnoresLateralPositions();
-  std::vector<Member> members(runs.size());
-  std::unordered_map<std::string, std::size_t> owner;  // SUMO vehicle id -> member
-  std::unordered_set<std::string> expected;             // vehicles that should be in the simulation
+  /// t = 0: SUMO inserts every vehicle at its start pose.
+  void start() {
+    session_.step();
+    checkRemovals(0.0);
+    record(0);
+  }
 
-  for (std::size_t m = 0; m < runs.size(); ++m) {
-    Member& member = members[m];
-    const ScenarioRun& run = runs[m];
+  /// From instant k to k + 1: every scenario's road users and Ego move, then SUMO steps.
+  void step(int k) {
+    const double time = k * options_.step;
+    reportSimulationTime(time);
+    for (auto& member : members_) {
+      if (member.active) driveScenario(member, k, time);
+    }
+    if (faultInjectionActive()) {
+      for (const auto& member : members_) {
+        if (member.active) faultPoint(fmt::format("sumo.step-with:{}", member.result.index));
+      }
+    }
+    reportSubject(-1);
+    session_.step();
+    checkRemovals(time + options_.step);
+    record(static_cast<std::size_t>(k) + 1);
+  }
+
+  std::vector<SimulatedScenario> results() {
+    std::vector<SimulatedScenario> results;
+    results.reserve(members_.size());
+    for (auto& member : members_) {
+      reportSubject(static_cast<std::int64_t>(member.result.index));
+      member.ego.reset();  // a plugin's destroy() runs here, attributed to its scenario
+      for (auto& track : member.result.trace.vehicles) fillAccelerationFromSpeed(track, options_.step);
+      results.push_back(std::move(member.result));
+    }
+    return results;
+  }
+
+
+ private:
+  void addScenario(std::size_t m, const ScenarioRun& run) {
+    Member& member = members_[m];
     const auto& concrete = *run.scenario;
-    const auto& spec = *concrete.logical;
     member.run = &run;
     member.result.index = concrete.index;
     reportSubject(static_cast<std::int64_t>(concrete.index));
     const ActivityScope adding(Activity::SumoVehicles);
-    member.result.trace.step = dt;
+    member.result.trace.step = options_.step;
     member.edge = road::edgeIdFor(concrete.index);
-    const std::string route = "r" + member.edge;
-    libsumo::Route::add(route, {member.edge});
-
+    member.route = "r" + member.edge;
+    libsumo::Route::add(member.route, {member.edge});
     for (int lane = 0; lane < run.road->lanes; ++lane) {
       member.result.lanes.push_back(fetchLane(fmt::format("{}_{}", member.edge, lane), run.offset));
     }
-    if (match_to_lanes) member.placement = SumoPlacement(member.result.lanes);
-
+    if (matchToLanes_) member.placement = SumoPlacement(member.result.lanes);
     // The scripted road users start where the scenario puts them; the Ego on its lane's
     // centre line at its x or s, heading along the lane.
     member.traffic.emplace(concrete, *run.road);
-    const auto& ego_spec = concrete.ego;
-    member.egoId = member.edge + "." + ego_spec.id;
-    libsumo::Vehicle::add(member.egoId, route, types.get(ego_spec), "now", std::to_string(ego_spec.lane), "base",
-                          fmt::format("{}", ego_spec.speed));
-    libsumo::Vehicle::setSpeedMode(member.egoId, 0);
-    libsumo::Vehicle::setLaneChangeMode(member.egoId, 0);
-    const bool overridden = !options.egoControllerOverride.empty();
+    member.result.trace.vehicles.resize(1 + concrete.others.size());
+    addEgo(m, member);
+    addOthers(m, member);
+  }
+
+  /// The Ego's controller: the scenario's, or the one --reference names for every scenario.
+  std::unique_ptr<EgoController> egoController(const scenario::ConcreteScenario& concrete) {
+    const auto& spec = *concrete.logical;
+    const bool overridden = !options_.egoControllerOverride.empty();
     const ControllerParams params(overridden ? std::vector<std::pair<std::string, double>>{} : concrete.controllerParams,
-                                  overridden ? "--reference " + options.egoControllerOverride : spec.ego.controller.where);
-    auto controller = withStepCost(
-        overridden ? makeController(registry, options.egoControllerOverride, {}, options.scenarioDir, params)
-                   : makeController(registry, spec.ego.controller.name, spec.ego.controller.library,
-                                    options.scenarioDir, params),
-        options.egoStepCost);
-    member.ego.emplace(member.egoId, std::move(controller), member.traffic->egoStart(), ego_spec.length,
-                       ego_spec.width, run.offset);
+                                  overridden ? "--reference " + options_.egoControllerOverride : spec.ego.controller.where);
+    return withStepCost(overridden ? makeController(registry_, options_.egoControllerOverride, {}, options_.scenarioDir, params)
+                                   : makeController(registry_, spec.ego.controller.name, spec.ego.controller.library,
+                                                    options_.scenarioDir, params),
+                        options_.egoStepCost);
+  }
+
+  void addEgo(std::size_t m, Member& member) {
+    const auto& ego_spec = member.run->scenario->ego;
+    member.egoId = member.edge + "." + ego_spec.id;
+    addSumoVehicle(member.egoId, member.route, ego_spec);
+    member.ego.emplace(member.egoId, egoController(*member.run->scenario), member.traffic->egoStart(), ego_spec.length,
+                       ego_spec.width, member.run->offset);
     member.ego->placeBy(member.placement);
     member.ego->pushToSumo();
-    owner.emplace(member.egoId, m);
-    expected.insert(member.egoId);
+    owner_.emplace(member.egoId, m);
+    expected_.insert(member.egoId);
+    initTrack(member.result.trace.vehicles[0], ego_spec, VehicleRole::Ego, instants_);
+  }
 
-    auto& trace = member.result.trace;
-    trace.vehicles.resize(1 + concrete.others.size());
-    initTrack(trace.vehicles[0], ego_spec, VehicleRole::Ego, instants);
-
-    for (std::size_t o = 0; o < concrete.others.size(); ++o) {
-      const auto& other = concrete.others[o];
-      // Scripted road users are placed where the stepper moves them, like the Ego, so SUMO
-      // and the Ego's sensors see them there.
+  /// Scripted road users are placed where the stepper moves them, like the Ego, so SUMO and
+  /// the Ego's sensors see them there.
+  void addOthers(std::size_t m, Member& member) {
+    const auto& others = member.run->scenario->others;
+    for (std::size_t o = 0; o < others.size(); ++o) {
+      const auto& other = others[o];
       const std::string id = member.edge + "." + other.id;
-      libsumo::Vehicle::add(id, route, types.get(other), "now", std::to_string(other.lane), "base",
-                            fmt::format("{}", other.speed));
-      libsumo::Vehicle::setSpeedMode(id, 0);
-      libsumo::Vehicle::setLaneChangeMode(id, 0);
-      placeInSumo(id, member.traffic->states()[o], other.length, other.width, run.offset, member.placement);
+      addSumoVehicle(id, member.route, other);
+      placeInSumo(id, member.traffic->states()[o], other.length, other.width, member.run->offset, member.placement);
       member.otherIds.push_back(id);
-      owner.emplace(id, m);
-      expected.insert(id);
-      initTrack(trace.vehicles[1 + o], other, VehicleRole::Other, instants);
+      owner_.emplace(id, m);
+      expected_.insert(id);
+      initTrack(member.result.trace.vehicles[1 + o], other, VehicleRole::Other, instants_);
     }
   }
 
-  auto record = [&](std::size_t k) {
-    for (auto& member : members) {
+  /// A vehicle SUMO neither drives nor changes lanes for: vsd-sumo places it every step.
+  void addSumoVehicle(const std::string& id, const std::string& route, const scenario::ConcreteVehicle& vehicle) {
+    libsumo::Vehicle::add(id, route, types_.get(vehicle), "now", std::to_string(vehicle.lane), "base",
+                          fmt::format("{}", vehicle.speed));
+    libsumo::Vehicle::setSpeedMode(id, 0);
+    libsumo::Vehicle::setLaneChangeMode(id, 0);
+  }
+
+  /// The road users as the Ego's sensors see them at the current instant.
+  static std::vector<RoadUserState> roadUsersOf(const Member& member) {
+    std::vector<RoadUserState> road_users;
+    const auto& others = member.run->scenario->others;
+    for (std::size_t o = 0; o < member.otherIds.size(); ++o) {
+      road_users.push_back(
+          {static_cast<int>(o) + 1, others[o].type, member.traffic->states()[o], others[o].length, others[o].width});
+    }
+    return road_users;
+  }
+
+  void driveScenario(Member& member, int k, double time) {
+    reportSubject(static_cast<std::int64_t>(member.result.index));
+    const ActivityScope driving(Activity::SumoVehicles);
+    if (faultInjectionActive()) {
+      const ActivityScope in_controller(Activity::Controller);
+      faultPoint(fmt::format("controller.step:{}", member.result.index));
+    }
+    // The Ego's sensors see the other road users where they are at instant k.
+    const std::vector<RoadUserState> road_users = roadUsersOf(member);
+    // The others move on from instant k with the Ego where it is at k (triggers see it there).
+    member.traffic->step(member.ego->state());
+    try {
+      member.ego->step(time, options_.step, member.run->scenario->ego.headingNoise[static_cast<std::size_t>(k)], lanes_,
+                       road_users);
+    } catch (const ConfigError&) {
+      throw;
+    } catch (const Error& error) {
+      fail(member, fmt::format("Ego controller failed at t = {:.1f} s: {}", time, error.what()));
+      return;
+    }
+    placeOthers(member, time);
+  }
+
+  void placeOthers(Member& member, double time) {
+    const auto& others = member.run->scenario->others;
+    for (std::size_t o = 0; o < member.otherIds.size() && member.active; ++o) {
+      if (member.traffic->pastRoadEnd(o)) {
+        fail(member, fmt::format("vehicle '{}' reached the end of its road at t = {:.1f} s", others[o].id,
+                                 time + options_.step));
+        break;
+      }
+      // Placed every step, standing or not: left alone, SUMO would turn a standing road
+      // user back along its lane.
+      placeInSumo(member.otherIds[o], member.traffic->states()[o], others[o].length, others[o].width, member.run->offset,
+                  member.placement);
+    }
+  }
+
+  void record(std::size_t k) {
+    for (auto& member : members_) {
       if (!member.active) continue;
       reportSubject(static_cast<std::int64_t>(member.result.index));
       const ActivityScope reading(Activity::SumoVehicles);
@@ -231,9 +320,9 @@ std::vector<SimulatedScenario> simulateBatch(const std::filesystem::path& net, c
         trace.vehicles[1 + o].valid[k] = 1;
       }
     }
-  };
+  }
 
-  auto fail = [&](Member& member, const std::string& reason) {
+  void fail(Member& member, const std::string& reason) {
     if (!member.active) return;
     member.active = false;
     member.result.failure = reason;
@@ -243,100 +332,65 @@ std::vector<SimulatedScenario> simulateBatch(const std::filesystem::path& net, c
     const auto alive = asSet(libsumo::Vehicle::getIDList());
     for (const auto& id : ids) {
       if (alive.count(id)) libsumo::Vehicle::remove(id);
-      expected.erase(id);
+      expected_.erase(id);
     }
-  };
+  }
 
-  // A vehicle SUMO removed (end of road, collision with action remove/teleport)
-  // fails its scenario; the others go on.
-  auto checkRemovals = [&](double time) {
-    if (static_cast<std::size_t>(libsumo::Vehicle::getIDCount()) == expected.size()) return;
+  /// A vehicle SUMO removed (end of road, collision with action remove/teleport) fails its
+  /// scenario; the others go on.
+  void checkRemovals(double time) {
+    if (static_cast<std::size_t>(libsumo::Vehicle::getIDCount()) == expected_.size()) return;
     const auto alive = asSet(libsumo::Vehicle::getIDList());
     const auto arrived = asSet(libsumo::Simulation::getArrivedIDList());
     const auto colliding = asSet(libsumo::Simulation::getCollidingVehiclesIDList());
     const auto teleporting = asSet(libsumo::Simulation::getStartingTeleportIDList());
     std::vector<std::string> missing;
-    for (const auto& id : expected) {
+    for (const auto& id : expected_) {
       if (!alive.count(id)) missing.push_back(id);
     }
     std::sort(missing.begin(), missing.end());
     for (const auto& id : missing) {
-      Member& member = members[owner.at(id)];
+      Member& member = members_[owner_.at(id)];
       const std::string vehicle = id.substr(member.edge.size() + 1);
       fail(member, fmt::format("SUMO removed vehicle '{}' at t = {:.1f} s ({})", vehicle, time,
                                removalReason(id, arrived, colliding, teleporting)));
     }
-  };
+  }
 
+  SumoSession& session_;
+  ControllerRegistry& registry_;
+  const BatchOptions& options_;
+  const std::size_t instants_;
+  const bool matchToLanes_;
+  VehicleTypes types_;
+  LaneCache lanes_;
+  std::vector<Member> members_;
+  std::unordered_map<std::string, std::size_t> owner_;  // SUMO vehicle id -> member
+  std::unordered_set<std::string> expected_;             // vehicles that should be in the simulation
+};
+
+}  // namespace
+
+std::vector<SimulatedScenario> simulateBatch(const std::filesystem::path& net, const std::vector<ScenarioRun>& runs,
+                                             ControllerRegistry& registry, const BatchOptions& options) {
+  if (!(options.step > 0.0) || options.steps < 1) {
+    throw Error(fmt::format("internal: batch simulation with step {} s and {} steps", options.step, options.steps));
+  }
+  const auto t_start = std::chrono::steady_clock::now();
+  // Outside the per-scenario parts, faults belong to the simulation as a whole.
+  reportSubject(-1);
+  reportSimulationTime(0.0);
+  const ActivityScope whole_batch(Activity::SumoStep);
+  SumoSession session(sessionArguments(net, options));
+  const double load_seconds = secondsSince(t_start);
+  BatchRun batch(session, runs, registry, options);
   const double setup_seconds = secondsSince(t_start) - load_seconds;
-  session.step();  // inserts every vehicle at its start pose: t = 0
-  checkRemovals(0.0);
-  record(0);
-
-  for (int k = 0; k < options.steps; ++k) {
-    const double time = k * dt;
-    reportSimulationTime(time);
-    for (auto& member : members) {
-      if (!member.active) continue;
-      reportSubject(static_cast<std::int64_t>(member.result.index));
-      const ActivityScope driving(Activity::SumoVehicles);
-      if (faultInjectionActive()) {
-        const ActivityScope in_controller(Activity::Controller);
-        faultPoint(fmt::format("controller.step:{}", member.result.index));
-      }
-      // The Ego's sensors see the other road users where they are at instant k.
-      std::vector<RoadUserState> road_users;
-      for (std::size_t o = 0; o < member.otherIds.size(); ++o) {
-        const auto& other = member.run->scenario->others[o];
-        road_users.push_back({static_cast<int>(o) + 1, other.type, member.traffic->states()[o], other.length,
-                              other.width});
-      }
-      // The others move on from instant k with the Ego where it is at k (triggers see it there).
-      member.traffic->step(member.ego->state());
-      try {
-        member.ego->step(time, dt, member.run->scenario->ego.headingNoise[static_cast<std::size_t>(k)], lanes,
-                         road_users);
-      } catch (const ConfigError&) {
-        throw;
-      } catch (const Error& error) {
-        fail(member, fmt::format("Ego controller failed at t = {:.1f} s: {}", time, error.what()));
-        continue;
-      }
-      const auto& others = member.run->scenario->others;
-      for (std::size_t o = 0; o < member.otherIds.size() && member.active; ++o) {
-        if (member.traffic->pastRoadEnd(o)) {
-          fail(member, fmt::format("vehicle '{}' reached the end of its road at t = {:.1f} s", others[o].id, time + dt));
-          break;
-        }
-        // Placed every step, standing or not: left alone, SUMO would turn a standing road
-        // user back along its lane.
-        placeInSumo(member.otherIds[o], member.traffic->states()[o], others[o].length, others[o].width,
-                    member.run->offset, member.placement);
-      }
-    }
-    if (faultInjectionActive()) {
-      for (const auto& member : members) {
-        if (member.active) faultPoint(fmt::format("sumo.step-with:{}", member.result.index));
-      }
-    }
-    reportSubject(-1);
-    session.step();
-    checkRemovals(time + dt);
-    record(static_cast<std::size_t>(k) + 1);
-  }
-
+  batch.start();
+  for (int k = 0; k < options.steps; ++k) batch.step(k);
   const double step_seconds = secondsSince(t_start) - load_seconds - setup_seconds;
-  spdlog::debug("simulateBatch: {} scenarios, load {:.3f} s, add vehicles {:.3f} s, {} steps {:.3f} s",
-                members.size(), load_seconds, setup_seconds, options.steps, step_seconds);
-  std::vector<SimulatedScenario> results;
-  results.reserve(members.size());
-  for (auto& member : members) {
-    reportSubject(static_cast<std::int64_t>(member.result.index));
-    member.ego.reset();  // a plugin's destroy() runs here, attributed to its scenario
-    for (auto& track : member.result.trace.vehicles) fillAccelerationFromSpeed(track, dt);
-    results.push_back(std::move(member.result));
-  }
-  return results;
+  spdlog::debug("simulateBatch: {} scenarios, load {:.3f} s, add vehicles {:.3f} s, {} steps {:.3f} s", runs.size(),
+                load_seconds, setup_seconds, options.steps, step_seconds);
+  return batch.results();
 }
 
 }  // namespace vsd::sim

@@ -381,6 +381,10 @@ struct DatasetReader::Impl {
 
   void readHeader(const H5::Group& root);
   void openArrays(const H5::Group& root);
+  /// The arrays of the file's version, by name (inputs / metrics only where stored).
+  std::map<std::string, H5::DataSet> openAll(const H5::Group& root);
+  /// Fails unless every array's shape follows from the header and the index arrays.
+  void checkShapes(const std::map<std::string, H5::DataSet>& arrays) const;
   void readIndex(const H5::Group& root);
   void checkIndex() const;
   std::pair<hsize_t, hsize_t> inlineVectorRange(std::size_t sample, const std::vector<std::uint8_t>& shared,
@@ -547,41 +551,38 @@ void DatasetReader::Impl::readHeader(const H5::Group& root) {
   header.history = static_cast<int>(history);
 }
 
-void DatasetReader::Impl::openArrays(const H5::Group& root) {
+std::map<std::string, H5::DataSet> DatasetReader::Impl::openAll(const H5::Group& root) {
   const auto open = [&](const char* name) {
     reading = name;
     H5::DataSet dataset = root.openDataSet(name);
     h5::checkStoredSize(dataset);
     return dataset;
   };
+  for (const char* table : {"labels", "input_names", "metric_names", "sources", "source_sha256", "ego_ids"}) open(table);
+  std::map<std::string, H5::DataSet> result;
+  for (const char* name : {"sample_polyline_start", "sample_polyline_count", "sample_ego_polyline", "sample_origin",
+                           "sample_label", "sample_index", "sample_source", "sample_ego", "sample_t0", "vectors",
+                           "vector_valid", "polyline_type", "polyline_shared", "shared_vectors",
+                           "polyline_vector_start", "polyline_vector_count", "targets", "target_valid"}) {
+    result.emplace(name, open(name));
+  }
+  for (const char* name : {"inputs", "metrics"}) {
+    if (root.nameExists(name)) result.emplace(name, open(name));
+  }
+  if (!header.vehicleSizesAssumed) {
+    for (const char* name : {"polyline_length", "polyline_width"}) result.emplace(name, open(name));
+  }
+  if (!header.roadUsersAssumed) result.emplace("polyline_road_user", open("polyline_road_user"));
+  return result;
+}
+
+void DatasetReader::Impl::checkShapes(const std::map<std::string, H5::DataSet>& arrays) const {
   const auto rows = [](const H5::DataSet& dataset) {
     const auto shape = h5::shapeOf(dataset);
     return shape.empty() ? hsize_t{0} : shape[0];
   };
   // Every array's shape follows from N samples, P polylines, V inline and S shared
   // vectors, F horizon steps and the I inputs / M metrics named in the header.
-  for (const char* table : {"labels", "input_names", "metric_names", "sources", "source_sha256", "ego_ids"}) open(table);
-  const std::map<std::string, H5::DataSet> arrays = [&] {
-    std::map<std::string, H5::DataSet> result;
-    for (const char* name : {"sample_polyline_start", "sample_polyline_count", "sample_ego_polyline", "sample_origin",
-                             "sample_label", "sample_index", "sample_source", "sample_ego", "sample_t0", "vectors",
-                             "vector_valid", "polyline_type", "polyline_shared", "shared_vectors",
-                             "polyline_vector_start", "polyline_vector_count", "targets", "target_valid"}) {
-      result.emplace(name, open(name));
-    }
-    for (const char* name : {"inputs", "metrics"}) {
-      if (root.nameExists(name)) result.emplace(name, open(name));
-    }
-    if (!header.vehicleSizesAssumed) {
-      for (const char* name : {"polyline_length", "polyline_width"}) result.emplace(name, open(name));
-    }
-    if (!header.roadUsersAssumed) result.emplace("polyline_road_user", open("polyline_road_user"));
-    return result;
-  }();
-  reading = "input_names";
-  header.inputNames = h5::readStrings(root, "input_names");
-  reading = "metric_names";
-  header.metricNames = h5::readStrings(root, "metric_names");
   const hsize_t n = rows(arrays.at("sample_label"));
   const hsize_t p = rows(arrays.at("polyline_type"));
   const hsize_t v = rows(arrays.at("vectors"));
@@ -614,6 +615,15 @@ void DatasetReader::Impl::openArrays(const H5::Group& root) {
                        name, fmt::join(actual, ", "), fmt::join(shape, ", "), n, p, v, f));
     }
   }
+}
+
+void DatasetReader::Impl::openArrays(const H5::Group& root) {
+  const auto arrays = openAll(root);
+  reading = "input_names";
+  header.inputNames = h5::readStrings(root, "input_names");
+  reading = "metric_names";
+  header.metricNames = h5::readStrings(root, "metric_names");
+  checkShapes(arrays);
   vectors = arrays.at("vectors");
   vectorValid = arrays.at("vector_valid");
   polylineType = arrays.at("polyline_type");

@@ -38,11 +38,15 @@ bool clipSegment(Vec2& a, Vec2& b, const Vec2& lo, const Vec2& hi) {
   a = start;
   return true;
 }
-}  // namespace
 
-std::string renderSceneSvg(const VectorizedScene& scene, const std::vector<TrajectoryOverlay>& overlays,
-                           const std::string& title, int width_px, const std::string& target_label,
-                           double focus_margin_m) {
+/// The drawn region: everything in the scene (only its road users and futures when focused).
+struct View {
+  Vec2 lo = Vec2::Zero();
+  Vec2 hi = Vec2::Zero();
+  Vec2 pad = Vec2::Zero();
+};
+
+View viewOf(const VectorizedScene& scene, const std::vector<TrajectoryOverlay>& overlays, double focus_margin_m) {
   const bool focus = focus_margin_m > 0.0;
   Vec2 lo(std::numeric_limits<double>::infinity(), std::numeric_limits<double>::infinity());
   Vec2 hi = -lo;
@@ -78,34 +82,46 @@ std::string renderSceneSvg(const VectorizedScene& scene, const std::vector<Traje
     lo.y() -= grow;
     hi.y() += grow;
   }
-  // The legend wraps to further rows on narrow drawings; the margin makes room for them.
-  struct Entry {
-    std::string colour;
-    std::string text;
-  };
-  std::vector<Entry> legend = {{kLaneColour, "lane boundaries"},
-                               {kVehicleColour, "other vehicles (timestamps in s)"},
-                               {kEgoColour, "Ego: initial vector and " + target_label}};
-  for (const auto& overlay : overlays) {
-    if (!overlay.label.empty()) legend.push_back({overlay.colour, overlay.label});  // "": drawn, not listed (a second part of one overlay)
-  }
-  std::vector<std::pair<Vec2, Entry>> legend_layout;
-  double legend_x = 10.0;
-  double legend_row = 0.0;
-  for (const auto& entry : legend) {
-    const double entry_width = 28.0 + 6.2 * static_cast<double>(entry.text.size());
-    if (legend_x > 10.0 && legend_x + entry_width > width_px) {
-      legend_x = 10.0;
-      legend_row += 16.0;
-    }
-    legend_layout.push_back({Vec2(legend_x, legend_row), entry});
-    legend_x += entry_width;
-  }
-  const int margin = 40 + static_cast<int>(legend_row);
-  SvgCanvas canvas(lo - pad, hi + pad, width_px, 0, /*equal_aspect=*/true, margin);
+  return {lo, hi, pad};
+}
 
-  const Vec2 view_lo = lo - pad;
-  const Vec2 view_hi = hi + pad;
+struct LegendEntry {
+  std::string colour;
+  std::string text;
+};
+
+/// The legend's entries with their offsets from its top left (px); it wraps to further
+/// rows on narrow drawings.
+struct Legend {
+  std::vector<std::pair<Vec2, LegendEntry>> layout;
+  double height = 0.0;  ///< px beyond the first row
+};
+
+Legend layoutLegend(const std::vector<TrajectoryOverlay>& overlays, const std::string& target_label, int width_px) {
+  std::vector<LegendEntry> entries = {{kLaneColour, "lane boundaries"},
+                                      {kVehicleColour, "other vehicles (timestamps in s)"},
+                                      {kEgoColour, "Ego: initial vector and " + target_label}};
+  for (const auto& overlay : overlays) {
+    if (!overlay.label.empty()) entries.push_back({overlay.colour, overlay.label});  // "": drawn, not listed (a second part of one overlay)
+  }
+  Legend legend;
+  double x = 10.0;
+  for (const auto& entry : entries) {
+    const double entry_width = 28.0 + 6.2 * static_cast<double>(entry.text.size());
+    if (x > 10.0 && x + entry_width > width_px) {
+      x = 10.0;
+      legend.height += 16.0;
+    }
+    legend.layout.push_back({Vec2(x, legend.height), entry});
+    x += entry_width;
+  }
+  return legend;
+}
+
+/// Lane boundaries (clipped to the view when focused) and the other road users' vectors.
+void drawContext(SvgCanvas& canvas, const VectorizedScene& scene, const View& view, bool focus) {
+  const Vec2 view_lo = view.lo - view.pad;
+  const Vec2 view_hi = view.hi + view.pad;
   for (const auto& polyline : scene.polylines) {
     if (polyline.type != ObjectType::LaneBoundary) continue;
     for (std::size_t v = 0; v < polyline.vectors.size(); ++v) {
@@ -127,6 +143,10 @@ std::string renderSceneSvg(const VectorizedScene& scene, const std::vector<Traje
       if (std::abs(t - std::round(t)) < 1e-3) canvas.text({f[2], f[3]}, fmt::format("{:.0f} s", t), 10, kVehicleColour);
     }
   }
+}
+
+/// The Ego's vectors, its true future and the overlays (predictions).
+void drawEgo(SvgCanvas& canvas, const VectorizedScene& scene, const std::vector<TrajectoryOverlay>& overlays) {
   const auto& ego = scene.polylines.at(scene.egoPolyline);
   for (std::size_t v = 0; v < ego.vectors.size(); ++v) {
     const auto& f = ego.vectors[v];
@@ -143,17 +163,34 @@ std::string renderSceneSvg(const VectorizedScene& scene, const std::vector<Traje
     canvas.polyline(overlay.points, overlay.colour, 2.0, overlay.dashed);
     for (const auto& p : overlay.points) canvas.circle(p, 2.0, overlay.colour);
   }
+}
 
-  // Title and legend (laid out above, before the drawing).
+/// Title and legend, laid out above the drawing.
+void drawHeading(SvgCanvas& canvas, const std::string& title, const Legend& legend) {
   double y = 18.0;
   if (!title.empty()) {
     canvas.textPx(10, y, title, 13, "#222222");
     y += 18.0;
   }
-  for (const auto& [at, entry] : legend_layout) {
+  for (const auto& [at, entry] : legend.layout) {
     canvas.rectPx(at.x(), y + at.y() - 9, 12, 4, entry.colour);
     canvas.textPx(at.x() + 16, y + at.y() - 4, entry.text, 11, "#333333");
   }
+}
+
+}  // namespace
+
+std::string renderSceneSvg(const VectorizedScene& scene, const std::vector<TrajectoryOverlay>& overlays,
+                           const std::string& title, int width_px, const std::string& target_label,
+                           double focus_margin_m) {
+  const bool focus = focus_margin_m > 0.0;
+  const View view = viewOf(scene, overlays, focus_margin_m);
+  const Legend legend = layoutLegend(overlays, target_label, width_px);
+  const int margin = 40 + static_cast<int>(legend.height);
+  SvgCanvas canvas(view.lo - view.pad, view.hi + view.pad, width_px, 0, /*equal_aspect=*/true, margin);
+  drawContext(canvas, scene, view, focus);
+  drawEgo(canvas, scene, overlays);
+  drawHeading(canvas, title, legend);
   return canvas.str();
 }
 

@@ -16,6 +16,7 @@
 #include "../../src/model/kinematics.hpp"
 #include "../../src/model/network.hpp"
 #include "../../src/model/tensors.hpp"
+#include "extension/constant_accel_decoder.hpp"
 #include "synthetic_scenes.hpp"
 #include "test_support.hpp"
 #include "vsd/core/error.hpp"
@@ -40,6 +41,17 @@ std::string errorOf(const std::function<void()>& action) {
     return error.what();
   }
   return "";
+}
+
+/// Trains a tiny model of `decoder` for `steps` steps on `samples` synthetic scenes into
+/// `dir`/`file`; returns the options it was trained with.
+TrainOptions trainTiny(const TemporaryDirectory& dir, const std::string& decoder, std::size_t samples, int steps,
+                       const std::string& file) {
+  auto options = tinyTraining(writeDataset(dir.path() / "acc.h5", samples), dir.path() / file);
+  options.config.decoder = decoder;
+  options.steps = steps;
+  train(options);
+  return options;
 }
 
 VectorNetConfig kinematicConfig() {
@@ -530,10 +542,7 @@ TEST(KinematicModel, ADivergingTrainingStopsWithTheStepAndKeepsTheLastGoodModel)
 
 TEST(KinematicModel, CalibrateFitsTheVarianceScaleAfterTrainingAndStoresItInTheModelFile) {
   TemporaryDirectory dir;
-  auto options = tinyTraining(writeDataset(dir.path() / "acc.h5", 60), dir.path() / "k.pt");
-  options.config.decoder = "kinematic";
-  options.steps = 12;
-  train(options);
+  auto options = trainTiny(dir, "kinematic", 60, 12, "k.pt");
   const Predictor plain(options.output);
   EXPECT_EQ(plain.info().config.decoderOption("variance_scale"), 1.0);
   const auto before = plain.predictDistribution({syntheticScene(3)}, {}).front();
@@ -705,6 +714,15 @@ TEST(Intervals, ConformalWideningBringsOverConfidentAndOverCautiousIntervalsToTh
   EXPECT_EQ(calibration.find("acc", "d_min"), nullptr);
 }
 
+TEST(Calibration, PointsFollowTheHorizon) {
+  // The paper's 5 s of 0.2 s steps: 1 s, 3 s, 5 s (target indices 4, 14, 24).
+  EXPECT_EQ(calibrationSteps(25), (std::array<std::size_t, kCalibrationPoints>{4, 14, 24}));
+  // A 3 s horizon of 0.2 s steps: 0.6 s, 1.8 s, 3 s - the end is always the horizon's.
+  EXPECT_EQ(calibrationSteps(15), (std::array<std::size_t, kCalibrationPoints>{2, 8, 14}));
+  // A one-step horizon: every point is that step.
+  EXPECT_EQ(calibrationSteps(1), (std::array<std::size_t, kCalibrationPoints>{0, 0, 0}));
+}
+
 TEST(Calibration, NllAndCoverageOfAPredictedGaussian) {
   auto scene = syntheticScene(3);
   Prediction prediction;
@@ -726,4 +744,29 @@ TEST(Calibration, NllAndCoverageOfAPredictedGaussian) {
   EXPECT_EQ(errors.coverageAt[0][0], 1.0);
   EXPECT_EQ(errors.coverageAt[2][0], 0.0);
   EXPECT_EQ(errors.coverageAt[2][1], 1.0);
+}
+
+// docs/design.md "Adding a decoder": the decoder's own file plus one registry line, then a
+// model trains with it by name and its model file loads and predicts. (Last in this file:
+// once added, the decoder is known for the rest of the process.)
+TEST(DecoderRegistry, ADecoderAddedFromItsOwnFileTrainsSavesAndLoads) {
+  if (!std::any_of(decoderRegistry().begin(), decoderRegistry().end(),
+                   [](const DecoderEntry& entry) { return entry.info.name == "constant_accel"; })) {
+    addDecoder(constantAccelDecoderEntry());  // the one line a newcomer writes
+  }
+  TemporaryDirectory dir;
+  const auto options = trainTiny(dir, "constant_accel", 20, 1, "ca.pt");
+  const Predictor predictor(options.output);
+  EXPECT_EQ(predictor.info().config.decoder, "constant_accel");
+  const auto scene = syntheticScene(3);
+  const auto predicted = predictor.predict({scene}).at(0);
+  ASSERT_EQ(predicted.size(), scene.target.size());
+  // Every predicted position lies on the line along the Ego's initial heading.
+  const auto start = scene.egoInitialState();
+  const Vec2 direction(std::cos(start.heading), std::sin(start.heading));
+  for (const auto& p : predicted) {
+    const Vec2 r = p - start.position();
+    EXPECT_NEAR(r.x() * direction.y() - r.y() * direction.x(), 0.0, 1e-3);
+  }
+  EXPECT_NE(errorOf([] { addDecoder(constantAccelDecoderEntry()); }).find("registered twice"), std::string::npos);
 }

@@ -114,7 +114,7 @@ TEST(Network, NetconvertFailureNamesTheInputAndTheReason) {
   NetworkBuilder builder;
   RoadGeometry road;
   road.centre = {{0, 0}, {100, 0}};
-  road.laneWidth = scenario::kDefaultLaneWidth;
+  road.laneWidth = kDefaultLaneWidth;
   builder.add(0, road, {1000, 1000});
   builder.writePlainXml(dir.path() / "net");
   try {
@@ -192,7 +192,7 @@ std::vector<RoadGeometry> awkwardRoads() {
   dense.centre.emplace_back(0.03, 16.005);  // the last point closer than 0.1 m to its predecessor
   roads.push_back(dense);
   RoadGeometry single;  // one lane: its shape is the edge's, whatever the bends
-  single.laneWidth = scenario::kDefaultLaneWidth;
+  single.laneWidth = kDefaultLaneWidth;
   single.centre = {{-100, 0}, {-99.95, 0.01}, {-99.9, 0.3}, {-60, 40}, {-59, 40}, {0, -10}, {0.05, -10.02}};
   roads.push_back(single);
   RoadGeometry kinks;

@@ -10,6 +10,7 @@
 #include <numeric>
 #include <nlohmann/json.hpp>
 
+#include "extension/nearest_neighbour_surrogate.hpp"
 #include "test_support.hpp"
 #include "vsd/core/csv.hpp"
 #include "vsd/core/error.hpp"
@@ -261,6 +262,32 @@ TEST(SearchLoop, ExtraTreesFindMoreCriticalScenariosThanRandomSampling) {
   EXPECT_LE(trees.estimate.low, trees.estimate.estimate);
   EXPECT_GE(trees.estimate.high, trees.estimate.estimate);
   EXPECT_EQ(column(work.path() / "trees" / "failures.csv", "critical").size(), trees.critical);
+}
+
+// docs/design.md "Adding a surrogate": the surrogate's own file plus one registry line,
+// then `search` (its library call) picks executions with it by name.
+TEST(SearchLoop, ASurrogateAddedFromItsOwnFileChoosesTheExecutions) {
+  if (!std::any_of(surrogateRegistry().begin(), surrogateRegistry().end(),
+                   [](const SurrogateEntry& entry) { return entry.name == "nearest-neighbour"; })) {
+    addSurrogate(test::nearestNeighbourSurrogate());  // the one line a newcomer writes
+  }
+  TemporaryDirectory work("vsd-test-search");
+  const auto summary = runSearch(smallSearch(work.path() / "nn", "nearest-neighbour", 60));
+  EXPECT_EQ(summary.surrogate, "nearest-neighbour");
+  EXPECT_EQ(summary.executions, 60u);
+  std::size_t acquired = 0;
+  std::size_t acquired_likely = 0;
+  for (const auto& execution : summary.executionsList) {
+    if (execution.origin != "acquired") continue;
+    ++acquired;
+    // Its probabilities are the surrogate's own two values; the acquisition prefers the likely ones.
+    EXPECT_TRUE(execution.predicted == 0.9 || execution.predicted == 0.1) << execution.predicted;
+    acquired_likely += execution.predicted == 0.9 ? 1 : 0;
+  }
+  EXPECT_GT(acquired, 0u);
+  EXPECT_GT(acquired_likely, 0u);
+  EXPECT_THAT(test::configErrorOf([] { addSurrogate(test::nearestNeighbourSurrogate()); }),
+              HasSubstr("registered twice"));
 }
 
 TEST(SearchLoop, ACriterionNeverMetInTheInitialDesignDoesNotStopTheSearch) {

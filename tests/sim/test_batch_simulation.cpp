@@ -1,9 +1,11 @@
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <regex>
 
+#include "extension/steady_brake_controller.hpp"
 #include "test_support.hpp"
 #include "vsd/core/error.hpp"
 #include "vsd/road/network.hpp"
@@ -222,5 +224,27 @@ TEST(BatchSimulation, AFailingControllerFailsItsScenarioWithTheReason) {
         << result.failure;
     EXPECT_TRUE(result.trace.vehicles[0].validAt(5));
     EXPECT_FALSE(result.trace.vehicles[0].validAt(6));
+  }
+}
+
+// docs/design.md "Adding a controller": the controller's own file plus one registry line,
+// then a scenario names it and the simulation drives the Ego with it.
+TEST(BatchSimulation, AControllerAddedFromItsOwnFileDrivesTheEgo) {
+  TemporaryDirectory dir;
+  auto registry = ControllerRegistry::withBuiltins();
+  test::registerSteadyBrake(registry);  // the one line a newcomer writes
+  auto logical = scenario::parseLogicalScenario(
+      test::scenarioVariant("acc.yaml", "name: paper_ego\n      params: {time_gap: 2.0, set_speed: v_ego}",
+                            "name: steady_brake\n      params: {decel: 1.5}"),
+      test::scenarioFile("acc.yaml"));
+  const Batch batch(logical, 2, dir.path(), registry);
+  for (std::size_t i = 0; i < batch.results.size(); ++i) {
+    const auto& result = batch.results[i];
+    ASSERT_TRUE(result.ok()) << result.failure;
+    const auto& ego = result.trace.vehicles[0];
+    for (std::size_t k = 0; k < result.trace.instants(); ++k) {
+      const double expected = std::max(0.0, batch.scenarios[i].ego.speed - 1.5 * logical->step * static_cast<double>(k));
+      EXPECT_NEAR(ego.states[k].speed, expected, 1e-9) << "scenario " << i << " step " << k;
+    }
   }
 }

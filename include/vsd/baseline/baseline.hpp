@@ -134,8 +134,19 @@ struct BaselineOptions {
   BnnOptions bnn;
 };
 
+/// A baseline model as its registry entry describes it (src/baseline/run_baseline.cpp).
+struct BaselineModel {
+  std::string name;                   ///< --model value (also the name of search's surrogate)
+  std::vector<std::string> oldNames;  ///< still accepted, deprecated
+  std::string title;                  ///< in reports ("extra trees")
+};
+
+/// Every baseline model, in registry order.
+std::vector<BaselineModel> baselineModels();
+
 struct BaselineReport {
   std::string model;
+  std::string modelTitle;  ///< the entry's title
   std::string functionalScenario;
   std::size_t trainRows = 0;
   std::size_t testRows = 0;

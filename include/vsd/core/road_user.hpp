@@ -13,6 +13,12 @@
 
 namespace vsd {
 
+/// m: the passenger car's bounding box (the paper's Ego and Co), the table's Car entry.
+/// Named so that a struct describing a vehicle before it is known (an observation, a
+/// snapshot) can default to a car without repeating the numbers.
+inline constexpr double kCarLength = 5.0;
+inline constexpr double kCarWidth = 1.8;
+
 enum class RoadUserType : std::uint8_t { Car = 0, Van, Truck, Bus, Motorbike, Pedestrian, StationaryObject };
 
 /// One entry of the road-user table: what the kind is and what it can do.

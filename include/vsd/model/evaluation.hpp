@@ -14,8 +14,14 @@
 
 namespace vsd::model {
 
-/// Times (s after t0) at which evaluate reports NLL and coverage of positions.
-inline constexpr std::array<double, 3> kCalibrationTimes = {1.0, 3.0, 5.0};
+/// Where in the horizon evaluate reports NLL and coverage of positions: these shares of
+/// the scenes' own horizon, rounded to whole steps (1 s, 3 s and 5 s of the paper's 5 s).
+inline constexpr std::array<double, 3> kCalibrationShares = {0.2, 0.6, 1.0};
+inline constexpr std::size_t kCalibrationPoints = kCalibrationShares.size();
+
+/// The target step (t_1 is 0) of each calibration point in a horizon of `horizon_steps`
+/// steps (>= 1): the share of the horizon rounded to whole steps, at least the first.
+std::array<std::size_t, kCalibrationPoints> calibrationSteps(std::size_t horizon_steps);
 
 /// Running sums of the errors of many predictions (means are read off with the accessors).
 struct LabelErrors {
@@ -26,13 +32,13 @@ struct LabelErrors {
   /// of the true position (nats, mean over valid steps, then over samples).
   std::size_t scored = 0;
   double nll = 0.0;
-  /// At each of kCalibrationTimes: scenes with a valid true position there, their mean
+  /// At each calibration point (calibrationSteps of the scene's horizon): scenes with a valid true position there, their mean
   /// NLL, and the share of them inside the predicted region of each kCoverageLevels level
   /// (the ellipse {r : r' S^-1 r <= r2} of the predictive covariance S, r2 = the
   /// prediction's regionRadius2: -2 ln(1 - level) unless the model is calibrated).
-  std::array<std::size_t, kCalibrationTimes.size()> countAt{};
-  std::array<double, kCalibrationTimes.size()> nllAt{};
-  std::array<std::array<double, kCoverageLevels.size()>, kCalibrationTimes.size()> coverageAt{};
+  std::array<std::size_t, kCalibrationPoints> countAt{};
+  std::array<double, kCalibrationPoints> nllAt{};
+  std::array<std::array<double, kCoverageLevels.size()>, kCalibrationPoints> coverageAt{};
 
   /// Adds one scene's errors (a scene without a valid step is not counted).
   void add(const LabelErrors& one);
@@ -47,13 +53,16 @@ struct Evaluation {
   std::string predictor;  ///< decoder or predictor name
   std::map<std::string, LabelErrors> perLabel;
   LabelErrors overall;
+  /// s after t0 of each calibration point: calibrationSteps of the datasets' horizon.
+  std::array<double, kCalibrationPoints> calibrationTimes{};
   double predictionSeconds = 0.0;
   std::string table() const;
   /// label,samples,ade_m,fde_m[,nll,nll_1s,...,coverage50_1s,...] rows (overall last).
   void writeCsv(const std::filesystem::path& path) const;
 };
 
-/// Predicts every sample of the datasets and averages the errors per label.
+/// Predicts every sample of the datasets and averages the errors per label. The datasets
+/// share one step and horizon (else DatasetError): the calibration points are theirs.
 Evaluation evaluate(const Predictor& predictor, const std::vector<std::filesystem::path>& data);
 
 }  // namespace vsd::model

@@ -30,6 +30,9 @@ struct DecoderInfo {
   bool probabilistic = false;  ///< predicts a distribution (samples, covariance, NLL)
   bool kinematic = false;      ///< predicts speeds and accelerations (not only positions)
   std::vector<DecoderOption> options;
+  /// Options added after model format 2 (vsd-model/2 files lack them), each with the value
+  /// that reproduces how such a file's decoder behaved. Loading one fills them in.
+  std::map<std::string, double> optionsBeforeModelFormat3;
 };
 
 /// Every decoder this build knows, in registry order.

@@ -20,6 +20,7 @@
 #include <utility>
 #include <vector>
 
+#include "vsd/core/defaults.hpp"
 #include "vsd/pipeline/worker_pool.hpp"
 #include "vsd/sim/map_simulation.hpp"
 
@@ -51,8 +52,8 @@ struct ExportOptions {
   std::filesystem::path output;          ///< dataset file (.h5)
   std::string egos = "all";
   std::uint64_t seed = 1;                ///< Ego selection and SUMO's --seed
-  double step = 0.2;                     ///< s, kMinStep .. kMaxStep
-  double horizon = 5.0;                  ///< s of Ego future (target), a multiple of step, <= kMaxWindowSteps steps
+  double step = kDefaultStep;            ///< s, kMinStep .. kMaxStep
+  double horizon = kDefaultHorizon;      ///< s of Ego future (target), a multiple of step, <= kMaxWindowSteps steps
   double history = 0.0;                  ///< s of past before t0 in the polylines, as horizon (0 allowed)
   double stride = 1.0;                   ///< s between window starts of one Ego, step .. kMaxStride
   double radius = 60.0;                  ///< m around the Ego at t0, (0, kMaxRadius]

@@ -109,8 +109,9 @@ class PendingNetwork {
   std::filesystem::path net_;
 };
 
-/// Converts an OpenDRIVE map to a SUMO network with netconvert. Throws SumoError
-/// naming the file and netconvert's first error line.
+/// Converts an OpenDRIVE map to a SUMO network with netconvert (the "opendrive" entry of
+/// MapImporterRegistry, src/road/importers/opendrive.cpp). Throws ConfigError for a missing
+/// file, SumoError naming the file and netconvert's first error line.
 void convertOpenDrive(const std::filesystem::path& xodr, const std::filesystem::path& net);
 
 /// Options this project always gives netconvert (net coordinates = generator coordinates, ...).

@@ -14,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include "vsd/core/defaults.hpp"
 #include "vsd/core/road_user.hpp"
 #include "vsd/scenario/expression.hpp"
 
@@ -45,9 +46,6 @@ struct InputSpec {
   std::string description;
   Distribution distribution;
 };
-
-/// Lane width (m) where a scenario gives none: the one source of this default.
-inline constexpr double kDefaultLaneWidth = 3.5;
 
 /// Road: a centre line of one of two shapes, `lanes` lanes of lane_width + lane_width_noise
 /// each, and straight extensions along the end tangents that keep vehicles on the road
@@ -218,8 +216,8 @@ struct LogicalScenario {
   std::string name;          ///< functional-scenario label (acc, lk, acc_lk, ...)
   std::string description;
   std::filesystem::path sourceFile;
-  double step = 0.2;         ///< s
-  double duration = 5.0;     ///< s
+  double step = kDefaultStep;          ///< s
+  double duration = kDefaultHorizon;  ///< s
   std::vector<InputSpec> inputs;
   RoadSpec road;
   VehicleSpec ego;

@@ -90,8 +90,12 @@ struct SurrogateEntry {
   bool learnsFromScenes = false;
 };
 
-/// Every surrogate, in a fixed order.
+/// Every surrogate, in a fixed order: the built-ins (src/search/surrogates.cpp), then the added ones.
 const std::vector<SurrogateEntry>& surrogateRegistry();
+/// Adds a surrogate written outside this module (its own file and this one call, before
+/// any search starts: entries found earlier may move). Throws ConfigError for a name that
+/// is taken or an entry without a factory.
+void addSurrogate(SurrogateEntry entry);
 /// Throws ConfigError "--surrogate 'x': unknown (known: random, extra-trees, bnn, vectornet)".
 const SurrogateEntry& findSurrogate(const std::string& name);
 

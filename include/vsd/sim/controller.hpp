@@ -23,6 +23,8 @@
 #include <utility>
 #include <vector>
 
+#include "vsd/core/defaults.hpp"
+#include "vsd/core/road_user.hpp"
 #include "vsd/core/trace.hpp"
 #include "vsd/sim/controller_abi.h"
 #include "vsd/sim/object_list.hpp"
@@ -35,13 +37,13 @@ constexpr int kPreviewPoints = VSD_PREVIEW_POINTS;
 struct Observation {
   double time = 0.0;       ///< s since the scenario started
   VehicleState ego;        ///< own state (centre of the vehicle)
-  double egoLength = 5.0;  ///< m
-  double egoWidth = 1.8;   ///< m
+  double egoLength = kCarLength;  ///< m
+  double egoWidth = kCarWidth;    ///< m
 
   struct Lane {
     double lateralOffset = 0.0;  ///< m, Ego centre relative to the lane centre, > 0 left
     double headingError = 0.0;   ///< rad, Ego heading minus lane direction, (-pi, pi]
-    double width = 3.5;          ///< m
+    double width = kDefaultLaneWidth;  ///< m
     double previewSpacing = 4.0; ///< m between preview points
     /// Lane centre at previewSpacing * (i + 1) m ahead along the lane, in the Ego frame (x forward, y left).
     std::array<Vec2, kPreviewPoints> preview{};

@@ -11,6 +11,7 @@
 #include <cmath>
 #include <limits>
 
+#include "vsd/core/defaults.hpp"
 #include "vsd/core/road_user.hpp"
 #include "vsd/sim/controller.hpp"
 #include "vsd/sim/object_list.hpp"
@@ -29,7 +30,7 @@ struct CutIn {
   double gap = 0.0;           ///< m, bumper to bumper at t = 0
   double lateralSpeed = 0.0;  ///< m/s, > 0
   int fromLane = 1;           ///< +1 or -1
-  double laneWidth = 3.5;     ///< m (ASAM's ALKS road)
+  double laneWidth = kDefaultLaneWidth;  ///< m (ASAM's ALKS road)
   RoadUserType targetType = RoadUserType::Car;
   double duration = 15.0;  ///< s simulated (stops at a collision)
   double step = 0.01;      ///< s, the controller's step

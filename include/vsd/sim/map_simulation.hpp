@@ -13,6 +13,7 @@
 #include <unordered_map>
 #include <vector>
 
+#include "vsd/core/road_user.hpp"
 #include "vsd/core/trace.hpp"
 #include "vsd/sim/controller.hpp"
 
@@ -32,8 +33,8 @@ struct MapSource {
 struct VehicleSnapshot {
   std::string id;
   VehicleState state;  ///< centre of the vehicle, network frame
-  double length = 5.0;
-  double width = 1.8;
+  double length = kCarLength;  ///< m, SUMO's length of the vehicle's type
+  double width = kCarWidth;    ///< m
   std::string type;
   /// Stopped with parking="true": SUMO takes it off the lane and draws it beside the
   /// road, so its position jumps sideways by metres in one step and back when it
@@ -55,7 +56,7 @@ struct MapSimulationOptions {
   std::optional<double> end;     ///< s; default: the map's own, else until no vehicle is left
   std::uint64_t seed = 1;        ///< SUMO's --seed
   /// s; > 0: SUMO's lane changes take this long instead of jumping a lane width
-  /// within one step (which would put 3.5 m jumps into recorded trajectories).
+  /// within one step (which would put lane-width jumps into recorded trajectories).
   /// 0 keeps the map's setting (e.g. for maps using the sublane model).
   double laneChangeDuration = 2.0;
 };

@@ -260,6 +260,8 @@ DecoderEntry kinematicDecoderEntry() {
        "1: after training, fit variance_scale on the validation split (90 % of its positions in their 90 % regions)"},
       {"variance_scale", 1.0, 1e-3, 1e3, "multiplies every predicted control variance (written by calibrate)"},
   };
+  // vsd-model/2 files were written before heading control existed: curvature control.
+  entry.info.optionsBeforeModelFormat3 = {{"heading_control", 0.0}};
   entry.create = [](const VectorNetConfig& config) -> std::unique_ptr<Decoder> {
     return std::make_unique<KinematicDecoder>(config);
   };

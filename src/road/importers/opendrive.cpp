@@ -1,0 +1,42 @@
+// Map importer: OpenDRIVE (.xodr), converted to a SUMO network by netconvert.
+#include <fmt/format.h>
+
+#include "vsd/core/error.hpp"
+#include "vsd/core/process.hpp"
+#include "vsd/road/map_importers.hpp"
+#include "vsd/road/network.hpp"
+
+namespace fs = std::filesystem;
+
+namespace vsd::road {
+
+void convertOpenDrive(const fs::path& xodr, const fs::path& net) {
+  ensureSumoHome();
+  if (!fs::exists(xodr)) throw ConfigError(fmt::format("{}: OpenDRIVE file does not exist", xodr.string()));
+  const fs::path log = net.string() + ".netconvert.log";
+  const auto result = runProcess({"netconvert", "--opendrive-files", xodr.string(), "--output-file", net.string(),
+                                  "--no-warnings", "true"},
+                                 log);
+  std::error_code ignored;
+  fs::remove(log, ignored);
+  if (result.exitCode != 0 || !fs::exists(net)) {
+    fs::remove(net, ignored);
+    throw SumoError(fmt::format("netconvert cannot import OpenDRIVE map {} (exit code {}): {}", xodr.string(),
+                                result.exitCode, firstErrorLine(result.output)));
+  }
+}
+
+MapImporter openDriveImporter() {
+  MapImporter importer;
+  importer.name = "opendrive";
+  importer.description = "ASAM OpenDRIVE road network, converted by netconvert (elevation dropped)";
+  importer.extensions = {".xodr"};
+  importer.toNet = [](const fs::path& map, const fs::path& work_dir) {
+    const fs::path net = work_dir / "opendrive.net.xml";
+    convertOpenDrive(map, net);
+    return net;
+  };
+  return importer;
+}
+
+}  // namespace vsd::road
