@@ -44,6 +44,9 @@ std::vector<Case> pluginCases(const Fixtures& fixtures, Random& random, std::siz
 /// XML, special files, huge geometry, option injection, paths out of the file's folder,
 /// foreign search checkpoints and round files, foreign or edited shards.
 std::vector<Case> hostileInputCases(const Fixtures& fixtures, Random& random, std::size_t count);
+/// Issue 29's reproductions of hostile .xosc numbers and XML, each exactly as reported
+/// (a fixed list, whatever the count).
+std::vector<Case> issueReproductionCases(const Fixtures& fixtures, Random& random, std::size_t count);
 
 /// Problems of a dataset file (empty: it opens and validates).
 std::string datasetProblems(const std::filesystem::path& path);

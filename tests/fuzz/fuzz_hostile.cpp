@@ -73,11 +73,12 @@ Case runXosc(const fs::path& xosc, const fs::path& folder, const std::string& na
 
 // --- one generator per class of hostile input ------------------------------------------------
 
-/// A number of the .xosc (an attribute or a FileHeader property) replaced by a hostile one.
-Case xoscNumberCase(const Fixtures& f, Random& random, const fs::path& folder) {
+/// A number of the .xosc (an attribute or a FileHeader property) set to `value`; `target`
+/// names which (empty: one drawn from `random`).
+Case xoscNumberCaseWith(const Fixtures& f, Random& random, const fs::path& folder, const std::string& target_name,
+                        const std::string& value) {
   const fs::path xosc = copyScenario(f, folder);
   std::string text = textOf(xosc);
-  const std::string value = random.pick(hostileNumbers());
   struct Target {
     std::string what;
     std::function<std::string(const std::string&)> apply;
@@ -97,20 +98,34 @@ Case xoscNumberCase(const Fixtures& f, Random& random, const fs::path& folder) {
          return t.substr(0, stop) + replaceFirst(t.substr(stop), "value=\"[^\"]*\"", "value=\"" + value + "\"");
        }},
       {"collision action", [&](const std::string& t) {
-         return withProperty(t, "vsd-sumo.sumo.collision_action", random.pick(std::vector<std::string>{"explode", "", "none"}));
+         return withProperty(t, "vsd-sumo.sumo.collision_action", value);
        }},
   };
-  const Target& target = random.pick(targets);
-  writeText(xosc, target.apply(text));  // a hostile number may equal the original
-  return runXosc(xosc, folder, fmt::format("hostile/xosc-number: {} = '{}'", target.what, value));
+  const Target* target = &random.pick(targets);
+  for (const auto& candidate : targets) {
+    if (candidate.what == target_name) target = &candidate;
+  }
+  writeText(xosc, target->apply(text));  // a hostile number may equal the original
+  return runXosc(xosc, folder, fmt::format("hostile/xosc-number: {} = '{}'", target->what, value));
 }
 
-/// Hostile XML: entity expansion, external entities, deep nesting, a cut-off file.
-Case hostileXmlCase(const Fixtures& f, Random& random, const fs::path& folder) {
+Case xoscNumberCase(const Fixtures& f, Random& random, const fs::path& folder) {
+  std::string value = random.pick(hostileNumbers());
+  Case drawn = xoscNumberCaseWith(f, random, folder, "", value);
+  if (drawn.name.find("collision action") != std::string::npos) {  // a name, not a number
+    value = random.pick(std::vector<std::string>{"explode", "", "none"});
+    fs::remove_all(folder);
+    drawn = xoscNumberCaseWith(f, random, folder, "collision action", value);
+  }
+  return drawn;
+}
+
+/// Hostile XML of `kind`: 0 entity expansion, 1 an external entity, 2 deep nesting, 3 a
+/// cut-off file.
+Case hostileXmlCaseOfKind(const Fixtures& f, Random& random, const fs::path& folder, int kind) {
   const fs::path xosc = copyScenario(f, folder);
   std::string text = textOf(xosc);
   const auto root = text.find("<OpenSCENARIO");
-  const int kind = static_cast<int>(random.index(4));
   std::string what;
   if (kind == 0) {
     std::string doctype = "<!DOCTYPE OpenSCENARIO [\n  <!ENTITY a0 \"lol\">\n";
@@ -138,6 +153,11 @@ Case hostileXmlCase(const Fixtures& f, Random& random, const fs::path& folder) {
   }
   writeMutation(xosc, text);
   return runXosc(xosc, folder, "hostile/xml: " + what);
+}
+
+Case hostileXmlCase(const Fixtures& f, Random& random, const fs::path& folder) {
+  const int kind = static_cast<int>(random.index(4));
+  return hostileXmlCaseOfKind(f, random, folder, kind);
 }
 
 /// Special files where a file is expected: devices and FIFOs, as the scenario or as the road.
@@ -346,6 +366,28 @@ Case foreignShardCase(const Fixtures& f, Random& random, const fs::path& folder)
 }
 
 }  // namespace
+
+std::vector<Case> issueReproductionCases(const Fixtures& fixtures, Random& random, std::size_t /*count*/) {
+  // Issue 29's reproductions that are numbers or XML of an .xosc, each exactly as reported
+  // (the other classes' generators draw from the issue's own examples already).
+  const std::vector<std::pair<std::string, std::string>> numbers = {
+      {"vsd-sumo.seed", "abc"},  {"vsd-sumo.seed", ""},    {"vsd-sumo.seed", "nan"},
+      {"vsd-sumo.seed", "18446744073709551616"},           {"vsd-sumo.sample", "-1"},
+      {"vsd-sumo.sample", "1.5"}, {"vehicle length", "1e300"}, {"Performance maxSpeed", "nan"},
+      {"Performance maxDeceleration", "-5"},               {"collision action", "explode"},
+      {"vsd-sumo.road.x_range", "900"},                    {"vsd-sumo.road.extension", "1e9"},
+      {"vsd-sumo.step", "1e-5"}, {"StopTrigger time", "1e6"}, {"StopTrigger time", "1e9"}};
+  std::vector<Case> cases;
+  for (const auto& [target, value] : numbers) {
+    cases.push_back(xoscNumberCaseWith(fixtures, random, caseFolder(fixtures, "issue29", cases.size()), target, value));
+    cases.back().mustRefuse = true;  // every one of them is out of range or malformed
+  }
+  // Billion laughs: pugixml does not expand entities, so the file runs with the entity's
+  // name as the text; what must hold is that nothing grows (the listed peak memory).
+  cases.push_back(hostileXmlCaseOfKind(fixtures, random, caseFolder(fixtures, "issue29", cases.size()), 0));
+  for (auto& c : cases) c.name = "issue29/" + c.name.substr(c.name.find('/') + 1);
+  return cases;
+}
 
 std::vector<Case> hostileInputCases(const Fixtures& fixtures, Random& random, std::size_t count) {
   using Generator = Case (*)(const Fixtures&, Random&, const fs::path&);

@@ -49,6 +49,7 @@ TEST(FaultInjection, NoCrashNoHangNoSilentSuccessNoCompleteLookingPartialOutput)
       {"flags", 5, flagCases},  {"yaml", 3, scenarioYamlCases}, {"dataset", 5, datasetCases},
       {"model", 3, modelCases}, {"kills", 8, killCases},        {"plugins", 6, pluginCases},
       {"hostile", 8, hostileInputCases},  // every class of hostile input once (issue 29)
+      {"issue29", 16, issueReproductionCases},  // its reproductions exactly as reported
   };
   const char* only = std::getenv("VSD_FUZZ_ONLY");
   const bool list_cases = environmentNumber("VSD_FUZZ_CASES", 0) != 0;
