@@ -38,7 +38,8 @@ std::string lineChartSvg(const std::vector<std::pair<std::string, std::vector<st
 /// The provenance table of an HTML report (key, value lines).
 std::string provenanceSection(const std::vector<std::pair<std::string, std::string>>& provenance);
 
-/// The inline CSS of the HTML reports (one look for all of them).
-const char* reportStyle();
+/// The start of an HTML report up to <body>: "vsd-sumo <kind>: <title>" as its title (title
+/// HTML-escaped here) and the inline CSS all reports share.
+std::string reportHead(const std::string& kind, const std::string& title);
 
 }  // namespace vsd::report

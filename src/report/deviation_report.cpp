@@ -56,10 +56,7 @@ void pValueSection(std::ostringstream& out, const DeviationReport& report) {
 
 std::string renderDeviationReport(const DeviationReport& report) {
   std::ostringstream out;
-  out << "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n"
-         "<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">\n";
-  out << fmt::format("<title>vsd-sumo deviations: {}</title>\n<style>{}</style>\n</head>\n<body>\n", html(report.title),
-                     reportStyle());
+  out << reportHead("deviations", report.title);
   out << fmt::format("<header><h1>Deviations: {}</h1>\n", html(report.title));
   for (const auto& warning : report.warnings) out << fmt::format("<p class=\"warning\">{}</p>\n", html(warning));
   for (const auto& line : report.summary) out << fmt::format("<p class=\"lead\">{}</p>\n", html(line));

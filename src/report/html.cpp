@@ -330,15 +330,17 @@ std::string provenanceSection(const std::vector<std::pair<std::string, std::stri
   return out.str();
 }
 
-const char* reportStyle() { return kStyle; }
+std::string reportHead(const std::string& kind, const std::string& title) {
+  return fmt::format("<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n"
+                     "<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">\n"
+                     "<title>vsd-sumo {}: {}</title>\n<style>{}</style>\n</head>\n<body>\n",
+                     kind, html(title), kStyle);
+}
 
 std::string renderHtmlReport(const Comparison& comparison, const ComparisonStatistics& statistics,
                              const std::vector<SceneDrawing>& worst) {
   std::ostringstream out;
-  out << "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n"
-         "<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">\n";
-  out << fmt::format("<title>vsd-sumo comparison: {}</title>\n<style>{}</style>\n</head>\n<body>\n",
-                     html(comparison.title), kStyle);
+  out << reportHead("comparison", comparison.title);
   out << fmt::format("<header><h1>Predicted vs {}: {}</h1>\n<p class=\"lead\">{}</p>\n",
                      html(comparison.referenceName), html(comparison.title), leadSentence(comparison, statistics));
   for (const auto& warning : comparison.warnings) out << "<p class=\"warning\">Warning: " << html(warning) << "</p>\n";

@@ -46,10 +46,7 @@ void rateSection(std::ostringstream& out, const SearchReport& report) {
 
 std::string renderSearchReport(const SearchReport& report) {
   std::ostringstream out;
-  out << "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n"
-         "<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">\n";
-  out << fmt::format("<title>vsd-sumo search: {}</title>\n<style>{}</style>\n</head>\n<body>\n", html(report.title),
-                     reportStyle());
+  out << reportHead("search", report.title);
   out << fmt::format("<header><h1>Search: {}</h1>\n", html(report.title));
   for (const auto& line : report.summary) out << fmt::format("<p class=\"lead\">{}</p>\n", html(line));
   out << "</header>\n";
