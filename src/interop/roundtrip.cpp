@@ -9,7 +9,6 @@
 #include <sstream>
 
 #include "vsd/core/error.hpp"
-#include "vsd/core/process.hpp"
 #include "vsd/interop/opendrive.hpp"
 #include "vsd/road/network.hpp"
 
@@ -145,24 +144,9 @@ double polylineDeviation(const Polyline& a, const Polyline& b) {
   return worst;
 }
 
-void importWithNetconvert(const fs::path& xodr, const fs::path& net) {
-  road::ensureSumoHome();
-  const fs::path log = net.string() + ".log";
-  const auto result = runProcess({"netconvert", "--opendrive-files", xodr.string(), "--output-file", net.string(),
-                                  "--offset.disable-normalization", "true", "--no-warnings", "true"},
-                                 log);
-  std::error_code ignored;
-  fs::remove(log, ignored);
-  if (result.exitCode != 0 || !fs::exists(net)) {
-    fs::remove(net, ignored);
-    throw SumoError(fmt::format("netconvert rejects {} (exit code {}): {}", xodr.string(), result.exitCode,
-                                firstErrorLine(result.output)));
-  }
-}
-
 std::vector<Polyline> netconvertLanes(const fs::path& xodr, const std::string& road_id, const fs::path& work_dir) {
   const fs::path net = work_dir / (xodr.stem().string() + ".net.xml");
-  importWithNetconvert(xodr, net);
+  road::convertOpenDrive(xodr, net, road::OpenDriveOrigin::AsWritten);
   const auto lanes = readNetLanes(net);
   std::error_code ignored;
   fs::remove(net, ignored);

@@ -230,7 +230,7 @@ TEST(Export, BadInputIsRejectedAndLeavesNoFile) {
   expect_error(too_many, "only");
   auto broken = openDriveExport("");
   broken.openDrive = test::writeFile(dir.path() / "broken.xodr", "<OpenDRIVE><road></OpenDRIVE>");
-  expect_error(broken, "netconvert cannot import OpenDRIVE map");
+  expect_error(broken, "netconvert rejects");
   ExportOptions missing_net;
   missing_net.source.config = test::writeFile(
       dir.path() / "bad.sumocfg",

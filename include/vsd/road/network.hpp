@@ -109,10 +109,18 @@ class PendingNetwork {
   std::filesystem::path net_;
 };
 
+/// Where a converted OpenDRIVE map's coordinates start.
+enum class OpenDriveOrigin {
+  Normalised,  ///< netconvert's default: the network shifted to start at (0, 0) (maps)
+  AsWritten,   ///< the file's own coordinates (a road compared with the one it was written from)
+};
+
 /// Converts an OpenDRIVE map to a SUMO network with netconvert (the "opendrive" entry of
-/// MapImporterRegistry, src/road/importers/opendrive.cpp). Throws ConfigError for a missing
-/// file, SumoError naming the file and netconvert's first error line.
-void convertOpenDrive(const std::filesystem::path& xodr, const std::filesystem::path& net);
+/// MapImporterRegistry, src/road/importers/opendrive.cpp, and the OpenDRIVE import of
+/// interop). Throws ConfigError for a missing file, SumoError "netconvert rejects FILE
+/// (exit code N): first error line".
+void convertOpenDrive(const std::filesystem::path& xodr, const std::filesystem::path& net,
+                      OpenDriveOrigin origin = OpenDriveOrigin::Normalised);
 
 /// Options this project always gives netconvert (net coordinates = generator coordinates, ...).
 std::vector<std::string> baseNetconvertOptions();

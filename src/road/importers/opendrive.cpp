@@ -10,19 +10,20 @@ namespace fs = std::filesystem;
 
 namespace vsd::road {
 
-void convertOpenDrive(const fs::path& xodr, const fs::path& net) {
+void convertOpenDrive(const fs::path& xodr, const fs::path& net, OpenDriveOrigin origin) {
   ensureSumoHome();
   if (!fs::exists(xodr)) throw ConfigError(fmt::format("{}: OpenDRIVE file does not exist", xodr.string()));
   const fs::path log = net.string() + ".netconvert.log";
-  const auto result = runProcess({"netconvert", "--opendrive-files", xodr.string(), "--output-file", net.string(),
-                                  "--no-warnings", "true"},
-                                 log);
+  std::vector<std::string> command = {"netconvert", "--opendrive-files", xodr.string(), "--output-file", net.string(),
+                                      "--no-warnings", "true"};
+  if (origin == OpenDriveOrigin::AsWritten) command.insert(command.end(), {"--offset.disable-normalization", "true"});
+  const auto result = runProcess(command, log);
   std::error_code ignored;
   fs::remove(log, ignored);
   if (result.exitCode != 0 || !fs::exists(net)) {
     fs::remove(net, ignored);
-    throw SumoError(fmt::format("netconvert cannot import OpenDRIVE map {} (exit code {}): {}", xodr.string(),
-                                result.exitCode, firstErrorLine(result.output)));
+    throw SumoError(fmt::format("netconvert rejects {} (exit code {}): {}", xodr.string(), result.exitCode,
+                                firstErrorLine(result.output)));
   }
 }
 
