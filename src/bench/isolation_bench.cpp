@@ -13,6 +13,7 @@
 #include "vsd/core/error.hpp"
 #include "vsd/core/files.hpp"
 #include "vsd/core/progress.hpp"
+#include "vsd/core/statistics.hpp"
 
 namespace fs = std::filesystem;
 

@@ -34,13 +34,6 @@ Usage Usage::operator-(const Usage& before) const {
   return {user - before.user, system - before.system, pageFaults - before.pageFaults};
 }
 
-double median(std::vector<double> values) {
-  if (values.empty()) throw Error("internal: median of no values");
-  std::sort(values.begin(), values.end());
-  const std::size_t n = values.size();
-  return n % 2 == 1 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
-}
-
 std::string loadAverage() {
   double load[3] = {0.0, 0.0, 0.0};
   if (::getloadavg(load, 3) != 3) return "unknown";

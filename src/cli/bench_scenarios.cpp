@@ -8,6 +8,7 @@
 #include "commands.hpp"
 #include "flags.hpp"
 #include "vsd/bench/scenario_bench.hpp"
+#include "vsd/core/statistics.hpp"
 
 namespace fs = std::filesystem;
 
@@ -26,7 +27,7 @@ int printInteropBench(const bench::InteropBenchOptions& options) {
   const auto& values = result.deviations;
   fmt::print("  netconvert round trip (exported .xodr -> netconvert vs the generated network), lane centres:\n");
   fmt::print("    {:>8} scenarios: max deviation {:.4f} m, median {:.4f} m (target <= 0.05 m)\n", values.size(),
-             values.back(), values[values.size() / 2]);
+             values.back(), upperMedian(values));
   return 0;
 }
 

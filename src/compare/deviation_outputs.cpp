@@ -7,6 +7,7 @@
 #include <map>
 
 #include "vsd/core/csv.hpp"
+#include "vsd/core/statistics.hpp"
 #include "vsd/model/intervals.hpp"
 #include "vsd/vector/scene_svg.hpp"
 
@@ -89,14 +90,10 @@ report::TextTable groupTable(const DeviationSummary& summary) {
       along.push_back(std::abs(scene->longitudinal));
       across.push_back(std::abs(scene->lateral));
     }
-    const auto median = [](std::vector<double> values) {
-      std::sort(values.begin(), values.end());
-      return values[values.size() / 2];
-    };
     table.rows.push_back({name, std::to_string(members.size()),
                           fmt::format("{:.1f} %", 100.0 * static_cast<double>(members.size()) /
                                                       static_cast<double>(std::max<std::size_t>(scored.size(), 1))),
-                          pCell(median(p)), cell(median(along)), cell(median(across)),
+                          pCell(upperMedian(p)), cell(upperMedian(along)), cell(upperMedian(across)),
                           distinguishingFeatures(result, members, scored)});
   }
   return table;

@@ -32,6 +32,7 @@
 #include "vsd/core/log.hpp"
 #include "vsd/core/output_policy.hpp"
 #include "vsd/core/progress.hpp"
+#include "vsd/core/statistics.hpp"
 #include "vsd/core/svg.hpp"
 #include "vsd/metrics/metrics.hpp"
 #include "vsd/model/model.hpp"
@@ -477,23 +478,22 @@ class ExperimentRunner {
   json displacementSummary(const model::Predictor& predictor, const std::string& label, const std::string& what) {
     const auto& scenes = testScenes(label);
     const auto predictions = predictor.predict(scenes);
-    std::vector<std::pair<double, std::size_t>> per_sample;
+    std::vector<double> per_sample;
     double ade_sum = 0.0;
     double fde_sum = 0.0;
     for (std::size_t i = 0; i < scenes.size(); ++i) {
       const auto sample = model::displacementErrors(predictions[i], scenes[i]);
       ade_sum += sample.ade;
       fde_sum += sample.fde;
-      per_sample.emplace_back(sample.ade, i);
+      per_sample.push_back(sample.ade);
     }
-    const auto median = per_sample.begin() + static_cast<std::ptrdiff_t>(per_sample.size() / 2);
-    std::nth_element(per_sample.begin(), median, per_sample.end());
+    const std::size_t median_sample = upperMedianIndex(per_sample);
     spdlog::info("{} on {}: ADE {:.3f} m over {} scenes", what, label, mean(ade_sum, scenes.size()), scenes.size());
     return {{"samples", scenes.size()},
             {"ade", mean(ade_sum, scenes.size())},
             {"fde", mean(fde_sum, scenes.size())},
-            {"median_ade", median->first},
-            {"median_sample", median->second}};
+            {"median_ade", per_sample[median_sample]},
+            {"median_sample", median_sample}};
   }
 
   /// A table row from the evaluations of its seeds (one for predictors).

@@ -4,6 +4,8 @@
 #include <cmath>
 #include <limits>
 
+#include "vsd/core/statistics.hpp"
+
 namespace vsd::model {
 
 namespace {
@@ -70,15 +72,8 @@ struct Scored {
   double reference = 0.0;
 };
 
-double median(std::vector<double> values) {
-  if (values.empty()) return 0.0;
-  const auto middle = values.begin() + static_cast<std::ptrdiff_t>(values.size() / 2);
-  std::nth_element(values.begin(), middle, values.end());
-  return *middle;
-}
-
-/// The scale of the normalised score: the median 90 % width, or (draws without spread) the
-/// median distance of the references from the draws' medians.
+/// The scale of the normalised score: the (upper) median 90 % width, or (draws without
+/// spread) the (upper) median distance of the references from the draws' medians.
 double widthFloor(const std::vector<Scored>& scored) {
   std::vector<double> widths;
   std::vector<double> distances;
@@ -86,9 +81,9 @@ double widthFloor(const std::vector<Scored>& scored) {
     widths.push_back(s.width90);
     distances.push_back(std::abs(s.reference - quantileOfSorted(s.sorted, 0.5)));
   }
-  const double width = median(widths);
+  const double width = upperMedian(widths);
   if (width > 0.0) return width;
-  return std::max(median(distances), 1e-9);
+  return std::max(upperMedian(distances), 1e-9);
 }
 
 /// The smallest central level of sorted draws holding `value` (1 outside their range).

@@ -19,13 +19,6 @@
 namespace fs = std::filesystem;
 using namespace vsd;
 
-TEST(Bench, MedianOfOddAndEvenCountsInAnyOrder) {
-  EXPECT_DOUBLE_EQ(bench::median({3.0, 1.0, 2.0}), 2.0);
-  EXPECT_DOUBLE_EQ(bench::median({4.0, 1.0, 3.0, 2.0}), 2.5);
-  EXPECT_DOUBLE_EQ(bench::median({7.0}), 7.0);
-  EXPECT_THROW(bench::median({}), Error);
-}
-
 TEST(Bench, ChildProcessCpuTimeIsCountedAndAFailureNamesItsError) {
   TemporaryDirectory work("vsd-test-bench");
   const auto busy = bench::runChecked(

@@ -1,6 +1,6 @@
 #pragma once
-// What every benchmark measures with: CPU time and page faults (getrusage), medians, the
-// load average, and `vsd-sumo` processes run to completion (the executable users start,
+// What every benchmark measures with: CPU time and page faults (getrusage), the load
+// average (medians: core/statistics.hpp), and `vsd-sumo` processes run to completion (the executable users start,
 // so start-up, scenario loading and file writing are part of what is timed).
 
 #include <filesystem>
@@ -28,9 +28,6 @@ struct Usage {
   Usage operator-(const Usage& before) const;
   double cpu() const { return user + system; }  ///< s
 };
-
-/// The median (mean of the middle two for an even count); `values` must not be empty.
-double median(std::vector<double> values);
 
 /// The 1, 5 and 15 minute load averages, "0.50 1.17 1.87" ("unknown" if unavailable).
 std::string loadAverage();

@@ -1,0 +1,44 @@
+#include "vsd/core/statistics.hpp"
+
+#include <algorithm>
+#include <numeric>
+
+#include "vsd/core/error.hpp"
+
+namespace vsd {
+
+namespace {
+
+void requireValues(const std::vector<double>& values, const char* what) {
+  if (values.empty()) throw Error(std::string("internal: ") + what + " of no values");
+}
+
+}  // namespace
+
+double median(std::vector<double> values) {
+  requireValues(values, "median");
+  std::sort(values.begin(), values.end());
+  const std::size_t n = values.size();
+  return n % 2 == 1 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
+}
+
+double upperMedian(std::vector<double> values) {
+  requireValues(values, "upper median");
+  const auto middle = values.begin() + static_cast<std::ptrdiff_t>(values.size() / 2);
+  std::nth_element(values.begin(), middle, values.end());
+  return *middle;
+}
+
+std::size_t upperMedianIndex(const std::vector<double>& values) {
+  requireValues(values, "upper median");
+  std::vector<std::size_t> order(values.size());
+  std::iota(order.begin(), order.end(), std::size_t{0});
+  const auto middle = order.begin() + static_cast<std::ptrdiff_t>(order.size() / 2);
+  // Ordered by value, then by index: the same element as sorting (value, index) pairs.
+  std::nth_element(order.begin(), middle, order.end(), [&](std::size_t a, std::size_t b) {
+    return values[a] < values[b] || (values[a] == values[b] && a < b);
+  });
+  return *middle;
+}
+
+}  // namespace vsd
