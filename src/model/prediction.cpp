@@ -222,13 +222,47 @@ class NetworkBackend final : public Predictor::Backend {
   mutable Model model_;  // inference only: forward() is not const in libtorch
 };
 
-/// Constant velocity ("cv") and constant acceleration ("ca") along the initial heading,
-/// rolled out through the same kinematic model as the kinematic decoder (no reversing).
-/// ca's acceleration at t0 comes from the Ego's history (README "Predictors without training").
+/// The predictors without training: one entry each, saying what acceleration the Ego keeps
+/// along its initial heading. Both roll out through the same kinematic model as the
+/// kinematic decoder (no reversing) (docs/models.md "Predictors without training").
+struct MotionModel {
+  const char* name;
+  /// m/s^2: the acceleration held over the whole horizon of a scene.
+  double (*acceleration)(const vector::VectorizedScene& scene);
+};
+
+/// ca: the acceleration over the last history step, from the speed over that step
+/// (|p_0 - p_-1| / dt, the speed at its middle) and the speed at t0 (initial vector):
+/// a = 2 (v_0 - u_-1/2) / dt, exact for constant acceleration within the step. 0 without
+/// a valid history step ending at t0 (then ca predicts what cv does).
+double lastObservedAcceleration(const vector::VectorizedScene& scene) {
+  const auto& ego = scene.polylines.at(scene.egoPolyline);
+  if (ego.vectors.size() < 2) return 0.0;
+  const std::size_t last = ego.vectors.size() - 2;
+  const auto& f = ego.vectors[last];
+  if (!ego.valid[last] || std::abs(f[6]) > 1e-6) return 0.0;
+  const double through_last_step = std::hypot(f[2] - f[0], f[3] - f[1]) / scene.step;
+  return 2.0 * (scene.egoInitialState().speed - through_last_step) / scene.step;
+}
+
+double noAcceleration(const vector::VectorizedScene&) { return 0.0; }
+
+constexpr MotionModel kMotionModels[] = {
+    {"cv", noAcceleration},            // constant velocity
+    {"ca", lastObservedAcceleration},  // constant acceleration: the last observed one
+};
+
+const MotionModel* findMotionModel(const fs::path& name) {
+  for (const auto& model : kMotionModels) {
+    if (name == model.name) return &model;
+  }
+  return nullptr;
+}
+
 class MotionModelBackend final : public Predictor::Backend {
  public:
-  explicit MotionModelBackend(std::string name) {
-    info_.config.decoder = std::move(name);
+  explicit MotionModelBackend(const MotionModel& motion) : motion_(motion) {
+    info_.config.decoder = motion.name;
     info_.config.horizon = 0;
     info_.config.step = 0.0;
     info_.mix = "none (no training)";
@@ -270,7 +304,7 @@ class MotionModelBackend final : public Predictor::Backend {
     for (std::int64_t i = 0; i < n; ++i) {
       const auto& scene = scenes[first + static_cast<std::size_t>(i)];
       speed[i] = scene.egoInitialState().speed;
-      accel[i][0] = info_.config.decoder == "ca" ? initialAcceleration(scene) : 0.0;
+      accel[i][0] = motion_.acceleration(scene);
       frames.frames.push_back(makeFrame("ego", scene, info_.config.laneSmoothing));
     }
     const auto path = rollout(torch::zeros({n, 2}), torch::zeros({n}), speed, accel.expand({n, steps}),
@@ -282,35 +316,21 @@ class MotionModelBackend final : public Predictor::Backend {
     return toPredictions(scenes, first, frames, decoded, Sampled{}, step);
   }
 
- public:
-  /// ca: the acceleration over the last history step, from the speed over that step
-  /// (|p_0 - p_-1| / dt, the speed at its middle) and the speed at t0 (initial vector):
-  /// a = 2 (v_0 - u_-1/2) / dt, exact for constant acceleration within the step. 0 without
-  /// a valid history step ending at t0 (then ca predicts what cv does).
-  static double initialAcceleration(const vector::VectorizedScene& scene) {
-    const auto& ego = scene.polylines.at(scene.egoPolyline);
-    if (ego.vectors.size() < 2) return 0.0;
-    const std::size_t last = ego.vectors.size() - 2;
-    const auto& f = ego.vectors[last];
-    if (!ego.valid[last] || std::abs(f[6]) > 1e-6) return 0.0;
-    const double through_last_step = std::hypot(f[2] - f[0], f[3] - f[1]) / scene.step;
-    return 2.0 * (scene.egoInitialState().speed - through_last_step) / scene.step;
-  }
-
  private:
+  const MotionModel& motion_;
   ModelInfo info_;
 };
 
 }  // namespace
 
-bool Predictor::isBuiltin(const fs::path& model) { return model == "cv" || model == "ca"; }
+bool Predictor::isBuiltin(const fs::path& model) { return findMotionModel(model) != nullptr; }
 
 Predictor::Predictor(const fs::path& model, int threads) {
   if (threads < 1 || threads > 256) {
     throw ConfigError::field("command line", "--threads", std::to_string(threads), "1 .. 256");
   }
   configureThreads(threads);
-  if (isBuiltin(model)) backend_ = std::make_unique<MotionModelBackend>(model.string());
+  if (const auto* motion = findMotionModel(model)) backend_ = std::make_unique<MotionModelBackend>(*motion);
   else backend_ = std::make_unique<NetworkBackend>(model);
 }
 
