@@ -43,13 +43,33 @@ void Reader::parse() {
   for (std::size_t i = 0; i < text_.size(); ++i) {
     if (text_[i] == '\n') lineStarts_.push_back(i + 1);
   }
-  const auto result = document_.load_buffer(text_.data(), text_.size(), pugi::parse_default | pugi::parse_ws_pcdata_single);
+  const auto result = document_.load_buffer(text_.data(), text_.size(),
+                                            pugi::parse_default | pugi::parse_ws_pcdata_single | pugi::parse_doctype);
   if (!result) {
-    const auto it = std::upper_bound(lineStarts_.begin(), lineStarts_.end(), static_cast<std::size_t>(result.offset));
-    throw ConfigError(fmt::format("{}:{}: not well-formed XML ({})", file_.string(), std::distance(lineStarts_.begin(), it),
+    throw ConfigError(fmt::format("{}:{}: not well-formed XML ({})", file_.string(), lineOfOffset(result.offset),
                                   result.description()));
   }
+  refuseEntityDeclarations();
   if (!document_.document_element()) throw ConfigError(fmt::format("{}: no XML root element", file_.string()));
+}
+
+int Reader::lineOfOffset(std::ptrdiff_t offset) const {
+  const auto it = std::upper_bound(lineStarts_.begin(), lineStarts_.end(), static_cast<std::size_t>(offset));
+  return static_cast<int>(std::distance(lineStarts_.begin(), it));
+}
+
+void Reader::refuseEntityDeclarations() const {
+  // pugixml expands no entities, but a file that declares them is written to attack the
+  // reader of a DTD-expanding parser (billion laughs, external entities): OpenSCENARIO and
+  // OpenDRIVE files need none, so it is refused rather than read with the names left in.
+  for (const auto& node : document_.children()) {
+    if (node.type() != pugi::node_doctype) continue;
+    const std::string declaration = node.value();
+    if (declaration.find("<!ENTITY") == std::string::npos) continue;
+    throw ConfigError(fmt::format("{}:{}: the document type declares entities (<!ENTITY ...>); OpenSCENARIO and OpenDRIVE "
+                                  "files need none, and vsd-sumo does not read files that do",
+                                  file_.string(), line(node)));
+  }
 }
 
 int Reader::line(const pugi::xml_node& node) const {

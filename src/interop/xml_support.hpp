@@ -9,6 +9,7 @@
 
 #include <pugixml.hpp>
 
+#include <cstddef>
 #include <filesystem>
 #include <functional>
 #include <initializer_list>
@@ -84,6 +85,10 @@ class Reader {
 
  private:
   void parse();
+  /// 1-based line of a byte offset of the text.
+  int lineOfOffset(std::ptrdiff_t offset) const;
+  /// Throws ConfigError for a document type that declares entities (billion laughs, XXE).
+  void refuseEntityDeclarations() const;
 
   std::filesystem::path file_;
   std::string text_;

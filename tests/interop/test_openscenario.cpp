@@ -320,6 +320,15 @@ TEST(OpenScenario, HostileFilesAreRefusedInOneLineBeforeAnyWork) {
       {edited(text, R"(filepath="[^"]*")", "filepath=\"../acc0.xodr\""), "<LogicFile>: filepath: got '../acc0.xodr'"},
       {edited(text, R"(<Property name="time_gap")", "<Property name=\"vsd-sumo.library\" value=\"../../lib/libx.so\" /><Property name=\"time_gap\""),
        "vsd-sumo.library: got '../../lib/libx.so', expected a path inside"},
+      // Issue 24's bad input: entity declarations (billion laughs, an external entity) are
+      // refused, not read with the entity names left in the text.
+      {edited(edited(text, R"(<OpenSCENARIO)",
+                     "<!DOCTYPE OpenSCENARIO [ <!ENTITY a0 \"lol\"> <!ENTITY a1 \"&a0;&a0;&a0;&a0;&a0;&a0;&a0;&a0;&a0;&a0;\"> ]>"
+                     "<OpenSCENARIO"),
+              seed, property("vsd-sumo.seed", "&a1;")),
+       "hostile.xosc:2: the document type declares entities (<!ENTITY ...>)"},
+      {edited(text, R"(<OpenSCENARIO)", "<!DOCTYPE OpenSCENARIO [ <!ENTITY xxe SYSTEM \"file:///etc/passwd\"> ]><OpenSCENARIO"),
+       "hostile.xosc:2: the document type declares entities"},
   };
   const fs::path folder = work.path() / "inner";
   fs::create_directories(folder);
