@@ -35,7 +35,7 @@ std::vector<vector::VectorizedScene> readScenes(const std::vector<fs::path>& dat
 struct ModelBench::Work {
   std::optional<TemporaryDirectory> temporary;
   fs::path folder;
-  std::vector<fs::path> tests;  ///< test data per label
+  std::vector<fs::path> validation;  ///< validation data per label (kValidationDataSeed)
   std::string suffix;           ///< of every model file: decoder, frame, decoder options
 };
 
@@ -52,7 +52,7 @@ ModelBench::ModelBench(ModelBenchOptions options) : options_(std::move(options))
   }
   ensureDirectory(work_->folder);
   if (options_.scenarios.empty()) options_.scenarios = fs::path(VSD_SOURCE_DIR) / "scenarios";
-  for (const auto& label : modelBenchLabels()) work_->tests.push_back(work_->folder / ("test_" + label));
+  for (const auto& label : modelBenchLabels()) work_->validation.push_back(work_->folder / ("validation_" + label));
   work_->suffix = fmt::format("_{}_{}", options_.decoder, options_.frame);
   for (const auto& option : options_.decoderOptions) work_->suffix += "_" + option;
   work_->suffix += ".pt";
@@ -65,8 +65,8 @@ fs::path ModelBench::modelPath(const std::string& name) const { return work_->fo
 double ModelBench::generateData() {
   double simulation_rate = 0.0;
   for (const auto& name : modelBenchLabels()) {
-    for (const auto& [kind, samples, seed] : {std::tuple{std::string("train"), options_.samples, kModelBenchTrainSeed},
-                                               std::tuple{std::string("test"), options_.testSamples, kModelBenchTestSeed}}) {
+    for (const auto& [kind, samples, seed] : {std::tuple{std::string("train"), options_.samples, kTrainingDataSeed},
+                                               std::tuple{std::string("validation"), options_.validationSamples, kValidationDataSeed}}) {
       const fs::path out = work_->folder / fmt::format("{}_{}", kind, name);
       if (fs::exists(out / "dataset.h5")) continue;
       const auto result = options_.tool.run({"run", (options_.scenarios / (name + ".yaml")).string(), "--samples",
@@ -98,7 +98,7 @@ MixResult ModelBench::trainAndEvaluate(const std::string& mix, const std::vector
   result.mix = mix;
   result.summary = finished ? model::TrainSummary{} : model::train(train_options);
   const model::Predictor predictor(train_options.output, options_.threads);
-  result.evaluation = model::evaluate(predictor, work_->tests);
+  result.evaluation = model::evaluate(predictor, work_->validation);
   return result;
 }
 
@@ -118,12 +118,12 @@ std::vector<MetricAccuracy> ModelBench::metricAccuracy() const {
   const model::Predictor predictor(modelPath("all"), options_.threads);
   std::vector<MetricAccuracy> accuracy;
   for (const auto& label : modelBenchLabels()) {
-    // `vsd-sumo compare`'s scenario mode on the test run's scenarios (same file, seed and
+    // `vsd-sumo compare`'s scenario mode on the validation run's scenarios (same file, seed and
     // count): fresh SUMO runs, the metric registry on the trace and on the prediction.
     compare::CompareOptions options;
     options.scenarioFile = options_.scenarios / (label + ".yaml");
-    options.samples = options_.testSamples;
-    options.seed = kModelBenchTestSeed;
+    options.samples = options_.validationSamples;
+    options.seed = kValidationDataSeed;
     options.threads = options_.threads;
     options.draws = options_.draws;
     const auto comparison = compare::compareScenarioPredictions(options, predictor);
@@ -135,7 +135,7 @@ std::vector<MetricAccuracy> ModelBench::metricAccuracy() const {
 std::optional<double> ModelBench::samplingRate() const {
   const model::Predictor predictor(modelPath("all"), options_.threads);
   if (!predictor.probabilistic() || options_.draws <= 0) return std::nullopt;
-  const auto scenes = readScenes(work_->tests);
+  const auto scenes = readScenes(work_->validation);
   model::PredictOptions options;
   options.samples = options_.draws;
   const auto start = std::chrono::steady_clock::now();

@@ -131,7 +131,7 @@ void printMetricAccuracy(const bench::MetricAccuracy& accuracy) {
 }
 
 void printMix(const bench::MixResult& result) {
-  fmt::print("  mix {:<32} trained in {:>5.1f} s ({} epochs, {:.0f} samples/s), test ADE [m]:", result.mix,
+  fmt::print("  mix {:<32} trained in {:>5.1f} s ({} epochs, {:.0f} samples/s), validation ADE [m]:", result.mix,
              result.summary.seconds, result.summary.plannedEpochs, result.summary.samplesPerSecond);
   for (const auto& [label, errors] : result.evaluation.perLabel) fmt::print(" {} {:.3f}", label, errors.ade);
   fmt::print("\n");
@@ -157,14 +157,15 @@ void printThroughput(const bench::ModelBench& bench, const bench::MixResult& all
 int printModelBench(const bench::ModelBenchOptions& model_options) {
   bench::ModelBench bench(model_options);
   const auto& options = bench.options();
-  fmt::print("vsd-sumo bench model: VectorNet on {} training + {} test samples per functional scenario ({} threads)\n",
-             options.samples, options.testSamples, options.threads);
+  fmt::print("vsd-sumo bench model: VectorNet on {} training (seed {}) + {} validation samples (seed {}) per functional "
+             "scenario ({} threads)\n",
+             options.samples, kTrainingDataSeed, options.validationSamples, kValidationDataSeed, options.threads);
   const double simulation_rate = bench.generateData();
   fmt::print("  decoder {}{}{}, frame {}, {} optimizer steps\n", options.decoder, options.decoderOptions.empty() ? "" : " ",
              fmt::join(options.decoderOptions, " "), options.frame, options.steps);
   const auto all = bench.trainAll();
   printMix(all);
-  fmt::print("  metrics of the all-three model's predictions vs. fresh SUMO runs of the test scenarios (as `vsd-sumo "
+  fmt::print("  metrics of the all-three model's predictions vs. fresh SUMO runs of the validation scenarios (as `vsd-sumo "
              "compare`); floor: metric of the simulated positions; intervals of {} sampled futures:\n",
              options.draws);
   for (const auto& accuracy : bench.metricAccuracy()) printMetricAccuracy(accuracy);
@@ -242,10 +243,11 @@ void addMapExportBench(CLI::App& bench, CommandContext& context) {
 
 void addModelBench(CLI::App& bench, CommandContext& context) {
   auto options = std::make_shared<bench::ModelBenchOptions>();
-  CLI::App* modeling = bench.add_subcommand("model", "Training and inference throughput and test ADE of VectorNet");
+  CLI::App* modeling = bench.add_subcommand("model", "Training and inference throughput and validation ADE of VectorNet (the data configurations are chosen on)");
   modeling->add_option("--work", options->work, "Keep data and models in this folder (reused when present)");
   addNumber(modeling, "--samples", options->samples, "Training samples per functional scenario")->capture_default_str();
-  addNumber(modeling, "--test-samples", options->testSamples, "Test samples per functional scenario")
+  addNumber(modeling, "--validation-samples,--test-samples", options->validationSamples,
+            "Validation samples per functional scenario (fresh scenarios of the validation seed; --test-samples: its old name)")
       ->capture_default_str();
   modeling->add_flag("--singles", options->singles, "Also train one model per functional scenario");
   addNumber(modeling, "--threads", options->threads, "libtorch threads")->capture_default_str();
@@ -254,7 +256,7 @@ void addModelBench(CLI::App& bench, CommandContext& context) {
   modeling->add_option("--steps", options->steps, "Optimizer steps of every training")->capture_default_str();
   modeling->add_flag("--resume", options->resume,
                      "Continue trainings from <model>.last where it exists; reuse finished models");
-  modeling->add_flag("--row4", options->row4, "Also train on acc + lk only and test on acc_lk (paper row 4)");
+  modeling->add_flag("--row4", options->row4, "Also train on acc + lk only and measure on acc_lk (paper row 4)");
   modeling->add_option("--frame", options->frame, "Model frame (ego, lane)")->capture_default_str();
   addNumber(modeling, "--futures", options->draws, "Sampled futures per scene in the inference benchmark")
       ->capture_default_str();

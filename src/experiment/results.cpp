@@ -14,6 +14,7 @@
 #include "vsd/core/csv.hpp"
 #include "vsd/core/files.hpp"
 #include "vsd/core/log.hpp"
+#include "vsd/core/seeds.hpp"
 #include "vsd/pipeline/provenance.hpp"
 
 namespace fs = std::filesystem;
@@ -106,13 +107,21 @@ std::string seedsText(const Spec& spec) {
                      fmt::join(spec.seedRows, ", "), spec.seed, spec.seed + static_cast<std::uint64_t>(spec.seedCount) - 1);
 }
 
+/// Whether the test data are sealed (core/seeds.hpp): figures on the validation seed or any
+/// seed below the sealed range may have been seen by a configuration choice.
+std::string sealedText(const Spec& spec) {
+  if (isSealedTestSeed(spec.testSeed)) return "sealed: no configuration was chosen on them";
+  return fmt::format("**not sealed**: test seeds start at {}, and configurations were chosen on seed {}",
+                     kFirstSealedTestSeed, kValidationDataSeed);
+}
+
 std::string sizesLine(const Spec& spec) {
   return fmt::format(
-      "Data per functional scenario: {} training scenarios (seed {}), {} test scenarios (seed {}). "
+      "Data per functional scenario: {} training scenarios (seed {}), {} test scenarios (seed {}; {}). "
       "VectorNet: {} optimizer steps, batch {}, peak learning rate {}, seed {}{}, {} thread(s) per training, {} "
       "training(s) at a time.{}",
-      spec.trainSamples, spec.trainSeed, spec.testSamples, spec.testSeed, spec.steps, spec.batch, spec.learningRate,
-      spec.seed, seedsText(spec), spec.threads, spec.parallel,
+      spec.trainSamples, spec.trainSeed, spec.testSamples, spec.testSeed, sealedText(spec), spec.steps, spec.batch,
+      spec.learningRate, spec.seed, seedsText(spec), spec.threads, spec.parallel,
       spec.quick ? " **--quick sizes: not comparable with the paper.**" : "");
 }
 
@@ -453,6 +462,9 @@ void writeResults(const Spec& spec, const ExperimentOptions& options, Experiment
   manifest["seeds"] = {{"experiment", spec.seed},
                        {"train_data", spec.trainSeed},
                        {"test_data", spec.testSeed},
+                       {"test_data_sealed", isSealedTestSeed(spec.testSeed)},
+                       {"validation", "each training's validation split of its training data (early stopping, "
+                                      "calibration)"},
                        {"count", spec.seedCount},
                        {"rows", spec.seedRows}};
   for (const auto& model : spec.models) {
