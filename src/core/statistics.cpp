@@ -1,6 +1,7 @@
 #include "vsd/core/statistics.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <numeric>
 
 #include "vsd/core/error.hpp"
@@ -39,6 +40,17 @@ std::size_t upperMedianIndex(const std::vector<double>& values) {
     return values[a] < values[b] || (values[a] == values[b] && a < b);
   });
   return *middle;
+}
+
+ProportionInterval wilsonInterval(double share, std::size_t trials, double z) {
+  if (trials == 0 || !(share >= 0.0 && share <= 1.0)) {
+    throw Error("internal: a proportion interval needs trials and a share in 0..1");
+  }
+  const double n = static_cast<double>(trials);
+  const double z2 = z * z;
+  const double centre = (share + z2 / (2.0 * n)) / (1.0 + z2 / n);
+  const double half = z / (1.0 + z2 / n) * std::sqrt(share * (1.0 - share) / n + z2 / (4.0 * n * n));
+  return {std::max(0.0, centre - half), std::min(1.0, centre + half)};
 }
 
 }  // namespace vsd

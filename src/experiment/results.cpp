@@ -15,6 +15,7 @@
 #include "vsd/core/files.hpp"
 #include "vsd/core/log.hpp"
 #include "vsd/core/seeds.hpp"
+#include "vsd/core/statistics.hpp"
 #include "vsd/pipeline/provenance.hpp"
 
 namespace fs = std::filesystem;
@@ -171,6 +172,21 @@ const VectorNetMetricError* errorOf(const MaeRow& row, const std::string& model)
 
 std::string percent(double share) { return std::isfinite(share) ? fmt::format("{:.0f} %", 100.0 * share) : "–"; }
 
+/// "51 % (48–54)": a coverage with its binomial 95 % confidence interval (Wilson) over the
+/// scenes scored.
+std::string coverageText(double share, std::size_t scenes) {
+  if (!std::isfinite(share) || scenes == 0) return percent(share);
+  const auto interval = wilsonInterval(share, scenes);
+  return fmt::format("{} ({:.0f}–{:.0f})", percent(share), 100.0 * interval.low, 100.0 * interval.high);
+}
+
+/// The 95 % interval's bounds of a coverage for mae.csv (empty where there is no coverage).
+std::pair<std::string, std::string> coverageBounds(double share, std::size_t scenes) {
+  if (!std::isfinite(share) || scenes == 0) return {"", ""};
+  const auto interval = wilsonInterval(share, scenes);
+  return {formatNumber(interval.low), formatNumber(interval.high)};
+}
+
 /// A model's cell of mae.md: "0.440 (bias +0.20; 90 % interval covers 87 %, 50 %: 48 %)";
 /// the main model's also carries the paper's value.
 std::string maeCell(const MaeRow& row, const std::string& model, bool main) {
@@ -179,7 +195,8 @@ std::string maeCell(const MaeRow& row, const std::string& model, bool main) {
   std::string cell = main ? withPaper(error->mae, row.paper, "vectornet", 3) : fmt::format("{:.3f}", error->mae);
   cell += fmt::format(" bias {:+.3f}", error->bias);
   if (std::isfinite(error->coverage90)) {
-    cell += fmt::format("; covered {} / {}", percent(error->coverage50), percent(error->coverage90));
+    cell += fmt::format("; covered {} / {}", coverageText(error->coverage50, error->samples),
+                        coverageText(error->coverage90, error->samples));
   }
   return cell;
 }
@@ -194,7 +211,10 @@ std::pair<std::string, std::string> maeFiles(const Spec& spec, const std::vector
                                    "vectornet_from_true_positions", "bnn_mean_std", "paper_et", "paper_bnn",
                                    "paper_vectornet", "train_rows", "vectornet_test_samples", "et_seconds", "bnn_seconds"};
   for (const auto& model : models) {
-    for (const char* column : {"", "_bias", "_coverage_50", "_coverage_90"}) head.push_back("vectornet_" + model + column);
+    for (const char* column : {"", "_bias", "_coverage_50", "_coverage_50_ci95_low", "_coverage_50_ci95_high",
+                               "_coverage_90", "_coverage_90_ci95_low", "_coverage_90_ci95_high"}) {
+      head.push_back("vectornet_" + model + column);
+    }
   }
   std::ostringstream csv;
   CsvWriter writer(csv);
@@ -207,7 +227,7 @@ std::pair<std::string, std::string> maeFiles(const Spec& spec, const std::vector
                   "named in the spec, for every model of the spec that trains that row: the MAE (the paper's value "
                   "in brackets for the main model), the bias (mean of predicted − simulated) and, for probabilistic "
                   "models, the share of simulated values inside the metric's 50 % / 90 % interval over {} sampled "
-                  "futures. 'true positions' is the same computation on the simulated future positions: the error "
+                  "futures, with its binomial 95 % confidence interval (Wilson) over the scenes scored. 'true positions' is the same computation on the simulated future positions: the error "
                   "of reconstructing the metric from positions alone, a floor for VectorNet's.\n\n",
                   spec.maeSamples, spec.maeDraws) +
       "| scenario | metric | extra trees | BNN | BNN mean std |";
@@ -227,8 +247,10 @@ std::pair<std::string, std::string> maeFiles(const Spec& spec, const std::vector
       const auto* error = errorOf(row, model);
       cells.push_back(error ? formatNumber(error->mae) : "");
       cells.push_back(error ? formatNumber(error->bias) : "");
-      cells.push_back(error ? optionalNumber(error->coverage50) : "");
-      cells.push_back(error ? optionalNumber(error->coverage90) : "");
+      for (const double coverage : {error ? error->coverage50 : kNaN, error ? error->coverage90 : kNaN}) {
+        const auto [low, high] = coverageBounds(coverage, error ? error->samples : 0);
+        cells.insert(cells.end(), {optionalNumber(coverage), low, high});
+      }
     }
     writer.writeRow(cells);
     md += fmt::format("| {} | {} [{}] | {} | {} | {:.3f} |", row.label, row.metric, row.unit,

@@ -30,3 +30,23 @@ TEST(Statistics, UpperMedianIndexPointsAtTheUpperMedianAndBreaksTiesByPosition) 
   EXPECT_EQ(upperMedianIndex({2.0, 1.0, 1.0, 1.0}), 3u);
   EXPECT_THROW(upperMedianIndex({}), Error);
 }
+
+TEST(Statistics, WilsonIntervalMatchesItsTextbookValuesAndStaysInsideZeroToOne) {
+  // 50 of 100: 0.5 ± 0.0962 (Wilson 1927; e.g. R's prop.test without continuity correction).
+  const auto half = wilsonInterval(0.5, 100);
+  EXPECT_NEAR(half.low, 0.4038, 1e-4);
+  EXPECT_NEAR(half.high, 0.5962, 1e-4);
+  // 90 of 100: [0.8256, 0.9448].
+  const auto ninety = wilsonInterval(0.9, 100);
+  EXPECT_NEAR(ninety.low, 0.8256, 1e-4);
+  EXPECT_NEAR(ninety.high, 0.9448, 1e-4);
+  // All covered in 10 trials: not [1, 1] but [0.7225, 1].
+  const auto all = wilsonInterval(1.0, 10);
+  EXPECT_NEAR(all.low, 0.7225, 1e-4);
+  EXPECT_DOUBLE_EQ(all.high, 1.0);
+  EXPECT_DOUBLE_EQ(wilsonInterval(0.0, 10).low, 0.0);
+  // More trials, narrower.
+  EXPECT_LT(wilsonInterval(0.9, 10000).high - wilsonInterval(0.9, 10000).low, ninety.high - ninety.low);
+  EXPECT_THROW(wilsonInterval(0.5, 0), Error);
+  EXPECT_THROW(wilsonInterval(1.5, 10), Error);
+}
