@@ -268,12 +268,15 @@ class ExperimentRunner {
   }
 
   // --- models ------------------------------------------------------------------
-  /// The seeds a row of a model is trained with: several for the main model's `seeds.rows`.
+  /// The seeds a row of a model is trained with: the model's own `seeds`, else several for
+  /// the main model's `seeds.rows`.
   std::vector<std::uint64_t> seedsOf(std::size_t model_index, int row) const {
     const bool repeated = model_index == 0 &&
                           std::find(spec_.seedRows.begin(), spec_.seedRows.end(), row) != spec_.seedRows.end();
+    const int own = spec_.models[model_index].seeds;
+    const int count = own > 0 ? own : (repeated ? spec_.seedCount : 1);
     std::vector<std::uint64_t> seeds;
-    for (int i = 0; i < (repeated ? spec_.seedCount : 1); ++i) seeds.push_back(spec_.seed + static_cast<std::uint64_t>(i));
+    for (int i = 0; i < count; ++i) seeds.push_back(spec_.seed + static_cast<std::uint64_t>(i));
     return seeds;
   }
 

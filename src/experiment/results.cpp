@@ -103,9 +103,19 @@ std::vector<std::string> labelsOf(const Spec& spec) {
 
 
 std::string seedsText(const Spec& spec) {
-  if (spec.seedCount < 2 || spec.seedRows.empty()) return "";
-  return fmt::format(" (rows {} of the main model: seeds {} to {}, mean ± standard deviation)",
-                     fmt::join(spec.seedRows, ", "), spec.seed, spec.seed + static_cast<std::uint64_t>(spec.seedCount) - 1);
+  std::vector<std::string> parts;
+  if (spec.seedCount >= 2 && !spec.seedRows.empty() && spec.models.front().seeds == 0) {
+    parts.push_back(fmt::format("rows {} of the main model: seeds {} to {}", fmt::join(spec.seedRows, ", "), spec.seed,
+                                spec.seed + static_cast<std::uint64_t>(spec.seedCount) - 1));
+  }
+  for (const auto& model : spec.models) {
+    if (model.seeds >= 2) {
+      parts.push_back(fmt::format("every row of {}: seeds {} to {}", model.name, spec.seed,
+                                  spec.seed + static_cast<std::uint64_t>(model.seeds) - 1));
+    }
+  }
+  if (parts.empty()) return "";
+  return fmt::format(" ({}; mean ± standard deviation)", fmt::join(parts, "; "));
 }
 
 /// Whether the test data are sealed (core/seeds.hpp): figures on the validation seed or any
@@ -491,7 +501,8 @@ void writeResults(const Spec& spec, const ExperimentOptions& options, Experiment
                        {"rows", spec.seedRows}};
   for (const auto& model : spec.models) {
     manifest["models"].push_back(
-        {{"name", model.name}, {"decoder", model.decoder}, {"options", model.options}, {"rows", model.rows}});
+        {{"name", model.name}, {"decoder", model.decoder}, {"options", model.options}, {"rows", model.rows},
+         {"seeds", model.seeds}});
   }
   manifest["predictors"] = spec.predictors;
   manifest["sizes"] = {{"train_samples", spec.trainSamples}, {"test_samples", spec.testSamples},

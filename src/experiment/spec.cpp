@@ -66,7 +66,7 @@ std::vector<int> allRows(const Spec& spec) {
 
 ModelSpec parseModel(const scenario::YamlReader& reader, const YAML::Node& node, const std::string& field,
                      const Spec& spec) {
-  reader.checkKeys(node, field, {"name", "decoder", "frame", "options", "rows"});
+  reader.checkKeys(node, field, {"name", "decoder", "frame", "options", "rows", "seeds"});
   ModelSpec model;
   if (!node["name"]) reader.fail(node, field, "missing 'name' (names its rows and cache folders)");
   model.name = reader.scalar(node["name"], field + ".name");
@@ -94,6 +94,7 @@ ModelSpec parseModel(const scenario::YamlReader& reader, const YAML::Node& node,
     reader.fail(node, field, error.what());
   }
   model.rows = node["rows"] ? rowList(reader, node["rows"], field + ".rows", spec) : allRows(spec);
+  if (node["seeds"]) model.seeds = reader.integer(node, "seeds", field + ".seeds", 1, 1, 100);
   return model;
 }
 
@@ -138,7 +139,8 @@ void parseModels(const scenario::YamlReader& reader, const YAML::Node& root, Spe
   }
 }
 
-/// In --quick, extra seeds and extra models train only the rows of `quick.repeat_rows`.
+/// In --quick, extra seeds and extra models train only the rows of `quick.repeat_rows`, and a
+/// model's own `seeds` is one.
 /// A model none of whose rows is repeated trains nothing there.
 void restrictRepeats(std::vector<int>& rows, const std::vector<int>& allowed) {
   rows.erase(std::remove_if(rows.begin(), rows.end(),
@@ -169,6 +171,9 @@ void applyQuickSizes(const scenario::YamlReader& reader, const YAML::Node& root,
     if (const auto rows = q["repeat_rows"]) repeat_rows = rowList(reader, rows, "quick.repeat_rows", spec);
     restrictRepeats(spec.seedRows, repeat_rows);
     for (std::size_t i = 1; i < spec.models.size(); ++i) restrictRepeats(spec.models[i].rows, repeat_rows);
+    // A model's own seeds are the full run's claim; the main model's repeated rows already
+    // take the several-seeds path here.
+    for (auto& model : spec.models) model.seeds = std::min(model.seeds, 1);
   }
 }
 

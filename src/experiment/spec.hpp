@@ -31,6 +31,9 @@ struct ModelSpec {
   std::map<std::string, double> options;   ///< decoder options (the rest take the decoder's defaults)
   std::string frame = "ego";               ///< the model's coordinate frame (model::availableFrames())
   std::vector<int> rows;                   ///< ade rows trained this way (every row unless the spec names them)
+  /// Seeds every row of this model is trained with (seed .. seed + seeds - 1, mean ± std in
+  /// the tables); 0: the spec's `seeds` section decides (the main model's rows it names).
+  int seeds = 0;
   bool trains(int row) const;
 };
 

@@ -93,6 +93,12 @@ TEST(Experiment, QuickRunProducesTheTablesFiguresAndManifestAndCachesArtefacts) 
       EXPECT_EQ(spread, "");
     }
   }
+  // paper.yaml gives the kinematic model its own three seeds; --quick trains them once.
+  for (std::size_t r = 0; r < ade_table.rows(); ++r) {
+    if (ade_table.cell(r, ade_table.column("model")) == "kinematic") {
+      EXPECT_EQ(ade_table.cell(r, ade_table.column("seeds")), "1");
+    }
+  }
   const auto ade_md = readTextFile(out / "ade.md");
   EXPECT_NE(ade_md.find("## residual: decoder offsets (residual=1)"), std::string::npos) << ade_md;
   EXPECT_NE(ade_md.find("## lane: decoder offsets (residual=0), lane frame"), std::string::npos) << ade_md;
@@ -232,6 +238,8 @@ TEST(Experiment, BadSpecsGiveOneLineNamingFileFieldAndValue) {
        "models[0].rows: the first model is the main one and trains every row"},
       {"unknown_seed_row", head + "ade:\n  - {row: 1, mix: {acc: 20}}\nseeds: {count: 3, rows: [1, 4]}\n",
        "seeds.rows[1]: no ade row 4"},
+      {"model_seeds_zero", head + "ade:\n  - {row: 1, mix: {acc: 20}}\nmodels:\n  - {name: m, seeds: 0}\n",
+       "models[0].seeds"},
   };
   for (const auto& c : cases) {
     const auto file = test::writeFile(dir.path() / (c.name + ".yaml"), c.yaml);
