@@ -85,10 +85,10 @@ std::vector<std::pair<std::string, std::filesystem::path>> inputsOf(
   return inputs;
 }
 
-/// "offsets, kinematic" for help texts.
-std::string decoderNames() {
+/// "offsets, kinematic" for help texts: the decoders of the registry the training is handed.
+std::string decoderNames(const model::DecoderRegistry& decoders) {
   std::vector<std::string> names;
-  for (const auto& info : model::availableDecoders()) names.push_back(info.name);
+  for (const auto& info : decoders.available()) names.push_back(info.name);
   return fmt::format("{}", fmt::join(names, ", "));
 }
 
@@ -121,7 +121,7 @@ void addTrainCommand(CLI::App& app, CommandContext& context) {
   addNumber(command, "--global-width", options->config.globalWidth, "Attention width")->capture_default_str();
   addNumber(command, "--heads", options->config.heads, "Attention heads")->capture_default_str();
   addNumber(command, "--decoder-hidden", options->config.decoderHidden, "Decoder width")->capture_default_str();
-  command->add_option("--decoder", options->config.decoder, "Decoder: " + decoderNames())->capture_default_str();
+  command->add_option("--decoder", options->config.decoder, "Decoder: " + decoderNames(options->config.decoderRegistry()))->capture_default_str();
   command->add_option("--decoder-option", *decoder_options,
                       "A decoder option name=value (repeatable; docs/models.md \"Decoders\" lists them)");
   command->add_option("--frame", options->config.frame, "Model frame: ego or lane")->capture_default_str();
@@ -138,7 +138,7 @@ void addTrainCommand(CLI::App& app, CommandContext& context) {
       auto inputs = inputsOf("--data", options->data);
       inputs.emplace_back("--init-from", options->initialModel);
       checkOutput({options->output, &modelKind(), trainingSubject(*options), *force, "--out", "--force", inputs});
-      model::findDecoder(options->config.decoder, "--decoder");
+      options->config.decoderRegistry().find(options->config.decoder, "--decoder");
       options->config.decoderOptions = model::parseDecoderOptions(*decoder_options);
       experiment::bindCalibrationMetrics(*options);  // `calibrate` also calibrates metric intervals
       const auto summary = model::train(*options, [&](const model::EpochRecord& record) {

@@ -16,15 +16,16 @@ namespace vsd::cli {
 
 namespace {
 
-std::vector<std::string> surrogateNames() {
+// Both from the registry the search is handed (SearchOptions::surrogates).
+std::vector<std::string> surrogateNames(const search::SurrogateRegistry& surrogates) {
   std::vector<std::string> names;
-  for (const auto& entry : search::surrogateRegistry()) names.push_back(entry.name);
+  for (const auto& entry : surrogates.entries()) names.push_back(entry.name);
   return names;
 }
 
-std::string surrogateHelp() {
+std::string surrogateHelp(const search::SurrogateRegistry& surrogates) {
   std::string text = "Surrogate that selects the executions:";
-  for (const auto& entry : search::surrogateRegistry()) text += fmt::format("\n  {}: {}", entry.name, entry.description);
+  for (const auto& entry : surrogates.entries()) text += fmt::format("\n  {}: {}", entry.name, entry.description);
   return text;
 }
 
@@ -47,9 +48,9 @@ void addSearchSubject(CLI::App* command, search::SearchOptions& options, bool& f
 
 /// How executions are chosen: the surrogate, the budget and the shape of the rounds.
 void addSelectionOptions(CLI::App* command, search::SearchOptions& options) {
-  command->add_option("--surrogate", options.surrogate, surrogateHelp())
+  command->add_option("--surrogate", options.surrogate, surrogateHelp(*options.surrogates))
       ->capture_default_str()
-      ->check(CLI::IsMember(surrogateNames()));  // a name the registry lacks is a usage error
+      ->check(CLI::IsMember(surrogateNames(*options.surrogates)));  // a name the registry lacks is a usage error
   addNumber(command, "--budget", options.budget,
             "SUMO simulations in total (an execution with --reference costs two)")
       ->capture_default_str();

@@ -27,7 +27,7 @@ struct AdeSpec {
 /// spec is the main one: its rows decide the findings and predict in the MAE table and figures.
 struct ModelSpec {
   std::string name;                        ///< names the rows in the tables and the cache folders
-  std::string decoder = "offsets";         ///< a name of model::availableDecoders()
+  std::string decoder = "offsets";         ///< a name of model::builtinDecoders()
   std::map<std::string, double> options;   ///< decoder options (the rest take the decoder's defaults)
   std::string frame = "ego";               ///< the model's coordinate frame (model::availableFrames())
   std::vector<int> rows;                   ///< ade rows trained this way (every row unless the spec names them)

@@ -29,11 +29,12 @@ constexpr const char* kModelFormatVersion2 = "vsd-model/2";
 
 /// Options a vsd-model/2 file lacks because its decoder gained them later, as that file's
 /// decoder behaved (each decoder's registry entry says which and how).
+/// (A decoder the registry lacks is refused afterwards, by the description's validation.)
 void addOptionsOfModelFormat2(VectorNetConfig& config) {
-  for (const auto& decoder : availableDecoders()) {
-    if (decoder.name != config.decoder) continue;
-    for (const auto& [name, value] : decoder.optionsBeforeModelFormat3) config.decoderOptions.emplace(name, value);
-  }
+  const auto& registry = config.decoderRegistry();
+  if (!registry.contains(config.decoder)) return;
+  const auto& decoder = registry.find(config.decoder, "model configuration");
+  for (const auto& [name, value] : decoder.optionsBeforeModelFormat3) config.decoderOptions.emplace(name, value);
 }
 constexpr double kLaneSmoothingBeforeVersion4 = 4.0;  ///< m
 constexpr const char* kLegacyModelFormat = "vsd-model/1";
@@ -181,8 +182,9 @@ void checkDescription(const ModelInfo& info, const fs::path& file) {
 
 }  // namespace
 
-ModelInfo infoFromJson(const std::string& text, const fs::path& file) {
+ModelInfo infoFromJson(const std::string& text, const fs::path& file, const Decoders& decoders) {
   ModelInfo info;
+  info.config.decoders = decoders;
   try {
     const auto json = nlohmann::json::parse(text);
     const std::string format = json.value("format", "");
@@ -279,13 +281,13 @@ void saveModel(const fs::path& path, const Model& model, const ModelInfo& info) 
   writeArchive(archive, path);
 }
 
-ModelInfo readModelInfo(const fs::path& path, torch::serialize::InputArchive& archive) {
+ModelInfo readModelInfo(const fs::path& path, torch::serialize::InputArchive& archive, const Decoders& decoders) {
   openArchive(path, archive);
   c10::IValue value;
   if (!archive.try_read(kInfoKey, value) || !value.isString()) {
     throw ModelError(fmt::format("{}: a torch archive, but not a vsd-sumo model (no model description)", path.string()));
   }
-  ModelInfo info = infoFromJson(value.toStringRef(), path);
+  ModelInfo info = infoFromJson(value.toStringRef(), path, decoders);
   if (info.featureVersion != vector::kFeatureVersion) {
     throw ModelError(fmt::format("{}: the model was trained on feature schema v{}, this vsd-sumo uses v{}",
                                  path.string(), info.featureVersion, vector::kFeatureVersion));
@@ -370,9 +372,9 @@ std::string architectureOf(const VectorNetConfig& c) {
 
 }  // namespace
 
-Model loadModel(const fs::path& path, ModelInfo& info) {
+Model loadModel(const fs::path& path, ModelInfo& info, const Decoders& decoders) {
   torch::serialize::InputArchive archive;
-  info = readModelInfo(path, archive);
+  info = readModelInfo(path, archive, decoders);
   Model model = Model::create(info.config);
   loadParameters(model.network, archive, path, architectureOf(info.config));
   model.network->eval();
@@ -391,9 +393,9 @@ void saveCheckpoint(const fs::path& path, const Model& model, torch::optim::Opti
   writeArchive(archive, path);
 }
 
-std::string readCheckpointState(const fs::path& path) {
+std::string readCheckpointState(const fs::path& path, const Decoders& decoders) {
   torch::serialize::InputArchive archive;
-  readModelInfo(path, archive);
+  readModelInfo(path, archive, decoders);
   c10::IValue state;
   if (!archive.try_read(kStateKey, state) || !state.isString()) {
     throw ModelError(fmt::format("{}: not a training checkpoint (no training state)", path.string()));
@@ -403,7 +405,7 @@ std::string readCheckpointState(const fs::path& path) {
 
 std::string loadCheckpoint(const fs::path& path, Model& model, torch::optim::Optimizer& optimizer) {
   torch::serialize::InputArchive archive;
-  readModelInfo(path, archive);
+  readModelInfo(path, archive, model.config.decoders);
   c10::IValue state;
   if (!archive.try_read(kStateKey, state) || !state.isString()) {
     throw ModelError(fmt::format("{}: not a training checkpoint (no training state)", path.string()));

@@ -6,7 +6,9 @@
 // positions and, depending on the decoder, speeds and accelerations, a position
 // covariance per step and a way to draw samples. It also defines the training loss.
 // Adding a decoder: one source file with its class and a function returning its
-// DecoderEntry, one line in decoder_registry.cpp (or one addDecoder() call; docs/design.md).
+// DecoderEntry, one line in decoder_registry.cpp (or, outside the model module, one
+// DecoderRegistry::add() call on the registry the model is trained and loaded with;
+// docs/design.md).
 //
 // Everything here is in the model's frame (README "Representations"): metres, radians,
 // the Ego starting at `EgoStart`.
@@ -58,20 +60,15 @@ class Decoder {
   virtual Sampled sample(const Decoded& decoded, const EgoStart& start, const torch::Tensor& noise) const;
 };
 
-/// A registry entry: the public description and how to build the decoder.
+/// A registry entry (DecoderRegistry, vsd/model/options.hpp): the public description and how
+/// to build the decoder.
 struct DecoderEntry {
   DecoderInfo info;
   /// Builds the decoder for a validated configuration (horizon, step and options set).
   std::function<std::unique_ptr<Decoder>(const VectorNetConfig&)> create;
 };
 
-/// Every decoder, one entry each: the built-ins (decoder_registry.cpp), then the added ones.
-const std::vector<DecoderEntry>& decoderRegistry();
-/// Adds a decoder written outside this module (its own file and this one call, before any
-/// model is built or loaded with it). Throws ConfigError for a name that is taken or an
-/// entry without a factory.
-void addDecoder(DecoderEntry entry);
-/// The decoder of a validated configuration.
+/// The decoder of a validated configuration, from the configuration's own registry.
 std::unique_ptr<Decoder> makeDecoder(const VectorNetConfig& config);
 
 /// Mean (over valid steps) Euclidean distance per sample [N] and final distance [N].

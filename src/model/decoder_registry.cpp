@@ -1,4 +1,5 @@
-// The decoder registry: one entry per decoder. A new decoder adds its file and a line here.
+// The decoder registry: one entry per decoder. A new built-in decoder adds its file and a
+// line in withBuiltins().
 #include <fmt/format.h>
 
 #include "decoder.hpp"
@@ -8,60 +9,55 @@
 
 namespace vsd::model {
 
-namespace {
-
-/// The built-ins (one line each), then what addDecoder() added.
-std::vector<DecoderEntry>& entries() {
-  static std::vector<DecoderEntry> registered = {
-      offsetsDecoderEntry(),
-      kinematicDecoderEntry(),
-  };
-  return registered;
+DecoderRegistry DecoderRegistry::withBuiltins() {
+  DecoderRegistry registry;
+  registry.add(offsetsDecoderEntry());
+  registry.add(kinematicDecoderEntry());
+  return registry;
 }
 
-/// The public descriptions, in registry order (kept beside the entries).
-std::vector<DecoderInfo>& infos() {
-  static std::vector<DecoderInfo> described = [] {
-    std::vector<DecoderInfo> result;
-    for (const auto& entry : entries()) result.push_back(entry.info);
-    return result;
-  }();
-  return described;
+std::shared_ptr<const DecoderRegistry> builtinDecoders() {
+  // Const and built from withBuiltins(): a shared default, not a list anyone can add to.
+  static const auto builtins = std::make_shared<const DecoderRegistry>(DecoderRegistry::withBuiltins());
+  return builtins;
 }
 
-}  // namespace
-
-const std::vector<DecoderEntry>& decoderRegistry() { return entries(); }
-
-void addDecoder(DecoderEntry entry) {
+void DecoderRegistry::add(DecoderEntry entry) {
   if (entry.info.name.empty() || !entry.create) throw ConfigError("a decoder entry needs a name and a factory");
-  for (const auto& existing : entries()) {
-    if (existing.info.name == entry.info.name) {
-      throw ConfigError(fmt::format("decoder '{}' is registered twice", entry.info.name));
-    }
+  if (contains(entry.info.name)) {
+    throw ConfigError(fmt::format("decoder '{}' is registered twice", entry.info.name));
   }
-  infos();  // described before the entry is added, so that it is added to both once
-  infos().push_back(entry.info);
-  entries().push_back(std::move(entry));
+  entries_.push_back(std::make_shared<const DecoderEntry>(std::move(entry)));
 }
 
-const std::vector<DecoderInfo>& availableDecoders() { return infos(); }
+std::vector<DecoderInfo> DecoderRegistry::available() const {
+  std::vector<DecoderInfo> infos;
+  for (const auto& entry : entries_) infos.push_back(entry->info);
+  return infos;
+}
 
-const DecoderInfo& findDecoder(const std::string& name, const std::string& where) {
+bool DecoderRegistry::contains(const std::string& name) const {
+  for (const auto& entry : entries_) {
+    if (entry->info.name == name) return true;
+  }
+  return false;
+}
+
+const DecoderEntry& DecoderRegistry::entry(const std::string& name, const std::string& where) const {
   std::vector<std::string> known;
-  for (const auto& info : availableDecoders()) {
-    if (info.name == name) return info;
-    known.push_back(info.name);
+  for (const auto& entry : entries_) {
+    if (entry->info.name == name) return *entry;
+    known.push_back(entry->info.name);
   }
   throw ConfigError(fmt::format("{}: unknown decoder '{}' (known: {})", where, name, fmt::join(known, ", ")));
 }
 
+const DecoderInfo& DecoderRegistry::find(const std::string& name, const std::string& where) const {
+  return entry(name, where).info;
+}
+
 std::unique_ptr<Decoder> makeDecoder(const VectorNetConfig& config) {
-  for (const auto& entry : decoderRegistry()) {
-    if (entry.info.name == config.decoder) return entry.create(config);
-  }
-  findDecoder(config.decoder, "model configuration");  // throws with the list
-  return nullptr;
+  return config.decoderRegistry().entry(config.decoder, "model configuration").create(config);
 }
 
 }  // namespace vsd::model

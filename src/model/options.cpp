@@ -17,8 +17,13 @@ const std::vector<std::string>& availableFrames() {
   return kFrames;
 }
 
+const DecoderRegistry& VectorNetConfig::decoderRegistry() const {
+  if (!decoders) throw ConfigError("model configuration: no decoder registry (VectorNetConfig::decoders is empty)");
+  return *decoders;
+}
+
 double VectorNetConfig::decoderOption(const std::string& name) const {
-  const auto& info = findDecoder(decoder, "model configuration");
+  const auto& info = decoderRegistry().find(decoder, "model configuration");
   for (const auto& option : info.options) {
     if (option.name != name) continue;
     const auto given = decoderOptions.find(name);
@@ -63,7 +68,7 @@ void VectorNetConfig::validate() const {
   require(step == 0.0 || (step >= kMinStep && step <= kMaxStep), "step", step,
           fmt::format("{} .. {} s (0: not yet known)", kMinStep, kMaxStep).c_str());
   require(coordinateScale >= 1e-3 && coordinateScale <= 1e6, "coordinate_scale", coordinateScale, "1e-3 .. 1e6 m");
-  validateDecoderOptions(findDecoder(decoder, "model configuration"), decoderOptions);
+  validateDecoderOptions(decoderRegistry().find(decoder, "model configuration"), decoderOptions);
   if (!(laneSmoothing > 0.0 && laneSmoothing <= 20.0)) {
     throw ConfigError::field("model configuration", "--lane-smoothing", formatValue(laneSmoothing), "in (0, 20] m");
   }

@@ -188,11 +188,15 @@ std::vector<Prediction> toPredictions(const std::vector<vector::VectorizedScene>
 /// A trained VectorNet read from a model file.
 class NetworkBackend final : public Predictor::Backend {
  public:
-  explicit NetworkBackend(const fs::path& path) : path_(path) { model_ = loadModel(path, info_); }
+  NetworkBackend(const fs::path& path, const Decoders& decoders) : path_(path) {
+    model_ = loadModel(path, info_, decoders);
+  }
 
   const ModelInfo& info() const override { return info_; }
   bool probabilistic() const override { return model_.decoder->noiseWidth() > 0; }
-  bool predictsMotion() const override { return findDecoder(info_.config.decoder, path_.string()).kinematic; }
+  bool predictsMotion() const override {
+    return info_.config.decoderRegistry().find(info_.config.decoder, path_.string()).kinematic;
+  }
 
   void checkCompatible(const vector::DatasetHeader& header, const std::string& what) const override {
     const auto& config = info_.config;
@@ -325,13 +329,13 @@ class MotionModelBackend final : public Predictor::Backend {
 
 bool Predictor::isBuiltin(const fs::path& model) { return findMotionModel(model) != nullptr; }
 
-Predictor::Predictor(const fs::path& model, int threads) {
+Predictor::Predictor(const fs::path& model, int threads, std::shared_ptr<const DecoderRegistry> decoders) {
   if (threads < 1 || threads > 256) {
     throw ConfigError::field("command line", "--threads", std::to_string(threads), "1 .. 256");
   }
   configureThreads(threads);
   if (const auto* motion = findMotionModel(model)) backend_ = std::make_unique<MotionModelBackend>(*motion);
-  else backend_ = std::make_unique<NetworkBackend>(model);
+  else backend_ = std::make_unique<NetworkBackend>(model, decoders);
 }
 
 Predictor::~Predictor() = default;

@@ -160,7 +160,7 @@ VectorNetConfig trainedConfig(const TrainOptions& options, const vector::Dataset
   VectorNetConfig config = options.config;
   config.horizon = header.horizon;
   config.step = header.step;
-  for (const auto& option : findDecoder(config.decoder, "--decoder").options) {
+  for (const auto& option : config.decoderRegistry().find(config.decoder, "--decoder").options) {
     config.decoderOptions[option.name] = config.decoderOption(option.name);
   }
   config.validate();
@@ -293,7 +293,7 @@ Model createSeeded(const VectorNetConfig& config, std::uint64_t seed) {
 Model startingModel(const TrainOptions& options, const VectorNetConfig& config) {
   if (options.initialModel.empty()) return createSeeded(config, options.seed);
   ModelInfo info;
-  Model model = loadModel(options.initialModel, info);
+  Model model = loadModel(options.initialModel, info, config.decoders);
   auto wanted = configJson(config);
   auto found = configJson(info.config);
   for (auto* json : {&wanted, &found}) {  // configJson holds the architecture; add what the weights mean
@@ -400,7 +400,7 @@ class Trainer {
       throw ConfigError(fmt::format("--resume: no checkpoint {} to resume from", lastCheckpoint_.string()));
     }
     try {
-      checkResumeKey(nlohmann::json::parse(readCheckpointState(lastCheckpoint_)), resumeKey_, lastCheckpoint_);
+      checkResumeKey(nlohmann::json::parse(readCheckpointState(lastCheckpoint_, model_.config.decoders)), resumeKey_, lastCheckpoint_);
       const auto state = nlohmann::json::parse(loadCheckpoint(lastCheckpoint_, model_, optimizer_));
       nextEpoch_ = state.at("next_epoch");
       sinceBest_ = state.at("since_best");
@@ -572,7 +572,7 @@ class Trainer {
   /// file with them (README "Calibration").
   void calibrate() {
     ModelInfo info;
-    Model best = loadModel(options_.output, info);
+    Model best = loadModel(options_.output, info, config_.decoders);
     const auto fitted = calibrateVariance(best, validation_);
     info.config = best.config;
     info.positionRegions = {};
@@ -581,7 +581,7 @@ class Trainer {
     spdlog::info("calibrated {}: variance scale {:.3f} fitted on the validation split, its positions inside their "
                  "90 % regions {:.1f} % -> {:.1f} %",
                  options_.output.string(), fitted.scale, 100.0 * fitted.coverageBefore, 100.0 * fitted.coverageAfter);
-    const Predictor scaled(options_.output, options_.threads);
+    const Predictor scaled(options_.output, options_.threads, config_.decoders);
     const auto conformal = fitConformal(scaled, selection_.validation, selection_.validationMetricNames,
                                         options_.metrics.get(), options_.seed);
     info.positionRegions = conformal.positionRegions;

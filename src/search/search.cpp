@@ -74,7 +74,8 @@ void SearchOptions::validate() const {
   if (futureSamples < 1 || futureSamples > 1000) {
     throw ConfigError::field(where, "--future-samples", std::to_string(futureSamples), "1 .. 1000");
   }
-  const auto& entry = findSurrogate(surrogate);
+  if (!surrogates) throw ConfigError::field(where, "surrogates", "none", "a surrogate registry");
+  const auto& entry = surrogates->find(surrogate);
   if (!priors.empty() && !entry.learnsFromScenes) {
     throw ConfigError::field(where, "--prior", priors.front().string(),
                              fmt::format("no --prior with --surrogate {}: it does not learn from scenes", surrogate));
@@ -189,7 +190,8 @@ SearchContext makeContext(const SearchOptions& options) {
   options.validate();
   SearchContext context;
   context.options = options;
-  context.surrogate = &findSurrogate(options.surrogate);
+  // The registry lives as long as the context's copy of the options holds it.
+  context.surrogate = &context.options.surrogates->find(options.surrogate);
   context.guides = context.surrogate->make(SurrogateOptions{})->guidesSelection();
   context.logical = scenario::loadLogicalScenario(options.scenarioFile);
   context.metricSet = std::make_shared<const metrics::MetricSet>(

@@ -11,40 +11,39 @@
 
 namespace vsd::search {
 
-namespace {
-
-/// The built-ins first (one line each), then what addSurrogate() added.
-std::vector<SurrogateEntry>& entries() {
-  static std::vector<SurrogateEntry> registered = {
-      {"random", "plain Monte Carlo: executes the logical scenario's random stream (the reference)",
-       makeRandomSurrogate},
-      {"extra-trees", "extra trees per criterion metric on the inputs; probability from the spread over the trees",
-       makeExtraTreesSurrogate},
-      {"bnn", "Bayesian neural network on the inputs; probability from its posterior predictive mean and std",
-       makeBnnSurrogate},
-      {"vectornet",
-       "VectorNet (kinematic decoder) on the vectorized scenes, retrained each round; probability = share of its "
-       "sampled futures whose metrics meet the criterion",
-       makeVectorNetSurrogate, /*learnsFromScenes=*/true},
-  };
-  return registered;
+SurrogateRegistry SurrogateRegistry::withBuiltins() {
+  SurrogateRegistry registry;
+  registry.add({"random", "plain Monte Carlo: executes the logical scenario's random stream (the reference)",
+                makeRandomSurrogate});
+  registry.add({"extra-trees",
+                "extra trees per criterion metric on the inputs; probability from the spread over the trees",
+                makeExtraTreesSurrogate});
+  registry.add({"bnn", "Bayesian neural network on the inputs; probability from its posterior predictive mean and std",
+                makeBnnSurrogate});
+  registry.add({"vectornet",
+                "VectorNet (kinematic decoder) on the vectorized scenes, retrained each round; probability = share of "
+                "its sampled futures whose metrics meet the criterion",
+                makeVectorNetSurrogate, /*learnsFromScenes=*/true});
+  return registry;
 }
 
-}  // namespace
+std::shared_ptr<const SurrogateRegistry> builtinSurrogates() {
+  // Const and built from withBuiltins(): a shared default, not a list anyone can add to.
+  static const auto builtins = std::make_shared<const SurrogateRegistry>(SurrogateRegistry::withBuiltins());
+  return builtins;
+}
 
-const std::vector<SurrogateEntry>& surrogateRegistry() { return entries(); }
-
-void addSurrogate(SurrogateEntry entry) {
+void SurrogateRegistry::add(SurrogateEntry entry) {
   if (entry.name.empty() || !entry.make) throw ConfigError("a surrogate entry needs a name and a factory");
-  for (const auto& existing : entries()) {
+  for (const auto& existing : entries_) {
     if (existing.name == entry.name) throw ConfigError(fmt::format("surrogate '{}' is registered twice", entry.name));
   }
-  entries().push_back(std::move(entry));
+  entries_.push_back(std::move(entry));
 }
 
-const SurrogateEntry& findSurrogate(const std::string& name) {
+const SurrogateEntry& SurrogateRegistry::find(const std::string& name) const {
   std::string known;
-  for (const auto& entry : surrogateRegistry()) {
+  for (const auto& entry : entries_) {
     if (entry.name == name) return entry;
     known += (known.empty() ? "" : ", ") + entry.name;
   }

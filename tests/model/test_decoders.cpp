@@ -747,16 +747,19 @@ TEST(Calibration, NllAndCoverageOfAPredictedGaussian) {
 }
 
 // docs/design.md "Adding a decoder": the decoder's own file plus one registry line, then a
-// model trains with it by name and its model file loads and predicts. (Last in this file:
-// once added, the decoder is known for the rest of the process.)
+// model trains with it by name and its model file loads and predicts - through the registry
+// it was added to; the built-in registry, and so every other user, stays as it was.
 TEST(DecoderRegistry, ADecoderAddedFromItsOwnFileTrainsSavesAndLoads) {
-  if (!std::any_of(decoderRegistry().begin(), decoderRegistry().end(),
-                   [](const DecoderEntry& entry) { return entry.info.name == "constant_accel"; })) {
-    addDecoder(constantAccelDecoderEntry());  // the one line a newcomer writes
-  }
+  auto decoders = DecoderRegistry::withBuiltins();
+  decoders.add(constantAccelDecoderEntry());  // the one line a newcomer writes
+  const auto registry = std::make_shared<const DecoderRegistry>(decoders);
   TemporaryDirectory dir;
-  const auto options = trainTiny(dir, "constant_accel", 20, 1, "ca.pt");
-  const Predictor predictor(options.output);
+  auto options = tinyTraining(writeDataset(dir.path() / "acc.h5", 20), dir.path() / "ca.pt");
+  options.config.decoders = registry;
+  options.config.decoder = "constant_accel";
+  options.steps = 1;
+  train(options);
+  const Predictor predictor(options.output, /*threads=*/2, registry);
   EXPECT_EQ(predictor.info().config.decoder, "constant_accel");
   const auto scene = syntheticScene(3);
   const auto predicted = predictor.predict({scene}).at(0);
@@ -768,5 +771,10 @@ TEST(DecoderRegistry, ADecoderAddedFromItsOwnFileTrainsSavesAndLoads) {
     const Vec2 r = p - start.position();
     EXPECT_NEAR(r.x() * direction.y() - r.y() * direction.x(), 0.0, 1e-3);
   }
-  EXPECT_NE(errorOf([] { addDecoder(constantAccelDecoderEntry()); }).find("registered twice"), std::string::npos);
+  EXPECT_FALSE(builtinDecoders()->contains("constant_accel"));
+  EXPECT_NE(errorOf([&] { Predictor{options.output}; }).find("unknown decoder 'constant_accel' (known: offsets, kinematic)"),
+            std::string::npos);
+  EXPECT_NE(errorOf([&] { decoders.add(constantAccelDecoderEntry()); }).find("registered twice"), std::string::npos);
+  EXPECT_NE(errorOf([&] { decoders.add(DecoderEntry{constantAccelDecoderEntry().info, {}}); }).find("a factory"),
+            std::string::npos);
 }

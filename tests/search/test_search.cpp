@@ -68,7 +68,7 @@ TEST(SearchCriterion, BadCriteriaGetOneLineNamingWhatIsKnown) {
 }
 
 TEST(SearchSurrogates, UnknownNameListsTheKnownOnes) {
-  const std::string message = test::configErrorOf([] { findSurrogate("gaussian-process"); });
+  const std::string message = test::configErrorOf([] { builtinSurrogates()->find("gaussian-process"); });
   EXPECT_THAT(message, HasSubstr("random, extra-trees, bnn"));
 }
 
@@ -265,14 +265,15 @@ TEST(SearchLoop, ExtraTreesFindMoreCriticalScenariosThanRandomSampling) {
 }
 
 // docs/design.md "Adding a surrogate": the surrogate's own file plus one registry line,
-// then `search` (its library call) picks executions with it by name.
+// then `search` (its library call), handed that registry, picks executions with it by name;
+// the built-in registry, and so every other search, stays as it was.
 TEST(SearchLoop, ASurrogateAddedFromItsOwnFileChoosesTheExecutions) {
-  if (!std::any_of(surrogateRegistry().begin(), surrogateRegistry().end(),
-                   [](const SurrogateEntry& entry) { return entry.name == "nearest-neighbour"; })) {
-    addSurrogate(test::nearestNeighbourSurrogate());  // the one line a newcomer writes
-  }
+  auto surrogates = SurrogateRegistry::withBuiltins();
+  surrogates.add(test::nearestNeighbourSurrogate());  // the one line a newcomer writes
   TemporaryDirectory work("vsd-test-search");
-  const auto summary = runSearch(smallSearch(work.path() / "nn", "nearest-neighbour", 60));
+  auto options = smallSearch(work.path() / "nn", "nearest-neighbour", 60);
+  options.surrogates = std::make_shared<const SurrogateRegistry>(surrogates);
+  const auto summary = runSearch(options);
   EXPECT_EQ(summary.surrogate, "nearest-neighbour");
   EXPECT_EQ(summary.executions, 60u);
   std::size_t acquired = 0;
@@ -286,7 +287,10 @@ TEST(SearchLoop, ASurrogateAddedFromItsOwnFileChoosesTheExecutions) {
   }
   EXPECT_GT(acquired, 0u);
   EXPECT_GT(acquired_likely, 0u);
-  EXPECT_THAT(test::configErrorOf([] { addSurrogate(test::nearestNeighbourSurrogate()); }),
+  EXPECT_THAT(test::configErrorOf([&] { runSearch(smallSearch(work.path() / "builtins", "nearest-neighbour", 60)); }),
+              HasSubstr("--surrogate 'nearest-neighbour': unknown surrogate"));
+  EXPECT_FALSE(fs::exists(work.path() / "builtins"));
+  EXPECT_THAT(test::configErrorOf([&] { surrogates.add(test::nearestNeighbourSurrogate()); }),
               HasSubstr("registered twice"));
 }
 

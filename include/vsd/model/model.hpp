@@ -10,7 +10,7 @@
 //   global:   one self-attention layer over the polylines (padding masked), queried
 //             by the Ego's polyline;
 //   decoder:  MLP on [global Ego feature, Ego polyline feature] -> the outputs of the
-//             decoder chosen by name (availableDecoders(): offsets, kinematic).
+//             decoder chosen by name (DecoderRegistry: offsets, kinematic).
 // Inputs are expressed in the model's frame (ego or lane, availableFrames());
 // predictions are returned in the scene's frame.
 

@@ -35,10 +35,38 @@ struct DecoderInfo {
   std::map<std::string, double> optionsBeforeModelFormat3;
 };
 
-/// Every decoder this build knows, in registry order.
-const std::vector<DecoderInfo>& availableDecoders();
-/// The decoder called `name`. Throws ConfigError naming `where` and listing the known decoders.
-const DecoderInfo& findDecoder(const std::string& name, const std::string& where);
+struct DecoderEntry;  // src/model/decoder.hpp: a DecoderInfo and the factory of its decoder
+
+/// The decoders a model configuration can name, one entry each: what the decoder is
+/// (DecoderInfo) and how to build it. A registry is an object handed to its users, never a
+/// process-wide list: the built-ins come from withBuiltins(); a test or a tool with a decoder
+/// of its own adds it to its own registry and hands that on (VectorNetConfig::decoders for
+/// training, the Predictor's constructor for loading its model files).
+/// Public, so that every module can validate a configuration; the entries are opaque here
+/// because their factories build libtorch modules (the type is internal to the model module),
+/// and shared, so that copies of a registry are cheap.
+class DecoderRegistry {
+ public:
+  /// The built-in decoders (the one list: src/model/decoder_registry.cpp).
+  static DecoderRegistry withBuiltins();
+  /// Adds a decoder written outside the model module's list (its own file and this one call).
+  /// Throws ConfigError for a name that is taken or an entry without a name or a factory.
+  void add(DecoderEntry entry);
+  /// Every decoder's description, in registry order.
+  std::vector<DecoderInfo> available() const;
+  bool contains(const std::string& name) const;
+  /// The decoder called `name`. Throws ConfigError naming `where` and listing the known decoders.
+  const DecoderInfo& find(const std::string& name, const std::string& where) const;
+  /// The entry of `name` (internal: needs src/model/decoder.hpp). Throws as find().
+  const DecoderEntry& entry(const std::string& name, const std::string& where) const;
+
+ private:
+  std::vector<std::shared_ptr<const DecoderEntry>> entries_;
+};
+
+/// The built-in decoders (DecoderRegistry::withBuiltins()), built once and never changed:
+/// what a configuration and a model file's loader use unless they are handed another registry.
+std::shared_ptr<const DecoderRegistry> builtinDecoders();
 
 /// Names of the coordinate frames a model can work in (README "Representations"):
 /// "ego"  - translated to the Ego's initial position and rotated by its heading (the paper's);
@@ -57,7 +85,7 @@ struct VectorNetConfig {
   int horizon = 0;
   double step = 0.0;         ///< s
   double coordinateScale = 10.0;  ///< m: model-frame coordinates are divided by this before the network
-  std::string decoder = "offsets";             ///< a name of availableDecoders()
+  std::string decoder = "offsets";             ///< a name of `decoders`
   std::map<std::string, double> decoderOptions;  ///< given options; the rest take the decoder's defaults
   std::string frame = "ego";                     ///< a name of availableFrames()
   /// m, in (0, 20]: half-width of the moving average that smooths the lane frame's reference
@@ -65,7 +93,14 @@ struct VectorNetConfig {
   /// leave the maximum lane offset of predictions at -0.05 / +-0.02 / +0.13 m bias; model files
   /// before vsd-model/4 used 4 m.
   double laneSmoothing = 3.0;
+  /// Where `decoder` is looked up (its options, defaults and factory). Not part of what the
+  /// model is - a model file stores the decoder's name - but carried with the configuration
+  /// because everything that reads a configuration (validation, option defaults, building the
+  /// model, training, calibration) needs it: one field instead of a parameter on each.
+  std::shared_ptr<const DecoderRegistry> decoders = builtinDecoders();
 
+  /// *decoders; throws ConfigError if it is empty.
+  const DecoderRegistry& decoderRegistry() const;
   /// The value of a decoder option: the given one or the decoder's default.
   /// Throws ConfigError for an option the decoder does not have.
   double decoderOption(const std::string& name) const;

@@ -104,8 +104,10 @@ class Predictor {
  public:
   /// Loads a model file, or builds the constant-velocity ("cv") or constant-acceleration
   /// ("ca") predictor. Throws ModelError naming the file for a missing, corrupt or foreign
-  /// file, one written for another feature schema or of a decoder this build does not know.
-  explicit Predictor(const std::filesystem::path& model, int threads = 2);
+  /// file, one written for another feature schema or of a decoder `decoders` does not know
+  /// (a model trained with a decoder of one's own loads with the registry it was trained with).
+  explicit Predictor(const std::filesystem::path& model, int threads = 2,
+                     std::shared_ptr<const DecoderRegistry> decoders = builtinDecoders());
   Predictor(const Predictor&) = delete;
   Predictor& operator=(const Predictor&) = delete;
   ~Predictor();

@@ -30,11 +30,13 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <memory>
 #include <string>
 #include <utility>
 #include <vector>
 
 #include "vsd/baseline/baseline.hpp"
+#include "vsd/search/surrogate.hpp"
 
 namespace vsd::search {
 
@@ -42,7 +44,12 @@ struct SearchOptions {
   std::filesystem::path scenarioFile;
   std::filesystem::path outputDir;    ///< required
   std::string criterion;              ///< expression over metrics or a criterion name of the scenario
-  std::string surrogate = "extra-trees";
+  std::string surrogate = "extra-trees";  ///< a name of `surrogates`
+  /// Where `surrogate` is looked up. Carried with the options rather than passed beside them
+  /// because everything that reads the options (validation, the search's context, its
+  /// checkpoint and training data) needs the entry; shared and const, so that copies of the
+  /// options are cheap and nothing changes it under a running search.
+  std::shared_ptr<const SurrogateRegistry> surrogates = builtinSurrogates();
   std::uint64_t budget = 2000;        ///< simulations in total, initial design included (executionBudget())
   std::uint64_t initial = 200;        ///< executions of the initial design (random stream)
   std::uint64_t roundSize = 100;      ///< executions per later round

@@ -2,7 +2,7 @@
 // Surrogates of `vsd-sumo search`: models fitted on the executed concrete scenarios
 // (normalised inputs -> the metrics a criterion reads) that predict, for candidates
 // not yet simulated, the probability of meeting the criterion. One registry entry
-// per surrogate (name, description, factory); an unknown name lists the known ones.
+// per surrogate (name, description, factory, abilities); an unknown name lists the known ones.
 
 #include <cstdint>
 #include <filesystem>
@@ -90,16 +90,30 @@ struct SurrogateEntry {
   bool learnsFromScenes = false;
 };
 
-/// Every surrogate, in a fixed order: the built-ins (src/search/surrogates.cpp), then the added ones.
-const std::vector<SurrogateEntry>& surrogateRegistry();
-/// Adds a surrogate written outside this module (its own file and this one call, before
-/// any search starts: entries found earlier may move). Throws ConfigError for a name that
-/// is taken or an entry without a factory.
-void addSurrogate(SurrogateEntry entry);
-/// Throws ConfigError "--surrogate 'x': unknown (known: random, extra-trees, bnn, vectornet)".
-const SurrogateEntry& findSurrogate(const std::string& name);
+/// The surrogates a search can name, one entry each, in a fixed order. A registry is an
+/// object handed to its users, never a process-wide list: the built-ins come from
+/// withBuiltins(); a test or a tool with a surrogate of its own adds it to its own registry
+/// and hands that to the search (SearchOptions::surrogates).
+class SurrogateRegistry {
+ public:
+  /// The built-in surrogates (the one list: src/search/surrogates.cpp).
+  static SurrogateRegistry withBuiltins();
+  /// Adds a surrogate written outside this module (its own file and this one call).
+  /// Throws ConfigError for a name that is taken or an entry without a name or a factory.
+  void add(SurrogateEntry entry);
+  /// Throws ConfigError "--surrogate 'x': unknown surrogate (known: random, extra-trees, bnn, vectornet)".
+  const SurrogateEntry& find(const std::string& name) const;
+  const std::vector<SurrogateEntry>& entries() const { return entries_; }
 
-// Factories, one per file (surrogate_*.cpp); listed in surrogateRegistry().
+ private:
+  std::vector<SurrogateEntry> entries_;
+};
+
+/// The built-in surrogates (SurrogateRegistry::withBuiltins()), built once and never changed:
+/// what a search uses unless it is handed another registry.
+std::shared_ptr<const SurrogateRegistry> builtinSurrogates();
+
+// Factories, one per file (surrogate_*.cpp); listed in SurrogateRegistry::withBuiltins().
 std::unique_ptr<Surrogate> makeRandomSurrogate(const SurrogateOptions& options);
 std::unique_ptr<Surrogate> makeExtraTreesSurrogate(const SurrogateOptions& options);
 std::unique_ptr<Surrogate> makeBnnSurrogate(const SurrogateOptions& options);
