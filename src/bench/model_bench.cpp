@@ -9,6 +9,7 @@
 #include "vsd/core/files.hpp"
 #include "vsd/core/progress.hpp"
 #include "vsd/experiment/experiment.hpp"
+#include "vsd/model/presets.hpp"
 #include "vsd/model/predictor.hpp"
 #include "vsd/vector/dataset.hpp"
 
@@ -35,6 +36,7 @@ std::vector<vector::VectorizedScene> readScenes(const std::vector<fs::path>& dat
 struct ModelBench::Work {
   std::optional<TemporaryDirectory> temporary;
   fs::path folder;
+  model::VectorNetConfig config;  ///< of every training (preset and overrides)
   std::vector<fs::path> validation;  ///< validation data per label (kValidationDataSeed)
   std::string suffix;           ///< of every model file: decoder, frame, decoder options
 };
@@ -43,6 +45,25 @@ const std::vector<std::string>& modelBenchLabels() {
   static const std::vector<std::string> labels = {"acc", "lk", "acc_lk"};
   return labels;
 }
+
+namespace {
+
+/// The preset with the options' overrides: another decoder starts from its own defaults.
+model::VectorNetConfig resolvedConfig(const ModelBenchOptions& options) {
+  const auto& preset = model::findModelPreset(options.preset, "--preset");
+  const auto given = model::parseDecoderOptions(options.decoderOptions);
+  model::VectorNetConfig config;
+  model::applyPreset(preset, given, config);
+  if (!options.decoder.empty() && options.decoder != preset.decoder) {
+    config.decoder = options.decoder;
+    config.decoderOptions = given;
+  }
+  if (!options.frame.empty()) config.frame = options.frame;
+  config.validate();
+  return config;
+}
+
+}  // namespace
 
 ModelBench::ModelBench(ModelBenchOptions options) : options_(std::move(options)), work_(std::make_unique<Work>()) {
   work_->folder = options_.work;
@@ -53,12 +74,15 @@ ModelBench::ModelBench(ModelBenchOptions options) : options_(std::move(options))
   ensureDirectory(work_->folder);
   if (options_.scenarios.empty()) options_.scenarios = fs::path(VSD_SOURCE_DIR) / "scenarios";
   for (const auto& label : modelBenchLabels()) work_->validation.push_back(work_->folder / ("validation_" + label));
-  work_->suffix = fmt::format("_{}_{}", options_.decoder, options_.frame);
-  for (const auto& option : options_.decoderOptions) work_->suffix += "_" + option;
+  work_->config = resolvedConfig(options_);
+  work_->suffix = fmt::format("_{}_{}", work_->config.decoder, work_->config.frame);
+  for (const auto& [name, value] : work_->config.decoderOptions) work_->suffix += fmt::format("_{}={}", name, value);
   work_->suffix += ".pt";
 }
 
 ModelBench::~ModelBench() = default;
+
+const model::VectorNetConfig& ModelBench::modelConfig() const { return work_->config; }
 
 fs::path ModelBench::modelPath(const std::string& name) const { return work_->folder / (name + work_->suffix); }
 
@@ -87,9 +111,7 @@ MixResult ModelBench::trainAndEvaluate(const std::string& mix, const std::vector
   train_options.output = modelPath(name);
   train_options.threads = options_.threads;
   train_options.steps = options_.steps;
-  train_options.config.decoder = options_.decoder;
-  train_options.config.decoderOptions = model::parseDecoderOptions(options_.decoderOptions);
-  train_options.config.frame = options_.frame;
+  train_options.config = work_->config;
   train_options.resume = options_.resume && fs::exists(train_options.output.string() + ".last");
   experiment::bindCalibrationMetrics(train_options);
   // A finished training leaves its model and no <model>.last: with --resume it is reused as it is.

@@ -161,8 +161,11 @@ int printModelBench(const bench::ModelBenchOptions& model_options) {
              "scenario ({} threads)\n",
              options.samples, kTrainingDataSeed, options.validationSamples, kValidationDataSeed, options.threads);
   const double simulation_rate = bench.generateData();
-  fmt::print("  decoder {}{}{}, frame {}, {} optimizer steps\n", options.decoder, options.decoderOptions.empty() ? "" : " ",
-             fmt::join(options.decoderOptions, " "), options.frame, options.steps);
+  const auto& config = bench.modelConfig();
+  std::vector<std::string> decoder_options;
+  for (const auto& [name, value] : config.decoderOptions) decoder_options.push_back(fmt::format("{}={}", name, value));
+  fmt::print("  preset {}: decoder {}{}{}, frame {}, {} optimizer steps\n", options.preset, config.decoder,
+             decoder_options.empty() ? "" : " ", fmt::join(decoder_options, " "), config.frame, options.steps);
   const auto all = bench.trainAll();
   printMix(all);
   fmt::print("  metrics of the all-three model's predictions vs. fresh SUMO runs of the validation scenarios (as `vsd-sumo "
@@ -251,13 +254,17 @@ void addModelBench(CLI::App& bench, CommandContext& context) {
       ->capture_default_str();
   modeling->add_flag("--singles", options->singles, "Also train one model per functional scenario");
   addNumber(modeling, "--threads", options->threads, "libtorch threads")->capture_default_str();
-  modeling->add_option("--decoder", options->decoder, "Decoder of the trained models")->capture_default_str();
-  modeling->add_option("--decoder-option", options->decoderOptions, "Decoder option name=value (repeatable)");
+  modeling->add_option("--preset", options->preset,
+                       "The configuration trained, as `train --preset` (docs/models.md \"Presets\")")
+      ->capture_default_str();
+  modeling->add_option("--decoder", options->decoder, "Another decoder than the preset's (its own default options)");
+  modeling->add_option("--decoder-option", options->decoderOptions,
+                       "Decoder option name=value on top of the preset's (repeatable)");
   modeling->add_option("--steps", options->steps, "Optimizer steps of every training")->capture_default_str();
   modeling->add_flag("--resume", options->resume,
                      "Continue trainings from <model>.last where it exists; reuse finished models");
   modeling->add_flag("--row4", options->row4, "Also train on acc + lk only and measure on acc_lk (paper row 4)");
-  modeling->add_option("--frame", options->frame, "Model frame (ego, lane)")->capture_default_str();
+  modeling->add_option("--frame", options->frame, "Another model frame than the preset's (ego, lane)");
   addNumber(modeling, "--futures", options->draws, "Sampled futures per scene in the inference benchmark")
       ->capture_default_str();
   modeling->callback([options, &context] {

@@ -13,6 +13,7 @@
 #include "vsd/experiment/experiment.hpp"
 #include "vsd/metrics/metrics.hpp"
 #include "vsd/model/model.hpp"
+#include "vsd/model/presets.hpp"
 #include "vsd/pipeline/scenes.hpp"
 #include "vsd/vector/dataset.hpp"
 
@@ -92,6 +93,13 @@ std::string decoderNames(const model::DecoderRegistry& decoders) {
   return fmt::format("{}", fmt::join(names, ", "));
 }
 
+/// "recommended, paper" for help texts.
+std::string presetNames() {
+  std::vector<std::string> names;
+  for (const auto& preset : model::modelPresets()) names.push_back(preset.name);
+  return fmt::format("{}", fmt::join(names, ", "));
+}
+
 }  // namespace
 
 void addTrainCommand(CLI::App& app, CommandContext& context) {
@@ -121,10 +129,17 @@ void addTrainCommand(CLI::App& app, CommandContext& context) {
   addNumber(command, "--global-width", options->config.globalWidth, "Attention width")->capture_default_str();
   addNumber(command, "--heads", options->config.heads, "Attention heads")->capture_default_str();
   addNumber(command, "--decoder-hidden", options->config.decoderHidden, "Decoder width")->capture_default_str();
-  command->add_option("--decoder", options->config.decoder, "Decoder: " + decoderNames(options->config.decoderRegistry()))->capture_default_str();
+  auto* decoder = command->add_option("--decoder", options->config.decoder,
+                                      "Decoder: " + decoderNames(options->config.decoderRegistry()))
+                      ->capture_default_str();
   command->add_option("--decoder-option", *decoder_options,
                       "A decoder option name=value (repeatable; docs/models.md \"Decoders\" lists them)");
-  command->add_option("--frame", options->config.frame, "Model frame: ego or lane")->capture_default_str();
+  auto* frame = command->add_option("--frame", options->config.frame, "Model frame: ego or lane")->capture_default_str();
+  auto preset = std::make_shared<std::string>();
+  command->add_option("--preset", *preset, "A named configuration: decoder, frame and decoder options (" +
+                                               presetNames() + "; docs/models.md \"Presets\"); --decoder-option adds to it")
+      ->excludes(decoder)
+      ->excludes(frame);
   addNumber(command, "--lane-smoothing", options->config.laneSmoothing,
             "m: half-width of the lane frame's smoothing of its reference line")
       ->capture_default_str();
@@ -138,8 +153,13 @@ void addTrainCommand(CLI::App& app, CommandContext& context) {
       auto inputs = inputsOf("--data", options->data);
       inputs.emplace_back("--init-from", options->initialModel);
       checkOutput({options->output, &modelKind(), trainingSubject(*options), *force, "--out", "--force", inputs});
-      options->config.decoderRegistry().find(options->config.decoder, "--decoder");
-      options->config.decoderOptions = model::parseDecoderOptions(*decoder_options);
+      const auto given_options = model::parseDecoderOptions(*decoder_options);
+      if (preset->empty()) {
+        options->config.decoderRegistry().find(options->config.decoder, "--decoder");
+        options->config.decoderOptions = given_options;
+      } else {
+        model::applyPreset(model::findModelPreset(*preset, "--preset"), given_options, options->config);
+      }
       experiment::bindCalibrationMetrics(*options);  // `calibrate` also calibrates metric intervals
       const auto summary = model::train(*options, [&](const model::EpochRecord& record) {
         const int planned = record.plannedEpochs;

@@ -12,6 +12,7 @@
 #include "vsd/metrics/metrics.hpp"
 #include "vsd/model/options.hpp"
 #include "vsd/model/predictor.hpp"
+#include "vsd/model/presets.hpp"
 #include "vsd/scenario/yaml_reader.hpp"
 
 namespace fs = std::filesystem;
@@ -66,7 +67,7 @@ std::vector<int> allRows(const Spec& spec) {
 
 ModelSpec parseModel(const scenario::YamlReader& reader, const YAML::Node& node, const std::string& field,
                      const Spec& spec) {
-  reader.checkKeys(node, field, {"name", "decoder", "frame", "options", "rows", "seeds"});
+  reader.checkKeys(node, field, {"name", "preset", "decoder", "frame", "options", "rows", "seeds"});
   ModelSpec model;
   if (!node["name"]) reader.fail(node, field, "missing 'name' (names its rows and cache folders)");
   model.name = reader.scalar(node["name"], field + ".name");
@@ -88,6 +89,21 @@ ModelSpec parseModel(const scenario::YamlReader& reader, const YAML::Node& node,
   config.decoder = model.decoder;
   config.decoderOptions = model.options;
   config.frame = model.frame;
+  if (node["preset"]) {
+    // The configuration `train --preset` gives; options add to it, decoder and frame are its own.
+    for (const char* key : {"decoder", "frame"}) {
+      if (node[key]) reader.fail(node[key], field + "." + key, "given with a preset, which sets it: give one or the other");
+    }
+    try {
+      model::applyPreset(model::findModelPreset(reader.scalar(node["preset"], field + ".preset"), field + ".preset"),
+                         model.options, config);
+    } catch (const ConfigError& error) {
+      reader.fail(node["preset"], field + ".preset", error.what());
+    }
+    model.decoder = config.decoder;
+    model.frame = config.frame;
+    model.options = config.decoderOptions;
+  }
   try {
     config.validate();
   } catch (const ConfigError& error) {

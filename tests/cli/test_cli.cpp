@@ -2,6 +2,9 @@
 // outputs readable from Python, replay of FCD output.
 #include <gtest/gtest.h>
 
+#include <fstream>
+#include <iterator>
+
 #include <algorithm>
 #include <regex>
 
@@ -232,6 +235,38 @@ TEST(Cli, ExportAndDatasetBadInputGiveOneLine) {
   const auto no_map = runForErrors({"export", "--out", out.string()}, dir.path());
   EXPECT_EQ(no_map.exitCode, 1);
   EXPECT_NE(no_map.output.find("no map given"), std::string::npos) << no_map.output;
+}
+
+// issue 26: the configuration the docs report is one name away, and a preset cannot be
+// contradicted by --decoder or --frame.
+TEST(Cli, TrainPresetGivesTheDocumentedConfiguration) {
+  TemporaryDirectory dir;
+  const auto data = dir.path() / "acc";
+  ASSERT_EQ(test::run({test::vsdSumo().string(), "--quiet", "run", test::scenarioFile("acc.yaml").string(), "--samples",
+                       "30", "--out", data.string()},
+                      dir.path())
+                .exitCode,
+            0);
+  const auto model = dir.path() / "p.pt";
+  const std::vector<std::string> train = {test::vsdSumo().string(), "train", "--data", data.string(), "--out",
+                                          model.string(), "--steps", "10", "--minibatch", "8", "--hidden", "8",
+                                          "--global-width", "8", "--decoder-hidden", "16", "--preset", "recommended"};
+  const auto trained = test::run(train, dir.path());
+  ASSERT_EQ(trained.exitCode, 0) << trained.output;
+  EXPECT_NE(trained.output.find("trained VectorNet (kinematic decoder)"), std::string::npos) << trained.output;
+  EXPECT_NE(trained.output.find("calibrated " + model.string()), std::string::npos) << trained.output;
+  // The model file's description (stored uncompressed in its archive) names frame and options.
+  std::ifstream file(model, std::ios::binary);
+  const std::string bytes((std::istreambuf_iterator<char>(file)), std::istreambuf_iterator<char>());
+  EXPECT_NE(bytes.find("\"frame\":\"lane\""), std::string::npos);
+  EXPECT_NE(bytes.find("\"accel_weight\":10.0"), std::string::npos);
+  for (const char* flag : {"--decoder", "--frame"}) {
+    auto contradicted = train;
+    contradicted.insert(contradicted.end(), {flag, std::string(flag) == "--frame" ? "ego" : "offsets"});
+    const auto refused = test::run(contradicted, dir.path());
+    EXPECT_EQ(refused.exitCode, 2) << refused.output;
+    EXPECT_NE(refused.output.find("excludes --preset"), std::string::npos) << refused.output;
+  }
 }
 
 TEST(Cli, TrainPredictEvaluate) {

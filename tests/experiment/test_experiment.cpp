@@ -240,6 +240,11 @@ TEST(Experiment, BadSpecsGiveOneLineNamingFileFieldAndValue) {
        "seeds.rows[1]: no ade row 4"},
       {"model_seeds_zero", head + "ade:\n  - {row: 1, mix: {acc: 20}}\nmodels:\n  - {name: m, seeds: 0}\n",
        "models[0].seeds"},
+      {"preset_and_decoder",
+       head + "ade:\n  - {row: 1, mix: {acc: 20}}\nmodels:\n  - {name: m, preset: paper, decoder: kinematic}\n",
+       "models[0].decoder: given with a preset, which sets it"},
+      {"unknown_preset", head + "ade:\n  - {row: 1, mix: {acc: 20}}\nmodels:\n  - {name: m, preset: best}\n",
+       "unknown preset 'best' (known: recommended, paper)"},
   };
   for (const auto& c : cases) {
     const auto file = test::writeFile(dir.path() / (c.name + ".yaml"), c.yaml);

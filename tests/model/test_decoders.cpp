@@ -23,6 +23,7 @@
 #include "vsd/core/hdf5.hpp"
 #include "vsd/core/interrupt.hpp"
 #include "vsd/core/random.hpp"
+#include "vsd/model/presets.hpp"
 #include "vsd/model/model.hpp"
 #include "vsd/pipeline/scenes.hpp"
 #include "vsd/sim/vehicle_model.hpp"
@@ -776,5 +777,24 @@ TEST(DecoderRegistry, ADecoderAddedFromItsOwnFileTrainsSavesAndLoads) {
             std::string::npos);
   EXPECT_NE(errorOf([&] { decoders.add(constantAccelDecoderEntry()); }).find("registered twice"), std::string::npos);
   EXPECT_NE(errorOf([&] { decoders.add(DecoderEntry{constantAccelDecoderEntry().info, {}}); }).find("a factory"),
+            std::string::npos);
+}
+
+TEST(Presets, RecommendedIsTheKinematicConfigurationTheDocsReportAndGivenOptionsAddToIt) {
+  VectorNetConfig config;
+  applyPreset(findModelPreset("recommended", "--preset"), {{"max_decel", 8.0}, {"accel_weight", 5.0}}, config);
+  EXPECT_EQ(config.decoder, "kinematic");
+  EXPECT_EQ(config.frame, "lane");
+  EXPECT_DOUBLE_EQ(config.decoderOption("calibrate"), 1.0);
+  EXPECT_DOUBLE_EQ(config.decoderOption("accel_weight"), 5.0);  // given on top of the preset's 10
+  EXPECT_DOUBLE_EQ(config.decoderOption("max_decel"), 8.0);
+  EXPECT_NO_THROW(config.validate());
+  // Every preset is a valid configuration of the built-in decoders.
+  for (const auto& preset : modelPresets()) {
+    VectorNetConfig each;
+    applyPreset(preset, {}, each);
+    EXPECT_NO_THROW(each.validate()) << preset.name;
+  }
+  EXPECT_NE(errorOf([] { findModelPreset("best", "--preset"); }).find("--preset: unknown preset 'best' (known: recommended, paper)"),
             std::string::npos);
 }

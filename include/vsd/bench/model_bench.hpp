@@ -17,6 +17,7 @@
 #include "vsd/core/seeds.hpp"
 #include "vsd/model/evaluation.hpp"
 #include "vsd/model/model.hpp"
+#include "vsd/model/options.hpp"
 #include "vsd/report/comparison.hpp"
 
 namespace vsd::bench {
@@ -31,9 +32,12 @@ struct ModelBenchOptions {
   bool resume = false;         ///< continue trainings from <model>.last where it exists
   int threads = 2;
   int steps = 6000;            ///< optimizer steps of every training
-  std::string decoder = "kinematic";
-  std::vector<std::string> decoderOptions;  ///< name=value
-  std::string frame = "ego";
+  /// The configuration trained (model/presets.hpp): the one `train --preset` gives and the
+  /// docs report. `decoder`, `frame` and `decoderOptions` change parts of it.
+  std::string preset = "recommended";
+  std::string decoder;                      ///< empty: the preset's; another decoder drops the preset's options
+  std::vector<std::string> decoderOptions;  ///< name=value, on top of the preset's
+  std::string frame;                        ///< empty: the preset's
   int draws = 32;              ///< sampled futures per scene for the inference and interval benchmarks
   Tool tool;
 };
@@ -60,6 +64,8 @@ class ModelBench {
   ~ModelBench();
 
   const ModelBenchOptions& options() const { return options_; }
+  /// The model configuration every training of the benchmark uses (preset and overrides).
+  const model::VectorNetConfig& modelConfig() const;
   /// Simulates the training and test data that is not in the work folder yet; returns
   /// acc_lk's simulation throughput (scenarios/s; 0 when its data was there).
   double generateData();
