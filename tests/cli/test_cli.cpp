@@ -237,16 +237,20 @@ TEST(Cli, ExportAndDatasetBadInputGiveOneLine) {
   EXPECT_NE(no_map.output.find("no map given"), std::string::npos) << no_map.output;
 }
 
+/// `run acc.yaml --samples 30` into `out`: the training data of the small CLI trainings.
+int runThirtyAcc(const fs::path& work, const fs::path& out) {
+  return test::run({test::vsdSumo().string(), "--quiet", "run", test::scenarioFile("acc.yaml").string(), "--samples",
+                    "30", "--out", out.string()},
+                   work)
+      .exitCode;
+}
+
 // issue 26: the configuration the docs report is one name away, and a preset cannot be
 // contradicted by --decoder or --frame.
 TEST(Cli, TrainPresetGivesTheDocumentedConfiguration) {
   TemporaryDirectory dir;
   const auto data = dir.path() / "acc";
-  ASSERT_EQ(test::run({test::vsdSumo().string(), "--quiet", "run", test::scenarioFile("acc.yaml").string(), "--samples",
-                       "30", "--out", data.string()},
-                      dir.path())
-                .exitCode,
-            0);
+  ASSERT_EQ(runThirtyAcc(dir.path(), data), 0);
   const auto model = dir.path() / "p.pt";
   const std::vector<std::string> train = {test::vsdSumo().string(), "train", "--data", data.string(), "--out",
                                           model.string(), "--steps", "10", "--minibatch", "8", "--hidden", "8",
@@ -272,11 +276,7 @@ TEST(Cli, TrainPresetGivesTheDocumentedConfiguration) {
 TEST(Cli, TrainPredictEvaluate) {
   TemporaryDirectory dir;
   const auto data = dir.path() / "acc";
-  ASSERT_EQ(test::run({test::vsdSumo().string(), "--quiet", "run", test::scenarioFile("acc.yaml").string(), "--samples",
-                       "30", "--out", data.string()},
-                      dir.path())
-                .exitCode,
-            0);
+  ASSERT_EQ(runThirtyAcc(dir.path(), data), 0);
   const auto model = dir.path() / "models" / "m.pt";
   const auto trained = test::run({test::vsdSumo().string(), "train", "--data", data.string(), "--mix", "acc=30", "--out",
                                   model.string(), "--steps", "30", "--minibatch", "8", "--hidden", "8", "--global-width",
