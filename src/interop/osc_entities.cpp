@@ -135,7 +135,8 @@ void readInitAction(Translation& translation, Entity& entity, const pugi::xml_no
       entity.speedTarget = reader.only(speed, "SpeedActionTarget");
     } else {
       // A gradual change from the start: the language's speed action at t = 0.
-      YAML::Node item = speedAction(translation, entity, speed);
+      YAML::Node item;
+      item["speed"] = speedAction(translation, entity, speed);
       item["trigger"]["time"] = "0";
       entity.actions.push_back(item);
     }

@@ -198,6 +198,20 @@ double speedOf(Translation& translation, Entity& entity) {
 
 }  // namespace
 
+Placement fixedPlace(Translation& translation, const pugi::xml_node& position_node) {
+  const xml::Reader& reader = translation.reader;
+  const pugi::xml_node position = reader.choice(position_node, {"WorldPosition", "LanePosition", "RoadPosition"});
+  const std::string kind = position.name();
+  if (kind == "WorldPosition") {
+    reader.requireSubset(position, {});
+    return planePosition(translation, position);
+  }
+  reader.requireSubset(position, {"Orientation"});
+  if (kind == "LanePosition") return lanePosition(translation, position);
+  checkRoad(translation, position);
+  return onRoad(translation, position, reader.number(position, "s"), reader.number(position, "t"));
+}
+
 void placeEntities(Translation& translation) {
   for (auto& entity : translation.entities) {
     translation.findings.attempt([&] {

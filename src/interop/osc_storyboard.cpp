@@ -206,20 +206,14 @@ pugi::xml_node onlyCondition(const xml::Reader& reader, const pugi::xml_node& tr
 /// A relation between two road users (gap, headway, TTC) as seen from `actor`: the other
 /// one's language id, or a refusal if neither is the actor.
 std::string counterpart(Translation& translation, const Entity& actor, const pugi::xml_node& condition,
-                        const std::string& reference) {
+                        const Entity& triggering, const std::string& reference) {
   const xml::Reader& reader = translation.reader;
-  const pugi::xml_node triggering = reader.only(condition, "TriggeringEntities");
-  reader.requireSubset(triggering, {"EntityRef"});
-  const std::string rule = reader.oneOf(triggering, "triggeringEntitiesRule", {"any", "all"});
-  (void)rule;  // one entity: any = all
-  const std::string trigger_name = reader.text(reader.only(triggering, "EntityRef"), "entityRef");
-  const Entity& triggering_entity = translation.entity(triggering, trigger_name);
   const Entity& reference_entity = translation.entity(condition, reference);
-  if (&triggering_entity == &actor) return reference_entity.id;
-  if (&reference_entity == &actor) return triggering_entity.id;
+  if (&triggering == &actor) return reference_entity.id;
+  if (&reference_entity == &actor) return triggering.id;
   reader.fail(condition, fmt::format("a condition between '{}' and '{}' starts an action of '{}': the language relates "
                                      "the acting road user to another",
-                                     trigger_name, reference, actor.name));
+                                     triggering.name, reference, actor.name));
 }
 
 void requireBelow(const xml::Reader& reader, const pugi::xml_node& node) {
@@ -230,18 +224,40 @@ void requireBelow(const xml::Reader& reader, const pugi::xml_node& node) {
   }
 }
 
+/// The language's bound of a rule ("at_least" / "at_most"); `value` may change (equalTo 0 of a
+/// quantity that is never negative is "at most 0").
+std::string boundOf(const xml::Reader& reader, const pugi::xml_node& node, bool never_negative, double value) {
+  const std::string rule = reader.oneOf(node, "rule", {"lessThan", "lessOrEqual", "greaterThan", "greaterOrEqual",
+                                                       "equalTo", "notEqualTo"});
+  if (rule == "greaterThan" || rule == "greaterOrEqual") return "at_least";
+  if (rule == "lessThan" || rule == "lessOrEqual") return "at_most";
+  if (rule == "equalTo" && never_negative && value == 0.0) return "at_most";
+  reader.fail(node, fmt::format("rule=\"{}\": compared at recorded instants a value equals another only by chance; "
+                                "the language fires when it is at least or at most a bound (greater*/less*; equalTo "
+                                "only of 0 for a speed or distance)",
+                                rule));
+}
+
 void requireFreespace(const xml::Reader& reader, const pugi::xml_node& node) {
   if (reader.text(node, "freespace") != "true") {
     reader.fail(node, "freespace=\"false\": the language measures bumper to bumper (freespace)");
   }
 }
 
-std::optional<YAML::Node> entityCondition(Translation& translation, const Entity& actor, const pugi::xml_node& by_entity) {
+/// Speeds and accelerations: along the road user's direction (the language's), not across or up.
+void requireLongitudinal(const xml::Reader& reader, const pugi::xml_node& condition) {
+  const auto direction = reader.optionalText(condition, "direction");
+  if (direction && *direction != "longitudinal") {
+    reader.fail(condition, fmt::format("direction=\"{}\": the language measures speeds and accelerations along the road "
+                                       "user's direction of motion",
+                                       *direction));
+  }
+}
+
+/// gap / headway / ttc of `triggering` (one of the condition's TriggeringEntities).
+YAML::Node relationLeaf(Translation& translation, const Entity& actor, const Entity& triggering,
+                        const pugi::xml_node& condition) {
   const xml::Reader& reader = translation.reader;
-  reader.requireSubset(by_entity, {"TriggeringEntities", "EntityCondition"});
-  const pugi::xml_node condition = reader.choice(
-      reader.only(by_entity, "EntityCondition"),
-      {"RelativeDistanceCondition", "TimeHeadwayCondition", "TimeToCollisionCondition"});
   reader.requireSubset(condition, {"TimeToCollisionConditionTarget"});
   requireBelow(reader, condition);
   const std::string kind = condition.name();
@@ -262,9 +278,124 @@ std::optional<YAML::Node> entityCondition(Translation& translation, const Entity
   }
   const std::string key = kind == "RelativeDistanceCondition" ? "gap" : kind == "TimeHeadwayCondition" ? "headway" : "ttc";
   trigger[key] = num(reader.number(condition, "value", NumberRange::atLeast(0.0)));
-  const std::string other = counterpart(translation, actor, by_entity, reference);
+  const std::string other = counterpart(translation, actor, condition, triggering, reference);
   if (other != "ego") trigger["to"] = other;
   return trigger;
+}
+
+/// The language's place of a condition's <Position>, where `subject`'s centre is when its
+/// reference point (what the file measures from) is there, driving along the road.
+YAML::Node placeOf(Translation& translation, const Entity& subject, const pugi::xml_node& condition) {
+  const CarriagewayRoad& road = translation.road;
+  const Placement p = fixedPlace(translation, translation.reader.only(condition, "Position"));
+  const double stretch = 1.0 - road.curvature * p.t;
+  const int lane = road.nearestLane(p.t);
+  YAML::Node place;
+  place["s"] = num(road.languageS(p.s + subject.centreAhead / stretch));
+  place["lane"] = std::to_string(lane);
+  const double offset = p.t - road.laneCentreT(lane);
+  if (offset != 0.0) place["offset"] = num(offset);
+  if (subject.centreAhead != 0.0) {
+    translation.findings.note(translation.where(condition),
+                              fmt::format("measured at the centre of '{}': the position moves {} m along the road, where "
+                                          "its centre is when its reference point is there",
+                                          subject.name, num(subject.centreAhead)));
+  }
+  return place;
+}
+
+/// The distance conditions: ReachPosition (within a tolerance) and Distance to a position.
+YAML::Node distanceLeaf(Translation& translation, const Entity& subject, const pugi::xml_node& condition) {
+  const xml::Reader& reader = translation.reader;
+  reader.requireSubset(condition, {"Position"});
+  YAML::Node trigger;
+  if (std::string(condition.name()) == "ReachPositionCondition") {
+    trigger["distance_at_most"] = num(reader.number(condition, "tolerance", NumberRange::atLeast(0.0)));
+  } else {
+    if (reader.text(condition, "freespace") == "true") {
+      reader.fail(condition, "freespace=\"true\": the language measures a distance to a position from the road user's centre");
+    }
+    if (reader.optionalText(condition, "alongRoute").value_or("false") != "false") {
+      reader.fail(condition, "alongRoute=\"true\": the language measures a straight distance");
+    }
+    const auto type = reader.optionalText(condition, "relativeDistanceType").value_or("euclidianDistance");
+    if (type != "euclidianDistance" && type != "cartesianDistance") {
+      reader.fail(condition, fmt::format("relativeDistanceType=\"{}\": the language measures a straight (euclidian) "
+                                         "distance to a position", type));
+    }
+    const auto system = reader.optionalText(condition, "coordinateSystem").value_or("entity");
+    if (system != "entity") {
+      reader.fail(condition, fmt::format("coordinateSystem=\"{}\": the language measures a straight distance in the plane",
+                                         system));
+    }
+    const double value = reader.number(condition, "value", NumberRange::atLeast(0.0));
+    trigger["distance_" + boundOf(reader, condition, true, value)] = num(value);
+  }
+  trigger["position"] = placeOf(translation, subject, condition);
+  return trigger;
+}
+
+/// One triggering entity's condition on its own motion (speed, acceleration, distance, road end).
+YAML::Node motionLeaf(Translation& translation, const Entity& actor, const Entity& subject,
+                      const pugi::xml_node& condition) {
+  const xml::Reader& reader = translation.reader;
+  const std::string kind = condition.name();
+  YAML::Node trigger;
+  if (kind == "ReachPositionCondition" || kind == "DistanceCondition") {
+    trigger = distanceLeaf(translation, subject, condition);
+  } else if (kind == "EndOfRoadCondition") {
+    reader.requireSubset(condition, {});
+    if (translation.road.languageS(translation.road.length) > regionLength(translation.road) + 1e-6) {
+      reader.fail(condition, fmt::format("the road goes on beyond vsd-sumo's region ({} m): the language's end of road is "
+                                         "the region's end", num(regionLength(translation.road))));
+    }
+    trigger["end_of_road"] = num(reader.number(condition, "duration", NumberRange::atLeast(0.0)));
+  } else if (kind == "TraveledDistanceCondition") {
+    reader.requireSubset(condition, {});
+    trigger["travelled"] = num(reader.number(condition, "value", NumberRange::atLeast(0.0)));
+  } else {
+    reader.requireSubset(condition, {});
+    requireLongitudinal(reader, condition);
+    const double value = reader.number(condition, "value");
+    const std::string bound = boundOf(reader, condition, kind == "SpeedCondition", value);
+    const std::string quantity = kind == "SpeedCondition" ? "speed" : kind == "RelativeSpeedCondition" ? "relative_speed" : "accel";
+    if (kind == "SpeedCondition" && value < 0) reader.fail(condition, fmt::format("value {}: a speed is >= 0", num(value)));
+    trigger[quantity + "_" + bound] = num(value);
+    if (kind == "RelativeSpeedCondition") {
+      const Entity& reference = translation.entity(condition, reader.text(condition, "entityRef"));
+      if (&reference == &subject) reader.fail(condition, "entityRef: the triggering entity relative to itself");
+      if (reference.id != "ego") trigger["to"] = reference.id;
+    }
+  }
+  if (&subject != &actor) trigger["of"] = subject.id;
+  return trigger;
+}
+
+std::optional<YAML::Node> entityCondition(Translation& translation, const Entity& actor, const pugi::xml_node& by_entity) {
+  const xml::Reader& reader = translation.reader;
+  reader.requireSubset(by_entity, {"TriggeringEntities", "EntityCondition"});
+  const pugi::xml_node condition = reader.choice(
+      reader.only(by_entity, "EntityCondition"),
+      {"RelativeDistanceCondition", "TimeHeadwayCondition", "TimeToCollisionCondition", "SpeedCondition",
+       "RelativeSpeedCondition", "AccelerationCondition", "ReachPositionCondition", "TraveledDistanceCondition",
+       "EndOfRoadCondition", "DistanceCondition"});
+  const std::string kind = condition.name();
+  const bool relation = kind == "RelativeDistanceCondition" || kind == "TimeHeadwayCondition" ||
+                        kind == "TimeToCollisionCondition";
+  const pugi::xml_node triggering = reader.only(by_entity, "TriggeringEntities");
+  reader.requireSubset(triggering, {"EntityRef"});
+  const std::string rule = reader.oneOf(triggering, "triggeringEntitiesRule", {"any", "all"});
+  std::vector<YAML::Node> leaves;
+  for (const pugi::xml_node& ref : triggering.children("EntityRef")) {
+    const Entity& subject = translation.entity(ref, reader.text(ref, "entityRef"));
+    leaves.push_back(relation ? relationLeaf(translation, actor, subject, condition)
+                              : motionLeaf(translation, actor, subject, condition));
+  }
+  if (leaves.empty()) reader.fail(triggering, "expected at least one <EntityRef>");
+  if (leaves.size() == 1) return leaves.front();
+  YAML::Node combined;
+  for (const auto& leaf : leaves) combined[rule].push_back(leaf);  // any: one of them; all: every one
+  return combined;
 }
 
 std::optional<YAML::Node> valueCondition(Translation& translation, const pugi::xml_node& by_value) {
@@ -318,20 +449,65 @@ std::optional<YAML::Node> valueCondition(Translation& translation, const pugi::x
   return trigger;
 }
 
-/// The language trigger of a StartTrigger; nullopt: it never fires.
+/// One <Condition> without its delay; nullopt: it never holds.
+std::optional<YAML::Node> condition(Translation& translation, const Entity& actor, const pugi::xml_node& node) {
+  const xml::Reader& reader = translation.reader;
+  const std::string edge = reader.oneOf(node, "conditionEdge", {"none", "rising", "falling", "risingOrFalling"});
+  if (edge != "none" && edge != "rising") {
+    reader.fail(node, fmt::format("conditionEdge=\"{}\": the language fires when a condition becomes true", edge));
+  }
+  reader.requireSubset(node, {"ByValueCondition", "ByEntityCondition"});
+  const pugi::xml_node by = reader.choice(node, {"ByValueCondition", "ByEntityCondition"});
+  return std::string(by.name()) == "ByValueCondition" ? valueCondition(translation, by)
+                                                      : entityCondition(translation, actor, by);
+}
+
+/// A <ConditionGroup>: all its conditions at one instant, plus their delay (one for the
+/// group: the language delays a group as a whole); nullopt: it never holds.
+std::optional<YAML::Node> conditionGroup(Translation& translation, const Entity& actor, const pugi::xml_node& group) {
+  const xml::Reader& reader = translation.reader;
+  reader.requireSubset(group, {"Condition"});
+  std::vector<YAML::Node> members;
+  std::optional<double> delay;
+  bool never = false;
+  for (const pugi::xml_node& node : group.children("Condition")) {
+    const double own = reader.number(node, "delay", NumberRange::atLeast(0.0));
+    if (delay && own != *delay) {
+      reader.fail(node, fmt::format("delay {} s, another condition of its group {} s: the language delays a group as a "
+                                    "whole (one delay per ConditionGroup)", num(own), num(*delay)));
+    }
+    delay = own;
+    const auto member = condition(translation, actor, node);
+    if (member) members.push_back(*member);
+    never = never || !member;
+  }
+  if (!delay) reader.fail(group, "expected at least one <Condition>");
+  if (never) return std::nullopt;
+  YAML::Node trigger;
+  if (members.size() == 1) {
+    trigger = members.front();
+  } else {
+    for (const auto& member : members) trigger["all"].push_back(member);
+  }
+  if (*delay > 0) trigger["delay"] = num(*delay);
+  return trigger;
+}
+
+/// The language trigger of a StartTrigger: its groups ORed; nullopt: it never fires.
 std::optional<YAML::Node> startTrigger(Translation& translation, const Entity& actor, const pugi::xml_node& start) {
   const xml::Reader& reader = translation.reader;
-  const pugi::xml_node condition = onlyCondition(reader, start);
-  const std::string edge = reader.oneOf(condition, "conditionEdge", {"none", "rising", "falling", "risingOrFalling"});
-  if (edge != "none" && edge != "rising") {
-    reader.fail(condition, fmt::format("conditionEdge=\"{}\": the language fires when a condition becomes true", edge));
+  reader.requireSubset(start, {"ConditionGroup"});
+  std::vector<YAML::Node> groups;
+  bool any_group = false;
+  for (const pugi::xml_node& group : start.children("ConditionGroup")) {
+    any_group = true;
+    if (const auto trigger = conditionGroup(translation, actor, group)) groups.push_back(*trigger);
   }
-  const double delay = reader.number(condition, "delay", NumberRange::atLeast(0.0));
-  reader.requireSubset(condition, {"ByValueCondition", "ByEntityCondition"});
-  const pugi::xml_node by = reader.choice(condition, {"ByValueCondition", "ByEntityCondition"});
-  auto trigger = std::string(by.name()) == "ByValueCondition" ? valueCondition(translation, by)
-                                                               : entityCondition(translation, actor, by);
-  if (trigger && delay > 0) (*trigger)["delay"] = num(delay);
+  if (!any_group) reader.fail(start, "expected at least one <ConditionGroup>");
+  if (groups.empty()) return std::nullopt;
+  if (groups.size() == 1) return groups.front();
+  YAML::Node trigger;
+  for (const auto& group : groups) trigger["any"].push_back(group);
   return trigger;
 }
 
@@ -450,6 +626,10 @@ void readStories(Translation& translation, const pugi::xml_node& storyboard) {
         }
         pending.item["trigger"] = *trigger;
         pending.actor->actions.push_back(pending.item);
+        YAML::Emitter flow;
+        flow << YAML::Flow << *trigger;
+        translation.findings.mapped(reader.where(reader.only(event.node, "StartTrigger")),
+                                    fmt::format("start of '{}': {}", pending.item["id"].as<std::string>(), flow.c_str()));
       }
     });
   }

@@ -109,12 +109,22 @@ LanguagePlace languagePlace(const CarriagewayRoad& road, const Entity& entity, b
   return {road.languageS(s), lane, t - road.laneCentreT(lane)};
 }
 
+}  // namespace
+
+double regionLength(const CarriagewayRoad& road) {
+  const double curvature = road.languageCurvature();
+  double region = std::min(road.languageS(road.length), kMaxRegion);
+  if (curvature != 0.0) region = std::min(region, scenario::kMaxArcTurn / std::abs(curvature));
+  return region;
+}
+
+namespace {
+
 YAML::Node roadNode(Translation& translation) {
   const CarriagewayRoad& road = translation.road;
   const double curvature = road.languageCurvature();
   const double length = road.languageS(road.length);
-  double region = std::min(length, kMaxRegion);
-  if (curvature != 0.0) region = std::min(region, scenario::kMaxArcTurn / std::abs(curvature));
+  const double region = regionLength(road);
   YAML::Node node;
   node["shape"] = "arc";
   node["curvature"] = num(curvature);

@@ -94,6 +94,14 @@ void readEntities(Translation& translation, const pugi::xml_node& root, Catalogs
 void readInit(Translation& translation, const pugi::xml_node& storyboard);
 /// Resolves every entity's start (relative positions and speeds after their references).
 void placeEntities(Translation& translation);
+/// A place that does not move (WorldPosition, LanePosition, RoadPosition), for conditions:
+/// a position relative to a road user would move with it, which the language's places do not.
+Placement fixedPlace(Translation& translation, const pugi::xml_node& position);
+
+// osc_template.cpp
+/// m of the road's length (along the language's centre line) that is vsd-sumo's scenario
+/// region; the road goes on straight beyond it.
+double regionLength(const CarriagewayRoad& road);
 
 // osc_storyboard.cpp
 void readStories(Translation& translation, const pugi::xml_node& storyboard);

@@ -187,21 +187,54 @@ int actionIndex(const LogicalScenario& logical, const std::string& id) {
   return -1;
 }
 
-ConcreteTrigger evaluateTrigger(const TriggerSpec& spec, const LogicalScenario& logical, const ConcreteScenario& concrete) {
+/// Index of road user `id`: -1 for the Ego, else into `others`.
+int roadUserIndex(const LogicalScenario& logical, const std::string& id) {
+  for (std::size_t o = 0; o < logical.others.size(); ++o) {
+    if (logical.others[o].id == id) return static_cast<int>(o);
+  }
+  return -1;
+}
+
+/// The place of a distance condition, lanes checked against the road.
+void evaluatePosition(const TriggerSpec& spec, const LogicalScenario& logical, const ConcreteScenario& concrete,
+                      ConcreteTrigger& trigger) {
+  const PositionSpec& position = spec.position;
+  trigger.inFrame = position.inFrame;
+  if (position.inFrame) {
+    trigger.x = evaluateFinite(position.x, concrete.inputs, spec.where, "position.x");
+    trigger.y = evaluateFinite(position.y, concrete.inputs, spec.where, "position.y");
+    return;
+  }
+  trigger.s = evaluateFinite(position.s, concrete.inputs, spec.where, "position.s");
+  trigger.offset = evaluateFinite(position.offset, concrete.inputs, spec.where, "position.offset");
+  const double lane = evaluateFinite(position.lane, concrete.inputs, spec.where, "position.lane");
+  trigger.lane = static_cast<int>(std::lround(lane));
+  if (std::abs(lane - trigger.lane) > 1e-9 || trigger.lane < 0 || trigger.lane >= logical.road.lanes) {
+    throw ConfigError(fmt::format("{}.position.lane: got {} in sample {}, expected a lane the road has (0 .. {})",
+                                  spec.where, formatValue(lane), concrete.index, logical.road.lanes - 1));
+  }
+}
+
+/// `owner`: the acting road user (index into `others`), whose quantities a condition without `of` measures.
+ConcreteTrigger evaluateTrigger(const TriggerSpec& spec, int owner, const LogicalScenario& logical,
+                                const ConcreteScenario& concrete) {
   ConcreteTrigger trigger;
   trigger.kind = spec.kind;
-  if (spec.kind != TriggerSpec::Kind::After) {
+  trigger.bound = spec.bound;
+  const bool composite = spec.kind == TriggerSpec::Kind::All || spec.kind == TriggerSpec::Kind::Any;
+  if (spec.kind != TriggerSpec::Kind::After && !composite) {
     trigger.value = evaluateFinite(spec.value, concrete.inputs, spec.where, "value");
   }
   trigger.delay = evaluateFinite(spec.delay, concrete.inputs, spec.where, "delay");
-  if (trigger.value < 0.0 || trigger.delay < 0.0) {
+  if ((trigger.value < 0.0 && !spec.signedValue()) || trigger.delay < 0.0) {
     throw ConfigError(fmt::format("{}: got value {} and delay {} s in sample {}, expected both >= 0", spec.where,
                                   formatValue(trigger.value), formatValue(trigger.delay), concrete.index));
   }
-  for (std::size_t o = 0; o < logical.others.size(); ++o) {
-    if (logical.others[o].id == spec.reference) trigger.reference = static_cast<int>(o);
-  }
+  trigger.reference = roadUserIndex(logical, spec.reference);
+  trigger.subject = spec.subject.empty() ? owner : roadUserIndex(logical, spec.subject);
   if (spec.kind == TriggerSpec::Kind::After) trigger.action = actionIndex(logical, spec.action);
+  if (spec.kind == TriggerSpec::Kind::Distance) evaluatePosition(spec, logical, concrete, trigger);
+  for (const auto& member : spec.members) trigger.members.push_back(evaluateTrigger(member, owner, logical, concrete));
   return trigger;
 }
 
@@ -211,7 +244,7 @@ ConcreteAction evaluateAction(const ActionSpec& spec, int owner, const LogicalSc
   action.id = spec.id;
   action.owner = owner;
   action.kind = spec.kind;
-  action.trigger = evaluateTrigger(spec.trigger, logical, concrete);
+  action.trigger = evaluateTrigger(spec.trigger, owner, logical, concrete);
   action.shape = spec.shape;
   action.speedTarget = spec.speedTarget;
   action.target = evaluateFinite(spec.target, concrete.inputs, spec.where, "target");

@@ -193,28 +193,118 @@ void requireNonNegative(const YamlReader& reader, const YAML::Node& node, const 
   }
 }
 
+/// A trigger's kinds: key, kind, bound, unit of its value (empty: the value may be negative).
+struct TriggerKey {
+  const char* key;
+  TriggerSpec::Kind kind;
+  TriggerSpec::Bound bound;
+  const char* unit;
+};
+constexpr TriggerKey kTriggerKeys[] = {
+    {"time", TriggerSpec::Kind::Time, TriggerSpec::Bound::AtLeast, "s"},
+    {"gap", TriggerSpec::Kind::Gap, TriggerSpec::Bound::AtMost, "m"},
+    {"headway", TriggerSpec::Kind::Headway, TriggerSpec::Bound::AtMost, "s"},
+    {"ttc", TriggerSpec::Kind::Ttc, TriggerSpec::Bound::AtMost, "s"},
+    {"after", TriggerSpec::Kind::After, TriggerSpec::Bound::AtLeast, ""},
+    {"speed_at_least", TriggerSpec::Kind::Speed, TriggerSpec::Bound::AtLeast, "m/s"},
+    {"speed_at_most", TriggerSpec::Kind::Speed, TriggerSpec::Bound::AtMost, "m/s"},
+    {"relative_speed_at_least", TriggerSpec::Kind::RelativeSpeed, TriggerSpec::Bound::AtLeast, ""},
+    {"relative_speed_at_most", TriggerSpec::Kind::RelativeSpeed, TriggerSpec::Bound::AtMost, ""},
+    {"accel_at_least", TriggerSpec::Kind::Accel, TriggerSpec::Bound::AtLeast, ""},
+    {"accel_at_most", TriggerSpec::Kind::Accel, TriggerSpec::Bound::AtMost, ""},
+    {"travelled", TriggerSpec::Kind::Travelled, TriggerSpec::Bound::AtLeast, "m"},
+    {"distance_at_most", TriggerSpec::Kind::Distance, TriggerSpec::Bound::AtMost, "m"},
+    {"distance_at_least", TriggerSpec::Kind::Distance, TriggerSpec::Bound::AtLeast, "m"},
+    {"end_of_road", TriggerSpec::Kind::EndOfRoad, TriggerSpec::Bound::AtLeast, "s"},
+    {"all", TriggerSpec::Kind::All, TriggerSpec::Bound::AtLeast, ""},
+    {"any", TriggerSpec::Kind::Any, TriggerSpec::Bound::AtLeast, ""},
+};
+
+bool isRelation(TriggerSpec::Kind kind) {
+  return kind == TriggerSpec::Kind::Gap || kind == TriggerSpec::Kind::Headway || kind == TriggerSpec::Kind::Ttc ||
+         kind == TriggerSpec::Kind::RelativeSpeed;
+}
+bool hasSubject(TriggerSpec::Kind kind) {
+  return kind != TriggerSpec::Kind::Time && kind != TriggerSpec::Kind::After && kind != TriggerSpec::Kind::All &&
+         kind != TriggerSpec::Kind::Any && kind != TriggerSpec::Kind::Gap && kind != TriggerSpec::Kind::Headway &&
+         kind != TriggerSpec::Kind::Ttc;
+}
+
+/// `position: {s, lane[, offset]}` or `{x, y}`.
+void parsePosition(const YamlReader& reader, const YAML::Node& node, const std::string& field,
+                   const std::vector<std::string>& inputs, PositionSpec& position) {
+  reader.requireMap(node, field);
+  reader.checkKeys(node, field, {"s", "lane", "offset", "x", "y"});
+  position.inFrame = static_cast<bool>(node["x"]) || static_cast<bool>(node["y"]);
+  const std::vector<std::string> keys = position.inFrame ? std::vector<std::string>{"x", "y"}
+                                                         : std::vector<std::string>{"s", "lane"};
+  for (const auto& key : keys) {
+    if (!node[key]) reader.fail(node, field, "expected {s, lane[, offset]} along the road or {x, y} in the scenario frame");
+  }
+  if (position.inFrame && (node["s"] || node["lane"] || node["offset"])) {
+    reader.fail(node, field, "expected {s, lane[, offset]} or {x, y}, not both");
+  }
+  if (position.inFrame) {
+    position.x = reader.expression(node["x"], field + ".x", inputs);
+    position.y = reader.expression(node["y"], field + ".y", inputs);
+    return;
+  }
+  position.s = reader.expression(node["s"], field + ".s", inputs);
+  position.lane = reader.expression(node["lane"], field + ".lane", inputs);
+  position.offset = optionalExpression(reader, node, "offset", field, inputs, 0.0);
+}
+
+/// A trigger; `delay_allowed`: where a member's own start time counts (the trigger itself
+/// and the members of its `any`), not inside `all` (whose members hold at one instant).
 void parseTrigger(const YamlReader& reader, const YAML::Node& node, const std::string& field,
-                  const std::vector<std::string>& inputs, TriggerSpec& trigger) {
+                  const std::vector<std::string>& inputs, bool delay_allowed, TriggerSpec& trigger) {
   trigger.where = reader.where(node, field);
-  reader.checkKeys(node, field, {"time", "gap", "headway", "ttc", "after", "to", "delay"});
-  const std::string kind = oneOf(reader, node, field, {"time", "gap", "headway", "ttc", "after"}, true);
-  static const std::map<std::string, TriggerSpec::Kind> kinds = {{"time", TriggerSpec::Kind::Time},
-                                                                 {"gap", TriggerSpec::Kind::Gap},
-                                                                 {"headway", TriggerSpec::Kind::Headway},
-                                                                 {"ttc", TriggerSpec::Kind::Ttc},
-                                                                 {"after", TriggerSpec::Kind::After}};
-  trigger.kind = kinds.at(kind);
-  if (trigger.kind == TriggerSpec::Kind::After) {
+  reader.requireMap(node, field);
+  std::set<std::string> allowed = {"to", "of", "position", "delay"};
+  std::vector<std::string> keys;
+  for (const auto& entry : kTriggerKeys) {
+    allowed.insert(entry.key);
+    keys.emplace_back(entry.key);
+  }
+  reader.checkKeys(node, field, allowed);
+  const std::string key = oneOf(reader, node, field, keys, true);
+  const auto& entry = *std::find_if(std::begin(kTriggerKeys), std::end(kTriggerKeys),
+                                    [&](const TriggerKey& candidate) { return key == candidate.key; });
+  trigger.kind = entry.kind;
+  trigger.bound = entry.bound;
+  if (trigger.kind == TriggerSpec::Kind::All || trigger.kind == TriggerSpec::Kind::Any) {
+    const YAML::Node list = node[key];
+    if (!list.IsSequence() || list.size() == 0) reader.fail(list, field + "." + key, "expected a non-empty list of triggers");
+    for (std::size_t m = 0; m < list.size(); ++m) {
+      TriggerSpec member;
+      parseTrigger(reader, list[m], fmt::format("{}.{}[{}]", field, key, m), inputs,
+                   delay_allowed && trigger.kind == TriggerSpec::Kind::Any, member);
+      trigger.members.push_back(std::move(member));
+    }
+  } else if (trigger.kind == TriggerSpec::Kind::After) {
     trigger.action = reader.scalar(node["after"], field + ".after");
   } else {
-    trigger.value = reader.expression(node[kind], field + "." + kind, inputs);
-    requireNonNegative(reader, node[kind], field + "." + kind, trigger.value, false, kind == "gap" ? "m" : "s");
+    trigger.value = reader.expression(node[key], field + "." + key, inputs);
+    if (*entry.unit) requireNonNegative(reader, node[key], field + "." + key, trigger.value, false, entry.unit);
   }
   if (node["to"]) {
-    if (trigger.kind == TriggerSpec::Kind::Time || trigger.kind == TriggerSpec::Kind::After) {
-      reader.fail(node["to"], field + ".to", "'to' names the road user of a gap, headway or ttc condition");
+    if (!isRelation(trigger.kind)) {
+      reader.fail(node["to"], field + ".to", "'to' names the other road user of a gap, headway, ttc or relative_speed condition");
     }
     trigger.reference = reader.scalar(node["to"], field + ".to");
+  }
+  if (node["of"]) {
+    if (!hasSubject(trigger.kind)) {
+      reader.fail(node["of"], field + ".of", "'of' names whose speed, acceleration, distance or road end a condition measures");
+    }
+    trigger.subject = reader.scalar(node["of"], field + ".of");
+  }
+  if ((trigger.kind == TriggerSpec::Kind::Distance) != static_cast<bool>(node["position"])) {
+    reader.fail(node, field, "'position' goes with distance_at_most and distance_at_least (and only there)");
+  }
+  if (node["position"]) parsePosition(reader, node["position"], field + ".position", inputs, trigger.position);
+  if (node["delay"] && !delay_allowed) {
+    reader.fail(node["delay"], field + ".delay", "a delay inside 'all' (its members hold at one instant): put it on the 'all'");
   }
   trigger.delay = optionalExpression(reader, node, "delay", field, inputs, 0.0);
   if (node["delay"]) requireNonNegative(reader, node["delay"], field + ".delay", trigger.delay, false, "s");
@@ -320,7 +410,7 @@ void parseAction(const YamlReader& reader, const YAML::Node& node, const std::st
                              "an identifier (letters, digits, _)");
   }
   if (node["trigger"]) {
-    parseTrigger(reader, node["trigger"], field + ".trigger", inputs, action.trigger);
+    parseTrigger(reader, node["trigger"], field + ".trigger", inputs, /*delay_allowed=*/true, action.trigger);
   } else {
     action.trigger.where = action.where;
     action.trigger.value = Expression::constant(0.0);
@@ -400,6 +490,60 @@ void parseEgo(const YamlReader& reader, const YAML::Node& ego, const std::vector
   parseController(reader, ego["controller"], field + ".controller", inputs, spec.controller);
 }
 
+/// A trigger's road users (`to`, `of`) and actions (`after`), members included, exist.
+void checkTriggerReferences(const TriggerSpec& trigger, const std::string& owner, const std::vector<std::string>& users,
+                            const std::map<std::string, const ActionSpec*>& actions,
+                            const std::vector<std::string>& action_ids) {
+  const std::string& subject = trigger.subject.empty() ? owner : trigger.subject;
+  if (!trigger.subject.empty() && std::find(users.begin(), users.end(), trigger.subject) == users.end()) {
+    throw ConfigError(fmt::format("{}.of: got '{}', expected a road user of the file: {}", trigger.where,
+                                  trigger.subject, fmt::join(users, ", ")));
+  }
+  if (isRelation(trigger.kind) &&
+      (std::find(users.begin(), users.end(), trigger.reference) == users.end() || trigger.reference == subject)) {
+    throw ConfigError(fmt::format("{}.to: got '{}', expected another road user of the file: {}", trigger.where,
+                                  trigger.reference, fmt::join(users, ", ")));
+  }
+  if (trigger.kind == TriggerSpec::Kind::After && !actions.count(trigger.action)) {
+    throw ConfigError(fmt::format("{}.after: got '{}', expected the id of an action of the file: {}", trigger.where,
+                                  trigger.action, action_ids.empty() ? "none" : fmt::format("{}", fmt::join(action_ids, ", "))));
+  }
+  for (const auto& member : trigger.members) checkTriggerReferences(member, owner, users, actions, action_ids);
+}
+
+/// The `after` conditions a trigger cannot fire without (itself, or members of an `all`),
+/// each with the trigger that names it.
+void necessaryAfters(const TriggerSpec& trigger, std::vector<const TriggerSpec*>& found) {
+  if (trigger.kind == TriggerSpec::Kind::After) found.push_back(&trigger);
+  if (trigger.kind != TriggerSpec::Kind::All) return;
+  for (const auto& member : trigger.members) necessaryAfters(member, found);
+}
+
+/// Depth-first over necessary `after` conditions: coming back to an action on the current
+/// path is a cycle, reported at its first action's `after`.
+void checkNoCycle(const std::string& id, const std::map<std::string, const ActionSpec*>& actions,
+                  std::vector<std::pair<std::string, const TriggerSpec*>>& path, std::map<std::string, int>& visited) {
+  visited[id] = 1;  // on the path
+  std::vector<const TriggerSpec*> afters;
+  necessaryAfters(actions.at(id)->trigger, afters);
+  for (const TriggerSpec* after : afters) {
+    path.emplace_back(id, after);
+    if (visited[after->action] == 1) {
+      std::size_t first = 0;
+      while (path[first].first != after->action) ++first;
+      std::vector<std::string> chain;
+      for (std::size_t i = first; i < path.size(); ++i) chain.push_back(path[i].first);
+      chain.push_back(after->action);
+      throw ConfigError(fmt::format("{}.after: got '{}', a cycle of triggers ({}); expected a chain that starts "
+                                    "with a time or a condition",
+                                    path[first].second->where, path[first].second->action, fmt::join(chain, " -> ")));
+    }
+    if (visited[after->action] == 0) checkNoCycle(after->action, actions, path, visited);
+    path.pop_back();
+  }
+  visited[id] = 2;  // done
+}
+
 /// Trigger references name existing road users and actions; `after` chains have no cycle.
 void resolveReferences(const LogicalScenario& scenario) {
   std::vector<std::string> users = {"ego"};
@@ -416,33 +560,12 @@ void resolveReferences(const LogicalScenario& scenario) {
   std::vector<std::string> action_ids;
   for (const auto& [id, action] : actions) action_ids.push_back(id);
   for (const auto& other : scenario.others) {
-    for (const auto& action : other.actions) {
-      const auto& trigger = action.trigger;
-      if (std::find(users.begin(), users.end(), trigger.reference) == users.end() || trigger.reference == other.id) {
-        throw ConfigError(fmt::format("{}.to: got '{}', expected another road user of the file: {}", trigger.where,
-                                      trigger.reference, fmt::join(users, ", ")));
-      }
-      if (trigger.kind == TriggerSpec::Kind::After && !actions.count(trigger.action)) {
-        throw ConfigError(fmt::format("{}.after: got '{}', expected the id of an action of the file: {}", trigger.where,
-                                      trigger.action, action_ids.empty() ? "none" : fmt::format("{}", fmt::join(action_ids, ", "))));
-      }
-    }
+    for (const auto& action : other.actions) checkTriggerReferences(action.trigger, other.id, users, actions, action_ids);
   }
-  // `after` edges form chains; following one from any action must not come back to it.
-  for (const auto& [id, start] : actions) {
-    std::vector<std::string> chain = {id};
-    const ActionSpec* current = start;
-    while (current->trigger.kind == TriggerSpec::Kind::After) {
-      const std::string& next = current->trigger.action;
-      chain.push_back(next);
-      if (next == id) {
-        throw ConfigError(fmt::format("{}.after: got '{}', a cycle of triggers ({}); expected a chain that starts "
-                                      "with a time or a condition",
-                                      start->trigger.where, start->trigger.action, fmt::join(chain, " -> ")));
-      }
-      if (chain.size() > actions.size() + 1) break;  // a cycle not through `id`: reported from its own members
-      current = actions.at(next);
-    }
+  std::map<std::string, int> visited;
+  for (const auto& [id, action] : actions) {
+    std::vector<std::pair<std::string, const TriggerSpec*>> path;
+    if (visited[id] == 0) checkNoCycle(id, actions, path, visited);
   }
 }
 

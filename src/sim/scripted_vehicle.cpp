@@ -96,6 +96,20 @@ struct Mover {
   }
 };
 
+/// True if a trigger (or a member) needs the distances travelled or the road's end.
+bool measuresProgress(const scenario::ConcreteTrigger& trigger) {
+  if (trigger.kind == TriggerSpec::Kind::Travelled || trigger.kind == TriggerSpec::Kind::EndOfRoad) return true;
+  return std::any_of(trigger.members.begin(), trigger.members.end(), measuresProgress);
+}
+
+/// `quantity` against a bound; to 1e-9, so that values computed at instants (e.g. 20 + 5 * 1.0
+/// reached through 25 steps) meet a bound they reach exactly.
+bool withinBound(double quantity, const scenario::ConcreteTrigger& trigger) {
+  constexpr double kTolerance = 1e-9;
+  return trigger.bound == TriggerSpec::Bound::AtLeast ? quantity >= trigger.value - kTolerance
+                                                      : quantity <= trigger.value + kTolerance;
+}
+
 Footprint footprintOf(const VehicleState& state, double length, double width) {
   return {state.position(), state.heading, length, width};
 }
@@ -128,10 +142,25 @@ struct ScriptedTraffic::Impl {
   std::vector<ActionTiming> timings;
   std::vector<double> scheduled;  ///< per action: start time once its trigger fired (NaN before)
   PurePursuitLateral laneKeeping;  // the Ego's defaults: lookahead max(4 m, 0.4 s * v)
+  // What travelled and end_of_road conditions measure, per road user (0: the Ego, 1 + o: others[o]);
+  // tracked only if a trigger asks.
+  bool tracksProgress = false;
+  std::vector<double> travelled;     ///< m since t = 0 (sum of the straight steps between instants)
+  std::vector<double> atRoadEndSince;  ///< s: first instant its front was at or beyond the region's end (NaN: never)
+  VehicleState lastEgo;
+  double regionStartS = 0.0;  ///< m along the centre line where the scenario region starts
+  double regionEndS = 0.0;    ///< m along the centre line where it ends (the road's end for end_of_road)
 
   void init();
   void checkOverlaps() const;
   double relationValue(const scenario::ConcreteTrigger& trigger, std::size_t owner, const VehicleState& ego) const;
+  const VehicleState& stateOf(int user, const VehicleState& ego) const {
+    return user < 0 ? ego : states[static_cast<std::size_t>(user)];
+  }
+  void trackProgress(const VehicleState& ego);
+  bool holds(const scenario::ConcreteTrigger& trigger, std::size_t owner, const VehicleState& ego) const;
+  double fireTime(const scenario::ConcreteTrigger& trigger, std::size_t owner, const VehicleState& ego) const;
+  void offer(std::size_t a, const VehicleState& ego);
   void fireTriggers(const VehicleState& ego);
   void activate(std::size_t a, const VehicleState& ego);
   void activateDue(const VehicleState& ego);
@@ -166,7 +195,16 @@ void ScriptedTraffic::Impl::init() {
   for (std::size_t a = 0; a < concrete->actions.size(); ++a) {
     const auto& trigger = concrete->actions[a].trigger;
     if (trigger.kind == TriggerSpec::Kind::Time) scheduled[a] = trigger.value + trigger.delay;
+    tracksProgress = tracksProgress || measuresProgress(trigger);
   }
+  regionStartS = road->regionStart();
+  regionEndS = regionStartS;
+  for (std::size_t i = road->regionBegin + 1; i < road->regionEnd; ++i) {
+    regionEndS += (road->centre[i] - road->centre[i - 1]).norm();
+  }
+  travelled.assign(movers.size() + 1, 0.0);
+  atRoadEndSince.assign(movers.size() + 1, kNaN);
+  lastEgo = egoStart;
   checkOverlaps();
 }
 
@@ -211,16 +249,85 @@ double ScriptedTraffic::Impl::relationValue(const scenario::ConcreteTrigger& tri
   return rear - front > 1e-9 ? gap / (rear - front) : kInf;  // Ttc
 }
 
-void ScriptedTraffic::Impl::fireTriggers(const VehicleState& ego) {
+void ScriptedTraffic::Impl::trackProgress(const VehicleState& ego) {
   const double now = static_cast<double>(k) * step;
-  for (std::size_t a = 0; a < concrete->actions.size(); ++a) {
-    if (!std::isnan(scheduled[a])) continue;
-    const auto& action = concrete->actions[a];
-    const auto& trigger = action.trigger;
-    if (trigger.kind == TriggerSpec::Kind::After || trigger.kind == TriggerSpec::Kind::Time) continue;
-    if (relationValue(trigger, static_cast<std::size_t>(action.owner), ego) <= trigger.value) {
-      scheduled[a] = now + trigger.delay;
+  travelled[0] += (ego.position() - lastEgo.position()).norm();
+  lastEgo = ego;
+  for (std::size_t u = 0; u < travelled.size(); ++u) {
+    if (!std::isnan(atRoadEndSince[u])) continue;  // road users never drive backwards
+    const VehicleState& state = u == 0 ? ego : states[u - 1];
+    const double length = u == 0 ? concrete->ego.length : concrete->others[u - 1].length;
+    if (frame.coordinates(state.position()).first + 0.5 * length >= regionEndS) atRoadEndSince[u] = now;
+  }
+}
+
+/// Whether a condition holds at the current instant (members of `all` and `any` alike).
+bool ScriptedTraffic::Impl::holds(const scenario::ConcreteTrigger& trigger, std::size_t owner,
+                                  const VehicleState& ego) const {
+  const double now = static_cast<double>(k) * step;
+  const auto user = static_cast<std::size_t>(trigger.subject + 1);
+  const auto member_holds = [&](const scenario::ConcreteTrigger& member) { return holds(member, owner, ego); };
+  switch (trigger.kind) {
+    case TriggerSpec::Kind::Time: return now + 1e-9 >= trigger.value;
+    case TriggerSpec::Kind::After: {
+      const double end = timings[static_cast<std::size_t>(trigger.action)].end;
+      return !std::isnan(end) && end <= now + 1e-9;
     }
+    case TriggerSpec::Kind::All: return std::all_of(trigger.members.begin(), trigger.members.end(), member_holds);
+    case TriggerSpec::Kind::Any: return std::any_of(trigger.members.begin(), trigger.members.end(), member_holds);
+    case TriggerSpec::Kind::Gap:
+    case TriggerSpec::Kind::Headway:
+    case TriggerSpec::Kind::Ttc: return relationValue(trigger, owner, ego) <= trigger.value;
+    case TriggerSpec::Kind::Speed: return withinBound(stateOf(trigger.subject, ego).speed, trigger);
+    case TriggerSpec::Kind::RelativeSpeed:
+      return withinBound(stateOf(trigger.subject, ego).speed - stateOf(trigger.reference, ego).speed, trigger);
+    case TriggerSpec::Kind::Accel: return withinBound(stateOf(trigger.subject, ego).accel, trigger);
+    case TriggerSpec::Kind::Travelled: return withinBound(travelled[user], trigger);
+    case TriggerSpec::Kind::EndOfRoad:
+      return !std::isnan(atRoadEndSince[user]) && withinBound(now - atRoadEndSince[user], trigger);
+    case TriggerSpec::Kind::Distance: {
+      const Vec2 place = trigger.inFrame ? Vec2(trigger.x, trigger.y)
+                                         : frame.point(regionStartS + trigger.s, road->laneOffset(trigger.lane) + trigger.offset);
+      return withinBound((stateOf(trigger.subject, ego).position() - place).norm(), trigger);
+    }
+  }
+  return false;
+}
+
+/// When a trigger fires as far as the current instant tells (NaN: not yet): a time or an
+/// action's end exactly, `any` at its earliest member, any other at this instant; plus delays.
+double ScriptedTraffic::Impl::fireTime(const scenario::ConcreteTrigger& trigger, std::size_t owner,
+                                       const VehicleState& ego) const {
+  if (trigger.kind == TriggerSpec::Kind::Time) return trigger.value + trigger.delay;
+  if (trigger.kind == TriggerSpec::Kind::After) {
+    return timings[static_cast<std::size_t>(trigger.action)].end + trigger.delay;  // NaN until it started
+  }
+  if (trigger.kind == TriggerSpec::Kind::Any) {
+    double earliest = kNaN;
+    for (const auto& member : trigger.members) {
+      const double when = fireTime(member, owner, ego);
+      if (!std::isnan(when) && !(when >= earliest)) earliest = when;
+    }
+    return earliest + trigger.delay;
+  }
+  return holds(trigger, owner, ego) ? static_cast<double>(k) * step + trigger.delay : kNaN;
+}
+
+/// Schedules action `a` at its trigger's fire time if that is earlier than what it has.
+void ScriptedTraffic::Impl::offer(std::size_t a, const VehicleState& ego) {
+  const auto& action = concrete->actions[a];
+  const double when = fireTime(action.trigger, static_cast<std::size_t>(action.owner), ego);
+  if (!std::isnan(when) && !(when >= scheduled[a])) scheduled[a] = when;
+}
+
+void ScriptedTraffic::Impl::fireTriggers(const VehicleState& ego) {
+  for (std::size_t a = 0; a < concrete->actions.size(); ++a) {
+    const auto kind = concrete->actions[a].trigger.kind;
+    if (kind == TriggerSpec::Kind::After || kind == TriggerSpec::Kind::Time) continue;  // scheduled exactly
+    if (!std::isnan(timings[a].start)) continue;  // started
+    // Only an `any` can fire earlier than it already has (a member with a shorter delay).
+    if (!std::isnan(scheduled[a]) && kind != TriggerSpec::Kind::Any) continue;
+    offer(a, ego);
   }
 }
 
@@ -267,6 +374,8 @@ void ScriptedTraffic::Impl::activate(std::size_t a, const VehicleState& ego) {
     const auto& trigger = concrete->actions[b].trigger;
     if (trigger.kind == TriggerSpec::Kind::After && trigger.action == static_cast<int>(a) && std::isnan(scheduled[b])) {
       scheduled[b] = transition.end() + trigger.delay;
+    } else if (trigger.kind == TriggerSpec::Kind::Any && std::isnan(timings[b].start)) {
+      offer(b, ego);  // a member waiting for this action's end
     }
   }
 }
@@ -344,11 +453,13 @@ const std::vector<ScriptedTraffic::ActionTiming>& ScriptedTraffic::timings() con
 
 void ScriptedTraffic::step(const VehicleState& ego) {
   Impl& impl = *impl_;
+  if (impl.tracksProgress) impl.trackProgress(ego);
   impl.fireTriggers(ego);
   impl.activateDue(ego);
   for (std::size_t o = 0; o < impl.movers.size(); ++o) {
     Mover& mover = impl.movers[o];
     mover.state = mover.spec->purePursuit ? impl.advancePurePursuit(mover) : impl.advanceExact(mover);
+    if (impl.tracksProgress) impl.travelled[o + 1] += (mover.state.position() - impl.states[o].position()).norm();
     impl.states[o] = mover.state;
   }
   ++impl.k;

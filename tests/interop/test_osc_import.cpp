@@ -157,7 +157,7 @@ TEST(OscImport, CheckListsEveryRefusalWithItsLine) {
                                "<Private entityRef=\"Walker\"><PrivateAction><RoutingAction><AssignRouteAction/>"
                                "</RoutingAction></PrivateAction></Private>\n        <Private entityRef=\"Walker\">");
   const std::string speed_condition =
-      "<SpeedCondition value=\"5\" rule=\"lessThan\"/>";
+      "<CollisionCondition><EntityRef entityRef=\"Cutter\"/></CollisionCondition>";
   const auto at = text.find("<RelativeDistanceCondition");
   text.replace(at, text.find("/>", at) + 2 - at, speed_condition);
   const auto dir = folderWith({{"unsupported.xosc", text}});
@@ -166,7 +166,7 @@ TEST(OscImport, CheckListsEveryRefusalWithItsLine) {
   const std::string report = check.report();
   const std::string file = (dir->path() / "unsupported.xosc").string();
   EXPECT_THAT(report, HasSubstr("REFUSED " + file + ":78: element <RoutingAction> is outside the supported subset"));
-  EXPECT_THAT(report, HasSubstr("REFUSED " + file + ":109: element <SpeedCondition> is outside the supported subset"));
+  EXPECT_THAT(report, HasSubstr("REFUSED " + file + ":109: element <CollisionCondition> is outside the supported subset"));
   EXPECT_THAT(report, HasSubstr("would not run: 2 element(s) refused"));
   EXPECT_TRUE(checkOpenScenario(data("cut_in.xosc"), {}).runnable());
 }
@@ -241,24 +241,31 @@ TEST(OscFormats, RegistryChoosesByExtensionAndContent) {
               HasSubstr("not a scenario file vsd-sumo reads (formats: vsd-scenario (.yaml, .yml)"));
 }
 
-TEST(OscRun, ScriptedRoadUsersEndWhereTheFileSays) {
-  const auto logical = importTemplate(data("cut_in.xosc"), {});
+namespace {
+
+/// The simulated track of road user `id` in the one concrete scenario of an imported file.
+std::optional<VehicleTrack> simulatedTrack(const fs::path& file, const std::string& id) {
+  const auto logical = importTemplate(file, {});
   TemporaryDirectory dir("vsd-osc-run");
   pipeline::RunOptions options;
   options.samples = 1;
   options.outputDir = dir.path() / "run";
   options.writeFiles = false;
-  std::optional<Trace> trace;
+  std::optional<VehicleTrack> found;
   pipeline::runScenarios(logical, options, [&](const pipeline::ScenarioOutcome& outcome) {
     ASSERT_TRUE(outcome.ok()) << outcome.failure;
-    trace = outcome.trace;
+    for (const auto& track : outcome.trace.vehicles) {
+      if (track.id == id) found = track;
+    }
   });
-  ASSERT_TRUE(trace);
-  const VehicleTrack* cutter = nullptr;
-  for (const auto& track : trace->vehicles) {
-    if (track.id == "Cutter") cutter = &track;
-  }
-  ASSERT_NE(cutter, nullptr);
+  return found;
+}
+
+}  // namespace
+
+TEST(OscRun, ScriptedRoadUsersEndWhereTheFileSays) {
+  const auto cutter = simulatedTrack(data("cut_in.xosc"), "Cutter");
+  ASSERT_TRUE(cutter);
   // By hand: the gap (35.25 m at 5 m/s closing) reaches 30 m at 1.05 s; the lane change to the
   // Ego's lane (3.5 m at a peak 1.5 m/s: 3.67 s) and the slow-down to 10 m/s (2.5 s at 2 m/s^2)
   // end before 5 s; 1 s later the 0.5 m offset (pi * sqrt(0.5 / 2) = 1.57 s) ends before 8 s.
@@ -307,4 +314,119 @@ TEST(OscCli, ScenarioCheckExitStatusSaysWhetherItWouldRun) {
   EXPECT_NE(flag.exitCode, 0);
   EXPECT_THAT(flag.output, HasSubstr("--duration"));
   EXPECT_THAT(flag.output, HasSubstr("a flag for other formats than vsd-scenario"));
+}
+
+namespace {
+
+/// conditions.xosc with its one StartTrigger's groups replaced by `groups`.
+std::string conditionsWith(const std::string& groups) {
+  std::string text = readTextFile(data("conditions.xosc"));
+  const auto begin = text.find("<StartTrigger>") + std::string("<StartTrigger>").size();
+  return text.replace(begin, text.find("</StartTrigger>") - begin, groups);
+}
+
+std::string group(const std::string& conditions) { return "<ConditionGroup>" + conditions + "</ConditionGroup>"; }
+
+std::string entityCondition(const std::string& entity, const std::string& condition, const std::string& delay = "0") {
+  return fmt::format(R"(<Condition name="c" delay="{}" conditionEdge="rising"><ByEntityCondition>
+      <TriggeringEntities triggeringEntitiesRule="any"><EntityRef entityRef="{}"/></TriggeringEntities>
+      <EntityCondition>{}</EntityCondition></ByEntityCondition></Condition>)",
+                     delay, entity, condition);
+}
+
+std::string timeCondition(const std::string& time) {
+  return fmt::format(R"(<Condition name="t" delay="0" conditionEdge="none"><ByValueCondition>
+      <SimulationTimeCondition value="{}" rule="greaterOrEqual"/></ByValueCondition></Condition>)",
+                     time);
+}
+
+/// When the lead's step down to 10 m/s shows in its simulated speeds (s): at the instant after
+/// the one its condition first holds at; at the start itself where a delay gives the start time.
+double stepDownSeen(const fs::path& file) {
+  const auto lead = simulatedTrack(file, "Lead");
+  if (!lead) return -1.0;
+  for (std::size_t k = 1; k < lead->states.size(); ++k) {
+    if (std::abs(lead->states[k].speed - 10.0) < 1e-6) {
+      // Up to then it speeds up at 1 m/s^2 from 20 m/s.
+      EXPECT_NEAR(lead->states[k - 1].speed, 20.0 + 0.2 * static_cast<double>(k - 1), 1e-6) << file;
+      return 0.2 * static_cast<double>(k);
+    }
+  }
+  return -1.0;
+}
+
+}  // namespace
+
+// Each condition kind the language maps, imported and run: the lead (reference point at s = 100
+// on lane -2, box centre 1.25 m ahead of it) speeds up as v = 20 + t, so it has travelled
+// 20 t + t^2 / 2 at t. A condition is checked at the instants (0.2 s): the step down starts at
+// the first instant it holds and shows at the next; a delay after it starts it at that time.
+TEST(OscRun, EachConditionStartsItsEventWhereTheFileSays) {
+  constexpr double kNext = 0.2;
+  const std::vector<std::pair<std::string, double>> cases = {
+      // 20 + t >= 25
+      {group(entityCondition("Lead", R"(<SpeedCondition value="25" rule="greaterOrEqual"/>)")), 5.0 + kNext},
+      // (20 + t) - 18 > 5
+      {group(entityCondition("Lead", R"(<RelativeSpeedCondition entityRef="Slow" value="5" rule="greaterThan"/>)")),
+       3.0 + kNext},
+      // 1 m/s^2 over the first step
+      {group(entityCondition("Lead", R"(<AccelerationCondition value="0.5" rule="greaterThan"/>)")), 0.2 + kNext},
+      // within 1 m of s = 150: 49 m travelled after 2.32 s
+      {group(entityCondition("Lead", R"(<ReachPositionCondition tolerance="1"><Position>
+          <LanePosition roadId="7" laneId="-2" s="150" offset="0"/></Position></ReachPositionCondition>)")), 2.4 + kNext},
+      // 30 m after 1.45 s
+      {group(entityCondition("Lead", R"(<TraveledDistanceCondition value="30"/>)")), 1.6 + kNext},
+      // closer than 10 m to x = 200 on its lane's centre (t = -2.75): 90 m after 4.08 s
+      {group(entityCondition("Lead", R"(<DistanceCondition value="10" freespace="false" rule="lessThan"
+          relativeDistanceType="euclidianDistance"><Position><WorldPosition x="200" y="-2.75"/></Position>
+          </DistanceCondition>)")), 4.2 + kNext},
+      // the runner's front (960 + 1.25 + 2.25 m) at 15 m/s reaches the road's end (1000 m) after 2.43 s; 1 s later
+      {group(entityCondition("Runner", R"(<EndOfRoadCondition duration="1"/>)")), 3.6 + kNext},
+      // AND: 24 m/s at 4.0 s and time 4.5 (an instant: 4.6); OR: 30 m travelled (1.6 s) + 4 s delay = 5.6
+      {group(entityCondition("Lead", R"(<SpeedCondition value="24" rule="greaterOrEqual"/>)") + timeCondition("4.5")) +
+           group(entityCondition("Lead", R"(<TraveledDistanceCondition value="30"/>)", "4")),
+       4.6 + kNext},
+      // OR, the other group first: 30 m (1.6 s) + 1 s delay, an instant's time
+      {group(entityCondition("Lead", R"(<SpeedCondition value="24" rule="greaterOrEqual"/>)") + timeCondition("4.5")) +
+           group(entityCondition("Lead", R"(<TraveledDistanceCondition value="30"/>)", "1")),
+       2.6},
+  };
+  int n = 0;
+  for (const auto& [groups, seen] : cases) {
+    const std::string name = fmt::format("case{}.xosc", n++);
+    const auto dir = folderWith({{name, conditionsWith(groups)}});
+    const ScenarioCheck check = checkOpenScenario(dir->path() / name, {});
+    EXPECT_TRUE(check.runnable()) << name << "\n" << check.report();
+    EXPECT_THAT(check.report(), HasSubstr("start of 'StepDown': {")) << name;
+    EXPECT_NEAR(stepDownSeen(dir->path() / name), seen, 1e-9) << name;
+  }
+}
+
+TEST(OscImport, ConditionsTheLanguageCannotExpressAreOneLineEach) {
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {group(entityCondition("Lead", R"(<SpeedCondition value="25" rule="equalTo"/>)")),
+       "<SpeedCondition>: rule=\"equalTo\": compared at recorded instants a value equals another only by chance"},
+      {group(entityCondition("Lead", R"(<SpeedCondition value="25" rule="greaterThan" direction="lateral"/>)")),
+       "direction=\"lateral\""},
+      {group(entityCondition("Lead", R"(<DistanceCondition value="10" freespace="true" rule="lessThan"><Position>
+          <WorldPosition x="200" y="-2.75"/></Position></DistanceCondition>)")),
+       "<DistanceCondition>: freespace=\"true\""},
+      {group(entityCondition("Lead", R"(<ReachPositionCondition tolerance="1"><Position>
+          <RelativeLanePosition entityRef="Ego" dLane="0" ds="10"/></Position></ReachPositionCondition>)")),
+       "element <RelativeLanePosition> is outside the supported subset"},
+      {group(timeCondition("1") + entityCondition("Lead", R"(<TraveledDistanceCondition value="30"/>)", "2")),
+       "delay 2 s, another condition of its group 0 s: the language delays a group as a whole"},
+      {group(R"(<Condition name="f" delay="0" conditionEdge="falling"><ByValueCondition>
+          <SimulationTimeCondition value="1" rule="greaterOrEqual"/></ByValueCondition></Condition>)"),
+       "conditionEdge=\"falling\""},
+  };
+  int n = 0;
+  for (const auto& [groups, message] : cases) {
+    const std::string name = fmt::format("bad{}.xosc", n++);
+    const auto dir = folderWith({{name, conditionsWith(groups)}});
+    const std::string error = test::configErrorOf([&] { importTemplate(dir->path() / name, {}); });
+    EXPECT_THAT(error, HasSubstr(name + ":")) << error;
+    EXPECT_THAT(error, HasSubstr(message)) << error;
+    EXPECT_EQ(error.find('\n'), std::string::npos) << error;
+  }
 }

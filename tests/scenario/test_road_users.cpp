@@ -87,6 +87,48 @@ TEST(RoadUsers, ACycleOfTriggersIsRefused) {
   EXPECT_NE(error.find("a cycle of triggers (one -> two -> one)"), std::string::npos) << error;
 }
 
+// Triggers on motion and their combinations: bad input is one line naming the field, the
+// value and what is allowed.
+TEST(RoadUsers, BadMotionTriggersAreRefused) {
+  const auto with = [](const std::string& trigger) {
+    return errorOf(fmt::format(R"(    - {{id: a, gap: 20, relative_lane: 0, speed: 5,
+       actions: [{{id: one, trigger: {}, stop: {{decel: 3}}}}]}})",
+                               trigger));
+  };
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {"{speed_at_least: 5, of: ghost}", "actions[0].trigger.of: got 'ghost', expected a road user of the file: ego, a"},
+      {"{relative_speed_at_least: 1, of: ego}", "trigger.to: got 'ego', expected another road user of the file"},
+      {"{distance_at_most: -1, position: {s: 10, lane: 0}}", "trigger.distance_at_most"},
+      {"{travelled: -3}", "trigger.travelled"},
+      {"{all: []}", "trigger.all: expected a non-empty list of triggers"},
+      {"{any: [{time: 1}, {all: [{gap: 5, delay: 1}]}]}",
+       "trigger.any[1].all[0].delay: a delay inside 'all' (its members hold at one instant): put it on the 'all'"},
+      {"{speed_at_least: 5, position: {s: 1, lane: 0}}", "'position' goes with distance_at_most and distance_at_least"},
+      {"{distance_at_least: 5}", "'position' goes with distance_at_most and distance_at_least"},
+      {"{distance_at_most: 1, position: {s: 10}}", "trigger.position: expected {s, lane[, offset]} along the road or {x, y}"},
+      {"{speed_at_least: 5, to: ego}", "trigger.to: 'to' names the other road user of a gap, headway, ttc or relative_speed"},
+      {"{gap: 5, of: ego}", "trigger.of: 'of' names whose speed, acceleration, distance or road end"},
+      {"{distance_at_most: 1, position: {s: 10, lane: 3}}",
+       "trigger.position.lane: got 3 in sample 0, expected a lane the road has (0 .. 2)"},
+      {"{fast: 3}", "trigger.fast: unknown key 'fast' (allowed: accel_at_least"},
+  };
+  for (const auto& [trigger, message] : cases) {
+    const std::string error = with(trigger);
+    EXPECT_NE(error.find("bad.yaml:"), std::string::npos) << trigger << ": " << error;
+    EXPECT_NE(error.find(message), std::string::npos) << trigger << ": " << error;
+    EXPECT_EQ(error.find('\n'), std::string::npos) << error;
+  }
+  // A cycle through an `all` (each member is needed) is a cycle; through an `any` it is not.
+  const auto cycle = errorOf(R"(    - {id: a, gap: 20, relative_lane: 0, speed: 5,
+       actions: [{id: one, trigger: {all: [{after: two}, {time: 1}]}, stop: {decel: 3}},
+                 {id: two, trigger: {after: one}, speed: {target: 4, rate: 1}}]})");
+  EXPECT_NE(cycle.find("a cycle of triggers (one -> two -> one)"), std::string::npos) << cycle;
+  EXPECT_EQ(errorOf(R"(    - {id: a, gap: 20, relative_lane: 0, speed: 5,
+       actions: [{id: one, trigger: {any: [{after: two}, {time: 1}]}, stop: {decel: 3}},
+                 {id: two, trigger: {after: one}, speed: {target: 4, rate: 1}}]})"),
+            "");
+}
+
 TEST(RoadUsers, ALaneChangeToALaneTheRoadDoesNotHaveIsRefused) {
   const auto error = errorOf(R"(    - {id: a, gap: 20, relative_lane: 1, speed: 5,
        actions: [{trigger: {time: 1}, lane_change: {lanes: 1, duration: 3}}]})");

@@ -248,3 +248,36 @@ TEST(BatchSimulation, AControllerAddedFromItsOwnFileDrivesTheEgo) {
     }
   }
 }
+
+// Triggers on motion in the simulation, with the real Ego (idm at its set speed of 10 m/s on a
+// free road): a speed trigger of a scripted vehicle and an `any` of the Ego's travelled
+// distance and a time start their actions where the numbers say (step 0.2 s).
+TEST(BatchSimulation, MotionTriggersFireWhereTheNumbersSay) {
+  TemporaryDirectory dir;
+  const auto logical = scenario::parseLogicalScenario(R"(
+name: motion_triggers
+time: {step: 0.2, duration: 6.0}
+road: {shape: arc, curvature: 0, length: 300, lanes: 3, lane_width: 3.5}
+vehicles:
+  ego: {s: 30, lane: 1, speed: 10, controller: {name: idm, params: {set_speed: 10}}}
+  others:
+    - {id: fast, s: 100, lane: 2, length: 5, speed_profile: {initial: 20, phases: [{duration: 10, accel: 1}]},
+       actions: [{trigger: {speed_at_least: 25}, stop: {decel: 5, shape: linear}}]}
+    - {id: side, s: 60, lane: 0, length: 5, speed: 10,
+       actions: [{trigger: {any: [{travelled: 24, of: ego}, {time: 5}]}, speed: {target: 15, shape: step}}]}
+)",
+                                                      "motion_triggers.yaml");
+  const Batch batch(logical, 1, dir.path());
+  const auto& result = batch.results.at(0);
+  ASSERT_TRUE(result.ok()) << result.failure;
+  // 20 m/s + 1 m/s^2: 25 m/s at t = 5 s, braking at 5 m/s^2 from there.
+  const auto& fast = result.trace.vehicles.at(1).states;
+  EXPECT_NEAR(fast.at(25).speed, 25.0, 1e-9);
+  EXPECT_NEAR(fast.at(26).speed, 24.0, 1e-9);
+  // The Ego at 10 m/s has travelled 24 m at 2.4 s: the step to 15 m/s is there at the next instant.
+  const auto& ego = result.trace.vehicles.at(0).states;
+  EXPECT_NEAR(ego.at(12).speed, 10.0, 1e-6);
+  const auto& side = result.trace.vehicles.at(2).states;
+  EXPECT_NEAR(side.at(12).speed, 10.0, 1e-9);
+  EXPECT_NEAR(side.at(13).speed, 15.0, 1e-9);
+}

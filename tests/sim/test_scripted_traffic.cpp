@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <functional>
+#include <map>
 
 #include "test_support.hpp"
 #include "vsd/core/error.hpp"
@@ -154,4 +155,55 @@ TEST(ScriptedTraffic, RoadUsersOverlappingAtTheStartAreRefused) {
   const std::string error = test::configErrorOf([&] { ScriptedTraffic traffic(concrete, road); });
   EXPECT_NE(error.find("stepper.yaml: sample 3: road user 'twin' starts overlapping 'lead'"), std::string::npos)
       << error;
+}
+
+// Triggers on motion (docs/scenario-language.md "Actions and triggers"), in planning: the
+// others move as scripted and the Ego is its stand-in (s = 30 on lane 1 at 10 m/s). Every
+// start time is derived by hand from the numbers, to the recorded instant (step 0.2 s). The
+// actions (a lateral offset of 0) change nothing, so each trigger sees the scripted motion.
+TEST(ScriptedTraffic, MotionTriggersFireWhereTheNumbersSay) {
+  const std::string mark = "lateral_offset: {offset: 0, duration: 0.2}";
+  const auto logical = scenarioWith(fmt::format(R"(
+    - {{id: slow, s: 60, lane: 0, length: 5, speed_profile: {{initial: 10, phases: [{{duration: 2, accel: 0}}, {{duration: 3, accel: 2}}]}},
+       actions: [{{id: pushes, trigger: {{accel_at_least: 1.5}}, {0}}},
+                 {{id: at11, trigger: {{speed_at_least: 11}}, {0}}},
+                 {{id: ego_went, trigger: {{travelled: 24, of: ego}}, {0}}},
+                 {{id: both, trigger: {{all: [{{relative_speed_at_least: 1.5, to: ego}}, {{time: 2.5}}]}}, {0}}},
+                 {{id: first, trigger: {{any: [{{time: 4}}, {{travelled: 24, of: ego, delay: 1}}]}}, {0}}}]}}
+    - {{id: mover, s: 200, lane: 2, length: 5, speed: 5,
+       actions: [{{id: there, trigger: {{distance_at_most: 0.5, position: {{s: 210, lane: 2}}}}, {0}}},
+                 {{id: away, trigger: {{distance_at_least: 6, position: {{x: 200, y: 3.5}}}}, {0}}},
+                 {{id: ego_slow, trigger: {{speed_at_most: 10, of: ego}}, {0}}}]}}
+    - {{id: ender, s: 250, lane: 0, length: 5, speed: 20,
+       actions: [{{id: ended, trigger: {{end_of_road: 1}}, {0}}}]}})",
+                                                mark),
+                                    0.0, 5.0);
+  const Planned run = plan(logical);
+  ScriptedTraffic traffic(run.concrete, run.road);
+  const EgoStandIn ego(run.concrete, run.road);
+  for (int k = 0; k < 25; ++k) traffic.step(ego.at(0.2 * k));
+  std::map<std::string, double> start;
+  for (std::size_t a = 0; a < run.concrete.actions.size(); ++a) start[run.concrete.actions[a].id] = traffic.timings()[a].start;
+  EXPECT_NEAR(start["pushes"], 2.2, 1e-9);    // the first step of 2 m/s^2 ends at 2.2 s
+  EXPECT_NEAR(start["at11"], 2.6, 1e-9);      // 10 + 2 (t - 2) = 11 at 2.5 s, between instants: 2.6 s
+  EXPECT_NEAR(start["ego_went"], 2.4, 1e-9);  // the stand-in at 10 m/s: 24 m at 2.4 s
+  EXPECT_NEAR(start["both"], 2.8, 1e-9);      // 11.6 - 10 >= 1.5 first at 2.8 s, after 2.5 s
+  EXPECT_NEAR(start["first"], 3.4, 1e-9);     // 2.4 + 1 before 4
+  EXPECT_NEAR(start["there"], 2.0, 1e-9);     // 10 m at 5 m/s (1 m short at 1.8 s)
+  EXPECT_NEAR(start["away"], 1.2, 1e-9);      // 6 m at 5 m/s
+  EXPECT_NEAR(start["ego_slow"], 0.0, 1e-9);  // the stand-in's 10 m/s from t = 0
+  // Front at 252.5 m + 20 m/s reaches the region's end (300 m) at 2.375 s: instant 2.4 s, plus 1 s.
+  EXPECT_NEAR(start["ended"], 3.4, 1e-9);
+}
+
+// The example of the brief: accelerating at 1 m/s^2 from 20 m/s, `speed_at_least: 25` starts
+// its action at t = 5 s (25 steps of 0.2 s), in planning.
+TEST(ScriptedTraffic, ASpeedTriggerStartsItsActionWhenTheSpeedIsReached) {
+  const Planned run = plan(scenarioWith(R"(
+    - {id: fast, s: 100, lane: 2, length: 5, speed_profile: {initial: 20, phases: [{duration: 10, accel: 1}]},
+       actions: [{id: at25, trigger: {speed_at_least: 25}, stop: {decel: 5, shape: linear}}]})",
+                                        0.0, 6.0));
+  const auto& path = run.paths[0];
+  EXPECT_NEAR(path[25].speed, 25.0, 1e-9);  // t = 5 s: still accelerating
+  EXPECT_NEAR(path[26].speed, 24.0, 1e-9);  // braking at 5 m/s^2 from t = 5 s
 }

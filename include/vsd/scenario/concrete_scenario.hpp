@@ -16,10 +16,20 @@ namespace vsd::scenario {
 /// A trigger with its numbers evaluated and its references resolved.
 struct ConcreteTrigger {
   TriggerSpec::Kind kind = TriggerSpec::Kind::Time;
-  double value = 0.0;   ///< s or m
+  TriggerSpec::Bound bound = TriggerSpec::Bound::AtMost;
+  double value = 0.0;   ///< s, m, m/s or m/s^2
   double delay = 0.0;   ///< s
   int reference = -1;   ///< road user the condition relates to: -1 = the Ego, else index into `others`
+  int subject = -1;     ///< whose quantity (Speed .. EndOfRoad): -1 = the Ego, else index into `others`
   int action = -1;      ///< After: index into ConcreteScenario::actions
+  // Distance: the place, along the road (s from the region's start, lane, offset) or in the frame (x, y).
+  bool inFrame = false;
+  double s = 0.0;
+  int lane = 0;
+  double offset = 0.0;
+  double x = 0.0;
+  double y = 0.0;
+  std::vector<ConcreteTrigger> members;  ///< All, Any
 };
 
 /// An action with its numbers evaluated (see ActionSpec).

@@ -101,10 +101,21 @@ struct ControllerSpec {
   std::string where;
 };
 
-/// When an action starts (README / docs/scenario-language.md "Triggers"). Conditions
-/// relative to another road user (the Ego unless `reference` names one) are checked at
-/// every recorded instant; the action starts at the first instant the condition holds,
-/// plus `delay`.
+/// A place a trigger measures distances to: along the road (`s` from the region's start,
+/// on `lane`'s centre plus `offset`) or in the scenario frame (`x`, `y`).
+struct PositionSpec {
+  bool inFrame = false;  ///< x/y (true) or s/lane/offset (false)
+  Expression s;          ///< m
+  Expression lane;       ///< lane index (0 = rightmost)
+  Expression offset;     ///< m from the lane's centre, > 0 left
+  Expression x;          ///< m
+  Expression y;          ///< m
+};
+
+/// When an action starts (docs/scenario-language.md "Actions and triggers"). Conditions are
+/// checked at every recorded instant; the action starts at the first instant the condition
+/// holds, plus `delay`. `All` holds when all its members hold at the same instant, `Any`
+/// fires when the first of its members fires (each with its own delay).
 struct TriggerSpec {
   enum class Kind {
     Time,     ///< simulation time >= value (s); not quantised to instants
@@ -112,13 +123,30 @@ struct TriggerSpec {
     Headway,  ///< time headway of the rear one of the two (gap / its speed) <= value (s)
     Ttc,      ///< time to collision along the Ego's lane (gap / closing speed) <= value (s)
     After,    ///< `action` ended (+ delay)
+    Speed,          ///< the subject's speed vs value (m/s, `bound`)
+    RelativeSpeed,  ///< the subject's speed minus `reference`'s vs value (m/s)
+    Accel,          ///< the subject's longitudinal acceleration vs value (m/s^2, < 0 braking)
+    Travelled,      ///< the subject has travelled >= value (m) since t = 0
+    Distance,       ///< the subject's centre's distance to `position` vs value (m)
+    EndOfRoad,      ///< the subject's front has been at or beyond the road region's end for >= value (s)
+    All,            ///< every member holds
+    Any,            ///< a member fired
   };
+  /// Speed, RelativeSpeed, Accel, Distance: the condition is `quantity <= value` or `>= value`.
+  enum class Bound { AtMost, AtLeast };
   Kind kind = Kind::Time;
+  Bound bound = Bound::AtMost;
   Expression value;
   Expression delay;           ///< s, >= 0
-  std::string reference = "ego";  ///< road user the condition relates to (Gap, Headway, Ttc)
+  std::string reference = "ego";  ///< road user the condition relates to (Gap, Headway, Ttc, RelativeSpeed)
+  std::string subject;        ///< `of`: whose quantity (the new kinds); empty: the acting road user
   std::string action;         ///< After: id of the action whose end starts this one
+  PositionSpec position;      ///< Distance
+  std::vector<TriggerSpec> members;  ///< All, Any
   std::string where;
+
+  /// True for the kinds whose value may be negative.
+  bool signedValue() const { return kind == Kind::RelativeSpeed || kind == Kind::Accel; }
 };
 
 /// Shape of a speed or lateral transition over its duration.
