@@ -217,12 +217,14 @@ def process(path, root, write):
             print(note, file=sys.stderr)
             continue
         problems += found
-        if body != match.group("body"):
-            if not write:
-                problems.append(f"{where}: the table differs from what {dict(ATTRIBUTE.findall(match.group('args')))['from']} "
-                                f"generates: run tools/doc_tables.py --write")
+        if body == match.group("body"):
+            continue
+        if write:
             pieces.append(text[last:match.start("body")] + body)
             last = match.end("body")
+        else:
+            source = dict(ATTRIBUTE.findall(match.group("args")))["from"]
+            problems.append(f"{where}: the table differs from what {source} generates: run tools/doc_tables.py --write")
     if write and pieces:
         path.write_text("".join(pieces) + text[last:], encoding="utf-8")
     return problems

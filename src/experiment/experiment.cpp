@@ -598,6 +598,7 @@ class ExperimentRunner {
         error.mae = errors.at("mae").get<double>();
         error.bias = errors.at("bias").get<double>();
         error.samples = errors.at("samples").get<std::size_t>();
+        error.intervalSamples = errors.at("interval_samples").get<std::size_t>();
         if (!errors.at("coverage50").is_null()) error.coverage50 = errors.at("coverage50").get<double>();
         if (!errors.at("coverage90").is_null()) error.coverage90 = errors.at("coverage90").get<double>();
         mae_row.vectornet.push_back(error);
@@ -752,6 +753,7 @@ class ExperimentRunner {
           {"mae", mean(error_sum[m], scored[m])},
           {"bias", mean(signed_sum[m], scored[m])},
           {"samples", scored[m]},
+          {"interval_samples", with_interval[m]},
           {"coverage50", has_intervals ? json(mean(static_cast<double>(covered[m][0]), with_interval[m])) : json()},
           {"coverage90", has_intervals ? json(mean(static_cast<double>(covered[m][1]), with_interval[m])) : json()}};
     }

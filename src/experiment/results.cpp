@@ -183,7 +183,7 @@ const VectorNetMetricError* errorOf(const MaeRow& row, const std::string& model)
 std::string percent(double share) { return std::isfinite(share) ? fmt::format("{:.0f} %", 100.0 * share) : "–"; }
 
 /// "51 % (48–54)": a coverage with its binomial 95 % confidence interval (Wilson) over the
-/// scenes scored.
+/// scenes that had an interval.
 std::string coverageText(double share, std::size_t scenes) {
   if (!std::isfinite(share) || scenes == 0) return percent(share);
   const auto interval = wilsonInterval(share, scenes);
@@ -205,8 +205,8 @@ std::string maeCell(const MaeRow& row, const std::string& model, bool main) {
   std::string cell = main ? withPaper(error->mae, row.paper, "vectornet", 3) : fmt::format("{:.3f}", error->mae);
   cell += fmt::format(" bias {:+.3f}", error->bias);
   if (std::isfinite(error->coverage90)) {
-    cell += fmt::format("; covered {} / {}", coverageText(error->coverage50, error->samples),
-                        coverageText(error->coverage90, error->samples));
+    cell += fmt::format("; covered {} / {}", coverageText(error->coverage50, error->intervalSamples),
+                        coverageText(error->coverage90, error->intervalSamples));
   }
   return cell;
 }
@@ -237,7 +237,7 @@ std::pair<std::string, std::string> maeFiles(const Spec& spec, const std::vector
                   "named in the spec, for every model of the spec that trains that row: the MAE (the paper's value "
                   "in brackets for the main model), the bias (mean of predicted − simulated) and, for probabilistic "
                   "models, the share of simulated values inside the metric's 50 % / 90 % interval over {} sampled "
-                  "futures, with its binomial 95 % confidence interval (Wilson) over the scenes scored. 'true positions' is the same computation on the simulated future positions: the error "
+                  "futures, with its binomial 95 % confidence interval (Wilson) over the scenes that had an interval. 'true positions' is the same computation on the simulated future positions: the error "
                   "of reconstructing the metric from positions alone, a floor for VectorNet's.\n\n",
                   spec.maeSamples, spec.maeDraws) +
       "| scenario | metric | extra trees | BNN | BNN mean std |";
@@ -258,7 +258,7 @@ std::pair<std::string, std::string> maeFiles(const Spec& spec, const std::vector
       cells.push_back(error ? formatNumber(error->mae) : "");
       cells.push_back(error ? formatNumber(error->bias) : "");
       for (const double coverage : {error ? error->coverage50 : kNaN, error ? error->coverage90 : kNaN}) {
-        const auto [low, high] = coverageBounds(coverage, error ? error->samples : 0);
+        const auto [low, high] = coverageBounds(coverage, error ? error->intervalSamples : 0);
         cells.insert(cells.end(), {optionalNumber(coverage), low, high});
       }
     }

@@ -51,6 +51,7 @@ struct VectorNetMetricError {
   double mae = 0.0;           ///< of the metric of the most likely future
   double bias = 0.0;          ///< mean of predicted - simulated
   std::size_t samples = 0;    ///< test scenarios scored (finite simulated and predicted values)
+  std::size_t intervalSamples = 0;  ///< of them, those with a finite interval: the coverages' denominator
   /// Share of the simulated values inside the central 50 % / 90 % interval of the metric over
   /// the model's sampled futures (mae.draws per scene); NaN for deterministic decoders.
   double coverage50 = std::numeric_limits<double>::quiet_NaN();
