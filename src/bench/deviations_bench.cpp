@@ -11,6 +11,7 @@
 #include "vsd/core/numbers.hpp"
 #include "vsd/core/progress.hpp"
 #include "vsd/core/random.hpp"
+#include "vsd/core/statistics.hpp"
 #include "vsd/experiment/experiment.hpp"
 #include "vsd/model/predictor.hpp"
 #include "vsd/pipeline/run.hpp"
@@ -139,11 +140,8 @@ void DeviationsBenchOptions::validate() const {
 
 std::pair<double, double> wilsonInterval(double k, double n) {
   if (n == 0.0) return {std::nan(""), std::nan("")};
-  const double z = 1.959964;
-  const double p = k / n;
-  const double centre = (p + z * z / (2 * n)) / (1 + z * z / n);
-  const double half = z * std::sqrt(p * (1 - p) / n + z * z / (4 * n * n)) / (1 + z * z / n);
-  return {centre - half, centre + half};
+  const auto interval = vsd::wilsonInterval(k / n, static_cast<std::size_t>(n));
+  return {interval.low, interval.high};
 }
 
 DeviationsBench::DeviationsBench(DeviationsBenchOptions options)

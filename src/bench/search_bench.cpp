@@ -3,10 +3,17 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <nlohmann/json.hpp>
+#include <sstream>
 
+#include "vsd/core/csv.hpp"
 #include "vsd/core/error.hpp"
 #include "vsd/core/files.hpp"
+#include "vsd/core/log.hpp"
 #include "vsd/core/output_policy.hpp"
+#include "vsd/core/provenance.hpp"
+#include "vsd/core/statistics.hpp"
+#include "vsd/report/numbers.hpp"
 
 namespace fs = std::filesystem;
 
@@ -42,7 +49,7 @@ void addSearch(SurrogateTotals& totals, const search::SearchSummary& summary) {
 SurrogateTotals benchSurrogate(const SearchBenchOptions& options, const std::string& surrogate, const fs::path& work,
                                std::vector<search::SearchSummary>& summaries, const OnSearch& on_search) {
   SurrogateTotals totals;
-  for (std::uint64_t seed = 1; seed <= options.seeds; ++seed) {
+  for (std::uint64_t seed = options.firstSeed; seed < options.firstSeed + options.seeds; ++seed) {
     search::SearchOptions run = options.search;
     run.surrogate = surrogate;
     run.seed = seed;
@@ -72,9 +79,26 @@ search::SearchOptions SearchBenchOptions::defaultSearch() {
 
 void SearchBenchOptions::validate() const {
   if (seeds < 1 || seeds > 1000) throw ConfigError::field("command line", "--seeds", std::to_string(seeds), "1 .. 1000");
+  if (trueRateSamples > 10'000'000) {
+    throw ConfigError::field("command line", "--true-rate-samples", std::to_string(trueRateSamples), "0 .. 10000000");
+  }
+  if (trueRateSamples > 0 && trueRateSeed >= firstSeed && trueRateSeed < firstSeed + seeds) {
+    throw ConfigError::field("command line", "--true-rate-seed", std::to_string(trueRateSeed),
+                             fmt::format("a seed none of the searches uses (they use {} .. {})", firstSeed,
+                                         firstSeed + seeds - 1));
+  }
+  if (!out.empty()) {
+    refuseDirtyCommittedResults(out, allowDirty, "--allow-dirty");
+    checkOutput({out, &output_kinds::searchBenchmarkFolder(), subject(), false, "--out", "--force",
+                 {{"scenario", search.scenarioFile}}});
+  }
   if (!report.empty()) {  // the output policy (docs/output-policy.md), before any work
     checkOutput({report, &searchReportKind(), "", false, "--report", "--force", {{"scenario", search.scenarioFile}}});
   }
+}
+
+std::string SearchBenchOptions::subject() const {
+  return fmt::format("{}: {}", search.scenarioFile.string(), search.criterion);
 }
 
 double SearchBenchResult::randomCritical() const {
@@ -88,11 +112,130 @@ SearchBenchResult runSearchBench(const SearchBenchOptions& options, const OnSear
   options.validate();
   TemporaryDirectory work("vsd-bench-search");
   SearchBenchResult result;
+  if (options.trueRateSamples > 0) {
+    result.trueRate = search::monteCarloRate(options.search, options.trueRateSeed, options.trueRateSamples);
+  }
   for (const auto& surrogate : options.surrogates) {
     result.surrogates.emplace_back(surrogate,
                                    benchSurrogate(options, surrogate, work.path(), result.searches, on_search));
   }
   return result;
+}
+
+bool coversTrueRate(const search::SearchSummary& summary, const search::MonteCarloRate& rate) {
+  return summary.estimate.low <= rate.estimate && rate.estimate <= summary.estimate.high;
+}
+
+namespace {
+
+std::string percent(double share) { return formatNumber(100.0 * share); }
+
+std::string searchesCsv(const SearchBenchResult& result) {
+  std::ostringstream text;
+  CsvWriter csv(text);
+  csv.writeRow({"surrogate", "seed", "executions", "critical", "cells", "method", "estimate_percent", "low_percent",
+                "high_percent", "covers_true_rate", "seconds", "surrogate_seconds", "simulation_seconds"});
+  for (const auto& s : result.searches) {
+    const auto& e = s.estimate;
+    csv.writeRow({s.surrogate, std::to_string(s.seed), std::to_string(s.executions), std::to_string(s.critical),
+                  std::to_string(s.coverageCells), e.method, percent(e.estimate), percent(e.low), percent(e.high),
+                  result.trueRate ? std::to_string(coversTrueRate(s, *result.trueRate) ? 1 : 0) : "",
+                  formatNumber(s.seconds), formatNumber(s.surrogateSeconds), formatNumber(s.simulationSeconds)});
+  }
+  return text.str();
+}
+
+/// One surrogate's searches: values of one field.
+template <typename Field>
+std::vector<double> valuesOf(const SearchBenchResult& result, const std::string& surrogate, Field field) {
+  std::vector<double> values;
+  for (const auto& s : result.searches) {
+    if (s.surrogate == surrogate) values.push_back(field(s));
+  }
+  return values;
+}
+
+std::vector<std::string> surrogateRow(const SearchBenchResult& result, const std::string& name) {
+  const auto critical = valuesOf(result, name, [](const auto& s) { return static_cast<double>(s.critical); });
+  const auto cells = valuesOf(result, name, [](const auto& s) { return static_cast<double>(s.coverageCells); });
+  const auto estimate = valuesOf(result, name, [](const auto& s) { return 100.0 * s.estimate.estimate; });
+  const auto width = valuesOf(result, name, [](const auto& s) { return 100.0 * (s.estimate.high - s.estimate.low); });
+  const auto seconds = valuesOf(result, name, [](const auto& s) { return s.seconds; });
+  const double random = result.randomCritical();
+  std::string covered;
+  std::string covered_share;
+  if (result.trueRate) {
+    const auto covers =
+        valuesOf(result, name, [&](const auto& s) { return coversTrueRate(s, *result.trueRate) ? 1.0 : 0.0; });
+    const double k = sampleMean(covers) * static_cast<double>(covers.size());
+    covered = fmt::format("{:.0f}/{}", k, covers.size());
+    covered_share = formatNumber(k / static_cast<double>(covers.size()));
+  }
+  return {name, std::to_string(critical.size()), fmt::format("{:.1f}", sampleMean(critical)),
+          fmt::format("{:.1f}", sampleStd(critical)),
+          random > 0 ? fmt::format("{:.2f}", sampleMean(critical) / random) : "",
+          fmt::format("{:.1f}", sampleMean(cells)), fmt::format("{:.4f}", sampleMean(estimate)),
+          fmt::format("{:.4f}", sampleStd(estimate)), fmt::format("{:.4f}", sampleMean(width)), covered, covered_share,
+          fmt::format("{:.1f}", sampleMean(seconds))};
+}
+
+std::string surrogatesCsv(const SearchBenchResult& result) {
+  std::ostringstream text;
+  CsvWriter csv(text);
+  csv.writeRow({"surrogate", "seeds", "critical_mean", "critical_std", "x_random", "cells_mean",
+                "estimate_mean_percent", "estimate_std_percent", "interval_width_mean_percent", "covers_true_rate",
+                "covers_true_rate_share", "seconds_mean"});
+  for (const auto& [name, totals] : result.surrogates) csv.writeRow(surrogateRow(result, name));
+  return text.str();
+}
+
+std::string resultsReadme(const SearchBenchOptions& options, const SearchBenchResult& result,
+                          const std::string& command_line) {
+  const auto& s = options.search;
+  std::string text = fmt::format(
+      "# Search benchmark: {}, criterion '{}'\n\nMade by `{}` with vsd-sumo {} (docs/search.md, "
+      "docs/benchmarks.md).\n\n- Searches: surrogates {}, seeds {} .. {}, budget {} (initial {}, rounds of {}, pool "
+      "{}, estimate share {}), {} simulation job(s).\n",
+      s.scenarioFile.string(), s.criterion, command_line, toolVersion(), fmt::join(options.surrogates, ", "),
+      options.firstSeed, options.firstSeed + options.seeds - 1, s.budget, s.initial, s.roundSize, s.pool,
+      s.estimateShare, s.jobs);
+  if (result.trueRate) {
+    const auto& r = *result.trueRate;
+    text += fmt::format(
+        "- True rate: plain Monte Carlo over {} concrete scenarios of seed {} (no search's seed): {} critical, "
+        "P = {} (Wilson 95 %), {} without a verdict. A search's interval covers the true rate when it holds this "
+        "point estimate.\n",
+        r.samples, r.seed, r.critical, report::percentWithInterval(r.estimate, r.low, r.high), r.withoutVerdict);
+  }
+  text += "\n`surrogates.csv`: per surrogate, mean and standard deviation over the seeds; `searches.csv`: every "
+          "search.\n";
+  return text;
+}
+
+}  // namespace
+
+void writeSearchBenchResults(const SearchBenchOptions& options, const SearchBenchResult& result,
+                             const std::string& command_line) {
+  OutputFolder output(options.out);
+  output.stageText("searches.csv", searchesCsv(result));
+  output.stageText("surrogates.csv", surrogatesCsv(result));
+  output.stageText("README.md", resultsReadme(options, result, command_line));
+  nlohmann::json manifest{{"kind", "search-benchmark"},
+                          {"subject", options.subject()},
+                          {"command", command_line},
+                          {"version", toolVersion()},
+                          {"seeds", {{"first", options.firstSeed}, {"count", options.seeds}}},
+                          {"sizes",
+                           {{"budget", options.search.budget},
+                            {"initial", options.search.initial},
+                            {"round", options.search.roundSize},
+                            {"pool", options.search.pool}}}};
+  if (result.trueRate) {
+    const auto& r = *result.trueRate;
+    manifest["true_rate"] = {{"seed", r.seed},         {"samples", r.samples}, {"critical", r.critical},
+                             {"estimate", r.estimate}, {"low", r.low},         {"high", r.high}};
+  }
+  output.commit(manifest);
 }
 
 void writeSearchBenchReport(const SearchBenchOptions& options, const SearchBenchResult& result,

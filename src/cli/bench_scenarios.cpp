@@ -75,8 +75,7 @@ void addReferenceBench(CLI::App& bench, CommandContext& context) {
   CLI::App* reference = bench.add_subcommand(
       "reference", "UN R157's reference driver on the regulation's documented cut-ins and ASAM's cut-in grid");
   reference->add_option("--out", *out, "Output folder")->capture_default_str();
-  reference->add_flag("--allow-dirty", *allow_dirty,
-                      "Write into the repository's results/ even though this binary was built from uncommitted changes");
+  addAllowDirtyFlag(*reference, *allow_dirty);
   reference->callback([out, allow_dirty, &context] {
     context.action = [out, allow_dirty, &context] {
       const auto result = bench::runReferenceBench(*out, *allow_dirty, context.commandLine);

@@ -23,6 +23,29 @@ void printSearch(const std::string& surrogate, std::uint64_t seed, const search:
              summary.surrogateSeconds);
 }
 
+void printTrueRate(const bench::SearchBenchResult& result) {
+  if (!result.trueRate) return;
+  const auto& r = *result.trueRate;
+  fmt::print("  true rate (plain Monte Carlo, {} scenarios, seed {}): {} critical, P = {} ({:.1f} s)\n", r.samples,
+             r.seed, r.critical, report::percentWithInterval(r.estimate, r.low, r.high), r.seconds);
+}
+
+void printCoverage(const bench::SearchBenchResult& result) {
+  if (!result.trueRate) return;
+  fmt::print("  intervals holding the true rate:");
+  for (const auto& [name, totals] : result.surrogates) {
+    std::size_t covers = 0;
+    std::size_t searches = 0;
+    for (const auto& summary : result.searches) {
+      if (summary.surrogate != name) continue;
+      ++searches;
+      covers += bench::coversTrueRate(summary, *result.trueRate) ? 1 : 0;
+    }
+    fmt::print(" {} {}/{}", name, covers, searches);
+  }
+  fmt::print("\n");
+}
+
 void printTotals(const bench::SearchBenchResult& result) {
   const double random_critical = result.randomCritical();
   fmt::print("  mean over seeds:\n  {:<12} {:>9} {:>8} {:>7} {:>11} {:>11} {:>16} {:>9} {:>14} {:>12} {:>12}\n",
@@ -45,7 +68,13 @@ int printSearchBench(const bench::SearchBenchOptions& options, const std::string
              s.scenarioFile.string(), s.criterion, s.budget, s.initial, s.roundSize, s.pool, options.seeds,
              1000.0 * s.egoStepCost, bench::loadAverage());
   const auto result = bench::runSearchBench(options, printSearch);
+  printTrueRate(result);
   printTotals(result);
+  printCoverage(result);
+  if (!options.out.empty()) {
+    bench::writeSearchBenchResults(options, result, command_line);
+    fmt::print("  results: {}\n", options.out.string());
+  }
   if (!options.report.empty()) {
     bench::writeSearchBenchReport(options, result, command_line);
     fmt::print("  report: {}\n", options.report.string());
@@ -78,14 +107,25 @@ void addSearchFlags(CLI::App& command, search::SearchOptions& search) {
 
 void addSearchBench(CLI::App& bench, CommandContext& context) {
   auto options = std::make_shared<bench::SearchBenchOptions>();
-  CLI::App* command = bench.add_subcommand("search", "Surrogates of `vsd-sumo search` side by side (same budget, seeds)");
+  CLI::App* command = bench.add_subcommand("search", "Surrogates of `vsd-sumo search` side by side (same budget, seeds), their rate estimates against the true rate");
   command->add_option("scenario", options->search.scenarioFile, "Logical scenario")
       ->check(CLI::ExistingFile)
       ->capture_default_str();
   command->add_option("--criterion", options->search.criterion, "Criterion")->capture_default_str();
   command->add_option("--surrogates", options->surrogates, "Surrogates to compare")->delimiter(',')->capture_default_str();
   addSearchFlags(*command, options->search);
-  addNumber(command, "--seeds", options->seeds, "Searches per surrogate (seeds 1..N)")->capture_default_str();
+  addNumber(command, "--seeds", options->seeds, "Searches per surrogate")->capture_default_str();
+  addNumber(command, "--first-seed", options->firstSeed, "Seed of the first search (then +1 each)")
+      ->capture_default_str();
+  addNumber(command, "--true-rate-samples", options->trueRateSamples,
+            "Estimate the true rate by plain Monte Carlo over this many scenarios (0: none) and count the searches "
+            "whose interval holds it")
+      ->capture_default_str();
+  addNumber(command, "--true-rate-seed", options->trueRateSeed, "Seed of that Monte Carlo run (no search's seed)")
+      ->capture_default_str();
+  command->add_option("--out", options->out,
+                      "Write searches.csv, surrogates.csv, README.md and manifest.json into this folder");
+  addAllowDirtyFlag(*command, options->allowDirty);
   command->add_option("--report", options->report,
                       "Write an HTML report (learning curves of every search, rate estimates) to this file");
   addNumber(command, "-j,--jobs", options->search.jobs, "Worker processes for the simulations")->capture_default_str();

@@ -52,6 +52,9 @@ void addMergeCommand(CLI::App& app, CommandContext& context);
 void addScenarioCommand(CLI::App& app, CommandContext& context);
 /// --ego-step-cost-ms: extra wall time per Ego step (stored in seconds in `seconds`).
 void addEgoStepCostOption(CLI::App& command, double& seconds);
+/// --allow-dirty: write into the repository's results/ from a build of uncommitted changes
+/// (core/provenance.hpp refuses it otherwise).
+void addAllowDirtyFlag(CLI::App& command, bool& allow);
 /// --duration, --ego, --controller, --controller-map (OpenSCENARIO input), for `run` and `scenario check`.
 void addImportOptions(CLI::App& command, interop::OscImportOptions& import);
 

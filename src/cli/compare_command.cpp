@@ -39,8 +39,7 @@ void addCompareCommand(CLI::App& app, CommandContext& context) {
   addNumber(command, "--confidence", options->confidence,
                       "A criterion's verdict is confident when this share of the drawn futures agrees")
       ->capture_default_str();
-  command->add_flag("--allow-dirty", options->allowDirty,
-                    "Write into the repository's results/ even though this binary was built from uncommitted changes");
+  addAllowDirtyFlag(*command, options->allowDirty);
   command->add_option("--metrics", options->metrics, "Datasets: metrics to compare, e.g. a_min,d_min")->delimiter(',');
   command->add_option("--criterion", options->criteria,
                       "Pass/fail criterion (repeatable), added to a scenario's own: a comparison of metrics such as "

@@ -31,8 +31,7 @@ void addDeviationsCommand(CLI::App& app, CommandContext& context) {
   addNumber(command, "--future-seed", options->seed, "Seed of the sampled futures")->capture_default_str();
   addNumber(command, "--drawn", options->drawn, "Flagged scenes drawn in the report, most surprising first")
       ->capture_default_str();
-  command->add_flag("--allow-dirty", options->allowDirty,
-                    "Write into the repository's results/ even though this binary was built from uncommitted changes");
+  addAllowDirtyFlag(*command, options->allowDirty);
   command->callback([=, &context] {
     context.action = [=, &context] {
       options->commandLine = context.commandLine;

@@ -21,8 +21,7 @@ void addExperimentCommand(CLI::App& app, CommandContext& context) {
   command->add_flag("--force", options->force,
                     "Replace the results folder of another experiment (docs/output-policy.md); a re-run of the same "
                     "experiment resumes from its cache without it");
-  command->add_flag("--allow-dirty", options->allowDirty,
-                    "Write into the repository's results/ even though this binary was built from uncommitted changes");
+  addAllowDirtyFlag(*command, options->allowDirty);
   command->callback([=, &context] {
     context.action = [=, &context] {
       options->commandLine = context.commandLine;

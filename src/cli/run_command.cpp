@@ -14,6 +14,11 @@
 
 namespace vsd::cli {
 
+void addAllowDirtyFlag(CLI::App& command, bool& allow) {
+  command.add_flag("--allow-dirty", allow,
+                   "Write into the repository's results/ even though this binary was built from uncommitted changes");
+}
+
 void addEgoStepCostOption(CLI::App& command, double& seconds) {
   command
       .add_option_function<double>(

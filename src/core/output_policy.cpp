@@ -298,6 +298,13 @@ const OutputKind& deviationsFolder() {
   return kind;
 }
 
+const OutputKind& searchBenchmarkFolder() {
+  static const OutputKind kind =
+      folderKind("search benchmark folder", {"searches.csv", "surrogates.csv", "README.md"},
+                 byManifest([](const json& m) { return stringField(m, "kind") == "search-benchmark"; }, field("subject")));
+  return kind;
+}
+
 const OutputKind& experimentFolder() {
   static const OutputKind kind = folderKind(
       "experiment results folder", {"ade.csv", "ade.md", "mae.csv", "mae.md", "findings.md"},
@@ -363,7 +370,7 @@ const OutputKind& sceneDrawing() {
 
 const std::vector<const OutputKind*>& all() {
   static const std::vector<const OutputKind*> kinds = {
-      &runFolder(),   &searchFolder(), &comparisonFolder(), &deviationsFolder(), &experimentFolder(),
+      &runFolder(),   &searchFolder(), &comparisonFolder(), &deviationsFolder(), &searchBenchmarkFolder(), &experimentFolder(),
       &scenarioExportFolder(), &datasetFile(), &predictionsFile(), &modelFile(), &distributionFile(), &sceneDrawing()};
   return kinds;
 }

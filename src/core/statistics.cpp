@@ -42,6 +42,21 @@ std::size_t upperMedianIndex(const std::vector<double>& values) {
   return *middle;
 }
 
+double sampleMean(const std::vector<double>& values) {
+  if (values.empty()) throw Error("internal: the mean of no values");
+  double sum = 0.0;
+  for (const double value : values) sum += value;
+  return sum / static_cast<double>(values.size());
+}
+
+double sampleStd(const std::vector<double>& values) {
+  if (values.size() < 2) return 0.0;
+  const double average = sampleMean(values);
+  double squares = 0.0;
+  for (const double value : values) squares += (value - average) * (value - average);
+  return std::sqrt(squares / static_cast<double>(values.size() - 1));
+}
+
 ProportionInterval wilsonInterval(double share, std::size_t trials, double z) {
   if (trials == 0 || !(share >= 0.0 && share <= 1.0)) {
     throw Error("internal: a proportion interval needs trials and a share in 0..1");

@@ -76,21 +76,6 @@ struct TrainedRun {
   json training;  ///< training.json
 };
 
-double meanOf(const std::vector<double>& values) {
-  double sum = 0.0;
-  for (const double value : values) sum += value;
-  return mean(sum, values.size());
-}
-
-/// Sample standard deviation (n - 1); 0 for fewer than two values.
-double sampleStd(const std::vector<double>& values) {
-  if (values.size() < 2) return 0.0;
-  const double average = meanOf(values);
-  double squares = 0.0;
-  for (const double value : values) squares += (value - average) * (value - average);
-  return std::sqrt(squares / static_cast<double>(values.size() - 1));
-}
-
 json readJson(const fs::path& path) {
   try {
     return json::parse(readTextFile(path));
@@ -513,8 +498,8 @@ class ExperimentRunner {
         ade.push_back(errors.at(source.label).at("ade").get<double>());
         fde.push_back(errors.at(source.label).at("fde").get<double>());
       }
-      ade_row.ade[source.label] = meanOf(ade);
-      ade_row.fde[source.label] = meanOf(fde);
+      ade_row.ade[source.label] = sampleMean(ade);
+      ade_row.fde[source.label] = sampleMean(fde);
       if (ade.size() > 1) ade_row.adeStd[source.label] = sampleStd(ade);
     }
     bool first = true;

@@ -9,6 +9,7 @@
 #include <map>
 #include <numeric>
 #include <set>
+#include <tuple>
 
 #include "search_internal.hpp"
 #include "vsd/core/error.hpp"
@@ -17,6 +18,7 @@
 #include "vsd/core/log.hpp"
 #include "vsd/core/progress.hpp"
 #include "vsd/core/random.hpp"
+#include "vsd/core/statistics.hpp"
 #include "vsd/metrics/metrics.hpp"
 #include "vsd/pipeline/outcome_files.hpp"
 #include "vsd/pipeline/run.hpp"
@@ -95,13 +97,9 @@ void SearchOptions::validate() const {
 
 std::pair<double, double> wilsonInterval(std::uint64_t successes, std::uint64_t trials) {
   if (trials == 0) return {0.0, 1.0};
-  constexpr double z = 1.959963984540054;
-  const double n = static_cast<double>(trials);
-  const double p = static_cast<double>(successes) / n;
-  const double denominator = 1.0 + z * z / n;
-  const double centre = (p + z * z / (2.0 * n)) / denominator;
-  const double half = z * std::sqrt(p * (1.0 - p) / n + z * z / (4.0 * n * n)) / denominator;
-  return {std::max(0.0, centre - half), std::min(1.0, centre + half)};
+  const auto interval =
+      vsd::wilsonInterval(static_cast<double>(successes) / static_cast<double>(trials), static_cast<std::size_t>(trials));
+  return {interval.low, interval.high};
 }
 
 namespace detail {
@@ -492,6 +490,32 @@ SearchSummary runSearch(const SearchOptions& options) {
   summary.seconds = secondsSince(start);
   summary.outputs = detail::commitSearchFolder(context, folder, summary, started);
   return summary;
+}
+
+MonteCarloRate monteCarloRate(SearchOptions options, std::uint64_t seed, std::uint64_t samples) {
+  if (samples < 1) throw ConfigError::field("command line", "--true-rate-samples", "0", ">= 1");
+  const auto start = std::chrono::steady_clock::now();
+  if (options.outputDir.empty()) options.outputDir = ".";  // validated, never written
+  const SearchContext context = makeContext(options);
+  pipeline::RunOptions run;
+  run.samples = samples;
+  run.seed = seed;
+  run.jobs = options.jobs;
+  run.egoStepCost = options.egoStepCost;
+  run.reference = options.reference;
+  run.writeFiles = false;
+  MonteCarloRate rate;
+  rate.seed = seed;
+  rate.samples = samples;
+  pipeline::runScenarios(context.logical, run, [&](const pipeline::ScenarioOutcome& outcome) {
+    const auto verdict = outcome.ok() ? context.criterion->verdict(executionValues(context, outcome)) : std::nullopt;
+    if (!verdict) ++rate.withoutVerdict;
+    if (verdict.value_or(false)) ++rate.critical;
+  });
+  rate.estimate = static_cast<double>(rate.critical) / static_cast<double>(samples);
+  std::tie(rate.low, rate.high) = wilsonInterval(rate.critical, samples);
+  rate.seconds = secondsSince(start);
+  return rate;
 }
 
 std::string SearchSummary::report() const {

@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 #include "vsd/core/error.hpp"
 
 using namespace vsd;
@@ -49,4 +51,13 @@ TEST(Statistics, WilsonIntervalMatchesItsTextbookValuesAndStaysInsideZeroToOne) 
   EXPECT_LT(wilsonInterval(0.9, 10000).high - wilsonInterval(0.9, 10000).low, ninety.high - ninety.low);
   EXPECT_THROW(wilsonInterval(0.5, 0), Error);
   EXPECT_THROW(wilsonInterval(1.5, 10), Error);
+}
+
+TEST(Statistics, MeanAndSampleStandardDeviationOverSeeds) {
+  // 2, 4, 4, 4, 5, 5, 7, 9: mean 5, sum of squares 32, sample std sqrt(32 / 7).
+  const std::vector<double> values = {2, 4, 4, 4, 5, 5, 7, 9};
+  EXPECT_DOUBLE_EQ(sampleMean(values), 5.0);
+  EXPECT_DOUBLE_EQ(sampleStd(values), std::sqrt(32.0 / 7.0));
+  EXPECT_DOUBLE_EQ(sampleStd({3.0}), 0.0);  // one seed: no spread
+  EXPECT_THROW(sampleMean({}), Error);
 }

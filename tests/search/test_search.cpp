@@ -1,12 +1,14 @@
 // `vsd-sumo search`: criteria, the surrogate registry, option checks, resuming,
 // determinism and that a guiding surrogate beats Monte Carlo on a small budget.
 
+#include <fmt/format.h>
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <map>
 #include <numeric>
 #include <nlohmann/json.hpp>
 
@@ -536,6 +538,75 @@ TEST(SearchCli, BadFlagsAreOneLineWithExitCodeTwoAndNoFolder) {
     EXPECT_EQ(std::count(result.output.begin(), result.output.end(), '\n'), 1) << result.output;
     EXPECT_FALSE(fs::exists(out));
   }
+}
+
+// `bench search --true-rate-samples --out` (docs/benchmarks.md, results/search): the true
+// rate is `run`'s share of critical scenarios for that seed, every search's interval is
+// checked against it, and the results folder follows the output policy.
+TEST(SearchBenchCli, TheTrueRateIsRunsShareAndEachIntervalIsCheckedAgainstIt) {
+  TemporaryDirectory work("vsd-test-search-bench");
+  const auto out = work.path() / "bench";
+  const std::string scenario = test::scenarioFile("acc_lk.yaml").string();
+  const std::vector<std::string> bench = {test::vsdSumo().string(), "-q", "bench", "search", scenario,
+                                          "--criterion", "d_min < 5", "--budget", "120", "--initial", "40",
+                                          "--round", "40", "--pool", "400", "--seeds", "2", "--first-seed", "21",
+                                          "--true-rate-samples", "400", "--true-rate-seed", "77"};
+  auto argv = bench;
+  argv.insert(argv.end(), {"--out", out.string()});
+  const auto result = test::run(argv, work.path());
+  ASSERT_EQ(result.exitCode, 0) << result.output;
+
+  // The same 400 scenarios as `run --seed 77`: the same critical count.
+  const auto run_out = work.path() / "run";
+  ASSERT_EQ(test::run({test::vsdSumo().string(), "-q", "run", scenario, "--samples", "400", "--seed", "77", "--out",
+                       run_out.string()},
+                      work.path())
+                .exitCode,
+            0);
+  const auto concrete = CsvTable::read(run_out / "concrete.csv");
+  std::uint64_t critical = 0;
+  for (std::size_t r = 0; r < concrete.rows(); ++r) {
+    critical += concrete.number(r, concrete.column("d_min")) < 5.0 ? 1 : 0;
+  }
+  const auto manifest = nlohmann::json::parse(readTextFile(out / "manifest.json"));
+  EXPECT_EQ(manifest.at("true_rate").at("critical").get<std::uint64_t>(), critical);
+  EXPECT_GT(critical, 0u);
+  const double rate = 100.0 * manifest.at("true_rate").at("estimate").get<double>();
+
+  // Every search's row: covered exactly when its interval holds the true rate; the summary counts them.
+  const auto searches = CsvTable::read(out / "searches.csv");
+  ASSERT_EQ(searches.rows(), 4u);  // random and extra-trees, seeds 21 and 22
+  std::map<std::string, int> covered;
+  for (std::size_t r = 0; r < searches.rows(); ++r) {
+    const double low = std::stod(searches.cell(r, searches.column("low_percent")));
+    const double high = std::stod(searches.cell(r, searches.column("high_percent")));
+    const bool covers = low <= rate && rate <= high;
+    EXPECT_EQ(searches.cell(r, searches.column("covers_true_rate")), covers ? "1" : "0") << r;
+    EXPECT_THAT(searches.cell(r, searches.column("seed")), testing::AnyOf("21", "22"));
+    covered[searches.cell(r, searches.column("surrogate"))] += covers ? 1 : 0;
+  }
+  const auto surrogates = CsvTable::read(out / "surrogates.csv");
+  ASSERT_EQ(surrogates.rows(), 2u);
+  for (std::size_t r = 0; r < surrogates.rows(); ++r) {
+    const auto name = surrogates.cell(r, surrogates.column("surrogate"));
+    EXPECT_EQ(surrogates.cell(r, surrogates.column("covers_true_rate")), fmt::format("{}/2", covered[name])) << name;
+  }
+
+  // A re-run replaces its own folder; another kind's folder and a true-rate seed a search uses are refused.
+  EXPECT_EQ(test::run(argv, work.path()).exitCode, 0);
+  auto onto_run = bench;
+  onto_run.insert(onto_run.end(), {"--out", run_out.string()});
+  const auto refused = test::run(onto_run, work.path());
+  EXPECT_NE(refused.exitCode, 0);
+  EXPECT_THAT(refused.output, HasSubstr("run folder"));
+  EXPECT_TRUE(fs::exists(run_out / "concrete.csv"));
+  auto same_seed = bench;
+  same_seed.insert(same_seed.end(), {"--true-rate-seed", "22", "--out", (work.path() / "other").string()});
+  const auto clash = test::run(same_seed, work.path());
+  EXPECT_NE(clash.exitCode, 0);
+  EXPECT_THAT(clash.output, HasSubstr("--true-rate-seed"));
+  EXPECT_EQ(std::count(clash.output.begin(), clash.output.end(), '\n'), 1) << clash.output;
+  EXPECT_FALSE(fs::exists(work.path() / "other"));
 }
 
 // Numeric flags are checked where they enter (src/cli/flags.hpp): no wrap-around of a

@@ -50,6 +50,7 @@ const OutputKind& runFolder();          ///< run, merge: concrete.csv, traces.h5
 const OutputKind& searchFolder();       ///< search; subject: "<functional scenario>: <criterion as given>"
 const OutputKind& comparisonFolder();   ///< compare; subject: "<scenario or data> with <model>"
 const OutputKind& deviationsFolder();   ///< deviations; subject: "<data> with <model>"
+const OutputKind& searchBenchmarkFolder();  ///< bench search --out; subject: "<scenario file>: <criterion>"
 const OutputKind& experimentFolder();   ///< experiment; subject: the spec's name
 const OutputKind& scenarioExportFolder();  ///< scenario export; subject: functional scenario
 const OutputKind& datasetFile();        ///< export; HDF5 vsd-dataset/*; subject: its labels

@@ -1,5 +1,6 @@
 #pragma once
-// Medians (the two definitions the project uses) and the interval of a proportion, in one place.
+// Medians (the two definitions the project uses), mean and spread over seeds, and the interval of a
+// proportion, in one place.
 //
 // median() is the textbook one (benchmarks' repeated timings). upperMedian() is the element
 // at position n / 2 of the sorted values, for an even count the upper of the middle two: it
@@ -21,6 +22,12 @@ double upperMedian(std::vector<double> values);
 /// The index of upperMedian(values) in `values`; among equal values the smallest index.
 /// Throws Error for no values.
 std::size_t upperMedianIndex(const std::vector<double>& values);
+
+/// The arithmetic mean. Throws Error for no values.
+double sampleMean(const std::vector<double>& values);
+
+/// The sample standard deviation (n - 1 in the denominator); 0 for fewer than two values.
+double sampleStd(const std::vector<double>& values);
 
 /// A range of a proportion (0..1).
 struct ProportionInterval {

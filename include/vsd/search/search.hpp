@@ -151,6 +151,24 @@ struct SearchSummary {
 /// simulations all fail (the checkpoint keeps every finished round).
 SearchSummary runSearch(const SearchOptions& options);
 
+/// P(criterion) by plain Monte Carlo over `samples` concrete scenarios drawn with `seed`
+/// (sample indices 0 .. samples - 1 of the logical scenario's stream, as `run --seed`),
+/// simulated and judged as a search with `options` judges its executions (its criterion,
+/// its --reference): the reference a search's rate estimate is checked against
+/// (`bench search --true-rate-samples`). Runs without a verdict count as not critical, as in
+/// the search's estimate. options.outputDir is not used (nothing is written).
+struct MonteCarloRate {
+  std::uint64_t seed = 0;
+  std::uint64_t samples = 0;
+  std::uint64_t critical = 0;
+  std::uint64_t withoutVerdict = 0;  ///< failed simulations or metrics not computable
+  double estimate = 0.0;             ///< critical / samples
+  double low = 0.0;                  ///< Wilson 95 % interval
+  double high = 0.0;
+  double seconds = 0.0;
+};
+MonteCarloRate monteCarloRate(SearchOptions options, std::uint64_t seed, std::uint64_t samples);
+
 /// Removes a search folder's search (search --force, after the output policy recognised
 /// the folder): the files its manifest lists, the manifest, the checkpoint and the round
 /// files, so that the next search there starts afresh. Files no manifest lists stay.
