@@ -199,6 +199,13 @@ std::string resultsReadme(const SearchBenchOptions& options, const SearchBenchRe
       s.scenarioFile.string(), s.criterion, command_line, toolVersion(), fmt::join(options.surrogates, ", "),
       options.firstSeed, options.firstSeed + options.seeds - 1, s.budget, s.initial, s.roundSize, s.pool,
       s.estimateShare, s.jobs);
+  if (!s.priors.empty()) {
+    std::vector<std::string> priors;
+    for (const auto& prior : s.priors) priors.push_back(prior.string());
+    text += fmt::format("- Priors (vectornet): {}; {} steps per round, {} futures per candidate.\n",
+                        fmt::join(priors, ", "), s.vectornetSteps, s.futureSamples);
+  }
+  text += fmt::format("- libtorch threads per search: {}.\n", s.threads);
   if (result.trueRate) {
     const auto& r = *result.trueRate;
     text += fmt::format(

@@ -129,6 +129,7 @@ void addSearchBench(CLI::App& bench, CommandContext& context) {
   command->add_option("--report", options->report,
                       "Write an HTML report (learning curves of every search, rate estimates) to this file");
   addNumber(command, "-j,--jobs", options->search.jobs, "Worker processes for the simulations")->capture_default_str();
+  addNumber(command, "--threads", options->search.threads, "libtorch threads (bnn, vectornet)")->capture_default_str();
   addEgoStepCostOption(*command, options->search.egoStepCost);
   command->callback([options, &context] {
     context.action = [options, &context] { return printSearchBench(*options, context.commandLine); };
