@@ -59,6 +59,7 @@ model::VectorNetConfig resolvedConfig(const ModelBenchOptions& options) {
     config.decoderOptions = given;
   }
   if (!options.frame.empty()) config.frame = options.frame;
+  if (options.laneSmoothing) config.laneSmoothing = *options.laneSmoothing;
   config.validate();
   return config;
 }
@@ -77,6 +78,7 @@ ModelBench::ModelBench(ModelBenchOptions options) : options_(std::move(options))
   work_->config = resolvedConfig(options_);
   work_->suffix = fmt::format("_{}_{}", work_->config.decoder, work_->config.frame);
   for (const auto& [name, value] : work_->config.decoderOptions) work_->suffix += fmt::format("_{}={}", name, value);
+  if (options_.laneSmoothing) work_->suffix += fmt::format("_smoothing={}", *options_.laneSmoothing);
   work_->suffix += ".pt";
 }
 

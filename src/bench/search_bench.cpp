@@ -130,16 +130,28 @@ namespace {
 
 std::string percent(double share) { return formatNumber(100.0 * share); }
 
+/// Critical executions found by the end of each round, "3/8/15/...": the learning curve.
+std::string criticalByRound(const search::SearchSummary& summary) {
+  std::vector<std::uint64_t> found;
+  for (const auto& execution : summary.executionsList) {
+    if (execution.round >= found.size()) found.resize(execution.round + 1, 0);
+    if (execution.verdict == 1) ++found[execution.round];
+  }
+  for (std::size_t r = 1; r < found.size(); ++r) found[r] += found[r - 1];
+  return fmt::format("{}", fmt::join(found, "/"));
+}
+
 std::string searchesCsv(const SearchBenchResult& result) {
   std::ostringstream text;
   CsvWriter csv(text);
   csv.writeRow({"surrogate", "seed", "executions", "critical", "cells", "method", "estimate_percent", "low_percent",
-                "high_percent", "covers_true_rate", "seconds", "surrogate_seconds", "simulation_seconds"});
+                "high_percent", "covers_true_rate", "critical_by_round", "seconds", "surrogate_seconds",
+                "simulation_seconds"});
   for (const auto& s : result.searches) {
     const auto& e = s.estimate;
     csv.writeRow({s.surrogate, std::to_string(s.seed), std::to_string(s.executions), std::to_string(s.critical),
                   std::to_string(s.coverageCells), e.method, percent(e.estimate), percent(e.low), percent(e.high),
-                  result.trueRate ? std::to_string(coversTrueRate(s, *result.trueRate) ? 1 : 0) : "",
+                  result.trueRate ? std::to_string(coversTrueRate(s, *result.trueRate) ? 1 : 0) : "", criticalByRound(s),
                   formatNumber(s.seconds), formatNumber(s.surrogateSeconds), formatNumber(s.simulationSeconds)});
   }
   return text.str();

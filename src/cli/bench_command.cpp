@@ -164,8 +164,9 @@ int printModelBench(const bench::ModelBenchOptions& model_options) {
   const auto& config = bench.modelConfig();
   std::vector<std::string> decoder_options;
   for (const auto& [name, value] : config.decoderOptions) decoder_options.push_back(fmt::format("{}={}", name, value));
-  fmt::print("  preset {}: decoder {}{}{}, frame {}, {} optimizer steps\n", options.preset, config.decoder,
-             decoder_options.empty() ? "" : " ", fmt::join(decoder_options, " "), config.frame, options.steps);
+  fmt::print("  preset {}: decoder {}{}{}, frame {} (lane smoothing {} m), {} optimizer steps\n", options.preset,
+             config.decoder, decoder_options.empty() ? "" : " ", fmt::join(decoder_options, " "), config.frame,
+             config.laneSmoothing, options.steps);
   const auto all = bench.trainAll();
   printMix(all);
   fmt::print("  metrics of the all-three model's predictions vs. fresh SUMO runs of the validation scenarios (as `vsd-sumo "
@@ -265,6 +266,9 @@ void addModelBench(CLI::App& bench, CommandContext& context) {
                      "Continue trainings from <model>.last where it exists; reuse finished models");
   modeling->add_flag("--row4", options->row4, "Also train on acc + lk only and measure on acc_lk (paper row 4)");
   modeling->add_option("--frame", options->frame, "Another model frame than the preset's (ego, lane)");
+  modeling->add_option_function<double>(
+      "--lane-smoothing", [options](double metres) { options->laneSmoothing = metres; },
+      "m: half-width of the lane frame's smoothing of its reference line (default: train's)");
   addNumber(modeling, "--futures", options->draws, "Sampled futures per scene in the inference benchmark")
       ->capture_default_str();
   modeling->callback([options, &context] {

@@ -584,6 +584,10 @@ TEST(SearchBenchCli, TheTrueRateIsRunsShareAndEachIntervalIsCheckedAgainstIt) {
     EXPECT_EQ(searches.cell(r, searches.column("covers_true_rate")), covers ? "1" : "0") << r;
     EXPECT_THAT(searches.cell(r, searches.column("seed")), testing::AnyOf("21", "22"));
     covered[searches.cell(r, searches.column("surrogate"))] += covers ? 1 : 0;
+    // The learning curve: one cumulative count per round (initial 40, then two rounds of 40), ending at the total.
+    const auto curve = searches.cell(r, searches.column("critical_by_round"));
+    EXPECT_EQ(std::count(curve.begin(), curve.end(), '/'), 2) << curve;
+    EXPECT_EQ(curve.substr(curve.rfind('/') + 1), searches.cell(r, searches.column("critical"))) << curve;
   }
   const auto surrogates = CsvTable::read(out / "surrogates.csv");
   ASSERT_EQ(surrogates.rows(), 2u);

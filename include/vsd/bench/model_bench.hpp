@@ -38,6 +38,8 @@ struct ModelBenchOptions {
   std::string decoder;                      ///< empty: the preset's; another decoder drops the preset's options
   std::vector<std::string> decoderOptions;  ///< name=value, on top of the preset's
   std::string frame;                        ///< empty: the preset's
+  /// m, the lane frame's smoothing half-width (VectorNetConfig::laneSmoothing); unset: its default.
+  std::optional<double> laneSmoothing;
   int draws = 32;              ///< sampled futures per scene for the inference and interval benchmarks
   Tool tool;
 };
