@@ -35,7 +35,9 @@ import re
 import subprocess
 import sys
 
-MARKER = re.compile(r"<!-- table (?P<args>.*?)-->\n(?P<body>.*?)<!-- /table -->", re.S)
+# A marker's attributes may span lines but never hold "-->": a mention of the marker in running
+# text ("`<!-- table from=... -->` and") is not one and must not swallow the next real marker.
+MARKER = re.compile(r"<!-- table (?P<args>(?:(?!-->).)*?)-->\n(?P<body>.*?)<!-- /table -->", re.S)
 ATTRIBUTE = re.compile(r'(\w+)="([^"]*)"')
 KNOWN_ATTRIBUTES = {"from", "section", "columns", "where", "code", "stale"}
 

@@ -79,6 +79,19 @@ class DocTables(unittest.TestCase):
         self.assertEqual(result.returncode, 1)
         self.assertIn("docs/results.md:3: the table differs from what results/exp/ade.md generates", result.stderr)
 
+    def test_a_marker_mentioned_in_running_text_is_not_one(self):
+        # The explanation of the markers quotes one inline (with a stale="..." in the same
+        # paragraph); it must not swallow the real marker below it and its attributes.
+        self.doc.write_text('A table sits between `<!-- table from="results/..." -->` and `<!-- /table -->`, '
+                            'unless stale="why".\n\n<!-- table from="results/exp/ade.md" section="## model b" '
+                            'columns="mix,acc" code="model" -->\n<!-- /table -->\n')
+        (self.root / "README.md").write_text("# readme\n")
+        self.assertEqual(self.run_tool("--write").returncode, 0)
+        self.assertEqual(self.run_tool("--check").returncode, 0)
+        text = self.doc.read_text()
+        self.assertTrue(text.startswith("A table sits between `<!-- table from=\"results/...\" -->` and"))
+        self.assertIn("| mix | acc |\n|---|---|\n| acc 2000 | 0.15 |\n<!-- /table -->", text)
+
     def test_csv_columns_are_formatted_and_filtered(self):
         self.write_doc('from="results/exp/ade.csv" columns="row,ade_m:.2f" where="label=acc" code="model"')
         self.assertEqual(self.run_tool("--write").returncode, 0)
