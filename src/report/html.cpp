@@ -105,7 +105,10 @@ std::string timingText(const Comparison& comparison) {
     if (stage == "simulate") simulate = seconds;
   }
   if (predict > 0.0 && simulate > 0.0) {
-    text += fmt::format(" &mdash; predicting took {:.0f}&times; less time than simulating", simulate / predict);
+    // The ratio with a decimal and the slower stage named, so 0.45 s against 0.65 s does not read "1x less".
+    text += simulate >= predict
+                ? fmt::format(" &mdash; simulating took {:.1f}&times; as long as predicting", simulate / predict)
+                : fmt::format(" &mdash; predicting took {:.1f}&times; as long as simulating", predict / simulate);
   }
   return text;
 }

@@ -184,6 +184,12 @@ TEST(ReportHtml, SelfContainedWithTheSummaryFirst) {
   EXPECT_NE(html.find("caption of sample 17"), std::string::npos);
   EXPECT_NE(html.find("SUMO removed vehicle &#39;co&#39;"), std::string::npos);  // the failed scenario is listed
   EXPECT_NE(html.find("models/m.pt"), std::string::npos);
+  EXPECT_NE(html.find("simulating took 75.0&times; as long as predicting"), std::string::npos);  // 1.5 s / 0.02 s
+  auto slow_model = c;
+  slow_model.timings = {{"predict", 0.9}, {"simulate", 0.6}};
+  EXPECT_NE(renderHtmlReport(slow_model, computeStatistics(slow_model), {}).find(
+                "predicting took 1.5&times; as long as simulating"),
+            std::string::npos);
   EXPECT_NE(html.find("the model flags 7 of 8 critical scenarios (1 missed, 1 false alarm)"), std::string::npos);
   // one scatter and one error histogram per metric, ADE and FDE histograms
   std::size_t svgs = 0;
