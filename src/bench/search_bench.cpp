@@ -79,6 +79,9 @@ search::SearchOptions SearchBenchOptions::defaultSearch() {
 
 void SearchBenchOptions::validate() const {
   if (seeds < 1 || seeds > 1000) throw ConfigError::field("command line", "--seeds", std::to_string(seeds), "1 .. 1000");
+  if (firstSeed > (std::uint64_t{1} << 62)) {  // firstSeed + seeds must not wrap around
+    throw ConfigError::field("command line", "--first-seed", std::to_string(firstSeed), "0 .. 2^62");
+  }
   if (trueRateSamples > 10'000'000) {
     throw ConfigError::field("command line", "--true-rate-samples", std::to_string(trueRateSamples), "0 .. 10000000");
   }
@@ -126,6 +129,13 @@ bool coversTrueRate(const search::SearchSummary& summary, const search::MonteCar
   return summary.estimate.low <= rate.estimate && rate.estimate <= summary.estimate.high;
 }
 
+std::optional<std::size_t> seedsCoveringTrueRate(const SearchBenchResult& result, const std::string& surrogate) {
+  if (!result.trueRate) return std::nullopt;
+  return static_cast<std::size_t>(std::count_if(result.searches.begin(), result.searches.end(), [&](const auto& s) {
+    return s.surrogate == surrogate && coversTrueRate(s, *result.trueRate);
+  }));
+}
+
 namespace {
 
 std::string percent(double share) { return formatNumber(100.0 * share); }
@@ -167,37 +177,31 @@ std::vector<double> valuesOf(const SearchBenchResult& result, const std::string&
   return values;
 }
 
-std::vector<std::string> surrogateRow(const SearchBenchResult& result, const std::string& name) {
+/// One row of surrogates.csv: the means come from the surrogate's totals, the spreads from its searches.
+std::vector<std::string> surrogateRow(const SearchBenchResult& result, const std::string& name,
+                                      const SurrogateTotals& t, std::uint64_t seeds) {
   const auto critical = valuesOf(result, name, [](const auto& s) { return static_cast<double>(s.critical); });
-  const auto cells = valuesOf(result, name, [](const auto& s) { return static_cast<double>(s.coverageCells); });
   const auto estimate = valuesOf(result, name, [](const auto& s) { return 100.0 * s.estimate.estimate; });
-  const auto width = valuesOf(result, name, [](const auto& s) { return 100.0 * (s.estimate.high - s.estimate.low); });
-  const auto seconds = valuesOf(result, name, [](const auto& s) { return s.seconds; });
   const double random = result.randomCritical();
   std::string covered;
   std::string covered_share;
-  if (result.trueRate) {
-    const auto covers =
-        valuesOf(result, name, [&](const auto& s) { return coversTrueRate(s, *result.trueRate) ? 1.0 : 0.0; });
-    const double k = sampleMean(covers) * static_cast<double>(covers.size());
-    covered = fmt::format("{:.0f}/{}", k, covers.size());
-    covered_share = formatNumber(k / static_cast<double>(covers.size()));
+  if (const auto k = seedsCoveringTrueRate(result, name)) {
+    covered = fmt::format("{}/{}", *k, seeds);
+    covered_share = formatNumber(static_cast<double>(*k) / static_cast<double>(seeds));
   }
-  return {name, std::to_string(critical.size()), fmt::format("{:.1f}", sampleMean(critical)),
-          fmt::format("{:.1f}", sampleStd(critical)),
-          random > 0 ? fmt::format("{:.2f}", sampleMean(critical) / random) : "",
-          fmt::format("{:.1f}", sampleMean(cells)), fmt::format("{:.4f}", sampleMean(estimate)),
-          fmt::format("{:.4f}", sampleStd(estimate)), fmt::format("{:.4f}", sampleMean(width)), covered, covered_share,
-          fmt::format("{:.1f}", sampleMean(seconds))};
+  return {name, std::to_string(seeds), fmt::format("{:.1f}", t.critical), fmt::format("{:.1f}", sampleStd(critical)),
+          random > 0 ? fmt::format("{:.2f}", t.critical / random) : "", fmt::format("{:.1f}", t.coverage),
+          fmt::format("{:.4f}", 100.0 * t.estimate), fmt::format("{:.4f}", sampleStd(estimate)),
+          fmt::format("{:.4f}", 100.0 * t.width), covered, covered_share, fmt::format("{:.1f}", t.seconds)};
 }
 
-std::string surrogatesCsv(const SearchBenchResult& result) {
+std::string surrogatesCsv(const SearchBenchResult& result, std::uint64_t seeds) {
   std::ostringstream text;
   CsvWriter csv(text);
   csv.writeRow({"surrogate", "seeds", "critical_mean", "critical_std", "x_random", "cells_mean",
                 "estimate_mean_percent", "estimate_std_percent", "interval_width_mean_percent", "covers_true_rate",
                 "covers_true_rate_share", "seconds_mean"});
-  for (const auto& [name, totals] : result.surrogates) csv.writeRow(surrogateRow(result, name));
+  for (const auto& [name, totals] : result.surrogates) csv.writeRow(surrogateRow(result, name, totals, seeds));
   return text.str();
 }
 
@@ -237,7 +241,7 @@ void writeSearchBenchResults(const SearchBenchOptions& options, const SearchBenc
                              const std::string& command_line) {
   OutputFolder output(options.out);
   output.stageText("searches.csv", searchesCsv(result));
-  output.stageText("surrogates.csv", surrogatesCsv(result));
+  output.stageText("surrogates.csv", surrogatesCsv(result, options.seeds));
   output.stageText("README.md", resultsReadme(options, result, command_line));
   nlohmann::json manifest{{"kind", "search-benchmark"},
                           {"subject", options.subject()},

@@ -30,18 +30,11 @@ void printTrueRate(const bench::SearchBenchResult& result) {
              r.seed, r.critical, report::percentWithInterval(r.estimate, r.low, r.high), r.seconds);
 }
 
-void printCoverage(const bench::SearchBenchResult& result) {
+void printCoverage(const bench::SearchBenchOptions& options, const bench::SearchBenchResult& result) {
   if (!result.trueRate) return;
   fmt::print("  intervals holding the true rate:");
   for (const auto& [name, totals] : result.surrogates) {
-    std::size_t covers = 0;
-    std::size_t searches = 0;
-    for (const auto& summary : result.searches) {
-      if (summary.surrogate != name) continue;
-      ++searches;
-      covers += bench::coversTrueRate(summary, *result.trueRate) ? 1 : 0;
-    }
-    fmt::print(" {} {}/{}", name, covers, searches);
+    fmt::print(" {} {}/{}", name, bench::seedsCoveringTrueRate(result, name).value_or(0), options.seeds);
   }
   fmt::print("\n");
 }
@@ -70,7 +63,7 @@ int printSearchBench(const bench::SearchBenchOptions& options, const std::string
   const auto result = bench::runSearchBench(options, printSearch);
   printTrueRate(result);
   printTotals(result);
-  printCoverage(result);
+  printCoverage(options, result);
   if (!options.out.empty()) {
     bench::writeSearchBenchResults(options, result, command_line);
     fmt::print("  results: {}\n", options.out.string());

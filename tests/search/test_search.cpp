@@ -637,6 +637,7 @@ TEST(SearchCli, NumbersFromFlagsAreCheckedWhereTheyEnter) {
        "--diversity: got 'nan', expected a finite decimal number"},
       {{"bench", "search", scenario, "--budget", "-5"}, "--budget: got '-5', expected a whole number"},
       {{"bench", "search", scenario, "--seeds", "0"}, "--seeds"},
+      {{"bench", "search", scenario, "--first-seed", "18446744073709551615"}, "--first-seed"},  // would wrap around
   };
   for (const auto& [flags, expected] : cases) {
     std::vector<std::string> argv = {test::vsdSumo().string(), "-q"};

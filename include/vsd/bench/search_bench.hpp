@@ -72,6 +72,9 @@ SearchBenchResult runSearchBench(const SearchBenchOptions& options, const OnSear
 /// True if the search's 95 % interval holds the true rate's point estimate.
 bool coversTrueRate(const search::SearchSummary& summary, const search::MonteCarloRate& rate);
 
+/// Searches of `surrogate` whose interval holds the true rate; nullopt without a true rate.
+std::optional<std::size_t> seedsCoveringTrueRate(const SearchBenchResult& result, const std::string& surrogate);
+
 /// Writes the results folder options.out: searches.csv (one row per search), surrogates.csv
 /// (per surrogate: means and standard deviations over the seeds, the share of seeds whose
 /// interval covers the true rate), README.md and manifest.json (command, version, seeds, sizes).
