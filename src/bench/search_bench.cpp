@@ -210,11 +210,16 @@ std::string resultsReadme(const SearchBenchOptions& options, const SearchBenchRe
   const auto& s = options.search;
   std::string text = fmt::format(
       "# Search benchmark: {}, criterion '{}'\n\nMade by `{}` with vsd-sumo {} (docs/search.md, "
-      "docs/benchmarks.md).\n\n- Searches: surrogates {}, seeds {} .. {}, budget {} (initial {}, rounds of {}, pool "
-      "{}, estimate share {}), {} simulation job(s).\n",
+      "docs/benchmarks.md).\n\n- Searches: surrogates {}, seeds {} .. {}, budget {} simulations (initial design {} "
+      "executions, rounds of {}, pool {}, estimate share {}), {} simulation job(s).\n",
       s.scenarioFile.string(), s.criterion, command_line, toolVersion(), fmt::join(options.surrogates, ", "),
       options.firstSeed, options.firstSeed + options.seeds - 1, s.budget, s.initial, s.roundSize, s.pool,
       s.estimateShare, s.jobs);
+  if (!s.reference.empty()) {
+    text += fmt::format("- Reference driver: `{}`; every execution runs twice (the system under test and the "
+                        "reference), so an execution costs two simulations of the budget.\n",
+                        s.reference);
+  }
   if (!s.priors.empty()) {
     std::vector<std::string> priors;
     for (const auto& prior : s.priors) priors.push_back(prior.string());
@@ -252,7 +257,8 @@ void writeSearchBenchResults(const SearchBenchOptions& options, const SearchBenc
                            {{"budget", options.search.budget},
                             {"initial", options.search.initial},
                             {"round", options.search.roundSize},
-                            {"pool", options.search.pool}}}};
+                            {"pool", options.search.pool}}},
+                          {"reference", options.search.reference}};
   if (result.trueRate) {
     const auto& r = *result.trueRate;
     manifest["true_rate"] = {{"seed", r.seed},         {"samples", r.samples}, {"critical", r.critical},

@@ -77,13 +77,18 @@ int printSearchBench(const bench::SearchBenchOptions& options, const std::string
 }
 
 void addSearchFlags(CLI::App& command, search::SearchOptions& search) {
-  addNumber(&command, "--budget", search.budget, "Executions per search")->capture_default_str();
+  addNumber(&command, "--budget", search.budget,
+            "SUMO simulations per search (an execution with --reference costs two)")
+      ->capture_default_str();
   addNumber(&command, "--initial", search.initial, "Initial design")->capture_default_str();
   addNumber(&command, "--round", search.roundSize, "Executions per round")->capture_default_str();
   addNumber(&command, "--pool", search.pool, "Candidates per round")->capture_default_str();
   addNumber(&command, "--estimate-share", search.estimateShare,
             "Share of each round drawn by importance sampling for the rate estimate")
       ->capture_default_str();
+  command.add_option("--reference", search.reference,
+                     "Run every execution, the true-rate run's too, a second time with this built-in controller as "
+                     "the Ego (see search --reference)");
   command.add_option("--probability", search.probability, "extra-trees: shifts or tail")->capture_default_str();
   command.add_flag("--rank-targets", search.rankTargets, "extra-trees: fit metric ranks");
   addNumber(&command, "--diversity", search.diversity, "Weight of the distance term in the acquisition")

@@ -10,6 +10,8 @@
 #include "vsd/core/error.hpp"
 #include "vsd/metrics/metrics.hpp"
 #include "vsd/pipeline/run.hpp"
+#include "vsd/pipeline/scenes.hpp"
+#include "vsd/search/search.hpp"
 
 namespace vsd::search {
 
@@ -40,6 +42,24 @@ void refuseMisspeltName(const std::string& text, const scenario::LogicalScenario
                                 names.empty() ? std::string("none") : fmt::format("{}", fmt::join(names, ", "))));
 }
 
+/// pipeline::referenceAvoidsSutCollides as an expression over the metrics: "(d_min <= 0) and
+/// reference_d_min > 0" — a metric at or below its collision threshold, the reference driver's
+/// above every threshold (metrics::MetricSet::collision); empty if no metric has a rule.
+std::string collidesWhereReferenceDoesNot(const scenario::LogicalScenario& logical) {
+  const metrics::MetricSet metric_set(logical.metrics, pipeline::scenarioAvailability(logical),
+                                      logical.sourceFile.string() + ": metrics");
+  std::vector<std::string> collides;
+  std::vector<std::string> reference_clear;
+  for (const auto& name : metric_set.names()) {
+    const auto& threshold = metrics::findMetric(name)->collisionAtOrBelow;
+    if (!threshold) continue;
+    collides.push_back(fmt::format("{} <= {}", name, *threshold));
+    reference_clear.push_back(fmt::format("{} > {}", referenceColumn(name), *threshold));
+  }
+  if (collides.empty()) return "";
+  return fmt::format("({}) and {}", fmt::join(collides, " or "), fmt::join(reference_clear, " and "));
+}
+
 }  // namespace
 
 Criterion::Criterion(const std::string& text, const scenario::LogicalScenario& logical,
@@ -59,7 +79,15 @@ Criterion::Criterion(const std::string& text, const scenario::LogicalScenario& l
                                     where, text));
     }
     name_ = text;
-    expression_ = text + " > 0.5";  // 1: the reference driver avoided a collision the system had
+    // Written over the metrics it stands for (d_min <= 0 and reference_d_min > 0), not over its
+    // 0/1 column: a surrogate then learns both clearances, which vary smoothly over the inputs,
+    // instead of a flag that is 0 nearly everywhere (docs/search.md measures the difference).
+    expression_ = collidesWhereReferenceDoesNot(logical);
+    if (expression_.empty()) {
+      throw ConfigError(fmt::format("{} '{}': needs a scenario whose metrics tell a collision ({}: metrics lists "
+                                    "none with a collision rule, such as d_min)",
+                                    where, text, logical.sourceFile.string()));
+    }
   } else if (yaml != logical.criteria.end()) {
     name_ = yaml->name;
     expression_ = yaml->expression;

@@ -35,10 +35,12 @@ namespace vsd::search {
 using detail::SearchContext;
 using detail::SearchState;
 
+std::string referenceColumn(const std::string& metric) { return "reference_" + metric; }
+
 std::vector<std::string> executionColumns(const std::vector<std::string>& metricNames, const std::string& reference) {
   std::vector<std::string> columns = metricNames;
   if (reference.empty()) return columns;
-  for (const auto& name : metricNames) columns.push_back("reference_" + name);
+  for (const auto& name : metricNames) columns.push_back(referenceColumn(name));
   columns.emplace_back(pipeline::kReferenceCriterion);
   return columns;
 }

@@ -55,6 +55,36 @@ TEST(SearchCriterion, NamedCriterionComesFromTheScenario) {
   EXPECT_EQ(criterion.usedMetrics(), std::vector<std::string>{"d_min"});
 }
 
+// UN R157's pass criterion by its name stands for the clearances it is made of, so that a
+// surrogate learns two metrics that vary smoothly over the inputs rather than a 0/1 flag that
+// is 0 nearly everywhere; its verdict is the flag's (the system collides, the reference not).
+TEST(SearchCriterion, TheRegulationsCriterionReadsBothClearancesAndJudgesLikeItsColumn) {
+  const auto logical = scenario::loadLogicalScenario(test::scenarioFile("alks/cut_in.yaml"));
+  const auto columns = executionColumns(logical->metrics, "r157_reference_driver");
+  const Criterion criterion("reference_avoids_sut_collides", *logical, columns);
+  EXPECT_EQ(criterion.name(), "reference_avoids_sut_collides");
+  EXPECT_EQ(criterion.usedMetrics(), (std::vector<std::string>{"d_min", "reference_d_min"}));
+  const auto d_min = criterion.usedColumns()[0];
+  const auto reference_d_min = criterion.usedColumns()[1];
+  std::vector<double> values(columns.size(), 1.0);
+  for (const auto& [sut, reference, critical] :
+       std::vector<std::tuple<double, double, bool>>{{-0.1, 0.5, true}, {0.0, 0.01, true}, {-0.1, 0.0, false},
+                                                     {0.2, 0.5, false}, {0.2, -1.0, false}}) {
+    values[d_min] = sut;
+    values[reference_d_min] = reference;
+    EXPECT_EQ(criterion.verdict(values), std::optional<bool>(critical)) << sut << " " << reference;
+  }
+  values[reference_d_min] = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_EQ(criterion.verdict(values), std::nullopt) << "the reference run failed: no verdict";
+
+  const auto no_collision = scenario::loadLogicalScenario(test::scenarioFile("alks/free_driving.yaml"));
+  EXPECT_THAT(test::configErrorOf([&] {
+                Criterion("reference_avoids_sut_collides", *no_collision,
+                          executionColumns(no_collision->metrics, "r157_reference_driver"));
+              }),
+              HasSubstr("free_driving.yaml: metrics lists none with a collision rule"));
+}
+
 TEST(SearchCriterion, BadCriteriaGetOneLineNamingWhatIsKnown) {
   const auto logical = scenario::loadLogicalScenario(test::scenarioFile("acc_lk.yaml"));
   const std::string unknown = test::configErrorOf([&] { Criterion("dmin < 2", *logical, kMetrics); });
@@ -620,6 +650,46 @@ TEST(SearchBenchCli, TheTrueRateIsRunsShareAndEachIntervalIsCheckedAgainstIt) {
   EXPECT_THAT(clash.output, HasSubstr("--true-rate-seed"));
   EXPECT_EQ(std::count(clash.output.begin(), clash.output.end(), '\n'), 1) << clash.output;
   EXPECT_FALSE(fs::exists(work.path() / "other"));
+}
+
+// `bench search --reference` (results/alks_search): every execution of every search, and of
+// the true-rate run, also runs the reference driver; both count against the budget, and the
+// true rate of UN R157's criterion is `run --reference`'s count of its column for that seed.
+TEST(SearchBenchCli, WithAReferenceDriverEachExecutionCostsTwoSimulationsAndTheTrueRateIsRunsCount) {
+  TemporaryDirectory work("vsd-test-search-bench");
+  const auto weak = work.path() / "weak_cut_in.yaml";  // collides where the reference driver does not
+  test::writeFile(weak, test::scenarioVariant("alks/cut_in.yaml", "set_speed: Ego_InitSpeed_Ve0_kph / 3.6}",
+                                              "set_speed: Ego_InitSpeed_Ve0_kph / 3.6, max_decel: 0.5, "
+                                              "emergency_trigger: 5}"));
+  const auto out = work.path() / "bench";
+  const auto result = test::run({test::vsdSumo().string(), "-q", "bench", "search", weak.string(), "--reference",
+                                 "r157_reference_driver", "--criterion", "reference_avoids_sut_collides", "--budget",
+                                 "60", "--initial", "10", "--round", "10", "--pool", "200", "--seeds", "1",
+                                 "--true-rate-samples", "100", "--true-rate-seed", "5", "--out", out.string()},
+                                work.path());
+  ASSERT_EQ(result.exitCode, 0) << result.output;
+  const auto searches = CsvTable::read(out / "searches.csv");
+  ASSERT_EQ(searches.rows(), 2u);  // random and extra-trees
+  for (std::size_t r = 0; r < searches.rows(); ++r) {
+    EXPECT_EQ(searches.cell(r, searches.column("executions")), "30") << "60 simulations buy 30 executions";
+  }
+  const auto manifest = nlohmann::json::parse(readTextFile(out / "manifest.json"));
+  EXPECT_EQ(manifest.at("reference").get<std::string>(), "r157_reference_driver");
+  EXPECT_THAT(readTextFile(out / "README.md"), HasSubstr("Reference driver: `r157_reference_driver`"));
+
+  const auto run_out = work.path() / "run";
+  ASSERT_EQ(test::run({test::vsdSumo().string(), "-q", "run", weak.string(), "--samples", "100", "--seed", "5",
+                       "--reference", "r157_reference_driver", "--out", run_out.string()},
+                      work.path())
+                .exitCode,
+            0);
+  const auto concrete = CsvTable::read(run_out / "concrete.csv");
+  std::uint64_t fails = 0;
+  for (std::size_t r = 0; r < concrete.rows(); ++r) {
+    fails += concrete.cell(r, concrete.column("reference_avoids_sut_collides")) == "1" ? 1 : 0;
+  }
+  EXPECT_GT(fails, 0u);
+  EXPECT_EQ(manifest.at("true_rate").at("critical").get<std::uint64_t>(), fails);
 }
 
 // Numeric flags are checked where they enter (src/cli/flags.hpp): no wrap-around of a

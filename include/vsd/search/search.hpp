@@ -89,6 +89,8 @@ struct SearchOptions {
 /// `metricNames`: those, then with a `reference` controller `reference_<metric>` for each
 /// and pipeline::kReferenceCriterion. A criterion is checked against these names.
 std::vector<std::string> executionColumns(const std::vector<std::string>& metricNames, const std::string& reference);
+/// The column of the reference driver's value of `metric` ("reference_d_min").
+std::string referenceColumn(const std::string& metric);
 
 /// One executed concrete scenario.
 struct Execution {
