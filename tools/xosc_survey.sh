@@ -1,0 +1,76 @@
+#!/usr/bin/env bash
+# Issue 24's measure on published OpenSCENARIO files: which ones vsd-sumo imports and runs,
+# and the one line each refused file gets. Prints a report (tool version, sources, one line
+# per file, totals).
+#
+#   tools/xosc_survey.sh ASAM_DIR ESMINI_DIR > results/openscenario/survey.txt
+#   VSD_SUMO=other/vsd-sumo tools/xosc_survey.sh ...      # another build (default: build/vsd-sumo)
+#
+# ASAM_DIR: a checkout of github.com/asam-oss/OSC-ALKS-scenarios; ESMINI_DIR: a checkout of
+# github.com/esmini/esmini (its resources/xosc). Neither is part of this repository.
+#   - ASAM's 15 concrete templates: `run --duration 60` (their StopTriggers are
+#     not simulation times; 60 s covers every manoeuvre of the set).
+#   - ASAM's variation files: `scenario check --duration 60` imports every parameter set
+#     (run / skipped by the template's constraints / refused), then `run --samples 200
+#     --duration 60` simulates 200 sets drawn from the grid (seed 1).
+#   - esmini's resources/xosc: `scenario check --duration 30`: would run, or the first refusal.
+set -euo pipefail
+root="$(cd "$(dirname "$0")/.." && pwd)"
+vsd="${VSD_SUMO:-$root/build/vsd-sumo}"
+asam="${1:?usage: tools/xosc_survey.sh ASAM_DIR ESMINI_DIR}"
+esmini="${2:?usage: tools/xosc_survey.sh ASAM_DIR ESMINI_DIR}"
+export SUMO_HOME="${SUMO_HOME:-/usr/share/sumo}"
+work="$(mktemp -d)"
+trap 'rm -rf "$work"' EXIT
+
+echo "# tools/xosc_survey.sh - vsd-sumo $("$vsd" --version), $(date -u +%Y-%m-%dT%H:%MZ)"
+echo "# git tree clean: $(cd "$root" && git diff --quiet HEAD && echo yes || echo no)"
+echo "# ASAM OSC-ALKS-scenarios $(git -C "$asam" rev-parse --short HEAD 2>/dev/null || echo '(not a git checkout)'), esmini $(git -C "$esmini" rev-parse --short HEAD 2>/dev/null || echo '(not a git checkout)')"
+
+# The line of a run's output that counts its scenarios, or its error line.
+run_line() {
+  local log="$1" status="$2"
+  if [ "$status" -eq 0 ]; then grep -m1 -E 'concrete scenarios? \(seed' "$log" || tail -1 "$log"
+  else grep -m1 '^vsd-sumo: ' "$log" || tail -1 "$log"; fi
+}
+
+echo
+echo "## ASAM concrete templates: vsd-sumo run FILE --duration 60"
+ran=0; total=0
+for file in "$asam"/logical_scenarios/concrete_scenarios/*_template.xosc; do
+  total=$((total + 1)); status=0
+  "$vsd" run "$file" --duration 60 --out "$work/t$total" >"$work/log" 2>&1 || status=$?
+  [ "$status" -eq 0 ] && ran=$((ran + 1))
+  echo "  $(basename "$file"): exit $status; $(run_line "$work/log" "$status")"
+done
+echo "  templates run: $ran of $total"
+
+echo
+echo "## ASAM variations: scenario check --duration 60 (every set), run --samples 200 --duration 60"
+ran=0; total=0
+for file in "$asam"/logical_scenarios/*_variation*.xosc; do
+  total=$((total + 1)); status=0
+  "$vsd" scenario check --duration 60 "$file" >"$work/check" 2>&1 || status=$?
+  sets="$(grep -m1 -E '[0-9]+ parameter sets: ' "$work/check" | sed -E 's/.*: ([0-9]+ parameter sets: )/\1/; s/ \(first: .*\), / (...), /' || true)"
+  [ -z "$sets" ] && sets="$(grep -m1 '^REFUSED' "$work/check" | sed "s|$asam/||g" || true)"
+  echo "  $(basename "$file"): check exit $status; $sets"
+  if [ "$status" -eq 0 ]; then
+    run_status=0
+    "$vsd" run "$file" --samples 200 --seed 1 --duration 60 --out "$work/v$total" >"$work/log" 2>&1 || run_status=$?
+    [ "$run_status" -eq 0 ] && ran=$((ran + 1))
+    echo "    run of 200 sets: exit $run_status; $(run_line "$work/log" "$run_status")"
+  fi
+done
+echo "  variation files run: $ran of $total"
+
+echo
+echo "## esmini resources/xosc: scenario check --duration 30"
+would=0; total=0
+for file in "$esmini"/resources/xosc/*.xosc; do
+  total=$((total + 1)); status=0
+  "$vsd" scenario check --duration 30 "$file" >"$work/check" 2>&1 || status=$?
+  if [ "$status" -eq 0 ]; then would=$((would + 1)); line="would run"
+  else line="$(grep -m1 -E '^REFUSED|^vsd-sumo: ' "$work/check" | sed "s|$esmini/||g" | cut -c1-220)"; fi
+  echo "  $(basename "$file"): $line"
+done
+echo "  esmini files that would run: $would of $total"
