@@ -498,6 +498,7 @@ MonteCarloRate monteCarloRate(SearchOptions options, std::uint64_t seed, std::ui
   if (samples < 1) throw ConfigError::field("command line", "--true-rate-samples", "0", ">= 1");
   const auto start = std::chrono::steady_clock::now();
   if (options.outputDir.empty()) options.outputDir = ".";  // validated, never written
+  options.priors.clear();  // plain Monte Carlo learns nothing: priors belong to a surrogate (bench search --prior)
   const SearchContext context = makeContext(options);
   pipeline::RunOptions run;
   run.samples = samples;

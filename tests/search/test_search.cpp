@@ -692,6 +692,26 @@ TEST(SearchBenchCli, WithAReferenceDriverEachExecutionCostsTwoSimulationsAndTheT
   EXPECT_EQ(manifest.at("true_rate").at("critical").get<std::uint64_t>(), fails);
 }
 
+// The true rate is plain Monte Carlo: the priors of the surrogates compared (bench search
+// --surrogates vectornet --prior ... --true-rate-samples N) neither change nor refuse it.
+TEST(SearchBench, TheTrueRateIgnoresThePriorsOfTheSurrogates) {
+  TemporaryDirectory work("vsd-test-search-bench");
+  const auto prior = work.path() / "acc";
+  ASSERT_EQ(test::run({test::vsdSumo().string(), "-q", "run", test::scenarioFile("acc.yaml").string(), "--samples",
+                       "20", "--out", prior.string()},
+                      work.path())
+                .exitCode,
+            0);
+  SearchOptions options;
+  options.scenarioFile = test::scenarioFile("acc_lk.yaml");
+  options.criterion = "d_min < 5";
+  const auto plain = monteCarloRate(options, 9, 60);
+  options.priors = {prior};
+  const auto with_priors = monteCarloRate(options, 9, 60);
+  EXPECT_EQ(with_priors.critical, plain.critical);
+  EXPECT_GT(plain.critical, 0u);
+}
+
 // Numeric flags are checked where they enter (src/cli/flags.hpp): no wrap-around of a
 // negative budget into 2^64 - 5, no infinite pool, no zero seeds in the bench.
 TEST(SearchCli, NumbersFromFlagsAreCheckedWhereTheyEnter) {
