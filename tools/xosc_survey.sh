@@ -13,7 +13,8 @@
 #   - ASAM's variation files: `scenario check --duration 60` imports every parameter set
 #     (run / skipped by the template's constraints / refused), then `run --samples 200
 #     --duration 60` simulates 200 sets drawn from the grid (seed 1).
-#   - esmini's resources/xosc: `scenario check --duration 30`: would run, or the first refusal.
+#   - esmini's resources/xosc: `scenario check --duration 30 --data-root resources` (its
+#     scenarios name roads in ../xodr): would run, or the first refusal.
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
 vsd="${VSD_SUMO:-$root/build/vsd-sumo}"
@@ -64,11 +65,11 @@ done
 echo "  variation files run: $ran of $total"
 
 echo
-echo "## esmini resources/xosc: scenario check --duration 30"
+echo "## esmini resources/xosc: scenario check --duration 30 --data-root resources"
 would=0; total=0
 for file in "$esmini"/resources/xosc/*.xosc; do
   total=$((total + 1)); status=0
-  "$vsd" scenario check --duration 30 "$file" >"$work/check" 2>&1 || status=$?
+  "$vsd" scenario check --duration 30 --data-root "$esmini/resources" "$file" >"$work/check" 2>&1 || status=$?
   if [ "$status" -eq 0 ]; then would=$((would + 1)); line="would run"
   else line="$(grep -m1 -E '^REFUSED|^vsd-sumo: ' "$work/check" | sed "s|$esmini/||g" | cut -c1-220)"; fi
   echo "  $(basename "$file"): $line"

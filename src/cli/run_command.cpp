@@ -46,6 +46,10 @@ void addImportOptions(CLI::App& command, interop::OscImportOptions& import) {
   command.add_option("--controller-map", import.controllerMap,
                      "OpenSCENARIO input: YAML map from the file's controller names to vsd-sumo controllers")
       ->check(CLI::ExistingFile);
+  command.add_option("--data-root", import.dataRoot,
+                     "OpenSCENARIO input: the folder the files a scenario names (road, catalogs, template) may lie in, "
+                     "e.g. esmini's resources/ (default: the scenario file's own folder)")
+      ->check(CLI::ExistingDirectory);
 }
 
 namespace {
@@ -68,7 +72,7 @@ void checkFlagsFor(const interop::ScenarioFormat& format, const interop::Scenari
     throw ConfigError::field("command line", flag, file, fmt::format("a flag for other formats than {}", format.name));
   };
   if (request.given("--step") && !format.can.step) refuse("--step");
-  for (const char* flag : {"--duration", "--ego", "--controller", "--controller-map"}) {
+  for (const char* flag : {"--duration", "--ego", "--controller", "--controller-map", "--data-root"}) {
     if (request.given(flag) && !format.can.importOptions) refuse(flag);
   }
   for (const char* flag : {"--shard", "--merge"}) {

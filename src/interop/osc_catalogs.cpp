@@ -17,12 +17,26 @@ namespace {
 constexpr std::size_t kMaxCatalogFiles = 256;
 }  // namespace
 
-Catalogs::Catalogs(const xml::Reader& scenario, const pugi::xml_node& root, Findings& findings) {
+fs::path referencedFile(const OscImportOptions& options, const fs::path& naming_file, const std::string& text,
+                        const std::string& where, const std::string& field) {
+  const fs::path folder = fs::absolute(naming_file).parent_path();
+  if (options.dataRoot.empty()) {
+    try {
+      return requirePathInside(folder, text, where, field);
+    } catch (const ConfigError& error) {
+      throw ConfigError(fmt::format("{}; --data-root DIR admits files anywhere inside DIR", error.what()));
+    }
+  }
+  const fs::path path(text);
+  return requirePathInside(options.dataRoot, path.is_absolute() ? path : folder / path, where, field);
+}
+
+Catalogs::Catalogs(const xml::Reader& scenario, const pugi::xml_node& root, const OscImportOptions& options,
+                   Findings& findings) {
   const pugi::xml_node locations = root.child("CatalogLocations");
   if (!locations) return;
   scenario.requireSubset(locations, {"VehicleCatalog", "PedestrianCatalog", "MiscObjectCatalog", "ControllerCatalog",
                                      "EnvironmentCatalog", "ManeuverCatalog", "RouteCatalog", "TrajectoryCatalog"});
-  const fs::path folder = fs::absolute(scenario.file()).parent_path();
   for (const pugi::xml_node& location : locations.children()) {
     if (location.type() != pugi::node_element) continue;
     const std::string kind = location.name();
@@ -33,8 +47,9 @@ Catalogs::Catalogs(const xml::Reader& scenario, const pugi::xml_node& root, Find
     }
     scenario.requireSubset(location, {"Directory"});
     const pugi::xml_node directory = scenario.only(location, "Directory");
-    // Catalogs are files the scenario makes the tool read: inside its folder only.
-    const fs::path path = requirePathInside(folder, scenario.text(directory, "path"), scenario.where(directory), "path");
+    // Catalogs are files the scenario makes the tool read: inside its folder (or --data-root) only.
+    const fs::path path =
+        referencedFile(options, scenario.file(), scenario.text(directory, "path"), scenario.where(directory), "path");
     if (!fs::is_directory(path)) scenario.fail(directory, fmt::format("{} is not a directory", path.string()));
     directories_.push_back(path);
     findings.mapped(scenario.where(location), fmt::format("catalog directory {}", path.string()));

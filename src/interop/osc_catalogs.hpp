@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "osc_findings.hpp"
+#include "vsd/interop/openscenario_import.hpp"
 #include "osc_parameters.hpp"
 #include "xml_support.hpp"
 
@@ -26,11 +27,20 @@ struct CatalogEntry {
   pugi::xml_node node;                  ///< <Vehicle>, <Pedestrian>, <MiscObject> or <Controller>
 };
 
+/// The file `text` (relative to `namingFile`'s folder) that `namingFile` names: a road
+/// network, a catalog directory, a distribution's template. It must lie inside
+/// options.dataRoot or, without one, in namingFile's folder or below (never /dev/zero, never
+/// ../../elsewhere unless the user widened the root). Throws ConfigError naming where/field.
+std::filesystem::path referencedFile(const OscImportOptions& options, const std::filesystem::path& namingFile,
+                                     const std::string& text, const std::string& where, const std::string& field);
+
 class Catalogs {
  public:
-  /// Reads <CatalogLocations> of `root` (none: no catalogs). Catalog types the import does
-  /// not use (environment, maneuver, route, trajectory) are noted, not read.
-  Catalogs(const xml::Reader& scenario, const pugi::xml_node& root, Findings& findings);
+  /// Reads <CatalogLocations> of `root` (none: no catalogs), directories as referencedFile
+  /// admits them. Catalog types the import does not use (environment, maneuver, route,
+  /// trajectory) are noted, not read.
+  Catalogs(const xml::Reader& scenario, const pugi::xml_node& root, const OscImportOptions& options,
+           Findings& findings);
 
   /// The entry a <CatalogReference> names, which must be one of `kinds` (e.g. {"Vehicle",
   /// "Pedestrian", "MiscObject"}). Throws ConfigError naming the reference for a missing

@@ -35,11 +35,29 @@ RoadUserType categoryType(const xml::Reader& reader, const pugi::xml_node& objec
   return *type;
 }
 
+/// OpenSCENARIO 1.2's trailer elements of a <Vehicle>. Where a trailer would attach
+/// (TrailerHitch, TrailerCoupler) is harmless without one — esmini's catalog cars declare both,
+/// with a <Trailer> whose TrailerRef is an empty parameter by default, which attaches none. A
+/// trailer that is attached is refused: the language has no articulated road users.
+void refuseAttachedTrailer(const xml::Reader& reader, const pugi::xml_node& vehicle) {
+  const pugi::xml_node trailer = vehicle.child("Trailer");
+  if (!trailer) return;
+  reader.requireSubset(trailer, {"TrailerRef"});
+  const pugi::xml_node reference = reader.only(trailer, "TrailerRef");
+  const std::string attached = reader.text(reference, "entityRef");
+  if (!attached.empty()) {
+    reader.fail(reference, fmt::format("entityRef=\"{}\": trailers are not simulated (the scenario language has no "
+                                       "articulated road users)", attached));
+  }
+}
+
 /// Type and bounding box of a <Vehicle>, <Pedestrian> or <MiscObject>.
 void readObject(const xml::Reader& reader, const pugi::xml_node& object, Entity& entity) {
   const std::string kind = object.name();
   if (kind == "Vehicle") {
-    reader.requireSubset(object, {"ParameterDeclarations", "BoundingBox", "Performance", "Axles", "Properties"});
+    reader.requireSubset(object, {"ParameterDeclarations", "BoundingBox", "Performance", "Axles", "TrailerHitch",
+                                  "TrailerCoupler", "Trailer", "Properties"});
+    refuseAttachedTrailer(reader, object);
   } else {
     reader.requireSubset(object, {"ParameterDeclarations", "BoundingBox", "Properties"});
   }

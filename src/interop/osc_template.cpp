@@ -256,14 +256,13 @@ TranslationResult translate(const fs::path& xosc, const OscImportOptions& option
   // A violated constraint is the caller's to report: a run refuses, a sweep skips and counts.
   if (result.violated) return result;
   Translation translation{reader, findings, options};
-  Catalogs catalogs(reader, root, findings);
+  Catalogs catalogs(reader, root, options, findings);
   const pugi::xml_node network = reader.only(root, "RoadNetwork");
   reader.requireSubset(network, {"LogicFile", "SceneGraphFile"});
   if (network.child("SceneGraphFile")) findings.note(reader.where(network.child("SceneGraphFile")), "3D models are not used");
   const pugi::xml_node logic = reader.only(network, "LogicFile");
-  // The road network must lie next to the scenario file or below it.
-  const fs::path xodr = requirePathInside(fs::absolute(xosc).parent_path(), reader.text(logic, "filepath"),
-                                          reader.where(logic), "filepath");
+  // The road network must lie next to the scenario file or below it (or inside --data-root).
+  const fs::path xodr = referencedFile(options, xosc, reader.text(logic, "filepath"), reader.where(logic), "filepath");
   if (!fs::exists(xodr)) reader.fail(logic, fmt::format("the road network {} does not exist", xodr.string()));
   translation.road = readCarriagewayRoad(xodr, findings);
   findings.mapped(reader.where(logic), fmt::format("road '{}': {} driving lanes of {} m, curvature {} 1/m",

@@ -71,7 +71,7 @@ Axis multiDistribution(const xml::Reader& reader, const pugi::xml_node& multi) {
 
 }  // namespace
 
-ParameterGrid readParameterDistribution(const fs::path& file) {
+ParameterGrid readParameterDistribution(const fs::path& file, const OscImportOptions& options) {
   xml::Reader reader(file, read_limits::kScenario);
   const pugi::xml_node root = reader.root();
   const pugi::xml_node distribution = root.child("ParameterValueDistribution");
@@ -83,8 +83,8 @@ ParameterGrid readParameterDistribution(const fs::path& file) {
   ParameterGrid grid;
   grid.file = file;
   const pugi::xml_node scenario = reader.only(distribution, "ScenarioFile");
-  grid.scenarioFile = requirePathInside(fs::absolute(file).parent_path(), reader.text(scenario, "filepath"),
-                                        reader.where(scenario), "filepath");
+  grid.scenarioFile =
+      osc::referencedFile(options, file, reader.text(scenario, "filepath"), reader.where(scenario), "filepath");
   if (!fs::exists(grid.scenarioFile)) reader.fail(scenario, fmt::format("{} does not exist", grid.scenarioFile.string()));
   if (const pugi::xml_node stochastic = distribution.child("Stochastic")) {
     reader.fail(stochastic, "stochastic distributions are not imported (docs/openscenario-import.md: deterministic "
@@ -162,7 +162,7 @@ std::shared_ptr<const scenario::LogicalScenario> importSet(const ParameterGrid& 
 }  // namespace
 
 SweepSummary runVariation(pipeline::RunOptions options, const OscImportOptions& import, bool samples_given) {
-  const ParameterGrid grid = readParameterDistribution(options.scenarioFile);
+  const ParameterGrid grid = readParameterDistribution(options.scenarioFile, import);
   osc::StringCodes codes = stringCodes(grid);
   // Numeric-looking strings are numbers in concrete.csv already; only names need codes.
   SweepSummary summary;

@@ -152,6 +152,80 @@ TEST(OscImport, BadReferencesAreOneLineEach) {
   EXPECT_EQ(importTemplate(dir->path() / "no_ego.xosc", mapped)->ego.controller.name, "idm");
 }
 
+// esmini's layout: scenarios in xosc/ name their roads in ../xodr/ (and catalogs in ../xosc/
+// Catalogs). A file may name files only in its own folder or below, unless --data-root widens
+// that to a folder the user names; a relative name is still relative to the naming file, and
+// nothing outside the root is read.
+TEST(OscImport, TheDataRootAdmitsSiblingFoldersAndNothingOutsideIt) {
+  TemporaryDirectory dir("vsd-osc");
+  const auto resources = dir.path() / "resources";
+  fs::create_directories(resources / "xosc");
+  fs::copy(data("roads"), resources / "xodr", fs::copy_options::recursive);
+  fs::copy(data("catalogs"), resources / "catalogs", fs::copy_options::recursive);
+  std::string text = cutInWith("./roads/three_lanes.xodr", "../xodr/three_lanes.xodr");
+  for (const char* kind : {"vehicles", "pedestrians", "controllers"}) {
+    const std::string from = fmt::format("./catalogs/{}", kind);
+    text.replace(text.find(from), from.size(), fmt::format("../catalogs/{}", kind));
+  }
+  const auto scenario = test::writeFile(resources / "xosc" / "cut_in.xosc", text);
+
+  const auto refused = test::configErrorOf([&] { importTemplate(scenario, {}); });
+  EXPECT_THAT(refused, HasSubstr("cut_in.xosc:28: <Directory>: path: got '../catalogs/vehicles', expected a path inside"));
+  EXPECT_THAT(refused, HasSubstr("--data-root DIR admits files anywhere inside DIR"));
+
+  OscImportOptions rooted;
+  rooted.dataRoot = resources;
+  const auto logical = importTemplate(scenario, rooted);
+  EXPECT_EQ(logical->road.lanes, 3);  // the road of ../xodr, as from ./roads
+  EXPECT_EQ(other(*logical, "Cutter").type, importTemplate(data("cut_in.xosc"), {})->others.front().type);
+
+  rooted.dataRoot = resources / "xosc";  // the road lies outside this root
+  EXPECT_THAT(test::configErrorOf([&] { importTemplate(scenario, rooted); }), HasSubstr("expected a path inside"));
+
+  // On the command line: `scenario check` and `run` take it; a YAML scenario refuses it by name.
+  const auto check = [&](std::vector<std::string> flags) {
+    std::vector<std::string> argv = {test::vsdSumo().string(), "--quiet", "scenario", "check", scenario.string()};
+    argv.insert(argv.end(), flags.begin(), flags.end());
+    return test::run(argv, dir.path());
+  };
+  EXPECT_EQ(check({}).exitCode, 1);
+  const auto widened = check({"--data-root", resources.string()});
+  EXPECT_EQ(widened.exitCode, 0) << widened.output;
+  const auto yaml = test::run({test::vsdSumo().string(), "--quiet", "run", test::scenarioFile("acc.yaml").string(),
+                               "--data-root", resources.string(), "--out", (dir.path() / "out").string()},
+                              dir.path());
+  EXPECT_THAT(yaml.output, HasSubstr("--data-root"));
+  EXPECT_THAT(yaml.output, HasSubstr("a flag for other formats than vsd-scenario"));
+  EXPECT_FALSE(fs::exists(dir.path() / "out"));
+}
+
+// OpenSCENARIO 1.2 vehicles may say where a trailer would attach (esmini's catalog cars do,
+// with an empty TrailerRef parameter): that imports; a trailer actually attached is refused.
+TEST(OscImport, TrailerPointsImportAndAnAttachedTrailerIsRefused) {
+  TemporaryDirectory dir("vsd-osc");
+  fs::copy(data(""), dir.path(), fs::copy_options::recursive);
+  const auto fleet = dir.path() / "catalogs" / "vehicles" / "fleet.xosc";
+  std::string catalog = readTextFile(fleet);
+  const std::string sedan_parameters = "<ParameterDeclaration name=\"Length\" parameterType=\"double\" value=\"4.5\"/>";
+  catalog.replace(catalog.find(sedan_parameters), sedan_parameters.size(),
+                  sedan_parameters + "<ParameterDeclaration name=\"Towed\" parameterType=\"string\" value=\"\"/>");
+  const std::string sedan_end = "      </Axles>\n      <Properties/>";
+  catalog.replace(catalog.find(sedan_end), sedan_end.size(),
+                  "      </Axles>\n      <TrailerHitch dx=\"-1.2\"/>\n      <Trailer><TrailerRef entityRef=\"$Towed\"/>"
+                  "</Trailer>\n      <Properties/>");
+  test::writeFile(fleet, catalog);
+  const auto scenario = dir.path() / "cut_in.xosc";
+  EXPECT_EQ(importTemplate(scenario, {})->ego.type, RoadUserType::Car);
+
+  std::string towing = readTextFile(scenario);
+  const std::string ego_length = "<ParameterAssignment parameterRef=\"Length\" value=\"5.0\"/>";
+  towing.replace(towing.find(ego_length), ego_length.size(),
+                 ego_length + "<ParameterAssignment parameterRef=\"Towed\" value=\"Caravan\"/>");
+  test::writeFile(dir.path() / "towing.xosc", towing);
+  EXPECT_THAT(test::configErrorOf([&] { importTemplate(dir.path() / "towing.xosc", {}); }),
+              HasSubstr("<TrailerRef>: entityRef=\"Caravan\": trailers are not simulated"));
+}
+
 TEST(OscImport, CheckListsEveryRefusalWithItsLine) {
   std::string text = cutInWith("<Private entityRef=\"Walker\">",
                                "<Private entityRef=\"Walker\"><PrivateAction><RoutingAction><AssignRouteAction/>"
@@ -210,7 +284,7 @@ TEST(OscImport, InitDistanceActionPlacesAndRateZeroLeavesTheSpeed) {
 }
 
 TEST(OscVariation, GridIsTheProductInFileOrder) {
-  const ParameterGrid grid = readParameterDistribution(data("cut_in_variation.xosc"));
+  const ParameterGrid grid = readParameterDistribution(data("cut_in_variation.xosc"), {});
   ASSERT_EQ(grid.sets.size(), 12u);  // 3 speeds x 2 value sets x 2 lateral speeds
   EXPECT_EQ(grid.sets[0], (std::map<std::string, std::string>{
                               {"Ego_Speed_kph", "60"}, {"Cutter_Side", "-1"}, {"Vehicle_Model", "sedan"}, {"LaneChange_Vy", "1.5"}}));
@@ -220,7 +294,7 @@ TEST(OscVariation, GridIsTheProductInFileOrder) {
   const auto dir = folderWith({{"steps.xosc", std::regex_replace(readTextFile(data("cut_in_variation.xosc")),
                                                                  std::regex("stepWidth=\"10\"><Range lowerLimit=\"60\" upperLimit=\"80\""),
                                                                  "stepWidth=\"0.2\"><Range lowerLimit=\"1.1\" upperLimit=\"1.5\"")}});
-  const ParameterGrid steps = readParameterDistribution(dir->path() / "steps.xosc");
+  const ParameterGrid steps = readParameterDistribution(dir->path() / "steps.xosc", {});
   EXPECT_EQ(steps.sets[8].at("Ego_Speed_kph"), "1.5");  // 1.1 + 2 * 0.2, the upper bound kept
 }
 

@@ -33,6 +33,10 @@ struct OscImportOptions {
   std::string controller = "alks";
   /// YAML map from the file's controller names to vsd-sumo controllers (empty: the defaults).
   std::filesystem::path controllerMap;
+  /// `--data-root`: the folder every file a scenario names (its road network, catalog
+  /// directories, a distribution's template) must lie in, e.g. esmini's resources/, whose
+  /// scenarios in xosc/ name roads in ../xodr/. Empty: the naming file's own folder.
+  std::filesystem::path dataRoot;
 };
 
 /// The file's controller names that map onto a built-in controller by default
@@ -79,7 +83,7 @@ struct ParameterGrid {
   std::filesystem::path scenarioFile;  ///< the template
   std::vector<std::map<std::string, std::string>> sets;
 };
-ParameterGrid readParameterDistribution(const std::filesystem::path& file);
+ParameterGrid readParameterDistribution(const std::filesystem::path& file, const OscImportOptions& options);
 
 /// `vsd-sumo run VARIATION.xosc`: the template at every parameter set that satisfies its
 /// ConstraintGroups, one concrete scenario (row of concrete.csv) each; the others are
