@@ -26,7 +26,7 @@ trap 'rm -rf "$work"' EXIT
 
 echo "# tools/xosc_survey.sh - vsd-sumo $("$vsd" --version), $(date -u +%Y-%m-%dT%H:%MZ)"
 # The binary's version ends in -dirty when it was built from uncommitted changes.
-echo "# built from a clean tree: $(case "$("$vsd" --version)" in *-dirty*) echo no ;; *) echo yes ;; esac)"
+echo "# built from a clean tree: $(case "$("$vsd" --version)" in *dirty*) echo no ;; *) echo yes ;; esac)"
 echo "# ASAM OSC-ALKS-scenarios $(git -C "$asam" rev-parse --short HEAD 2>/dev/null || echo '(not a git checkout)'), esmini $(git -C "$esmini" rev-parse --short HEAD 2>/dev/null || echo '(not a git checkout)')"
 
 # The line of a run's output that counts its scenarios, or its error line.
