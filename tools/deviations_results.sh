@@ -1,0 +1,20 @@
+#!/bin/sh
+# results/deviations/bench_deviations.txt: the deviations finder on field data with known
+# answers (issue 25 item 4; docs/deviations.md "Benchmark with known answers"), the
+# benchmark's defaults: a calibrated kinematic model trained on 2,000 clean acc_lk scenes,
+# validation seed 101 (where the settings were chosen) and sealed test seeds 201-203, each
+# 2,900 field scenes of which 30 % carry the friction limit (max_decel 3 m/s^2).
+#
+#   tools/deviations_results.sh [VSD_SUMO]      # from the repository root
+set -eu
+vsd=${1:-build/vsd-sumo}
+out=results/deviations
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+mkdir -p "$out"
+set -- bench deviations --work "$work/bench" --test-seed 201 202 203 --jobs 2
+{
+  echo "# $("$vsd" --version): $vsd $* (work folder: a temporary one)"
+  "$vsd" "$@"
+} > "$work/bench_deviations.txt"
+mv "$work/bench_deviations.txt" "$out/bench_deviations.txt"
