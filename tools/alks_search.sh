@@ -15,10 +15,13 @@
 #
 #   tools/alks_search.sh [VSD_SUMO] [STEPS]   # from the repository root; STEPS: any of
 #                                             # failures selection test (default: all three);
-#                                             # about 40 min on 2 cores
+#                                             # about 30 min on 2 cores
 set -eu
 vsd=${1:-build/vsd-sumo}
 steps=${2:-"failures selection test"}
+for step in $steps; do
+  case $step in failures|selection|test) ;; *) echo "alks_search.sh: step '$step': expected failures, selection or test" >&2; exit 1 ;; esac
+done
 out=results/alks_search
 scenarios="cut_in cut_in_unavoidable"
 mkdir -p "$out"

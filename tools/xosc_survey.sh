@@ -1,9 +1,9 @@
 #!/usr/bin/env bash
 # Issue 24's measure on published OpenSCENARIO files: which ones vsd-sumo imports and runs,
-# and the one line each refused file gets. Prints a report (tool version, sources, one line
-# per file, totals).
+# and the one line each refused file gets. Writes a report (tool version, sources, one line
+# per file, totals) to OUT (default results/openscenario/survey.txt) when it is complete.
 #
-#   tools/xosc_survey.sh ASAM_DIR ESMINI_DIR > results/openscenario/survey.txt
+#   tools/xosc_survey.sh ASAM_DIR ESMINI_DIR [OUT]
 #   VSD_SUMO=other/vsd-sumo tools/xosc_survey.sh ...      # another build (default: build/vsd-sumo)
 #
 # ASAM_DIR: a checkout of github.com/asam-oss/OSC-ALKS-scenarios; ESMINI_DIR: a checkout of
@@ -18,11 +18,17 @@
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
 vsd="${VSD_SUMO:-$root/build/vsd-sumo}"
-asam="${1:?usage: tools/xosc_survey.sh ASAM_DIR ESMINI_DIR}"
-esmini="${2:?usage: tools/xosc_survey.sh ASAM_DIR ESMINI_DIR}"
+usage="usage: tools/xosc_survey.sh ASAM_DIR ESMINI_DIR [OUT]"
+asam="${1:?$usage}"
+esmini="${2:?$usage}"
+out="${3:-$root/results/openscenario/survey.txt}"
+[ -d "$asam/logical_scenarios" ] || { echo "xosc_survey.sh: $asam: expected a checkout of OSC-ALKS-scenarios (no logical_scenarios/)" >&2; exit 1; }
+[ -d "$esmini/resources/xosc" ] || { echo "xosc_survey.sh: $esmini: expected a checkout of esmini (no resources/xosc/)" >&2; exit 1; }
 export SUMO_HOME="${SUMO_HOME:-/usr/share/sumo}"
 work="$(mktemp -d)"
 trap 'rm -rf "$work"' EXIT
+# The report goes to a temporary file and replaces OUT only once it is complete.
+exec 3>&1 > "$work/survey.txt"
 
 echo "# tools/xosc_survey.sh - vsd-sumo $("$vsd" --version), $(date -u +%Y-%m-%dT%H:%MZ)"
 # The binary's version ends in -dirty when it was built from uncommitted changes.
@@ -76,3 +82,6 @@ for file in "$esmini"/resources/xosc/*.xosc; do
   echo "  $(basename "$file"): $line"
 done
 echo "  esmini files that would run: $would of $total"
+mkdir -p "$(dirname "$out")"
+mv "$work/survey.txt" "$out"
+echo "xosc_survey.sh: wrote $out" >&3

@@ -85,6 +85,12 @@ void SearchBenchOptions::validate() const {
   if (trueRateSamples > 10'000'000) {
     throw ConfigError::field("command line", "--true-rate-samples", std::to_string(trueRateSamples), "0 .. 10000000");
   }
+  for (const auto& surrogate : surrogates) {  // every search's options before any work (the true-rate run comes first)
+    search::SearchOptions each = search;
+    each.surrogate = surrogate;
+    if (each.outputDir.empty()) each.outputDir = ".";  // validated, never written: each search gets its own folder
+    each.validate();
+  }
   if (trueRateSamples > 0 && trueRateSeed >= firstSeed && trueRateSeed < firstSeed + seeds) {
     throw ConfigError::field("command line", "--true-rate-seed", std::to_string(trueRateSeed),
                              fmt::format("a seed none of the searches uses (they use {} .. {})", firstSeed,

@@ -35,6 +35,16 @@ namespace {
 const std::vector<std::string> kMetrics = {"a_min", "d_min", "p_lat_max", "y_max", "ttc_min", "thw_min",
                                            "lane_offset_max"};
 
+/// cut_in with a system under test that brakes weakly (0.5 m/s^2): it collides in many cut-ins
+/// the reference driver avoids (11 of 100 in a run of this variant). Written into `folder`.
+fs::path weakCutIn(const fs::path& folder) {
+  const auto weak = folder / "weak_cut_in.yaml";
+  test::writeFile(weak, test::scenarioVariant("alks/cut_in.yaml", "set_speed: Ego_InitSpeed_Ve0_kph / 3.6}",
+                                              "set_speed: Ego_InitSpeed_Ve0_kph / 3.6, max_decel: 0.5, "
+                                              "emergency_trigger: 5}"));
+  return weak;
+}
+
 TEST(SearchCriterion, ExpressionReadsItsMetricsAndJudges) {
   const auto logical = scenario::loadLogicalScenario(test::scenarioFile("acc_lk.yaml"));
   const Criterion criterion("ttc_min < 1 || d_min < 0.5", *logical, kMetrics);
@@ -410,12 +420,7 @@ TEST(SearchVectorNet, APriorPreTrainsTheModelAndTheSearchResumesWithTheSameChoic
 // system under test collides and the reference driver does not.
 TEST(SearchReference, TheRegulationsCriterionCostsTwoSimulationsAndMarksWhereOnlyTheSystemCollides) {
   TemporaryDirectory work("vsd-test-search");
-  // A system under test that brakes weakly (0.5 m/s^2): it collides in many cut-ins the
-  // reference driver avoids (11 of 100 in a run of this variant).
-  const auto weak = work.path() / "weak_cut_in.yaml";
-  test::writeFile(weak, test::scenarioVariant("alks/cut_in.yaml", "set_speed: Ego_InitSpeed_Ve0_kph / 3.6}",
-                                              "set_speed: Ego_InitSpeed_Ve0_kph / 3.6, max_decel: 0.5, "
-                                              "emergency_trigger: 5}"));
+  const auto weak = weakCutIn(work.path());
   SearchOptions options;
   options.scenarioFile = weak;
   options.outputDir = work.path() / "out";
@@ -657,10 +662,7 @@ TEST(SearchBenchCli, TheTrueRateIsRunsShareAndEachIntervalIsCheckedAgainstIt) {
 // true rate of UN R157's criterion is `run --reference`'s count of its column for that seed.
 TEST(SearchBenchCli, WithAReferenceDriverEachExecutionCostsTwoSimulationsAndTheTrueRateIsRunsCount) {
   TemporaryDirectory work("vsd-test-search-bench");
-  const auto weak = work.path() / "weak_cut_in.yaml";  // collides where the reference driver does not
-  test::writeFile(weak, test::scenarioVariant("alks/cut_in.yaml", "set_speed: Ego_InitSpeed_Ve0_kph / 3.6}",
-                                              "set_speed: Ego_InitSpeed_Ve0_kph / 3.6, max_decel: 0.5, "
-                                              "emergency_trigger: 5}"));
+  const auto weak = weakCutIn(work.path());
   const auto out = work.path() / "bench";
   const auto result = test::run({test::vsdSumo().string(), "-q", "bench", "search", weak.string(), "--reference",
                                  "r157_reference_driver", "--criterion", "reference_avoids_sut_collides", "--budget",
@@ -728,6 +730,10 @@ TEST(SearchCli, NumbersFromFlagsAreCheckedWhereTheyEnter) {
       {{"bench", "search", scenario, "--budget", "-5"}, "--budget: got '-5', expected a whole number"},
       {{"bench", "search", scenario, "--seeds", "0"}, "--seeds"},
       {{"bench", "search", scenario, "--first-seed", "18446744073709551615"}, "--first-seed"},  // would wrap around
+      // Every search's options are checked before the true-rate run (which would take minutes here).
+      {{"bench", "search", scenario, "--surrogates", "random,vectornet", "--reference", "r157_reference_driver",
+        "--true-rate-samples", "100000"},
+       "no --reference with --surrogate vectornet"},
   };
   for (const auto& [flags, expected] : cases) {
     std::vector<std::string> argv = {test::vsdSumo().string(), "-q"};
