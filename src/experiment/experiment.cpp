@@ -2,9 +2,11 @@
 // cache (cache.hpp). Stages, in order:
 //   data     per functional scenario a training pool and a test set (vsd-sumo run)
 //   models   one VectorNet per ADE row (its training mix)
-//   eval     every model on every test set: ADE/FDE, and the sample of median ADE
+//   eval     every model on every test set (a leave-one-out row on its held-out one):
+//            ADE/FDE, and the sample of median ADE
 //   mae      extra trees, BNN (on concrete inputs) and VectorNet (metrics of the
 //            predicted trajectory) against the simulated metrics of the test set
+//   held_out the same per held-out scenario of `leave_one_out` (held_out.cpp writes it)
 //   figures  example predictions like the paper's figures 6-8
 //   results  tables, findings and manifest (results.cpp)
 #include "vsd/experiment/experiment.hpp"
@@ -76,6 +78,20 @@ struct TrainedRun {
   json training;  ///< training.json
 };
 
+/// One metric's errors of one model as vectornetErrors writes them.
+VectorNetMetricError metricError(const json& model, const std::string& metric) {
+  const auto& errors = model.at("metrics").at(metric);
+  VectorNetMetricError error;
+  error.model = model.at("model").get<std::string>();
+  error.mae = errors.at("mae").get<double>();
+  error.bias = errors.at("bias").get<double>();
+  error.samples = errors.at("samples").get<std::size_t>();
+  error.intervalSamples = errors.at("interval_samples").get<std::size_t>();
+  if (!errors.at("coverage50").is_null()) error.coverage50 = errors.at("coverage50").get<double>();
+  if (!errors.at("coverage90").is_null()) error.coverage90 = errors.at("coverage90").get<double>();
+  return error;
+}
+
 json readJson(const fs::path& path) {
   try {
     return json::parse(readTextFile(path));
@@ -104,13 +120,14 @@ class ExperimentRunner {
     trainModels();
     evaluateModels();
     compareMetrics();
+    compareHeldOut();
     drawFigures();
     summary_.output = output_;
     std::vector<AdeRow> main_rows;  // the findings are the main model's
     for (const auto& row : summary_.ade) {
       if (row.model == spec_.models.front().name) main_rows.push_back(row);
     }
-    summary_.findings = checkFindings(main_rows);
+    summary_.findings = checkFindings(spec_, main_rows);
     summary_.seconds = secondsSince(start);
     writeResults(spec_, options_, summary_, artefacts_, *folder_);
     return summary_;
@@ -421,14 +438,14 @@ class ExperimentRunner {
       throwIfInterrupted();
       const auto errors = evaluate(run.modelFile.file, run.modelFile.digest,
                                    fmt::format("eval/{}/row{}_seed{}", run.model, run.row, run.seed),
-                                   fmt::format("{} row {} seed {}", run.model, run.row, run.seed));
+                                   fmt::format("{} row {} seed {}", run.model, run.row, run.seed),
+                                   testLabelsOf(spec_.row(run.row)));
       errors_by_row[{run.model, run.row}].push_back(errors);
       if (run.seed == spec_.seed) rowModels_[{run.model, run.row}] = run.modelFile;
       if (run.model == spec_.models.front().name && run.seed == spec_.seed) {
-        for (const auto& source : spec_.sources) {
-          const auto& entry = errors.at(source.label);
-          medianSample_[{run.row, source.label}] = {entry.at("median_sample").get<std::size_t>(),
-                                                    entry.at("median_ade").get<double>()};
+        for (const auto& [label, entry] : errors.items()) {
+          medianSample_[{run.row, label}] = {entry.at("median_sample").get<std::size_t>(),
+                                             entry.at("median_ade").get<double>()};
         }
       }
     }
@@ -441,22 +458,34 @@ class ExperimentRunner {
     for (const auto& predictor : spec_.predictors) {
       throwIfInterrupted();
       AdeSpec no_training;
-      summary_.ade.push_back(adeRow(predictor, no_training, {evaluate(predictor, "", "eval/" + predictor, predictor)}));
+      summary_.ade.push_back(
+          adeRow(predictor, no_training, {evaluate(predictor, "", "eval/" + predictor, predictor, allLabels())}));
     }
   }
 
-  /// errors.json of one model file or predictor ("cv", "ca") on every test set, cached.
+  std::vector<std::string> allLabels() const {
+    std::vector<std::string> labels;
+    for (const auto& source : spec_.sources) labels.push_back(source.label);
+    return labels;
+  }
+
+  /// The test sets a row is evaluated on: a leave-one-out row's held-out one, else all.
+  std::vector<std::string> testLabelsOf(const AdeSpec& row) const {
+    return row.heldOut.empty() ? allLabels() : std::vector<std::string>{row.heldOut};
+  }
+
+  /// errors.json of one model file or predictor ("cv", "ca") on the test sets of `labels`, cached.
   json evaluate(const fs::path& model, const std::string& model_digest, const std::string& relative,
-                const std::string& what) {
+                const std::string& what, const std::vector<std::string>& labels) {
     const auto folder = cache_.folder(relative);
     auto eval_key = key("evaluation", modelModules());
     eval_key.add("model", model_digest.empty() ? model.string() : model_digest);
-    for (const auto& source : spec_.sources) eval_key.add("test_" + source.label, data(source.label).testDigest);
+    for (const auto& label : labels) eval_key.add("test_" + label, data(label).testDigest);
     if (!reuse(folder, eval_key, what + " evaluation")) {
       cache_.clear(folder);
       const model::Predictor predictor(model, spec_.cores());
       json errors;
-      for (const auto& source : spec_.sources) errors[source.label] = displacementSummary(predictor, source.label, what);
+      for (const auto& label : labels) errors[label] = displacementSummary(predictor, label, what);
       writeJson(folder / "errors.json", errors);
       cache_.commit(folder, eval_key);
     }
@@ -491,7 +520,12 @@ class ExperimentRunner {
     ade_row.model = model_name;
     for (const auto& [label, count] : row.mix) ade_row.mix[label] = count;
     ade_row.paper = row.paper;
+    if (!row.heldOut.empty()) {
+      ade_row.heldOut = row.heldOut;
+      ade_row.training = heldOutTrainingId(row.training);
+    }
     for (const auto& source : spec_.sources) {
+      if (!evaluations.front().contains(source.label)) continue;  // a leave-one-out row's other labels
       std::vector<double> ade;
       std::vector<double> fde;
       for (const auto& errors : evaluations) {
@@ -530,6 +564,26 @@ class ExperimentRunner {
     return models;
   }
 
+  /// The key of a functional scenario's metric errors: its data, the baselines' settings and
+  /// training rows (`rows`: field and value), the draws and every VectorNet model scored.
+  CacheKey metricErrorsKey(const std::string& kind, int format, const std::string& label,
+                           const std::vector<std::string>& names, const std::pair<std::string, std::string>& rows,
+                           const std::vector<std::pair<std::string, RowModel>>& models) const {
+    auto errors_key = key(kind, maeModules());
+    if (format > 0) errors_key.add("format", format);
+    errors_key.add("metrics", fmt::format("{}", fmt::join(names, ",")))
+        .add("train", data(label).trainDigest)
+        .add("test", data(label).testDigest)
+        .add(rows.first, rows.second)
+        .add("et", fmt::format("trees {} max_features {} min_samples_split {} seed {}", spec_.extraTrees.trees,
+                               spec_.extraTrees.maxFeatures, spec_.extraTrees.minSamplesSplit, spec_.extraTrees.seed))
+        .add("bnn", fmt::format("hidden {} layers {} epochs {} samples {} seed {}", spec_.bnn.hidden, spec_.bnn.layers,
+                                spec_.bnn.epochs, spec_.bnn.samples, spec_.bnn.seed))
+        .add("draws", fmt::format("{} seed {}", spec_.maeDraws, spec_.seed));
+    for (const auto& [name, row_model] : models) errors_key.add("vectornet_model_" + name, row_model.digest);
+    return errors_key;
+  }
+
   void compareMetrics() {
     std::vector<std::string> labels;
     for (const auto& item : spec_.maeMetrics) {
@@ -541,21 +595,11 @@ class ExperimentRunner {
       for (const auto& item : spec_.maeMetrics) {
         if (item.label == label) names.push_back(item.metric);
       }
-      const auto& label_data = data(label);
       const auto models = maeModels(label);
       const auto folder = cache_.folder("mae/" + label);
-      auto mae_key = key("metric mae", maeModules());
-      mae_key.add("format", 2)  // 2: every model's errors, bias and interval coverage
-          .add("metrics", fmt::format("{}", fmt::join(names, ",")))
-          .add("train", label_data.trainDigest)
-          .add("test", label_data.testDigest)
-          .add("train_rows", spec_.maeSamples)
-          .add("et", fmt::format("trees {} max_features {} min_samples_split {} seed {}", spec_.extraTrees.trees,
-                                 spec_.extraTrees.maxFeatures, spec_.extraTrees.minSamplesSplit, spec_.extraTrees.seed))
-          .add("bnn", fmt::format("hidden {} layers {} epochs {} samples {} seed {}", spec_.bnn.hidden,
-                                  spec_.bnn.layers, spec_.bnn.epochs, spec_.bnn.samples, spec_.bnn.seed))
-          .add("draws", fmt::format("{} seed {}", spec_.maeDraws, spec_.seed));
-      for (const auto& [name, row_model] : models) mae_key.add("vectornet_model_" + name, row_model.digest);
+      // format 2: every model's errors, bias and interval coverage
+      const auto mae_key = metricErrorsKey("metric mae", 2, label, names,
+                                           {"train_rows", fmt::format("{}", spec_.maeSamples)}, models);
       if (!reuse(folder, mae_key, fmt::format("{} metric MAE", label))) {
         cache_.clear(folder);
         writeJson(folder / "mae.json", computeMae(label, names, models));
@@ -576,18 +620,7 @@ class ExperimentRunner {
       mae_row.bnn = entry.at("bnn").get<double>();
       mae_row.bnnStd = entry.at("bnn_std").get<double>();
       mae_row.fromTruePositions = entry.at("from_true_positions").get<double>();
-      for (const auto& model : results.at("vectornet")) {
-        const auto& errors = model.at("metrics").at(name);
-        VectorNetMetricError error;
-        error.model = model.at("model").get<std::string>();
-        error.mae = errors.at("mae").get<double>();
-        error.bias = errors.at("bias").get<double>();
-        error.samples = errors.at("samples").get<std::size_t>();
-        error.intervalSamples = errors.at("interval_samples").get<std::size_t>();
-        if (!errors.at("coverage50").is_null()) error.coverage50 = errors.at("coverage50").get<double>();
-        if (!errors.at("coverage90").is_null()) error.coverage90 = errors.at("coverage90").get<double>();
-        mae_row.vectornet.push_back(error);
-      }
+      for (const auto& model : results.at("vectornet")) mae_row.vectornet.push_back(metricError(model, name));
       mae_row.etSeconds = results.at("et_seconds").get<double>();
       mae_row.bnnSeconds = results.at("bnn_seconds").get<double>();
       mae_row.trainRows = results.at("train_rows").get<std::size_t>();
@@ -598,25 +631,34 @@ class ExperimentRunner {
     }
   }
 
-  json computeMae(const std::string& label, const std::vector<std::string>& names,
-                  const std::vector<std::pair<std::string, RowModel>>& models) {
+  /// The regression metamodels on the concrete inputs of `label`: extra trees and the BNN
+  /// fitted on its first `train_rows` training rows, scored on its test set.
+  std::pair<baseline::BaselineReport, baseline::BaselineReport> fitBaselines(const std::string& label,
+                                                                             const std::vector<std::string>& names,
+                                                                             std::size_t train_rows) const {
     const auto& label_data = data(label);
-    json results;
-    // Regression metamodels on the concrete inputs.
     baseline::BaselineOptions baseline_options;
     baseline_options.train = label_data.trainRun;
     baseline_options.test = label_data.testRun;
     baseline_options.targets = names;
-    baseline_options.maxTrainRows = spec_.maeSamples;
+    baseline_options.maxTrainRows = train_rows;
     baseline_options.extraTrees = spec_.extraTrees;
     baseline_options.bnn = spec_.bnn;
     baseline_options.bnn.threads = spec_.cores();
     baseline_options.model = "et";
-    const auto et = baseline::runBaseline(baseline_options);
+    auto et = baseline::runBaseline(baseline_options);
     baseline_options.model = "bnn";
-    const auto bnn = baseline::runBaseline(baseline_options);
+    auto bnn = baseline::runBaseline(baseline_options);
     spdlog::info("{}: extra trees {:.1f} s, BNN {:.1f} s (fit + predict, {} training rows, {} test rows)", label,
                  et.fitSeconds + et.predictSeconds, bnn.fitSeconds + bnn.predictSeconds, et.trainRows, et.testRows);
+    return {std::move(et), std::move(bnn)};
+  }
+
+  json computeMae(const std::string& label, const std::vector<std::string>& names,
+                  const std::vector<std::pair<std::string, RowModel>>& models) {
+    const auto& label_data = data(label);
+    json results;
+    const auto [et, bnn] = fitBaselines(label, names, spec_.maeSamples);
     results["et_seconds"] = et.fitSeconds + et.predictSeconds;
     results["bnn_seconds"] = bnn.fitSeconds + bnn.predictSeconds;
     results["train_rows"] = et.trainRows;
@@ -657,6 +699,102 @@ class ExperimentRunner {
       }
     }
     return results;
+  }
+
+  // --- leave one functional scenario out --------------------------------------------------
+  /// The leave-one-out rows of `held_out` in HeldOutTraining order.
+  std::vector<const AdeSpec*> heldOutRows(const std::string& held_out) const {
+    std::vector<const AdeSpec*> rows;
+    for (const auto& row : spec_.ade) {
+      if (row.heldOut == held_out) rows.push_back(&row);
+    }
+    return rows;
+  }
+
+  /// Own training samples of a held-out row (its mix's count of the held-out label).
+  static std::size_t ownSamples(const AdeSpec& row) {
+    for (const auto& [label, count] : row.mix) {
+      if (label == row.heldOut) return count;
+    }
+    return 0;
+  }
+
+  /// The study's metrics that the held-out scenario's test set stores.
+  std::vector<std::string> heldOutMetricNames(const std::string& label) const {
+    const vector::DatasetReader reader(vector::resolveDatasetPath(data(label).testRun));
+    const auto& stored = reader.header().metricNames;
+    std::vector<std::string> names;
+    for (const auto& name : spec_.leaveOneOut.metrics) {
+      if (std::find(stored.begin(), stored.end(), name) != stored.end()) names.push_back(name);
+    }
+    return names;
+  }
+
+  /// Per held-out scenario: the metric errors of the main model of each of its rows, and of
+  /// extra trees and the BNN fitted on as many of its own samples as the own-data rows use.
+  void compareHeldOut() {
+    for (const auto& label : spec_.leaveOneOut.heldOut) {
+      throwIfInterrupted();
+      const auto names = heldOutMetricNames(label);
+      if (names.empty()) continue;
+      std::vector<std::pair<std::string, RowModel>> models;
+      std::vector<std::size_t> own_sizes;
+      for (const auto* row : heldOutRows(label)) {
+        models.emplace_back(heldOutTrainingId(row->training), rowModels_.at({spec_.models.front().name, row->row}));
+        if (row->training == HeldOutTraining::FewOwn || row->training == HeldOutTraining::AllOwn) {
+          own_sizes.push_back(ownSamples(*row));
+        }
+      }
+      const auto folder = cache_.folder("held_out/" + label);
+      const auto held_key = metricErrorsKey("held-out metric errors", 0, label, names,
+                                            {"own_rows", fmt::format("{}", fmt::join(own_sizes, ","))}, models);
+      if (!reuse(folder, held_key, fmt::format("{} held-out metric errors", label))) {
+        cache_.clear(folder);
+        writeJson(folder / "errors.json", heldOutErrors(label, names, models, own_sizes));
+        cache_.commit(folder, held_key);
+      }
+      addHeldOutMetrics(label, names, readJson(folder / "errors.json"));
+    }
+  }
+
+  json heldOutErrors(const std::string& label, const std::vector<std::string>& names,
+                     const std::vector<std::pair<std::string, RowModel>>& models,
+                     const std::vector<std::size_t>& own_sizes) {
+    json results;
+    for (const auto rows : own_sizes) {
+      const auto [et, bnn] = fitBaselines(label, names, rows);
+      for (std::size_t m = 0; m < names.size(); ++m) {
+        results["baselines"].push_back({{"train_rows", et.trainRows}, {"metric", names[m]}, {"et", et.mae[m]},
+                                        {"bnn", bnn.mae[m]}});
+      }
+    }
+    const auto& scenes = testScenes(label);
+    const vector::DatasetReader reader(vector::resolveDatasetPath(data(label).testRun));
+    const auto simulated = simulatedMetrics(reader, names);
+    const metrics::MetricSet metric_set(names, pipeline::sceneAvailability(reader.header().kind),
+                                        fmt::format("{}: leave_one_out.metrics ({})", spec_.file.string(), label));
+    results["vectornet"] = json::array();
+    for (const auto& [training, row_model] : models) {
+      results["vectornet"].push_back(vectornetErrors(training, row_model, scenes, simulated, metric_set));
+    }
+    return results;
+  }
+
+  void addHeldOutMetrics(const std::string& label, const std::vector<std::string>& names, const json& results) {
+    for (const auto& name : names) {
+      HeldOutMetric metric;
+      metric.label = label;
+      metric.metric = name;
+      metric.unit = metrics::findMetric(name)->unit;
+      for (const auto& model : results.at("vectornet")) metric.vectornet.push_back(metricError(model, name));
+      for (const auto& entry : results.at("baselines")) {
+        if (entry.at("metric").get<std::string>() != name) continue;
+        const auto rows = entry.at("train_rows").get<std::size_t>();
+        metric.et[rows] = entry.at("et").get<double>();
+        metric.bnn[rows] = entry.at("bnn").get<double>();
+      }
+      summary_.heldOut.push_back(std::move(metric));
+    }
   }
 
   /// The simulated value of every metric of `names` per test scene (the stored metrics).

@@ -23,8 +23,49 @@ namespace fs = std::filesystem;
 namespace vsd::experiment {
 
 namespace {
-
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+}  // namespace
+
+double adeOf(const AdeRow& row, const std::string& label) {
+  const auto found = row.ade.find(label);
+  return found == row.ade.end() ? kNaN : found->second;
+}
+
+std::string metres(double value) { return std::isfinite(value) ? fmt::format("{:.2f}", value) : "–"; }
+
+/// "0.57" or, over several seeds, "0.57 ± 0.03" (mean ± sample standard deviation).
+std::string adeText(const AdeRow& row, const std::string& label) {
+  const auto spread = row.adeStd.find(label);
+  if (spread == row.adeStd.end()) return metres(adeOf(row, label));
+  return fmt::format("{} ± {}", metres(adeOf(row, label)), metres(spread->second));
+}
+
+std::string mixText(const AdeRow& row) {
+  std::vector<std::string> parts;
+  for (const auto& [label, count] : row.mix) {
+    if (count > 0) parts.push_back(fmt::format("{} {}", label, count));
+  }
+  return fmt::format("{}", fmt::join(parts, " + "));
+}
+
+std::string percent(double share) { return std::isfinite(share) ? fmt::format("{:.0f} %", 100.0 * share) : "–"; }
+
+/// "51 % (48–54)": a coverage with its binomial 95 % confidence interval (Wilson) over the
+/// scenes that had an interval.
+std::string coverageText(double share, std::size_t scenes) {
+  if (!std::isfinite(share) || scenes == 0) return percent(share);
+  const auto interval = wilsonInterval(share, scenes);
+  return fmt::format("{} ({:.0f}–{:.0f})", percent(share), 100.0 * interval.low, 100.0 * interval.high);
+}
+
+std::string modelDescription(const ModelSpec& model) {
+  std::vector<std::string> options;
+  for (const auto& [name, value] : model.options) options.push_back(fmt::format("{}={}", name, formatNumber(value)));
+  std::string text = options.empty() ? model.decoder : fmt::format("{} ({})", model.decoder, fmt::join(options, ", "));
+  return model.frame == "ego" ? text : text + fmt::format(", {} frame", model.frame);
+}
+
+namespace {
 
 /// Row `number` if its mix holds exactly `labels` (count > 0), else null.
 const AdeRow* paperRow(const std::vector<AdeRow>& rows, int number, const std::set<std::string>& labels) {
@@ -39,10 +80,6 @@ const AdeRow* paperRow(const std::vector<AdeRow>& rows, int number, const std::s
   return nullptr;
 }
 
-double adeOf(const AdeRow& row, const std::string& label) {
-  const auto found = row.ade.find(label);
-  return found == row.ade.end() ? kNaN : found->second;
-}
 
 enum class Transfer { Generalises, Fails, Between };
 
@@ -61,27 +98,13 @@ const char* transferText(Transfer transfer) {
   return "";
 }
 
-std::string metres(double value) { return std::isfinite(value) ? fmt::format("{:.2f}", value) : "–"; }
 
-/// "0.57" or, over several seeds, "0.57 ± 0.03" (mean ± sample standard deviation).
-std::string adeText(const AdeRow& row, const std::string& label) {
-  const auto spread = row.adeStd.find(label);
-  if (spread == row.adeStd.end()) return metres(adeOf(row, label));
-  return fmt::format("{} ± {}", metres(adeOf(row, label)), metres(spread->second));
-}
 
 double stdOf(const AdeRow& row, const std::string& label) {
   const auto spread = row.adeStd.find(label);
   return spread == row.adeStd.end() ? 0.0 : spread->second;
 }
 
-std::string mixText(const AdeRow& row) {
-  std::vector<std::string> parts;
-  for (const auto& [label, count] : row.mix) {
-    if (count > 0) parts.push_back(fmt::format("{} {}", label, count));
-  }
-  return fmt::format("{}", fmt::join(parts, " + "));
-}
 
 std::string paperValue(const std::map<std::string, double>& paper, const std::string& key) {
   const auto found = paper.find(key);
@@ -126,6 +149,8 @@ std::string sealedText(const Spec& spec) {
                      kFirstSealedTestSeed, kValidationDataSeed);
 }
 
+}  // namespace
+
 std::string sizesLine(const Spec& spec) {
   return fmt::format(
       "Data per functional scenario: {} training scenarios (seed {}), {} test scenarios (seed {}; {}). "
@@ -135,6 +160,9 @@ std::string sizesLine(const Spec& spec) {
       spec.learningRate, spec.seed, seedsText(spec), spec.threads, spec.parallel,
       spec.quick ? " **--quick sizes: not comparable with the paper.**" : "");
 }
+
+namespace {
+
 
 
 /// "| first | <labels> | last |" and its separator row; `first` and `last` may hold several
@@ -153,12 +181,6 @@ std::string adeTableHead(const std::vector<std::string>& labels, const std::stri
   return md + "\n";
 }
 
-std::string modelDescription(const ModelSpec& model) {
-  std::vector<std::string> options;
-  for (const auto& [name, value] : model.options) options.push_back(fmt::format("{}={}", name, formatNumber(value)));
-  std::string text = options.empty() ? model.decoder : fmt::format("{} ({})", model.decoder, fmt::join(options, ", "));
-  return model.frame == "ego" ? text : text + fmt::format(", {} frame", model.frame);
-}
 
 /// The spec's models that predict in the MAE table, in spec order (main model first).
 std::vector<std::string> maeModelNames(const Spec& spec, const std::vector<MaeRow>& rows) {
@@ -180,15 +202,7 @@ const VectorNetMetricError* errorOf(const MaeRow& row, const std::string& model)
   return nullptr;
 }
 
-std::string percent(double share) { return std::isfinite(share) ? fmt::format("{:.0f} %", 100.0 * share) : "–"; }
 
-/// "51 % (48–54)": a coverage with its binomial 95 % confidence interval (Wilson) over the
-/// scenes that had an interval.
-std::string coverageText(double share, std::size_t scenes) {
-  if (!std::isfinite(share) || scenes == 0) return percent(share);
-  const auto interval = wilsonInterval(share, scenes);
-  return fmt::format("{} ({:.0f}–{:.0f})", percent(share), 100.0 * interval.low, 100.0 * interval.high);
-}
 
 /// The 95 % interval's bounds of a coverage for mae.csv (empty where there is no coverage).
 std::pair<std::string, std::string> coverageBounds(double share, std::size_t scenes) {
@@ -437,6 +451,13 @@ std::vector<Finding> checkFindings(const std::vector<AdeRow>& rows) {
   return {findingA(rows), findingB(rows, generalise_rule), findingC(rows, generalise_rule), findingD(rows), findingE(rows)};
 }
 
+std::vector<Finding> checkFindings(const Spec& spec, const std::vector<AdeRow>& rows) {
+  const bool paper_rows = std::any_of(spec.ade.begin(), spec.ade.end(), [](const AdeSpec& row) { return row.heldOut.empty(); });
+  auto findings = paper_rows ? checkFindings(rows) : std::vector<Finding>{};
+  for (auto& finding : heldOutFindings(spec, rows)) findings.push_back(std::move(finding));
+  return findings;
+}
+
 void writeResults(const Spec& spec, const ExperimentOptions& options, ExperimentSummary& summary,
                   const std::vector<ArtefactRecord>& artefacts, OutputFolder& folder) {
   const auto& out = summary.output;
@@ -446,12 +467,18 @@ void writeResults(const Spec& spec, const ExperimentOptions& options, Experiment
     summary.files.push_back(path);
   };
 
-  {  // ade.csv (long format) and ade.md (the paper's layout, one table per model)
+  const bool table_rows =
+      std::any_of(spec.ade.begin(), spec.ade.end(), [](const AdeSpec& row) { return row.heldOut.empty(); });
+  if (table_rows) {  // ade.csv (long format) and ade.md (the paper's layout, one table per model)
+    std::vector<AdeRow> rows;  // the leave-one-out rows have their own files
+    for (const auto& row : summary.ade) {
+      if (row.heldOut.empty()) rows.push_back(row);
+    }
     std::ostringstream csv;
     CsvWriter writer(csv);
     writer.writeRow({"model", "row", "mix", "test_label", "ade_m", "ade_std_m", "seeds", "fde_m", "paper_ade_m",
                      "train_seconds", "epochs"});
-    for (const auto& row : summary.ade) {
+    for (const auto& row : rows) {
       for (const auto& label : labels) {
         const double ade = row.ade.count(label) ? row.ade.at(label) : kNaN;
         const double fde = row.fde.count(label) ? row.fde.at(label) : kNaN;
@@ -462,17 +489,24 @@ void writeResults(const Spec& spec, const ExperimentOptions& options, Experiment
       }
     }
     keep(out / "ade.csv", csv.str());
-    keep(out / "ade.md", adeMarkdown(spec, summary.ade));
+    keep(out / "ade.md", adeMarkdown(spec, rows));
   }
 
-  {  // mae.csv and mae.md
+  if (table_rows) {  // mae.csv and mae.md
     const auto [csv, md] = maeFiles(spec, summary.mae);
     keep(out / "mae.csv", csv);
     keep(out / "mae.md", md);
   }
 
+  if (!spec.leaveOneOut.heldOut.empty()) {  // held_out.csv and held_out.md
+    const auto [csv, md] = heldOutFiles(spec, summary);
+    keep(out / "held_out.csv", csv);
+    keep(out / "held_out.md", md);
+  }
+
   {  // findings.md
-    std::string md = "# The paper's findings, checked on these numbers\n\n" + sizesLine(spec) + "\n\n";
+    std::string md = fmt::format("# {}, checked on these numbers\n\n{}\n\n",
+                                 table_rows ? "The paper's findings" : "Findings of the leave-one-out study", sizesLine(spec));
     for (const auto& finding : summary.findings) {
       md += fmt::format("- **({}) {}** — **{}**: {}.  \n  Rule: {}.\n", finding.id, finding.claim, finding.verdict,
                         finding.evidence, finding.rule);
@@ -505,6 +539,12 @@ void writeResults(const Spec& spec, const ExperimentOptions& options, Experiment
          {"seeds", model.seeds}});
   }
   manifest["predictors"] = spec.predictors;
+  if (!spec.leaveOneOut.heldOut.empty()) {
+    const auto& study = spec.leaveOneOut;
+    manifest["leave_one_out"] = {{"held_out", study.heldOut}, {"context", study.context},
+                                 {"others", study.others},    {"few_shot", study.fewShot},
+                                 {"alone", study.alone},      {"metrics", study.metrics}};
+  }
   manifest["sizes"] = {{"train_samples", spec.trainSamples}, {"test_samples", spec.testSamples},
                        {"steps", spec.steps},                {"batch", spec.batch},
                        {"mae_train_rows", spec.maeSamples},  {"threads", spec.threads},

@@ -30,6 +30,16 @@ bool ModelSpec::trains(int row) const {
   return std::find(rows.begin(), rows.end(), row) != rows.end();
 }
 
+const char* heldOutTrainingId(HeldOutTraining training) {
+  switch (training) {
+    case HeldOutTraining::Others: return "others";
+    case HeldOutTraining::OthersAndFewOwn: return "others_and_few_own";
+    case HeldOutTraining::FewOwn: return "few_own";
+    case HeldOutTraining::AllOwn: return "all_own";
+  }
+  return "?";
+}
+
 const AdeSpec& Spec::row(int number) const {
   for (const auto& row : ade) {
     if (row.row == number) return row;
@@ -173,12 +183,15 @@ void applyQuickSizes(const scenario::YamlReader& reader, const YAML::Node& root,
     spec.trainSamples = static_cast<std::uint64_t>(reader.integer(q, "train_samples", "quick.train_samples", 300, 2));
     spec.testSamples = static_cast<std::uint64_t>(reader.integer(q, "test_samples", "quick.test_samples", 300, 1));
     const double scale = reader.number(q, "mix_scale", "quick.mix_scale", 0.1);
+    auto scaled = [&](std::size_t count) {
+      if (count > 0) count = std::max<std::size_t>(10, static_cast<std::size_t>(std::lround(static_cast<double>(count) * scale)));
+      return std::min<std::size_t>(count, spec.trainSamples);
+    };
     for (auto& row : spec.ade) {
-      for (auto& [label, count] : row.mix) {
-        if (count > 0) count = std::max<std::size_t>(10, static_cast<std::size_t>(std::lround(static_cast<double>(count) * scale)));
-        count = std::min<std::size_t>(count, spec.trainSamples);
-      }
+      for (auto& [label, count] : row.mix) count = scaled(count);
     }
+    auto& study = spec.leaveOneOut;
+    for (auto* count : {&study.others, &study.fewShot, &study.alone}) *count = scaled(*count);
     spec.steps = reader.integer(q, "steps", "quick.steps", 500, 1);
     spec.maeSamples = static_cast<std::size_t>(reader.integer(q, "mae_samples", "quick.mae_samples", 200, 2));
     spec.bnn.epochs = reader.integer(q, "bnn_epochs", "quick.bnn_epochs", 80, 1);
@@ -312,7 +325,8 @@ void requireRow(const scenario::YamlReader& reader, const Spec& spec, const YAML
 /// `ade`: the training mixes, one row each, numbered uniquely.
 void parseAdeRows(const scenario::YamlReader& reader, const YAML::Node& root, Spec& spec) {
   const auto ade = root["ade"];
-  if (!ade || !ade.IsSequence()) reader.fail(root, "ade", "expected a list of training mixes");
+  if (!ade && root["leave_one_out"]) return;  // a spec of the leave-one-out study alone
+  if (!ade || !ade.IsSequence()) reader.fail(root, "ade", "expected a list of training mixes (or a leave_one_out section)");
   std::set<int> rows;
   for (std::size_t i = 0; i < ade.size(); ++i) {
     const std::string field = fmt::format("ade[{}]", i);
@@ -331,6 +345,98 @@ void parseAdeRows(const scenario::YamlReader& reader, const YAML::Node& root, Sp
     }
     if (ade[i]["paper"]) row.paper = labelledNumbers(reader, ade[i]["paper"], field + ".paper");
     spec.ade.push_back(row);
+  }
+}
+
+/// A list of functional-scenario labels, each defined under `scenarios`.
+std::vector<std::string> labelList(const scenario::YamlReader& reader, const Spec& spec, const YAML::Node& node,
+                                   const std::string& field) {
+  if (!node.IsSequence()) reader.fail(node, field, "expected a list of functional scenarios, e.g. [acc, lk]");
+  std::vector<std::string> labels;
+  for (std::size_t i = 0; i < node.size(); ++i) {
+    const std::string item = fmt::format("{}[{}]", field, i);
+    const auto label = reader.scalar(node[i], item);
+    requireLabel(reader, spec, node[i], item, label);
+    if (std::find(labels.begin(), labels.end(), label) != labels.end()) {
+      reader.fail(node[i], item, fmt::format("'{}' appears twice", label));
+    }
+    labels.push_back(label);
+  }
+  return labels;
+}
+
+/// The four rows of one held-out functional scenario (HeldOutTraining), numbered from `first`.
+void addHeldOutRows(const LeaveOneOutSpec& study, const std::vector<Source>& sources, const std::string& held_out,
+                    int first, Spec& spec) {
+  for (const auto training : kHeldOutTrainings) {
+    AdeSpec row;
+    row.row = first++;
+    row.heldOut = held_out;
+    row.training = training;
+    const bool others = training == HeldOutTraining::Others || training == HeldOutTraining::OthersAndFewOwn;
+    if (others) {
+      for (const auto& source : sources) {
+        if (source.label != held_out) row.mix.emplace_back(source.label, study.others);
+      }
+    }
+    if (training == HeldOutTraining::OthersAndFewOwn || training == HeldOutTraining::FewOwn) {
+      row.mix.emplace_back(held_out, study.fewShot);
+    }
+    if (training == HeldOutTraining::AllOwn) row.mix.emplace_back(held_out, study.alone);
+    spec.ade.push_back(std::move(row));
+  }
+}
+
+/// `leave_one_out`: the study's settings, expanded into four ade rows per held-out scenario.
+void parseLeaveOneOut(const scenario::YamlReader& reader, const YAML::Node& root, Spec& spec) {
+  const auto node = root["leave_one_out"];
+  if (!node) return;
+  const std::string field = "leave_one_out";
+  reader.checkKeys(node, field, {"held_out", "context", "others", "few_shot", "alone", "metrics"});
+  auto& study = spec.leaveOneOut;
+  if (node["context"]) study.context = labelList(reader, spec, node["context"], field + ".context");
+  if (node["held_out"]) {
+    study.heldOut = labelList(reader, spec, node["held_out"], field + ".held_out");
+    for (std::size_t i = 0; i < study.heldOut.size(); ++i) {
+      if (std::find(study.context.begin(), study.context.end(), study.heldOut[i]) != study.context.end()) {
+        reader.fail(node["held_out"][i], fmt::format("{}.held_out[{}]", field, i),
+                    fmt::format("'{}' is in leave_one_out.context (always trained on, never held out)", study.heldOut[i]));
+      }
+    }
+  } else {
+    for (const auto& source : spec.sources) {
+      if (std::find(study.context.begin(), study.context.end(), source.label) == study.context.end()) {
+        study.heldOut.push_back(source.label);
+      }
+    }
+  }
+  if (study.heldOut.empty()) reader.fail(node, field, "no functional scenario left to hold out (all are context)");
+  if (spec.sources.size() < 2) reader.fail(node, field, "needs at least two functional scenarios under scenarios");
+  const auto limit = static_cast<int>(spec.trainSamples);
+  // Every count draws from a functional scenario's training pool (data.train_samples).
+  auto count = [&](const char* key, int fallback, int minimum) {
+    return static_cast<std::size_t>(
+        reader.integer(node, key, field + "." + key, std::min(fallback, limit), minimum, limit));
+  };
+  study.others = count("others", 1000, 1);
+  study.fewShot = count("few_shot", 200, 2);
+  study.alone = count("alone", 2000, 2);
+  if (study.alone <= study.fewShot) {
+    reader.fail(node["alone"] ? node["alone"] : node, field + ".alone",
+                fmt::format("{} is not more than few_shot ({}): the reference trains on more own samples",
+                            study.alone, study.fewShot));
+  }
+  if (const auto metrics = node["metrics"]) {
+    if (!metrics.IsSequence()) reader.fail(metrics, field + ".metrics", "expected a list of metric names, e.g. [d_min]");
+    for (std::size_t i = 0; i < metrics.size(); ++i) {
+      const std::string item = fmt::format("{}.metrics[{}]", field, i);
+      const auto name = reader.scalar(metrics[i], item);
+      if (!metrics::findMetric(name)) reader.fail(metrics[i], item, fmt::format("unknown metric '{}'", name));
+      study.metrics.push_back(name);
+    }
+  }
+  for (std::size_t i = 0; i < study.heldOut.size(); ++i) {
+    addHeldOutRows(study, spec.sources, study.heldOut[i], kFirstHeldOutRow + 10 * static_cast<int>(i), spec);
   }
 }
 
@@ -419,7 +525,7 @@ Spec parseSpec(const fs::path& file, bool quick) {
   const scenario::YamlReader reader(file.string());
   const auto root = scenario::loadYaml(text, file.string());
   reader.checkKeys(root, "", {"schema", "name", "seed", "scenarios", "data", "training", "ade", "models", "seeds", "predictors", "mae",
-                          "figures", "quick"});
+                          "figures", "quick", "leave_one_out"});
   Spec spec;
   spec.file = file;
   spec.quick = quick;
@@ -427,6 +533,7 @@ Spec parseSpec(const fs::path& file, bool quick) {
   parseSources(reader, root, spec);
   parseDataAndTraining(reader, root, spec);
   parseAdeRows(reader, root, spec);
+  parseLeaveOneOut(reader, root, spec);
   parseModels(reader, root, spec);
   parseMae(reader, root, spec);
   parseFigures(reader, root, spec);

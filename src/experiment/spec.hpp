@@ -17,11 +17,40 @@ struct Source {
   std::filesystem::path testRun;
 };
 
+/// What a leave-one-out row trains on, for its held-out functional scenario (docs/results.md
+/// "Leave one scenario out"): the paper's rows 9 and 10 asked of every scenario.
+enum class HeldOutTraining {
+  Others,           ///< every other functional scenario, `others` samples each
+  OthersAndFewOwn,  ///< the same plus `few_shot` of its own (row 9)
+  FewOwn,           ///< `few_shot` of its own alone (row 10)
+  AllOwn,           ///< `alone` of its own alone (the reference row 9 is held to)
+};
+inline constexpr HeldOutTraining kHeldOutTrainings[] = {HeldOutTraining::Others, HeldOutTraining::OthersAndFewOwn,
+                                                        HeldOutTraining::FewOwn, HeldOutTraining::AllOwn};
+/// Its name in CSV files and the manifest ("others", "others_and_few_own", "few_own", "all_own").
+const char* heldOutTrainingId(HeldOutTraining training);
+
 struct AdeSpec {
   int row = 0;
   std::vector<std::pair<std::string, std::size_t>> mix;
   std::map<std::string, double> paper;
+  /// A leave-one-out row: the held-out label (its test set is the only one it is evaluated
+  /// on) and what it trains on; empty for the table rows of the spec's `ade`.
+  std::string heldOut;
+  HeldOutTraining training = HeldOutTraining::Others;
 };
+
+/// `leave_one_out`: each of `heldOut` in turn predicted from the others (the rows it expands
+/// into are AdeSpec rows numbered from kFirstHeldOutRow, four per held-out scenario).
+struct LeaveOneOutSpec {
+  std::vector<std::string> heldOut;  ///< every label but `context` unless the spec names them
+  std::vector<std::string> context;  ///< always trained on, never held out (the paper's three)
+  std::size_t others = 1000;         ///< samples of each other functional scenario
+  std::size_t fewShot = 200;         ///< own samples added (row 9) or alone (row 10)
+  std::size_t alone = 2000;          ///< own samples of the reference row
+  std::vector<std::string> metrics;  ///< reported for a held-out scenario whose data store them
+};
+inline constexpr int kFirstHeldOutRow = 1001;
 
 /// A way of training every ADE row (README "experiment: models"). The first model of a
 /// spec is the main one: its rows decide the findings and predict in the MAE table and figures.
@@ -78,6 +107,7 @@ struct Spec {
   baseline::ExtraTreesOptions extraTrees;
   baseline::BnnOptions bnn;
   std::vector<FigureSpec> figures;
+  LeaveOneOutSpec leaveOneOut;
   bool quick = false;
 
   const Source& source(const std::string& label) const;

@@ -42,6 +42,10 @@ struct AdeRow {
   double trainSeconds = 0.0;             ///< mean over the seeds
   int epochs = 0;                        ///< of the first seed
   std::string stopReason;                ///< of the first seed
+  /// A leave-one-out row: the held-out functional scenario (the only test label it has) and
+  /// what it trained on ("others", "others_and_few_own", "few_own", "all_own"); empty otherwise.
+  std::string heldOut;
+  std::string training;
 };
 
 /// A metric of one VectorNet model of the spec (the first seed of the ADE row that predicts the
@@ -74,6 +78,18 @@ struct MaeRow {
   std::map<std::string, double> paper;  ///< et, bnn, vectornet
 };
 
+/// A metric of a held-out functional scenario (the leave-one-out study): the main model of
+/// each of its rows (first seed; `model` names the row's training) and the regression
+/// baselines fitted on its own inputs, which have nothing to learn from the other scenarios.
+struct HeldOutMetric {
+  std::string label;                            ///< the held-out functional scenario
+  std::string metric;
+  std::string unit;
+  std::vector<VectorNetMetricError> vectornet;  ///< one per training, in HeldOutTraining order
+  std::map<std::size_t, double> et;             ///< own training rows -> MAE of extra trees
+  std::map<std::size_t, double> bnn;            ///< own training rows -> MAE of the BNN
+};
+
 /// One of the paper's findings, checked on our numbers with the thresholds in its
 /// `rule` (README "Findings"): "holds", "does not hold" or "inconclusive" (between
 /// the "generalises" and "does not generalise" thresholds).
@@ -89,6 +105,7 @@ struct ExperimentSummary {
   std::filesystem::path output;
   std::vector<AdeRow> ade;  ///< the main model's rows first, then other models', then predictors
   std::vector<MaeRow> mae;
+  std::vector<HeldOutMetric> heldOut;  ///< the leave-one-out study's metrics (empty without one)
   std::vector<Finding> findings;
   std::vector<std::filesystem::path> files;
   double seconds = 0.0;
