@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <regex>
+#include <set>
 #include <sstream>
 
 #include "../../src/experiment/cache.hpp"
@@ -203,6 +204,7 @@ TEST(Experiment, BadSpecsGiveOneLineNamingFileFieldAndValue) {
   const auto scenarios = test::sourceDir() / "scenarios";
   const std::string head = fmt::format("schema: vsd-experiment/1\nname: bad\nscenarios:\n  acc: {{scenario: {}}}\n",
                                        (scenarios / "acc.yaml").string());
+  const std::string two = head + fmt::format("  lk: {{scenario: {}}}\n", (scenarios / "lk.yaml").string());
   struct Case {
     std::string name;
     std::string yaml;
@@ -245,6 +247,19 @@ TEST(Experiment, BadSpecsGiveOneLineNamingFileFieldAndValue) {
        "models[0].decoder: given with a preset, which sets it"},
       {"unknown_preset", head + "ade:\n  - {row: 1, mix: {acc: 20}}\nmodels:\n  - {name: m, preset: best}\n",
        "unknown preset 'best' (known: recommended, paper)"},
+      {"no_ade_no_study", head, "ade: expected a list of training mixes (or a leave_one_out section)"},
+      {"held_out_in_context", two + "leave_one_out: {context: [acc], held_out: [lk, acc]}\n",
+       "leave_one_out.held_out[1]: 'acc' is in leave_one_out.context"},
+      {"held_out_unknown", two + "leave_one_out: {held_out: [acc_lk]}\n",
+       "leave_one_out.held_out[0]: unknown functional scenario 'acc_lk' (defined under scenarios: acc, lk)"},
+      {"alone_not_more", two + "leave_one_out: {few_shot: 200, alone: 200}\n",
+       "leave_one_out.alone: 200 is not more than few_shot (200)"},
+      {"others_beyond_pool", two + "data: {train_samples: 100}\nleave_one_out: {others: 500}\n",
+       "leave_one_out.others"},
+      {"all_context", two + "leave_one_out: {context: [acc, lk]}\n",
+       "leave_one_out: no functional scenario left to hold out (all are context)"},
+      {"study_unknown_metric", two + "leave_one_out: {metrics: [d_minimum]}\n",
+       "leave_one_out.metrics[0]: unknown metric 'd_minimum'"},
   };
   for (const auto& c : cases) {
     const auto file = test::writeFile(dir.path() / (c.name + ".yaml"), c.yaml);
@@ -258,6 +273,84 @@ TEST(Experiment, BadSpecsGiveOneLineNamingFileFieldAndValue) {
     EXPECT_NE(result.output.find(file.string()), std::string::npos) << c.name << ": " << result.output;
     EXPECT_FALSE(fs::exists(out)) << c.name << ": output left behind";
   }
+}
+
+// Issue 25 item 1 at toy sizes: each held-out scenario gets its four trainings, is evaluated on
+// its own test set only, the baselines learn from its own inputs only, and the finding states
+// what the numbers say.
+TEST(Experiment, LeaveOneOutHoldsEachScenarioOutAndComparesFewOwnSamplesWithManyAlone) {
+  TemporaryDirectory dir;
+  const auto scenarios = test::sourceDir() / "scenarios";
+  const auto spec = test::writeFile(dir.path() / "loso.yaml", fmt::format(R"(schema: vsd-experiment/1
+name: loso
+scenarios:
+  acc: {{scenario: {0}/acc.yaml}}
+  lk: {{scenario: {0}/lk.yaml}}
+  acc_lk: {{scenario: {0}/acc_lk.yaml}}
+data: {{train_samples: 60, test_samples: 20, test_seed: 1001}}
+training: {{steps: 8, threads: 1, parallel: 2}}
+models:
+  - {{name: kin, preset: recommended}}
+leave_one_out: {{context: [acc], others: 20, few_shot: 10, alone: 40, metrics: [a_min, d_min, p_lat_max]}}
+mae: {{draws: 4, extra_trees: {{trees: 5}}, bnn: {{epochs: 5}}}}
+)",
+                                                                       scenarios.string()));
+  const auto out = dir.path() / "out";
+  const auto result = runExperimentCli({spec.string(), "--out", out.string()}, dir.path());
+  ASSERT_EQ(result.exitCode, 0) << result.output;
+  // Without an `ade` section there is no paper table to write.
+  EXPECT_FALSE(fs::exists(out / "ade.csv"));
+  EXPECT_FALSE(fs::exists(out / "mae.csv"));
+
+  const auto table = CsvTable::read(out / "held_out.csv");
+  std::map<std::string, std::string> mix;   // "held_out training" -> mix of the ADE row
+  std::map<std::string, double> ade;        // "held_out training" -> ADE
+  std::set<std::string> baseline_trainings;
+  std::set<std::string> metrics_of_lk;
+  for (std::size_t r = 0; r < table.rows(); ++r) {
+    const auto held_out = table.cell(r, table.column("held_out"));
+    const auto training = table.cell(r, table.column("training"));
+    const auto model = table.cell(r, table.column("model"));
+    const auto quantity = table.cell(r, table.column("quantity"));
+    if (quantity == "ade") {
+      mix[held_out + " " + training] = table.cell(r, table.column("mix"));
+      ade[held_out + " " + training] = table.number(r, table.column("value"));
+    } else if (model == "et" || model == "bnn") {
+      baseline_trainings.insert(training);
+    } else if (held_out == "lk") {
+      metrics_of_lk.insert(quantity);
+    }
+  }
+  // acc is context: never held out. Each held-out scenario: four trainings with the spec's counts.
+  EXPECT_EQ(mix.count("acc others"), 0U);
+  EXPECT_EQ(mix["lk others"], "acc 20 + acc_lk 20");
+  EXPECT_EQ(mix["lk others_and_few_own"], "acc 20 + acc_lk 20 + lk 10");
+  EXPECT_EQ(mix["lk few_own"], "lk 10");
+  EXPECT_EQ(mix["lk all_own"], "lk 40");
+  EXPECT_EQ(mix["acc_lk others"], "acc 20 + lk 20");
+  EXPECT_EQ(mix["acc_lk all_own"], "acc_lk 40");
+  // The baselines have only the scenario's own samples to learn from.
+  EXPECT_EQ(baseline_trainings, (std::set<std::string>{"few_own", "all_own"}));
+  // Metrics where the held-out data store them: lk has no leader, so no d_min.
+  EXPECT_EQ(metrics_of_lk, (std::set<std::string>{"a_min", "p_lat_max"}));
+
+  // A held-out row is evaluated on its own test set only.
+  const auto errors = readTextFile(out / "cache" / "eval" / "kin" / "row1001_seed1" / "errors.json");
+  EXPECT_NE(errors.find("\"lk\""), std::string::npos) << errors;
+  EXPECT_EQ(errors.find("\"acc_lk\""), std::string::npos) << errors;
+
+  // One finding per held-out scenario, its verdict the comparison of its two ADEs.
+  const auto findings = readTextFile(out / "findings.md");
+  for (const std::string label : {"lk", "acc_lk"}) {
+    const bool holds = ade[label + " others_and_few_own"] <= ade[label + " all_own"];
+    const std::string expected = fmt::format("predict {} no worse than 40 own samples alone (the paper's rows 9 and 10)** — **{}**",
+                                             label, holds ? "holds" : "does not hold");
+    EXPECT_NE(findings.find(expected), std::string::npos) << findings;
+  }
+  const auto held_out_md = readTextFile(out / "held_out.md");
+  EXPECT_NE(held_out_md.find("| held out | others (20 each) | others + 10 own | 10 own | 40 own |"), std::string::npos)
+      << held_out_md;
+  EXPECT_NE(readTextFile(out / "manifest.json").find("\"leave_one_out\""), std::string::npos);
 }
 
 TEST(Experiment, CacheKeysAreExactAndClearingRemovesTheKeyFirst) {
