@@ -11,7 +11,7 @@
 #   - ASAM's 15 concrete templates: `run --duration 60` (their StopTriggers are
 #     not simulation times; 60 s covers every manoeuvre of the set).
 #   - ASAM's variation files: `scenario check --duration 60` imports every parameter set
-#     (run / skipped by the template's constraints / refused), then `run --samples 200
+#     (skipped by the template's constraints / refused / would fail / would run), then `run --samples 200
 #     --duration 60` simulates 200 sets drawn from the grid (seed 1).
 #   - esmini's resources/xosc: `scenario check --duration 30 --data-root resources` (its
 #     scenarios name roads in ../xodr): would run, or the first refusal.
@@ -59,7 +59,10 @@ ran=0; total=0
 for file in "$asam"/logical_scenarios/*_variation*.xosc; do
   total=$((total + 1)); status=0
   "$vsd" scenario check --duration 60 "$file" >"$work/check" 2>&1 || status=$?
-  sets="$(grep -m1 -E '[0-9]+ parameter sets: ' "$work/check" | sed -E 's/.*: ([0-9]+ parameter sets: )/\1/; s/ \(first: .*\), / (...), /' || true)"
+  # The counts alone: the first skipped / failing set's message is in the check's own output.
+  sets="$(grep -m1 -E '[0-9]+ parameter sets: ' "$work/check" \
+    | grep -oE '[0-9]+ (parameter sets|skipped by the template.s constraints|refused|would fail|would run)' \
+    | paste -sd ';' - | sed 's/;/, /g' || true)"
   [ -z "$sets" ] && sets="$(grep -m1 '^REFUSED' "$work/check" | sed "s|$asam/||g" || true)"
   echo "  $(basename "$file"): check exit $status; $sets"
   if [ "$status" -eq 0 ]; then
@@ -67,6 +70,7 @@ for file in "$asam"/logical_scenarios/*_variation*.xosc; do
     "$vsd" run "$file" --samples 200 --seed 1 --duration 60 --out "$work/v$total" >"$work/log" 2>&1 || run_status=$?
     [ "$run_status" -eq 0 ] && ran=$((ran + 1))
     echo "    run of 200 sets: exit $run_status; $(run_line "$work/log" "$run_status")"
+    [ "$run_status" -eq 0 ] && echo "      $(grep -m1 '^parameter sets:' "$work/log" || true)"
   fi
 done
 echo "  variation files run: $ran of $total"

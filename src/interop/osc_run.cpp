@@ -58,8 +58,10 @@ std::shared_ptr<const scenario::LogicalScenario> loadTranslation(const fs::path&
 void countSets(const ParameterGrid& grid, const OscImportOptions& options, osc::Findings& findings) {
   std::size_t skipped = 0;
   std::size_t refused = 0;
+  std::size_t failing = 0;
   std::string first_skipped;
   std::string first_refused;
+  std::string first_failing;
   for (std::size_t set = 0; set < grid.sets.size(); ++set) {
     osc::Findings quiet(/*collect=*/false);
     try {
@@ -69,16 +71,19 @@ void countSets(const ParameterGrid& grid, const OscImportOptions& options, osc::
         if (skipped++ == 0) first_skipped = fmt::format("set {}: {}", set, *result.violated);
         continue;
       }
-      scenario::sampleConcreteScenario(osc::loadLanguage(grid.scenarioFile, result.yaml), 1, 0);
+      // A set whose road users cannot start fails alone in `run`, counted (runVariation).
+      const auto refusal = osc::startRefusal(osc::loadLanguage(grid.scenarioFile, result.yaml), 1, 0);
+      if (!refusal.empty() && failing++ == 0) first_failing = fmt::format("set {}: {}", set, refusal);
     } catch (const ConfigError& error) {
       if (refused++ == 0) first_refused = fmt::format("set {}: {}", set, error.what());
     }
   }
-  findings.mapped(grid.file.string(), fmt::format("{} parameter sets: {} skipped by the template's constraints{}, {} "
-                                                  "refused, {} would run",
-                                                  grid.sets.size(), skipped,
-                                                  first_skipped.empty() ? "" : " (first: " + first_skipped + ")",
-                                                  refused, grid.sets.size() - skipped - refused));
+  findings.mapped(grid.file.string(),
+                  fmt::format("{} parameter sets: {} skipped by the template's constraints{}, {} refused, {} would "
+                              "fail (road users that cannot start{}), {} would run",
+                              grid.sets.size(), skipped, first_skipped.empty() ? "" : " (first: " + first_skipped + ")",
+                              refused, failing, first_failing.empty() ? "" : "; first: " + first_failing,
+                              grid.sets.size() - skipped - refused - failing));
   if (refused > 0) findings.refuse(fmt::format("{}: {} parameter sets refused, the first: {}", grid.file.string(), refused,
                                                first_refused));
 }

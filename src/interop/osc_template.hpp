@@ -121,6 +121,13 @@ TranslationResult translate(const std::filesystem::path& xosc, const OscImportOp
 /// The language's reading of a translation, recorded as coming from `file`.
 std::shared_ptr<const scenario::LogicalScenario> loadLanguage(const std::filesystem::path& file, const std::string& yaml);
 
+/// Why the road users of sample `index` of an imported scenario cannot start as the simulation
+/// would refuse them (overlapping at t = 0, off their road), or empty if they can. A sweep
+/// checks every parameter set with it first, so that such a set fails alone and is counted
+/// instead of ending the sweep where the simulation meets it.
+std::string startRefusal(const std::shared_ptr<const scenario::LogicalScenario>& logical, std::uint64_t seed,
+                         std::uint64_t index);
+
 /// A speed action's YAML (`speed:` item) from <SpeedAction>, for Init and Story.
 YAML::Node speedAction(Translation& translation, const Entity& actor, const pugi::xml_node& action);
 

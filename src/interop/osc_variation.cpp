@@ -10,6 +10,7 @@
 #include "vsd/core/files.hpp"
 #include "vsd/road/road_geometry.hpp"
 #include "vsd/scenario/concrete_scenario.hpp"
+#include "vsd/sim/scripted_vehicle.hpp"
 
 namespace fs = std::filesystem;
 
@@ -120,15 +121,32 @@ ParameterGrid readParameterDistribution(const fs::path& file, const OscImportOpt
 
 std::string SweepSummary::report() const {
   std::string text = run.report();
-  const std::uint64_t satisfying = sets - skipped;
-  text += fmt::format("parameter sets: {} in the grid, {} skipped by the template's constraints, {} run{}\n", sets,
-                      skipped, simulated,
-                      simulated < satisfying
-                          ? fmt::format(" (--samples: evenly spaced over the {} that satisfy them)", satisfying)
-                          : "");
+  const std::uint64_t runnable = sets - skipped - refused;
+  text += fmt::format(
+      "parameter sets: {} in the grid, {} skipped by the template's constraints, {} failed (road users that cannot "
+      "start), {} run{}\n",
+      sets, skipped, refused, simulated,
+      simulated < runnable ? fmt::format(" (--samples: evenly spaced over the {} others)", runnable) : "");
   if (!firstSkipped.empty()) text += fmt::format("first skipped: {}\n", firstSkipped);
+  if (!firstRefused.empty()) text += fmt::format("first failed: {}\n", firstRefused);
   return text;
 }
+
+namespace osc {
+
+std::string startRefusal(const std::shared_ptr<const scenario::LogicalScenario>& logical, std::uint64_t seed,
+                         std::uint64_t index) {
+  try {
+    const auto concrete = scenario::sampleConcreteScenario(logical, seed, index);
+    const auto road = road::buildRoadGeometry(concrete);
+    const sim::ScriptedTraffic traffic(concrete, road);
+  } catch (const ConfigError& error) {
+    return error.what();
+  }
+  return {};
+}
+
+}  // namespace osc
 
 namespace {
 
@@ -177,12 +195,21 @@ SweepSummary runVariation(pipeline::RunOptions options, const OscImportOptions& 
       if (summary.firstSkipped.empty()) summary.firstSkipped = fmt::format("parameter set {}: {}", set, violation);
       continue;
     }
+    const std::string refusal = osc::startRefusal(logical, options.seed, accepted.size());
+    if (!refusal.empty()) {
+      if (summary.refused++ == 0) summary.firstRefused = fmt::format("parameter set {}: {}", set, refusal);
+      continue;
+    }
     if (!first) first = logical;
     accepted.push_back(set);
   }
   if (accepted.empty()) {
-    throw ConfigError(fmt::format("{}: none of the {} parameter sets satisfies the template's constraints (first: {})",
-                                  grid.file.string(), grid.sets.size(), summary.firstSkipped));
+    throw ConfigError(fmt::format("{}: none of the {} parameter sets can run ({} violate the template's constraints{}, "
+                                  "{} have road users that cannot start{})",
+                                  grid.file.string(), grid.sets.size(), summary.skipped,
+                                  summary.firstSkipped.empty() ? "" : ", first: " + summary.firstSkipped,
+                                  summary.refused,
+                                  summary.firstRefused.empty() ? "" : ", first: " + summary.firstRefused));
   }
   if (samples_given && options.samples < accepted.size()) {
     // Evenly spaced over the grid: every distribution's range is still covered.

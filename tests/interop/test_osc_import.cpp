@@ -302,7 +302,7 @@ TEST(OscVariation, CheckCountsTheSetsWithoutRunning) {
   const ScenarioCheck check = checkOpenScenario(data("cut_in_variation.xosc"), {});
   EXPECT_TRUE(check.runnable());
   EXPECT_THAT(check.report(), HasSubstr("12 parameter sets: 6 skipped by the template's constraints (first: set 1: "));
-  EXPECT_THAT(check.report(), HasSubstr("0 refused, 6 would run"));
+  EXPECT_THAT(check.report(), HasSubstr("0 refused, 0 would fail (road users that cannot start), 6 would run"));
 }
 
 TEST(OscFormats, RegistryChoosesByExtensionAndContent) {
@@ -362,7 +362,9 @@ TEST(OscRun, VariationRunsTheGridAndSkipsViolatedSets) {
   const std::string csv = readTextFile(dir.path() / "sweep" / "concrete.csv");
   EXPECT_THAT(csv, HasSubstr("Vehicle_Model"));  // string parameters the grid varies: their code
   EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 7);
-  EXPECT_THAT(summary.report(), HasSubstr("12 in the grid, 6 skipped by the template's constraints, 6 run\n"));
+  EXPECT_THAT(summary.report(),
+              HasSubstr("12 in the grid, 6 skipped by the template's constraints, 0 failed (road users that cannot "
+                        "start), 6 run\n"));
 
   // --samples below the sets that satisfy the constraints: evenly spaced over them, and said.
   options.outputDir = dir.path() / "fewer";
@@ -370,8 +372,33 @@ TEST(OscRun, VariationRunsTheGridAndSkipsViolatedSets) {
   const SweepSummary fewer = runVariation(options, {}, /*samples_given=*/true);
   EXPECT_EQ(fewer.simulated, 2u);
   EXPECT_EQ(fewer.run.ok, 2u);
-  EXPECT_THAT(fewer.report(), HasSubstr("6 skipped by the template's constraints, 2 run (--samples: evenly spaced over "
-                                        "the 6 that satisfy them)"));
+  EXPECT_THAT(fewer.report(), HasSubstr("2 run (--samples: evenly spaced over the 6 others)"));
+}
+
+// ASAM's multiple-blocking-target sweeps hold sets whose targets overlap at t = 0: such a set
+// fails alone and is counted; the sweep runs the others (before, it ended at the first one).
+TEST(OscRun, ASetWhoseRoadUsersCannotStartFailsAloneAndTheSweepGoesOn) {
+  TemporaryDirectory dir("vsd-osc-sweep");
+  pipeline::RunOptions options;
+  options.scenarioFile = data("blocking_targets_variation.xosc");
+  options.outputDir = dir.path() / "sweep";
+  const SweepSummary summary = runVariation(options, {}, /*samples_given=*/false);
+  EXPECT_EQ(summary.sets, 3u);
+  EXPECT_EQ(summary.skipped, 0u);
+  EXPECT_EQ(summary.refused, 1u);  // the 3 m gap between 5 m long vehicles
+  EXPECT_EQ(summary.run.ok, 2u);
+  EXPECT_THAT(summary.firstRefused, HasSubstr("parameter set 1:"));
+  EXPECT_THAT(summary.firstRefused, HasSubstr("road user 'Second' starts overlapping 'First'"));
+  EXPECT_THAT(summary.report(), HasSubstr("3 in the grid, 0 skipped by the template's constraints, 1 failed (road "
+                                          "users that cannot start), 2 run\n"));
+  const std::string csv = readTextFile(dir.path() / "sweep" / "concrete.csv");
+  EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 3);  // header and the two sets that ran
+
+  // `scenario check` counts them the same way, and the file still runs.
+  const auto check = checkOpenScenario(data("blocking_targets_variation.xosc"), {});
+  EXPECT_TRUE(check.runnable()) << check.report();
+  EXPECT_THAT(check.report(), HasSubstr("0 refused, 1 would fail (road users that cannot start; first: set 1:"));
+  EXPECT_THAT(check.report(), HasSubstr("2 would run"));
 }
 
 TEST(OscCli, ScenarioCheckExitStatusSaysWhetherItWouldRun) {

@@ -93,8 +93,10 @@ struct SweepSummary {
   pipeline::RunSummary run;
   std::uint64_t sets = 0;     ///< in the grid
   std::uint64_t skipped = 0;  ///< violating a constraint
-  std::uint64_t simulated = 0;  ///< sets run: all that satisfy the constraints, or --samples of them
+  std::uint64_t refused = 0;  ///< satisfying the constraints, but road users that cannot start (overlapping, off the road)
+  std::uint64_t simulated = 0;  ///< sets run: all the others, or --samples of them
   std::string firstSkipped;   ///< the first violation, as reported
+  std::string firstRefused;   ///< the first refusal, as reported
   std::string report() const;
 };
 SweepSummary runVariation(pipeline::RunOptions options, const OscImportOptions& import, bool samples_given);
