@@ -303,6 +303,7 @@ void addBenchCommand(CLI::App& app, CommandContext& context) {
   addModelBench(*bench, context);
   addCompareBench(*bench, context);
   addInteropBench(*bench, context);
+  addImportBench(*bench, context);
   addLibraryBench(*bench, context);
   addSearchBench(*bench, context);
   addDeviationsBench(*bench, context);

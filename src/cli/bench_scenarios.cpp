@@ -1,5 +1,5 @@
-// `vsd-sumo bench interop`, `bench library` and `bench reference`: flags and printing of
-// the scenario benchmarks (vsd/bench/scenario_bench.hpp).
+// `vsd-sumo bench interop`, `bench import`, `bench library` and `bench reference`: flags and
+// printing of the scenario benchmarks (vsd/bench/scenario_bench.hpp, interop for import).
 
 #include <fmt/format.h>
 
@@ -8,7 +8,9 @@
 #include "commands.hpp"
 #include "flags.hpp"
 #include "vsd/bench/scenario_bench.hpp"
+#include "vsd/core/log.hpp"
 #include "vsd/core/statistics.hpp"
+#include "vsd/interop/openscenario_import.hpp"
 
 namespace fs = std::filesystem;
 
@@ -28,6 +30,27 @@ int printInteropBench(const bench::InteropBenchOptions& options) {
   fmt::print("  netconvert round trip (exported .xodr -> netconvert vs the generated network), lane centres:\n");
   fmt::print("    {:>8} scenarios: max deviation {:.4f} m, median {:.4f} m (target <= 0.05 m)\n", values.size(),
              values.back(), upperMedian(values));
+  return 0;
+}
+
+/// Issue 24's target: the import overhead per concrete scenario of a sweep (ms).
+constexpr double kImportTargetMs = 20.0;
+
+int printImportBench(const fs::path& file, const interop::OscImportOptions& import, std::uint64_t seed) {
+  const auto timing = interop::timeSweepImport(file, import, seed);
+  fmt::print("vsd-sumo bench import: {} (seed {}), vsd-sumo {}\n", file.string(), seed, toolVersion());
+  const auto& counts = timing.counts;
+  fmt::print("  parameter sets: {} in the grid, {} skipped by the template's constraints, {} failed (road users that "
+             "cannot start), {} would run\n",
+             counts.sets, counts.skipped, counts.refused, counts.simulated);
+  fmt::print("  grid read:                          {:9.3f} s\n", timing.gridSeconds);
+  fmt::print("  every set imported and checked:     {:9.3f} s = {:.3f} ms per set\n", timing.acceptSeconds,
+             1000.0 * timing.acceptSeconds / static_cast<double>(counts.sets));
+  fmt::print("  every set run imported and sampled: {:9.3f} s = {:.3f} ms per set\n", timing.sampleSeconds,
+             1000.0 * timing.sampleSeconds / static_cast<double>(counts.simulated));
+  const double per_set = timing.millisecondsPerSet();
+  fmt::print("  import overhead per concrete scenario: {:.3f} ms (target <= {:.0f} ms: {})\n", per_set, kImportTargetMs,
+             per_set <= kImportTargetMs ? "met" : "not met");
   return 0;
 }
 
@@ -54,6 +77,20 @@ void addInteropBench(CLI::App& bench, CommandContext& context) {
       ->capture_default_str();
   addNumber(interop, "--seed", options->seed, "Random seed")->capture_default_str();
   interop->callback([options, &context] { context.action = [options] { return printInteropBench(*options); }; });
+}
+
+void addImportBench(CLI::App& bench, CommandContext& context) {
+  auto file = std::make_shared<fs::path>();
+  auto import = std::make_shared<interop::OscImportOptions>();
+  auto seed = std::make_shared<std::uint64_t>(1);
+  CLI::App* command = bench.add_subcommand(
+      "import", "Import overhead of an OpenSCENARIO sweep without its simulation (ms per concrete scenario)");
+  command->add_option("variation", *file, "ParameterValueDistribution file (.xosc)")->required()->check(CLI::ExistingFile);
+  addNumber(command, "--seed", *seed, "Random seed (as run --seed)")->capture_default_str();
+  addImportOptions(*command, *import);
+  command->callback([file, import, seed, &context] {
+    context.action = [file, import, seed] { return printImportBench(*file, *import, *seed); };
+  });
 }
 
 void addLibraryBench(CLI::App& bench, CommandContext& context) {

@@ -63,6 +63,7 @@ void addSearchCommand(CLI::App& app, CommandContext& context);
 bench::Tool benchTool();
 /// `bench interop` (bench_scenarios.cpp), a subcommand of `bench`.
 void addInteropBench(CLI::App& bench, CommandContext& context);
+void addImportBench(CLI::App& bench, CommandContext& context);
 /// `bench search` (bench_search.cpp), a subcommand of `bench`.
 void addSearchBench(CLI::App& bench, CommandContext& context);
 /// `vsd-sumo bench library` (bench_scenarios.cpp).

@@ -3,11 +3,13 @@
 
 #include <fmt/format.h>
 
+#include <chrono>
 #include <cmath>
 
 #include "osc_template.hpp"
 #include "vsd/core/error.hpp"
 #include "vsd/core/files.hpp"
+#include "vsd/core/progress.hpp"
 #include "vsd/road/road_geometry.hpp"
 #include "vsd/scenario/concrete_scenario.hpp"
 #include "vsd/sim/scripted_vehicle.hpp"
@@ -177,30 +179,25 @@ std::shared_ptr<const scenario::LogicalScenario> importSet(const ParameterGrid& 
   return osc::loadLanguage(grid.file, result.yaml);
 }
 
-}  // namespace
-
-SweepSummary runVariation(pipeline::RunOptions options, const OscImportOptions& import, bool samples_given) {
-  const ParameterGrid grid = readParameterDistribution(options.scenarioFile, import);
-  osc::StringCodes codes = stringCodes(grid);
-  // Numeric-looking strings are numbers in concrete.csv already; only names need codes.
-  SweepSummary summary;
+/// The sets of a grid that run, in grid order: each imported and its road users' start checked,
+/// the others counted in `summary` (skipped by a constraint, failed at the start).
+std::vector<std::size_t> acceptSets(const ParameterGrid& grid, const OscImportOptions& import,
+                                    const osc::StringCodes& codes, std::uint64_t seed, SweepSummary& summary) {
   summary.sets = grid.sets.size();
   std::vector<std::size_t> accepted;
-  std::shared_ptr<const scenario::LogicalScenario> first;
   for (std::size_t set = 0; set < grid.sets.size(); ++set) {
     std::string violation;
-    auto logical = importSet(grid, import, codes, set, &violation);
+    const auto logical = importSet(grid, import, codes, set, &violation);
     if (!logical) {
       ++summary.skipped;
       if (summary.firstSkipped.empty()) summary.firstSkipped = fmt::format("parameter set {}: {}", set, violation);
       continue;
     }
-    const std::string refusal = osc::startRefusal(logical, options.seed, accepted.size());
+    const std::string refusal = osc::startRefusal(logical, seed, accepted.size());
     if (!refusal.empty()) {
       if (summary.refused++ == 0) summary.firstRefused = fmt::format("parameter set {}: {}", set, refusal);
       continue;
     }
-    if (!first) first = logical;
     accepted.push_back(set);
   }
   if (accepted.empty()) {
@@ -211,6 +208,28 @@ SweepSummary runVariation(pipeline::RunOptions options, const OscImportOptions& 
                                   summary.refused,
                                   summary.firstRefused.empty() ? "" : ", first: " + summary.firstRefused));
   }
+  return accepted;
+}
+
+/// What the sweep's workers do per sample: the set imported again, sampled, its road built.
+pipeline::ScenarioWithRoad sweepSample(const ParameterGrid& grid, const OscImportOptions& import,
+                                       const osc::StringCodes& codes, std::size_t set, std::uint64_t seed,
+                                       std::uint64_t index) {
+  const auto logical = importSet(grid, import, codes, set, nullptr);
+  auto concrete = scenario::sampleConcreteScenario(logical, seed, index);
+  auto road = road::buildRoadGeometry(concrete);
+  return pipeline::ScenarioWithRoad{std::move(concrete), std::move(road)};
+}
+
+}  // namespace
+
+SweepSummary runVariation(pipeline::RunOptions options, const OscImportOptions& import, bool samples_given) {
+  const ParameterGrid grid = readParameterDistribution(options.scenarioFile, import);
+  // Numeric-looking strings are numbers in concrete.csv already; only names need codes.
+  const osc::StringCodes codes = stringCodes(grid);
+  SweepSummary summary;
+  std::vector<std::size_t> accepted = acceptSets(grid, import, codes, options.seed, summary);
+  const auto first = importSet(grid, import, codes, accepted.front(), nullptr);
   if (samples_given && options.samples < accepted.size()) {
     // Evenly spaced over the grid: every distribution's range is still covered.
     std::vector<std::size_t> chosen;
@@ -221,13 +240,32 @@ SweepSummary runVariation(pipeline::RunOptions options, const OscImportOptions& 
   summary.simulated = accepted.size();
   options.firstSample = 0;
   options.source = [grid, import, codes, accepted, seed = options.seed](std::uint64_t index) {
-    const auto logical = importSet(grid, import, codes, accepted.at(index), nullptr);
-    auto concrete = scenario::sampleConcreteScenario(logical, seed, index);
-    auto road = road::buildRoadGeometry(concrete);
-    return pipeline::ScenarioWithRoad{std::move(concrete), std::move(road)};
+    return sweepSample(grid, import, codes, accepted.at(index), seed, index);
   };
   summary.run = pipeline::runScenarios(first, options);
   return summary;
+}
+
+SweepImportTiming timeSweepImport(const fs::path& file, const OscImportOptions& import, std::uint64_t seed) {
+  SweepImportTiming timing;
+  auto start = std::chrono::steady_clock::now();
+  const ParameterGrid grid = readParameterDistribution(file, import);
+  const osc::StringCodes codes = stringCodes(grid);
+  timing.gridSeconds = secondsSince(start);
+  start = std::chrono::steady_clock::now();
+  const std::vector<std::size_t> accepted = acceptSets(grid, import, codes, seed, timing.counts);
+  timing.acceptSeconds = secondsSince(start);
+  start = std::chrono::steady_clock::now();
+  for (std::size_t index = 0; index < accepted.size(); ++index) sweepSample(grid, import, codes, accepted[index], seed, index);
+  timing.sampleSeconds = secondsSince(start);
+  timing.counts.simulated = accepted.size();
+  return timing;
+}
+
+double SweepImportTiming::millisecondsPerSet() const {
+  if (counts.sets == 0 || counts.simulated == 0) return 0.0;
+  return 1000.0 * (acceptSeconds / static_cast<double>(counts.sets) +
+                   sampleSeconds / static_cast<double>(counts.simulated));
 }
 
 }  // namespace vsd::interop

@@ -401,6 +401,25 @@ TEST(OscRun, ASetWhoseRoadUsersCannotStartFailsAloneAndTheSweepGoesOn) {
   EXPECT_THAT(check.report(), HasSubstr("2 would run"));
 }
 
+// `bench import` times what a sweep does besides simulating; the counts it times over are the
+// sweep's own (the timing itself is the benchmark's output, not asserted).
+TEST(OscCli, BenchImportTimesTheSweepsImportOverTheSetsThatRun) {
+  TemporaryDirectory dir("vsd-osc-cli");
+  const auto bench = test::run({test::vsdSumo().string(), "--quiet", "bench", "import",
+                                data("blocking_targets_variation.xosc").string()}, dir.path());
+  ASSERT_EQ(bench.exitCode, 0) << bench.output;
+  EXPECT_THAT(bench.output, HasSubstr("parameter sets: 3 in the grid, 0 skipped by the template's constraints, 1 failed "
+                                      "(road users that cannot start), 2 would run"));
+  EXPECT_THAT(bench.output, HasSubstr("import overhead per concrete scenario: "));
+  EXPECT_THAT(bench.output, HasSubstr("(target <= 20 ms: "));
+  // A template is one concrete scenario, not a sweep: refused in one line, nothing printed before it.
+  const auto one = test::run({test::vsdSumo().string(), "--quiet", "bench", "import", data("cut_in.xosc").string()},
+                             dir.path());
+  EXPECT_EQ(one.exitCode, 1);
+  EXPECT_EQ(std::count(one.output.begin(), one.output.end(), '\n'), 1) << one.output;
+  EXPECT_THAT(one.output, HasSubstr("expected <OpenSCENARIO> with a <ParameterValueDistribution>"));
+}
+
 TEST(OscCli, ScenarioCheckExitStatusSaysWhetherItWouldRun) {
   TemporaryDirectory dir("vsd-osc-cli");
   const auto ok = test::run({test::vsdSumo().string(), "--quiet", "scenario", "check", data("cut_in.xosc").string()}, dir.path());

@@ -101,4 +101,19 @@ struct SweepSummary {
 };
 SweepSummary runVariation(pipeline::RunOptions options, const OscImportOptions& import, bool samples_given);
 
+/// The import work of a whole sweep without its simulation (`vsd-sumo bench import`): the
+/// grid read, every set imported and its start checked as runVariation does before the sweep,
+/// then every set that would run imported again, sampled and its road built, as the sweep's
+/// workers do before they simulate it.
+struct SweepImportTiming {
+  SweepSummary counts;        ///< sets, skipped, refused (failed at the start), simulated (= would run)
+  double gridSeconds = 0.0;   ///< reading the distribution and building the grid
+  double acceptSeconds = 0.0; ///< every set imported and checked
+  double sampleSeconds = 0.0; ///< every set that would run: imported, sampled, road built
+  /// The sweep's import overhead per concrete scenario (ms): the check per set of the grid
+  /// plus the workers' import per set run.
+  double millisecondsPerSet() const;
+};
+SweepImportTiming timeSweepImport(const std::filesystem::path& file, const OscImportOptions& import, std::uint64_t seed);
+
 }  // namespace vsd::interop
