@@ -40,8 +40,8 @@ int printImportBench(const fs::path& file, const interop::OscImportOptions& impo
   const auto timing = interop::timeSweepImport(file, import, seed);
   fmt::print("vsd-sumo bench import: {} (seed {}), vsd-sumo {}\n", file.string(), seed, toolVersion());
   const auto& counts = timing.counts;
-  fmt::print("  parameter sets: {} in the grid, {} skipped by the template's constraints, {} failed (road users that "
-             "cannot start), {} would run\n",
+  fmt::print("  parameter sets: {} in the grid, {} skipped by the template's constraints, {} failed (refused by the "
+             "import or road users that cannot start), {} would run\n",
              counts.sets, counts.skipped, counts.refused, counts.simulated);
   fmt::print("  grid read:                          {:9.3f} s\n", timing.gridSeconds);
   fmt::print("  every set imported and checked:     {:9.3f} s = {:.3f} ms per set\n", timing.acceptSeconds,

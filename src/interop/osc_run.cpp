@@ -84,8 +84,16 @@ void countSets(const ParameterGrid& grid, const OscImportOptions& options, osc::
                               grid.sets.size(), skipped, first_skipped.empty() ? "" : " (first: " + first_skipped + ")",
                               refused, failing, first_failing.empty() ? "" : "; first: " + first_failing,
                               grid.sets.size() - skipped - refused - failing));
-  if (refused > 0) findings.refuse(fmt::format("{}: {} parameter sets refused, the first: {}", grid.file.string(), refused,
-                                               first_refused));
+  // `run` fails such sets alone and runs the others (runVariation); with none left it refuses the file.
+  if (refused == 0) return;
+  const std::string refusals =
+      fmt::format("{}: {} parameter sets refused, the first: {}", grid.file.string(), refused, first_refused);
+  if (skipped + refused + failing == grid.sets.size()) {
+    findings.refuse(refusals);
+  } else {
+    findings.note(grid.file.string(), fmt::format("{} parameter sets refused (they fail alone in run), the first: {}",
+                                                  refused, first_refused));
+  }
 }
 
 }  // namespace

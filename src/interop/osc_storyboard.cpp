@@ -114,6 +114,67 @@ YAML::Node laneOffset(Translation& translation, const Entity& actor, const pugi:
   return item;
 }
 
+/// m: how far a trajectory's first vertex may lie from where its pedestrian stands, and how far
+/// its two vertices may lie apart along the road, for a walk straight across it.
+constexpr double kCrossingTolerance = 0.05;
+
+/// One <Vertex> of a crossing: its time (s) and where it is.
+std::pair<double, Placement> crossingVertex(Translation& translation, const pugi::xml_node& vertex) {
+  const xml::Reader& reader = translation.reader;
+  reader.requireSubset(vertex, {"Position"});
+  const pugi::xml_node position = reader.only(vertex, "Position");
+  reader.choice(position, {"LanePosition", "RoadPosition", "WorldPosition"});
+  return {reader.number(vertex, "time", NumberRange::atLeast(0.0)), fixedPlace(translation, position)};
+}
+
+/// A <FollowTrajectoryAction> that walks a pedestrian straight across the road: an inline
+/// trajectory of two timed vertices at the same place along the road, the first where the
+/// pedestrian stands, at a constant pace (ASAM's 4.2.3 crosses the Ego's lane so). The
+/// language's `cross` at the pace of the two vertices; any other trajectory is refused.
+YAML::Node crossing(Translation& translation, const Entity& actor, const pugi::xml_node& routing) {
+  const xml::Reader& reader = translation.reader;
+  const pugi::xml_node follow = reader.choice(routing, {"FollowTrajectoryAction"});
+  if (actor.type != RoadUserType::Pedestrian) {
+    reader.fail(follow, "a trajectory of a vehicle or object: the language walks pedestrians across the road only");
+  }
+  reader.requireSubset(follow, {"TrajectoryRef", "TimeReference", "TrajectoryFollowingMode"});
+  const pugi::xml_node trajectory = reader.only(reader.only(follow, "TrajectoryRef"), "Trajectory");
+  reader.requireSubset(trajectory, {"Shape"});
+  if (reader.text(trajectory, "closed") != "false") reader.fail(trajectory, "a closed trajectory: a crossing ends");
+  const pugi::xml_node polyline = reader.choice(reader.only(trajectory, "Shape"), {"Polyline"});
+  reader.requireSubset(polyline, {"Vertex"});
+  std::vector<pugi::xml_node> vertices(polyline.children("Vertex").begin(), polyline.children("Vertex").end());
+  if (vertices.size() != 2) {
+    reader.fail(polyline, fmt::format("{} vertices: the language walks straight across the road (two)", vertices.size()));
+  }
+  const auto [start_time, from] = crossingVertex(translation, vertices[0]);
+  const auto [end_time, to] = crossingVertex(translation, vertices[1]);
+  const pugi::xml_node timing = reader.only(reader.only(follow, "TimeReference"), "Timing");
+  if (reader.oneOf(timing, "domainAbsoluteRelative", {"relative", "absolute"}) != "relative" ||
+      reader.number(timing, "scale") != 1.0 || reader.number(timing, "offset") != 0.0) {
+    reader.fail(timing, "a timing other than relative, scale 1, offset 0: the crossing starts with its event");
+  }
+  reader.oneOf(reader.only(follow, "TrajectoryFollowingMode"), "followingMode", {"position", "follow"});
+  if (!(end_time > start_time)) reader.fail(vertices[1], "time: the second vertex must come after the first");
+  if (std::abs(to.s - from.s) > kCrossingTolerance) {
+    reader.fail(vertices[1], fmt::format("{} m along the road from the first vertex: the language walks straight across",
+                                         num(to.s - from.s)));
+  }
+  const Placement& stands = *actor.placement;
+  if (std::abs(from.s - stands.s) > kCrossingTolerance || std::abs(from.t - stands.t) > kCrossingTolerance) {
+    reader.fail(vertices[0], fmt::format("the trajectory starts {} m along and {} m across from where '{}' stands",
+                                         num(from.s - stands.s), num(from.t - stands.t), actor.name));
+  }
+  YAML::Node item;
+  item["speed"] = num(std::abs(to.t - from.t) / (end_time - start_time));
+  item["to_offset"] = num(to.t - translation.road.laneCentreT(stands.lane));
+  translation.findings.mapped(reader.where(follow), fmt::format("'{}' walks across the road to {} m from its lane's "
+                                                                "centre at {} m/s",
+                                                                actor.name, item["to_offset"].as<std::string>(),
+                                                                item["speed"].as<std::string>()));
+  return item;
+}
+
 }  // namespace
 
 YAML::Node speedAction(Translation& translation, const Entity& actor, const pugi::xml_node& action) {
@@ -155,7 +216,8 @@ namespace {
 /// The language's action (without trigger) for one <PrivateAction> of `actor`.
 std::optional<YAML::Node> privateAction(Translation& translation, Entity& actor, const pugi::xml_node& node) {
   const xml::Reader& reader = translation.reader;
-  const pugi::xml_node action = reader.choice(node, {"LongitudinalAction", "LateralAction", "ControllerAction"});
+  const pugi::xml_node action =
+      reader.choice(node, {"LongitudinalAction", "LateralAction", "ControllerAction", "RoutingAction"});
   const std::string kind = action.name();
   if (&actor == translation.ego) {
     if (kind == "ControllerAction" && action.child("ActivateControllerAction")) {
@@ -183,6 +245,9 @@ std::optional<YAML::Node> privateAction(Translation& translation, Entity& actor,
     } else {
       item["lateral_offset"] = laneOffset(translation, actor, lateral);
     }
+    actor.movesLaterally = true;
+  } else if (kind == "RoutingAction") {
+    item["cross"] = crossing(translation, actor, action);
     actor.movesLaterally = true;
   } else {
     reader.fail(action, "a controller action on a scripted road user (only the Ego has a controller)");

@@ -125,8 +125,8 @@ std::string SweepSummary::report() const {
   std::string text = run.report();
   const std::uint64_t runnable = sets - skipped - refused;
   text += fmt::format(
-      "parameter sets: {} in the grid, {} skipped by the template's constraints, {} failed (road users that cannot "
-      "start), {} run{}\n",
+      "parameter sets: {} in the grid, {} skipped by the template's constraints, {} failed (refused by the import or "
+      "road users that cannot start), {} run{}\n",
       sets, skipped, refused, simulated,
       simulated < runnable ? fmt::format(" (--samples: evenly spaced over the {} others)", runnable) : "");
   if (!firstSkipped.empty()) text += fmt::format("first skipped: {}\n", firstSkipped);
@@ -187,13 +187,19 @@ std::vector<std::size_t> acceptSets(const ParameterGrid& grid, const OscImportOp
   std::vector<std::size_t> accepted;
   for (std::size_t set = 0; set < grid.sets.size(); ++set) {
     std::string violation;
-    const auto logical = importSet(grid, import, codes, set, &violation);
-    if (!logical) {
+    std::shared_ptr<const scenario::LogicalScenario> logical;
+    std::string refusal;
+    try {
+      logical = importSet(grid, import, codes, set, &violation);
+    } catch (const ConfigError& error) {
+      refusal = error.what();  // this set's values take the file outside what is supported
+    }
+    if (!logical && refusal.empty()) {
       ++summary.skipped;
       if (summary.firstSkipped.empty()) summary.firstSkipped = fmt::format("parameter set {}: {}", set, violation);
       continue;
     }
-    const std::string refusal = osc::startRefusal(logical, seed, accepted.size());
+    if (logical) refusal = osc::startRefusal(logical, seed, accepted.size());
     if (!refusal.empty()) {
       if (summary.refused++ == 0) summary.firstRefused = fmt::format("parameter set {}: {}", set, refusal);
       continue;
@@ -202,7 +208,7 @@ std::vector<std::size_t> acceptSets(const ParameterGrid& grid, const OscImportOp
   }
   if (accepted.empty()) {
     throw ConfigError(fmt::format("{}: none of the {} parameter sets can run ({} violate the template's constraints{}, "
-                                  "{} have road users that cannot start{})",
+                                  "{} fail: refused by the import or road users that cannot start{})",
                                   grid.file.string(), grid.sets.size(), summary.skipped,
                                   summary.firstSkipped.empty() ? "" : ", first: " + summary.firstSkipped,
                                   summary.refused,

@@ -35,13 +35,15 @@ std::unique_ptr<TemporaryDirectory> folderWith(const std::map<std::string, std::
   return dir;
 }
 
-/// cut_in.xosc with one piece of text replaced (the test's variation of it).
-std::string cutInWith(const std::string& from, const std::string& to) {
-  std::string text = readTextFile(data("cut_in.xosc"));
+/// A test data file with one piece of text replaced (the test's variation of it).
+std::string dataWith(const std::string& name, const std::string& from, const std::string& to) {
+  std::string text = readTextFile(data(name));
   const auto at = text.find(from);
   EXPECT_NE(at, std::string::npos) << from;
   return text.replace(at, from.size(), to);
 }
+
+std::string cutInWith(const std::string& from, const std::string& to) { return dataWith("cut_in.xosc", from, to); }
 
 const scenario::VehicleSpec& other(const scenario::LogicalScenario& logical, const std::string& id) {
   for (const auto& candidate : logical.others) {
@@ -349,6 +351,43 @@ TEST(OscRun, ScriptedRoadUsersEndWhereTheFileSays) {
   EXPECT_NEAR(end.y, 0.5, 0.2);
 }
 
+// ASAM's 4.2.3 walks its pedestrian across the road by a two-vertex trajectory. By hand from
+// crossing.xosc: 3 m right of lane -4's centre to lane -2's centre is 10 m across in 5 s
+// (2 m/s), from t = 1 s to 6 s; the language's road centre is the middle lane's (-3) centre,
+// so the walker ends 3.5 m left of it, standing.
+TEST(OscRun, APedestriansTwoVertexTrajectoryWalksItAcrossTheRoad) {
+  const auto logical = importTemplate(data("crossing.xosc"), {});
+  const auto& walker = other(*logical, "Walker");
+  EXPECT_EQ(walker.type, RoadUserType::Pedestrian);
+  ASSERT_EQ(walker.actions.size(), 1u);
+  const auto walker_track = simulatedTrack(data("crossing.xosc"), "Walker");
+  ASSERT_TRUE(walker_track);
+  const VehicleState& end = walker_track->states.back();
+  EXPECT_NEAR(end.y, 3.5, 0.2);
+  EXPECT_NEAR(end.speed, 0.0, 0.2);
+  const VehicleState& start = walker_track->states.front();
+  EXPECT_NEAR(start.y, -6.5, 0.2);
+
+  // Trajectories the language cannot walk are one line each, naming the element.
+  const auto dir = folderWith({
+      {"away.xosc", dataWith("crossing.xosc", "value=\"-3.0\"/>", "value=\"-2.0\"/>")},
+      {"three.xosc", dataWith("crossing.xosc", "</Polyline>",
+                              "<Vertex time=\"6\"><Position><LanePosition roadId=\"7\" laneId=\"-2\" s=\"300\" "
+                              "offset=\"1\"/></Position></Vertex></Polyline>")},
+      {"along.xosc", dataWith("crossing.xosc", "laneId=\"-2\" s=\"300\"", "laneId=\"-2\" s=\"310\"")},
+      {"vehicle.xosc", dataWith("crossing.xosc", "catalogName=\"people\" entryName=\"walker\"",
+                                "catalogName=\"fleet\" entryName=\"sedan\"")},
+  });
+  EXPECT_THAT(test::configErrorOf([&] { importTemplate(dir->path() / "away.xosc", {}); }),
+              HasSubstr("<Vertex>: the trajectory starts 0 m along and 1 m across from where 'Walker' stands"));
+  EXPECT_THAT(test::configErrorOf([&] { importTemplate(dir->path() / "three.xosc", {}); }),
+              HasSubstr("<Polyline>: 3 vertices: the language walks straight across the road (two)"));
+  EXPECT_THAT(test::configErrorOf([&] { importTemplate(dir->path() / "along.xosc", {}); }),
+              HasSubstr("10 m along the road from the first vertex"));
+  EXPECT_THAT(test::configErrorOf([&] { importTemplate(dir->path() / "vehicle.xosc", {}); }),
+              HasSubstr("<FollowTrajectoryAction>: a trajectory of a vehicle or object"));
+}
+
 TEST(OscRun, VariationRunsTheGridAndSkipsViolatedSets) {
   TemporaryDirectory dir("vsd-osc-sweep");
   pipeline::RunOptions options;
@@ -363,8 +402,8 @@ TEST(OscRun, VariationRunsTheGridAndSkipsViolatedSets) {
   EXPECT_THAT(csv, HasSubstr("Vehicle_Model"));  // string parameters the grid varies: their code
   EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 7);
   EXPECT_THAT(summary.report(),
-              HasSubstr("12 in the grid, 6 skipped by the template's constraints, 0 failed (road users that cannot "
-                        "start), 6 run\n"));
+              HasSubstr("12 in the grid, 6 skipped by the template's constraints, 0 failed (refused by the import or road "
+                        "users that cannot start), 6 run\n"));
 
   // --samples below the sets that satisfy the constraints: evenly spaced over them, and said.
   options.outputDir = dir.path() / "fewer";
@@ -389,8 +428,8 @@ TEST(OscRun, ASetWhoseRoadUsersCannotStartFailsAloneAndTheSweepGoesOn) {
   EXPECT_EQ(summary.run.ok, 2u);
   EXPECT_THAT(summary.firstRefused, HasSubstr("parameter set 1:"));
   EXPECT_THAT(summary.firstRefused, HasSubstr("road user 'Second' starts overlapping 'First'"));
-  EXPECT_THAT(summary.report(), HasSubstr("3 in the grid, 0 skipped by the template's constraints, 1 failed (road "
-                                          "users that cannot start), 2 run\n"));
+  EXPECT_THAT(summary.report(), HasSubstr("3 in the grid, 0 skipped by the template's constraints, 1 failed (refused "
+                                          "by the import or road users that cannot start), 2 run\n"));
   const std::string csv = readTextFile(dir.path() / "sweep" / "concrete.csv");
   EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 3);  // header and the two sets that ran
 
@@ -401,6 +440,24 @@ TEST(OscRun, ASetWhoseRoadUsersCannotStartFailsAloneAndTheSweepGoesOn) {
   EXPECT_THAT(check.report(), HasSubstr("2 would run"));
 }
 
+// A set whose values the import refuses (here a lane driven against the reference line, which
+// vsd-sumo's road does not have; ASAM's 4.2.3 varies the Ego's lane so) fails alone as well.
+TEST(OscRun, ASetTheImportRefusesFailsAloneAndCheckSaysTheFileStillRuns) {
+  TemporaryDirectory dir("vsd-osc-sweep");
+  pipeline::RunOptions options;
+  options.scenarioFile = data("blocking_targets_lanes_variation.xosc");
+  options.outputDir = dir.path() / "sweep";
+  const SweepSummary summary = runVariation(options, {}, /*samples_given=*/false);
+  EXPECT_EQ(summary.sets, 2u);
+  EXPECT_EQ(summary.refused, 1u);
+  EXPECT_EQ(summary.run.ok, 1u);
+  EXPECT_THAT(summary.firstRefused, HasSubstr("parameter set 0:"));
+  EXPECT_THAT(summary.firstRefused, HasSubstr("laneId 2: expected a driving lane of the road's right side"));
+  const auto check = checkOpenScenario(data("blocking_targets_lanes_variation.xosc"), {});
+  EXPECT_TRUE(check.runnable()) << check.report();
+  EXPECT_THAT(check.report(), HasSubstr("1 parameter sets refused (they fail alone in run), the first: set 0:"));
+}
+
 // `bench import` times what a sweep does besides simulating; the counts it times over are the
 // sweep's own (the timing itself is the benchmark's output, not asserted).
 TEST(OscCli, BenchImportTimesTheSweepsImportOverTheSetsThatRun) {
@@ -409,7 +466,7 @@ TEST(OscCli, BenchImportTimesTheSweepsImportOverTheSetsThatRun) {
                                 data("blocking_targets_variation.xosc").string()}, dir.path());
   ASSERT_EQ(bench.exitCode, 0) << bench.output;
   EXPECT_THAT(bench.output, HasSubstr("parameter sets: 3 in the grid, 0 skipped by the template's constraints, 1 failed "
-                                      "(road users that cannot start), 2 would run"));
+                                      "(refused by the import or road users that cannot start), 2 would run"));
   EXPECT_THAT(bench.output, HasSubstr("import overhead per concrete scenario: "));
   EXPECT_THAT(bench.output, HasSubstr("(target <= 20 ms: "));
   // A template is one concrete scenario, not a sweep: refused in one line, nothing printed before it.

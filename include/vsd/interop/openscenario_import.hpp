@@ -93,7 +93,9 @@ struct SweepSummary {
   pipeline::RunSummary run;
   std::uint64_t sets = 0;     ///< in the grid
   std::uint64_t skipped = 0;  ///< violating a constraint
-  std::uint64_t refused = 0;  ///< satisfying the constraints, but road users that cannot start (overlapping, off the road)
+  /// Satisfying the constraints, but failing alone: values the import refuses (a lane the road
+  /// lacks, say) or road users that cannot start (overlapping, off the road).
+  std::uint64_t refused = 0;
   std::uint64_t simulated = 0;  ///< sets run: all the others, or --samples of them
   std::string firstSkipped;   ///< the first violation, as reported
   std::string firstRefused;   ///< the first refusal, as reported
