@@ -5,6 +5,7 @@
 
 #include <cmath>
 
+#include "osc_parameters.hpp"
 #include "osc_template.hpp"
 #include "vsd/core/numbers.hpp"
 #include "vsd/core/trace.hpp"
@@ -596,6 +597,7 @@ struct PendingAction {
 struct PendingEvent {
   pugi::xml_node node;
   std::vector<PendingAction> actions;
+  ParameterValues scope;  ///< the parameters its Story sees (the file's, and the Story's own)
 };
 
 void readEvent(Translation& translation, const std::vector<Entity*>& actors, const pugi::xml_node& event,
@@ -607,7 +609,7 @@ void readEvent(Translation& translation, const std::vector<Entity*>& actors, con
   if (reader.optionalNumber(event, "maximumExecutionCount").value_or(1.0) != 1.0) {
     reader.fail(event, "maximumExecutionCount: the language runs each action once");
   }
-  PendingEvent pending{event, {}};
+  PendingEvent pending{event, {}, reader.parameters()};
   for (const pugi::xml_node& action : event.children("Action")) {
     translation.findings.attempt([&] {
       reader.requireSubset(action, {"PrivateAction"});
@@ -661,13 +663,34 @@ void markLateralMotion(Translation& translation, const pugi::xml_node& storyboar
 
 }  // namespace
 
+/// A Story's own <ParameterDeclarations> (OpenSCENARIO 1.0) on top of the file's parameters:
+/// in scope inside the Story only. Their values are the file's and never inputs (a parameter
+/// distribution varies global parameters); constraints on them are refused.
+void readStoryParameters(Translation& translation, const pugi::xml_node& story, const ParameterValues& global) {
+  xml::Reader& reader = translation.reader;
+  const pugi::xml_node declarations = story.child("ParameterDeclarations");
+  if (!declarations) return;
+  for (const pugi::xml_node& declaration : declarations.children("ParameterDeclaration")) {
+    if (declaration.child("ConstraintGroup")) {
+      reader.fail(declaration.child("ConstraintGroup"),
+                  "a constraint on a Story's parameter: constraints apply to the file's global parameters");
+    }
+  }
+  readParameters(reader, story, global, {}, "");
+  translation.findings.mapped(reader.where(declarations),
+                              fmt::format("parameters of Story '{}', in scope inside it", reader.text(story, "name")));
+}
+
 void readStories(Translation& translation, const pugi::xml_node& storyboard) {
-  const xml::Reader& reader = translation.reader;
+  xml::Reader& reader = translation.reader;
   markLateralMotion(translation, storyboard);
+  const ParameterValues global = reader.parameters();
   std::vector<PendingEvent> events;
   for (const pugi::xml_node& story : storyboard.children("Story")) {
     translation.findings.attempt([&] {
-      reader.requireSubset(story, {"Act"});
+      reader.setParameters(global);
+      reader.requireSubset(story, {"ParameterDeclarations", "Act"});
+      readStoryParameters(translation, story, global);
       requireStartsAtZero(translation, story);
       for (const pugi::xml_node& act : story.children("Act")) {
         translation.findings.attempt([&] {
@@ -680,9 +703,11 @@ void readStories(Translation& translation, const pugi::xml_node& storyboard) {
       }
     });
   }
-  // Triggers after all actions have ids (a condition may name an action of a later Story).
+  // Triggers after all actions have ids (a condition may name an action of a later Story),
+  // each in its Story's parameters.
   for (auto& event : events) {
     translation.findings.attempt([&] {
+      reader.setParameters(event.scope);
       for (auto& pending : event.actions) {
         const auto trigger = startTrigger(translation, *pending.actor, reader.only(event.node, "StartTrigger"));
         if (!trigger) {
@@ -698,6 +723,7 @@ void readStories(Translation& translation, const pugi::xml_node& storyboard) {
       }
     });
   }
+  reader.setParameters(global);
 }
 
 void readStopTrigger(Translation& translation, const pugi::xml_node& storyboard) {

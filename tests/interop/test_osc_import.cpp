@@ -388,6 +388,33 @@ TEST(OscRun, APedestriansTwoVertexTrajectoryWalksItAcrossTheRoad) {
               HasSubstr("<FollowTrajectoryAction>: a trajectory of a vehicle or object"));
 }
 
+// OpenSCENARIO 1.0 declares parameters in a Story too: in scope inside it only.
+TEST(OscImport, AStorysParametersAreInScopeInsideItOnly) {
+  // crossing.xosc with Start_s declared in its Story and `from` replaced by `to`.
+  const auto with_story_parameter = [](const std::string& from, const std::string& to) {
+    const std::string story = "<Story name=\"CrossStory\">";
+    std::string text = dataWith("crossing.xosc", from, to);
+    return text.replace(text.find(story), story.size(),
+                        story + "<ParameterDeclarations><ParameterDeclaration name=\"Start_s\" parameterType=\"double\" "
+                                "value=\"2\"/></ParameterDeclarations>");
+  };
+  const auto dir = folderWith({
+      {"story.xosc", with_story_parameter("<SimulationTimeCondition value=\"1\"", "<SimulationTimeCondition value=\"$Start_s\"")},
+      {"outside.xosc", with_story_parameter("<SimulationTimeCondition value=\"8\"", "<SimulationTimeCondition value=\"$Start_s\"")},
+  });
+  // By hand: the walk starts at t = 2 s (not 1 s), so at 1.8 s the walker still stands.
+  const auto logical = importTemplate(dir->path() / "story.xosc", {});
+  const auto walker = simulatedTrack(dir->path() / "story.xosc", "Walker");
+  ASSERT_TRUE(walker);
+  const auto at = static_cast<std::size_t>(std::lround(1.8 / logical->step));
+  ASSERT_LT(at, walker->states.size());
+  EXPECT_NEAR(walker->states[at].y, -6.5, 0.05);
+  EXPECT_NEAR(walker->states.back().y, 3.5, 0.2);
+  // The StopTrigger is outside the Story: its parameter does not resolve there.
+  EXPECT_THAT(test::configErrorOf([&] { importTemplate(dir->path() / "outside.xosc", {}); }),
+              HasSubstr("<SimulationTimeCondition>: attribute value: $Start_s refers to an undeclared parameter"));
+}
+
 TEST(OscRun, VariationRunsTheGridAndSkipsViolatedSets) {
   TemporaryDirectory dir("vsd-osc-sweep");
   pipeline::RunOptions options;
