@@ -63,19 +63,21 @@ void countSets(const ParameterGrid& grid, const OscImportOptions& options, osc::
   std::string first_refused;
   std::string first_failing;
   for (std::size_t set = 0; set < grid.sets.size(); ++set) {
-    osc::Findings quiet(/*collect=*/false);
-    try {
-      const auto result = osc::translate(grid.scenarioFile, options, grid.sets[set],
-                                         fmt::format("{}: parameter set {}", grid.file.string(), set), quiet);
-      if (result.violated) {
-        if (skipped++ == 0) first_skipped = fmt::format("set {}: {}", set, *result.violated);
-        continue;
-      }
-      // A set whose road users cannot start fails alone in `run`, counted (runVariation).
-      const auto refusal = osc::startRefusal(osc::loadLanguage(grid.scenarioFile, result.yaml), 1, 0);
-      if (!refusal.empty() && failing++ == 0) first_failing = fmt::format("set {}: {}", set, refusal);
-    } catch (const ConfigError& error) {
-      if (refused++ == 0) first_refused = fmt::format("set {}: {}", set, error.what());
+    // Sample 0 of seed 1: a check has no sweep seed, and an imported set is one concrete scenario.
+    const auto verdict = osc::judgeSet(grid, options, {}, set, 1, 0);
+    const std::string first = fmt::format("set {}: {}", set, verdict.message);
+    switch (verdict.kind) {
+      case osc::SetVerdict::Kind::Runs:
+        break;
+      case osc::SetVerdict::Kind::Skipped:
+        if (skipped++ == 0) first_skipped = first;
+        break;
+      case osc::SetVerdict::Kind::Refused:
+        if (refused++ == 0) first_refused = first;
+        break;
+      case osc::SetVerdict::Kind::CannotStart:
+        if (failing++ == 0) first_failing = first;
+        break;
     }
   }
   findings.mapped(grid.file.string(),
@@ -85,14 +87,14 @@ void countSets(const ParameterGrid& grid, const OscImportOptions& options, osc::
                               refused, failing, first_failing.empty() ? "" : "; first: " + first_failing,
                               grid.sets.size() - skipped - refused - failing));
   // `run` fails such sets alone and runs the others (runVariation); with none left it refuses the file.
-  if (refused == 0) return;
-  const std::string refusals =
-      fmt::format("{}: {} parameter sets refused, the first: {}", grid.file.string(), refused, first_refused);
-  if (skipped + refused + failing == grid.sets.size()) {
-    findings.refuse(refusals);
-  } else {
+  const bool none_run = skipped + refused + failing == grid.sets.size();
+  if (refused > 0 && none_run) {
+    findings.refuse(fmt::format("{}: {} parameter sets refused, the first: {}", grid.file.string(), refused, first_refused));
+  } else if (refused > 0) {
     findings.note(grid.file.string(), fmt::format("{} parameter sets refused (they fail alone in run), the first: {}",
                                                   refused, first_refused));
+  } else if (none_run) {
+    findings.refuse(fmt::format("{}: none of the {} parameter sets would run", grid.file.string(), grid.sets.size()));
   }
 }
 

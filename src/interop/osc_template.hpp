@@ -121,12 +121,23 @@ TranslationResult translate(const std::filesystem::path& xosc, const OscImportOp
 /// The language's reading of a translation, recorded as coming from `file`.
 std::shared_ptr<const scenario::LogicalScenario> loadLanguage(const std::filesystem::path& file, const std::string& yaml);
 
-/// Why the road users of sample `index` of an imported scenario cannot start as the simulation
-/// would refuse them (overlapping at t = 0, off their road), or empty if they can. A sweep
-/// checks every parameter set with it first, so that such a set fails alone and is counted
-/// instead of ending the sweep where the simulation meets it.
-std::string startRefusal(const std::shared_ptr<const scenario::LogicalScenario>& logical, std::uint64_t seed,
-                         std::uint64_t index);
+/// How one parameter set of a grid fares before any simulation; `run` (which fails a Refused or
+/// CannotStart set alone and runs the others) and `scenario check` count sets by it.
+struct SetVerdict {
+  enum class Kind {
+    Runs,
+    Skipped,      ///< violates the template's constraints
+    Refused,      ///< its values take the file outside what the import supports
+    CannotStart,  ///< its sample fails the language's per-sample checks or the simulation's start
+                  ///< (road users overlapping at t = 0 or off their road)
+  };
+  Kind kind = Kind::Runs;
+  std::string message;  ///< why, for every kind but Runs
+};
+/// Imports set `set` of `grid` (string parameters coded by `codes`) and checks sample `index`
+/// of it with `seed`.
+SetVerdict judgeSet(const ParameterGrid& grid, const OscImportOptions& import, const StringCodes& codes,
+                    std::size_t set, std::uint64_t seed, std::uint64_t index);
 
 /// A speed action's YAML (`speed:` item) from <SpeedAction>, for Init and Story.
 YAML::Node speedAction(Translation& translation, const Entity& actor, const pugi::xml_node& action);

@@ -134,21 +134,6 @@ std::string SweepSummary::report() const {
   return text;
 }
 
-namespace osc {
-
-std::string startRefusal(const std::shared_ptr<const scenario::LogicalScenario>& logical, std::uint64_t seed,
-                         std::uint64_t index) {
-  try {
-    const auto concrete = scenario::sampleConcreteScenario(logical, seed, index);
-    const auto road = road::buildRoadGeometry(concrete);
-    const sim::ScriptedTraffic traffic(concrete, road);
-  } catch (const ConfigError& error) {
-    return error.what();
-  }
-  return {};
-}
-
-}  // namespace osc
 
 namespace {
 
@@ -179,6 +164,33 @@ std::shared_ptr<const scenario::LogicalScenario> importSet(const ParameterGrid& 
   return osc::loadLanguage(grid.file, result.yaml);
 }
 
+}  // namespace
+
+namespace osc {
+
+SetVerdict judgeSet(const ParameterGrid& grid, const OscImportOptions& import, const StringCodes& codes,
+                    std::size_t set, std::uint64_t seed, std::uint64_t index) {
+  try {
+    std::string violation;
+    const auto logical = importSet(grid, import, codes, set, &violation);
+    if (!logical) return {SetVerdict::Kind::Skipped, violation};
+    try {
+      const auto concrete = scenario::sampleConcreteScenario(logical, seed, index);
+      const auto road = road::buildRoadGeometry(concrete);
+      const sim::ScriptedTraffic traffic(concrete, road);  // throws where the simulation would refuse the start
+    } catch (const ConfigError& error) {
+      return {SetVerdict::Kind::CannotStart, error.what()};
+    }
+  } catch (const ConfigError& error) {
+    return {SetVerdict::Kind::Refused, error.what()};
+  }
+  return {};
+}
+
+}  // namespace osc
+
+namespace {
+
 /// The sets of a grid that run, in grid order: each imported and its road users' start checked,
 /// the others counted in `summary` (skipped by a constraint, failed at the start).
 std::vector<std::size_t> acceptSets(const ParameterGrid& grid, const OscImportOptions& import,
@@ -186,25 +198,19 @@ std::vector<std::size_t> acceptSets(const ParameterGrid& grid, const OscImportOp
   summary.sets = grid.sets.size();
   std::vector<std::size_t> accepted;
   for (std::size_t set = 0; set < grid.sets.size(); ++set) {
-    std::string violation;
-    std::shared_ptr<const scenario::LogicalScenario> logical;
-    std::string refusal;
-    try {
-      logical = importSet(grid, import, codes, set, &violation);
-    } catch (const ConfigError& error) {
-      refusal = error.what();  // this set's values take the file outside what is supported
+    const auto verdict = osc::judgeSet(grid, import, codes, set, seed, accepted.size());
+    switch (verdict.kind) {
+      case osc::SetVerdict::Kind::Runs:
+        accepted.push_back(set);
+        break;
+      case osc::SetVerdict::Kind::Skipped:
+        if (summary.skipped++ == 0) summary.firstSkipped = fmt::format("parameter set {}: {}", set, verdict.message);
+        break;
+      case osc::SetVerdict::Kind::Refused:
+      case osc::SetVerdict::Kind::CannotStart:
+        if (summary.refused++ == 0) summary.firstRefused = fmt::format("parameter set {}: {}", set, verdict.message);
+        break;
     }
-    if (!logical && refusal.empty()) {
-      ++summary.skipped;
-      if (summary.firstSkipped.empty()) summary.firstSkipped = fmt::format("parameter set {}: {}", set, violation);
-      continue;
-    }
-    if (logical) refusal = osc::startRefusal(logical, seed, accepted.size());
-    if (!refusal.empty()) {
-      if (summary.refused++ == 0) summary.firstRefused = fmt::format("parameter set {}: {}", set, refusal);
-      continue;
-    }
-    accepted.push_back(set);
   }
   if (accepted.empty()) {
     throw ConfigError(fmt::format("{}: none of the {} parameter sets can run ({} violate the template's constraints{}, "
