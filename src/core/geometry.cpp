@@ -52,7 +52,13 @@ double MeasuredPolyline::headingAt(double arc_length) const {
 }
 
 PolylineProjection MeasuredPolyline::project(const Vec2& point) const {
-  PolylineProjection best;
+  // The search compares squared distances only; arc length, heading (an atan2) and side
+  // are worked out once, for the nearest segment. A zero-length nearest segment keeps the
+  // heading of the last nearer segment that has a direction (0 if none has).
+  constexpr std::size_t kNone = std::numeric_limits<std::size_t>::max();
+  std::size_t best_segment = 0;
+  std::size_t heading_segment = kNone;
+  double best_fraction = 0.0;
   double best_distance_sq = std::numeric_limits<double>::infinity();
   for (std::size_t seg = 0; seg + 1 < points_.size(); ++seg) {
     const Vec2 start = points_[seg];
@@ -60,19 +66,25 @@ PolylineProjection MeasuredPolyline::project(const Vec2& point) const {
     const double length_sq = delta.squaredNorm();
     double fraction = 0.0;
     if (length_sq > 0.0) fraction = std::clamp((point - start).dot(delta) / length_sq, 0.0, 1.0);
-    const Vec2 foot = start + fraction * delta;
-    const double distance_sq = (point - foot).squaredNorm();
+    const double distance_sq = (point - (start + fraction * delta)).squaredNorm();
     if (distance_sq < best_distance_sq) {
       best_distance_sq = distance_sq;
-      best.segment = seg;
-      best.foot = foot;
-      best.arcLength = cumulative_[seg] + fraction * std::sqrt(length_sq);
-      best.heading = length_sq > 0.0 ? headingOf(delta) : best.heading;
-      const Vec2 relative = point - foot;
-      const double cross = delta.x() * relative.y() - delta.y() * relative.x();
-      best.lateralOffset = std::copysign(std::sqrt(distance_sq), cross);
+      best_segment = seg;
+      best_fraction = fraction;
+      if (length_sq > 0.0) heading_segment = seg;
     }
   }
+  PolylineProjection best;
+  if (best_distance_sq == std::numeric_limits<double>::infinity()) return best;
+  const Vec2 start = points_[best_segment];
+  const Vec2 delta = points_[best_segment + 1] - start;
+  best.segment = best_segment;
+  best.foot = start + best_fraction * delta;
+  best.arcLength = cumulative_[best_segment] + best_fraction * std::sqrt(delta.squaredNorm());
+  if (heading_segment != kNone) best.heading = headingOf(points_[heading_segment + 1] - points_[heading_segment]);
+  const Vec2 relative = point - best.foot;
+  const double cross = delta.x() * relative.y() - delta.y() * relative.x();
+  best.lateralOffset = std::copysign(std::sqrt(best_distance_sq), cross);
   return best;
 }
 
