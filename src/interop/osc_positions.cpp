@@ -151,7 +151,7 @@ void applyDistance(Translation& translation, Entity& entity, Placement& placemen
   const double sign = side == "trailingReferencedEntity" ? -1.0
                       : side == "leadingReferencedEntity" ? 1.0
                       : (placement.s + entity.centreAhead >= base.s + other.centreAhead ? 1.0 : -1.0);
-  const double stretch = 1.0 - translation.road.curvature * placement.t;
+  const double stretch = 1.0 - translation.road.curvatureAt(placement.s) * placement.t;
   placement.s = base.s + other.centreAhead + sign * centres / stretch - entity.centreAhead;
   translation.findings.mapped(reader.where(action), fmt::format("'{}' placed {} m ({}) {} '{}'", entity.name,
                                                                 xml::number(gap), freespace ? "bumper to bumper" : "centres",

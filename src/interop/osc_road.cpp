@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
 
 #include "vsd/core/files.hpp"
@@ -17,32 +18,101 @@ constexpr NumberRange kLength = NumberRange::aboveUpTo(0.0, 50'000.0);
 /// Widths and positions of consecutive geometries must join within this (m, rad).
 constexpr double kJoinTolerance = 1e-3;
 
-/// The plan view: lines or arcs of one curvature, joined end to start.
+/// m between a spiral's tabulated points; Simpson's rule over half of it is exact to far
+/// below a micrometre for the curvatures of roads.
+constexpr double kSpiralStep = 0.5;
+/// m between the reference line's samples for coordinates() (chord error below 1 mm up to
+/// a curvature of 0.03 1/m, a radius of 33 m; tighter curves are sampled more densely).
+constexpr double kSampleSpacing = 0.5;
+
+/// Simpson's rule for the unit tangent of a curve of heading h(u) over [a, b].
+template <typename Heading>
+Vec2 integrateTangent(const Heading& h, double a, double b) {
+  const double m = 0.5 * (a + b);
+  const auto tangent = [&](double u) { return Vec2(std::cos(h(u)), std::sin(h(u))); };
+  return (b - a) / 6.0 * (tangent(a) + 4.0 * tangent(m) + tangent(b));
+}
+
+PlanGeometry readGeometry(const xml::Reader& reader, const pugi::xml_node& geometry) {
+  const pugi::xml_node shape = reader.choice(geometry, {"line", "arc", "spiral", "paramPoly3"});
+  const double s = reader.number(geometry, "s", NumberRange::atLeast(0.0));
+  const Vec2 start(reader.number(geometry, "x"), reader.number(geometry, "y"));
+  const double heading = reader.number(geometry, "hdg");
+  const double length = reader.number(geometry, "length", kLength);
+  const std::string kind = shape.name();
+  const NumberRange curvature_range = NumberRange::closed(-1.0, 1.0);
+  if (kind == "line") return PlanGeometry::line(s, start, heading, length);
+  if (kind == "arc") return PlanGeometry::arc(s, start, heading, length, reader.number(shape, "curvature", curvature_range));
+  if (kind == "spiral") {
+    return PlanGeometry::spiral(s, start, heading, length, reader.number(shape, "curvStart", curvature_range),
+                                reader.number(shape, "curvEnd", curvature_range));
+  }
+  std::array<double, 4> u{};
+  std::array<double, 4> v{};
+  const char* names[] = {"a", "b", "c", "d"};
+  for (std::size_t i = 0; i < 4; ++i) {
+    u[i] = reader.number(shape, (std::string(names[i]) + "U").c_str());
+    v[i] = reader.number(shape, (std::string(names[i]) + "V").c_str());
+  }
+  const std::string range = reader.optionalText(shape, "pRange").value_or("normalized");
+  if (range != "normalized" && range != "arcLength") {
+    reader.fail(shape, fmt::format("pRange=\"{}\": expected arcLength or normalized", range));
+  }
+  return PlanGeometry::paramPoly3(s, start, heading, length, u, v, range == "normalized");
+}
+
+/// The plan view: geometries joined end to start (within kJoinTolerance), in order of s.
 void readPlanView(const xml::Reader& reader, const pugi::xml_node& road, CarriagewayRoad& result) {
   const pugi::xml_node plan = reader.only(road, "planView");
   reader.requireSubset(plan, {"geometry"});
-  bool first = true;
-  for (const pugi::xml_node& geometry : plan.children("geometry")) {
-    const pugi::xml_node shape = reader.choice(geometry, {"line", "arc"});
-    const double curvature = std::string(shape.name()) == "arc" ? reader.number(shape, "curvature", NumberRange::closed(-1.0, 1.0)) : 0.0;
-    const double s = reader.number(geometry, "s", NumberRange::atLeast(0.0));
-    const Vec2 start(reader.number(geometry, "x"), reader.number(geometry, "y"));
-    const double heading = reader.number(geometry, "hdg");
-    const double length = reader.number(geometry, "length", kLength);
-    if (first) {
-      result.start = start;
-      result.heading = heading;
-      result.curvature = curvature;
-      first = false;
-    } else if (std::abs(curvature - result.curvature) > 1e-9 || std::abs(s - result.length) > kJoinTolerance ||
-               (result.point(s, 0.0) - start).norm() > kJoinTolerance ||
-               std::abs(std::remainder(result.headingAt(s) - heading, 2.0 * kPi)) > kJoinTolerance) {
-      reader.fail(geometry, "a second curvature: the scenario language's roads are one line or one arc "
-                            "(docs/openscenario-import.md \"Roads\")");
+  for (const pugi::xml_node& node : plan.children("geometry")) {
+    PlanGeometry geometry = readGeometry(reader, node);
+    if (result.geometries.empty()) {
+      result.start = geometry.point(0.0);
+      result.heading = geometry.heading(0.0);
+      result.turnBefore.push_back(0.0);
+    } else {
+      const PlanGeometry& before = result.geometries.back();
+      const double gap = (before.point(before.length()) - geometry.point(0.0)).norm();
+      const double kink = std::remainder(before.heading(before.length()) - geometry.heading(0.0), 2.0 * kPi);
+      if (std::abs(geometry.s() - result.length) > kJoinTolerance || gap > kJoinTolerance ||
+          std::abs(kink) > kJoinTolerance) {
+        reader.fail(node, fmt::format("does not continue the geometry before it (s {} m after {} m of road, a gap of "
+                                      "{:.3g} m, a kink of {:.3g} rad; expected at most {})",
+                                      xml::number(geometry.s()), xml::number(result.length), gap, kink, kJoinTolerance));
+      }
+      result.turnBefore.push_back(result.turnBefore.back() + before.turn(before.length()));
     }
-    result.length = s + length;
+    result.length = geometry.s() + geometry.length();
+    result.geometries.push_back(std::move(geometry));
   }
-  if (first) reader.fail(plan, "expected at least one <geometry>");
+  if (result.geometries.empty()) reader.fail(plan, "expected at least one <geometry>");
+}
+
+/// Lines only, or arcs of one curvature: the language's arc road, by closed formulas.
+void classifyCurvature(CarriagewayRoad& road) {
+  using Kind = PlanGeometry::Kind;
+  const PlanGeometry& first = road.geometries.front();
+  road.curvature = first.kind() == Kind::Arc ? first.curvature(0.0) : 0.0;
+  road.oneCurvature = true;
+  for (const PlanGeometry& geometry : road.geometries) {
+    const bool same = (geometry.kind() == Kind::Line && road.curvature == 0.0) ||
+                      (geometry.kind() == Kind::Arc && std::abs(geometry.curvature(0.0) - road.curvature) <= 1e-9);
+    if (!same) road.oneCurvature = false;
+  }
+  if (road.oneCurvature) return;
+  road.curvature = 0.0;
+  Polyline points;
+  for (const PlanGeometry& geometry : road.geometries) {
+    const double spacing = std::min(kSampleSpacing, std::sqrt(8.0 * 1e-3 / std::max(geometry.largestCurvature(), 1e-9)));
+    const auto steps = static_cast<int>(std::ceil(geometry.length() / spacing));
+    for (int i = points.empty() ? 0 : 1; i <= steps; ++i) {
+      const double ds = geometry.length() * i / steps;
+      points.push_back(geometry.point(ds));
+      road.sampleS.push_back(geometry.s() + ds);
+    }
+  }
+  road.referenceSamples = MeasuredPolyline(std::move(points));
 }
 
 double constantWidth(const xml::Reader& reader, const pugi::xml_node& lane) {
@@ -132,14 +202,164 @@ int CarriagewayRoad::nearestLane(double t) const {
   return static_cast<int>(std::clamp<long>(lane, 0, lanes - 1));
 }
 
+PlanGeometry PlanGeometry::line(double s, const Vec2& start, double heading, double length) {
+  PlanGeometry geometry;
+  geometry.s_ = s;
+  geometry.start_ = start;
+  geometry.heading_ = heading;
+  geometry.length_ = length;
+  return geometry;
+}
+
+PlanGeometry PlanGeometry::arc(double s, const Vec2& start, double heading, double length, double curvature) {
+  PlanGeometry geometry = line(s, start, heading, length);
+  geometry.kind_ = Kind::Arc;
+  geometry.curvatureStart_ = geometry.curvatureEnd_ = curvature;
+  return geometry;
+}
+
+PlanGeometry PlanGeometry::spiral(double s, const Vec2& start, double heading, double length, double curvature_start,
+                                  double curvature_end) {
+  PlanGeometry geometry = line(s, start, heading, length);
+  geometry.kind_ = Kind::Spiral;
+  geometry.curvatureStart_ = curvature_start;
+  geometry.curvatureEnd_ = curvature_end;
+  const auto steps = static_cast<std::size_t>(std::ceil(length / kSpiralStep));
+  geometry.spiralStep_ = length / static_cast<double>(steps);
+  geometry.spiralPoints_.reserve(steps + 1);
+  geometry.spiralPoints_.push_back(start);
+  const auto h = [&geometry](double u) { return geometry.heading(u); };
+  for (std::size_t i = 1; i <= steps; ++i) {
+    const double a = geometry.spiralStep_ * static_cast<double>(i - 1);
+    geometry.spiralPoints_.push_back(geometry.spiralPoints_.back() + integrateTangent(h, a, a + geometry.spiralStep_));
+  }
+  return geometry;
+}
+
+PlanGeometry PlanGeometry::paramPoly3(double s, const Vec2& start, double heading, double length,
+                                      const std::array<double, 4>& u, const std::array<double, 4>& v, bool normalized) {
+  PlanGeometry geometry = line(s, start, heading, length);
+  geometry.kind_ = Kind::ParamPoly3;
+  geometry.u_ = u;
+  geometry.v_ = v;
+  geometry.normalized_ = normalized;
+  return geometry;
+}
+
+Vec2 PlanGeometry::localTangent(double p) const {
+  return {u_[1] + 2.0 * u_[2] * p + 3.0 * u_[3] * p * p, v_[1] + 2.0 * v_[2] * p + 3.0 * v_[3] * p * p};
+}
+
+Vec2 PlanGeometry::localSecond(double p) const { return {2.0 * u_[2] + 6.0 * u_[3] * p, 2.0 * v_[2] + 6.0 * v_[3] * p}; }
+
+Vec2 PlanGeometry::point(double ds) const {
+  const Vec2 direction(std::cos(heading_), std::sin(heading_));
+  switch (kind_) {
+    case Kind::Line: return start_ + ds * direction;
+    case Kind::Arc: {
+      if (curvatureStart_ == 0.0) return start_ + ds * direction;
+      const double r = 1.0 / curvatureStart_;
+      const double h = heading_ + curvatureStart_ * ds;
+      return start_ + Vec2(r * (std::sin(h) - std::sin(heading_)), -r * (std::cos(h) - std::cos(heading_)));
+    }
+    case Kind::Spiral: {
+      const auto index = std::min(static_cast<std::size_t>(std::max(ds, 0.0) / spiralStep_), spiralPoints_.size() - 1);
+      const double from = spiralStep_ * static_cast<double>(index);
+      return spiralPoints_[index] + integrateTangent([this](double u) { return heading(u); }, from, ds);
+    }
+    case Kind::ParamPoly3: {
+      const double p = parameter(ds);
+      const Vec2 local(u_[0] + p * (u_[1] + p * (u_[2] + p * u_[3])), v_[0] + p * (v_[1] + p * (v_[2] + p * v_[3])));
+      return start_ + local.x() * direction + local.y() * Vec2(-direction.y(), direction.x());
+    }
+  }
+  return start_;
+}
+
+double PlanGeometry::heading(double ds) const {
+  if (kind_ == Kind::ParamPoly3) return heading_ + headingOf(localTangent(parameter(ds)));
+  return heading_ + turn(ds);
+}
+
+double PlanGeometry::turn(double ds) const {
+  switch (kind_) {
+    case Kind::Line: return 0.0;
+    case Kind::Arc: return curvatureStart_ * ds;
+    case Kind::Spiral: return curvatureStart_ * ds + (curvatureEnd_ - curvatureStart_) * ds * ds / (2.0 * length_);
+    case Kind::ParamPoly3:
+      return std::remainder(headingOf(localTangent(parameter(ds))) - headingOf(localTangent(0.0)), 2.0 * kPi);
+  }
+  return 0.0;
+}
+
+double PlanGeometry::curvature(double ds) const {
+  switch (kind_) {
+    case Kind::Line: return 0.0;
+    case Kind::Arc: return curvatureStart_;
+    case Kind::Spiral: return curvatureStart_ + (curvatureEnd_ - curvatureStart_) * ds / length_;
+    case Kind::ParamPoly3: {
+      const double p = parameter(ds);
+      const Vec2 d1 = localTangent(p);
+      const Vec2 d2 = localSecond(p);
+      const double speed = d1.norm();
+      return speed > 0.0 ? (d1.x() * d2.y() - d1.y() * d2.x()) / (speed * speed * speed) : 0.0;
+    }
+  }
+  return 0.0;
+}
+
+double PlanGeometry::largestCurvature() const {
+  if (kind_ != Kind::ParamPoly3) return std::max(std::abs(curvatureStart_), std::abs(curvatureEnd_));
+  double largest = 0.0;
+  constexpr int kProbes = 32;
+  for (int i = 0; i <= kProbes; ++i) largest = std::max(largest, std::abs(curvature(length_ * i / kProbes)));
+  return largest;
+}
+
+const PlanGeometry& CarriagewayRoad::geometryAt(double s) const {
+  const auto after = std::upper_bound(geometries.begin(), geometries.end(), s,
+                                      [](double value, const PlanGeometry& g) { return value < g.s(); });
+  return after == geometries.begin() ? geometries.front() : *std::prev(after);
+}
+
+double CarriagewayRoad::turnAt(double s) const {
+  if (oneCurvature) return curvature * s;
+  const PlanGeometry& geometry = geometryAt(s);
+  const auto index = static_cast<std::size_t>(&geometry - geometries.data());
+  const double ds = std::clamp(s - geometry.s(), 0.0, geometry.length());
+  return turnBefore[index] + geometry.turn(ds);
+}
+
+double CarriagewayRoad::languageS(double s) const {
+  if (oneCurvature) return s * (1.0 - curvature * centreT());
+  return s - centreT() * turnAt(s);
+}
+
+double CarriagewayRoad::curvatureAt(double s) const {
+  if (oneCurvature) return curvature;
+  if (s < 0.0 || s > length) return 0.0;  // the straight continuations beyond the ends
+  const PlanGeometry& geometry = geometryAt(s);
+  return geometry.curvature(std::clamp(s - geometry.s(), 0.0, geometry.length()));
+}
+
+double CarriagewayRoad::headingAt(double s) const {
+  if (oneCurvature) return heading + curvature * s;
+  return heading + turnAt(std::clamp(s, 0.0, length));
+}
+
 Vec2 CarriagewayRoad::point(double s, double t) const {
   const double h = headingAt(s);
   Vec2 reference;
-  if (std::abs(curvature) < 1e-12) {
+  if (oneCurvature && std::abs(curvature) < 1e-12) {
     reference = start + s * Vec2(std::cos(heading), std::sin(heading));
-  } else {
+  } else if (oneCurvature) {
     const double r = 1.0 / curvature;
     reference = start + Vec2(r * (std::sin(h) - std::sin(heading)), -r * (std::cos(h) - std::cos(heading)));
+  } else {
+    const double on_road = std::clamp(s, 0.0, length);
+    const PlanGeometry& geometry = geometryAt(on_road);
+    reference = geometry.point(std::clamp(on_road - geometry.s(), 0.0, geometry.length())) +
+                (s - on_road) * Vec2(std::cos(h), std::sin(h));
   }
   return reference + t * Vec2(-std::sin(h), std::cos(h));
 }
@@ -147,6 +367,24 @@ Vec2 CarriagewayRoad::point(double s, double t) const {
 std::pair<double, double> CarriagewayRoad::coordinates(const Vec2& p) const {
   const Vec2 direction(std::cos(heading), std::sin(heading));
   const Vec2 normal(-direction.y(), direction.x());
+  if (!oneCurvature) {
+    // Nearest point of the sampled reference line; before its start and beyond its end the
+    // road goes on along the end tangents.
+    const PolylineProjection foot = referenceSamples.project(p);
+    const auto& points = referenceSamples.points();
+    const Vec2 from_start = p - points.front();
+    if (foot.arcLength <= 0.0 && from_start.dot(direction) < 0.0) return {from_start.dot(direction), from_start.dot(normal)};
+    const double end_heading = headingAt(length);
+    const Vec2 end_direction(std::cos(end_heading), std::sin(end_heading));
+    const Vec2 from_end = p - points.back();
+    if (foot.arcLength >= referenceSamples.length() && from_end.dot(end_direction) > 0.0) {
+      return {length + from_end.dot(end_direction), from_end.dot(Vec2(-end_direction.y(), end_direction.x()))};
+    }
+    const Vec2 segment = points[foot.segment + 1] - points[foot.segment];
+    const double fraction = std::clamp((foot.foot - points[foot.segment]).norm() / segment.norm(), 0.0, 1.0);
+    const double s = sampleS[foot.segment] + fraction * (sampleS[foot.segment + 1] - sampleS[foot.segment]);
+    return {s, foot.lateralOffset};
+  }
   if (std::abs(curvature) < 1e-12) {
     const Vec2 d = p - start;
     return {d.dot(direction), d.dot(normal)};
@@ -180,6 +418,7 @@ CarriagewayRoad readCarriagewayRoad(const std::filesystem::path& file, Findings&
     reader.fail(road, "rule: only right-hand traffic (RHT) maps onto the language's lanes");
   }
   readPlanView(reader, road, result);
+  classifyCurvature(result);
   if (std::abs(result.length - reader.number(road, "length", kLength)) > kJoinTolerance) {
     reader.fail(road, "length: differs from the sum of its geometries' lengths");
   }

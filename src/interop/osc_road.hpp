@@ -1,34 +1,90 @@
 #pragma once
-// An OpenDRIVE road as the scenario language's arc road (private to the interop module).
+// An OpenDRIVE road as one of the scenario language's roads (private to the interop module).
 //
-// The scenario language (docs/scenario-language.md) has one kind of road an OpenDRIVE
-// file can map onto exactly: a carriageway of equal driving lanes along a line or a
-// circular arc. A file maps if it has one road whose plan view is lines or arcs of one
-// curvature, one lane section, no lane offset, constant widths, and on its right side
-// (negative lane ids, driven towards +s) a contiguous run of `driving` lanes of one
-// width. Lanes between the reference line and that run and `shoulder`/`stop` lanes
-// right of it become the language's shoulders; the left side (positive ids) is not
-// part of vsd-sumo's road. Elevation, superelevation, road marks, links, objects and
-// signals do not change the planar lanes: they are reported as not simulated.
+// A file maps if it has one road with one lane section, no lane offset, constant widths,
+// and on its right side (negative lane ids, driven towards +s) a contiguous run of
+// `driving` lanes of one width. Lanes between the reference line and that run and
+// `shoulder`/`stop` lanes right of it become the language's shoulders; the left side
+// (positive ids) is not part of vsd-sumo's road. Elevation, superelevation, road marks,
+// links, objects and signals do not change the planar lanes: they are reported as not
+// simulated.
 //
-// The language's road centre is the centre line of the driving lanes (t = centreT()),
-// a concentric arc: its curvature is k / (1 - k * centreT()) and its s is the reference
-// line's s times (1 - k * centreT()).
+// The plan view is any chain of `line`, `arc`, `spiral` and `paramPoly3` geometries.
+// A road of one curvature (lines only, or arcs of one curvature) maps onto the language's
+// arc road exactly, as closed formulas; any other becomes a polyline road, the centre
+// line of its driving lanes sampled within 1 cm.
+//
+// The language's road centre is the centre line of the driving lanes (t = centreT()), a
+// parallel curve of the reference line: along it, s advances by (1 - k(s) * centreT()) per m
+// of reference line, so its s is s - centreT() * (heading turned since s = 0), and on
+// roads of one curvature k its own curvature is k / (1 - k * centreT()).
 
+#include <array>
 #include <filesystem>
 #include <string>
+#include <vector>
 
 #include "osc_findings.hpp"
 #include "vsd/core/geometry.hpp"
 
 namespace vsd::interop::osc {
 
+/// One <geometry> of a plan view, placed by its own start, heading and length
+/// (OpenDRIVE 1.6 section 7.3): a line, an arc, a spiral (curvature linear in s) or a
+/// paramPoly3 (u, v cubic in p; p runs over [0, length] or, pRange="normalized", [0, 1]).
+class PlanGeometry {
+ public:
+  enum class Kind { Line, Arc, Spiral, ParamPoly3 };
+  static PlanGeometry line(double s, const Vec2& start, double heading, double length);
+  static PlanGeometry arc(double s, const Vec2& start, double heading, double length, double curvature);
+  static PlanGeometry spiral(double s, const Vec2& start, double heading, double length, double curvature_start,
+                             double curvature_end);
+  /// u, v: coefficients a, b, c, d of the local u(p) and v(p).
+  static PlanGeometry paramPoly3(double s, const Vec2& start, double heading, double length,
+                                 const std::array<double, 4>& u, const std::array<double, 4>& v, bool normalized);
+
+  Kind kind() const { return kind_; }
+  double s() const { return s_; }            ///< m of reference line where it starts
+  double length() const { return length_; }  ///< m
+  /// Point ds m into the geometry (0 <= ds <= length).
+  Vec2 point(double ds) const;
+  /// rad: direction of travel ds m into the geometry.
+  double heading(double ds) const;
+  /// rad turned from the geometry's start to ds (unwrapped).
+  double turn(double ds) const;
+  /// 1/m, > 0 left, ds m into the geometry.
+  double curvature(double ds) const;
+  /// 1/m: the largest |curvature| along the geometry (sampled for paramPoly3).
+  double largestCurvature() const;
+
+ private:
+  Vec2 localTangent(double p) const;
+  Vec2 localSecond(double p) const;
+  double parameter(double ds) const { return normalized_ ? ds / length_ : ds; }
+
+  Kind kind_ = Kind::Line;
+  double s_ = 0.0;
+  Vec2 start_ = Vec2::Zero();
+  double heading_ = 0.0;
+  double length_ = 0.0;
+  double curvatureStart_ = 0.0;
+  double curvatureEnd_ = 0.0;
+  std::array<double, 4> u_{};
+  std::array<double, 4> v_{};
+  bool normalized_ = false;
+  double spiralStep_ = 0.0;          ///< m between the spiral's tabulated points
+  std::vector<Vec2> spiralPoints_;   ///< the spiral's points at multiples of spiralStep_
+};
+
 struct CarriagewayRoad {
   std::filesystem::path file;
   std::string id;
+  std::vector<PlanGeometry> geometries;
+  std::vector<double> turnBefore;  ///< rad turned along the reference line before each geometry
+  bool oneCurvature = true;  ///< lines only, or arcs of one curvature: the language's arc road
   Vec2 start;               ///< m, start of the reference line
   double heading = 0.0;     ///< rad, of the reference line at s = 0
-  double curvature = 0.0;   ///< 1/m of the reference line, > 0 left
+  double curvature = 0.0;   ///< 1/m of the reference line, > 0 left (roads of one curvature)
   double length = 0.0;      ///< m of reference line
   int lanes = 0;            ///< driving lanes on the right side
   int innermostLaneId = -1; ///< OpenDRIVE id of the driving lane next to the reference line
@@ -36,6 +92,8 @@ struct CarriagewayRoad {
   double innerT = 0.0;      ///< m, t of the driving lanes' inner edge (<= 0)
   double shoulderLeft = 0.0;   ///< m between the reference line and the driving lanes
   double shoulderRight = 0.0;  ///< m of shoulder/stop lanes right of the driving lanes
+  MeasuredPolyline referenceSamples;  ///< the reference line within 1 mm (roads of several curvatures)
+  std::vector<double> sampleS;        ///< m, reference-line s of each of referenceSamples' points
 
   /// t of the driving lanes' centre line (the language's road centre).
   double centreT() const { return innerT - lanes * laneWidth / 2.0; }
@@ -46,14 +104,22 @@ struct CarriagewayRoad {
   /// The language lane whose centre is nearest to t (clamped to the driving lanes).
   int nearestLane(double t) const;
   /// Language s (along the driving lanes' centre line) of the reference line's s.
-  double languageS(double s) const { return s * (1.0 - curvature * centreT()); }
-  /// The language road's curvature (of the driving lanes' centre line).
+  double languageS(double s) const;
+  /// The language road's curvature (of the driving lanes' centre line; roads of one curvature).
   double languageCurvature() const { return curvature / (1.0 - curvature * centreT()); }
-  /// Point at reference-line coordinates (s, t), and back.
+  /// 1/m: the reference line's curvature at s.
+  double curvatureAt(double s) const;
+  /// rad: turned along the reference line from s = 0 to s (unwrapped).
+  double turnAt(double s) const;
+  /// Point at reference-line coordinates (s, t), and back. Beyond the ends the road goes on
+  /// along its end tangents.
   Vec2 point(double s, double t) const;
   /// Road heading (rad) at s.
-  double headingAt(double s) const { return heading + curvature * s; }
+  double headingAt(double s) const;
   std::pair<double, double> coordinates(const Vec2& point) const;
+
+ private:
+  const PlanGeometry& geometryAt(double s) const;
 };
 
 /// Reads the road; refuses (ConfigError "file:line: <element>: why") what does not map.

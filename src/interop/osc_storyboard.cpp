@@ -354,7 +354,7 @@ YAML::Node relationLeaf(Translation& translation, const Entity& actor, const Ent
 YAML::Node placeOf(Translation& translation, const Entity& subject, const pugi::xml_node& condition) {
   const CarriagewayRoad& road = translation.road;
   const Placement p = fixedPlace(translation, translation.reader.only(condition, "Position"));
-  const double stretch = 1.0 - road.curvature * p.t;
+  const double stretch = 1.0 - road.curvatureAt(p.s) * p.t;
   const int lane = road.nearestLane(p.t);
   YAML::Node place;
   place["s"] = num(road.languageS(p.s + subject.centreAhead / stretch));

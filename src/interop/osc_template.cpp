@@ -102,7 +102,7 @@ struct LanguagePlace {
 
 LanguagePlace languagePlace(const CarriagewayRoad& road, const Entity& entity, bool keep_lane) {
   const Placement& p = *entity.placement;
-  const double stretch = 1.0 - road.curvature * p.t;  // reference-line s per m along the entity's line
+  const double stretch = 1.0 - road.curvatureAt(p.s) * p.t;  // reference-line s per m along the entity's line
   const double s = p.s + entity.centreAhead * std::cos(p.heading) / stretch;
   const double t = p.t + entity.centreAhead * std::sin(p.heading);
   const int lane = keep_lane ? p.lane : road.nearestLane(t);
@@ -111,7 +111,35 @@ LanguagePlace languagePlace(const CarriagewayRoad& road, const Entity& entity, b
 
 }  // namespace
 
+namespace {
+
+/// Reference-line s where the language's region of a road of several curvatures ends: at
+/// kMaxRegion along the driving lanes' centre, at the road's end, or where the road has
+/// turned kMaxArcTurn from its start (a polyline road's segments head at most that from +x).
+double regionEndS(const CarriagewayRoad& road) {
+  double end = road.length;
+  for (const double s : road.sampleS) {
+    if (std::abs(road.turnAt(s)) > scenario::kMaxArcTurn || road.languageS(s) > kMaxRegion) {
+      end = s;
+      break;
+    }
+  }
+  // languageS grows with s (1 - k t > 0 on every road a file can draw): bisect the bound.
+  if (road.languageS(end) > kMaxRegion) {
+    double lo = 0.0;
+    for (double hi = end, i = 0; i < 60; ++i) {
+      const double mid = 0.5 * (lo + hi);
+      (road.languageS(mid) > kMaxRegion ? hi : lo) = mid;
+    }
+    end = lo;
+  }
+  return end;
+}
+
+}  // namespace
+
 double regionLength(const CarriagewayRoad& road) {
+  if (!road.oneCurvature) return road.languageS(regionEndS(road));
   const double curvature = road.languageCurvature();
   double region = std::min(road.languageS(road.length), kMaxRegion);
   if (curvature != 0.0) region = std::min(region, scenario::kMaxArcTurn / std::abs(curvature));
@@ -120,25 +148,60 @@ double regionLength(const CarriagewayRoad& road) {
 
 namespace {
 
+/// The driving lanes' centre line over the region, within 1 cm (as the language samples its
+/// arcs), in the language's frame: starting at the origin, heading +x.
+YAML::Node centreLineNode(const CarriagewayRoad& road) {
+  const double end = regionEndS(road);
+  const double t = road.centreT();
+  const Vec2 origin = road.point(0.0, t);
+  const double c = std::cos(road.heading);
+  const double s_ = std::sin(road.heading);
+  YAML::Node points;
+  auto add = [&](double s) {
+    const Vec2 d = road.point(s, t) - origin;
+    YAML::Node point;
+    point.push_back(num(c * d.x() + s_ * d.y()));
+    point.push_back(num(-s_ * d.x() + c * d.y()));
+    point.SetStyle(YAML::EmitterStyle::Flow);
+    points.push_back(point);
+  };
+  add(0.0);
+  for (const PlanGeometry& geometry : road.geometries) {
+    if (geometry.s() >= end) break;
+    const double k = geometry.largestCurvature();
+    const double k_centre = k / std::max(1.0 - k * std::abs(t), 0.1);
+    const double spacing = std::min(10.0, std::sqrt(8.0 * 0.01 / std::max(k_centre, 1e-9)));
+    const double until = std::min(end, geometry.s() + geometry.length());
+    const auto steps = static_cast<int>(std::ceil((until - geometry.s()) / spacing));
+    for (int i = 1; i <= steps; ++i) add(geometry.s() + (until - geometry.s()) * i / steps);
+  }
+  return points;
+}
+
 YAML::Node roadNode(Translation& translation) {
   const CarriagewayRoad& road = translation.road;
-  const double curvature = road.languageCurvature();
   const double length = road.languageS(road.length);
   const double region = regionLength(road);
   YAML::Node node;
-  node["shape"] = "arc";
-  node["curvature"] = num(curvature);
-  node["length"] = num(region);
+  if (road.oneCurvature) {
+    node["shape"] = "arc";
+    node["curvature"] = num(road.languageCurvature());
+    node["length"] = num(region);
+  } else {
+    node["shape"] = "polyline";
+    node["centre_line"] = centreLineNode(road);
+  }
   node["lanes"] = std::to_string(road.lanes);
   node["lane_width"] = num(road.laneWidth);
   node["shoulders"]["left"] = num(road.shoulderLeft);
   node["shoulders"]["right"] = num(road.shoulderRight);
   node["extension"]["before"] = "0";
   node["extension"]["after"] = num(std::clamp(length - region, 150.0, kMaxExtension));
-  if (curvature != 0.0 && length > region + 1e-6) {
+  if ((!road.oneCurvature || road.curvature != 0.0) && length > region + 1e-6) {
     translation.findings.note(fmt::format("{}", road.file.string()),
-                              fmt::format("the road curves for {} m; vsd-sumo's road has {} m of curve (at most {} rad) "
-                                          "and goes on straight", num(length), num(region), scenario::kMaxArcTurn));
+                              fmt::format("the road curves for {} m; vsd-sumo's road has its first {} m (at most {} m "
+                                          "and {} rad of turn) and goes on straight",
+                                          num(length), num(region), kMaxRegion, scenario::kMaxArcTurn));
   }
   return node;
 }
@@ -265,9 +328,13 @@ TranslationResult translate(const fs::path& xosc, const OscImportOptions& option
   const fs::path xodr = referencedFile(options, xosc, reader.text(logic, "filepath"), reader.where(logic), "filepath");
   if (!fs::exists(xodr)) reader.fail(logic, fmt::format("the road network {} does not exist", xodr.string()));
   translation.road = readCarriagewayRoad(xodr, findings);
-  findings.mapped(reader.where(logic), fmt::format("road '{}': {} driving lanes of {} m, curvature {} 1/m",
-                                                   translation.road.id, translation.road.lanes,
-                                                   num(translation.road.laneWidth), num(translation.road.curvature)));
+  const CarriagewayRoad& road = translation.road;
+  findings.mapped(reader.where(logic),
+                  road.oneCurvature
+                      ? fmt::format("road '{}': {} driving lanes of {} m, curvature {} 1/m", road.id, road.lanes,
+                                    num(road.laneWidth), num(road.curvature))
+                      : fmt::format("road '{}': {} driving lanes of {} m, {} geometries of varying curvature", road.id,
+                                    road.lanes, num(road.laneWidth), road.geometries.size()));
   readEntities(translation, root, catalogs);
   for (auto& entity : translation.entities) entity.id = identifier(entity.name, translation.usedIds);
   const pugi::xml_node storyboard = reader.only(root, "Storyboard");

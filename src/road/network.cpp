@@ -19,10 +19,14 @@ BatchLayout::BatchLayout(double cell_size) : cellSize_(cell_size) {
 
 double BatchLayout::cellSizeFor(const scenario::RoadSpec& road) {
   // Arc roads start at the origin: no point of theirs is farther from it than its path length.
-  const double reach =
-      road.shape == scenario::RoadSpec::Shape::Arc
-          ? std::max(road.extensionBefore, road.length.evaluate({}) + road.extensionAfter)
-          : std::max(std::abs(road.xMin) + road.extensionBefore, std::abs(road.xMax) + road.extensionAfter);
+  double reach = std::max(std::abs(road.xMin) + road.extensionBefore, std::abs(road.xMax) + road.extensionAfter);
+  if (road.shape == scenario::RoadSpec::Shape::Arc) {
+    reach = std::max(road.extensionBefore, road.length.evaluate({}) + road.extensionAfter);
+  } else if (road.shape == scenario::RoadSpec::Shape::Polyline) {
+    double farthest = 0.0;
+    for (const auto& [x, y] : road.centreLine) farthest = std::max(farthest, std::hypot(x, y));
+    reach = farthest + std::max(road.extensionBefore, road.extensionAfter);
+  }
   // Rounded up to 100 m so that offsets stay round numbers.
   return std::max(1000.0, std::ceil((2.0 * reach + 200.0) / 100.0) * 100.0);
 }

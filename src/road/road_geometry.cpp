@@ -102,10 +102,23 @@ Polyline arcRegion(const scenario::ConcreteScenario& concrete, Vec2& tangent_beg
   return region;
 }
 
+/// A polyline road's region as given, the extensions along its end segments.
+Polyline polylineRegion(const scenario::RoadSpec& spec, Vec2& tangent_begin, Vec2& tangent_end) {
+  Polyline region;
+  region.reserve(spec.centreLine.size());
+  for (const auto& [x, y] : spec.centreLine) region.emplace_back(x, y);
+  tangent_begin = (region[1] - region[0]).normalized();
+  tangent_end = (region.back() - region[region.size() - 2]).normalized();
+  return region;
+}
+
 }  // namespace
 
 std::pair<double, double> regionXRange(const scenario::LogicalScenario& logical, const std::vector<double>& inputs) {
   if (logical.road.shape == scenario::RoadSpec::Shape::Polynomial) return {logical.road.xMin, logical.road.xMax};
+  if (logical.road.shape == scenario::RoadSpec::Shape::Polyline) {
+    return {logical.road.centreLine.front().first, logical.road.centreLine.back().first};
+  }
   const auto [curvature, length] = arcOf(logical, inputs);
   return {0.0, arcPoint(curvature, length).x()};
 }
@@ -119,9 +132,10 @@ RoadGeometry buildRoadGeometry(const scenario::ConcreteScenario& concrete) {
 
   Vec2 tangent_begin;
   Vec2 tangent_end;
-  const Polyline region = spec.shape == scenario::RoadSpec::Shape::Polynomial
-                              ? polynomialRegion(concrete, tangent_begin, tangent_end)
-                              : arcRegion(concrete, tangent_begin, tangent_end);
+  using Shape = scenario::RoadSpec::Shape;
+  const Polyline region = spec.shape == Shape::Polynomial ? polynomialRegion(concrete, tangent_begin, tangent_end)
+                          : spec.shape == Shape::Arc      ? arcRegion(concrete, tangent_begin, tangent_end)
+                                                          : polylineRegion(spec, tangent_begin, tangent_end);
   road.centre.reserve(region.size() + 2);
   if (spec.extensionBefore > 0.0) road.centre.push_back(region.front() - spec.extensionBefore * tangent_begin);
   road.regionBegin = road.centre.size();

@@ -104,6 +104,9 @@ void parseInputs(const YamlReader& reader, const YAML::Node& node, LogicalScenar
 /// x_range, points, centre, centre_noise: the paper's road.
 void parsePolynomialRoad(const YamlReader& reader, const YAML::Node& node, const std::vector<std::string>& inputs,
                          RoadSpec& road) {
+  for (const char* key : {"curvature", "length", "centre_line"}) {
+    if (node[key]) reader.fail(node[key], std::string("road.") + key, "belongs to another road shape, not a polynomial");
+  }
   auto with_x = inputs;
   with_x.emplace_back("x");
   if (const auto range = node["x_range"]) {
@@ -129,8 +132,8 @@ void parsePolynomialRoad(const YamlReader& reader, const YAML::Node& node, const
 /// curvature, length: a straight road or a constant radius.
 void parseArcRoad(const YamlReader& reader, const YAML::Node& node, const std::vector<std::string>& inputs,
                   RoadSpec& road) {
-  for (const char* key : {"x_range", "points", "centre", "centre_noise"}) {
-    if (node[key]) reader.fail(node[key], std::string("road.") + key, "belongs to a polynomial road, not an arc");
+  for (const char* key : {"x_range", "points", "centre", "centre_noise", "centre_line"}) {
+    if (node[key]) reader.fail(node[key], std::string("road.") + key, "belongs to another road shape, not an arc");
   }
   if (!node["length"]) reader.fail(node, "road", "an arc road needs 'length' (m of scenario region along the road)");
   road.length = reader.expression(node["length"], "road.length", inputs);
@@ -152,6 +155,44 @@ void parseArcRoad(const YamlReader& reader, const YAML::Node& node, const std::v
   }
 }
 
+/// points: a polyline road, its region's centre line as given.
+void parsePolylineRoad(const YamlReader& reader, const YAML::Node& node, RoadSpec& road) {
+  for (const char* key : {"x_range", "points", "centre", "centre_noise", "curvature", "length"}) {
+    if (node[key]) reader.fail(node[key], std::string("road.") + key, "belongs to another road shape, not a polyline");
+  }
+  const YAML::Node points = node["centre_line"];
+  if (!points || !points.IsSequence() || points.size() < 2 || points.size() > 100'000) {
+    reader.fail(points ? points : node, "road.centre_line",
+                "a polyline road needs 'centre_line': a list of 2 .. 100000 [x, y] in m");
+  }
+  double length = 0.0;
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const std::string field = fmt::format("road.centre_line[{}]", i);
+    if (!points[i].IsSequence() || points[i].size() != 2) reader.fail(points[i], field, "expected [x, y] in m");
+    const double x = reader.number(points[i][0], field + "[0]");
+    const double y = reader.number(points[i][1], field + "[1]");
+    if (!(std::abs(x) <= kMaxRoadLength && std::abs(y) <= kMaxRoadLength)) {
+      reader.fail(points[i], field, fmt::format("expected coordinates within -{0} .. {0} m", kMaxRoadLength));
+    }
+    if (i > 0) {
+      const double dx = x - road.centreLine.back().first;
+      const double dy = y - road.centreLine.back().second;
+      const double step = std::hypot(dx, dy);
+      if (!(step >= 1e-3) || !(std::abs(std::atan2(dy, dx)) <= kMaxArcTurn)) {
+        reader.fail(points[i], field,
+                    fmt::format("the segment from the point before is {:.3g} m long and heads {:.3g} rad from +x: "
+                                "expected at least 1 mm, at most {} rad (scenes clip lanes by x, which must advance "
+                                "along the region)", step, std::atan2(dy, dx), kMaxArcTurn));
+      }
+      length += step;
+    }
+    road.centreLine.emplace_back(x, y);
+  }
+  if (!(length <= kMaxRoadLength)) {
+    reader.fail(points, "road.centre_line", fmt::format("a region of {:.1f} m: expected at most {} m", length, kMaxRoadLength));
+  }
+}
+
 void parseShoulders(const YamlReader& reader, const YAML::Node& node, RoadSpec& road) {
   reader.checkKeys(node, "road.shoulders", {"left", "right"});
   road.shoulderLeft = reader.number(node, "left", "road.shoulders.left", 0.0);
@@ -163,7 +204,7 @@ void parseShoulders(const YamlReader& reader, const YAML::Node& node, RoadSpec& 
 
 void parseRoad(const YamlReader& reader, const YAML::Node& node, LogicalScenario& scenario) {
   if (!node) reader.fail(YAML::Node(), "road", "missing section 'road'");
-  reader.checkKeys(node, "road", {"shape", "x_range", "points", "centre", "centre_noise", "curvature", "length", "lanes",
+  reader.checkKeys(node, "road", {"shape", "x_range", "points", "centre", "centre_noise", "centre_line", "curvature", "length", "lanes",
                                   "lane_width", "lane_width_noise", "speed_limit", "extension", "shoulders"});
   const auto inputs = scenario.inputNames();
   RoadSpec& road = scenario.road;
@@ -173,8 +214,12 @@ void parseRoad(const YamlReader& reader, const YAML::Node& node, LogicalScenario
   } else if (shape == "arc") {
     road.shape = RoadSpec::Shape::Arc;
     parseArcRoad(reader, node, inputs, road);
+  } else if (shape == "polyline") {
+    road.shape = RoadSpec::Shape::Polyline;
+    parsePolylineRoad(reader, node, road);
   } else {
-    throw ConfigError::field(reader.where(node["shape"], "road.shape"), "road.shape", shape, "polynomial or arc");
+    throw ConfigError::field(reader.where(node["shape"], "road.shape"), "road.shape", shape,
+                             "polynomial, arc or polyline");
   }
   if (node["shoulders"]) parseShoulders(reader, node["shoulders"], road);
   road.lanes = reader.integer(node, "lanes", "road.lanes", road.lanes, 1, 16);

@@ -5,10 +5,15 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <pugixml.hpp>
+
 #include <cmath>
+#include <map>
 #include <regex>
+#include <sstream>
 
 #include "osc_expression.hpp"
+#include "osc_road.hpp"
 #include "test_support.hpp"
 #include "vsd/core/csv.hpp"
 #include "vsd/core/error.hpp"
@@ -16,6 +21,7 @@
 #include "vsd/interop/openscenario_import.hpp"
 #include "vsd/interop/scenario_formats.hpp"
 #include "vsd/pipeline/run.hpp"
+#include "vsd/road/network.hpp"
 
 using namespace vsd;
 using namespace vsd::interop;
@@ -633,4 +639,107 @@ TEST(OscImport, ConditionsTheLanguageCannotExpressAreOneLineEach) {
     EXPECT_THAT(error, HasSubstr(message)) << error;
     EXPECT_EQ(error.find('\n'), std::string::npos) << error;
   }
+}
+
+namespace {
+
+/// Lane shapes of a network netconvert built: edge id -> lane index -> points.
+std::map<std::string, std::map<int, Polyline>> laneShapes(const fs::path& net) {
+  pugi::xml_document document;
+  EXPECT_TRUE(document.load_file(net.c_str()));
+  std::map<std::string, std::map<int, Polyline>> shapes;
+  for (const auto& edge : document.child("net").children("edge")) {
+    for (const auto& lane : edge.children("lane")) {
+      Polyline points;
+      std::istringstream text(lane.attribute("shape").value());
+      std::string pair;
+      while (text >> pair) {
+        const auto comma = pair.find(',');
+        points.emplace_back(std::stod(pair.substr(0, comma)), std::stod(pair.substr(comma + 1)));
+      }
+      shapes[edge.attribute("id").value()][lane.attribute("index").as_int()] = points;
+    }
+  }
+  return shapes;
+}
+
+/// The road's driving lanes, as the import evaluates its plan view, against the lanes SUMO's
+/// netconvert builds from the same file (an independent reading of spirals and paramPoly3).
+void expectTheLanesNetconvertBuilds(const std::string& road_file) {
+  osc::Findings findings(true);
+  const auto road = osc::readCarriagewayRoad(data(road_file), findings);
+  EXPECT_FALSE(road.oneCurvature);
+  TemporaryDirectory work("vsd-osc-road");
+  road::convertOpenDrive(data(road_file), work.path() / "road.net.xml", road::OpenDriveOrigin::AsWritten);
+  // Edge -7 holds road 7's right lanes, SUMO index 0 = the rightmost = the language's lane 0.
+  const auto lanes = laneShapes(work.path() / "road.net.xml").at("-7");
+  ASSERT_EQ(lanes.size(), 3u);
+  for (const auto& [index, shape] : lanes) {
+    Polyline ours;
+    for (double s = 0.0; s <= road.length; s += 0.25) ours.push_back(road.point(s, road.laneCentreT(index)));
+    const MeasuredPolyline lane(ours);
+    double farthest = 0.0;
+    for (const Vec2& point : shape) farthest = std::max(farthest, std::abs(lane.project(point).lateralOffset));
+    EXPECT_LT(farthest, 0.02) << road_file << " lane " << index;
+    // netconvert's lane covers the road (it trims a few metres at the ends for its junctions).
+    EXPECT_GT(lane.project(shape.back()).arcLength - lane.project(shape.front()).arcLength, 0.97 * lane.length());
+  }
+}
+
+}  // namespace
+
+TEST(OscRoad, SpiralsAndParamPoly3LieWhereNetconvertPutsThem) {
+  expectTheLanesNetconvertBuilds("roads/s_curve.xodr");
+  expectTheLanesNetconvertBuilds("roads/param_poly3.xodr");
+}
+
+TEST(OscRoad, AlongAndAcrossARoadOfSeveralCurvatures) {
+  osc::Findings findings(true);
+  const auto road = osc::readCarriagewayRoad(data("roads/s_curve.xodr"), findings);
+  // By hand: the spirals turn 80 * 0.004 / 2 = 0.16 rad each, the arc 150 * 0.004 = 0.6 rad.
+  EXPECT_NEAR(road.turnAt(road.length), 0.92, 1e-12);
+  EXPECT_NEAR(road.turnAt(140.0), 0.004 * 40.0 * 40.0 / 160.0, 1e-12);
+  EXPECT_NEAR(road.curvatureAt(140.0), 0.002, 1e-12);
+  // The driving lanes' centre (t = -1 - 1.5 * 3.5 = -6.25) is longer by 6.25 m per rad turned:
+  // 710 + 6.25 * 0.92 = 715.75 m, the length netconvert gives the middle lane.
+  EXPECT_DOUBLE_EQ(road.centreT(), -6.25);
+  EXPECT_NEAR(road.languageS(road.length), 715.75, 1e-9);
+  double centre_length = 0.0;
+  for (double s = 0.05; s <= road.length + 1e-9; s += 0.05) {
+    centre_length += (road.point(s, road.centreT()) - road.point(s - 0.05, road.centreT())).norm();
+  }
+  EXPECT_NEAR(centre_length, 715.75, 0.01);
+  // Back from the plane: on the line, in the spirals, in the arc, before the start and beyond the end.
+  for (const double s : {-5.0, 50.0, 140.0, 250.0, 370.0, 600.0, 715.0}) {
+    for (const double t : {-2.75, -6.25, 0.5}) {
+      const auto [s_back, t_back] = road.coordinates(road.point(s, t));
+      EXPECT_NEAR(s_back, s, 1e-3) << s << ", " << t;
+      EXPECT_NEAR(t_back, t, 1e-3) << s << ", " << t;
+    }
+  }
+}
+
+// The cut-in of cut_in.xosc on the S-curve: by hand as on the straight road (the cutter's
+// lane change, slow-down and 0.5 m offset end before 8 s, about 150 m along the road, in the
+// spiral into the curve), measured from the language road's centre line. The walker's world
+// position lies off this road: it stands on the shoulder by a lane position instead.
+TEST(OscRun, ARoadOfSeveralCurvaturesBecomesAPolylineRoadAndScriptsHoldOnIt) {
+  std::string text = cutInWith("./roads/three_lanes.xodr", "./roads/s_curve.xodr");
+  const std::string walker = R"(<WorldPosition x="300" y="-12.75" h="1.5707963267948966"/>)";
+  ASSERT_NE(text.find(walker), std::string::npos);
+  text.replace(text.find(walker), walker.size(), R"(<LanePosition roadId="7" laneId="-4" offset="-3" s="300"/>)");
+  const auto folder = folderWith({{"cut_in_curved.xosc", text}});
+  const auto logical = importTemplate(folder->path() / "cut_in_curved.xosc", {});
+  ASSERT_EQ(logical->road.shape, scenario::RoadSpec::Shape::Polyline);
+  Polyline centre;
+  for (const auto& [x, y] : logical->road.centreLine) centre.emplace_back(x, y);
+  const MeasuredPolyline centre_line(centre);
+  EXPECT_NEAR(centre_line.length(), 715.75, 0.01);  // the whole road: 0.92 rad of turn
+  const auto cutter = simulatedTrack(folder->path() / "cut_in_curved.xosc", "Cutter");
+  ASSERT_TRUE(cutter);
+  const VehicleState& end = cutter->states.back();
+  const auto where = centre_line.project(end.position());
+  EXPECT_GT(where.arcLength, 100.0);
+  EXPECT_NEAR(where.lateralOffset, 0.5, 0.2);
+  EXPECT_NEAR(end.speed, 10.0, 0.2);
 }

@@ -265,3 +265,41 @@ TEST(DirectNetwork, RoadsWhoseLanesFoldAtABendAreLeftToNetconvert) {
   single.add(0, road, {1000, 1000});
   EXPECT_TRUE(single.directlyWritable());
 }
+
+namespace {
+std::string polylineRoad(const std::string& centre_line, const std::string& extra = "") {
+  return "name: bend\nroad: {shape: polyline, centre_line: " + centre_line + ", lanes: 2" + extra +
+         "}\nvehicles:\n  ego: {s: 20, lane: 0, speed: 10, controller: {name: idm}}\n";
+}
+std::string polylineError(const std::string& centre_line, const std::string& extra = "") {
+  try {
+    scenario::parseLogicalScenario(polylineRoad(centre_line, extra), "bend.yaml");
+  } catch (const ConfigError& error) {
+    return error.what();
+  }
+  return "";
+}
+}  // namespace
+
+TEST(RoadGeometry, APolylineRoadIsItsPointsWithStraightExtensionsAndAFittingCell) {
+  const auto logical = scenario::parseLogicalScenario(polylineRoad("[[0, 0], [100, 0], [200, 50], [300, 50]]"), "bend.yaml");
+  const auto road = buildRoadGeometry(scenario::sampleConcreteScenario(logical, 1, 0));
+  ASSERT_EQ(road.regionEnd - road.regionBegin, 4u);
+  EXPECT_TRUE(road.centre[road.regionBegin + 2].isApprox(Vec2(200.0, 50.0)));
+  // Extensions (30 m before, 150 m after by default) along the first and the last segment.
+  EXPECT_TRUE(road.centre.front().isApprox(Vec2(-30.0, 0.0), 1e-12));
+  EXPECT_TRUE(road.centre.back().isApprox(Vec2(450.0, 50.0), 1e-12));
+  EXPECT_EQ(regionXRange(*logical, {}), std::make_pair(0.0, 300.0));
+  EXPECT_TRUE(BatchLayout(BatchLayout::cellSizeFor(logical->road)).fits(road));
+}
+
+TEST(RoadGeometry, PolylineRoadsThatScenesCannotClipByXAreRefused) {
+  EXPECT_NE(polylineError("[[0, 0]]").find("road.centre_line: a polyline road needs 'centre_line'"), std::string::npos);
+  // Turning back: the second segment heads 2.36 rad from +x.
+  EXPECT_NE(polylineError("[[0, 0], [100, 0], [90, 10]]").find("road.centre_line[2]"), std::string::npos);
+  EXPECT_NE(polylineError("[[0, 0], [100, 0], [90, 10]]").find("at most 1.4 rad"), std::string::npos);
+  EXPECT_NE(polylineError("[[0, 0], [0, 0]]").find("at least 1 mm"), std::string::npos);
+  EXPECT_NE(polylineError("[[0, 0], [10, 0]]", ", length: 10").find("road.length: belongs to another road shape"),
+            std::string::npos);
+  EXPECT_NE(polylineError("[[0, 0], [x, 0]]").find("road.centre_line[1][0]"), std::string::npos);
+}

@@ -47,17 +47,19 @@ struct InputSpec {
   Distribution distribution;
 };
 
-/// Road: a centre line of one of two shapes, `lanes` lanes of lane_width + lane_width_noise
+/// Road: a centre line of one of three shapes, `lanes` lanes of lane_width + lane_width_noise
 /// each, and straight extensions along the end tangents that keep vehicles on the road
 /// beyond the scenario region.
 ///   polynomial (the paper's): y = f(x, inputs) sampled at `points` equally spaced x in
 ///              x_range, each point shifted laterally by centre_noise;
 ///   arc:       constant curvature (0: straight), `length` m along the road from the
 ///              origin heading +x, sampled densely enough that the polyline stays within
-///              1 cm of the circle.
+///              1 cm of the circle;
+///   polyline:  the region's centre line as given points (e.g. an imported OpenDRIVE road
+///              sampled within 1 cm), each segment heading at most kMaxArcTurn from +x.
 /// Positions "along the road" (s) are arc lengths on the centre line from the region's start.
 struct RoadSpec {
-  enum class Shape { Polynomial, Arc };
+  enum class Shape { Polynomial, Arc, Polyline };
   Shape shape = Shape::Polynomial;
   double xMin = -55.0;   ///< m (polynomial)
   double xMax = 55.0;    ///< m (polynomial)
@@ -66,6 +68,7 @@ struct RoadSpec {
   Distribution centreNoise;     ///< m, drawn independently at every point (polynomial)
   Expression curvature;  ///< 1/m, > 0 turns left (arc); |curvature| * length <= kMaxArcTurn
   Expression length;     ///< m, the scenario region along the road (arc), > 0
+  std::vector<std::pair<double, double>> centreLine;  ///< m, (x, y) of the region's centre line (polyline)
   int lanes = 1;
   Expression laneWidth = Expression::constant(kDefaultLaneWidth);  ///< m
   Distribution laneWidthNoise;  ///< m, drawn once per concrete scenario
@@ -77,8 +80,9 @@ struct RoadSpec {
   double shoulderRight = 0.0;
   double shoulderLeft = 0.0;
 };
-/// rad: the largest turn of an arc road's region. Scenes clip lanes by x (as the paper's
-/// region is an x range), which needs x to advance along the whole region.
+/// rad: the largest turn of an arc road's region, and the largest angle between +x and a
+/// polyline road's segment. Scenes clip lanes by x (as the paper's region is an x range),
+/// which needs x to advance along the whole region.
 inline constexpr double kMaxArcTurn = 1.4;
 
 /// Scripted speed of a non-Ego vehicle: `initial`, then each phase accelerates
