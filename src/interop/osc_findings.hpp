@@ -46,6 +46,14 @@ class Findings {
     }
   }
 
+  /// Adds lines another Findings recorded (a refusal as refuse() would).
+  void replay(const std::vector<Line>& lines) {
+    for (const auto& line : lines) {
+      if (line.kind == Kind::Refused) refuse(line.text);
+      else lines_.push_back(line);
+    }
+  }
+
   bool collecting() const { return collect_; }
   bool anyRefused() const {
     for (const auto& line : lines_) {

@@ -4,6 +4,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <map>
+#include <mutex>
 
 #include "vsd/core/files.hpp"
 #include "vsd/core/numbers.hpp"
@@ -402,7 +404,9 @@ std::pair<double, double> CarriagewayRoad::coordinates(const Vec2& p) const {
   return {swept * std::abs(r), r - (r > 0 ? 1.0 : -1.0) * radial.norm()};
 }
 
-CarriagewayRoad readCarriagewayRoad(const std::filesystem::path& file, Findings& findings) {
+namespace {
+
+CarriagewayRoad readRoad(const std::filesystem::path& file, Findings& findings) {
   xml::Reader reader(file, read_limits::kRoadNetwork);
   const pugi::xml_node root = reader.root();
   if (std::string(root.name()) != "OpenDRIVE") reader.fail(root, "expected the root element <OpenDRIVE>");
@@ -434,6 +438,41 @@ CarriagewayRoad readCarriagewayRoad(const std::filesystem::path& file, Findings&
     if (node && node.first_child()) findings.note(reader.where(node), "not simulated (the scenario language has no road furniture)");
   }
   return result;
+}
+
+/// A road read before in this process, and the notes its reading gave.
+struct ReadRoad {
+  CarriagewayRoad road;
+  std::vector<Findings::Line> notes;
+};
+
+}  // namespace
+
+CarriagewayRoad readCarriagewayRoad(const std::filesystem::path& file, Findings& findings) {
+  // A sweep imports its template once per parameter set (twice: to check it, to run it);
+  // the road is read once per process and file content. A file that changes is read again.
+  static std::mutex mutex;
+  static std::map<std::string, ReadRoad> roads;
+  constexpr std::size_t kRoadsKept = 8;
+  std::error_code error;
+  const bool hashable = std::filesystem::is_regular_file(file, error) &&
+                        std::filesystem::file_size(file, error) <= read_limits::kRoadNetwork.effective() && !error;
+  if (!hashable) return readRoad(file, findings);  // refused there, with the reason
+  const std::string key = std::filesystem::absolute(file).lexically_normal().string() + "\n" + sha256OfFile(file);
+  {
+    const std::lock_guard<std::mutex> lock(mutex);
+    if (const auto found = roads.find(key); found != roads.end()) {
+      findings.replay(found->second.notes);
+      return found->second.road;
+    }
+  }
+  Findings own(findings.collecting());
+  CarriagewayRoad road = readRoad(file, own);
+  findings.replay(own.lines());
+  const std::lock_guard<std::mutex> lock(mutex);
+  if (roads.size() >= kRoadsKept) roads.clear();
+  roads.emplace(key, ReadRoad{road, own.lines()});
+  return road;
 }
 
 }  // namespace vsd::interop::osc

@@ -743,3 +743,21 @@ TEST(OscRun, ARoadOfSeveralCurvaturesBecomesAPolylineRoadAndScriptsHoldOnIt) {
   EXPECT_NEAR(where.lateralOffset, 0.5, 0.2);
   EXPECT_NEAR(end.speed, 10.0, 0.2);
 }
+
+// A sweep imports its template once per set; the road file is read once per content: the
+// notes of its reading are still reported every time, and a file that changes is read again.
+TEST(OscImport, ARoadIsReadOncePerContentAndAChangedFileAgain) {
+  const auto dir = folderWith({});
+  const fs::path xosc = dir->path() / "cut_in.xosc";
+  for (int i = 0; i < 2; ++i) {
+    EXPECT_THAT(checkOpenScenario(xosc, {}).report(), HasSubstr("vsd-sumo is planar")) << "import " << i;
+    EXPECT_DOUBLE_EQ(importTemplate(xosc, {})->road.laneWidth.evaluate({}), 3.5);
+  }
+  const fs::path road = dir->path() / "roads" / "three_lanes.xodr";
+  std::string text = readTextFile(road);
+  for (auto at = text.find("a=\"3.5\""); at != std::string::npos; at = text.find("a=\"3.5\"", at)) {
+    text.replace(at, 7, "a=\"3.25\"");
+  }
+  test::writeFile(road, text);
+  EXPECT_DOUBLE_EQ(importTemplate(xosc, {})->road.laneWidth.evaluate({}), 3.25);
+}
