@@ -142,4 +142,10 @@ SetVerdict judgeSet(const ParameterGrid& grid, const OscImportOptions& import, c
 /// A speed action's YAML (`speed:` item) from <SpeedAction>, for Init and Story.
 YAML::Node speedAction(Translation& translation, const Entity& actor, const pugi::xml_node& action);
 
+/// The parameter sets of a <Stochastic> distribution (osc_stochastic.cpp): numberOfTestRuns
+/// sets, run i drawn from (seed, i); the seed is the file's randomSeed, else `run_seed`.
+std::vector<std::map<std::string, std::string>> drawStochasticSets(const xml::Reader& reader,
+                                                                   const pugi::xml_node& stochastic,
+                                                                   std::uint64_t run_seed);
+
 }  // namespace vsd::interop::osc

@@ -74,7 +74,7 @@ Axis multiDistribution(const xml::Reader& reader, const pugi::xml_node& multi) {
 
 }  // namespace
 
-ParameterGrid readParameterDistribution(const fs::path& file, const OscImportOptions& options) {
+ParameterGrid readParameterDistribution(const fs::path& file, const OscImportOptions& options, std::uint64_t seed) {
   xml::Reader reader(file, read_limits::kScenario);
   const pugi::xml_node root = reader.root();
   const pugi::xml_node distribution = root.child("ParameterValueDistribution");
@@ -89,9 +89,19 @@ ParameterGrid readParameterDistribution(const fs::path& file, const OscImportOpt
   grid.scenarioFile =
       osc::referencedFile(options, file, reader.text(scenario, "filepath"), reader.where(scenario), "filepath");
   if (!fs::exists(grid.scenarioFile)) reader.fail(scenario, fmt::format("{} does not exist", grid.scenarioFile.string()));
-  if (const pugi::xml_node stochastic = distribution.child("Stochastic")) {
-    reader.fail(stochastic, "stochastic distributions are not imported (docs/openscenario-import.md: deterministic "
-                            "sets, ranges and value sets)");
+  const std::string extension = grid.scenarioFile.extension().string();
+  if (extension == ".yaml" || extension == ".yml") {
+    // `scenario distribution` writes such files for other tools; vsd-sumo samples the YAML itself.
+    reader.fail(scenario, fmt::format("{} is a vsd-sumo YAML scenario: run it directly (vsd-sumo run {}); the "
+                                      "template of a distribution vsd-sumo runs is an OpenSCENARIO file",
+                                      grid.scenarioFile.string(), grid.scenarioFile.filename().string()));
+  }
+  if (distribution.child("Stochastic")) {
+    if (distribution.child("Deterministic")) {
+      reader.fail(distribution.child("Deterministic"), "expected either <Deterministic> or <Stochastic>, not both");
+    }
+    grid.sets = osc::drawStochasticSets(reader, reader.only(distribution, "Stochastic"), seed);
+    return grid;
   }
   const pugi::xml_node deterministic = reader.only(distribution, "Deterministic");
   reader.requireSubset(deterministic, {"DeterministicSingleParameterDistribution", "DeterministicMultiParameterDistribution"});
@@ -236,7 +246,7 @@ pipeline::ScenarioWithRoad sweepSample(const ParameterGrid& grid, const OscImpor
 }  // namespace
 
 SweepSummary runVariation(pipeline::RunOptions options, const OscImportOptions& import, bool samples_given) {
-  const ParameterGrid grid = readParameterDistribution(options.scenarioFile, import);
+  const ParameterGrid grid = readParameterDistribution(options.scenarioFile, import, options.seed);
   // Numeric-looking strings are numbers in concrete.csv already; only names need codes.
   const osc::StringCodes codes = stringCodes(grid);
   SweepSummary summary;
@@ -261,7 +271,7 @@ SweepSummary runVariation(pipeline::RunOptions options, const OscImportOptions& 
 SweepImportTiming timeSweepImport(const fs::path& file, const OscImportOptions& import, std::uint64_t seed) {
   SweepImportTiming timing;
   auto start = std::chrono::steady_clock::now();
-  const ParameterGrid grid = readParameterDistribution(file, import);
+  const ParameterGrid grid = readParameterDistribution(file, import, seed);
   const osc::StringCodes codes = stringCodes(grid);
   timing.gridSeconds = secondsSince(start);
   start = std::chrono::steady_clock::now();

@@ -761,3 +761,101 @@ TEST(OscImport, ARoadIsReadOncePerContentAndAChangedFileAgain) {
   test::writeFile(road, text);
   EXPECT_DOUBLE_EQ(importTemplate(xosc, {})->road.laneWidth.evaluate({}), 3.25);
 }
+
+// Every stochastic distribution the import reads, drawn per test run from (randomSeed, run):
+// values inside their ranges, shares and means as the file states them (400 runs: the bounds
+// are more than four standard errors wide), the same sets for the same seed, and run i's
+// values unchanged when the file asks for fewer runs.
+TEST(OscVariation, StochasticDistributionsDrawEachTestRunFromItsOwnStream) {
+  const ParameterGrid grid = readParameterDistribution(data("cut_in_stochastic.xosc"), {});
+  ASSERT_EQ(grid.sets.size(), 400u);
+  double speed_sum = 0.0, ahead_sum = 0.0, left = 0.0, slow_bin = 0.0, poisson_sum = 0.0;
+  for (const auto& set : grid.sets) {
+    const double speed = std::stod(set.at("Ego_Speed_kph"));
+    const double ahead = std::stod(set.at("Cutter_Ahead_m"));
+    const double relative = std::stod(set.at("Cutter_RelSpeed_kph"));
+    const double lateral = std::stod(set.at("LaneChange_Vy"));
+    EXPECT_TRUE(speed >= 60.0 && speed <= 80.0) << speed;
+    EXPECT_TRUE(ahead >= 36.0 && ahead <= 44.0) << ahead;
+    EXPECT_TRUE(relative >= -20.0 && relative <= -10.0) << relative;
+    EXPECT_TRUE(lateral >= 0.0 && lateral <= 5.0 && lateral == std::floor(lateral)) << lateral;
+    EXPECT_TRUE(set.at("Cutter_Side") == "-1" || set.at("Cutter_Side") == "1");
+    speed_sum += speed;
+    ahead_sum += ahead;
+    poisson_sum += lateral;
+    left += set.at("Cutter_Side") == "-1" ? 1.0 : 0.0;
+    slow_bin += relative >= -15.0 ? 1.0 : 0.0;
+  }
+  EXPECT_NEAR(speed_sum / 400.0, 70.0, 1.5);  // uniform: sd of the mean 0.29
+  EXPECT_NEAR(ahead_sum / 400.0, 40.0, 0.5);  // normal, sd 2, truncated at 2 sd: sd of the mean < 0.1
+  EXPECT_NEAR(left / 400.0, 0.75, 0.09);      // weights 3 : 1: sd 0.022
+  EXPECT_NEAR(slow_bin / 400.0, 0.75, 0.09);  // bin weights 1 : 3
+  EXPECT_NEAR(poisson_sum / 400.0, 2.0, 0.35);  // Poisson(2) cut at 5: mean 1.96, sd of the mean 0.07
+
+  EXPECT_EQ(readParameterDistribution(data("cut_in_stochastic.xosc"), {}, 99).sets, grid.sets);  // the file's seed
+  const auto fewer = folderWith({{"fewer.xosc", dataWith("cut_in_stochastic.xosc", "numberOfTestRuns=\"400\"",
+                                                         "numberOfTestRuns=\"10\"")}});
+  const auto ten = readParameterDistribution(fewer->path() / "fewer.xosc", {}).sets;
+  const std::vector<std::map<std::string, std::string>> first_ten(grid.sets.begin(), grid.sets.begin() + 10);
+  EXPECT_EQ(ten, first_ten);
+  // Without randomSeed the run's --seed decides.
+  const auto unseeded = folderWith({{"unseeded.xosc", dataWith("cut_in_stochastic.xosc", " randomSeed=\"7\"", "")}});
+  const auto seed_1 = readParameterDistribution(unseeded->path() / "unseeded.xosc", {}, 1).sets;
+  EXPECT_EQ(readParameterDistribution(unseeded->path() / "unseeded.xosc", {}, 1).sets, seed_1);
+  EXPECT_NE(readParameterDistribution(unseeded->path() / "unseeded.xosc", {}, 2).sets, seed_1);
+}
+
+TEST(OscRun, AStochasticVariationRunsItsTestRunsAndSkipsTheViolatedOnes) {
+  TemporaryDirectory dir("vsd-osc-stochastic");
+  pipeline::RunOptions options;
+  options.scenarioFile = data("cut_in_stochastic.xosc");
+  options.outputDir = dir.path() / "sweep";
+  options.samples = 40;
+  const SweepSummary summary = runVariation(options, {}, /*samples_given=*/true);
+  const ParameterGrid grid = readParameterDistribution(data("cut_in_stochastic.xosc"), {});
+  std::uint64_t zero_lateral_speed = 0;
+  for (const auto& set : grid.sets) zero_lateral_speed += set.at("LaneChange_Vy") == "0" ? 1 : 0;
+  EXPECT_GT(zero_lateral_speed, 0u);
+  EXPECT_EQ(summary.sets, 400u);
+  EXPECT_EQ(summary.skipped, zero_lateral_speed);  // LaneChange_Vy must be greater than 0
+  EXPECT_EQ(summary.run.ok, 40u);
+  const std::string csv = readTextFile(dir.path() / "sweep" / "concrete.csv");
+  EXPECT_THAT(csv, HasSubstr("Cutter_Ahead_m"));
+  EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 41);
+}
+
+TEST(OscVariation, BadStochasticDistributionsAreOneLineEach) {
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {" numberOfTestRuns=\"400\"", "numberOfTestRuns"},
+      {"<Range lowerLimit=\"60\" upperLimit=\"80\"/>", "lowerLimit 80 > upperLimit 60"},
+      {"<NormalDistribution expectedValue=\"40\" variance=\"4\"><Range lowerLimit=\"36\" upperLimit=\"44\"/>",
+       "10000 draws fell outside its Range [100, 101]"},
+      {"<PoissonDistribution expectedValue=\"2\">", "LogNormalDistribution"},
+      {"randomSeed=\"7\"", "randomSeed 7.5: expected a whole number"},
+  };
+  const std::vector<std::string> replacements = {
+      "", "<Range lowerLimit=\"80\" upperLimit=\"60\"/>",
+      "<NormalDistribution expectedValue=\"0\" variance=\"1\"><Range lowerLimit=\"100\" upperLimit=\"101\"/>",
+      "<LogNormalDistribution expectedValue=\"2\" variance=\"1\">", "randomSeed=\"7.5\""};
+  for (std::size_t i = 0; i < cases.size(); ++i) {
+    std::string text = dataWith("cut_in_stochastic.xosc", cases[i].first, replacements[i]);
+    if (replacements[i].rfind("<LogNormal", 0) == 0) {
+      text.replace(text.find("</PoissonDistribution>"), 22, "</LogNormalDistribution>");
+    }
+    const auto dir = folderWith({{"bad.xosc", text}});
+    const std::string error = test::configErrorOf([&] { readParameterDistribution(dir->path() / "bad.xosc", {}); });
+    EXPECT_THAT(error, HasSubstr(cases[i].second)) << i;
+    EXPECT_THAT(error, HasSubstr("bad.xosc:")) << i;
+    EXPECT_EQ(error.find('\n'), std::string::npos) << i;
+  }
+}
+
+// `scenario distribution` writes distributions over a YAML scenario for other tools; vsd-sumo
+// says to run the YAML itself instead of reading it as an OpenSCENARIO template.
+TEST(OscVariation, ADistributionOverAYamlScenarioPointsToTheYaml) {
+  const auto dir = folderWith({{"plain.yaml", "name: plain\n"},
+                               {"over_yaml.xosc", dataWith("cut_in_stochastic.xosc", "./cut_in.xosc", "./plain.yaml")}});
+  const std::string error = test::configErrorOf([&] { readParameterDistribution(dir->path() / "over_yaml.xosc", {}); });
+  EXPECT_THAT(error, HasSubstr("over_yaml.xosc:8: <ScenarioFile>: "));
+  EXPECT_THAT(error, HasSubstr("plain.yaml is a vsd-sumo YAML scenario: run it directly (vsd-sumo run plain.yaml)"));
+}

@@ -75,15 +75,18 @@ std::shared_ptr<const scenario::LogicalScenario> importTemplate(const std::files
 pipeline::RunSummary runTemplate(pipeline::RunOptions options, const OscImportOptions& import,
                                  const std::vector<std::string>& fixed_by_file);
 
-/// The parameter sets of a ParameterValueDistribution file (Deterministic: the product of
-/// its single distributions and value-set distributions, in file order, last varying
-/// fastest) and its template. Throws ConfigError for elements outside that (naming them).
+/// The parameter sets of a ParameterValueDistribution file and its template. Throws
+/// ConfigError for elements outside what is read (naming them).
 struct ParameterGrid {
   std::filesystem::path file;
   std::filesystem::path scenarioFile;  ///< the template
   std::vector<std::map<std::string, std::string>> sets;
 };
-ParameterGrid readParameterDistribution(const std::filesystem::path& file, const OscImportOptions& options);
+/// The parameter sets of a ParameterValueDistribution: a Deterministic grid (the product of
+/// its distributions, the last varying fastest), or numberOfTestRuns Stochastic draws from
+/// the file's randomSeed, else from `seed` (a run's --seed).
+ParameterGrid readParameterDistribution(const std::filesystem::path& file, const OscImportOptions& options,
+                                        std::uint64_t seed = 1);
 
 /// `vsd-sumo run VARIATION.xosc`: the template at every parameter set that satisfies its
 /// ConstraintGroups, one concrete scenario (row of concrete.csv) each; the others are
