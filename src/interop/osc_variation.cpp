@@ -3,12 +3,15 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <mutex>
 
 #include "osc_template.hpp"
 #include "vsd/core/error.hpp"
 #include "vsd/core/files.hpp"
+#include "vsd/core/numbers.hpp"
 #include "vsd/core/progress.hpp"
 #include "vsd/road/road_geometry.hpp"
 #include "vsd/scenario/concrete_scenario.hpp"
@@ -74,6 +77,11 @@ Axis multiDistribution(const xml::Reader& reader, const pugi::xml_node& multi) {
 
 }  // namespace
 
+bool isYamlTemplate(const ParameterGrid& grid) {
+  const std::string extension = grid.scenarioFile.extension().string();
+  return extension == ".yaml" || extension == ".yml";
+}
+
 ParameterGrid readParameterDistribution(const fs::path& file, const OscImportOptions& options, std::uint64_t seed) {
   xml::Reader reader(file, read_limits::kScenario);
   const pugi::xml_node root = reader.root();
@@ -89,13 +97,6 @@ ParameterGrid readParameterDistribution(const fs::path& file, const OscImportOpt
   grid.scenarioFile =
       osc::referencedFile(options, file, reader.text(scenario, "filepath"), reader.where(scenario), "filepath");
   if (!fs::exists(grid.scenarioFile)) reader.fail(scenario, fmt::format("{} does not exist", grid.scenarioFile.string()));
-  const std::string extension = grid.scenarioFile.extension().string();
-  if (extension == ".yaml" || extension == ".yml") {
-    // `scenario distribution` writes such files for other tools; vsd-sumo samples the YAML itself.
-    reader.fail(scenario, fmt::format("{} is a vsd-sumo YAML scenario: run it directly (vsd-sumo run {}); the "
-                                      "template of a distribution vsd-sumo runs is an OpenSCENARIO file",
-                                      grid.scenarioFile.string(), grid.scenarioFile.filename().string()));
-  }
   if (distribution.child("Stochastic")) {
     if (distribution.child("Deterministic")) {
       reader.fail(distribution.child("Deterministic"), "expected either <Deterministic> or <Stochastic>, not both");
@@ -159,10 +160,39 @@ osc::StringCodes stringCodes(const ParameterGrid& grid) {
   return codes;
 }
 
+/// A set over a vsd-sumo YAML scenario (as `scenario distribution` writes them): the inputs it
+/// names become constants, the others are drawn as the file says (per seed and sample).
+std::shared_ptr<const scenario::LogicalScenario> yamlSet(const ParameterGrid& grid, std::size_t set) {
+  static std::mutex mutex;
+  static std::pair<fs::path, std::shared_ptr<const scenario::LogicalScenario>> loaded;  // the last one read
+  std::shared_ptr<const scenario::LogicalScenario> base;
+  {
+    const std::lock_guard<std::mutex> lock(mutex);
+    if (loaded.first != grid.scenarioFile || !loaded.second) loaded = {grid.scenarioFile, scenario::loadLogicalScenario(grid.scenarioFile)};
+    base = loaded.second;
+  }
+  auto logical = std::make_shared<scenario::LogicalScenario>(*base);
+  const std::string where = fmt::format("{}: parameter set {}", grid.file.string(), set);
+  for (const auto& [name, text] : grid.sets[set]) {
+    const auto input = std::find_if(logical->inputs.begin(), logical->inputs.end(),
+                                    [&name = name](const scenario::InputSpec& spec) { return spec.name == name; });
+    if (input == logical->inputs.end()) {
+      throw ConfigError(fmt::format("{}: '{}' is not an input of {} (its inputs: {})", where, name,
+                                    grid.scenarioFile.string(), fmt::join(logical->inputNames(), ", ")));
+    }
+    scenario::Distribution fixed;
+    fixed.value = scenario::Expression::constant(parseReal(text, NumberRange::any(), where, name));
+    fixed.where = where + ": " + name;
+    input->distribution = fixed;
+  }
+  return logical;
+}
+
 /// The language scenario of one parameter set; nullopt (and `violation`) if a constraint fails.
 std::shared_ptr<const scenario::LogicalScenario> importSet(const ParameterGrid& grid, const OscImportOptions& import,
                                                            const osc::StringCodes& codes, std::size_t set,
                                                            std::string* violation) {
+  if (isYamlTemplate(grid)) return yamlSet(grid, set);
   osc::Findings findings(/*collect=*/false);
   const auto result = osc::translate(grid.scenarioFile, import, grid.sets[set], fmt::format("{}: parameter set {}",
                                      grid.file.string(), set), findings, codes);

@@ -850,12 +850,46 @@ TEST(OscVariation, BadStochasticDistributionsAreOneLineEach) {
   }
 }
 
-// `scenario distribution` writes distributions over a YAML scenario for other tools; vsd-sumo
-// says to run the YAML itself instead of reading it as an OpenSCENARIO template.
-TEST(OscVariation, ADistributionOverAYamlScenarioPointsToTheYaml) {
-  const auto dir = folderWith({{"plain.yaml", "name: plain\n"},
-                               {"over_yaml.xosc", dataWith("cut_in_stochastic.xosc", "./cut_in.xosc", "./plain.yaml")}});
-  const std::string error = test::configErrorOf([&] { readParameterDistribution(dir->path() / "over_yaml.xosc", {}); });
-  EXPECT_THAT(error, HasSubstr("over_yaml.xosc:8: <ScenarioFile>: "));
-  EXPECT_THAT(error, HasSubstr("plain.yaml is a vsd-sumo YAML scenario: run it directly (vsd-sumo run plain.yaml)"));
+// `scenario distribution` writes distributions over a vsd-sumo YAML scenario: run, each set
+// fixes the inputs it names (v_ego at the grid's values) and the others are drawn as the YAML
+// says (x_co within its range, which depends on v_ego); a name that is not an input is one line.
+TEST(OscRun, ADistributionOverAYamlScenarioFixesTheInputsItNames) {
+  const std::string distribution = R"(<?xml version="1.0" encoding="UTF-8"?>
+<OpenSCENARIO>
+  <FileHeader revMajor="1" revMinor="2" date="2026-01-01T00:00:00" description="v_ego grid over acc" author="vsd-sumo tests"/>
+  <ParameterValueDistribution>
+    <ScenarioFile filepath="./acc.yaml"/>
+    <Deterministic>
+      <DeterministicSingleParameterDistribution parameterName="v_ego">
+        <DistributionSet><Element value="8"/><Element value="12.5"/><Element value="16"/></DistributionSet>
+      </DeterministicSingleParameterDistribution>
+    </Deterministic>
+  </ParameterValueDistribution>
+</OpenSCENARIO>
+)";
+  const auto dir = folderWith({{"acc.yaml", readTextFile(test::scenarioFile("acc.yaml"))}, {"grid.xosc", distribution}});
+  pipeline::RunOptions options;
+  options.scenarioFile = dir->path() / "grid.xosc";
+  options.outputDir = dir->path() / "sweep";
+  const SweepSummary summary = runVariation(options, {}, /*samples_given=*/false);
+  EXPECT_EQ(summary.run.ok, 3u);
+  const CsvTable table = CsvTable::read(dir->path() / "sweep" / "concrete.csv");
+  ASSERT_EQ(table.rows(), 3u);
+  const std::vector<double> expected = {8.0, 12.5, 16.0};
+  for (std::size_t i = 0; i < 3; ++i) {
+    const double v_ego = table.number(i, table.column("v_ego"));
+    const double x_co = table.number(i, table.column("x_co"));
+    EXPECT_EQ(v_ego, expected[i]);
+    EXPECT_TRUE(x_co >= -50.0 + v_ego && x_co <= -50.0 + 2.0 * v_ego) << x_co;
+  }
+  EXPECT_TRUE(checkOpenScenario(dir->path() / "grid.xosc", {}).runnable());
+
+  const auto bad = folderWith({{"acc.yaml", readTextFile(test::scenarioFile("acc.yaml"))},
+                               {"bad.xosc", std::regex_replace(distribution, std::regex("\"v_ego\""), "\"v_eg\"")}});
+  options.scenarioFile = bad->path() / "bad.xosc";
+  options.outputDir = bad->path() / "sweep";
+  const std::string error = test::configErrorOf([&] { runVariation(options, {}, false); });
+  EXPECT_THAT(error, HasSubstr("'v_eg' is not an input of"));
+  EXPECT_THAT(error, HasSubstr("(its inputs: v_ego, x_co, v_co, t_v_co, a_co, t_a_co)"));
+  EXPECT_FALSE(fs::exists(bad->path() / "sweep"));
 }

@@ -79,9 +79,12 @@ pipeline::RunSummary runTemplate(pipeline::RunOptions options, const OscImportOp
 /// ConfigError for elements outside what is read (naming them).
 struct ParameterGrid {
   std::filesystem::path file;
-  std::filesystem::path scenarioFile;  ///< the template
+  /// The template: an OpenSCENARIO file, or a vsd-sumo YAML scenario whose inputs the sets fix.
+  std::filesystem::path scenarioFile;
   std::vector<std::map<std::string, std::string>> sets;
 };
+/// Whether the grid's template is a vsd-sumo YAML scenario (.yaml, .yml).
+bool isYamlTemplate(const ParameterGrid& grid);
 /// The parameter sets of a ParameterValueDistribution: a Deterministic grid (the product of
 /// its distributions, the last varying fastest), or numberOfTestRuns Stochastic draws from
 /// the file's randomSeed, else from `seed` (a run's --seed).
