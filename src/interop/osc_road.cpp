@@ -245,7 +245,41 @@ PlanGeometry PlanGeometry::paramPoly3(double s, const Vec2& start, double headin
   geometry.u_ = u;
   geometry.v_ = v;
   geometry.normalized_ = normalized;
+  // Arc length over p by Simpson's rule on |(u', v')|, at least 64 steps and one per 0.5 m.
+  const auto steps = std::max<std::size_t>(64, static_cast<std::size_t>(std::ceil(length / kSpiralStep)));
+  geometry.parameterStep_ = (normalized ? 1.0 : length) / static_cast<double>(steps);
+  geometry.arcLengths_.reserve(steps + 1);
+  geometry.arcLengths_.push_back(0.0);
+  const auto speed = [&geometry](double p) { return geometry.localTangent(p).norm(); };
+  for (std::size_t i = 1; i <= steps; ++i) {
+    const double a = geometry.parameterStep_ * static_cast<double>(i - 1);
+    const double b = a + geometry.parameterStep_;
+    geometry.arcLengths_.push_back(geometry.arcLengths_.back() +
+                                   (b - a) / 6.0 * (speed(a) + 4.0 * speed(0.5 * (a + b)) + speed(b)));
+  }
   return geometry;
+}
+
+double PlanGeometry::parameter(double ds) const {
+  const double total = arcLengths_.back();
+  if (!(total > 0.0)) return normalized_ ? ds / length_ : ds;
+  const double target = std::clamp(ds, 0.0, length_) / length_ * total;
+  const auto after = std::upper_bound(arcLengths_.begin(), arcLengths_.end(), target);
+  const auto i = static_cast<std::size_t>(std::max<std::ptrdiff_t>(0, std::distance(arcLengths_.begin(), after) - 1));
+  if (i + 1 >= arcLengths_.size()) return parameterStep_ * static_cast<double>(arcLengths_.size() - 1);
+  const double span = arcLengths_[i + 1] - arcLengths_[i];
+  const double from = parameterStep_ * static_cast<double>(i);
+  double p = from + parameterStep_ * (span > 0.0 ? (target - arcLengths_[i]) / span : 0.0);
+  // Two Newton steps on the arc length from the step's start (Simpson's rule), from the
+  // linear guess: within a micrometre where the speed changes along the step.
+  const auto speed = [this](double q) { return localTangent(q).norm(); };
+  for (int iteration = 0; iteration < 2; ++iteration) {
+    const double arc = (p - from) / 6.0 * (speed(from) + 4.0 * speed(0.5 * (from + p)) + speed(p));
+    const double rate = speed(p);
+    if (!(rate > 0.0)) break;
+    p = std::clamp(p - (arcLengths_[i] + arc - target) / rate, from, from + parameterStep_);
+  }
+  return p;
 }
 
 Vec2 PlanGeometry::localTangent(double p) const {
@@ -467,7 +501,13 @@ CarriagewayRoad readCarriagewayRoad(const std::filesystem::path& file, Findings&
     }
   }
   Findings own(findings.collecting());
-  CarriagewayRoad road = readRoad(file, own);
+  CarriagewayRoad road;
+  try {
+    road = readRoad(file, own);
+  } catch (const ConfigError&) {
+    findings.replay(own.lines());  // the notes before the refusal, as without the cache
+    throw;
+  }
   findings.replay(own.lines());
   const std::lock_guard<std::mutex> lock(mutex);
   if (roads.size() >= kRoadsKept) roads.clear();

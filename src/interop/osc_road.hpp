@@ -32,6 +32,8 @@ namespace vsd::interop::osc {
 /// One <geometry> of a plan view, placed by its own start, heading and length
 /// (OpenDRIVE 1.6 section 7.3): a line, an arc, a spiral (curvature linear in s) or a
 /// paramPoly3 (u, v cubic in p; p runs over [0, length] or, pRange="normalized", [0, 1]).
+/// s along a paramPoly3 is its arc length (tabulated over p), stretched to the geometry's
+/// length if the file's length differs from it.
 class PlanGeometry {
  public:
   enum class Kind { Line, Arc, Spiral, ParamPoly3 };
@@ -50,7 +52,7 @@ class PlanGeometry {
   Vec2 point(double ds) const;
   /// rad: direction of travel ds m into the geometry.
   double heading(double ds) const;
-  /// rad turned from the geometry's start to ds (unwrapped).
+  /// rad turned from the geometry's start to ds (unwrapped; a paramPoly3 within +-pi).
   double turn(double ds) const;
   /// 1/m, > 0 left, ds m into the geometry.
   double curvature(double ds) const;
@@ -60,7 +62,8 @@ class PlanGeometry {
  private:
   Vec2 localTangent(double p) const;
   Vec2 localSecond(double p) const;
-  double parameter(double ds) const { return normalized_ ? ds / length_ : ds; }
+  /// p of a paramPoly3 at ds m into it (by its arc length).
+  double parameter(double ds) const;
 
   Kind kind_ = Kind::Line;
   double s_ = 0.0;
@@ -74,6 +77,8 @@ class PlanGeometry {
   bool normalized_ = false;
   double spiralStep_ = 0.0;          ///< m between the spiral's tabulated points
   std::vector<Vec2> spiralPoints_;   ///< the spiral's points at multiples of spiralStep_
+  double parameterStep_ = 0.0;       ///< p between a paramPoly3's tabulated arc lengths
+  std::vector<double> arcLengths_;   ///< m along a paramPoly3 at multiples of parameterStep_
 };
 
 struct CarriagewayRoad {

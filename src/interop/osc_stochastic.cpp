@@ -2,14 +2,16 @@
 // parameter drawn from its StochasticDistribution (OpenSCENARIO 1.2: ProbabilityDistributionSet,
 // UniformDistribution, NormalDistribution, PoissonDistribution, Histogram).
 //
-// Test run i draws from the stream (seed, i, Inputs) of vsd/core/random.hpp - the inputs of
-// the i-th concrete scenario - so a set does not change with numberOfTestRuns, and the draws
-// are the same with every standard library. The seed is the file's randomSeed, else the run's.
+// Test run i draws from the stream (seed, i, Inputs) of vsd/core/random.hpp, so a set does
+// not change with numberOfTestRuns, and the draws are the same with every standard library
+// (std::erfc and std::lgamma aside). The seed is the file's randomSeed, else the run's.
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
+#include <vector>
 
 #include "osc_template.hpp"
 #include "vsd/core/random.hpp"
@@ -20,8 +22,6 @@ namespace {
 
 /// Test runs a file may ask for (as many sets as a deterministic grid may hold).
 constexpr std::int64_t kMaxTestRuns = 10'000'000;
-/// Draws per value of a truncated distribution before its Range is called empty.
-constexpr int kMaxRejections = 10'000;
 /// Poisson means drawn by multiplying uniforms (exp(-mean) stays a normal double).
 constexpr double kMaxPoissonMean = 500.0;
 
@@ -43,49 +43,102 @@ struct ParameterDraw {
 
  private:
   std::size_t pick(Rng& rng) const;
-  template <typename Draw>
-  double truncated(Draw&& draw) const;
+  double truncatedNormal(Rng& rng) const;
+  double poisson(Rng& rng) const;
 };
 
 std::size_t ParameterDraw::pick(Rng& rng) const {
   double total = 0.0;
   for (const double weight : weights) total += weight;
   double point = rng.uniform01() * total;
-  for (std::size_t i = 0; i + 1 < weights.size(); ++i) {
+  std::size_t last_weighted = 0;
+  for (std::size_t i = 0; i < weights.size(); ++i) {
+    if (weights[i] <= 0.0) continue;
     if (point < weights[i]) return i;
     point -= weights[i];
+    last_weighted = i;
   }
-  return weights.size() - 1;
+  return last_weighted;  // rounding left `point` at the end: never an element of weight 0
 }
 
-template <typename Draw>
-double ParameterDraw::truncated(Draw&& draw) const {
-  for (int attempt = 0; attempt < kMaxRejections; ++attempt) {
-    const double value = draw();
-    if (value >= lower && value <= upper) return value;
+/// P(X > x) and P(X <= x) of the standard normal distribution, each accurate in its own tail.
+double upperTail(double z) { return 0.5 * std::erfc(z / std::sqrt(2.0)); }
+double lowerTail(double z) { return 0.5 * std::erfc(-z / std::sqrt(2.0)); }
+
+/// A normal draw truncated to [lower, upper] by inverting its distribution function: a
+/// uniform share of the range's probability, solved by bisection on std::erfc (exact to
+/// rounding however little of the distribution the range holds).
+double ParameterDraw::truncatedNormal(Rng& rng) const {
+  if (stddev == 0.0 || (std::isinf(lower) && std::isinf(upper))) {
+    return stddev == 0.0 ? std::clamp(mean, lower, upper) : rng.normal(mean, stddev);
   }
-  throw ConfigError(fmt::format("{}: parameter '{}': {} draws fell outside its Range [{}, {}] (expected a range that "
-                                "holds a share of the distribution)",
-                                where, name, kMaxRejections, xml::number(lower), xml::number(upper)));
+  const double a = (lower - mean) / stddev;
+  const double b = (upper - mean) / stddev;
+  // Above the mean, work with upper-tail probabilities (they keep their digits there).
+  const bool upper_side = a > 0.0;
+  const auto tail = [&](double z) { return upper_side ? upperTail(z) : lowerTail(z); };
+  const double at_a = tail(a);
+  const double at_b = tail(b);
+  if (!(std::abs(at_a - at_b) > 0.0)) {
+    throw ConfigError(fmt::format("{}: parameter '{}': its Range [{}, {}] holds no share of N({}, {}) that a double "
+                                  "can tell (expected a range nearer the expected value)",
+                                  where, name, xml::number(lower), xml::number(upper), xml::number(mean),
+                                  xml::number(stddev * stddev)));
+  }
+  const double target = at_a + rng.uniform01() * (at_b - at_a);
+  double lo = std::isinf(a) ? std::min(b, 0.0) - 40.0 : a;
+  double hi = std::isinf(b) ? std::max(a, 0.0) + 40.0 : b;
+  for (int i = 0; i < 200 && lo < hi; ++i) {
+    const double mid = 0.5 * (lo + hi);
+    // tail() falls with z on the upper side and rises on the lower side.
+    const bool before_target = upper_side ? tail(mid) > target : tail(mid) < target;
+    (before_target ? lo : hi) = mid;
+  }
+  return std::clamp(mean + stddev * 0.5 * (lo + hi), lower, upper);
+}
+
+/// A Poisson draw: without a Range by Knuth's product of uniforms; with one, by its
+/// probabilities over the whole numbers in the Range (exact however far in the tail).
+double ParameterDraw::poisson(Rng& rng) const {
+  if (std::isinf(upper)) {
+    double value = 0.0;
+    do {
+      const double limit = std::exp(-mean);
+      double product = rng.uniform01();
+      value = 0.0;
+      while (product > limit) {
+        product *= rng.uniform01();
+        value += 1.0;
+      }
+    } while (value < lower);
+    return value;
+  }
+  // Past 10,000 counts beyond the first a Poisson of mean <= 500 holds nothing a double keeps.
+  const double first = std::max(0.0, std::ceil(lower));
+  const double last = std::min(std::floor(upper), first + 10'000.0);
+  std::vector<double> log_p;
+  for (double k = first; k <= last; k += 1.0) log_p.push_back(k * std::log(mean) - mean - std::lgamma(k + 1.0));
+  if (log_p.empty()) {
+    throw ConfigError(fmt::format("{}: parameter '{}': its Range [{}, {}] holds no whole number (a Poisson draw is "
+                                  "one)", where, name, xml::number(lower), xml::number(upper)));
+  }
+  const double top = *std::max_element(log_p.begin(), log_p.end());
+  double total = 0.0;
+  for (double& value : log_p) total += (value = std::exp(value - top));
+  double point = rng.uniform01() * total;
+  for (std::size_t i = 0; i < log_p.size(); ++i) {
+    if (point < log_p[i]) return first + static_cast<double>(i);
+    point -= log_p[i];
+  }
+  return last;
 }
 
 std::string ParameterDraw::draw(Rng& rng) const {
   switch (kind) {
     case Kind::Set: return values[pick(rng)];
     case Kind::Uniform: return xml::number(rng.uniform(lower, upper));
-    case Kind::Normal: return xml::number(truncated([&] { return rng.normal(mean, stddev); }));
-    case Kind::Poisson:
-      return xml::number(truncated([&] {
-        // Knuth: the count of uniforms whose product stays above exp(-mean).
-        const double limit = std::exp(-mean);
-        double product = rng.uniform01();
-        double count = 0.0;
-        while (product > limit) {
-          product *= rng.uniform01();
-          count += 1.0;
-        }
-        return count;
-      }));
+    case Kind::Normal: return xml::number(truncatedNormal(rng));
+    case Kind::Poisson: return xml::number(poisson(rng));
     case Kind::Histogram: {
       const auto& [low, high] = bins[pick(rng)];
       return xml::number(rng.uniform(low, high));

@@ -115,24 +115,29 @@ namespace {
 
 /// Reference-line s where the language's region of a road of several curvatures ends: at
 /// kMaxRegion along the driving lanes' centre, at the road's end, or where the road has
-/// turned kMaxArcTurn from its start (a polyline road's segments head at most that from +x).
+/// turned kMaxArcTurn from its start (a polyline road's segments head at most that from +x;
+/// 0.1 mrad of margin keeps the chords inside).
 double regionEndS(const CarriagewayRoad& road) {
+  const double max_turn = scenario::kMaxArcTurn - 1e-4;
+  // Bisects [lo, hi] for the last s where `beyond` is false (beyond(lo) false, beyond(hi) true).
+  const auto bisect = [](double lo, double hi, const auto& beyond) {
+    for (int i = 0; i < 60; ++i) {
+      const double mid = 0.5 * (lo + hi);
+      (beyond(mid) ? hi : lo) = mid;
+    }
+    return lo;
+  };
   double end = road.length;
+  double before = 0.0;
   for (const double s : road.sampleS) {
-    if (std::abs(road.turnAt(s)) > scenario::kMaxArcTurn || road.languageS(s) > kMaxRegion) {
-      end = s;
+    if (std::abs(road.turnAt(s)) > max_turn) {
+      end = bisect(before, s, [&](double at) { return std::abs(road.turnAt(at)) > max_turn; });
       break;
     }
+    before = s;
   }
-  // languageS grows with s (1 - k t > 0 on every road a file can draw): bisect the bound.
-  if (road.languageS(end) > kMaxRegion) {
-    double lo = 0.0;
-    for (double hi = end, i = 0; i < 60; ++i) {
-      const double mid = 0.5 * (lo + hi);
-      (road.languageS(mid) > kMaxRegion ? hi : lo) = mid;
-    }
-    end = lo;
-  }
+  // languageS grows with s wherever 1 - k t > 0, which a road whose lanes do not fold ensures.
+  if (road.languageS(end) > kMaxRegion) end = bisect(0.0, end, [&](double at) { return road.languageS(at) > kMaxRegion; });
   return end;
 }
 
@@ -165,7 +170,10 @@ YAML::Node centreLineNode(const CarriagewayRoad& road) {
     point.SetStyle(YAML::EmitterStyle::Flow);
     points.push_back(point);
   };
-  add(0.0);
+  // Reference-line s of the points: each geometry sampled within 1 cm of its curve, points
+  // closer than 1 cm dropped (a geometry of a millimetre is no segment), the region's end kept.
+  constexpr double kMinStep = 0.01;  // m of reference line
+  std::vector<double> along = {0.0};
   for (const PlanGeometry& geometry : road.geometries) {
     if (geometry.s() >= end) break;
     const double k = geometry.largestCurvature();
@@ -173,8 +181,16 @@ YAML::Node centreLineNode(const CarriagewayRoad& road) {
     const double spacing = std::min(10.0, std::sqrt(8.0 * 0.01 / std::max(k_centre, 1e-9)));
     const double until = std::min(end, geometry.s() + geometry.length());
     const auto steps = static_cast<int>(std::ceil((until - geometry.s()) / spacing));
-    for (int i = 1; i <= steps; ++i) add(geometry.s() + (until - geometry.s()) * i / steps);
+    for (int i = 1; i <= steps; ++i) {
+      const double s_i = geometry.s() + (until - geometry.s()) * i / steps;
+      if (s_i - along.back() >= kMinStep) along.push_back(s_i);
+    }
   }
+  if (along.back() < end) {
+    if (along.size() > 1 && end - along.back() < kMinStep) along.back() = end;
+    else along.push_back(end);
+  }
+  for (const double s : along) add(s);
   return points;
 }
 

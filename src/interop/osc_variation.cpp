@@ -7,6 +7,7 @@
 #include <chrono>
 #include <cmath>
 #include <mutex>
+#include <set>
 
 #include "osc_template.hpp"
 #include "vsd/core/error.hpp"
@@ -149,12 +150,13 @@ std::string SweepSummary::report() const {
 namespace {
 
 /// For each string parameter the grid varies, its values in order of appearance (their codes).
+/// (A stochastic grid holds millions of distinct values: seen by a set, not a list search.)
 osc::StringCodes stringCodes(const ParameterGrid& grid) {
   osc::StringCodes codes;
+  std::map<std::string, std::set<std::string>> seen;
   for (const auto& set : grid.sets) {
     for (const auto& [name, value] : set) {
-      auto& values = codes[name];
-      if (std::find(values.begin(), values.end(), value) == values.end()) values.push_back(value);
+      if (seen[name].insert(value).second) codes[name].push_back(value);
     }
   }
   return codes;

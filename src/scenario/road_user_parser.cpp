@@ -81,7 +81,7 @@ void parsePlacement(const YamlReader& reader, const YAML::Node& node, const std:
     vehicle.along = VehicleSpec::Along::X;
     vehicle.x = reader.expression(node["x"], field + ".x", inputs);
     if (scenario.road.shape != RoadSpec::Shape::Polynomial) {
-      reader.fail(node["x"], field + ".x", "x places a road user on a polynomial road; an arc road takes 's' or 'ds'");
+      reader.fail(node["x"], field + ".x", "x places a road user on a polynomial road; arc and polyline roads take 's' or 'ds'");
     }
   } else {
     vehicle.along = along == "s"    ? VehicleSpec::Along::S

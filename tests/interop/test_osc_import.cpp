@@ -779,7 +779,7 @@ TEST(OscVariation, StochasticDistributionsDrawEachTestRunFromItsOwnStream) {
     EXPECT_TRUE(ahead >= 36.0 && ahead <= 44.0) << ahead;
     EXPECT_TRUE(relative >= -20.0 && relative <= -10.0) << relative;
     EXPECT_TRUE(lateral >= 0.0 && lateral <= 5.0 && lateral == std::floor(lateral)) << lateral;
-    EXPECT_TRUE(set.at("Cutter_Side") == "-1" || set.at("Cutter_Side") == "1");
+    EXPECT_TRUE(set.at("Cutter_Side") == "-1" || set.at("Cutter_Side") == "1");  // never "7", of weight 0
     speed_sum += speed;
     ahead_sum += ahead;
     poisson_sum += lateral;
@@ -791,6 +791,18 @@ TEST(OscVariation, StochasticDistributionsDrawEachTestRunFromItsOwnStream) {
   EXPECT_NEAR(left / 400.0, 0.75, 0.09);      // weights 3 : 1: sd 0.022
   EXPECT_NEAR(slow_bin / 400.0, 0.75, 0.09);  // bin weights 1 : 3
   EXPECT_NEAR(poisson_sum / 400.0, 2.0, 0.35);  // Poisson(2) cut at 5: mean 1.96, sd of the mean 0.07
+  // Far in a tail: N(0, 1) in [4, 5] holds 3e-5 of it; its mean there is 4.2168 (by hand from
+  // the normal density and distribution function), its sd about 0.21.
+  const auto tail = folderWith({{"tail.xosc", dataWith("cut_in_stochastic.xosc",
+                                                        R"(expectedValue="40" variance="4"><Range lowerLimit="36" upperLimit="44"/>)",
+                                                        R"(expectedValue="0" variance="1"><Range lowerLimit="4" upperLimit="5"/>)")}});
+  double tail_sum = 0.0;
+  for (const auto& set : readParameterDistribution(tail->path() / "tail.xosc", {}).sets) {
+    const double value = std::stod(set.at("Cutter_Ahead_m"));
+    EXPECT_TRUE(value >= 4.0 && value <= 5.0) << value;
+    tail_sum += value;
+  }
+  EXPECT_NEAR(tail_sum / 400.0, 4.2168, 0.05);
 
   EXPECT_EQ(readParameterDistribution(data("cut_in_stochastic.xosc"), {}, 99).sets, grid.sets);  // the file's seed
   const auto fewer = folderWith({{"fewer.xosc", dataWith("cut_in_stochastic.xosc", "numberOfTestRuns=\"400\"",
@@ -829,7 +841,7 @@ TEST(OscVariation, BadStochasticDistributionsAreOneLineEach) {
       {" numberOfTestRuns=\"400\"", "numberOfTestRuns"},
       {"<Range lowerLimit=\"60\" upperLimit=\"80\"/>", "lowerLimit 80 > upperLimit 60"},
       {"<NormalDistribution expectedValue=\"40\" variance=\"4\"><Range lowerLimit=\"36\" upperLimit=\"44\"/>",
-       "10000 draws fell outside its Range [100, 101]"},
+       "its Range [100, 101] holds no share of N(0, 1) that a double can tell"},
       {"<PoissonDistribution expectedValue=\"2\">", "LogNormalDistribution"},
       {"randomSeed=\"7\"", "randomSeed 7.5: expected a whole number"},
   };
@@ -892,4 +904,67 @@ TEST(OscRun, ADistributionOverAYamlScenarioFixesTheInputsItNames) {
   EXPECT_THAT(error, HasSubstr("'v_eg' is not an input of"));
   EXPECT_THAT(error, HasSubstr("(its inputs: v_ego, x_co, v_co, t_v_co, a_co, t_a_co)"));
   EXPECT_FALSE(fs::exists(bad->path() / "sweep"));
+}
+
+// s along a paramPoly3 is arc length, whatever its parameter does: u = 50 p + 50 p^2 runs
+// 3 times as fast at its end as at its start, and 25 m along it is still 25 m from its start.
+TEST(OscRoad, AlongAParamPoly3IsItsArcLength) {
+  const auto straight = osc::PlanGeometry::paramPoly3(0.0, Vec2(1.0, 2.0), 0.0, 100.0, {0.0, 50.0, 50.0, 0.0},
+                                                      {0.0, 0.0, 0.0, 0.0}, /*normalized=*/true);
+  for (const double s : {0.0, 25.0, 50.0, 99.0, 100.0}) {
+    EXPECT_NEAR((straight.point(s) - Vec2(1.0 + s, 2.0)).norm(), 0.0, 1e-6) << s;
+  }
+}
+
+namespace {
+
+/// An OpenDRIVE road of three 3.5 m driving lanes on the right (as three_lanes.xodr) along `plan_view`.
+std::string roadWithPlanView(double length, const std::string& plan_view) {
+  std::string text = readTextFile(data("roads/three_lanes.xodr"));
+  const auto from = text.find("<planView>");
+  const auto to = text.find("</planView>");
+  text.replace(from, to - from, "<planView>" + plan_view);
+  text = std::regex_replace(text, std::regex("length=\"1000\""), fmt::format("length=\"{}\"", length));
+  return std::regex_replace(text, std::regex("<elevationProfile>.*</elevationProfile>"), "<elevationProfile/>");
+}
+
+std::string geometry(double s, const Vec2& start, double heading, double length, const std::string& shape) {
+  return fmt::format(R"(<geometry s="{:.17g}" x="{:.17g}" y="{:.17g}" hdg="{:.17g}" length="{:.17g}">{}</geometry>)", s,
+                     start.x(), start.y(), heading, length, shape);
+}
+
+}  // namespace
+
+// Roads as converters write them: a geometry of half a millimetre at the end, and a curve that
+// passes the language's 1.4 rad of turn just after a geometry ends - both import as polyline
+// roads the language accepts (before, the first became a segment under 1 mm, the second one
+// heading 1.41 rad).
+TEST(OscImport, ATinyGeometryAndATurnPastTheLimitStillGiveAPolylineRoad) {
+  const Vec2 line_end = Vec2(10.0, 0.0);
+  const double k1 = 0.02, turn1 = 1.3995, k2 = 0.03;
+  const Vec2 arc_end = line_end + Vec2(std::sin(turn1) / k1, (1.0 - std::cos(turn1)) / k1);
+  const std::string turning = geometry(0, Vec2(0, 0), 0, 10, "<line/>") +
+                              geometry(10, line_end, 0, turn1 / k1, fmt::format(R"(<arc curvature="{}"/>)", k1)) +
+                              geometry(10 + turn1 / k1, arc_end, turn1, 50, fmt::format(R"(<arc curvature="{}"/>)", k2));
+  const Vec2 last_end = Vec2(363.926304489347, 130.761962697521) + 300.0 * Vec2(std::cos(0.92), std::sin(0.92));
+  std::string curved = readTextFile(data("roads/s_curve.xodr"));
+  curved.replace(curved.find("</planView>"), 0, geometry(710, last_end, 0.92, 0.0005, "<line/>"));
+  curved = std::regex_replace(curved, std::regex("length=\"710\""), "length=\"710.0005\"");
+  const auto dir = folderWith({{"roads/turning.xodr", roadWithPlanView(10 + turn1 / k1 + 50, turning)},
+                               {"roads/tiny.xodr", curved}});
+  for (const std::string road : {"turning", "tiny"}) {
+    test::writeFile(dir->path() / (road + ".xosc"), cutInWith("./roads/three_lanes.xodr", "./roads/" + road + ".xodr"));
+    const auto logical = importTemplate(dir->path() / (road + ".xosc"), {});
+    ASSERT_EQ(logical->road.shape, scenario::RoadSpec::Shape::Polyline) << road;
+    const auto& points = logical->road.centreLine;
+    double largest_heading = 0.0;
+    for (std::size_t i = 1; i < points.size(); ++i) {
+      const double dx = points[i].first - points[i - 1].first, dy = points[i].second - points[i - 1].second;
+      EXPECT_GE(std::hypot(dx, dy), 1e-3) << road << " point " << i;
+      largest_heading = std::max(largest_heading, std::abs(std::atan2(dy, dx)));
+    }
+    if (road == "turning") {
+      EXPECT_NEAR(largest_heading, scenario::kMaxArcTurn, 0.01);
+    }
+  }
 }
