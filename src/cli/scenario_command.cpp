@@ -123,6 +123,8 @@ void addCheck(CLI::App& scenario, CommandContext& context) {
   command->add_option("file", *file, "Scenario file (any format `run` reads)")->required()->check(CLI::ExistingFile);
   CLI::Option* step_option = addNumber(command, "--step", *step, "OpenSCENARIO input: simulation step (s)");
   addImportOptions(*command, *import);
+  addNumber(command, "--seed", import->checkSeed,
+            "Stochastic parameter distribution without a randomSeed: draw its sets as `run --seed` would (default 1)");
   command->add_flag("--yaml", *yaml, "OpenSCENARIO input: print the translation into the scenario language too");
   command->callback([file, import, step, step_option, yaml, &context] {
     context.action = [file, import, step, step_option, yaml] {

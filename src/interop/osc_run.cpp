@@ -107,7 +107,7 @@ ScenarioCheck checkOpenScenario(const fs::path& file, const OscImportOptions& op
   std::optional<ParameterGrid> grid;
   const bool readable = findings.attempt([&] {
     if (!xml::Reader(file, read_limits::kScenario).root().child("ParameterValueDistribution")) return;
-    grid = readParameterDistribution(file, options);
+    grid = readParameterDistribution(file, options, options.checkSeed);
     findings.mapped(file.string(), fmt::format("ParameterValueDistribution of {} parameter sets over {}",
                                                grid->sets.size(), grid->scenarioFile.string()));
     scenario_file = grid->scenarioFile;

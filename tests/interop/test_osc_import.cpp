@@ -26,6 +26,7 @@
 using namespace vsd;
 using namespace vsd::interop;
 using ::testing::HasSubstr;
+using ::testing::Not;
 
 namespace fs = std::filesystem;
 
@@ -834,6 +835,20 @@ TEST(OscRun, AStochasticVariationRunsItsTestRunsAndSkipsTheViolatedOnes) {
   const std::string csv = readTextFile(dir.path() / "sweep" / "concrete.csv");
   EXPECT_THAT(csv, HasSubstr("Cutter_Ahead_m"));
   EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 41);
+
+  // Without the file's randomSeed, `scenario check --seed 2` counts the sets `run --seed 2` draws.
+  const auto unseeded = folderWith({{"unseeded.xosc", dataWith("cut_in_stochastic.xosc", " randomSeed=\"7\"", "")}});
+  options.scenarioFile = unseeded->path() / "unseeded.xosc";
+  options.outputDir = unseeded->path() / "sweep";
+  options.seed = 2;
+  options.samples = 3;
+  const SweepSummary seeded = runVariation(options, {}, /*samples_given=*/true);
+  OscImportOptions check_options;
+  check_options.checkSeed = 2;
+  EXPECT_THAT(checkOpenScenario(unseeded->path() / "unseeded.xosc", check_options).report(),
+              HasSubstr(fmt::format("400 parameter sets: {} skipped", seeded.skipped)));
+  EXPECT_THAT(checkOpenScenario(unseeded->path() / "unseeded.xosc", {}).report(),
+              Not(HasSubstr(fmt::format("400 parameter sets: {} skipped", seeded.skipped))));
 }
 
 TEST(OscVariation, BadStochasticDistributionsAreOneLineEach) {

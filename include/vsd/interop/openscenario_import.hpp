@@ -37,6 +37,9 @@ struct OscImportOptions {
   /// directories, a distribution's template) must lie in, e.g. esmini's resources/, whose
   /// scenarios in xosc/ name roads in ../xodr/. Empty: the naming file's own folder.
   std::filesystem::path dataRoot;
+  /// `scenario check --seed`: the seed a Stochastic distribution without its own randomSeed
+  /// draws its sets with, as `run --seed` would (`run` passes its seed directly).
+  std::uint64_t checkSeed = 1;
 };
 
 /// The file's controller names that map onto a built-in controller by default
