@@ -9,6 +9,7 @@
 
 #include "vsd/core/files.hpp"
 #include "vsd/core/numbers.hpp"
+#include "vsd/road/road_geometry.hpp"
 #include "xml_support.hpp"
 
 namespace vsd::interop::osc {
@@ -106,7 +107,7 @@ void classifyCurvature(CarriagewayRoad& road) {
   road.curvature = 0.0;
   Polyline points;
   for (const PlanGeometry& geometry : road.geometries) {
-    const double spacing = std::min(kSampleSpacing, std::sqrt(8.0 * 1e-3 / std::max(geometry.largestCurvature(), 1e-9)));
+    const double spacing = vsd::road::chordSpacing(geometry.largestCurvature(), 1e-3, kSampleSpacing);
     const auto steps = static_cast<int>(std::ceil(geometry.length() / spacing));
     for (int i = points.empty() ? 0 : 1; i <= steps; ++i) {
       const double ds = geometry.length() * i / steps;
@@ -440,8 +441,8 @@ std::pair<double, double> CarriagewayRoad::coordinates(const Vec2& p) const {
 
 namespace {
 
-CarriagewayRoad readRoad(const std::filesystem::path& file, Findings& findings) {
-  xml::Reader reader(file, read_limits::kRoadNetwork);
+CarriagewayRoad readRoad(const std::filesystem::path& file, std::string text, Findings& findings) {
+  xml::Reader reader(file, std::move(text));
   const pugi::xml_node root = reader.root();
   if (std::string(root.name()) != "OpenDRIVE") reader.fail(root, "expected the root element <OpenDRIVE>");
   reader.requireSubset(root, {"header", "road", "controller", "junction"});
@@ -488,11 +489,8 @@ CarriagewayRoad readCarriagewayRoad(const std::filesystem::path& file, Findings&
   static std::mutex mutex;
   static std::map<std::string, ReadRoad> roads;
   constexpr std::size_t kRoadsKept = 8;
-  std::error_code error;
-  const bool hashable = std::filesystem::is_regular_file(file, error) &&
-                        std::filesystem::file_size(file, error) <= read_limits::kRoadNetwork.effective() && !error;
-  if (!hashable) return readRoad(file, findings);  // refused there, with the reason
-  const std::string key = std::filesystem::absolute(file).lexically_normal().string() + "\n" + sha256OfFile(file);
+  std::string text = readTextFile(file, read_limits::kRoadNetwork);  // read once: hashed, then parsed
+  const std::string key = std::filesystem::absolute(file).lexically_normal().string() + "\n" + sha256OfString(text);
   {
     const std::lock_guard<std::mutex> lock(mutex);
     if (const auto found = roads.find(key); found != roads.end()) {
@@ -503,7 +501,7 @@ CarriagewayRoad readCarriagewayRoad(const std::filesystem::path& file, Findings&
   Findings own(findings.collecting());
   CarriagewayRoad road;
   try {
-    road = readRoad(file, own);
+    road = readRoad(file, std::move(text), own);
   } catch (const ConfigError&) {
     findings.replay(own.lines());  // the notes before the refusal, as without the cache
     throw;

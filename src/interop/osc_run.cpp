@@ -117,8 +117,8 @@ ScenarioCheck checkOpenScenario(const fs::path& file, const OscImportOptions& op
     return check;
   }
   if (grid) countSets(*grid, options, findings);
-  if (grid && isYamlTemplate(*grid)) {
-    findings.mapped(grid->scenarioFile.string(), "a vsd-sumo YAML scenario: each set fixes the inputs it names");
+  if (grid && grid->logicalTemplate) {
+    findings.mapped(grid->scenarioFile.string(), "a logical scenario: each set fixes the inputs it names");
     for (const auto& line : findings.lines()) check.lines.push_back({kindOf(line.kind), line.text});
     return check;
   }

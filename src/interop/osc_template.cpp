@@ -13,6 +13,7 @@
 #include "vsd/core/error.hpp"
 #include "vsd/core/files.hpp"
 #include "vsd/core/log.hpp"
+#include "vsd/road/road_geometry.hpp"
 #include "vsd/scenario/yaml_reader.hpp"
 
 namespace fs = std::filesystem;
@@ -159,14 +160,14 @@ YAML::Node centreLineNode(const CarriagewayRoad& road) {
   const double end = regionEndS(road);
   const double t = road.centreT();
   const Vec2 origin = road.point(0.0, t);
-  const double c = std::cos(road.heading);
-  const double s_ = std::sin(road.heading);
+  const double cos_h = std::cos(road.heading);
+  const double sin_h = std::sin(road.heading);
   YAML::Node points;
   auto add = [&](double s) {
     const Vec2 d = road.point(s, t) - origin;
     YAML::Node point;
-    point.push_back(num(c * d.x() + s_ * d.y()));
-    point.push_back(num(-s_ * d.x() + c * d.y()));
+    point.push_back(num(cos_h * d.x() + sin_h * d.y()));
+    point.push_back(num(-sin_h * d.x() + cos_h * d.y()));
     point.SetStyle(YAML::EmitterStyle::Flow);
     points.push_back(point);
   };
@@ -178,7 +179,7 @@ YAML::Node centreLineNode(const CarriagewayRoad& road) {
     if (geometry.s() >= end) break;
     const double k = geometry.largestCurvature();
     const double k_centre = k / std::max(1.0 - k * std::abs(t), 0.1);
-    const double spacing = std::min(10.0, std::sqrt(8.0 * 0.01 / std::max(k_centre, 1e-9)));
+    const double spacing = vsd::road::chordSpacing(k_centre);
     const double until = std::min(end, geometry.s() + geometry.length());
     const auto steps = static_cast<int>(std::ceil((until - geometry.s()) / spacing));
     for (int i = 1; i <= steps; ++i) {

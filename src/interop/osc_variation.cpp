@@ -6,10 +6,10 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <mutex>
 #include <set>
 
 #include "osc_template.hpp"
+#include "vsd/interop/scenario_formats.hpp"
 #include "vsd/core/error.hpp"
 #include "vsd/core/files.hpp"
 #include "vsd/core/numbers.hpp"
@@ -78,11 +78,6 @@ Axis multiDistribution(const xml::Reader& reader, const pugi::xml_node& multi) {
 
 }  // namespace
 
-bool isYamlTemplate(const ParameterGrid& grid) {
-  const std::string extension = grid.scenarioFile.extension().string();
-  return extension == ".yaml" || extension == ".yml";
-}
-
 ParameterGrid readParameterDistribution(const fs::path& file, const OscImportOptions& options, std::uint64_t seed) {
   xml::Reader reader(file, read_limits::kScenario);
   const pugi::xml_node root = reader.root();
@@ -98,6 +93,9 @@ ParameterGrid readParameterDistribution(const fs::path& file, const OscImportOpt
   grid.scenarioFile =
       osc::referencedFile(options, file, reader.text(scenario, "filepath"), reader.where(scenario), "filepath");
   if (!fs::exists(grid.scenarioFile)) reader.fail(scenario, fmt::format("{} does not exist", grid.scenarioFile.string()));
+  if (const ScenarioFormat& format = scenarioFormatOf(grid.scenarioFile); format.logical) {
+    grid.logicalTemplate = format.logical(grid.scenarioFile);
+  }
   if (distribution.child("Stochastic")) {
     if (distribution.child("Deterministic")) {
       reader.fail(distribution.child("Deterministic"), "expected either <Deterministic> or <Stochastic>, not both");
@@ -162,18 +160,10 @@ osc::StringCodes stringCodes(const ParameterGrid& grid) {
   return codes;
 }
 
-/// A set over a vsd-sumo YAML scenario (as `scenario distribution` writes them): the inputs it
-/// names become constants, the others are drawn as the file says (per seed and sample).
-std::shared_ptr<const scenario::LogicalScenario> yamlSet(const ParameterGrid& grid, std::size_t set) {
-  static std::mutex mutex;
-  static std::pair<fs::path, std::shared_ptr<const scenario::LogicalScenario>> loaded;  // the last one read
-  std::shared_ptr<const scenario::LogicalScenario> base;
-  {
-    const std::lock_guard<std::mutex> lock(mutex);
-    if (loaded.first != grid.scenarioFile || !loaded.second) loaded = {grid.scenarioFile, scenario::loadLogicalScenario(grid.scenarioFile)};
-    base = loaded.second;
-  }
-  auto logical = std::make_shared<scenario::LogicalScenario>(*base);
+/// A set over a logical scenario (as `scenario distribution` writes them): the inputs it names
+/// become constants, the others are drawn as the file says (per seed and sample).
+std::shared_ptr<const scenario::LogicalScenario> logicalSet(const ParameterGrid& grid, std::size_t set) {
+  auto logical = std::make_shared<scenario::LogicalScenario>(*grid.logicalTemplate);
   const std::string where = fmt::format("{}: parameter set {}", grid.file.string(), set);
   for (const auto& [name, text] : grid.sets[set]) {
     const auto input = std::find_if(logical->inputs.begin(), logical->inputs.end(),
@@ -194,7 +184,7 @@ std::shared_ptr<const scenario::LogicalScenario> yamlSet(const ParameterGrid& gr
 std::shared_ptr<const scenario::LogicalScenario> importSet(const ParameterGrid& grid, const OscImportOptions& import,
                                                            const osc::StringCodes& codes, std::size_t set,
                                                            std::string* violation) {
-  if (isYamlTemplate(grid)) return yamlSet(grid, set);
+  if (grid.logicalTemplate) return logicalSet(grid, set);
   osc::Findings findings(/*collect=*/false);
   const auto result = osc::translate(grid.scenarioFile, import, grid.sets[set], fmt::format("{}: parameter set {}",
                                      grid.file.string(), set), findings, codes);

@@ -84,20 +84,21 @@ std::string runDistribution(const ScenarioRunRequest& request) {
 std::vector<ScenarioFormat> makeFormats() {
   std::vector<ScenarioFormat> formats;
   ScenarioFormat yaml{"vsd-scenario", "logical scenario in the scenario language (docs/scenario-language.md)",
-                      {".yaml", ".yml"}, nullptr, {}, nullptr, checkYaml};
+                      {".yaml", ".yml"}, nullptr, {}, nullptr, checkYaml,
+                      [](const fs::path& file) { return scenario::loadLogicalScenario(file); }};
   yaml.can = {true, true, true, true, false, false, true, true};
   yaml.run = [](const ScenarioRunRequest& request) { return pipeline::runScenarios(request.options).report(); };
   ScenarioFormat exported{"openscenario-export", "a concrete scenario `vsd-sumo scenario export` wrote (read back exactly)",
-                          {".xosc"}, isExport, {}, runExport, checkExport};
+                          {".xosc"}, isExport, {}, runExport, checkExport, nullptr};
   exported.can = {true, false, false, false, true, false, true};
   ScenarioFormat distribution{"openscenario-distribution",
                               "OpenSCENARIO ParameterValueDistribution: its template over the parameter grid",
-                              {".xosc"}, isDistribution, {}, runDistribution, checkOpenScenario};
+                              {".xosc"}, isDistribution, {}, runDistribution, checkOpenScenario, nullptr};
   distribution.can = {true, true, true, false, true, true, true};
   ScenarioFormat catalog{"openscenario-catalog", "OpenSCENARIO catalog (read through the scenarios that reference it)",
-                         {".xosc"}, isCatalog, {}, nullptr, nullptr};
+                         {".xosc"}, isCatalog, {}, nullptr, nullptr, nullptr};
   ScenarioFormat openscenario{"openscenario", "OpenSCENARIO 1.0-1.2 scenario (docs/openscenario-import.md)",
-                              {".xosc"}, nullptr, {}, runTemplateFile, checkOpenScenario};
+                              {".xosc"}, nullptr, {}, runTemplateFile, checkOpenScenario, nullptr};
   openscenario.can = {true, false, false, false, true, true, true};
   for (auto* format : {&yaml, &exported, &distribution, &catalog, &openscenario}) formats.push_back(std::move(*format));
   return formats;

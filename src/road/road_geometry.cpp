@@ -34,8 +34,6 @@ std::pair<Vec2, Vec2> RoadGeometry::bounds() const {
 
 namespace {
 
-constexpr double kArcSpacing = 10.0;       ///< m, longest segment of an arc road's polyline
-constexpr double kArcChordError = 0.01;    ///< m, largest distance between the polyline and its circle
 
 /// The region's points of a polynomial road (noise included) and the noise-free tangents at its ends.
 Polyline polynomialRegion(const scenario::ConcreteScenario& concrete, Vec2& tangent_begin, Vec2& tangent_end) {
@@ -91,9 +89,7 @@ Vec2 arcPoint(double curvature, double s) {
 
 Polyline arcRegion(const scenario::ConcreteScenario& concrete, Vec2& tangent_begin, Vec2& tangent_end) {
   const auto [curvature, length] = arcOf(*concrete.logical, concrete.inputs);
-  // A chord c of a circle of radius R lies c^2 / (8 R) from it at most.
-  double spacing = kArcSpacing;
-  if (std::abs(curvature) > 0.0) spacing = std::min(spacing, std::sqrt(8.0 * kArcChordError / std::abs(curvature)));
+  const double spacing = chordSpacing(curvature);
   const auto segments = static_cast<int>(std::ceil(length / spacing));
   Polyline region;
   for (int i = 0; i <= segments; ++i) region.push_back(arcPoint(curvature, length * i / segments));
@@ -113,6 +109,11 @@ Polyline polylineRegion(const scenario::RoadSpec& spec, Vec2& tangent_begin, Vec
 }
 
 }  // namespace
+
+double chordSpacing(double curvature, double chord_error, double longest) {
+  if (std::abs(curvature) > 0.0) return std::min(longest, std::sqrt(8.0 * chord_error / std::abs(curvature)));
+  return longest;
+}
 
 std::pair<double, double> regionXRange(const scenario::LogicalScenario& logical, const std::vector<double>& inputs) {
   if (logical.road.shape == scenario::RoadSpec::Shape::Polynomial) return {logical.road.xMin, logical.road.xMax};

@@ -422,12 +422,24 @@ TEST(OscImport, AStorysParametersAreInScopeInsideItOnly) {
               HasSubstr("<SimulationTimeCondition>: attribute value: $Start_s refers to an undeclared parameter"));
 }
 
+namespace {
+
+/// `vsd-sumo run VARIATION.xosc --out OUT [--samples N] [--seed S]`.
+SweepSummary sweep(const fs::path& variation, const fs::path& out, std::optional<std::uint64_t> samples = {},
+                   std::uint64_t seed = 1) {
+  pipeline::RunOptions options;
+  options.scenarioFile = variation;
+  options.outputDir = out;
+  options.seed = seed;
+  if (samples) options.samples = *samples;
+  return runVariation(options, {}, samples.has_value());
+}
+
+}  // namespace
+
 TEST(OscRun, VariationRunsTheGridAndSkipsViolatedSets) {
   TemporaryDirectory dir("vsd-osc-sweep");
-  pipeline::RunOptions options;
-  options.scenarioFile = data("cut_in_variation.xosc");
-  options.outputDir = dir.path() / "sweep";
-  const SweepSummary summary = runVariation(options, {}, /*samples_given=*/false);
+  const SweepSummary summary = sweep(data("cut_in_variation.xosc"), dir.path() / "sweep");
   EXPECT_EQ(summary.sets, 12u);
   EXPECT_EQ(summary.skipped, 6u);  // lateral speed 25 m/s is not below 60..80 km/h
   EXPECT_EQ(summary.run.ok, 6u);
@@ -440,9 +452,7 @@ TEST(OscRun, VariationRunsTheGridAndSkipsViolatedSets) {
                         "users that cannot start), 6 run\n"));
 
   // --samples below the sets that satisfy the constraints: evenly spaced over them, and said.
-  options.outputDir = dir.path() / "fewer";
-  options.samples = 2;
-  const SweepSummary fewer = runVariation(options, {}, /*samples_given=*/true);
+  const SweepSummary fewer = sweep(data("cut_in_variation.xosc"), dir.path() / "fewer", 2);
   EXPECT_EQ(fewer.simulated, 2u);
   EXPECT_EQ(fewer.run.ok, 2u);
   EXPECT_THAT(fewer.report(), HasSubstr("2 run (--samples: evenly spaced over the 6 others)"));
@@ -452,10 +462,7 @@ TEST(OscRun, VariationRunsTheGridAndSkipsViolatedSets) {
 // fails alone and is counted; the sweep runs the others (before, it ended at the first one).
 TEST(OscRun, ASetWhoseRoadUsersCannotStartFailsAloneAndTheSweepGoesOn) {
   TemporaryDirectory dir("vsd-osc-sweep");
-  pipeline::RunOptions options;
-  options.scenarioFile = data("blocking_targets_variation.xosc");
-  options.outputDir = dir.path() / "sweep";
-  const SweepSummary summary = runVariation(options, {}, /*samples_given=*/false);
+  const SweepSummary summary = sweep(data("blocking_targets_variation.xosc"), dir.path() / "sweep");
   EXPECT_EQ(summary.sets, 3u);
   EXPECT_EQ(summary.skipped, 0u);
   EXPECT_EQ(summary.refused, 1u);  // the 3 m gap between 5 m long vehicles
@@ -478,10 +485,7 @@ TEST(OscRun, ASetWhoseRoadUsersCannotStartFailsAloneAndTheSweepGoesOn) {
 // vsd-sumo's road does not have; ASAM's 4.2.3 varies the Ego's lane so) fails alone as well.
 TEST(OscRun, ASetTheImportRefusesFailsAloneAndCheckSaysTheFileStillRuns) {
   TemporaryDirectory dir("vsd-osc-sweep");
-  pipeline::RunOptions options;
-  options.scenarioFile = data("blocking_targets_lanes_variation.xosc");
-  options.outputDir = dir.path() / "sweep";
-  const SweepSummary summary = runVariation(options, {}, /*samples_given=*/false);
+  const SweepSummary summary = sweep(data("blocking_targets_lanes_variation.xosc"), dir.path() / "sweep");
   EXPECT_EQ(summary.sets, 2u);
   EXPECT_EQ(summary.refused, 1u);
   EXPECT_EQ(summary.run.ok, 1u);
@@ -820,11 +824,7 @@ TEST(OscVariation, StochasticDistributionsDrawEachTestRunFromItsOwnStream) {
 
 TEST(OscRun, AStochasticVariationRunsItsTestRunsAndSkipsTheViolatedOnes) {
   TemporaryDirectory dir("vsd-osc-stochastic");
-  pipeline::RunOptions options;
-  options.scenarioFile = data("cut_in_stochastic.xosc");
-  options.outputDir = dir.path() / "sweep";
-  options.samples = 40;
-  const SweepSummary summary = runVariation(options, {}, /*samples_given=*/true);
+  const SweepSummary summary = sweep(data("cut_in_stochastic.xosc"), dir.path() / "sweep", 40);
   const ParameterGrid grid = readParameterDistribution(data("cut_in_stochastic.xosc"), {});
   std::uint64_t zero_lateral_speed = 0;
   for (const auto& set : grid.sets) zero_lateral_speed += set.at("LaneChange_Vy") == "0" ? 1 : 0;
@@ -838,11 +838,7 @@ TEST(OscRun, AStochasticVariationRunsItsTestRunsAndSkipsTheViolatedOnes) {
 
   // Without the file's randomSeed, `scenario check --seed 2` counts the sets `run --seed 2` draws.
   const auto unseeded = folderWith({{"unseeded.xosc", dataWith("cut_in_stochastic.xosc", " randomSeed=\"7\"", "")}});
-  options.scenarioFile = unseeded->path() / "unseeded.xosc";
-  options.outputDir = unseeded->path() / "sweep";
-  options.seed = 2;
-  options.samples = 3;
-  const SweepSummary seeded = runVariation(options, {}, /*samples_given=*/true);
+  const SweepSummary seeded = sweep(unseeded->path() / "unseeded.xosc", unseeded->path() / "sweep", 3, 2);
   OscImportOptions check_options;
   check_options.checkSeed = 2;
   EXPECT_THAT(checkOpenScenario(unseeded->path() / "unseeded.xosc", check_options).report(),
@@ -895,10 +891,7 @@ TEST(OscRun, ADistributionOverAYamlScenarioFixesTheInputsItNames) {
 </OpenSCENARIO>
 )";
   const auto dir = folderWith({{"acc.yaml", readTextFile(test::scenarioFile("acc.yaml"))}, {"grid.xosc", distribution}});
-  pipeline::RunOptions options;
-  options.scenarioFile = dir->path() / "grid.xosc";
-  options.outputDir = dir->path() / "sweep";
-  const SweepSummary summary = runVariation(options, {}, /*samples_given=*/false);
+  const SweepSummary summary = sweep(dir->path() / "grid.xosc", dir->path() / "sweep");
   EXPECT_EQ(summary.run.ok, 3u);
   const CsvTable table = CsvTable::read(dir->path() / "sweep" / "concrete.csv");
   ASSERT_EQ(table.rows(), 3u);
@@ -913,9 +906,7 @@ TEST(OscRun, ADistributionOverAYamlScenarioFixesTheInputsItNames) {
 
   const auto bad = folderWith({{"acc.yaml", readTextFile(test::scenarioFile("acc.yaml"))},
                                {"bad.xosc", std::regex_replace(distribution, std::regex("\"v_ego\""), "\"v_eg\"")}});
-  options.scenarioFile = bad->path() / "bad.xosc";
-  options.outputDir = bad->path() / "sweep";
-  const std::string error = test::configErrorOf([&] { runVariation(options, {}, false); });
+  const std::string error = test::configErrorOf([&] { sweep(bad->path() / "bad.xosc", bad->path() / "sweep"); });
   EXPECT_THAT(error, HasSubstr("'v_eg' is not an input of"));
   EXPECT_THAT(error, HasSubstr("(its inputs: v_ego, x_co, v_co, t_v_co, a_co, t_a_co)"));
   EXPECT_FALSE(fs::exists(bad->path() / "sweep"));

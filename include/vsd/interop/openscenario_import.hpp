@@ -82,12 +82,12 @@ pipeline::RunSummary runTemplate(pipeline::RunOptions options, const OscImportOp
 /// ConfigError for elements outside what is read (naming them).
 struct ParameterGrid {
   std::filesystem::path file;
-  /// The template: an OpenSCENARIO file, or a vsd-sumo YAML scenario whose inputs the sets fix.
-  std::filesystem::path scenarioFile;
+  std::filesystem::path scenarioFile;  ///< the template: an OpenSCENARIO file or a logical scenario
+  /// Set when the template is a logical scenario (a format with ScenarioFormat::logical, read
+  /// once): each set fixes the inputs it names.
+  std::shared_ptr<const scenario::LogicalScenario> logicalTemplate;
   std::vector<std::map<std::string, std::string>> sets;
 };
-/// Whether the grid's template is a vsd-sumo YAML scenario (.yaml, .yml).
-bool isYamlTemplate(const ParameterGrid& grid);
 /// The parameter sets of a ParameterValueDistribution: a Deterministic grid (the product of
 /// its distributions, the last varying fastest), or numberOfTestRuns Stochastic draws from
 /// the file's randomSeed, else from `seed` (a run's --seed).

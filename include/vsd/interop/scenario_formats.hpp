@@ -7,6 +7,7 @@
 
 #include <filesystem>
 #include <functional>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -48,6 +49,9 @@ struct ScenarioFormat {
   std::function<std::string(const ScenarioRunRequest&)> run;
   /// What the file holds, line by line. Set if can.check.
   std::function<ScenarioCheck(const std::filesystem::path&, const OscImportOptions&)> check;
+  /// Set for formats that are logical scenarios: loads one. A parameter distribution over
+  /// such a template fixes the inputs each set names (vsd-sumo's own `scenario distribution`).
+  std::function<std::shared_ptr<const scenario::LogicalScenario>(const std::filesystem::path&)> logical;
 };
 
 /// Every format, most specific first.

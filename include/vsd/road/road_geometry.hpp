@@ -29,6 +29,11 @@ struct RoadGeometry {
   double regionStart() const;
 };
 
+/// m: how far apart points of a curve of this curvature (1/m) may lie for the chords between
+/// them to stay within `chord_error` m of it (a chord c of radius R lies c^2 / (8 R) from
+/// it at most), and at most `longest` m. Arc roads: 1 cm and 10 m.
+double chordSpacing(double curvature, double chord_error = 0.01, double longest = 10.0);
+
 /// The x range of the scenario region: x_range for polynomial roads; for arc roads the x
 /// of the region's start (0) and end (a pure function of the inputs: arcs have no noise).
 std::pair<double, double> regionXRange(const scenario::LogicalScenario& logical, const std::vector<double>& inputs);
