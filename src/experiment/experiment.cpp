@@ -67,6 +67,7 @@ double mean(double sum, std::size_t count) {
 struct RowModel {
   fs::path file;
   std::string digest;
+  std::uint64_t seed = 0;  ///< the training seed
 };
 
 /// One trained model: a row of one of the spec's models with one seed.
@@ -90,6 +91,45 @@ VectorNetMetricError metricError(const json& model, const std::string& metric) {
   if (!errors.at("coverage50").is_null()) error.coverage50 = errors.at("coverage50").get<double>();
   if (!errors.at("coverage90").is_null()) error.coverage90 = errors.at("coverage90").get<double>();
   return error;
+}
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+/// One metric's errors of one model over its seeds (vectornetErrors' entries of that model):
+/// means, the MAE's sample standard deviation, and per coverage the span of the seeds' Wilson
+/// 95 % intervals.
+VectorNetMetricError metricErrorOverSeeds(const std::vector<const json*>& seeds, const std::string& metric) {
+  std::vector<VectorNetMetricError> errors;
+  for (const auto* seed : seeds) errors.push_back(metricError(*seed, metric));
+  auto combined = errors.front();
+  combined.seeds = errors.size();
+  const auto meanOf = [&](double VectorNetMetricError::*field) {
+    std::vector<double> values;
+    for (const auto& error : errors) values.push_back(error.*field);
+    return sampleMean(values);
+  };
+  combined.mae = meanOf(&VectorNetMetricError::mae);
+  combined.bias = meanOf(&VectorNetMetricError::bias);
+  combined.coverage50 = meanOf(&VectorNetMetricError::coverage50);
+  combined.coverage90 = meanOf(&VectorNetMetricError::coverage90);
+  if (errors.size() > 1) {
+    std::vector<double> maes;
+    for (const auto& error : errors) maes.push_back(error.mae);
+    combined.maeStd = sampleStd(maes);
+  }
+  const auto span = [&](double VectorNetMetricError::*coverage) {
+    std::array<double, 2> bounds{kNaN, kNaN};
+    for (const auto& error : errors) {
+      if (!std::isfinite(error.*coverage) || error.intervalSamples == 0) return std::array<double, 2>{kNaN, kNaN};
+      const auto interval = wilsonInterval(error.*coverage, error.intervalSamples);
+      bounds[0] = std::isfinite(bounds[0]) ? std::min(bounds[0], interval.low) : interval.low;
+      bounds[1] = std::isfinite(bounds[1]) ? std::max(bounds[1], interval.high) : interval.high;
+    }
+    return bounds;
+  };
+  combined.coverage50Interval = span(&VectorNetMetricError::coverage50);
+  combined.coverage90Interval = span(&VectorNetMetricError::coverage90);
+  return combined;
 }
 
 json readJson(const fs::path& path) {
@@ -320,7 +360,7 @@ class ExperimentRunner {
     }
     trainInParallel(pending);
     for (const auto& job : jobs) {
-      runs_.push_back({job.model->name, job.row, job.seed, {job.folder / "model.pt", job.key.digest()},
+      runs_.push_back({job.model->name, job.row, job.seed, {job.folder / "model.pt", job.key.digest(), job.seed},
                        readJson(job.folder / "training.json")});
     }
   }
@@ -553,16 +593,21 @@ class ExperimentRunner {
 
   // --- metric MAE ------------------------------------------------------------------
   /// The models predicting a functional scenario in the MAE table: every model of the spec
-  /// that trains its `mae.vectornet_rows` row (first seed), the main model first.
+  /// that trains its `mae.vectornet_rows` row, each with every seed it is trained with, the
+  /// main model first.
   std::vector<std::pair<std::string, RowModel>> maeModels(const std::string& label) const {
     std::vector<std::pair<std::string, RowModel>> models;
     const int row = spec_.vectornetRows.at(label);
     for (const auto& model_spec : spec_.models) {
-      const auto found = rowModels_.find({model_spec.name, row});
-      if (found != rowModels_.end()) models.emplace_back(model_spec.name, found->second);
+      for (const auto& run : runs_) {
+        if (run.model == model_spec.name && run.row == row) models.emplace_back(model_spec.name, run.modelFile);
+      }
     }
     return models;
   }
+
+  /// Extra trees and the BNN are fitted with as many seeds as the rows that carry findings.
+  std::size_t baselineSeeds() const { return static_cast<std::size_t>(std::max(1, spec_.seedCount)); }
 
   /// The key of a functional scenario's metric errors: its data, the baselines' settings and
   /// training rows (`rows`: field and value), the draws and every VectorNet model scored.
@@ -580,7 +625,11 @@ class ExperimentRunner {
         .add("bnn", fmt::format("hidden {} layers {} epochs {} samples {} seed {}", spec_.bnn.hidden, spec_.bnn.layers,
                                 spec_.bnn.epochs, spec_.bnn.samples, spec_.bnn.seed))
         .add("draws", fmt::format("{} seed {}", spec_.maeDraws, spec_.seed));
-    for (const auto& [name, row_model] : models) errors_key.add("vectornet_model_" + name, row_model.digest);
+    for (const auto& [name, row_model] : models) {
+      // The first seed's entry keeps its name, so keys of single-seed studies stay as they were.
+      const auto entry = row_model.seed == spec_.seed ? name : fmt::format("{}_seed{}", name, row_model.seed);
+      errors_key.add("vectornet_model_" + entry, row_model.digest);
+    }
     return errors_key;
   }
 
@@ -597,9 +646,10 @@ class ExperimentRunner {
       }
       const auto models = maeModels(label);
       const auto folder = cache_.folder("mae/" + label);
-      // format 2: every model's errors, bias and interval coverage
-      const auto mae_key = metricErrorsKey("metric mae", 2, label, names,
-                                           {"train_rows", fmt::format("{}", spec_.maeSamples)}, models);
+      // format 3: every model's errors, bias and interval coverage per seed; the baselines per seed
+      auto mae_key = metricErrorsKey("metric mae", 3, label, names,
+                                     {"train_rows", fmt::format("{}", spec_.maeSamples)}, models);
+      mae_key.add("baseline_seeds", baselineSeeds());
       if (!reuse(folder, mae_key, fmt::format("{} metric MAE", label))) {
         cache_.clear(folder);
         writeJson(folder / "mae.json", computeMae(label, names, models));
@@ -616,11 +666,24 @@ class ExperimentRunner {
       mae_row.label = label;
       mae_row.metric = name;
       mae_row.unit = metrics::findMetric(name)->unit;
-      mae_row.et = entry.at("et").get<double>();
-      mae_row.bnn = entry.at("bnn").get<double>();
+      const auto et = entry.at("et").get<std::vector<double>>();
+      const auto bnn = entry.at("bnn").get<std::vector<double>>();
+      mae_row.baselineSeeds = et.size();
+      mae_row.et = sampleMean(et);
+      mae_row.bnn = sampleMean(bnn);
+      if (et.size() > 1) {
+        mae_row.etSpread = sampleStd(et);
+        mae_row.bnnSpread = sampleStd(bnn);
+      }
       mae_row.bnnStd = entry.at("bnn_std").get<double>();
       mae_row.fromTruePositions = entry.at("from_true_positions").get<double>();
-      for (const auto& model : results.at("vectornet")) mae_row.vectornet.push_back(metricError(model, name));
+      for (const auto& model_spec : spec_.models) {
+        std::vector<const json*> seeds;
+        for (const auto& model : results.at("vectornet")) {
+          if (model.at("model").get<std::string>() == model_spec.name) seeds.push_back(&model);
+        }
+        if (!seeds.empty()) mae_row.vectornet.push_back(metricErrorOverSeeds(seeds, name));
+      }
       mae_row.etSeconds = results.at("et_seconds").get<double>();
       mae_row.bnnSeconds = results.at("bnn_seconds").get<double>();
       mae_row.trainRows = results.at("train_rows").get<std::size_t>();
@@ -632,10 +695,12 @@ class ExperimentRunner {
   }
 
   /// The regression metamodels on the concrete inputs of `label`: extra trees and the BNN
-  /// fitted on its first `train_rows` training rows, scored on its test set.
+  /// fitted on its first `train_rows` training rows (with the spec's seeds + `seed_offset`),
+  /// scored on its test set.
   std::pair<baseline::BaselineReport, baseline::BaselineReport> fitBaselines(const std::string& label,
                                                                              const std::vector<std::string>& names,
-                                                                             std::size_t train_rows) const {
+                                                                             std::size_t train_rows,
+                                                                             std::uint64_t seed_offset = 0) const {
     const auto& label_data = data(label);
     baseline::BaselineOptions baseline_options;
     baseline_options.train = label_data.trainRun;
@@ -643,7 +708,9 @@ class ExperimentRunner {
     baseline_options.targets = names;
     baseline_options.maxTrainRows = train_rows;
     baseline_options.extraTrees = spec_.extraTrees;
+    baseline_options.extraTrees.seed += seed_offset;
     baseline_options.bnn = spec_.bnn;
+    baseline_options.bnn.seed += seed_offset;
     baseline_options.bnn.threads = spec_.cores();
     baseline_options.model = "et";
     auto et = baseline::runBaseline(baseline_options);
@@ -658,11 +725,26 @@ class ExperimentRunner {
                   const std::vector<std::pair<std::string, RowModel>>& models) {
     const auto& label_data = data(label);
     json results;
-    const auto [et, bnn] = fitBaselines(label, names, spec_.maeSamples);
-    results["et_seconds"] = et.fitSeconds + et.predictSeconds;
-    results["bnn_seconds"] = bnn.fitSeconds + bnn.predictSeconds;
-    results["train_rows"] = et.trainRows;
-    results["test_rows"] = et.testRows;
+    // Per metric the MAE of every baseline seed; times are means over the seeds.
+    std::vector<std::vector<double>> et_mae(names.size());
+    std::vector<std::vector<double>> bnn_mae(names.size());
+    std::vector<double> bnn_std(names.size(), 0.0);
+    double et_seconds = 0.0;
+    double bnn_seconds = 0.0;
+    for (std::uint64_t offset = 0; offset < baselineSeeds(); ++offset) {
+      const auto [et, bnn] = fitBaselines(label, names, spec_.maeSamples, offset);
+      et_seconds += et.fitSeconds + et.predictSeconds;
+      bnn_seconds += bnn.fitSeconds + bnn.predictSeconds;
+      for (std::size_t m = 0; m < names.size(); ++m) {
+        et_mae[m].push_back(et.mae[m]);
+        bnn_mae[m].push_back(bnn.mae[m]);
+        if (offset == 0 && !bnn.meanStd.empty()) bnn_std[m] = bnn.meanStd[m];
+      }
+      results["train_rows"] = et.trainRows;
+      results["test_rows"] = et.testRows;
+    }
+    results["et_seconds"] = et_seconds / static_cast<double>(baselineSeeds());
+    results["bnn_seconds"] = bnn_seconds / static_cast<double>(baselineSeeds());
 
     // VectorNet: the metric code of simulated runs on the predicted Ego trajectory,
     // with the recorded trajectories of the other vehicles.
@@ -683,9 +765,9 @@ class ExperimentRunner {
       }
     }
     for (std::size_t m = 0; m < names.size(); ++m) {
-      results["metrics"][names[m]] = {{"et", et.mae[m]},
-                                      {"bnn", bnn.mae[m]},
-                                      {"bnn_std", bnn.meanStd.empty() ? 0.0 : bnn.meanStd[m]},
+      results["metrics"][names[m]] = {{"et", et_mae[m]},
+                                      {"bnn", bnn_mae[m]},
+                                      {"bnn_std", bnn_std[m]},
                                       {"from_true_positions", mean(true_sum[m], true_counted[m])}};
     }
     results["vectornet"] = json::array();
@@ -693,9 +775,9 @@ class ExperimentRunner {
       results["vectornet"].push_back(vectornetErrors(model_name, row_model, scenes, simulated, metric_set));
       for (std::size_t m = 0; m < names.size(); ++m) {
         const auto& errors = results["vectornet"].back()["metrics"][names[m]];
-        spdlog::info("{} {}: MAE extra trees {:.3f}, BNN {:.3f}, VectorNet {} {:.3f} (true positions {:.3f})", label,
-                     names[m], et.mae[m], bnn.mae[m], model_name, errors["mae"].get<double>(),
-                     mean(true_sum[m], true_counted[m]));
+        spdlog::info("{} {}: MAE extra trees {:.3f}, BNN {:.3f}, VectorNet {} seed {} {:.3f} (true positions {:.3f})",
+                     label, names[m], et_mae[m].front(), bnn_mae[m].front(), model_name, row_model.seed,
+                     errors["mae"].get<double>(), mean(true_sum[m], true_counted[m]));
       }
     }
     return results;
@@ -869,6 +951,7 @@ class ExperimentRunner {
     }
     json errors;
     errors["model"] = model_name;
+    errors["seed"] = row_model.seed;
     errors["decoder"] = predictor.name();
     for (std::size_t m = 0; m < count; ++m) {
       const bool has_intervals = with_interval[m] > 0;

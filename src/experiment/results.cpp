@@ -111,12 +111,6 @@ std::string paperValue(const std::map<std::string, double>& paper, const std::st
   return found == paper.end() ? std::string() : formatNumber(found->second);
 }
 
-std::string withPaper(double ours, const std::map<std::string, double>& paper, const std::string& key,
-                      int decimals = 2) {
-  const std::string value = std::isfinite(ours) ? fmt::format("{:.{}f}", ours, decimals) : "–";
-  const auto found = paper.find(key);
-  return found == paper.end() ? value : fmt::format("{} ({:.2f})", value, found->second);
-}
 
 std::vector<std::string> labelsOf(const Spec& spec) {
   std::vector<std::string> labels;
@@ -204,28 +198,37 @@ const VectorNetMetricError* errorOf(const MaeRow& row, const std::string& model)
 
 
 
-/// The 95 % interval's bounds of a coverage for mae.csv (empty where there is no coverage).
-std::pair<std::string, std::string> coverageBounds(double share, std::size_t scenes) {
-  if (!std::isfinite(share) || scenes == 0) return {"", ""};
-  const auto interval = wilsonInterval(share, scenes);
-  return {formatNumber(interval.low), formatNumber(interval.high)};
+std::string optionalNumber(double value) { return std::isfinite(value) ? formatNumber(value) : std::string(); }
+
+/// An MAE over seeds for mae.md: "0.232" for one seed, "0.232 ± 0.010" over several, then the
+/// paper's value in brackets where `paper_key` names one.
+std::string maeText(double mae, double spread, const MaeRow& row, const std::string& paper_key) {
+  std::string text = std::isfinite(mae) ? fmt::format("{:.3f}", mae) : "–";
+  if (std::isfinite(spread)) text += fmt::format(" ± {:.3f}", spread);
+  const auto found = paper_key.empty() ? row.paper.end() : row.paper.find(paper_key);
+  return found == row.paper.end() ? text : fmt::format("{} ({:.2f})", text, found->second);
 }
 
-/// A model's cell of mae.md: "0.440 (bias +0.20; 90 % interval covers 87 %, 50 %: 48 %)";
+/// "51 % (48–54)": a coverage (mean over seeds) with its 95 % interval (over seeds: the span of
+/// their Wilson intervals).
+std::string coverageSpanText(double share, const std::array<double, 2>& interval) {
+  if (!std::isfinite(share) || !std::isfinite(interval[0])) return percent(share);
+  return fmt::format("{} ({:.0f}–{:.0f})", percent(share), 100.0 * interval[0], 100.0 * interval[1]);
+}
+
+/// A model's cell of mae.md: "0.440 ± 0.020 (0.58) bias +0.200; covered 48 % (47–49) / 87 % (86–88)";
 /// the main model's also carries the paper's value.
 std::string maeCell(const MaeRow& row, const std::string& model, bool main) {
   const auto* error = errorOf(row, model);
   if (error == nullptr) return "";
-  std::string cell = main ? withPaper(error->mae, row.paper, "vectornet", 3) : fmt::format("{:.3f}", error->mae);
+  std::string cell = maeText(error->mae, error->maeStd, row, main ? "vectornet" : "");
   cell += fmt::format(" bias {:+.3f}", error->bias);
   if (std::isfinite(error->coverage90)) {
-    cell += fmt::format("; covered {} / {}", coverageText(error->coverage50, error->intervalSamples),
-                        coverageText(error->coverage90, error->intervalSamples));
+    cell += fmt::format("; covered {} / {}", coverageSpanText(error->coverage50, error->coverage50Interval),
+                        coverageSpanText(error->coverage90, error->coverage90Interval));
   }
   return cell;
 }
-
-std::string optionalNumber(double value) { return std::isfinite(value) ? formatNumber(value) : std::string(); }
 
 /// mae.csv (a row per functional scenario and metric; `vectornet` is the main model's MAE,
 /// then per model of the spec its MAE, bias and interval coverage) and mae.md.
@@ -233,10 +236,12 @@ std::pair<std::string, std::string> maeFiles(const Spec& spec, const std::vector
   const auto models = maeModelNames(spec, rows);
   std::vector<std::string> head = {"functional_scenario", "metric", "unit", "et", "bnn", "vectornet",
                                    "vectornet_from_true_positions", "bnn_mean_std", "paper_et", "paper_bnn",
-                                   "paper_vectornet", "train_rows", "vectornet_test_samples", "et_seconds", "bnn_seconds"};
+                                   "paper_vectornet", "train_rows", "vectornet_test_samples", "et_seconds", "bnn_seconds",
+                                   "baseline_seeds", "et_seed_std", "bnn_seed_std"};
   for (const auto& model : models) {
-    for (const char* column : {"", "_bias", "_coverage_50", "_coverage_50_ci95_low", "_coverage_50_ci95_high",
-                               "_coverage_90", "_coverage_90_ci95_low", "_coverage_90_ci95_high"}) {
+    for (const char* column : {"", "_seed_std", "_seeds", "_bias", "_coverage_50", "_coverage_50_ci95_low",
+                               "_coverage_50_ci95_high", "_coverage_90", "_coverage_90_ci95_low",
+                               "_coverage_90_ci95_high"}) {
       head.push_back("vectornet_" + model + column);
     }
   }
@@ -247,13 +252,17 @@ std::pair<std::string, std::string> maeFiles(const Spec& spec, const std::vector
       "# MAE of evaluation metrics: ours (paper's Table III)\n\n" + sizesLine(spec) +
       fmt::format("\n\nExtra trees and the BNN are trained on the first {} training scenarios' concrete inputs; "
                   "VectorNet's metrics come from its predicted Ego trajectory (docs/models.md: metrics from predicted trajectories; a "
-                  "kinematic model's own speeds and accelerations), with the first seed's model of the ADE row "
-                  "named in the spec, for every model of the spec that trains that row: the MAE (the paper's value "
-                  "in brackets for the main model), the bias (mean of predicted − simulated) and, for probabilistic "
-                  "models, the share of simulated values inside the metric's 50 % / 90 % interval over {} sampled "
-                  "futures, with its binomial 95 % confidence interval (Wilson) over the scenes that had an interval. 'true positions' is the same computation on the simulated future positions: the error "
+                  "kinematic model's own speeds and accelerations), with every seed's model of the ADE row "
+                  "named in the spec, for every model of the spec that trains that row: the MAE (mean ± sample "
+                  "standard deviation over the seeds where there are several — the ADE table's seeds column says how "
+                  "many; the paper's value in brackets for the main model), the bias (mean of predicted − simulated) "
+                  "and, for probabilistic models, the share of simulated values inside the metric's 50 % / 90 % "
+                  "interval over {} sampled futures (mean over the seeds), with its binomial 95 % confidence interval "
+                  "(Wilson, over the scenes that had an interval; over several seeds from the lowest seed's lower bound "
+                  "to the highest seed's upper bound). Extra trees and the BNN are fitted with {} seed(s) (mean ± "
+                  "std). 'true positions' is the same computation on the simulated future positions: the error "
                   "of reconstructing the metric from positions alone, a floor for VectorNet's.\n\n",
-                  spec.maeSamples, spec.maeDraws) +
+                  spec.maeSamples, spec.maeDraws, rows.empty() ? std::size_t{1} : rows.front().baselineSeeds) +
       "| scenario | metric | extra trees | BNN | BNN mean std |";
   for (const auto& model : models) md += fmt::format(" VectorNet `{}` |", model);
   md += " true positions | ET / BNN time |\n|";
@@ -266,19 +275,23 @@ std::pair<std::string, std::string> maeFiles(const Spec& spec, const std::vector
         main_error ? formatNumber(main_error->mae) : "", formatNumber(row.fromTruePositions), formatNumber(row.bnnStd),
         paperValue(row.paper, "et"), paperValue(row.paper, "bnn"), paperValue(row.paper, "vectornet"),
         std::to_string(row.trainRows), main_error ? std::to_string(main_error->samples) : "",
-        formatNumber(row.etSeconds), formatNumber(row.bnnSeconds)};
+        formatNumber(row.etSeconds), formatNumber(row.bnnSeconds), std::to_string(row.baselineSeeds),
+        optionalNumber(row.etSpread), optionalNumber(row.bnnSpread)};
     for (const auto& model : models) {
       const auto* error = errorOf(row, model);
       cells.push_back(error ? formatNumber(error->mae) : "");
+      cells.push_back(error ? optionalNumber(error->maeStd) : "");
+      cells.push_back(error ? std::to_string(error->seeds) : "");
       cells.push_back(error ? formatNumber(error->bias) : "");
-      for (const double coverage : {error ? error->coverage50 : kNaN, error ? error->coverage90 : kNaN}) {
-        const auto [low, high] = coverageBounds(coverage, error ? error->intervalSamples : 0);
-        cells.insert(cells.end(), {optionalNumber(coverage), low, high});
+      for (const auto& [coverage, interval] :
+           {std::pair{error ? error->coverage50 : kNaN, error ? error->coverage50Interval : std::array{kNaN, kNaN}},
+            std::pair{error ? error->coverage90 : kNaN, error ? error->coverage90Interval : std::array{kNaN, kNaN}}}) {
+        cells.insert(cells.end(), {optionalNumber(coverage), optionalNumber(interval[0]), optionalNumber(interval[1])});
       }
     }
     writer.writeRow(cells);
     md += fmt::format("| {} | {} [{}] | {} | {} | {:.3f} |", row.label, row.metric, row.unit,
-                      withPaper(row.et, row.paper, "et", 3), withPaper(row.bnn, row.paper, "bnn", 3), row.bnnStd);
+                      maeText(row.et, row.etSpread, row, "et"), maeText(row.bnn, row.bnnSpread, row, "bnn"), row.bnnStd);
     for (std::size_t m = 0; m < models.size(); ++m) md += " " + maeCell(row, models[m], m == 0) + " |";
     md += fmt::format(" {:.3f} | {:.1f} s / {:.1f} s |\n", row.fromTruePositions, row.etSeconds, row.bnnSeconds);
   }
@@ -572,12 +585,11 @@ std::string ExperimentSummary::report() const {
   if (!mae.empty()) {
     text += "\nMAE of metrics, ours (paper):\n";
     for (const auto& row : mae) {
-      text += fmt::format("  {:<7} {:<10} ET {:<14} BNN {:<14}", row.label, row.metric,
-                          withPaper(row.et, row.paper, "et", 3), withPaper(row.bnn, row.paper, "bnn", 3));
+      text += fmt::format("  {:<7} {:<10} ET {:<22} BNN {:<22}", row.label, row.metric,
+                          maeText(row.et, row.etSpread, row, "et"), maeText(row.bnn, row.bnnSpread, row, "bnn"));
       for (std::size_t m = 0; m < row.vectornet.size(); ++m) {
         const auto& error = row.vectornet[m];
-        text += fmt::format(" VectorNet {} {}", error.model,
-                            m == 0 ? withPaper(error.mae, row.paper, "vectornet", 3) : fmt::format("{:.3f}", error.mae));
+        text += fmt::format(" VectorNet {} {}", error.model, maeText(error.mae, error.maeStd, row, m == 0 ? "vectornet" : ""));
       }
       text += fmt::format(" (true positions {:.3f})\n", row.fromTruePositions);
     }

@@ -136,6 +136,18 @@ TEST(Experiment, QuickRunProducesTheTablesFiguresAndManifestAndCachesArtefacts) 
     EXPECT_EQ(mae.cell(r, mae.column("vectornet_no_residual_coverage_90")), "");
     EXPECT_EQ(mae.cell(r, mae.column("vectornet_kinematic")) != "", acc_lk) << "row " << r;
     EXPECT_EQ(mae.cell(r, mae.column("vectornet_lane")) != "", acc_lk) << "row " << r;
+    // The MAE of a row trained with several seeds is their mean with a spread (acc_lk: row 3,
+    // quick.repeat_rows); a row of one seed has none. The baselines are fitted with as many
+    // seeds as the rows that carry findings, and different seeds fit different models.
+    EXPECT_EQ(mae.cell(r, mae.column("vectornet_no_residual_seeds")), acc_lk ? "3" : "1") << "row " << r;
+    if (acc_lk) {
+      EXPECT_GT(mae.number(r, mae.column("vectornet_no_residual_seed_std")), 0.0) << "row " << r;
+    } else {
+      EXPECT_EQ(mae.cell(r, mae.column("vectornet_no_residual_seed_std")), "") << "row " << r;
+    }
+    EXPECT_EQ(mae.cell(r, mae.column("baseline_seeds")), "3");
+    EXPECT_GT(mae.number(r, mae.column("et_seed_std")), 0.0) << "row " << r;
+    EXPECT_GT(mae.number(r, mae.column("bnn_seed_std")), 0.0) << "row " << r;
     if (acc_lk) {
       const double covered50 = mae.number(r, mae.column("vectornet_kinematic_coverage_50"));
       const double covered90 = mae.number(r, mae.column("vectornet_kinematic_coverage_90"));

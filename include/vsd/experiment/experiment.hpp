@@ -7,6 +7,7 @@
 // written atomically, so a re-run only does what changed and an interrupted run
 // never leaves a corrupt artefact.
 
+#include <array>
 #include <cstdint>
 #include <filesystem>
 #include <memory>
@@ -48,26 +49,38 @@ struct AdeRow {
   std::string training;
 };
 
-/// A metric of one VectorNet model of the spec (the first seed of the ADE row that predicts the
-/// functional scenario) against the simulated values of the test set.
+/// A metric of one VectorNet model of the spec (every seed of the ADE row that predicts the
+/// functional scenario: means over the seeds) against the simulated values of the test set.
 struct VectorNetMetricError {
   std::string model;          ///< the spec's model name
-  double mae = 0.0;           ///< of the metric of the most likely future
-  double bias = 0.0;          ///< mean of predicted - simulated
-  std::size_t samples = 0;    ///< test scenarios scored (finite simulated and predicted values)
+  double mae = 0.0;           ///< of the metric of the most likely future (mean over the seeds)
+  double maeStd = std::numeric_limits<double>::quiet_NaN();  ///< sample std over the seeds; NaN for one seed
+  std::size_t seeds = 1;      ///< trainings averaged
+  double bias = 0.0;          ///< mean of predicted - simulated (mean over the seeds)
+  std::size_t samples = 0;    ///< test scenarios scored (finite simulated and predicted values), per seed
   std::size_t intervalSamples = 0;  ///< of them, those with a finite interval: the coverages' denominator
   /// Share of the simulated values inside the central 50 % / 90 % interval of the metric over
-  /// the model's sampled futures (mae.draws per scene); NaN for deterministic decoders.
+  /// the model's sampled futures (mae.draws per scene; mean over the seeds); NaN for
+  /// deterministic decoders.
   double coverage50 = std::numeric_limits<double>::quiet_NaN();
   double coverage90 = std::numeric_limits<double>::quiet_NaN();
+  /// The binomial 95 % confidence interval (Wilson) of each coverage: over several seeds, from
+  /// the lowest seed's lower bound to the highest seed's upper bound.
+  std::array<double, 2> coverage50Interval{std::numeric_limits<double>::quiet_NaN(),
+                                           std::numeric_limits<double>::quiet_NaN()};
+  std::array<double, 2> coverage90Interval{std::numeric_limits<double>::quiet_NaN(),
+                                           std::numeric_limits<double>::quiet_NaN()};
 };
 
 struct MaeRow {
   std::string label;
   std::string metric;
   std::string unit;
-  double et = 0.0;
-  double bnn = 0.0;
+  double et = 0.0;                 ///< MAE, mean over the baseline seeds
+  double bnn = 0.0;                ///< MAE, mean over the baseline seeds
+  double etSpread = std::numeric_limits<double>::quiet_NaN();   ///< sample std over the seeds; NaN for one
+  double bnnSpread = std::numeric_limits<double>::quiet_NaN();  ///< sample std over the seeds; NaN for one
+  std::size_t baselineSeeds = 1;   ///< fits of extra trees and of the BNN averaged (seeds seed, seed + 1, ...)
   std::vector<VectorNetMetricError> vectornet;  ///< every model that trains the row; the main model first
   double fromTruePositions = 0.0;  ///< MAE of the metric computed from the true future positions (the
                                    ///< reconstruction's own error: a floor for VectorNet's)
