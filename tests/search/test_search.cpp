@@ -607,6 +607,10 @@ TEST(SearchBenchCli, TheTrueRateIsRunsShareAndEachIntervalIsCheckedAgainstIt) {
   EXPECT_EQ(manifest.at("true_rate").at("critical").get<std::uint64_t>(), critical);
   EXPECT_GT(critical, 0u);
   const double rate = 100.0 * manifest.at("true_rate").at("estimate").get<double>();
+  // The wall time (what the docs' time budgets are checked against) holds the true-rate run and
+  // every search.
+  const double true_rate_seconds = manifest.at("true_rate").at("seconds").get<double>();
+  double search_seconds = 0.0;
 
   // Every search's row: covered exactly when its interval holds the true rate; the summary counts them.
   const auto searches = CsvTable::read(out / "searches.csv");
@@ -619,6 +623,7 @@ TEST(SearchBenchCli, TheTrueRateIsRunsShareAndEachIntervalIsCheckedAgainstIt) {
     EXPECT_EQ(searches.cell(r, searches.column("covers_true_rate")), covers ? "1" : "0") << r;
     EXPECT_THAT(searches.cell(r, searches.column("seed")), testing::AnyOf("21", "22"));
     covered[searches.cell(r, searches.column("surrogate"))] += covers ? 1 : 0;
+    search_seconds += searches.number(r, searches.column("seconds"));
     // The learning curve: one cumulative count per round (the initial design, then the search's
     // rounds), never falling, ending at the total.
     const auto curve = searches.cell(r, searches.column("critical_by_round"));
@@ -633,6 +638,9 @@ TEST(SearchBenchCli, TheTrueRateIsRunsShareAndEachIntervalIsCheckedAgainstIt) {
     EXPECT_LE(counts.front(), 40) << curve;
     EXPECT_EQ(std::to_string(counts.back()), searches.cell(r, searches.column("critical"))) << curve;
   }
+  EXPECT_GT(true_rate_seconds, 0.0);
+  EXPECT_GE(manifest.at("seconds").get<double>(), true_rate_seconds + search_seconds);
+  EXPECT_NE(readTextFile(out / "README.md").find("- Wall time: "), std::string::npos);
   const auto surrogates = CsvTable::read(out / "surrogates.csv");
   ASSERT_EQ(surrogates.rows(), 2u);
   for (std::size_t r = 0; r < surrogates.rows(); ++r) {

@@ -59,6 +59,8 @@ struct SearchBenchResult {
   std::vector<std::pair<std::string, SurrogateTotals>> surrogates;  ///< in the order asked for
   std::vector<search::SearchSummary> searches;                       ///< every search
   std::optional<search::MonteCarloRate> trueRate;                    ///< with trueRateSamples > 0
+  double trueRateSeconds = 0.0;  ///< wall time of the true-rate run (s)
+  double seconds = 0.0;          ///< wall time of the whole benchmark: true rate and every search (s)
 
   /// Mean critical scenarios of the random surrogate (0 if it was not run).
   double randomCritical() const;
