@@ -103,27 +103,22 @@ VectorNetMetricError metricErrorOverSeeds(const std::vector<const json*>& seeds,
   for (const auto* seed : seeds) errors.push_back(metricError(*seed, metric));
   auto combined = errors.front();
   combined.seeds = errors.size();
-  const auto meanOf = [&](double VectorNetMetricError::*field) {
+  const auto valuesOf = [&](double VectorNetMetricError::*field) {
     std::vector<double> values;
     for (const auto& error : errors) values.push_back(error.*field);
-    return sampleMean(values);
+    return values;
   };
-  combined.mae = meanOf(&VectorNetMetricError::mae);
-  combined.bias = meanOf(&VectorNetMetricError::bias);
-  combined.coverage50 = meanOf(&VectorNetMetricError::coverage50);
-  combined.coverage90 = meanOf(&VectorNetMetricError::coverage90);
-  if (errors.size() > 1) {
-    std::vector<double> maes;
-    for (const auto& error : errors) maes.push_back(error.mae);
-    combined.maeStd = sampleStd(maes);
-  }
+  combined.mae = sampleMean(valuesOf(&VectorNetMetricError::mae));
+  combined.bias = sampleMean(valuesOf(&VectorNetMetricError::bias));
+  combined.coverage50 = sampleMean(valuesOf(&VectorNetMetricError::coverage50));
+  combined.coverage90 = sampleMean(valuesOf(&VectorNetMetricError::coverage90));
+  if (errors.size() > 1) combined.maeStd = sampleStd(valuesOf(&VectorNetMetricError::mae));
   const auto span = [&](double VectorNetMetricError::*coverage) {
-    std::array<double, 2> bounds{kNaN, kNaN};
+    std::array<double, 2> bounds{1.0, 0.0};  // widened to every seed's interval below
     for (const auto& error : errors) {
       if (!std::isfinite(error.*coverage) || error.intervalSamples == 0) return std::array<double, 2>{kNaN, kNaN};
       const auto interval = wilsonInterval(error.*coverage, error.intervalSamples);
-      bounds[0] = std::isfinite(bounds[0]) ? std::min(bounds[0], interval.low) : interval.low;
-      bounds[1] = std::isfinite(bounds[1]) ? std::max(bounds[1], interval.high) : interval.high;
+      bounds = {std::min(bounds[0], interval.low), std::max(bounds[1], interval.high)};
     }
     return bounds;
   };

@@ -50,12 +50,21 @@ std::string mixText(const AdeRow& row) {
 
 std::string percent(double share) { return std::isfinite(share) ? fmt::format("{:.0f} %", 100.0 * share) : "–"; }
 
+namespace {
+/// "51 % (48–54)": a coverage with a 95 % interval (one seed's Wilson interval, or over seeds
+/// the span of theirs); the share alone where there is no interval.
+std::string coverageSpanText(double share, const std::array<double, 2>& interval) {
+  if (!std::isfinite(share) || !std::isfinite(interval[0])) return percent(share);
+  return fmt::format("{} ({:.0f}–{:.0f})", percent(share), 100.0 * interval[0], 100.0 * interval[1]);
+}
+}  // namespace
+
 /// "51 % (48–54)": a coverage with its binomial 95 % confidence interval (Wilson) over the
 /// scenes that had an interval.
 std::string coverageText(double share, std::size_t scenes) {
   if (!std::isfinite(share) || scenes == 0) return percent(share);
   const auto interval = wilsonInterval(share, scenes);
-  return fmt::format("{} ({:.0f}–{:.0f})", percent(share), 100.0 * interval.low, 100.0 * interval.high);
+  return coverageSpanText(share, {interval.low, interval.high});
 }
 
 std::string modelDescription(const ModelSpec& model) {
@@ -110,7 +119,6 @@ std::string paperValue(const std::map<std::string, double>& paper, const std::st
   const auto found = paper.find(key);
   return found == paper.end() ? std::string() : formatNumber(found->second);
 }
-
 
 std::vector<std::string> labelsOf(const Spec& spec) {
   std::vector<std::string> labels;
@@ -207,13 +215,6 @@ std::string maeText(double mae, double spread, const MaeRow& row, const std::str
   if (std::isfinite(spread)) text += fmt::format(" ± {:.3f}", spread);
   const auto found = paper_key.empty() ? row.paper.end() : row.paper.find(paper_key);
   return found == row.paper.end() ? text : fmt::format("{} ({:.2f})", text, found->second);
-}
-
-/// "51 % (48–54)": a coverage (mean over seeds) with its 95 % interval (over seeds: the span of
-/// their Wilson intervals).
-std::string coverageSpanText(double share, const std::array<double, 2>& interval) {
-  if (!std::isfinite(share) || !std::isfinite(interval[0])) return percent(share);
-  return fmt::format("{} ({:.0f}–{:.0f})", percent(share), 100.0 * interval[0], 100.0 * interval[1]);
 }
 
 /// A model's cell of mae.md: "0.440 ± 0.020 (0.58) bias +0.200; covered 48 % (47–49) / 87 % (86–88)";
