@@ -14,6 +14,7 @@
 #include "vsd/core/statistics.hpp"
 #include "vsd/experiment/experiment.hpp"
 #include "vsd/model/predictor.hpp"
+#include "vsd/model/presets.hpp"
 #include "vsd/pipeline/run.hpp"
 #include "vsd/pipeline/scenes.hpp"
 #include "vsd/scenario/expression.hpp"
@@ -120,6 +121,15 @@ void countScored(DeviationCounts& counts, const compare::DeviationResult& result
   }
 }
 
+/// Flags `result` and counts it against the field's truth.
+DeviationCounts countFlags(compare::DeviationResult& result, const Field& field, const SimulatedScenes& clean,
+                           const SimulatedScenes& factor) {
+  compare::rankDeviations(result);
+  DeviationCounts counts;
+  countScored(counts, result, field, clean, factor);
+  return counts;
+}
+
 }  // namespace
 
 struct DeviationsBench::State {
@@ -127,6 +137,8 @@ struct DeviationsBench::State {
   Logical factor;
   Logical ood;
   std::unique_ptr<model::Predictor> predictor;
+  std::unique_ptr<compare::DeviationScorer> scorer;
+  std::optional<compare::RunCalibration> calibration;
 };
 
 void DeviationsBenchOptions::validate() const {
@@ -175,9 +187,7 @@ DeviationsModel DeviationsBench::prepareModel() {
     model::TrainOptions train;
     train.data = {data};
     train.output = prepared.path;
-    train.config.decoder = "kinematic";
-    train.config.frame = "lane";
-    train.config.decoderOptions = {{"accel_weight", 10.0}, {"calibrate", 1.0}};
+    model::applyPreset(model::findModelPreset("recommended", "bench deviations"), {}, train.config);
     train.seed = options_.trainSeed;
     train.threads = options_.threads;
     train.steps = options_.steps;
@@ -189,31 +199,55 @@ DeviationsModel DeviationsBench::prepareModel() {
   return prepared;
 }
 
-DeviationCounts DeviationsBench::scoreSeed(std::uint64_t seed) {
-  if (!state_->predictor) throw Error("internal: bench deviations scored before its model was prepared");
+void DeviationsBench::prepareCalibration() {
+  if (!state_->predictor) throw Error("internal: bench deviations calibrated before its model was prepared");
+  state_->scorer = std::make_unique<compare::DeviationScorer>(*state_->predictor, options_.model.string(),
+                                                              options_.metrics, pipeline::sceneAvailability("generated"),
+                                                              /*seed=*/1);
+  if (options_.calibrationSamples == 0) return;
+  const auto runs = simulate(state_->clean, options_.calibrationSamples, options_.calibrationSeed, options_.jobs);
+  std::vector<vector::VectorizedScene> scenes;
+  for (const auto& scene : runs.scenes) {
+    if (!scene.polylines.empty()) scenes.push_back(scene);
+  }
+  state_->calibration.emplace(state_->scorer->score(scenes, runs.metricNames, "calibration"),
+                              state_->scorer->metricNames().size(),
+                              fmt::format("(seed {})", options_.calibrationSeed), options_.level);
+}
+
+DeviationSeedCounts DeviationsBench::scoreSeed(std::uint64_t seed) {
+  if (!state_->scorer) throw Error("internal: bench deviations scored before its model and calibration were prepared");
   const auto clean = simulate(state_->clean, options_.fieldSamples, seed, options_.jobs);
   const auto factor = simulate(state_->factor, options_.fieldSamples, seed, options_.jobs);
   SimulatedScenes ood;
   if (options_.oodSamples > 0) ood = simulate(state_->ood, options_.oodSamples, seed, options_.jobs);
   const Field field = drawField(clean, factor, options_.share, seed);
-  const compare::DeviationScorer scorer(*state_->predictor, options_.model.string(), options_.metrics,
-                                        pipeline::sceneAvailability("generated"), /*seed=*/1);
+  const auto& scorer = *state_->scorer;
   compare::DeviationResult result;
   result.level = options_.level;
   result.metricNames = scorer.metricNames();
   result.metricUnits = scorer.metricUnits();
   const auto start = std::chrono::steady_clock::now();
   result.scenes = scorer.score(field.scenes, factor.metricNames, "field");
-  DeviationCounts counts;
-  counts.seconds = secondsSince(start);
-  counts.scenes = static_cast<double>(field.scenes.size());
+  const double seconds = secondsSince(start);
   std::vector<vector::VectorizedScene> ood_field;
   for (const auto& scene : ood.scenes) {
     if (!scene.polylines.empty()) ood_field.push_back(scene);
   }
   for (auto& row : scorer.score(ood_field, ood.metricNames, "ood")) result.scenes.push_back(std::move(row));
-  compare::rankDeviations(result);
-  countScored(counts, result, field, clean, factor);
+  DeviationSeedCounts counts;
+  if (state_->calibration) {
+    auto ranked = result;
+    ranked.calibrationRuns = state_->calibration->runs();
+    for (auto& scene : ranked.scenes) state_->calibration->apply(scene);
+    counts.runs = countFlags(ranked, field, clean, factor);
+  }
+  counts.model = countFlags(result, field, clean, factor);
+  for (auto* c : {&counts.model, counts.runs ? &*counts.runs : nullptr}) {
+    if (c == nullptr) continue;
+    c->seconds = seconds;
+    c->scenes = static_cast<double>(field.scenes.size());
+  }
   return counts;
 }
 

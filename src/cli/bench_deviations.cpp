@@ -21,14 +21,14 @@ std::string share(double k, double n) {
 }
 
 void printCounts(const std::string& name, const bench::DeviationCounts& c, double level) {
-  fmt::print("  {}:\n", name);
-  fmt::print("    false alarms on clean scenes:  {} (nominal {:.1f} %)\n", share(c.cleanFlagged, c.clean), 100.0 * level);
-  fmt::print("    precision of flagged scenes:   {}\n", share(c.injectedFlagged, c.injectedFlagged + c.cleanFlagged));
-  fmt::print("    recall, all injected scenes:   {}\n", share(c.injectedFlagged, c.injected));
-  fmt::print("    recall, injected scenes moved beyond the 90 % region: {} ({:.0f} of {:.0f} injected moved)\n",
+  fmt::print("    {}:\n", name);
+  fmt::print("      false alarms on clean scenes:  {} (nominal {:.1f} %)\n", share(c.cleanFlagged, c.clean), 100.0 * level);
+  fmt::print("      precision of flagged scenes:   {}\n", share(c.injectedFlagged, c.injectedFlagged + c.cleanFlagged));
+  fmt::print("      recall, all injected scenes:   {}\n", share(c.injectedFlagged, c.injected));
+  fmt::print("      recall, injected scenes moved beyond the 90 % region: {} ({:.0f} of {:.0f} injected moved)\n",
              share(c.beyondFlagged, c.beyond), c.beyond, c.injected);
-  fmt::print("    out of distribution (unseen label): {:.0f} reported apart, {:.0f} of them flagged\n", c.ood, c.oodFlagged);
-  fmt::print("    scoring throughput: {:.0f} scenes/s ({:.0f} scenes in {:.2f} s, 32 futures each)\n",
+  fmt::print("      out of distribution (unseen label): {:.0f} reported apart, {:.0f} of them flagged\n", c.ood, c.oodFlagged);
+  fmt::print("      scoring throughput: {:.0f} scenes/s ({:.0f} scenes in {:.2f} s, 32 futures each)\n",
              c.scenes / c.seconds, c.scenes, c.seconds);
 }
 
@@ -52,8 +52,16 @@ int printDeviationsBench(const bench::DeviationsBenchOptions& given) {
              bench.oodScenarioName(), options.level);
   const auto model = bench.prepareModel();
   if (given.model.empty()) printModel(bench, model);
+  bench.prepareCalibration();
+  const std::string runs = fmt::format("ranked among {} clean calibration runs (seed {})", options.calibrationSamples,
+                                       options.calibrationSeed);
   for (const auto& [name, seeds] : {std::pair{"validation", options.validationSeeds}, std::pair{"test", options.testSeeds}}) {
-    for (const auto seed : seeds) printCounts(fmt::format("{} seed {}", name, seed), bench.scoreSeed(seed), options.level);
+    for (const auto seed : seeds) {
+      const auto counts = bench.scoreSeed(seed);
+      fmt::print("  {} seed {}:\n", name, seed);
+      printCounts("the model's own calibration", counts.model, options.level);
+      if (counts.runs) printCounts(runs, *counts.runs, options.level);
+    }
   }
   return 0;
 }
@@ -64,6 +72,11 @@ void addFieldFlags(CLI::App& command, bench::DeviationsBenchOptions& options) {
   addNumber(&command, "--validation-seed", options.validationSeeds, "Seeds the settings were chosen on")
       ->capture_default_str();
   addNumber(&command, "--test-seed", options.testSeeds, "Seeds reported")->capture_default_str();
+  addNumber(&command, "--calibration-samples", options.calibrationSamples,
+            "Clean runs the field is also ranked among (deviations --calibration); 0: none")
+      ->capture_default_str();
+  addNumber(&command, "--calibration-seed", options.calibrationSeed, "Seed of the calibration runs")
+      ->capture_default_str();
   addNumber(&command, "--share", options.share, "Share of field scenes with the factor")->capture_default_str();
   addNumber(&command, "--max-decel", options.maxDecel, "The friction limit: the Ego controller's max_decel (m/s^2)")
       ->capture_default_str();

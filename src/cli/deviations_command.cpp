@@ -18,6 +18,10 @@ void addDeviationsCommand(CLI::App& app, CommandContext& context) {
                       "Probabilistic model trained with --decoder-option calibrate=1 (vsd-sumo train)")
       ->required();
   command->add_option("-d,--data", options->data, "Field data: dataset files or run folders")->required();
+  command->add_option("--calibration", options->calibration,
+                      "Clean recorded runs of the field's scenarios that the model never trained on (e.g. test runs "
+                      "of other seeds): p-values by conformal rank among them instead of the model's own calibration "
+                      "(narrower, docs/deviations.md)");
   command->add_option("-o,--out", options->output, "Report folder (deviations.csv, report.html)")->required();
   addNumber(command, "--level", options->level, "Flag scenes whose tail probability is below this, in (0, 1)")
       ->capture_default_str();

@@ -156,16 +156,35 @@ report::TextTable apartList(const DeviationResult& result, SceneStatus status) {
   return table;
 }
 
+/// How the report's p-values were computed.
+std::string pValueNote(const DeviationResult& result) {
+  if (result.calibrationRuns > 0) {
+    return fmt::format(
+        "Metrics scored: {}, and the path. p-values are conformal ranks among {} clean calibration runs the model "
+        "never trained on (per label): a metric's score is its distance from the most likely future's value, the "
+        "path's its largest squared distance from the most likely future over the calibrated 90 % region's; p = (1 + "
+        "runs scoring at least as high) / (n + 1). A metric's 90 % interval is the most likely value +- the runs' 90 "
+        "% score. A scene's p combines them by Simes' rule.",
+        fmt::join(result.metricNames, ", "), result.calibrationRuns);
+  }
+  return fmt::format(
+      "Metrics scored: {}. Per metric, p = 1 - the smallest calibrated central interval of the {} sampled futures' "
+      "metric holding the recorded value (no smaller than the calibration resolves: 0.01, or 1 / (n + 1) for n "
+      "held-out scenes; not scored where the recorded value or the draws' 5-95 % range is infinite); a scene's p "
+      "combines them by Simes' rule.",
+      fmt::join(result.metricNames, ", "), model::kCalibrationDraws);
+}
+
 }  // namespace
 
 std::vector<std::string> csvHeader(const DeviationResult& result) {
   std::vector<std::string> header = {"source", "row", "sample", "label", "status", "p", "flagged", "rank", "group",
-                                     "worst_metric", "axis", "region_excess_90", columnWithUnit("region_time", "s"),
+                                     "worst_metric", "axis", "region_excess_90", "path_p", columnWithUnit("region_time", "s"),
                                      columnWithUnit("along", "m"), columnWithUnit("across", "m")};
   for (std::size_t m = 0; m < result.metricNames.size(); ++m) {
     const auto& name = result.metricNames[m];
     const auto& unit = result.metricUnits[m];
-    for (const char* part : {"_recorded", "_median", "_p05", "_p95"}) header.push_back(columnWithUnit(name + part, unit));
+    for (const char* part : {"_recorded", "_median", "_most_likely", "_p05", "_p95"}) header.push_back(columnWithUnit(name + part, unit));
     header.push_back(name + "_p");
   }
   for (std::size_t f = 0; f < result.featureNames.size(); ++f) {
@@ -181,11 +200,12 @@ std::vector<std::string> csvRow(const DeviationResult& result, const SceneDeviat
                                   statusName(s.status), formatNumber(s.p), s.flagged ? "1" : "0",
                                   rank ? std::to_string(rank) : "", s.group,
                                   scored ? result.metricNames[s.worstMetric] : "", s.axis, formatNumber(s.regionExcess),
+                                  formatNumber(s.pathP),
                                   scored ? formatNumber(result.step * s.regionStep) : "",
                                   scored ? formatNumber(s.longitudinal) : "", scored ? formatNumber(s.lateral) : ""};
   for (std::size_t m = 0; m < result.metricNames.size(); ++m) {
     const MetricTail tail = m < s.metrics.size() ? s.metrics[m] : MetricTail{};
-    for (const double v : {tail.recorded, tail.median, tail.p05, tail.p95, tail.p}) row.push_back(formatNumber(v));
+    for (const double v : {tail.recorded, tail.median, tail.mostLikely, tail.p05, tail.p95, tail.p}) row.push_back(formatNumber(v));
   }
   for (std::size_t f = 0; f < result.featureNames.size(); ++f) {
     row.push_back(f < s.features.size() ? formatNumber(s.features[f]) : "");
@@ -203,21 +223,15 @@ report::DeviationReport buildReport(const DeviationSummary& summary, const std::
   out.title = fmt::format("{} scenes at level {:g}", result.scenes.size(), result.level);
   out.summary.push_back(fmt::format(
       "{} of {} scored scenes ({:.1f} %) flagged: their recorded Ego behaviour has a tail probability below {:g} "
-      "under the model's calibrated prediction. On scenes like the model's test data, about {:.0f} % are flagged by "
-      "chance.",
+      "under the model's calibrated prediction. On scenes like {}, at most about {:.0f} % are flagged by chance.",
       summary.ranked.size(), scored, scored ? 100.0 * static_cast<double>(summary.ranked.size()) / static_cast<double>(scored) : 0.0,
-      result.level, 100.0 * result.level));
+      result.level, result.calibrationRuns > 0 ? "the calibration runs" : "the model's test data", 100.0 * result.level));
   out.warnings = summary.warnings;
   if (summary.outOfDistribution() > 0) {
     out.warnings.push_back(fmt::format("{} scenes are of labels the model never trained on: listed apart, not scored.",
                                        summary.outOfDistribution()));
   }
-  out.notes.push_back(fmt::format(
-      "Metrics scored: {}. Per metric, p = 1 - the smallest calibrated central interval of the {} sampled futures' "
-      "metric holding the recorded value (no smaller than the calibration resolves: 0.01, or 1 / (n + 1) for n "
-      "held-out scenes; not scored where the recorded value or the draws' 5-95 % range is infinite); a scene's p "
-      "combines them by Simes' rule.",
-      fmt::join(result.metricNames, ", "), model::kCalibrationDraws));
+  out.notes.push_back(pValueNote(result));
   for (const auto& scene : result.scenes) {
     if (scene.status == SceneStatus::Scored) out.pValues.push_back(scene.p);
   }

@@ -26,17 +26,53 @@ constexpr std::size_t kRegion90 = 1;
 static_assert(model::kCoverageLevels[kRegion90] == 0.9, "the 90 % region is the second coverage level");
 
 /// Simes' combination of p-values: min over k of M p_(k) / k (NaN ones left out).
-double simes(const std::vector<MetricTail>& tails) {
-  std::vector<double> p;
-  for (const auto& tail : tails) {
-    if (!std::isnan(tail.p)) p.push_back(tail.p);
-  }
+double simes(std::vector<double> p) {
+  p.erase(std::remove_if(p.begin(), p.end(), [](double v) { return std::isnan(v); }), p.end());
   if (p.empty()) return kNaN;
   std::sort(p.begin(), p.end());
   const double m = static_cast<double>(p.size());
   double combined = 1.0;
   for (std::size_t k = 0; k < p.size(); ++k) combined = std::min(combined, m * p[k] / static_cast<double>(k + 1));
   return combined;
+}
+
+/// The scene's p from its metrics' and its path's (Simes), and which of them is smallest.
+void combine(SceneDeviation& row) {
+  std::vector<double> p = {row.pathP};
+  for (const auto& tail : row.metrics) p.push_back(tail.p);
+  row.p = simes(p);
+  row.worstMetric = 0;
+  for (std::size_t m = 0; m < row.metrics.size(); ++m) {
+    const double pm = row.metrics[m].p;
+    if (!std::isnan(pm) && (std::isnan(row.metrics[row.worstMetric].p) || pm < row.metrics[row.worstMetric].p)) {
+      row.worstMetric = m;
+    }
+  }
+  const double worst = row.metrics.empty() ? kNaN : row.metrics[row.worstMetric].p;
+  row.pathWorst = !std::isnan(row.pathP) && !(worst <= row.pathP);
+}
+
+/// A metric's conformal score: how far the recorded value is from the most likely future's
+/// (0 where both are the same infinity; NaN where only one is finite or either is NaN).
+double metricScore(const MetricTail& tail) {
+  if (tail.recorded == tail.mostLikely) return 0.0;
+  if (!std::isfinite(tail.recorded) || !std::isfinite(tail.mostLikely)) return kNaN;
+  return std::abs(tail.recorded - tail.mostLikely);
+}
+
+/// (1 + calibration scores >= score) / (n + 1): the split-conformal p of `score` among the
+/// sorted `scores`; NaN for a NaN score or no scores.
+double conformalP(const std::vector<double>& scores, double score) {
+  if (std::isnan(score) || scores.empty()) return kNaN;
+  const auto at_least = scores.end() - std::lower_bound(scores.begin(), scores.end(), score);
+  return static_cast<double>(1 + at_least) / static_cast<double>(scores.size() + 1);
+}
+
+/// The conformal 90 % bound of the sorted `scores`: the ceil(0.9 (n + 1))-th smallest
+/// (infinite when n is too small to give one).
+double conformalBound90(const std::vector<double>& scores) {
+  const auto rank = static_cast<std::size_t>(std::ceil(0.9 * static_cast<double>(scores.size() + 1)));
+  return rank <= scores.size() ? scores[rank - 1] : std::numeric_limits<double>::infinity();
 }
 
 /// 1 - the smallest calibrated level holding `value`, no smaller than the smallest tail the
@@ -104,6 +140,64 @@ void scorePath(SceneDeviation& row, const model::Prediction& prediction, const v
 
 }  // namespace
 
+double intervalCentre(const DeviationResult& result, const MetricTail& tail) {
+  return result.calibrationRuns > 0 ? tail.mostLikely : tail.median;
+}
+
+RunCalibration::RunCalibration(const std::vector<SceneDeviation>& scenes, std::size_t metrics, std::string source,
+                               double level)
+    : source_(std::move(source)), level_(level) {
+  for (const auto& scene : scenes) {
+    if (scene.status != SceneStatus::Scored) continue;
+    auto& scores = byLabel_[scene.label];
+    scores.metrics.resize(metrics);
+    ++scores.runs;
+    for (std::size_t m = 0; m < metrics && m < scene.metrics.size(); ++m) {
+      const double score = metricScore(scene.metrics[m]);
+      if (!std::isnan(score)) scores.metrics[m].push_back(score);
+    }
+    if (!std::isnan(scene.regionExcess)) scores.path.push_back(scene.regionExcess);
+  }
+  for (auto& [label, scores] : byLabel_) {
+    for (auto& metric : scores.metrics) std::sort(metric.begin(), metric.end());
+    std::sort(scores.path.begin(), scores.path.end());
+  }
+}
+
+std::size_t RunCalibration::runs(const std::string& label) const {
+  const auto found = byLabel_.find(label);
+  return found == byLabel_.end() ? 0 : found->second.runs;
+}
+
+std::size_t RunCalibration::runs() const {
+  std::size_t total = 0;
+  for (const auto& [label, scores] : byLabel_) total += scores.runs;
+  return total;
+}
+
+void RunCalibration::apply(SceneDeviation& row) const {
+  if (row.status != SceneStatus::Scored) return;
+  const auto found = byLabel_.find(row.label);
+  auto needed = static_cast<std::size_t>(std::floor(1.0 / level_));  // the fewest giving p = 1 / (n + 1) < level
+  if (1.0 / static_cast<double>(needed + 1) >= level_) ++needed;
+  if (found == byLabel_.end() || found->second.runs < needed) {
+    throw ConfigError::field("command line", "--calibration " + source_, fmt::format("{} runs of label '{}'", runs(row.label), row.label),
+                             fmt::format("at least {} clean runs of each label of the field data (fewer give no p below "
+                                         "the level {:g})",
+                                         needed, level_));
+  }
+  const auto& scores = found->second;
+  for (std::size_t m = 0; m < row.metrics.size() && m < scores.metrics.size(); ++m) {
+    auto& tail = row.metrics[m];
+    tail.p = conformalP(scores.metrics[m], metricScore(tail));
+    const double bound = conformalBound90(scores.metrics[m]);
+    tail.p05 = tail.mostLikely - bound;
+    tail.p95 = tail.mostLikely + bound;
+  }
+  row.pathP = conformalP(scores.path, row.regionExcess);
+  combine(row);
+}
+
 const char* statusName(SceneStatus status) {
   switch (status) {
     case SceneStatus::Scored:
@@ -142,6 +236,8 @@ struct DeviationScorer::Impl {
       for (std::size_t m = 0; m < names.size(); ++m) draws[m].push_back(values[m]);
     }
     const auto reference = recorded(scene, stored);
+    const auto likely = pipeline::metricsOfFuture(*scored, scene, prediction.mostLikely.positions,
+                                                  prediction.mostLikely.states);
     const auto& calibration = predictor.info().metricIntervals;
     for (std::size_t m = 0; m < names.size(); ++m) {
       const auto* widening = calibration.find(scene.label, names[m]);
@@ -152,15 +248,10 @@ struct DeviationScorer::Impl {
       tail.p05 = interval[0];
       tail.p95 = interval[1];
       tail.p = tailProbability(draws[m], reference[m], widening);
+      tail.mostLikely = likely[m];
       row.metrics.push_back(tail);
     }
-    row.p = simes(row.metrics);
-    for (std::size_t m = 0; m < row.metrics.size(); ++m) {
-      const double p = row.metrics[m].p;
-      if (!std::isnan(p) && (std::isnan(row.metrics[row.worstMetric].p) || p < row.metrics[row.worstMetric].p)) {
-        row.worstMetric = m;
-      }
-    }
+    combine(row);
     if (std::isnan(row.p)) {
       row.status = SceneStatus::NotScored;
       row.reason = "no metric is defined on both the recorded and the predicted futures";

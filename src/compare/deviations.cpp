@@ -12,6 +12,7 @@
 #include <cmath>
 #include <fstream>
 #include <map>
+#include <optional>
 #include <set>
 
 #include "vsd/core/csv.hpp"
@@ -49,7 +50,7 @@ std::string number(double value, int decimals = 2) {
 std::string metricReason(const DeviationResult& result, const SceneDeviation& scene) {
   const auto m = scene.worstMetric;
   const auto& tail = scene.metrics.at(m);
-  const bool below = tail.recorded < tail.median;
+  const bool below = tail.recorded < intervalCentre(result, tail);
   const bool inside = tail.recorded >= tail.p05 && tail.recorded <= tail.p95;
   return fmt::format("{} {} {} {} its calibrated 90 % interval [{}, {}] (p {:.3g})", result.metricNames[m],
                      number(tail.recorded), result.metricUnits[m], inside ? (below ? "in the lower part of" : "in the upper part of")
@@ -57,14 +58,33 @@ std::string metricReason(const DeviationResult& result, const SceneDeviation& sc
                      number(tail.p05), number(tail.p95), tail.p);
 }
 
+/// "the recorded path leaves its calibrated 90 % region by a factor 3.1 in squared distance
+/// (at 2.4 s: ...)", with the path's p where calibration runs give one.
 std::string pathReason(const SceneDeviation& scene, double step) {
   if (std::isnan(scene.regionExcess)) return "";
-  return fmt::format("; the recorded path {} its calibrated 90 % region {} (at {:.1f} s: {:+.2f} m along, {:+.2f} m "
-                     "across the predicted heading)",
+  return fmt::format("the recorded path {} its calibrated 90 % region {} (at {:.1f} s: {:+.2f} m along, {:+.2f} m "
+                     "across the predicted heading{})",
                      scene.regionExcess > 1.0 ? "leaves" : "stays inside",
                      scene.regionExcess > 1.0 ? fmt::format("by a factor {:.1f} in squared distance", scene.regionExcess)
                                               : "throughout",
-                     step * scene.regionStep, scene.longitudinal, scene.lateral);
+                     step * scene.regionStep, scene.longitudinal, scene.lateral,
+                     std::isnan(scene.pathP) ? "" : fmt::format("; p {:.3g}", scene.pathP));
+}
+
+/// Why a flagged scene is flagged: its smallest p first.
+std::string flagReason(const DeviationResult& result, const SceneDeviation& scene) {
+  const auto path = pathReason(scene, result.step);
+  const auto metric = metricReason(result, scene);
+  if (scene.pathWorst) return path + "; " + metric;
+  return path.empty() ? metric : metric + "; " + path;
+}
+
+/// "<label>: <axis>, <metric> <lower|higher> than predicted" (or "path off its predicted region").
+std::string flagGroup(const DeviationResult& result, const SceneDeviation& scene) {
+  if (scene.pathWorst) return fmt::format("{}: {}, path off its predicted region", scene.label, scene.axis);
+  const auto& tail = scene.metrics.at(scene.worstMetric);
+  return fmt::format("{}: {}, {} {}", scene.label, scene.axis, result.metricNames[scene.worstMetric],
+                     tail.recorded < intervalCentre(result, tail) ? "lower than predicted" : "higher than predicted");
 }
 
 }  // namespace
@@ -75,10 +95,8 @@ std::vector<std::size_t> rankDeviations(DeviationResult& result) {
     auto& scene = result.scenes[i];
     scene.flagged = scene.status == SceneStatus::Scored && scene.p < result.level;
     if (!scene.flagged) continue;
-    scene.reason = metricReason(result, scene) + pathReason(scene, result.step);
-    const auto& tail = scene.metrics.at(scene.worstMetric);
-    scene.group = fmt::format("{}: {}, {} {}", scene.label, scene.axis, result.metricNames[scene.worstMetric],
-                              tail.recorded < tail.median ? "lower than predicted" : "higher than predicted");
+    scene.reason = flagReason(result, scene);
+    scene.group = flagGroup(result, scene);
     flagged.push_back(i);
   }
   std::stable_sort(flagged.begin(), flagged.end(), [&](std::size_t a, std::size_t b) {
@@ -122,9 +140,9 @@ struct Field {
   std::size_t samples = 0;
 };
 
-/// What a --data path stands for: a dataset file, a run or sweep folder (vector::datasetFiles),
-/// or a folder of dataset files (*.h5, e.g. map exports) in name order.
-std::vector<fs::path> fieldFiles(const fs::path& path) {
+/// What a --data (`flag`) path stands for: a dataset file, a run or sweep folder
+/// (vector::datasetFiles), or a folder of dataset files (*.h5, e.g. map exports) in name order.
+std::vector<fs::path> fieldFiles(const fs::path& path, const std::string& flag) {
   if (!fs::is_directory(path) || fs::exists(path / "manifest.json") || fs::exists(path / "shards")) return {path};
   std::vector<fs::path> files;
   bool anything = false;
@@ -133,19 +151,21 @@ std::vector<fs::path> fieldFiles(const fs::path& path) {
     if (entry.is_regular_file() && entry.path().extension() == ".h5") files.push_back(entry.path());
   }
   if (!anything) {
-    throw DatasetError(fmt::format("--data {}: an empty folder (expected a run folder, a sweep folder or dataset "
+    throw DatasetError(fmt::format("{} {}: an empty folder (expected a run folder, a sweep folder or dataset "
                                    "files)",
-                                   path.string()));
+                                   flag, path.string()));
   }
   if (files.empty()) return {path};  // vector::datasetFiles says what is wrong with it
   std::sort(files.begin(), files.end());
   return files;
 }
 
-Field openField(const DeviationOptions& options, const model::Predictor& predictor) {
+/// Opens the recorded runs of `paths` (given by `flag`) and checks them against the model.
+Field openField(const std::vector<fs::path>& paths, const std::string& flag, const DeviationOptions& options,
+                const model::Predictor& predictor) {
   Field field;
-  for (const auto& path : options.data) {
-    for (const auto& file : fieldFiles(path)) field.collection.add(file);
+  for (const auto& path : paths) {
+    for (const auto& file : fieldFiles(path, flag)) field.collection.add(file);
   }
   for (std::size_t f = 0; f < field.collection.files(); ++f) {
     const auto& reader = field.collection.reader(f);
@@ -157,7 +177,7 @@ Field openField(const DeviationOptions& options, const model::Predictor& predict
     field.samples += reader.size();
   }
   if (field.samples == 0) {
-    throw DatasetError(fmt::format("--data {}: no recorded scenes in it", options.data.front().string()));
+    throw DatasetError(fmt::format("{} {}: no recorded scenes in it", flag, paths.front().string()));
   }
   field.inputNames = field.collection.reader(0).header().inputNames;
   for (std::size_t f = 1; f < field.collection.files(); ++f) {
@@ -211,6 +231,57 @@ void scoreField(const Field& field, const DeviationScorer& scorer, const model::
   }
 }
 
+/// The calibration runs (--calibration), scored like the field and ranked among per label; nullopt
+/// without them. Refuses runs whose scenes hold other information than the field's (another kind).
+std::optional<RunCalibration> calibrateOnRuns(const Field& field, const DeviationScorer& scorer,
+                                              const model::Predictor& predictor, const DeviationOptions& options) {
+  if (options.calibration.empty()) return std::nullopt;
+  const Field runs = openField(options.calibration, "--calibration", options, predictor);
+  const auto& a = field.available;
+  const auto& b = runs.available;
+  if (a.otherVehicles != b.otherVehicles || a.egoLane != b.egoLane || a.scenarioFrame != b.scenarioFrame) {
+    throw DatasetError(fmt::format("--calibration {}: its scenes hold other information than the field data's (e.g. a "
+                                   "map export against generated runs): the scores would not be comparable",
+                                   options.calibration.front().string()));
+  }
+  DeviationResult scored;
+  double seconds = 0.0;
+  scoreField(runs, scorer, predictor.info(), options, scored, seconds);
+  std::vector<std::string> names;
+  for (const auto& path : options.calibration) names.push_back(path.string());
+  return RunCalibration(scored.scenes, scorer.metricNames().size(), fmt::format("{}", fmt::join(names, " ")),
+                        options.level);
+}
+
+/// deviations.csv, staged in `folder`.
+void writeTable(OutputFolder& folder, const DeviationSummary& summary, const fs::path& output) {
+  const auto& result = summary.result;
+  {
+    std::ofstream stream(folder.stage("deviations.csv"));
+    CsvWriter csv(stream);
+    csv.writeRow(csvHeader(result));
+    std::vector<std::size_t> rank(result.scenes.size(), 0);
+    for (std::size_t r = 0; r < summary.ranked.size(); ++r) rank[summary.ranked[r]] = r + 1;
+    for (std::size_t i = 0; i < result.scenes.size(); ++i) csv.writeRow(csvRow(result, result.scenes[i], rank[i]));
+    stream.flush();
+    if (!stream) throw IoError(fmt::format("{}: cannot write", (output / "deviations.csv").string()));
+  }
+  folder.staged("deviations.csv");
+}
+
+/// The scenes of the `drawn` most surprising flagged rows, read again from the field data.
+std::vector<vector::VectorizedScene> drawnScenes(const Field& field, const DeviationSummary& summary, int drawn) {
+  std::vector<vector::VectorizedScene> scenes;
+  for (std::size_t r = 0; r < summary.ranked.size() && r < static_cast<std::size_t>(drawn); ++r) {
+    const auto& scene = summary.result.scenes[summary.ranked[r]];
+    for (std::size_t f = 0; f < field.collection.files(); ++f) {
+      const auto& reader = field.collection.reader(f);
+      if (reader.path().string() == scene.source) scenes.push_back(reader.scene(scene.row));
+    }
+  }
+  return scenes;
+}
+
 }  // namespace
 
 DeviationSummary findDeviations(const DeviationOptions& options) {
@@ -224,10 +295,11 @@ DeviationSummary findDeviations(const DeviationOptions& options) {
     inputs.emplace_back("--data", path);
     names.push_back(path.filename().string());
   }
+  for (const auto& path : options.calibration) inputs.emplace_back("--calibration", path);
   const std::string subject = fmt::format("{} with {}", fmt::join(names, ", "), options.model.filename().string());
   checkOutput({options.output, &output_kinds::deviationsFolder(), subject, options.force, "--out", "--force", inputs});
   const model::Predictor predictor(options.model, options.threads);
-  const Field field = openField(options, predictor);
+  const Field field = openField(options.data, "--data", options, predictor);
   const DeviationScorer scorer(predictor, options.model.string(), field.metricNames, field.available, options.seed);
 
   DeviationSummary summary;
@@ -249,33 +321,25 @@ DeviationSummary findDeviations(const DeviationOptions& options) {
                                            options.model.string()));
   }
   for (const auto& warning : summary.warnings) spdlog::warn("{}", warning);
+  const auto calibration = calibrateOnRuns(field, scorer, predictor, options);
   scoreField(field, scorer, predictor.info(), options, result, summary.scoringSeconds);
+  if (calibration) {
+    for (auto& scene : result.scenes) calibration->apply(scene);
+    result.calibrationRuns = calibration->runs();
+  }
   summary.ranked = rankDeviations(result);
   summary.output = options.output;
 
   OutputFolder folder(options.output);
-  {
-    std::ofstream stream(folder.stage("deviations.csv"));
-    CsvWriter csv(stream);
-    csv.writeRow(csvHeader(result));
-    std::vector<std::size_t> rank(result.scenes.size(), 0);
-    for (std::size_t r = 0; r < summary.ranked.size(); ++r) rank[summary.ranked[r]] = r + 1;
-    for (std::size_t i = 0; i < result.scenes.size(); ++i) csv.writeRow(csvRow(result, result.scenes[i], rank[i]));
-    stream.flush();
-    if (!stream) throw IoError(fmt::format("{}: cannot write", (options.output / "deviations.csv").string()));
-  }
-  folder.staged("deviations.csv");
-  std::vector<vector::VectorizedScene> drawn;
-  for (std::size_t r = 0; r < summary.ranked.size() && r < static_cast<std::size_t>(options.drawn); ++r) {
-    const auto& scene = result.scenes[summary.ranked[r]];
-    for (std::size_t f = 0; f < field.collection.files(); ++f) {
-      const auto& reader = field.collection.reader(f);
-      if (reader.path().string() == scene.source) drawn.push_back(reader.scene(scene.row));
-    }
-  }
+  writeTable(folder, summary, options.output);
+  const auto drawn = drawnScenes(field, summary, options.drawn);
   std::vector<std::pair<std::string, std::string>> provenance = {
       {"model file", options.model.string()}, {"model SHA-256", sha256OfFile(options.model)}};
   for (const auto& path : options.data) provenance.push_back({"field data", path.string()});
+  for (const auto& path : options.calibration) provenance.push_back({"calibration runs", path.string()});
+  provenance.push_back({"p-values", calibration ? fmt::format("conformal ranks among {} clean calibration runs",
+                                                              result.calibrationRuns)
+                                                : std::string("the model's own calibration")});
   provenance.push_back({"level", formatNumber(options.level)});
   provenance.push_back({"sampled futures", fmt::format("{} per scene, seed {}", model::kCalibrationDraws, options.seed)});
   provenance.push_back({"vsd-sumo", toolVersion()});

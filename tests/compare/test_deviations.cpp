@@ -224,6 +224,88 @@ TEST_F(DeviationsTest, BadInputIsOneLineAndWritesNothing) {
   expectRefused<ModelError>(options, "calibrate=1");
 }
 
+TEST_F(DeviationsTest, CalibrationRunsRankTheFieldAndFlagChangedBehaviourWithTheLevelsShareOfCleanScenes) {
+  TemporaryDirectory dir;
+  std::vector<vector::VectorizedScene> runs, field;
+  for (std::uint64_t i = 500; i < 700; ++i) runs.push_back(fieldScene(i, Change::None));  // clean, never trained on
+  for (std::uint64_t i = 200; i < 240; ++i) field.push_back(fieldScene(i, Change::None));
+  for (std::uint64_t i = 240; i < 260; ++i) field.push_back(fieldScene(i, Change::Brakes));
+  for (std::uint64_t i = 260; i < 280; ++i) field.push_back(fieldScene(i, Change::Swerves));
+  auto options = optionsFor(writeField(dir.path() / "field.h5", field), dir.path() / "report");
+  options.calibration = {writeField(dir.path() / "runs.h5", runs)};
+  const auto summary = findDeviations(options);
+  EXPECT_EQ(summary.result.calibrationRuns, 200u);
+  std::size_t clean_flagged = 0, changed_flagged = 0, path_p = 0;
+  for (std::size_t i = 0; i < 80; ++i) {
+    const auto& row = summary.result.scenes[i];
+    ASSERT_EQ(row.status, SceneStatus::Scored);
+    EXPECT_GE(row.pathP, 1.0 / 201.0 - 1e-12);  // ranked among 200 runs
+    path_p += std::isnan(row.pathP) ? 0 : 1;
+    (i < 40 ? clean_flagged : changed_flagged) += row.flagged ? 1 : 0;
+    for (const auto& tail : row.metrics) {
+      if (!std::isfinite(tail.p05)) continue;
+      EXPECT_NEAR(tail.p05 + tail.p95, 2.0 * tail.mostLikely, 1e-9);  // around the most likely future
+    }
+  }
+  EXPECT_EQ(path_p, 80u);
+  EXPECT_LE(clean_flagged, 8u);
+  EXPECT_GE(changed_flagged, 38u);
+  const auto table = CsvTable::read(options.output / "deviations.csv");
+  for (const std::string column : {"path_p", "a_min_most_likely_m_s2"}) EXPECT_TRUE(table.findColumn(column)) << column;
+  EXPECT_NE(readTextFile(options.output / "report.html").find("conformal ranks among 200 clean calibration runs"),
+            std::string::npos);
+}
+
+TEST_F(DeviationsTest, CalibrationRunsThatCannotRankTheFieldAreOneLineAndWriteNothing) {
+  TemporaryDirectory dir;
+  std::vector<vector::VectorizedScene> runs, other_label;
+  for (std::uint64_t i = 500; i < 519; ++i) runs.push_back(fieldScene(i, Change::None));
+  for (std::uint64_t i = 500; i < 530; ++i) other_label.push_back(fieldScene(i, Change::None, "acc_lk"));
+  const auto field = writeField(dir.path() / "field.h5", {fieldScene(200, Change::None)});
+  const auto out = dir.path() / "out";
+  auto options = optionsFor(field, out);
+  options.calibration = {writeField(dir.path() / "few.h5", runs)};  // 19 runs: p >= 1/20, never below 0.05
+  expectRefused<ConfigError>(options, "at least 20 clean runs");
+  options.calibration = {writeField(dir.path() / "other.h5", other_label)};
+  expectRefused<ConfigError>(options, "0 runs of label 'acc'");
+  fs::create_directories(dir.path() / "empty");
+  options.calibration = {dir.path() / "empty"};
+  expectRefused<DatasetError>(options, "--calibration");
+}
+
+TEST(RunCalibration, PValuesAreConformalRanksAndIntervalsTheRunsNinetyPercentScore) {
+  const auto row = [](const std::string& label, double metric_error, double excess) {
+    SceneDeviation s;
+    s.label = label;
+    s.regionExcess = excess;
+    MetricTail tail;
+    tail.mostLikely = 1.0;
+    tail.recorded = 1.0 + metric_error;
+    s.metrics = {tail};
+    return s;
+  };
+  std::vector<SceneDeviation> runs;
+  for (int i = 1; i <= 20; ++i) runs.push_back(row("acc", i % 2 ? i : -i, i));  // scores 1 .. 20 either side
+  const RunCalibration calibration(runs, 1, "runs.h5", 0.05);
+  EXPECT_EQ(calibration.runs("acc"), 20u);
+  EXPECT_EQ(calibration.runs("lk"), 0u);
+  auto far = row("acc", -20.5, 0.5);
+  calibration.apply(far);
+  EXPECT_DOUBLE_EQ(far.metrics[0].p, 1.0 / 21.0);      // beyond every run
+  EXPECT_DOUBLE_EQ(far.pathP, 21.0 / 21.0);             // inside every run's path
+  EXPECT_DOUBLE_EQ(far.metrics[0].p05, 1.0 - 19.0);     // the ceil(0.9 * 21) = 19th smallest score
+  EXPECT_DOUBLE_EQ(far.metrics[0].p95, 1.0 + 19.0);
+  EXPECT_DOUBLE_EQ(far.p, std::min(2.0 * (1.0 / 21.0), 1.0));  // Simes over metric and path
+  EXPECT_FALSE(far.pathWorst);
+  auto middle = row("acc", 10.0, 15.0);
+  calibration.apply(middle);
+  EXPECT_DOUBLE_EQ(middle.metrics[0].p, 12.0 / 21.0);  // 1 + runs scoring 10 .. 20
+  EXPECT_DOUBLE_EQ(middle.pathP, 7.0 / 21.0);           // 1 + runs of excess 15 .. 20
+  EXPECT_TRUE(middle.pathWorst);
+  auto unknown = row("lk", 0.0, 0.0);
+  EXPECT_THROW(calibration.apply(unknown), ConfigError);
+}
+
 TEST(DeviationRanking, MostSurprisingFirstGroupedByLabelAxisAndMetric) {
   DeviationResult result;
   result.metricNames = {"a_min", "y_max"};

@@ -7,7 +7,9 @@
 // clean scenes against the nominal level, precision and recall of the flagged scenes
 // against the injected ones (recall also among the injected scenes whose path the factor
 // moves beyond the model's calibrated 90 % region), scenes of a label the model never
-// trained on (counted apart), and the scoring throughput. docs/deviations.md.
+// trained on (counted apart), and the scoring throughput. The field is scored twice: with the
+// model's own calibration, and by conformal rank among clean calibration runs of a seed of
+// their own (`deviations --calibration`). docs/deviations.md.
 
 #include <cstdint>
 #include <filesystem>
@@ -29,9 +31,12 @@ struct DeviationsBenchOptions {
   std::filesystem::path model;                              ///< given: no training
   std::uint64_t trainSamples = 2000;
   std::uint64_t trainSeed = 1;
-  int steps = 2000;
+  int steps = model::TrainOptions{}.steps;  ///< train's: the configuration the docs report
   std::uint64_t fieldSamples = 2900;  ///< per seed; about 2,000 clean ones at share 0.3
   std::uint64_t oodSamples = 100;
+  /// Clean runs the field is also ranked among (`deviations --calibration`); 0: not scored so.
+  std::uint64_t calibrationSamples = 2000;
+  std::uint64_t calibrationSeed = 301;  ///< data, not a choice: no other part of the bench uses it
   std::vector<std::uint64_t> validationSeeds = {101};
   std::vector<std::uint64_t> testSeeds = {201};
   double share = 0.3;        ///< of the field scenes that carry the factor
@@ -50,6 +55,12 @@ struct DeviationsBenchOptions {
 struct DeviationCounts {
   double clean = 0, cleanFlagged = 0, injected = 0, injectedFlagged = 0, beyond = 0, beyondFlagged = 0;
   double ood = 0, oodFlagged = 0, scenes = 0, seconds = 0;
+};
+
+/// A seed's counts with each calibration.
+struct DeviationSeedCounts {
+  DeviationCounts model;                ///< the model's own calibration
+  std::optional<DeviationCounts> runs;  ///< the calibration runs' (when calibrationSamples > 0)
 };
 
 /// Wilson's 95 % interval of k successes in n (NaN for n = 0).
@@ -72,8 +83,10 @@ class DeviationsBench {
   const std::string& oodScenarioName() const;
   /// The given model, the one in the work folder, or one trained now on clean scenes.
   DeviationsModel prepareModel();
-  /// Simulates and scores the field of `seed` with the prepared model.
-  DeviationCounts scoreSeed(std::uint64_t seed);
+  /// Simulates and scores the calibration runs (none when calibrationSamples is 0); after prepareModel.
+  void prepareCalibration();
+  /// Simulates and scores the field of `seed` with the prepared model (and calibration).
+  DeviationSeedCounts scoreSeed(std::uint64_t seed);
 
  private:
   DeviationsBenchOptions options_;

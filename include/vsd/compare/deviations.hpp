@@ -16,12 +16,21 @@
 // heading. Scenes of a label the model never trained on are out of its distribution: listed
 // apart, never flagged (compare's warning, as a verdict).
 //
+// With clean recorded runs the model never trained on (`--calibration`, RunCalibration) the
+// p-values are split-conformal ranks instead: per label, a metric's score is its distance
+// from the most likely future's value and the path's score its region excess (below), and a
+// field scene's p is (1 + calibration scenes scoring at least as high) / (n + 1). For clean
+// field scenes exchangeable with the calibration runs "p < level" then happens to at most a
+// share `level` of them, whatever the model's own calibration; the intervals are narrower
+// where the most likely future is better than the spread of the sampled ones says.
+//
 // Writes <out>/deviations.csv and <out>/report.html (report module), manifest last.
 
 #include <array>
 #include <cstdint>
 #include <filesystem>
 #include <limits>
+#include <map>
 #include <memory>
 #include <string>
 #include <vector>
@@ -45,6 +54,8 @@ struct MetricTail {
   /// the recorded value. 0 beyond the calibrated 99 % interval (the highest level fitted);
   /// NaN when the recorded value or every draw is NaN.
   double p = std::numeric_limits<double>::quiet_NaN();
+  /// The metric of the model's most likely future (what calibration runs centre on).
+  double mostLikely = std::numeric_limits<double>::quiet_NaN();
 };
 
 enum class SceneStatus {
@@ -64,9 +75,13 @@ struct SceneDeviation {
   std::string reason;          ///< why not scored / out of distribution; why flagged
   std::vector<double> features;  ///< DeviationResult::featureNames order
   std::vector<MetricTail> metrics;  ///< DeviationResult::metricNames order
-  double p = std::numeric_limits<double>::quiet_NaN();  ///< Simes combination of the metrics' p
+  /// Simes combination of the metrics' p (and the path's, where calibration runs give it).
+  double p = std::numeric_limits<double>::quiet_NaN();
   bool flagged = false;        ///< p < level
   std::size_t worstMetric = 0;  ///< the metric with the smallest p
+  /// The path's conformal p (regionExcess ranked among the calibration runs'); NaN without them.
+  double pathP = std::numeric_limits<double>::quiet_NaN();
+  bool pathWorst = false;       ///< pathP is smaller than every metric's p
   /// Max over valid steps of d^2 / r^2_90: the recorded position's squared Mahalanobis
   /// distance over the calibrated 90 % region's (> 1: outside that region). NaN: no valid step.
   double regionExcess = std::numeric_limits<double>::quiet_NaN();
@@ -91,8 +106,15 @@ struct DeviationResult {
   std::vector<std::string> featureUnits;
   double level = 0.05;
   double step = 0.0;  ///< s between future steps (the data's and the model's)
+  /// Calibration runs the p-values were ranked among (RunCalibration); 0: the model's own
+  /// calibration, intervals around the draws' median.
+  std::size_t calibrationRuns = 0;
   std::vector<SceneDeviation> scenes;
 };
+
+/// The value a metric's interval is around: the draws' median (the model's calibration) or
+/// the most likely future's value (calibration runs).
+double intervalCentre(const DeviationResult& result, const MetricTail& tail);
 
 /// Scores recorded scenes against a calibrated probabilistic model.
 class DeviationScorer {
@@ -123,6 +145,34 @@ class DeviationScorer {
   std::unique_ptr<Impl> impl_;
 };
 
+/// Split-conformal calibration on clean recorded runs of the field's labels that the model
+/// never trained on (`deviations --calibration`, docs/deviations.md).
+class RunCalibration {
+ public:
+  /// `scenes`: the calibration runs as DeviationScorer::score returns them (only Scored ones
+  /// count), `metrics` entries each. `source` names them in errors; `level` is the level p is
+  /// compared with (a label with too few runs to give a p below it is refused by apply).
+  RunCalibration(const std::vector<SceneDeviation>& scenes, std::size_t metrics, std::string source, double level);
+  /// Calibration runs of `label` (0: none).
+  std::size_t runs(const std::string& label) const;
+  /// Calibration runs of every label.
+  std::size_t runs() const;
+  /// Ranks `row` among its label's runs: each metric's p (and its 90 % interval: the most likely
+  /// value +- the runs' 90 % score), the path's p, and their Simes combination. Throws
+  /// ConfigError naming `source` for a label without runs or with fewer than 1 / level.
+  void apply(SceneDeviation& row) const;
+
+ private:
+  struct Scores {
+    std::vector<std::vector<double>> metrics;  ///< per metric: sorted finite scores
+    std::vector<double> path;                  ///< sorted finite region excesses
+    std::size_t runs = 0;
+  };
+  std::map<std::string, Scores> byLabel_;
+  std::string source_;
+  double level_;
+};
+
 /// Flags, explains and groups the scored scenes of `result`: sets `flagged` (p < level),
 /// `reason` and `group`, and returns the indices of the flagged scenes, most surprising
 /// (smallest p, then largest region excess) first.
@@ -131,6 +181,10 @@ std::vector<std::size_t> rankDeviations(DeviationResult& result);
 struct DeviationOptions {
   std::filesystem::path model;              ///< a calibrated probabilistic model (.pt)
   std::vector<std::filesystem::path> data;  ///< field data: dataset files or run folders
+  /// Clean recorded runs of the field's labels the model never trained on (dataset files or
+  /// run folders): p-values by conformal rank among them (RunCalibration). Empty: the
+  /// model's own calibration.
+  std::vector<std::filesystem::path> calibration;
   std::filesystem::path output;             ///< required
   double level = 0.05;                      ///< flag scenes with p < level; in (0, 1)
   /// Metrics to score (those the model's calibration covers are kept). Empty: the metrics
