@@ -282,14 +282,6 @@ std::string counterpart(Translation& translation, const Entity& actor, const pug
                                      triggering.name, reference, actor.name));
 }
 
-void requireBelow(const xml::Reader& reader, const pugi::xml_node& node) {
-  const std::string rule = reader.oneOf(node, "rule", {"lessThan", "lessOrEqual", "greaterThan", "greaterOrEqual",
-                                                       "equalTo", "notEqualTo"});
-  if (rule != "lessThan" && rule != "lessOrEqual") {
-    reader.fail(node, fmt::format("rule=\"{}\": the language's relation triggers fire when the value falls to a bound", rule));
-  }
-}
-
 /// The language's bound of a rule ("at_least" / "at_most"); `value` may change (equalTo 0 of a
 /// quantity that is never negative is "at most 0").
 std::string boundOf(const xml::Reader& reader, const pugi::xml_node& node, bool never_negative, double value) {
@@ -325,7 +317,6 @@ YAML::Node relationLeaf(Translation& translation, const Entity& actor, const Ent
                         const pugi::xml_node& condition) {
   const xml::Reader& reader = translation.reader;
   reader.requireSubset(condition, {"TimeToCollisionConditionTarget"});
-  requireBelow(reader, condition);
   const std::string kind = condition.name();
   YAML::Node trigger;
   std::string reference;
@@ -342,8 +333,13 @@ YAML::Node relationLeaf(Translation& translation, const Entity& actor, const Ent
       reader.fail(condition, fmt::format("{}=\"{}\": the language measures along the Ego's lane", attribute, *value));
     }
   }
-  const std::string key = kind == "RelativeDistanceCondition" ? "gap" : kind == "TimeHeadwayCondition" ? "headway" : "ttc";
-  trigger[key] = num(reader.number(condition, "value", NumberRange::atLeast(0.0)));
+  const std::string quantity = kind == "RelativeDistanceCondition" ? "gap"
+                               : kind == "TimeHeadwayCondition"    ? "headway"
+                                                                   : "ttc";
+  const double value = reader.number(condition, "value", NumberRange::atLeast(0.0));
+  // The language's gap / headway / ttc fire at most at a bound; `_at_least` at least.
+  const bool at_least = boundOf(reader, condition, /*never_negative=*/quantity != "gap", value) == "at_least";
+  trigger[at_least ? quantity + "_at_least" : quantity] = num(value);
   const std::string other = counterpart(translation, actor, condition, triggering, reference);
   if (other != "ego") trigger["to"] = other;
   return trigger;
@@ -590,6 +586,20 @@ void requireStartsAtZero(Translation& translation, const pugi::xml_node& parent)
   }
 }
 
+/// An Act's StopTrigger: an empty one never fires (accepted, noted); one with conditions would
+/// cut its actions short, which the language does not do.
+void requireActRunsToItsEnd(Translation& translation, const pugi::xml_node& act) {
+  const xml::Reader& reader = translation.reader;
+  const pugi::xml_node stop = act.child("StopTrigger");
+  if (!stop) return;
+  reader.requireSubset(stop, {"ConditionGroup"});
+  if (stop.child("ConditionGroup")) {
+    reader.fail(stop, "an Act's StopTrigger with conditions: the language runs each started action to its end (end "
+                      "the scenario with the Storyboard's StopTrigger or --duration)");
+  }
+  translation.findings.note(reader.where(stop), "an empty StopTrigger: it never fires");
+}
+
 struct PendingAction {
   Entity* actor;
   YAML::Node item;
@@ -694,8 +704,9 @@ void readStories(Translation& translation, const pugi::xml_node& storyboard) {
       requireStartsAtZero(translation, story);
       for (const pugi::xml_node& act : story.children("Act")) {
         translation.findings.attempt([&] {
-          reader.requireSubset(act, {"ManeuverGroup", "StartTrigger"});
+          reader.requireSubset(act, {"ManeuverGroup", "StartTrigger", "StopTrigger"});
           requireStartsAtZero(translation, act);
+          requireActRunsToItsEnd(translation, act);
           for (const pugi::xml_node& group : act.children("ManeuverGroup")) {
             translation.findings.attempt([&] { readManeuverGroup(translation, group, events); });
           }

@@ -277,7 +277,11 @@ bool ScriptedTraffic::Impl::holds(const scenario::ConcreteTrigger& trigger, std:
     case TriggerSpec::Kind::Any: return std::any_of(trigger.members.begin(), trigger.members.end(), member_holds);
     case TriggerSpec::Kind::Gap:
     case TriggerSpec::Kind::Headway:
-    case TriggerSpec::Kind::Ttc: return relationValue(trigger, owner, ego) <= trigger.value;
+    case TriggerSpec::Kind::Ttc: {
+      // Exact, as these were before the *_at_least forms: a gap is no count reached through steps.
+      const double value = relationValue(trigger, owner, ego);
+      return trigger.bound == TriggerSpec::Bound::AtMost ? value <= trigger.value : value >= trigger.value;
+    }
     case TriggerSpec::Kind::Speed: return withinBound(stateOf(trigger.subject, ego).speed, trigger);
     case TriggerSpec::Kind::RelativeSpeed:
       return withinBound(stateOf(trigger.subject, ego).speed - stateOf(trigger.reference, ego).speed, trigger);

@@ -605,6 +605,17 @@ TEST(OscRun, EachConditionStartsItsEventWhereTheFileSays) {
       {group(entityCondition("Lead", R"(<SpeedCondition value="24" rule="greaterOrEqual"/>)") + timeCondition("4.5")) +
            group(entityCondition("Lead", R"(<TraveledDistanceCondition value="30"/>)", "1")),
        2.6},
+      // The lead pulls away from Slow (18 m/s, 40 m behind, both 4.5 m long): gap 35.5 + 2 t + t^2 / 2 >= 45.5
+      // after 2.90 s
+      {group(entityCondition("Lead", R"(<RelativeDistanceCondition entityRef="Slow" value="45.5" freespace="true"
+          relativeDistanceType="longitudinal" rule="greaterThan"/>)")), 3.0 + kNext},
+      // Slow's headway (gap / 18 m/s) >= 2.5 s: a gap of 45 m after 2.80 s
+      {group(entityCondition("Lead", R"(<TimeHeadwayCondition entityRef="Slow" value="2.5" freespace="true"
+          rule="greaterOrEqual"/>)")), 2.8 + kNext},
+      // the two never close in: an infinite time to collision is above any bound from the start
+      {group(entityCondition("Lead", R"(<TimeToCollisionCondition value="100" freespace="true" rule="greaterThan">
+          <TimeToCollisionConditionTarget><EntityRef entityRef="Slow"/></TimeToCollisionConditionTarget>
+          </TimeToCollisionCondition>)")), 0.0 + kNext},
   };
   int n = 0;
   for (const auto& [groups, seen] : cases) {
@@ -615,6 +626,24 @@ TEST(OscRun, EachConditionStartsItsEventWhereTheFileSays) {
     EXPECT_THAT(check.report(), HasSubstr("start of 'StepDown': {")) << name;
     EXPECT_NEAR(stepDownSeen(dir->path() / name), seen, 1e-9) << name;
   }
+}
+
+// An Act's empty StopTrigger never fires: the file runs as without it. One with conditions
+// would cut the Act's actions short, which the language does not do.
+TEST(OscImport, AnActsEmptyStopTriggerIsAcceptedAndOneWithConditionsRefused) {
+  std::string text = readTextFile(data("conditions.xosc"));
+  const auto act_end = text.find("</Act>");
+  const auto dir = folderWith({{"empty.xosc", std::string(text).insert(act_end, "<StopTrigger/>")},
+                               {"timed.xosc", std::string(text).insert(act_end, "<StopTrigger>" +
+                                                                                    group(timeCondition("3")) +
+                                                                                    "</StopTrigger>")}});
+  const ScenarioCheck check = checkOpenScenario(dir->path() / "empty.xosc", {});
+  EXPECT_TRUE(check.runnable()) << check.report();
+  EXPECT_THAT(check.report(), HasSubstr("an empty StopTrigger: it never fires"));
+  const std::string error = test::configErrorOf([&] { importTemplate(dir->path() / "timed.xosc", {}); });
+  EXPECT_THAT(error, HasSubstr("timed.xosc:"));
+  EXPECT_THAT(error, HasSubstr("an Act's StopTrigger with conditions: the language runs each started action to its end"));
+  EXPECT_EQ(error.find('\n'), std::string::npos) << error;
 }
 
 TEST(OscImport, ConditionsTheLanguageCannotExpressAreOneLineEach) {

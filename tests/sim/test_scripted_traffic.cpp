@@ -101,6 +101,25 @@ TEST(ScriptedTraffic, AGapTriggerFiresWhenTheStandInEgoComesClose) {
   EXPECT_NEAR(traffic.states()[0].speed, 0.0, 1e-9);           // stopped at 2 m/s^2 within 2.5 s
 }
 
+TEST(ScriptedTraffic, AtLeastRelationTriggersFireWhenTheGapOpens) {
+  // The mover starts 10 m ahead at 15 m/s; the stand-in Ego follows at 10 m/s: the gap opens at
+  // 5 m/s - 30 m after 4 s, a headway (gap / the Ego's 10 m/s) of 2.5 s after 3 s - and the two
+  // never close in (an infinite time to collision: at least any bound from the start).
+  const auto logical = scenarioWith(R"(
+    - {id: mover, gap: 10, relative_lane: 1, speed: 15,
+       actions: [{id: wide, trigger: {gap_at_least: 30}, stop: {decel: 1}},
+                 {id: slow, trigger: {headway_at_least: 2.5}, lateral_offset: {offset: 0.5, duration: 1}},
+                 {id: apart, trigger: {ttc_at_least: 100}, lateral_offset: {offset: 0, duration: 1}, }]})");
+  const Planned run = plan(logical);
+  ScriptedTraffic traffic(run.concrete, run.road);
+  const EgoStandIn ego(run.concrete, run.road);
+  for (int k = 0; k < 30; ++k) traffic.step(ego.at(0.2 * k));
+  const auto& timings = traffic.timings();
+  EXPECT_NEAR(timings[0].start, 4.0, 1e-9);
+  EXPECT_NEAR(timings[1].start, 3.0, 1e-9);
+  EXPECT_NEAR(timings[2].start, 0.0, 1e-9);
+}
+
 TEST(ScriptedTraffic, APedestrianCrossesAtItsSpeedFacingAcross) {
   const auto logical = scenarioWith(R"(
     - {id: walker, type: pedestrian, gap: 30, relative_lane: 0, offset: -4, heading_deg: 90,

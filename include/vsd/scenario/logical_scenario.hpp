@@ -123,9 +123,9 @@ struct PositionSpec {
 struct TriggerSpec {
   enum class Kind {
     Time,     ///< simulation time >= value (s); not quantised to instants
-    Gap,      ///< bumper-to-bumper gap along the Ego's lane to `reference` <= value (m)
-    Headway,  ///< time headway of the rear one of the two (gap / its speed) <= value (s)
-    Ttc,      ///< time to collision along the Ego's lane (gap / closing speed) <= value (s)
+    Gap,      ///< bumper-to-bumper gap along the Ego's lane to `reference` vs value (m, `bound`)
+    Headway,  ///< time headway of the rear one of the two (gap / its speed) vs value (s; inf standing)
+    Ttc,      ///< time to collision along the Ego's lane (gap / closing speed) vs value (s; inf not closing)
     After,    ///< `action` ended (+ delay)
     Speed,          ///< the subject's speed vs value (m/s, `bound`)
     RelativeSpeed,  ///< the subject's speed minus `reference`'s vs value (m/s)
@@ -136,7 +136,8 @@ struct TriggerSpec {
     All,            ///< every member holds
     Any,            ///< a member fired
   };
-  /// Speed, RelativeSpeed, Accel, Distance: the condition is `quantity <= value` or `>= value`.
+  /// Gap, Headway, Ttc, Speed, RelativeSpeed, Accel, Distance: the condition is `quantity <= value`
+  /// or `>= value`.
   enum class Bound { AtMost, AtLeast };
   Kind kind = Kind::Time;
   Bound bound = Bound::AtMost;
