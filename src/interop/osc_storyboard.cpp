@@ -555,17 +555,34 @@ std::optional<YAML::Node> conditionGroup(Translation& translation, const Entity&
   return trigger;
 }
 
-/// The language trigger of a StartTrigger: its groups ORed; nullopt: it never fires.
-std::optional<YAML::Node> startTrigger(Translation& translation, const Entity& actor, const pugi::xml_node& start) {
+/// True for a StartTrigger without conditions (absent, or without a ConditionGroup): it
+/// starts its element at once, as esmini reads it. Noted when empty, and when absent if
+/// `note_absent` (an Event's; a Story has none, and an Act without one is common).
+bool startsAtOnce(Translation& translation, const pugi::xml_node& parent, bool note_absent) {
+  const pugi::xml_node start = parent.child("StartTrigger");
+  if (start && start.child("ConditionGroup")) return false;
+  if (!start && !note_absent) return true;
+  translation.findings.note(translation.reader.where(start ? start : parent),
+                            fmt::format("{} StartTrigger: <{}> starts at t = 0", start ? "an empty" : "no",
+                                        parent.name()));
+  return true;
+}
+
+/// The language trigger of an Event's StartTrigger: its groups ORed ({time: 0} without
+/// conditions); nullopt: it never fires.
+std::optional<YAML::Node> startTrigger(Translation& translation, const Entity& actor, const pugi::xml_node& event) {
+  if (startsAtOnce(translation, event, /*note_absent=*/true)) {
+    YAML::Node now;
+    now["time"] = 0;
+    return now;
+  }
   const xml::Reader& reader = translation.reader;
+  const pugi::xml_node start = reader.only(event, "StartTrigger");
   reader.requireSubset(start, {"ConditionGroup"});
   std::vector<YAML::Node> groups;
-  bool any_group = false;
   for (const pugi::xml_node& group : start.children("ConditionGroup")) {
-    any_group = true;
     if (const auto trigger = conditionGroup(translation, actor, group)) groups.push_back(*trigger);
   }
-  if (!any_group) reader.fail(start, "expected at least one <ConditionGroup>");
   if (groups.empty()) return std::nullopt;
   if (groups.size() == 1) return groups.front();
   YAML::Node trigger;
@@ -576,9 +593,8 @@ std::optional<YAML::Node> startTrigger(Translation& translation, const Entity& a
 /// An Act's or Story's start must hold from t = 0 (the language has no nested triggers).
 void requireStartsAtZero(Translation& translation, const pugi::xml_node& parent) {
   const xml::Reader& reader = translation.reader;
-  const pugi::xml_node start = parent.child("StartTrigger");
-  if (!start) return;
-  const pugi::xml_node condition = onlyCondition(reader, start);
+  if (startsAtOnce(translation, parent, /*note_absent=*/false)) return;
+  const pugi::xml_node condition = onlyCondition(reader, parent.child("StartTrigger"));
   const pugi::xml_node time = condition.child("ByValueCondition").child("SimulationTimeCondition");
   if (!time || reader.number(time, "value") > 0 || reader.number(condition, "delay") > 0) {
     reader.fail(condition, "an Act that starts later than t = 0: the language starts each action by its own "
@@ -720,7 +736,7 @@ void readStories(Translation& translation, const pugi::xml_node& storyboard) {
     translation.findings.attempt([&] {
       reader.setParameters(event.scope);
       for (auto& pending : event.actions) {
-        const auto trigger = startTrigger(translation, *pending.actor, reader.only(event.node, "StartTrigger"));
+        const auto trigger = startTrigger(translation, *pending.actor, event.node);
         if (!trigger) {
           translation.findings.note(reader.where(event.node), "its condition never holds: the event never starts");
           return;
@@ -729,7 +745,8 @@ void readStories(Translation& translation, const pugi::xml_node& storyboard) {
         pending.actor->actions.push_back(pending.item);
         YAML::Emitter flow;
         flow << YAML::Flow << *trigger;
-        translation.findings.mapped(reader.where(reader.only(event.node, "StartTrigger")),
+        const pugi::xml_node start = event.node.child("StartTrigger");
+        translation.findings.mapped(reader.where(start ? start : event.node),
                                     fmt::format("start of '{}': {}", pending.item["id"].as<std::string>(), flow.c_str()));
       }
     });

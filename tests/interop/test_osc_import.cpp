@@ -628,18 +628,31 @@ TEST(OscRun, EachConditionStartsItsEventWhereTheFileSays) {
   }
 }
 
-// An Act's empty StopTrigger never fires: the file runs as without it. One with conditions
-// would cut the Act's actions short, which the language does not do.
-TEST(OscImport, AnActsEmptyStopTriggerIsAcceptedAndOneWithConditionsRefused) {
-  std::string text = readTextFile(data("conditions.xosc"));
+// Triggers without conditions, read as esmini reads them: an empty (or absent) StartTrigger
+// starts its Act or Event at t = 0, an Act's empty StopTrigger never fires. An Act's
+// StopTrigger with conditions would cut its actions short, which the language does not do.
+TEST(OscRun, TriggersWithoutConditionsStartAtOnceAndNeverStop) {
+  const std::string text = readTextFile(data("conditions.xosc"));
   const auto act_end = text.find("</Act>");
-  const auto dir = folderWith({{"empty.xosc", std::string(text).insert(act_end, "<StopTrigger/>")},
-                               {"timed.xosc", std::string(text).insert(act_end, "<StopTrigger>" +
-                                                                                    group(timeCondition("3")) +
-                                                                                    "</StopTrigger>")}});
-  const ScenarioCheck check = checkOpenScenario(dir->path() / "empty.xosc", {});
-  EXPECT_TRUE(check.runnable()) << check.report();
-  EXPECT_THAT(check.report(), HasSubstr("an empty StopTrigger: it never fires"));
+  const auto event_start = text.find("<StartTrigger>");
+  const auto event_end = text.find("</StartTrigger>") + std::string("</StartTrigger>").size();
+  const auto dir = folderWith(
+      {{"empty_act.xosc", std::string(text).insert(act_end, "<StartTrigger/><StopTrigger/>")},
+       {"empty_event.xosc", conditionsWith("")},
+       {"no_event_trigger.xosc", std::string(text).erase(event_start, event_end - event_start)},
+       {"timed.xosc", std::string(text).insert(act_end, "<StopTrigger>" + group(timeCondition("3")) + "</StopTrigger>")}});
+  const ScenarioCheck act = checkOpenScenario(dir->path() / "empty_act.xosc", {});
+  EXPECT_TRUE(act.runnable()) << act.report();
+  EXPECT_THAT(act.report(), HasSubstr("an empty StartTrigger: <Act> starts at t = 0"));
+  EXPECT_THAT(act.report(), HasSubstr("an empty StopTrigger: it never fires"));
+  EXPECT_NEAR(stepDownSeen(dir->path() / "empty_act.xosc"), 3.0, 1e-9);  // the Event's own time trigger, exact
+  for (const auto& [name, note] : {std::pair{"empty_event.xosc", "an empty StartTrigger: <Event> starts at t = 0"},
+                                   std::pair{"no_event_trigger.xosc", "no StartTrigger: <Event> starts at t = 0"}}) {
+    const ScenarioCheck check = checkOpenScenario(dir->path() / name, {});
+    EXPECT_TRUE(check.runnable()) << check.report();
+    EXPECT_THAT(check.report(), HasSubstr(note));
+    EXPECT_NEAR(stepDownSeen(dir->path() / name), 0.2, 1e-9) << name;
+  }
   const std::string error = test::configErrorOf([&] { importTemplate(dir->path() / "timed.xosc", {}); });
   EXPECT_THAT(error, HasSubstr("timed.xosc:"));
   EXPECT_THAT(error, HasSubstr("an Act's StopTrigger with conditions: the language runs each started action to its end"));
