@@ -142,12 +142,23 @@ TEST(OscImport, ViolatedConstraintIsReportedWithItsDeclaration) {
 TEST(OscImport, BadReferencesAreOneLineEach) {
   const auto dir = folderWith({
       {"outside.xosc", cutInWith("./catalogs/vehicles", "../vehicles")},
+      {"no_folder.xosc", cutInWith("./catalogs/vehicles", "./catalogs/lorries")},
+      {"unused_folder.xosc", cutInWith("  </CatalogLocations>",
+                                       "    <MiscObjectCatalog><Directory path=\"./catalogs/objects\"/></MiscObjectCatalog>\n"
+                                       "  </CatalogLocations>")},
       {"no_entry.xosc", cutInWith("entryName=\"walker\"", "entryName=\"runner\"")},
       {"forward.xosc", cutInWith("value=\"40\"/>", "value=\"${$Cutter_RelSpeed_kph * 2}\"/>")},
       {"no_ego.xosc", cutInWith("<ObjectController><CatalogReference catalogName=\"drivers\" entryName=\"ALKSController\"/></ObjectController>",
                                 "<ObjectController><CatalogReference catalogName=\"drivers\" entryName=\"TeleoperatedDriver\"/></ObjectController>")},
   });
   EXPECT_THAT(test::configErrorOf([&] { importTemplate(dir->path() / "outside.xosc", {}); }), HasSubstr("outside.xosc:28: <Directory>"));
+  // A catalog folder that does not exist is noted, and a reference into it refused where it occurs.
+  EXPECT_THAT(test::configErrorOf([&] { importTemplate(dir->path() / "no_folder.xosc", {}); }),
+              HasSubstr("no_folder.xosc:37: <CatalogReference>: catalogName=\"fleet\": no catalog of that name in the "
+                        "catalog directories"));
+  const ScenarioCheck unused = checkOpenScenario(dir->path() / "unused_folder.xosc", {});
+  EXPECT_TRUE(unused.runnable()) << unused.report();
+  EXPECT_THAT(unused.report(), HasSubstr("catalogs/objects is not a directory: not read"));
   EXPECT_THAT(test::configErrorOf([&] { importTemplate(dir->path() / "no_entry.xosc", {}); }),
               HasSubstr("no_entry.xosc:46: <CatalogReference>: entryName=\"runner\": catalog 'people'"));
   EXPECT_THAT(test::configErrorOf([&] { importTemplate(dir->path() / "forward.xosc", {}); }),
