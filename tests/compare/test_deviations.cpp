@@ -2,8 +2,10 @@
 // trained once on synthetic ACC-like scenes (tests/model/synthetic_scenes.hpp). The tests
 // check what a user relies on - a changed behaviour is flagged and said to be longitudinal
 // or lateral, unseen labels are apart, outputs and bad input - not the model's accuracy.
+#include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 
@@ -271,6 +273,33 @@ TEST_F(DeviationsTest, CalibrationRunsThatCannotRankTheFieldAreOneLineAndWriteNo
   fs::create_directories(dir.path() / "empty");
   options.calibration = {dir.path() / "empty"};
   expectRefused<DatasetError>(options, "--calibration");
+}
+
+// The command line: --calibration is passed through, and a bad one is one line, exit 2, nothing written.
+TEST_F(DeviationsTest, TheCommandRanksAmongCalibrationRunsAndRefusesTooFewInOneLine) {
+  TemporaryDirectory dir;
+  std::vector<vector::VectorizedScene> runs, field;
+  for (std::uint64_t i = 500; i < 540; ++i) runs.push_back(fieldScene(i, Change::None));
+  for (std::uint64_t i = 200; i < 210; ++i) field.push_back(fieldScene(i, i % 2 ? Change::Brakes : Change::None));
+  const auto field_file = writeField(dir.path() / "field.h5", field);
+  const auto runs_file = writeField(dir.path() / "runs.h5", runs);
+  const auto command = [&](const std::string& level, const fs::path& out) {
+    return test::run({test::vsdSumo().string(), "--quiet", "deviations", "--model", model_.string(), "--data",
+                      field_file.string(), "--calibration", runs_file.string(), "--threads", "1", "--level", level,
+                      "--out", out.string()},
+                     dir.path());
+  };
+  const auto ok = command("0.05", dir.path() / "report");
+  ASSERT_EQ(ok.exitCode, 0) << ok.output;
+  EXPECT_THAT(ok.output, testing::HasSubstr("deviations: 10 scenes, 10 scored"));
+  EXPECT_THAT(readTextFile(dir.path() / "report" / "report.html"),
+              testing::HasSubstr("conformal ranks among 40 clean calibration runs"));
+  const auto few = command("0.01", dir.path() / "strict");  // 40 runs cannot give p < 0.01
+  EXPECT_EQ(few.exitCode, 2) << few.output;  // a flag value
+  EXPECT_THAT(few.output, testing::HasSubstr("--calibration " + runs_file.string()));
+  EXPECT_THAT(few.output, testing::HasSubstr("at least 100 clean runs"));
+  EXPECT_EQ(std::count(few.output.begin(), few.output.end(), '\n'), 1) << few.output;
+  EXPECT_FALSE(fs::exists(dir.path() / "strict"));
 }
 
 TEST(RunCalibration, PValuesAreConformalRanksAndIntervalsTheRunsNinetyPercentScore) {
