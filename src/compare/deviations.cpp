@@ -366,6 +366,10 @@ std::string DeviationSummary::report() const {
                                  result.scenes.size(), n, flagged, result.level,
                                  n ? 100.0 * static_cast<double>(flagged) / static_cast<double>(n) : 0.0,
                                  outOfDistribution());
+  text += result.calibrationRuns > 0
+              ? fmt::format("  p-values: conformal ranks among {} clean calibration runs\n", result.calibrationRuns)
+              : std::string("  p-values: the model's own calibration (--calibration RUNS ranks among clean runs: "
+                            "sharper)\n");
   std::map<std::string, std::size_t> groups;
   for (const auto i : ranked) ++groups[result.scenes[i].group];
   for (const auto& [group, count] : groups) text += fmt::format("  {:>6}  {}\n", count, group);

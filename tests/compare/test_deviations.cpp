@@ -292,6 +292,7 @@ TEST_F(DeviationsTest, TheCommandRanksAmongCalibrationRunsAndRefusesTooFewInOneL
   const auto ok = command("0.05", dir.path() / "report");
   ASSERT_EQ(ok.exitCode, 0) << ok.output;
   EXPECT_THAT(ok.output, testing::HasSubstr("deviations: 10 scenes, 10 scored"));
+  EXPECT_THAT(ok.output, testing::HasSubstr("p-values: conformal ranks among 40 clean calibration runs"));
   EXPECT_THAT(readTextFile(dir.path() / "report" / "report.html"),
               testing::HasSubstr("conformal ranks among 40 clean calibration runs"));
   const auto few = command("0.01", dir.path() / "strict");  // 40 runs cannot give p < 0.01
