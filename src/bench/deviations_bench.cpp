@@ -148,6 +148,13 @@ void DeviationsBenchOptions::validate() const {
   if (!(level > 0.0 && level < 1.0)) {
     throw ConfigError::field("command line", "--level", formatValue(level), "a share in (0, 1)");
   }
+  const auto needed = compare::RunCalibration::runsNeeded(metrics.size(), level);
+  if (calibrationSamples > 0 && calibrationSamples < needed) {
+    throw ConfigError::field("command line", "--calibration-samples", std::to_string(calibrationSamples),
+                             fmt::format("0 or at least {} (fewer cannot flag a scene on one of {} p-values at --level "
+                                         "{:g})",
+                                         needed, metrics.size() + 1, level));
+  }
 }
 
 std::pair<double, double> wilsonInterval(double k, double n) {
@@ -210,10 +217,14 @@ void DeviationsBench::prepareCalibration() {
   for (const auto& scene : runs.scenes) {
     if (!scene.polylines.empty()) scenes.push_back(scene);
   }
+  const auto start = std::chrono::steady_clock::now();
   state_->calibration.emplace(state_->scorer->score(scenes, runs.metricNames, "calibration"),
                               state_->scorer->metricNames().size(),
-                              fmt::format("(seed {})", options_.calibrationSeed), options_.level);
+                              fmt::format("(bench runs of seed {})", options_.calibrationSeed), options_.level);
+  calibrationSeconds_ = secondsSince(start);
 }
+
+std::size_t DeviationsBench::calibrationRuns() const { return state_->calibration ? state_->calibration->runs() : 0; }
 
 DeviationSeedCounts DeviationsBench::scoreSeed(std::uint64_t seed) {
   if (!state_->scorer) throw Error("internal: bench deviations scored before its model and calibration were prepared");
@@ -236,17 +247,19 @@ DeviationSeedCounts DeviationsBench::scoreSeed(std::uint64_t seed) {
   }
   for (auto& row : scorer.score(ood_field, ood.metricNames, "ood")) result.scenes.push_back(std::move(row));
   DeviationSeedCounts counts;
+  counts.model = countFlags(result, field, clean, factor);
+  counts.model.seconds = seconds;
+  counts.model.scenes = static_cast<double>(field.scenes.size());
   if (state_->calibration) {
     auto ranked = result;
     ranked.calibrationRuns = state_->calibration->runs();
-    for (auto& scene : ranked.scenes) state_->calibration->apply(scene);
+    const auto ranking = std::chrono::steady_clock::now();
+    for (std::size_t j = 0; j < field.scenes.size(); ++j) state_->calibration->apply(ranked.scenes[j]);
+    const double ranking_seconds = secondsSince(ranking);
+    for (std::size_t j = field.scenes.size(); j < ranked.scenes.size(); ++j) state_->calibration->apply(ranked.scenes[j]);
     counts.runs = countFlags(ranked, field, clean, factor);
-  }
-  counts.model = countFlags(result, field, clean, factor);
-  for (auto* c : {&counts.model, counts.runs ? &*counts.runs : nullptr}) {
-    if (c == nullptr) continue;
-    c->seconds = seconds;
-    c->scenes = static_cast<double>(field.scenes.size());
+    counts.runs->seconds = seconds + ranking_seconds;  // scoring, then ranking among the runs
+    counts.runs->scenes = static_cast<double>(field.scenes.size());
   }
   return counts;
 }

@@ -53,8 +53,13 @@ int printDeviationsBench(const bench::DeviationsBenchOptions& given) {
   const auto model = bench.prepareModel();
   if (given.model.empty()) printModel(bench, model);
   bench.prepareCalibration();
-  const std::string runs = fmt::format("ranked among {} clean calibration runs (seed {})", options.calibrationSamples,
+  const std::string runs = fmt::format("ranked among {} clean calibration runs (seed {})", bench.calibrationRuns(),
                                        options.calibrationSeed);
+  if (options.calibrationSamples > 0) {
+    fmt::print("  calibration: {} of {} clean runs of seed {} rank (the others failed or left the map at once), scored "
+               "once in {:.2f} s\n",
+               bench.calibrationRuns(), options.calibrationSamples, options.calibrationSeed, bench.calibrationSeconds());
+  }
   for (const auto& [name, seeds] : {std::pair{"validation", options.validationSeeds}, std::pair{"test", options.testSeeds}}) {
     for (const auto seed : seeds) {
       const auto counts = bench.scoreSeed(seed);

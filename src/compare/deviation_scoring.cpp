@@ -52,13 +52,25 @@ void combine(SceneDeviation& row) {
   row.pathWorst = !std::isnan(row.pathP) && !(worst <= row.pathP);
 }
 
-/// A metric's conformal score: how far the recorded value is from the most likely future's
-/// (0 where both are the same infinity; NaN where only one is finite or either is NaN).
+/// A metric's conformal score: how far the recorded value is from the most likely future's.
+/// 0 where both are the same infinity; +inf where only one is finite (e.g. a recorded time to
+/// collision where the most likely future never closes in: as surprising as it gets); NaN
+/// where either is NaN.
 double metricScore(const MetricTail& tail) {
+  if (std::isnan(tail.recorded) || std::isnan(tail.mostLikely)) return kNaN;
   if (tail.recorded == tail.mostLikely) return 0.0;
-  if (!std::isfinite(tail.recorded) || !std::isfinite(tail.mostLikely)) return kNaN;
+  if (!std::isfinite(tail.recorded) || !std::isfinite(tail.mostLikely)) return std::numeric_limits<double>::infinity();
   return std::abs(tail.recorded - tail.mostLikely);
 }
+
+/// Whether calibration runs can rank a scene: one the model's calibration scored, or one it
+/// could not (no metric defined) whose path has a region excess.
+bool rankable(const SceneDeviation& scene) {
+  if (scene.status == SceneStatus::Scored) return true;
+  return scene.status == SceneStatus::NotScored && !std::isnan(scene.regionExcess);
+}
+
+
 
 /// (1 + calibration scores >= score) / (n + 1): the split-conformal p of `score` among the
 /// sorted `scores`; NaN for a NaN score or no scores.
@@ -140,6 +152,13 @@ void scorePath(SceneDeviation& row, const model::Prediction& prediction, const v
 
 }  // namespace
 
+std::size_t RunCalibration::runsNeeded(std::size_t metrics, double level) {
+  const double c = static_cast<double>(metrics + 1);  // the metrics and the path
+  auto n = static_cast<std::size_t>(std::floor(c / level));
+  if (c / static_cast<double>(n + 1) >= level) ++n;  // rounding
+  return n;
+}
+
 double intervalCentre(const DeviationResult& result, const MetricTail& tail) {
   return result.calibrationRuns > 0 ? tail.mostLikely : tail.median;
 }
@@ -148,7 +167,7 @@ RunCalibration::RunCalibration(const std::vector<SceneDeviation>& scenes, std::s
                                double level)
     : source_(std::move(source)), level_(level) {
   for (const auto& scene : scenes) {
-    if (scene.status != SceneStatus::Scored) continue;
+    if (!rankable(scene)) continue;
     auto& scores = byLabel_[scene.label];
     scores.metrics.resize(metrics);
     ++scores.runs;
@@ -176,15 +195,16 @@ std::size_t RunCalibration::runs() const {
 }
 
 void RunCalibration::apply(SceneDeviation& row) const {
-  if (row.status != SceneStatus::Scored) return;
+  if (!rankable(row)) return;
   const auto found = byLabel_.find(row.label);
-  auto needed = static_cast<std::size_t>(std::floor(1.0 / level_));  // the fewest giving p = 1 / (n + 1) < level
-  if (1.0 / static_cast<double>(needed + 1) >= level_) ++needed;
+  const std::size_t components = row.metrics.size() + 1;  // the metrics and the path
+  const std::size_t needed = runsNeeded(row.metrics.size(), level_);
   if (found == byLabel_.end() || found->second.runs < needed) {
     throw ConfigError::field("command line", "--calibration " + source_, fmt::format("{} runs of label '{}'", runs(row.label), row.label),
-                             fmt::format("at least {} clean runs of each label of the field data (fewer give no p below "
-                                         "the level {:g})",
-                                         needed, level_));
+                             fmt::format("at least {} clean runs of each label of the field data (with fewer, one of "
+                                         "the {} p-values - {} metrics and the path - cannot flag a scene alone at the "
+                                         "level {:g})",
+                                         needed, components, row.metrics.size(), level_));
   }
   const auto& scores = found->second;
   for (std::size_t m = 0; m < row.metrics.size() && m < scores.metrics.size(); ++m) {
@@ -196,6 +216,10 @@ void RunCalibration::apply(SceneDeviation& row) const {
   }
   row.pathP = conformalP(scores.path, row.regionExcess);
   combine(row);
+  if (!std::isnan(row.p) && row.status == SceneStatus::NotScored) {  // its path is ranked now
+    row.status = SceneStatus::Scored;
+    row.reason.clear();
+  }
 }
 
 const char* statusName(SceneStatus status) {

@@ -68,7 +68,7 @@ std::string pathReason(const SceneDeviation& scene, double step) {
                      scene.regionExcess > 1.0 ? fmt::format("by a factor {:.1f} in squared distance", scene.regionExcess)
                                               : "throughout",
                      step * scene.regionStep, scene.longitudinal, scene.lateral,
-                     std::isnan(scene.pathP) ? "" : fmt::format("; p {:.3g}", scene.pathP));
+                     std::isnan(scene.pathP) ? "" : fmt::format("; p {:.3g} among the calibration runs' paths", scene.pathP));
 }
 
 /// Why a flagged scene is flagged: its smallest p first.
@@ -79,9 +79,9 @@ std::string flagReason(const DeviationResult& result, const SceneDeviation& scen
   return path.empty() ? metric : metric + "; " + path;
 }
 
-/// "<label>: <axis>, <metric> <lower|higher> than predicted" (or "path off its predicted region").
+/// "<label>: <axis>, <metric> <lower|higher> than predicted" (or "path far from the most likely one").
 std::string flagGroup(const DeviationResult& result, const SceneDeviation& scene) {
-  if (scene.pathWorst) return fmt::format("{}: {}, path off its predicted region", scene.label, scene.axis);
+  if (scene.pathWorst) return fmt::format("{}: {}, path far from the most likely one", scene.label, scene.axis);
   const auto& tail = scene.metrics.at(scene.worstMetric);
   return fmt::format("{}: {}, {} {}", scene.label, scene.axis, result.metricNames[scene.worstMetric],
                      tail.recorded < intervalCentre(result, tail) ? "lower than predicted" : "higher than predicted");

@@ -63,6 +63,13 @@ TEST(Bench, OptionsOutsideTheirRangesAreRefused) {
   deviations.share = 0.3;
   deviations.level = 0.0;
   EXPECT_THROW(deviations.validate(), ConfigError);
+  deviations.level = 0.05;
+  deviations.calibrationSamples = 79;  // three metrics and the path: one extreme p gives 4 / 80
+  EXPECT_THROW(deviations.validate(), ConfigError);
+  deviations.calibrationSamples = 80;
+  EXPECT_NO_THROW(deviations.validate());
+  deviations.calibrationSamples = 0;  // not ranked among runs at all
+  EXPECT_NO_THROW(deviations.validate());
 }
 
 TEST(Bench, LibraryScenariosAreTheSortedYamlFilesOfAFolder) {

@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <fstream>
 
 #include "../model/synthetic_scenes.hpp"
@@ -266,8 +267,9 @@ TEST_F(DeviationsTest, CalibrationRunsThatCannotRankTheFieldAreOneLineAndWriteNo
   const auto field = writeField(dir.path() / "field.h5", {fieldScene(200, Change::None)});
   const auto out = dir.path() / "out";
   auto options = optionsFor(field, out);
-  options.calibration = {writeField(dir.path() / "few.h5", runs)};  // 19 runs: p >= 1/20, never below 0.05
-  expectRefused<ConfigError>(options, "at least 20 clean runs");
+  // 19 runs: one extreme p of four (three metrics and the path) gives Simes' 4 / 20, never below 0.05.
+  options.calibration = {writeField(dir.path() / "few.h5", runs)};
+  expectRefused<ConfigError>(options, "at least 80 clean runs");
   options.calibration = {writeField(dir.path() / "other.h5", other_label)};
   expectRefused<ConfigError>(options, "0 runs of label 'acc'");
   fs::create_directories(dir.path() / "empty");
@@ -279,7 +281,7 @@ TEST_F(DeviationsTest, CalibrationRunsThatCannotRankTheFieldAreOneLineAndWriteNo
 TEST_F(DeviationsTest, TheCommandRanksAmongCalibrationRunsAndRefusesTooFewInOneLine) {
   TemporaryDirectory dir;
   std::vector<vector::VectorizedScene> runs, field;
-  for (std::uint64_t i = 500; i < 540; ++i) runs.push_back(fieldScene(i, Change::None));
+  for (std::uint64_t i = 500; i < 600; ++i) runs.push_back(fieldScene(i, Change::None));
   for (std::uint64_t i = 200; i < 210; ++i) field.push_back(fieldScene(i, i % 2 ? Change::Brakes : Change::None));
   const auto field_file = writeField(dir.path() / "field.h5", field);
   const auto runs_file = writeField(dir.path() / "runs.h5", runs);
@@ -292,13 +294,13 @@ TEST_F(DeviationsTest, TheCommandRanksAmongCalibrationRunsAndRefusesTooFewInOneL
   const auto ok = command("0.05", dir.path() / "report");
   ASSERT_EQ(ok.exitCode, 0) << ok.output;
   EXPECT_THAT(ok.output, testing::HasSubstr("deviations: 10 scenes, 10 scored"));
-  EXPECT_THAT(ok.output, testing::HasSubstr("p-values: conformal ranks among 40 clean calibration runs"));
+  EXPECT_THAT(ok.output, testing::HasSubstr("p-values: conformal ranks among 100 clean calibration runs"));
   EXPECT_THAT(readTextFile(dir.path() / "report" / "report.html"),
-              testing::HasSubstr("conformal ranks among 40 clean calibration runs"));
-  const auto few = command("0.01", dir.path() / "strict");  // 40 runs cannot give p < 0.01
+              testing::HasSubstr("conformal ranks among 100 clean calibration runs"));
+  const auto few = command("0.01", dir.path() / "strict");  // 100 runs: one extreme p of four gives 4 / 101
   EXPECT_EQ(few.exitCode, 2) << few.output;  // a flag value
   EXPECT_THAT(few.output, testing::HasSubstr("--calibration " + runs_file.string()));
-  EXPECT_THAT(few.output, testing::HasSubstr("at least 100 clean runs"));
+  EXPECT_THAT(few.output, testing::HasSubstr("at least 400 clean runs"));
   EXPECT_EQ(std::count(few.output.begin(), few.output.end(), '\n'), 1) << few.output;
   EXPECT_FALSE(fs::exists(dir.path() / "strict"));
 }
@@ -316,7 +318,7 @@ TEST(RunCalibration, PValuesAreConformalRanksAndIntervalsTheRunsNinetyPercentSco
   };
   std::vector<SceneDeviation> runs;
   for (int i = 1; i <= 20; ++i) runs.push_back(row("acc", i % 2 ? i : -i, i));  // scores 1 .. 20 either side
-  const RunCalibration calibration(runs, 1, "runs.h5", 0.05);
+  const RunCalibration calibration(runs, 1, "runs.h5", 0.1);  // 2 p-values: 20 runs let one alone reach 2 / 21
   EXPECT_EQ(calibration.runs("acc"), 20u);
   EXPECT_EQ(calibration.runs("lk"), 0u);
   auto far = row("acc", -20.5, 0.5);
@@ -334,6 +336,23 @@ TEST(RunCalibration, PValuesAreConformalRanksAndIntervalsTheRunsNinetyPercentSco
   EXPECT_TRUE(middle.pathWorst);
   auto unknown = row("lk", 0.0, 0.0);
   EXPECT_THROW(calibration.apply(unknown), ConfigError);
+  // Only the recorded value is finite (a time to collision where the most likely future never
+  // closes in): beyond every run.
+  auto one_sided = row("acc", 0.0, 0.5);
+  one_sided.metrics[0].mostLikely = std::numeric_limits<double>::infinity();
+  calibration.apply(one_sided);
+  EXPECT_DOUBLE_EQ(one_sided.metrics[0].p, 1.0 / 21.0);
+  // No metric defined (the model's calibration could not score it), but a path: ranked by it.
+  auto path_only = row("acc", 0.0, 30.0);
+  path_only.metrics[0].recorded = std::numeric_limits<double>::quiet_NaN();
+  path_only.status = SceneStatus::NotScored;
+  calibration.apply(path_only);
+  EXPECT_EQ(path_only.status, SceneStatus::Scored);
+  EXPECT_DOUBLE_EQ(path_only.p, 1.0 / 21.0);
+  EXPECT_TRUE(path_only.pathWorst);
+  const RunCalibration strict(runs, 1, "runs.h5", 0.05);  // 2 p-values at 0.05: 40 runs needed
+  auto middle_again = row("acc", 10.0, 15.0);
+  EXPECT_THROW(strict.apply(middle_again), ConfigError);
 }
 
 TEST(DeviationRanking, MostSurprisingFirstGroupedByLabelAxisAndMetric) {

@@ -47,7 +47,8 @@ struct DeviationsBenchOptions {
   int threads = 1;  ///< on a loaded machine, libtorch's second thread spins against other processes
   int jobs = 1;
 
-  /// Throws ConfigError for a share or level outside (0, 1).
+  /// Throws ConfigError for a share or level outside (0, 1), and for calibration samples too
+  /// few for one p-value alone to flag a scene at the level.
   void validate() const;
 };
 
@@ -85,11 +86,16 @@ class DeviationsBench {
   DeviationsModel prepareModel();
   /// Simulates and scores the calibration runs (none when calibrationSamples is 0); after prepareModel.
   void prepareCalibration();
+  /// The calibration runs that rank (scored, in the model's distribution); 0 without.
+  std::size_t calibrationRuns() const;
+  /// s scoring the calibration runs (once per bench; not in a seed's throughput).
+  double calibrationSeconds() const { return calibrationSeconds_; }
   /// Simulates and scores the field of `seed` with the prepared model (and calibration).
   DeviationSeedCounts scoreSeed(std::uint64_t seed);
 
  private:
   DeviationsBenchOptions options_;
+  double calibrationSeconds_ = 0.0;
   struct State;
   std::unique_ptr<State> state_;
 };

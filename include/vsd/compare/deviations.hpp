@@ -149,17 +149,23 @@ class DeviationScorer {
 /// never trained on (`deviations --calibration`, docs/deviations.md).
 class RunCalibration {
  public:
-  /// `scenes`: the calibration runs as DeviationScorer::score returns them (only Scored ones
-  /// count), `metrics` entries each. `source` names them in errors; `level` is the level p is
-  /// compared with (a label with too few runs to give a p below it is refused by apply).
+  /// `scenes`: the calibration runs as DeviationScorer::score returns them (those with a
+  /// metric or a path to rank count; out-of-distribution ones not), `metrics` entries each.
+  /// `source` names them in errors; `level` is the level p is compared with (apply refuses a
+  /// label with too few runs for one p-value alone to flag a scene below it).
   RunCalibration(const std::vector<SceneDeviation>& scenes, std::size_t metrics, std::string source, double level);
   /// Calibration runs of `label` (0: none).
   std::size_t runs(const std::string& label) const;
   /// Calibration runs of every label.
   std::size_t runs() const;
+  /// The fewest runs of a label with which one of the metrics' and the path's p-values alone
+  /// can flag a scene at `level`: the smallest n with (metrics + 1) / (n + 1) < level (Simes'
+  /// rule with one extreme p = 1 / (n + 1)).
+  static std::size_t runsNeeded(std::size_t metrics, double level);
   /// Ranks `row` among its label's runs: each metric's p (and its 90 % interval: the most likely
-  /// value +- the runs' 90 % score), the path's p, and their Simes combination. Throws
-  /// ConfigError naming `source` for a label without runs or with fewer than 1 / level.
+  /// value +- the runs' 90 % score), the path's p, and their Simes combination; a scene the
+  /// model's calibration could not score but whose path is ranked becomes Scored. Throws
+  /// ConfigError naming `source` for a label with fewer runs than (metrics + 1) / level.
   void apply(SceneDeviation& row) const;
 
  private:
