@@ -54,6 +54,7 @@ Catalogs::Catalogs(const xml::Reader& scenario, const pugi::xml_node& root, cons
       // Files name catalog folders they never use (esmini's examples do); a reference into
       // one fails where it occurs, naming the folders searched.
       findings.note(scenario.where(directory), fmt::format("{} is not a directory: not read", path.string()));
+      missing_.push_back(path);
       continue;
     }
     directories_.push_back(path);
@@ -84,6 +85,7 @@ std::shared_ptr<xml::Reader> Catalogs::catalog(const xml::Reader& scenario, cons
   if (by_file_name) return by_file_name;
   std::vector<std::string> searched;
   for (const auto& directory : directories_) searched.push_back(directory.string());
+  for (const auto& directory : missing_) searched.push_back(directory.string() + " (no such directory)");
   scenario.fail(reference, fmt::format("catalogName=\"{}\": no catalog of that name in the catalog directories ({})",
                                        name, searched.empty() ? std::string("none declared")
                                                               : fmt::format("{}", fmt::join(searched, ", "))));

@@ -54,6 +54,7 @@ class Catalogs {
                                        const std::string& name);
 
   std::vector<std::filesystem::path> directories_;
+  std::vector<std::filesystem::path> missing_;  ///< named in the file, not directories: listed in errors
   std::map<std::filesystem::path, std::shared_ptr<xml::Reader>> files_;
 };
 

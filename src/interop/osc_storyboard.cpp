@@ -339,6 +339,15 @@ YAML::Node relationLeaf(Translation& translation, const Entity& actor, const Ent
   const double value = reader.number(condition, "value", NumberRange::atLeast(0.0));
   // The language's gap / headway / ttc fire at most at a bound; `_at_least` at least.
   const bool at_least = boundOf(reader, condition, /*never_negative=*/quantity != "gap", value) == "at_least";
+  if (at_least && quantity != "gap") {
+    // OpenSCENARIO's headway and time to collision run from the triggering entity to the reference
+    // ahead of it and are undefined (false) otherwise; the language's are the rear one's,
+    // whichever of the two that is - a lower bound would hold while the order is the other way.
+    reader.fail(condition, fmt::format("rule=\"{}\": a lower bound on a {} measured from the triggering entity "
+                                       "(the language measures from the rear one of the two, whichever it is)",
+                                       reader.text(condition, "rule"), quantity == "headway" ? "time headway"
+                                                                                              : "time to collision"));
+  }
   trigger[at_least ? quantity + "_at_least" : quantity] = num(value);
   const std::string other = counterpart(translation, actor, condition, triggering, reference);
   if (other != "ego") trigger["to"] = other;
@@ -558,20 +567,22 @@ std::optional<YAML::Node> conditionGroup(Translation& translation, const Entity&
 /// True for a StartTrigger without conditions (absent, or without a ConditionGroup): it
 /// starts its element at once, as esmini reads it. Noted when empty, and when absent if
 /// `note_absent` (an Event's; a Story has none, and an Act without one is common).
-bool startsAtOnce(Translation& translation, const pugi::xml_node& parent, bool note_absent) {
+bool startsAtOnce(Translation& translation, const pugi::xml_node& parent, bool note_absent, bool note = true) {
   const pugi::xml_node start = parent.child("StartTrigger");
+  if (start) translation.reader.requireSubset(start, {"ConditionGroup"});
   if (start && start.child("ConditionGroup")) return false;
-  if (!start && !note_absent) return true;
+  if (!note || (!start && !note_absent)) return true;
   translation.findings.note(translation.reader.where(start ? start : parent),
                             fmt::format("{} StartTrigger: <{}> starts at t = 0", start ? "an empty" : "no",
                                         parent.name()));
   return true;
 }
 
-/// The language trigger of an Event's StartTrigger: its groups ORed ({time: 0} without
-/// conditions); nullopt: it never fires.
-std::optional<YAML::Node> startTrigger(Translation& translation, const Entity& actor, const pugi::xml_node& event) {
-  if (startsAtOnce(translation, event, /*note_absent=*/true)) {
+/// The language trigger of an Event's StartTrigger for `actor`: its groups ORed ({time: 0}
+/// without conditions, noted if `note`: once per Event); nullopt: it never fires.
+std::optional<YAML::Node> startTrigger(Translation& translation, const Entity& actor, const pugi::xml_node& event,
+                                       bool note) {
+  if (startsAtOnce(translation, event, /*note_absent=*/true, note)) {
     YAML::Node now;
     now["time"] = 0;
     return now;
@@ -736,7 +747,7 @@ void readStories(Translation& translation, const pugi::xml_node& storyboard) {
     translation.findings.attempt([&] {
       reader.setParameters(event.scope);
       for (auto& pending : event.actions) {
-        const auto trigger = startTrigger(translation, *pending.actor, event.node);
+        const auto trigger = startTrigger(translation, *pending.actor, event.node, &pending == &event.actions.front());
         if (!trigger) {
           translation.findings.note(reader.where(event.node), "its condition never holds: the event never starts");
           return;

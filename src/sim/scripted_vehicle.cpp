@@ -279,8 +279,11 @@ bool ScriptedTraffic::Impl::holds(const scenario::ConcreteTrigger& trigger, std:
     case TriggerSpec::Kind::Headway:
     case TriggerSpec::Kind::Ttc: {
       // Exact, as these were before the *_at_least forms: a gap is no count reached through steps.
+      // inf stands for undefined (the rear one stands; the two do not close in): it holds
+      // neither bound, as an OpenSCENARIO condition on an undefined value is false.
       const double value = relationValue(trigger, owner, ego);
-      return trigger.bound == TriggerSpec::Bound::AtMost ? value <= trigger.value : value >= trigger.value;
+      return trigger.bound == TriggerSpec::Bound::AtMost ? value <= trigger.value
+                                                         : std::isfinite(value) && value >= trigger.value;
     }
     case TriggerSpec::Kind::Speed: return withinBound(stateOf(trigger.subject, ego).speed, trigger);
     case TriggerSpec::Kind::RelativeSpeed:

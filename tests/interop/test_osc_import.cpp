@@ -156,6 +156,8 @@ TEST(OscImport, BadReferencesAreOneLineEach) {
   EXPECT_THAT(test::configErrorOf([&] { importTemplate(dir->path() / "no_folder.xosc", {}); }),
               HasSubstr("no_folder.xosc:37: <CatalogReference>: catalogName=\"fleet\": no catalog of that name in the "
                         "catalog directories"));
+  EXPECT_THAT(test::configErrorOf([&] { importTemplate(dir->path() / "no_folder.xosc", {}); }),
+              HasSubstr("catalogs/lorries (no such directory)"));
   const ScenarioCheck unused = checkOpenScenario(dir->path() / "unused_folder.xosc", {});
   EXPECT_TRUE(unused.runnable()) << unused.report();
   EXPECT_THAT(unused.report(), HasSubstr("catalogs/objects is not a directory: not read"));
@@ -620,13 +622,6 @@ TEST(OscRun, EachConditionStartsItsEventWhereTheFileSays) {
       // after 2.90 s
       {group(entityCondition("Lead", R"(<RelativeDistanceCondition entityRef="Slow" value="45.5" freespace="true"
           relativeDistanceType="longitudinal" rule="greaterThan"/>)")), 3.0 + kNext},
-      // Slow's headway (gap / 18 m/s) >= 2.5 s: a gap of 45 m after 2.80 s
-      {group(entityCondition("Lead", R"(<TimeHeadwayCondition entityRef="Slow" value="2.5" freespace="true"
-          rule="greaterOrEqual"/>)")), 2.8 + kNext},
-      // the two never close in: an infinite time to collision is above any bound from the start
-      {group(entityCondition("Lead", R"(<TimeToCollisionCondition value="100" freespace="true" rule="greaterThan">
-          <TimeToCollisionConditionTarget><EntityRef entityRef="Slow"/></TimeToCollisionConditionTarget>
-          </TimeToCollisionCondition>)")), 0.0 + kNext},
   };
   int n = 0;
   for (const auto& [groups, seen] : cases) {
@@ -651,6 +646,7 @@ TEST(OscRun, TriggersWithoutConditionsStartAtOnceAndNeverStop) {
       {{"empty_act.xosc", std::string(text).insert(act_end, "<StartTrigger/><StopTrigger/>")},
        {"empty_event.xosc", conditionsWith("")},
        {"no_event_trigger.xosc", std::string(text).erase(event_start, event_end - event_start)},
+       {"no_group.xosc", conditionsWith(timeCondition("1"))},  // a Condition outside any ConditionGroup
        {"timed.xosc", std::string(text).insert(act_end, "<StopTrigger>" + group(timeCondition("3")) + "</StopTrigger>")}});
   const ScenarioCheck act = checkOpenScenario(dir->path() / "empty_act.xosc", {});
   EXPECT_TRUE(act.runnable()) << act.report();
@@ -664,6 +660,8 @@ TEST(OscRun, TriggersWithoutConditionsStartAtOnceAndNeverStop) {
     EXPECT_THAT(check.report(), HasSubstr(note));
     EXPECT_NEAR(stepDownSeen(dir->path() / name), 0.2, 1e-9) << name;
   }
+  EXPECT_THAT(test::configErrorOf([&] { importTemplate(dir->path() / "no_group.xosc", {}); }),
+              HasSubstr("element <Condition> is outside the supported subset"));
   const std::string error = test::configErrorOf([&] { importTemplate(dir->path() / "timed.xosc", {}); });
   EXPECT_THAT(error, HasSubstr("timed.xosc:"));
   EXPECT_THAT(error, HasSubstr("an Act's StopTrigger with conditions: the language runs each started action to its end"));
@@ -684,6 +682,15 @@ TEST(OscImport, ConditionsTheLanguageCannotExpressAreOneLineEach) {
        "element <RelativeLanePosition> is outside the supported subset"},
       {group(timeCondition("1") + entityCondition("Lead", R"(<TraveledDistanceCondition value="30"/>)", "2")),
        "delay 2 s, another condition of its group 0 s: the language delays a group as a whole"},
+      // OpenSCENARIO measures these from the triggering entity to the reference ahead of it
+      // (false otherwise); the language from the rear one of the two.
+      {group(entityCondition("Lead", R"(<TimeHeadwayCondition entityRef="Slow" value="2.5" freespace="true"
+          rule="greaterOrEqual"/>)")),
+       "<TimeHeadwayCondition>: rule=\"greaterOrEqual\": a lower bound on a time headway measured from the triggering"},
+      {group(entityCondition("Lead", R"(<TimeToCollisionCondition value="100" freespace="true" rule="greaterThan">
+          <TimeToCollisionConditionTarget><EntityRef entityRef="Slow"/></TimeToCollisionConditionTarget>
+          </TimeToCollisionCondition>)")),
+       "rule=\"greaterThan\": a lower bound on a time to collision"},
       {group(R"(<Condition name="f" delay="0" conditionEdge="falling"><ByValueCondition>
           <SimulationTimeCondition value="1" rule="greaterOrEqual"/></ByValueCondition></Condition>)"),
        "conditionEdge=\"falling\""},

@@ -124,8 +124,8 @@ struct TriggerSpec {
   enum class Kind {
     Time,     ///< simulation time >= value (s); not quantised to instants
     Gap,      ///< bumper-to-bumper gap along the Ego's lane to `reference` vs value (m, `bound`)
-    Headway,  ///< time headway of the rear one of the two (gap / its speed) vs value (s; inf standing)
-    Ttc,      ///< time to collision along the Ego's lane (gap / closing speed) vs value (s; inf not closing)
+    Headway,  ///< time headway of the rear one of the two (gap / its speed) vs value (s; undefined standing)
+    Ttc,      ///< time to collision along the Ego's lane (gap / closing speed) vs value (s; undefined not closing)
     After,    ///< `action` ended (+ delay)
     Speed,          ///< the subject's speed vs value (m/s, `bound`)
     RelativeSpeed,  ///< the subject's speed minus `reference`'s vs value (m/s)
