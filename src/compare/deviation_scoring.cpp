@@ -194,19 +194,19 @@ std::size_t RunCalibration::runs() const {
   return total;
 }
 
+void RunCalibration::requireRuns(const std::string& label, std::size_t metrics) const {
+  const std::size_t needed = runsNeeded(metrics, level_);
+  if (runs(label) >= needed) return;
+  throw ConfigError::field("command line", "--calibration " + source_, fmt::format("{} runs of label '{}'", runs(label), label),
+                           fmt::format("at least {} clean runs of each label of the field data (with fewer, one of the {} "
+                                       "p-values - {} metrics and the path - cannot flag a scene alone at the level {:g})",
+                                       needed, metrics + 1, metrics, level_));
+}
+
 void RunCalibration::apply(SceneDeviation& row) const {
   if (!rankable(row)) return;
-  const auto found = byLabel_.find(row.label);
-  const std::size_t components = row.metrics.size() + 1;  // the metrics and the path
-  const std::size_t needed = runsNeeded(row.metrics.size(), level_);
-  if (found == byLabel_.end() || found->second.runs < needed) {
-    throw ConfigError::field("command line", "--calibration " + source_, fmt::format("{} runs of label '{}'", runs(row.label), row.label),
-                             fmt::format("at least {} clean runs of each label of the field data (with fewer, one of "
-                                         "the {} p-values - {} metrics and the path - cannot flag a scene alone at the "
-                                         "level {:g})",
-                                         needed, components, row.metrics.size(), level_));
-  }
-  const auto& scores = found->second;
+  requireRuns(row.label, row.metrics.size());
+  const auto& scores = byLabel_.at(row.label);
   for (std::size_t m = 0; m < row.metrics.size() && m < scores.metrics.size(); ++m) {
     auto& tail = row.metrics[m];
     tail.p = conformalP(scores.metrics[m], metricScore(tail));

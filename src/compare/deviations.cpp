@@ -206,9 +206,14 @@ void checkRoadUsers(const vector::VectorizedScene& scene, const model::ModelInfo
   }
 }
 
-/// Reads and scores every scene of the field data, a chunk at a time.
+/// Reads and scores every scene of `field`, a chunk at a time. With `ranks` (calibration runs), a
+/// scene of a trained label they cannot rank stops it before any of its chunk is scored.
 void scoreField(const Field& field, const DeviationScorer& scorer, const model::ModelInfo& info,
-                const DeviationOptions& options, DeviationResult& result, double& scoring_seconds) {
+                const DeviationOptions& options, DeviationResult& result, double& scoring_seconds,
+                const RunCalibration* ranks = nullptr) {
+  const auto trained = [&](const std::string& label) {
+    return info.labels.empty() || std::find(info.labels.begin(), info.labels.end(), label) != info.labels.end();
+  };
   for (std::size_t f = 0; f < field.collection.files(); ++f) {
     const auto& reader = field.collection.reader(f);
     const auto& stored = reader.header().metricNames;
@@ -218,6 +223,7 @@ void scoreField(const Field& field, const DeviationScorer& scorer, const model::
       for (std::size_t i = first; i < std::min(reader.size(), first + kChunk); ++i) {
         scenes.push_back(reader.scene(i));
         checkRoadUsers(scenes.back(), info, options.model.string(), reader.path());
+        if (ranks && trained(scenes.back().label)) ranks->requireRuns(scenes.back().label, scorer.metricNames().size());
         if (field.inputNames.empty()) scenes.back().inputs.clear();  // files with other inputs: no input features
       }
       const auto start = std::chrono::steady_clock::now();
@@ -322,7 +328,8 @@ DeviationSummary findDeviations(const DeviationOptions& options) {
   }
   for (const auto& warning : summary.warnings) spdlog::warn("{}", warning);
   const auto calibration = calibrateOnRuns(field, scorer, predictor, options);
-  scoreField(field, scorer, predictor.info(), options, result, summary.scoringSeconds);
+  scoreField(field, scorer, predictor.info(), options, result, summary.scoringSeconds,
+             calibration ? &*calibration : nullptr);
   if (calibration) {
     for (auto& scene : result.scenes) calibration->apply(scene);
     result.calibrationRuns = calibration->runs();

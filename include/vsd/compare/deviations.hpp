@@ -162,6 +162,9 @@ class RunCalibration {
   /// can flag a scene at `level`: the smallest n with (metrics + 1) / (n + 1) < level (Simes'
   /// rule with one extreme p = 1 / (n + 1)).
   static std::size_t runsNeeded(std::size_t metrics, double level);
+  /// Throws ConfigError naming `source` unless `label` has the runs `metrics` scored metrics need
+  /// (runsNeeded): checked before a field scene of a trained label is scored, and by apply.
+  void requireRuns(const std::string& label, std::size_t metrics) const;
   /// Ranks `row` among its label's runs: each metric's p (and its 90 % interval: the most likely
   /// value +- the runs' 90 % score), the path's p, and their Simes combination; a scene the
   /// model's calibration could not score but whose path is ranked becomes Scored. Throws
