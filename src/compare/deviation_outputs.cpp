@@ -117,8 +117,9 @@ report::SceneDrawing drawScene(const DeviationResult& result, const SceneDeviati
     overlays.push_back(std::move(ellipse));
   }
   const auto& tail = row.metrics.at(row.worstMetric);
-  const std::string title = fmt::format("#{} {} sample {}: p {:.3g} ({} {})", rank, row.label, row.sample, row.p,
-                                        result.metricNames[row.worstMetric], cell(tail.recorded));
+  const std::string what = row.pathWorst ? fmt::format("path: region excess {}", cell(row.regionExcess, 1))
+                                         : fmt::format("{} {}", result.metricNames[row.worstMetric], cell(tail.recorded));
+  const std::string title = fmt::format("#{} {} sample {}: p {:.3g} ({})", rank, row.label, row.sample, row.p, what);
   return {row.sample, row.reason,
           vector::renderSceneSvg(scene, overlays, title, 560, "recorded future", /*focus_margin_m=*/8.0)};
 }
