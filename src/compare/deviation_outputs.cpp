@@ -117,7 +117,7 @@ report::SceneDrawing drawScene(const DeviationResult& result, const SceneDeviati
     overlays.push_back(std::move(ellipse));
   }
   const auto& tail = row.metrics.at(row.worstMetric);
-  const std::string what = row.pathWorst ? fmt::format("path: region excess {}", cell(row.regionExcess, 1))
+  const std::string what = row.pathWorst ? fmt::format("path: mean region excess {}", cell(row.regionMeanExcess, 1))
                                          : fmt::format("{} {}", result.metricNames[row.worstMetric], cell(tail.recorded));
   const std::string title = fmt::format("#{} {} sample {}: p {:.3g} ({})", rank, row.label, row.sample, row.p, what);
   return {row.sample, row.reason,
@@ -163,8 +163,8 @@ std::string pValueNote(const DeviationResult& result) {
     return fmt::format(
         "Metrics scored: {}, and the path. p-values are conformal ranks among {} clean calibration runs the model "
         "never trained on (per label): a metric's score is its distance from the most likely future's value, the "
-        "path's its largest squared distance from the most likely future over the calibrated 90 % region's; p = (1 + "
-        "runs scoring at least as high) / (n + 1). A metric's 90 % interval is the most likely value +- the runs' 90 "
+        "path's its squared distance from the most likely future over the calibrated 90 % region's, averaged over "
+        "the steps; p = (1 + runs scoring at least as high) / (n + 1). A metric's 90 % interval is the most likely value +- the runs' 90 "
         "% score. A scene's p combines them by Simes' rule.",
         fmt::join(result.metricNames, ", "), result.calibrationRuns);
   }
@@ -180,7 +180,7 @@ std::string pValueNote(const DeviationResult& result) {
 
 std::vector<std::string> csvHeader(const DeviationResult& result) {
   std::vector<std::string> header = {"source", "row", "sample", "label", "status", "p", "flagged", "rank", "group",
-                                     "worst_metric", "axis", "region_excess_90", "path_p", columnWithUnit("region_time", "s"),
+                                     "worst_metric", "axis", "region_excess_90", "region_mean_excess_90", "path_p", columnWithUnit("region_time", "s"),
                                      columnWithUnit("along", "m"), columnWithUnit("across", "m")};
   for (std::size_t m = 0; m < result.metricNames.size(); ++m) {
     const auto& name = result.metricNames[m];
@@ -201,7 +201,7 @@ std::vector<std::string> csvRow(const DeviationResult& result, const SceneDeviat
                                   statusName(s.status), formatNumber(s.p), s.flagged ? "1" : "0",
                                   rank ? std::to_string(rank) : "", s.group,
                                   scored ? result.metricNames[s.worstMetric] : "", s.axis, formatNumber(s.regionExcess),
-                                  formatNumber(s.pathP),
+                                  formatNumber(s.regionMeanExcess), formatNumber(s.pathP),
                                   scored ? formatNumber(result.step * s.regionStep) : "",
                                   scored ? formatNumber(s.longitudinal) : "", scored ? formatNumber(s.lateral) : ""};
   for (std::size_t m = 0; m < result.metricNames.size(); ++m) {

@@ -67,7 +67,7 @@ double metricScore(const MetricTail& tail) {
 /// could not (no metric defined) whose path has a region excess.
 bool rankable(const SceneDeviation& scene) {
   if (scene.status == SceneStatus::Scored) return true;
-  return scene.status == SceneStatus::NotScored && !std::isnan(scene.regionExcess);
+  return scene.status == SceneStatus::NotScored && !std::isnan(scene.regionMeanExcess);
 }
 
 
@@ -123,10 +123,13 @@ double predictedHeading(const model::Prediction& prediction, const vector::Vecto
 }
 
 /// Where the recorded path leaves its calibrated 90 % region furthest, split along and
-/// across the predicted heading; the region ellipses for drawing.
+/// across the predicted heading, and its mean excess over the steps; the region ellipses for
+/// drawing.
 void scorePath(SceneDeviation& row, const model::Prediction& prediction, const vector::VectorizedScene& scene) {
   const std::size_t steps = std::min(prediction.positionCovariance.size(), scene.target.size());
   double worst = -1.0;
+  double sum = 0.0;
+  double counted = 0.0;
   for (std::size_t k = 0; k < steps; ++k) {
     const auto& covariance = prediction.positionCovariance[k];
     const double r2 = prediction.regionRadius2[k][kRegion90];
@@ -134,6 +137,8 @@ void scorePath(SceneDeviation& row, const model::Prediction& prediction, const v
     if (!scene.targetValid[k]) continue;
     const Vec2 r = scene.target[k] - prediction.mostLikely.positions[k];
     const double d2 = r.dot(covariance.inverse() * r);
+    sum += d2 / r2;
+    counted += 1.0;
     if (!(d2 / r2 > worst)) continue;
     worst = d2 / r2;
     const double h = predictedHeading(prediction, scene, k);
@@ -147,6 +152,7 @@ void scorePath(SceneDeviation& row, const model::Prediction& prediction, const v
     row.axis = std::abs(row.longitudinal) / sd_along >= std::abs(row.lateral) / sd_across ? "longitudinal" : "lateral";
   }
   row.regionExcess = worst >= 0.0 ? worst : kNaN;
+  row.regionMeanExcess = counted > 0 ? sum / counted : kNaN;
   row.predicted = prediction.mostLikely.positions;
 }
 
@@ -175,7 +181,7 @@ RunCalibration::RunCalibration(const std::vector<SceneDeviation>& scenes, std::s
       const double score = metricScore(scene.metrics[m]);
       if (!std::isnan(score)) scores.metrics[m].push_back(score);
     }
-    if (!std::isnan(scene.regionExcess)) scores.path.push_back(scene.regionExcess);
+    if (!std::isnan(scene.regionMeanExcess)) scores.path.push_back(scene.regionMeanExcess);
   }
   for (auto& [label, scores] : byLabel_) {
     for (auto& metric : scores.metrics) std::sort(metric.begin(), metric.end());
@@ -214,7 +220,7 @@ void RunCalibration::apply(SceneDeviation& row) const {
     tail.p05 = tail.mostLikely - bound;
     tail.p95 = tail.mostLikely + bound;
   }
-  row.pathP = conformalP(scores.path, row.regionExcess);
+  row.pathP = conformalP(scores.path, row.regionMeanExcess);
   combine(row);
   if (!std::isnan(row.p) && row.status == SceneStatus::NotScored) {  // its path is ranked now
     row.status = SceneStatus::Scored;

@@ -254,7 +254,9 @@ TEST_F(DeviationsTest, CalibrationRunsRankTheFieldAndFlagChangedBehaviourWithThe
   EXPECT_LE(clean_flagged, 8u);
   EXPECT_GE(changed_flagged, 38u);
   const auto table = CsvTable::read(options.output / "deviations.csv");
-  for (const std::string column : {"path_p", "a_min_most_likely_m_s2"}) EXPECT_TRUE(table.findColumn(column)) << column;
+  for (const std::string column : {"path_p", "region_mean_excess_90", "a_min_most_likely_m_s2"}) {
+    EXPECT_TRUE(table.findColumn(column)) << column;
+  }
   EXPECT_NE(readTextFile(options.output / "report.html").find("conformal ranks among 200 clean calibration runs"),
             std::string::npos);
 }
@@ -310,6 +312,7 @@ TEST(RunCalibration, PValuesAreConformalRanksAndIntervalsTheRunsNinetyPercentSco
     SceneDeviation s;
     s.label = label;
     s.regionExcess = excess;
+    s.regionMeanExcess = excess;  // the path's score
     MetricTail tail;
     tail.mostLikely = 1.0;
     tail.recorded = 1.0 + metric_error;

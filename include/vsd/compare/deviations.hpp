@@ -18,7 +18,7 @@
 //
 // With clean recorded runs the model never trained on (`--calibration`, RunCalibration) the
 // p-values are split-conformal ranks instead: per label, a metric's score is its distance
-// from the most likely future's value and the path's score its region excess (below), and a
+// from the most likely future's value and the path's score its mean region excess (below), and a
 // field scene's p is (1 + calibration scenes scoring at least as high) / (n + 1). For clean
 // field scenes exchangeable with the calibration runs "p < level" then happens to at most a
 // share `level` of them, whatever the model's own calibration; the intervals are narrower
@@ -79,12 +79,15 @@ struct SceneDeviation {
   double p = std::numeric_limits<double>::quiet_NaN();
   bool flagged = false;        ///< p < level
   std::size_t worstMetric = 0;  ///< the metric with the smallest p
-  /// The path's conformal p (regionExcess ranked among the calibration runs'); NaN without them.
+  /// The path's conformal p (regionMeanExcess ranked among the calibration runs'); NaN without them.
   double pathP = std::numeric_limits<double>::quiet_NaN();
   bool pathWorst = false;       ///< pathP is smaller than every metric's p
   /// Max over valid steps of d^2 / r^2_90: the recorded position's squared Mahalanobis
   /// distance over the calibrated 90 % region's (> 1: outside that region). NaN: no valid step.
   double regionExcess = std::numeric_limits<double>::quiet_NaN();
+  /// Mean over valid steps of the same d^2 / r^2_90: the path's score among calibration runs
+  /// (a lasting deviation, such as a lag that grows, outscores a brief one of the same peak).
+  double regionMeanExcess = std::numeric_limits<double>::quiet_NaN();
   int regionStep = 0;           ///< 1-based future step of that maximum
   double longitudinal = 0.0;    ///< m, recorded - predicted mean there, along the predicted heading
   double lateral = 0.0;         ///< m, across it (left positive)
@@ -174,7 +177,7 @@ class RunCalibration {
  private:
   struct Scores {
     std::vector<std::vector<double>> metrics;  ///< per metric: sorted finite scores
-    std::vector<double> path;                  ///< sorted finite region excesses
+    std::vector<double> path;                  ///< sorted finite mean region excesses
     std::size_t runs = 0;
   };
   std::map<std::string, Scores> byLabel_;
