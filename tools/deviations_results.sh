@@ -4,7 +4,8 @@
 # benchmark's defaults: the recommended model trained on 2,000 clean acc_lk scenes,
 # validation seed 101 (where the settings were chosen) and sealed test seeds 201-203, each
 # 2,900 field scenes of which 30 % carry the friction limit (max_decel 3 m/s^2), scored with
-# the model's own calibration and ranked among 2,000 clean calibration runs (seed 301).
+# the model's own calibration and ranked among 2,000 clean calibration runs (seed 301); and
+# bench_deviations_braking.txt: the same field scored on a_min and the path only.
 #
 #   tools/deviations_results.sh [VSD_SUMO]      # from the repository root
 set -eu
@@ -13,9 +14,18 @@ out=results/deviations
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 mkdir -p "$out"
-set -- bench deviations --work "$work/bench" --test-seed 201 202 203 --jobs 2
-{
-  echo "# $("$vsd" --version): $vsd $* (work folder: a temporary one)"
-  "$vsd" "$@"
-} > "$work/bench_deviations.txt"
-mv "$work/bench_deviations.txt" "$out/bench_deviations.txt"
+# bench FILE ARGS...: one benchmark into $work/FILE (the model of the first is reused by the next).
+bench() {
+  file=$1
+  shift
+  set -- bench deviations --work "$work/bench" --test-seed 201 202 203 --jobs 2 "$@"
+  {
+    echo "# $("$vsd" --version): $vsd $* (work folder: a temporary one)"
+    "$vsd" "$@"
+  } > "$work/$file"
+}
+bench bench_deviations.txt
+# A test aimed at braking factors: a_min and the path only (chosen on validation seeds 101 and
+# 102 for this factor; the general default above scores d_min and lane_offset_max too).
+bench bench_deviations_braking.txt --metrics a_min
+mv "$work/bench_deviations.txt" "$work/bench_deviations_braking.txt" "$out/"
