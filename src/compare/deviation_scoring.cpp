@@ -70,8 +70,6 @@ bool rankable(const SceneDeviation& scene) {
   return scene.status == SceneStatus::NotScored && !std::isnan(scene.regionMeanExcess);
 }
 
-
-
 /// (1 + calibration scores >= score) / (n + 1): the split-conformal p of `score` among the
 /// sorted `scores`; NaN for a NaN score or no scores.
 double conformalP(const std::vector<double>& scores, double score) {
