@@ -254,9 +254,8 @@ DeviationSeedCounts DeviationsBench::scoreSeed(std::uint64_t seed) {
     auto ranked = result;
     ranked.calibrationRuns = state_->calibration->runs();
     const auto ranking = std::chrono::steady_clock::now();
-    for (std::size_t j = 0; j < field.scenes.size(); ++j) state_->calibration->apply(ranked.scenes[j]);
+    for (auto& scene : ranked.scenes) state_->calibration->apply(scene);  // unseen labels stay apart
     const double ranking_seconds = secondsSince(ranking);
-    for (std::size_t j = field.scenes.size(); j < ranked.scenes.size(); ++j) state_->calibration->apply(ranked.scenes[j]);
     counts.runs = countFlags(ranked, field, clean, factor);
     counts.runs->seconds = seconds + ranking_seconds;  // scoring, then ranking among the runs
     counts.runs->scenes = static_cast<double>(field.scenes.size());

@@ -12,6 +12,7 @@
 #include "vsd/core/files.hpp"
 #include "vsd/core/log.hpp"
 #include "vsd/core/output_policy.hpp"
+#include "vsd/core/progress.hpp"
 #include "vsd/core/provenance.hpp"
 #include "vsd/core/statistics.hpp"
 #include "vsd/report/numbers.hpp"
@@ -124,9 +125,6 @@ SearchBenchResult runSearchBench(const SearchBenchOptions& options, const OnSear
   SearchBenchResult result;
   // Wall times: the docs state each committed benchmark's time budget against them.
   const auto started = std::chrono::steady_clock::now();
-  const auto secondsSince = [](std::chrono::steady_clock::time_point since) {
-    return std::chrono::duration<double>(std::chrono::steady_clock::now() - since).count();
-  };
   if (options.trueRateSamples > 0) {
     result.trueRate = search::monteCarloRate(options.search, options.trueRateSeed, options.trueRateSamples);
     result.trueRateSeconds = secondsSince(started);

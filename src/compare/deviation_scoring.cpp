@@ -321,6 +321,11 @@ DeviationScorer::~DeviationScorer() = default;
 const std::vector<std::string>& DeviationScorer::metricNames() const { return impl_->scored->names(); }
 std::vector<std::string> DeviationScorer::metricUnits() const { return impl_->scored->units(); }
 
+bool DeviationScorer::trainedOn(const std::string& label) const {
+  const auto& labels = impl_->predictor.info().labels;
+  return labels.empty() || std::find(labels.begin(), labels.end(), label) != labels.end();
+}
+
 std::vector<SceneDeviation> DeviationScorer::score(const std::vector<vector::VectorizedScene>& scenes,
                                                    const std::vector<std::string>& stored,
                                                    const std::string& source) const {
@@ -336,7 +341,7 @@ std::vector<SceneDeviation> DeviationScorer::score(const std::vector<vector::Vec
     row.label = scene.label;
     row.features = scene.inputs;
     row.features.push_back(scene.egoInitialState().speed);
-    if (!labels.empty() && std::find(labels.begin(), labels.end(), scene.label) == labels.end()) {
+    if (!trainedOn(scene.label)) {
       row.status = SceneStatus::OutOfDistribution;
       row.reason = fmt::format("label '{}': the model never trained on it (it trained on {})", scene.label,
                                fmt::join(labels, ", "));

@@ -211,9 +211,6 @@ void checkRoadUsers(const vector::VectorizedScene& scene, const model::ModelInfo
 void scoreField(const Field& field, const DeviationScorer& scorer, const model::ModelInfo& info,
                 const DeviationOptions& options, DeviationResult& result, double& scoring_seconds,
                 const RunCalibration* ranks = nullptr) {
-  const auto trained = [&](const std::string& label) {
-    return info.labels.empty() || std::find(info.labels.begin(), info.labels.end(), label) != info.labels.end();
-  };
   for (std::size_t f = 0; f < field.collection.files(); ++f) {
     const auto& reader = field.collection.reader(f);
     const auto& stored = reader.header().metricNames;
@@ -223,7 +220,9 @@ void scoreField(const Field& field, const DeviationScorer& scorer, const model::
       for (std::size_t i = first; i < std::min(reader.size(), first + kChunk); ++i) {
         scenes.push_back(reader.scene(i));
         checkRoadUsers(scenes.back(), info, options.model.string(), reader.path());
-        if (ranks && trained(scenes.back().label)) ranks->requireRuns(scenes.back().label, scorer.metricNames().size());
+        if (ranks && scorer.trainedOn(scenes.back().label)) {
+          ranks->requireRuns(scenes.back().label, scorer.metricNames().size());
+        }
         if (field.inputNames.empty()) scenes.back().inputs.clear();  // files with other inputs: no input features
       }
       const auto start = std::chrono::steady_clock::now();

@@ -135,6 +135,9 @@ class DeviationScorer {
 
   const std::vector<std::string>& metricNames() const;
   std::vector<std::string> metricUnits() const;
+  /// Whether the model trained on `label` (true for every label when its file does not say):
+  /// scenes of other labels are out of its distribution.
+  bool trainedOn(const std::string& label) const;
   /// Scores `scenes` (one source). `stored`: the names of the metrics the scenes carry
   /// (scene.metrics; the recorded run's values, what the calibration's references were),
   /// empty: every metric from the recorded future. `input_count`: leading scene.inputs used
