@@ -84,12 +84,6 @@ void SearchOptions::validate() const {
     throw ConfigError::field(where, "--prior", priors.front().string(),
                              fmt::format("no --prior with --surrogate {}: it does not learn from scenes", surrogate));
   }
-  if (!reference.empty() && entry.learnsFromScenes) {
-    throw ConfigError::field(where, "--reference", reference,
-                             fmt::format("no --reference with --surrogate {}: it predicts only the Ego's own futures, "
-                                         "not the reference driver's outcome (use extra-trees, bnn or random)",
-                                         surrogate));
-  }
   if (jobs < 1 || jobs > 256) throw ConfigError::field(where, "--jobs", std::to_string(jobs), "1 .. 256");
   if (threads < 1 || threads > 256) throw ConfigError::field(where, "--threads", std::to_string(threads), "1 .. 256");
   if (!(egoStepCost >= 0.0 && egoStepCost <= 10.0)) {

@@ -7,6 +7,11 @@
 // criterion (where none does, a Gaussian tail below 1 / (2 S) that ranks by closeness).
 // Every round trains on all the search's scenes so far: from scratch, or with --prior
 // fine-tuning a model pre-trained on the prior datasets once per search.
+// A criterion column that is no metric of the Ego's own future (with --reference the
+// reference driver's outcome, `reference_d_min`) cannot come from the scenes, which carry
+// the system's future only: it is learnt from the inputs by extra trees, as the
+// `extra-trees` surrogate learns it, and every sampled future is judged with every tree's
+// prediction (the two are independent given the scenario).
 
 #include <fmt/format.h>
 
@@ -15,6 +20,7 @@
 #include <map>
 #include <stdexcept>
 
+#include "vsd/baseline/baseline.hpp"
 #include "vsd/core/error.hpp"
 #include "vsd/core/interrupt.hpp"
 #include "vsd/metrics/metrics.hpp"
@@ -50,11 +56,14 @@ class VectorNetSurrogate final : public Surrogate {
     model::train(train);
     fs::remove(options_.modelFile.string() + ".last");  // resume state of the training: not needed
     predictor_ = std::make_unique<model::Predictor>(options_.modelFile, options_.threads);
+    fitInputModels(data);
   }
 
   std::vector<double> probability(const CandidateSet& candidates, const Criterion& criterion) const override {
     const auto rows = static_cast<std::size_t>(candidates.x.rows());
     std::vector<double> result(rows, 0.0);
+    std::vector<std::vector<Matrix>> per_tree;  // per input model: one [rows, 1] prediction per tree
+    for (const auto& input_model : inputModels_) per_tree.push_back(input_model.forest.predictPerTree(candidates.x));
     model::PredictOptions predict;
     predict.samples = options_.futureSamples;
     predict.seed = options_.seed;
@@ -75,7 +84,9 @@ class VectorNetSurrogate final : public Surrogate {
       }
       if (scenes.empty()) continue;
       const auto predictions = predictor_->predictDistribution(scenes, predict);
-      for (std::size_t k = 0; k < scenes.size(); ++k) result[which[k]] = shareMeeting(scenes[k], predictions[k], criterion);
+      for (std::size_t k = 0; k < scenes.size(); ++k) {
+        result[which[k]] = shareMeeting(scenes[k], predictions[k], inputDraws(per_tree, which[k]), criterion);
+      }
     }
     return result;
   }
@@ -139,29 +150,70 @@ class VectorNetSurrogate final : public Surrogate {
     for (const auto& [label, count] : counts) train.mix.counts.emplace_back(label, count);
   }
 
-  /// Share of the sampled futures whose metrics meet the criterion (futures whose
-  /// criterion metrics cannot be computed do not count). Where none meets it (a rare
-  /// criterion: most candidates), the share is 0 everywhere and cannot rank; then the
-  /// Gaussian tail of the futures' criterion metrics (their mean and spread,
-  /// tailProbability) ranks by closeness, scaled below 1 / (2 S) so that it stays below
-  /// every candidate with a future that meets it.
+  /// Share of the (sampled future, input-model tree) pairs whose values meet the criterion
+  /// (futures whose criterion metrics cannot be computed do not count; without input
+  /// models every future is one pair). Where none meets it (a rare criterion: most
+  /// candidates), the share is 0 everywhere and cannot rank; then the Gaussian tail of the
+  /// criterion's values (their mean and spread, tailProbability) ranks by closeness, scaled
+  /// below 1 / (2 S) so that it stays below every candidate with a future that meets it.
   double shareMeeting(const vector::VectorizedScene& scene, const model::Prediction& prediction,
-                      const Criterion& criterion) const {
+                      const std::vector<std::vector<double>>& input_draws, const Criterion& criterion) const {
     const auto& used = criterion.usedColumns();
+    const std::size_t own = options_.metricSet->names().size();
     std::vector<std::vector<double>> draws(used.size());
-    std::size_t judged = 0;
+    for (std::size_t k = 0; k < inputModels_.size(); ++k) draws[inputModels_[k].slot] = input_draws[k];
+    const std::size_t pairs_per_future = inputModels_.empty() ? 1 : input_draws.front().size();
+    std::vector<double> values(used.size());
+    std::size_t futures = 0;
     std::size_t meeting = 0;
     for (const auto& future : prediction.samples) {
-      const auto values = pipeline::metricsOfFuture(*options_.metricSet, scene, future.positions, future.states);
-      const auto verdict = criterion.verdict(values);
-      if (!verdict) continue;
-      ++judged;
-      meeting += *verdict ? 1 : 0;
-      for (std::size_t m = 0; m < used.size(); ++m) draws[m].push_back(values[used[m]]);
+      const auto metrics = pipeline::metricsOfFuture(*options_.metricSet, scene, future.positions, future.states);
+      bool computable = true;
+      for (std::size_t m = 0; m < used.size(); ++m) {
+        if (used[m] >= own) continue;
+        values[m] = metrics[used[m]];
+        computable = computable && !std::isnan(values[m]);
+      }
+      if (!computable) continue;
+      ++futures;
+      for (std::size_t m = 0; m < used.size(); ++m) {
+        if (used[m] < own) draws[m].push_back(values[m]);
+      }
+      for (std::size_t t = 0; t < pairs_per_future; ++t) {
+        for (std::size_t k = 0; k < inputModels_.size(); ++k) values[inputModels_[k].slot] = input_draws[k][t];
+        meeting += criterion.meetsUsed(values) ? 1 : 0;
+      }
     }
-    if (judged == 0) return 0.0;
-    if (meeting > 0) return static_cast<double>(meeting) / static_cast<double>(judged);
-    return tailProbabilityOf(draws, criterion) / (2.0 * static_cast<double>(judged));
+    if (futures == 0) return 0.0;
+    const double pairs = static_cast<double>(futures * pairs_per_future);
+    if (meeting > 0) return static_cast<double>(meeting) / pairs;
+    return tailProbabilityOf(draws, criterion) / (2.0 * static_cast<double>(futures));
+  }
+
+  /// One forest per criterion column that is not a metric of the Ego's own future (the
+  /// --reference driver's outcome), fitted on the inputs like the `extra-trees` surrogate.
+  void fitInputModels(const TrainingSet& data) {
+    const std::size_t own = options_.metricSet->names().size();
+    inputModels_.clear();
+    for (std::size_t slot = 0; slot < data.columns.size(); ++slot) {
+      if (data.columns[slot] < own) continue;
+      baseline::ExtraTreesOptions tree_options;
+      tree_options.trees = options_.trees;
+      tree_options.seed = options_.seed + static_cast<std::uint64_t>(slot);
+      baseline::ExtraTrees forest(tree_options);
+      forest.fit(data.x, data.y.col(static_cast<Eigen::Index>(slot)));
+      inputModels_.push_back({slot, std::move(forest)});
+    }
+  }
+
+  /// Candidate `row`'s predictions of every input model, one per tree.
+  std::vector<std::vector<double>> inputDraws(const std::vector<std::vector<Matrix>>& per_tree, std::size_t row) const {
+    std::vector<std::vector<double>> draws;
+    for (const auto& trees : per_tree) {
+      draws.emplace_back();
+      for (const auto& prediction : trees) draws.back().push_back(prediction(static_cast<Eigen::Index>(row), 0));
+    }
+    return draws;
   }
 
   /// tailProbability of the draws' mean and standard deviation per metric (finite draws
@@ -186,8 +238,15 @@ class VectorNetSurrogate final : public Surrogate {
     return tailProbability(centre, spread, criterion);
   }
 
+  /// A criterion column learnt from the inputs: its position among Criterion::usedColumns.
+  struct InputModel {
+    std::size_t slot;
+    baseline::ExtraTrees forest;
+  };
+
   SurrogateOptions options_;
   std::unique_ptr<model::Predictor> predictor_;
+  std::vector<InputModel> inputModels_;
 };
 
 }  // namespace

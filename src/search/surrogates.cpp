@@ -22,7 +22,7 @@ SurrogateRegistry SurrogateRegistry::withBuiltins() {
                 makeBnnSurrogate});
   registry.add({"vectornet",
                 "VectorNet (kinematic decoder) on the vectorized scenes, retrained each round; probability = share of "
-                "its sampled futures whose metrics meet the criterion",
+                "its sampled futures whose metrics meet the criterion (--reference columns: extra trees on the inputs)",
                 makeVectorNetSurrogate, /*learnsFromScenes=*/true});
   return registry;
 }

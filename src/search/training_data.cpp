@@ -89,7 +89,7 @@ std::unique_ptr<Surrogate> fitSurrogate(const SearchContext& context, const std:
     }
   }
   capInfinities(y);
-  TrainingSet data{context.normaliser.apply(x), std::move(y), {}, {}};
+  TrainingSet data{context.normaliser.apply(x), std::move(y), columns, {}, {}};
   if (context.surrogate->learnsFromScenes) {
     data.scenes = roundFiles(context, round, "dataset.h5");
     data.priorScenes = context.priors;

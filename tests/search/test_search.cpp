@@ -17,7 +17,9 @@
 #include "vsd/core/csv.hpp"
 #include "vsd/core/error.hpp"
 #include "vsd/core/files.hpp"
+#include "vsd/metrics/metrics.hpp"
 #include "vsd/model/model.hpp"
+#include "vsd/pipeline/scenes.hpp"
 #include "vsd/scenario/logical_scenario.hpp"
 #include "vsd/search/criterion.hpp"
 #include "vsd/search/search.hpp"
@@ -43,6 +45,16 @@ fs::path weakCutIn(const fs::path& folder) {
                                               "set_speed: Ego_InitSpeed_Ve0_kph / 3.6, max_decel: 0.5, "
                                               "emergency_trigger: 5}"));
   return weak;
+}
+
+/// A run folder of `samples` concrete scenarios of the library scenario `name` (e.g.
+/// "alks/cut_in.yaml"), written to `out`; throws with vsd-sumo's output if the run fails.
+fs::path runLibraryScenario(const fs::path& out, const std::string& name, int samples) {
+  const auto result = test::run({test::vsdSumo().string(), "-q", "run", test::scenarioFile(name).string(), "-n",
+                                 std::to_string(samples), "--out", out.string()},
+                                out.parent_path());
+  if (result.exitCode != 0) throw std::runtime_error("run " + name + ": " + result.output);
+  return out;
 }
 
 TEST(SearchCriterion, ExpressionReadsItsMetricsAndJudges) {
@@ -139,7 +151,7 @@ TEST(SearchSurrogates, RankTargetsMapBackToMetricValuesAndReachBelowTheObservedR
     x(i, 0) = static_cast<double>(i) / 49.0;
     y(i, 0) = 0.5 + 2.0 * x(i, 0);  // d_min from 0.5 to 2.5 m
   }
-  surrogate->fit({x, y, {}, {}});
+  surrogate->fit({x, y, {1}, {}, {}});  // y is d_min (column 1)
   CandidateSet candidates;
   candidates.x.resize(3, 1);
   candidates.x << 0.1, 0.9, 0.01;
@@ -164,6 +176,20 @@ SearchOptions smallSearch(const fs::path& out, const std::string& surrogate, std
   options.roundSize = 20;
   options.pool = 1000;
   options.trees = 20;
+  return options;
+}
+
+/// smallSearch of weakCutIn (written into `work`) for UN R157's criterion with the reference
+/// driver: 10 initial executions, rounds of 5 from a pool of 200, 10 trees; out: work/out.
+SearchOptions regulationSearch(const fs::path& work, const std::string& surrogate, std::uint64_t budget) {
+  auto options = smallSearch(work / "out", surrogate, budget);
+  options.scenarioFile = weakCutIn(work);
+  options.criterion = "reference_avoids_sut_collides";
+  options.reference = "r157_reference_driver";
+  options.initial = 10;
+  options.roundSize = 5;
+  options.pool = 200;
+  options.trees = 10;
   return options;
 }
 
@@ -355,11 +381,7 @@ TEST(SearchLoop, ACriterionNeverMetInTheInitialDesignDoesNotStopTheSearch) {
 // scenes, resumes like the other surrogates and makes the same choices whether resumed or not.
 TEST(SearchVectorNet, APriorPreTrainsTheModelAndTheSearchResumesWithTheSameChoices) {
   TemporaryDirectory work("vsd-test-search");
-  const auto prior = work.path() / "lk";
-  const auto run = test::run({test::vsdSumo().string(), "-q", "run", test::scenarioFile("lk.yaml").string(), "-n", "30",
-                              "--out", prior.string()},
-                             work.path());
-  ASSERT_EQ(run.exitCode, 0) << run.output;
+  const auto prior = runLibraryScenario(work.path() / "lk", "lk.yaml", 30);
   auto vectornet = [&](const fs::path& out, std::uint64_t budget) {
     auto options = smallSearch(out, "vectornet", budget);
     options.pool = 100;
@@ -420,17 +442,7 @@ TEST(SearchVectorNet, APriorPreTrainsTheModelAndTheSearchResumesWithTheSameChoic
 // system under test collides and the reference driver does not.
 TEST(SearchReference, TheRegulationsCriterionCostsTwoSimulationsAndMarksWhereOnlyTheSystemCollides) {
   TemporaryDirectory work("vsd-test-search");
-  const auto weak = weakCutIn(work.path());
-  SearchOptions options;
-  options.scenarioFile = weak;
-  options.outputDir = work.path() / "out";
-  options.criterion = "reference_avoids_sut_collides";
-  options.reference = "r157_reference_driver";
-  options.budget = 60;
-  options.initial = 10;
-  options.roundSize = 5;
-  options.pool = 200;
-  options.trees = 10;
+  const auto options = regulationSearch(work.path(), "extra-trees", 60);
   const auto summary = runSearch(options);
   EXPECT_EQ(summary.executions, 30u) << "60 simulations buy 30 executions with a reference driver";
   const auto csv = options.outputDir / "concrete.csv";
@@ -452,7 +464,84 @@ TEST(SearchReference, TheRegulationsCriterionCostsTwoSimulationsAndMarksWhereOnl
   EXPECT_THAT(summary.report(), HasSubstr("r157_reference_driver as the Ego (60 simulations)"));
 }
 
-TEST(SearchReference, TheCriterionNeedsAReferenceAndASurrogateThatCanPredictIt) {
+// With --reference the criterion also reads the reference driver's outcome, which the
+// scenes (the system's own futures) cannot carry: vectornet learns those columns from the
+// inputs (extra trees) and judges each sampled future with each tree's prediction. Here the
+// reference driver collides (reference_d_min -1) below input 0.5 and clears 5 m above it.
+TEST(SearchVectorNet, LearnsTheReferenceDriversOutcomeFromTheInputs) {
+  TemporaryDirectory work("vsd-test-search");
+  const auto run_folder = runLibraryScenario(work.path() / "cut_in", "alks/cut_in.yaml", 12);
+  const auto logical = scenario::loadLogicalScenario(test::scenarioFile("alks/cut_in.yaml"));
+  SurrogateOptions options;
+  options.metricSet = std::make_shared<const metrics::MetricSet>(logical->metrics, pipeline::scenarioAvailability(*logical),
+                                                                 "cut_in metrics");
+  options.modelFile = work.path() / "round.pt";
+  options.vectornetSteps = 8;  // the system's part is not what this test is about
+  options.futureSamples = 4;
+  options.trees = 10;
+  options.threads = 1;
+  const auto columns = executionColumns(options.metricSet->names(), "r157_reference_driver");
+  const auto judge = [&](const std::string& text) {
+    const Criterion criterion(text, *logical, columns);
+    constexpr Eigen::Index kRows = 40;
+    TrainingSet data;
+    data.x.resize(kRows, 1);
+    data.y.resize(kRows, static_cast<Eigen::Index>(criterion.usedColumns().size()));
+    data.columns = criterion.usedColumns();
+    for (Eigen::Index r = 0; r < kRows; ++r) {
+      data.x(r, 0) = static_cast<double>(r) / static_cast<double>(kRows - 1);
+      for (std::size_t m = 0; m < data.columns.size(); ++m) {
+        const bool reference = columns[data.columns[m]].rfind("reference_", 0) == 0;
+        data.y(r, static_cast<Eigen::Index>(m)) = reference ? (data.x(r, 0) < 0.5 ? -1.0 : 5.0) : 3.0;
+      }
+    }
+    data.scenes = {run_folder / "dataset.h5"};
+    auto surrogate = makeVectorNetSurrogate(options);
+    surrogate->fit(data);
+    const vector::DatasetReader reader(run_folder / "dataset.h5");
+    const auto scene = reader.scene(0);
+    CandidateSet candidates;
+    candidates.x.resize(2, 1);
+    candidates.x << 0.1, 0.9;
+    candidates.scene = [&](std::size_t) { return scene; };
+    return surrogate->probability(candidates, criterion);
+  };
+  // Every future meets the system's part; the reference part decides alone.
+  EXPECT_EQ(judge("d_min <= 1000 and reference_d_min > 0"), (std::vector<double>{0.0, 1.0}));
+  EXPECT_EQ(judge("d_min <= 1000 and reference_d_min <= 0"), (std::vector<double>{1.0, 0.0}));
+  // Without reference columns the futures alone decide, as before.
+  EXPECT_EQ(judge("d_min <= 1000"), (std::vector<double>{1.0, 1.0}));
+}
+
+// The regulation's criterion searched with vectornet and a prior of another ALKS scenario:
+// the prior pre-trains the system's model, each execution costs two simulations, and the
+// reference driver's clearance is a column the rounds learn from.
+TEST(SearchVectorNet, SearchesTheRegulationsCriterionWithAPriorOfAnotherAlksScenario) {
+  TemporaryDirectory work("vsd-test-search");
+  const auto prior = runLibraryScenario(work.path() / "lead_brake", "alks/lead_brake.yaml", 20);
+  auto options = regulationSearch(work.path(), "vectornet", 40);
+  options.priors = {prior};
+  options.pool = 60;
+  options.vectornetSteps = 8;
+  options.futureSamples = 4;
+  const auto summary = runSearch(options);
+  EXPECT_EQ(summary.executions, 20u) << "40 simulations buy 20 executions with a reference driver";
+  EXPECT_EQ(model::Predictor(options.outputDir / ".rounds" / "vectornet-prior.pt").info().labels,
+            std::vector<std::string>{"lead_brake"});
+  const auto table = CsvTable::read(options.outputDir / "concrete.csv");
+  ASSERT_EQ(table.rows(), 20u);
+  std::size_t guided = 0;  // chosen by the surrogate's probability: acquired or importance draws
+  for (std::size_t r = 0; r < table.rows(); ++r) {
+    if (table.cell(r, table.column("origin")) == "initial") continue;
+    ++guided;
+    const double p = std::stod(table.cell(r, table.column("predicted_probability")));
+    EXPECT_TRUE(p >= 0.0 && p <= 1.0) << p;
+    EXPECT_FALSE(table.cell(r, table.column("reference_d_min")).empty()) << "row " << r;
+  }
+  EXPECT_EQ(guided, 10u);
+}
+
+TEST(SearchReference, TheCriterionNeedsAReferenceAndTwoSimulationsPerExecution) {
   TemporaryDirectory work("vsd-test-search");
   SearchOptions options;
   options.scenarioFile = test::scenarioFile("alks/cut_in.yaml");
@@ -462,9 +551,6 @@ TEST(SearchReference, TheCriterionNeedsAReferenceAndASurrogateThatCanPredictIt) 
   options.initial = 10;
   EXPECT_THAT(test::configErrorOf([&] { runSearch(options); }), HasSubstr("needs --reference NAME"));
   options.reference = "r157_reference_driver";
-  options.surrogate = "vectornet";
-  EXPECT_THAT(test::configErrorOf([&] { runSearch(options); }), HasSubstr("no --reference with --surrogate vectornet"));
-  options.surrogate = "extra-trees";
   options.budget = 15;  // 10 initial executions need 20 simulations
   EXPECT_THAT(test::configErrorOf([&] { runSearch(options); }), HasSubstr(">= --initial (10) x 2"));
   EXPECT_FALSE(fs::exists(options.outputDir));
@@ -739,9 +825,9 @@ TEST(SearchCli, NumbersFromFlagsAreCheckedWhereTheyEnter) {
       {{"bench", "search", scenario, "--seeds", "0"}, "--seeds"},
       {{"bench", "search", scenario, "--first-seed", "18446744073709551615"}, "--first-seed"},  // would wrap around
       // Every search's options are checked before the true-rate run (which would take minutes here).
-      {{"bench", "search", scenario, "--surrogates", "random,vectornet", "--reference", "r157_reference_driver",
-        "--true-rate-samples", "100000"},
-       "no --reference with --surrogate vectornet"},
+      {{"bench", "search", scenario, "--surrogates", "random,extra-trees", "--reference", "r157_reference_driver",
+        "--budget", "60", "--initial", "40", "--true-rate-samples", "100000"},
+       ">= --initial (40) x 2"},
   };
   for (const auto& [flags, expected] : cases) {
     std::vector<std::string> argv = {test::vsdSumo().string(), "-q"};

@@ -28,6 +28,10 @@ using Matrix = Eigen::MatrixXd;  ///< rows = concrete scenarios
 struct TrainingSet {
   Matrix x;  ///< [n, inputs] normalised to about [0, 1]
   Matrix y;  ///< [n, criterion.usedMetrics()] finite (infinities capped)
+  /// Where each column of y stands among the execution's columns (Criterion::usedColumns):
+  /// below the metric set's size a metric of the Ego's own run, beyond it a --reference
+  /// column (executionColumns).
+  std::vector<std::size_t> columns;
   /// Vectorized scenes of every completed execution with its simulated future (the rounds'
   /// dataset.h5 files, in round order). For scene models.
   std::vector<std::filesystem::path> scenes;
@@ -85,8 +89,8 @@ struct SurrogateEntry {
   std::string description;  ///< one line: what it fits and where its probability comes from
   std::function<std::unique_ptr<Surrogate>(const SurrogateOptions&)> make;
   /// It learns from the vectorized scenes (the rounds' datasets and --prior) and judges the
-  /// criterion on the Ego's predicted futures: it cannot predict values that are not
-  /// metrics of the Ego's own trajectory (e.g. the --reference driver's outcome).
+  /// criterion on the Ego's predicted futures (values that are not metrics of the Ego's own
+  /// trajectory, such as the --reference driver's outcome, it must learn otherwise).
   bool learnsFromScenes = false;
 };
 
