@@ -13,14 +13,24 @@
 #    runs the system and the reference driver); the true rate is plain Monte Carlo over
 #    200,000 scenarios of seed 1,000,000.
 #
+# 4. transfer/cold and transfer/prior (step `transfer`, not in the default): does data of the
+#    other ALKS scenarios help a search of cut_in? The vectornet surrogate searches it with and
+#    without --prior runs of the fourteen other ALKS scenarios (2,000 each, seed 11: data, not
+#    a choice), five sealed test seeds 1001-1005, the test step's flags (but --probability,
+#    which only extra trees read) plus the transfer benchmark's vectornet settings (--pool
+#    2000 --threads 1, chosen on acc_lk's seeds 1-4, docs/search.md "Transfer"; nothing was
+#    tuned on ALKS), the two benchmarks side by side; about two hours on 2 cores.
 #   tools/alks_search.sh [VSD_SUMO] [STEPS]   # from the repository root; STEPS: any of
-#                                             # failures selection test (default: all three);
-#                                             # about 30 min on 2 cores
+#                                             # failures selection test transfer (default:
+#                                             # the first three, about 30 min on 2 cores)
 set -eu
 vsd=${1:-build/vsd-sumo}
 steps=${2:-"failures selection test"}
 for step in $steps; do
-  case $step in failures|selection|test) ;; *) echo "alks_search.sh: step '$step': expected failures, selection or test" >&2; exit 1 ;; esac
+  case $step in
+    failures|selection|test|transfer) ;;
+    *) echo "alks_search.sh: step '$step': expected failures, selection, test or transfer" >&2; exit 1 ;;
+  esac
 done
 out=results/alks_search
 scenarios="cut_in cut_in_unavoidable"
@@ -32,7 +42,7 @@ search() {  # search SCENARIO OUT [flags...]
   scenario=$1 folder=$2
   shift 2
   "$vsd" bench search "scenarios/alks/$scenario.yaml" --reference r157_reference_driver \
-    --criterion reference_avoids_sut_collides --budget 2000 --jobs 2 --out "$folder" "$@"
+    --criterion reference_avoids_sut_collides --budget 2000 --jobs "${jobs:-2}" --out "$folder" "$@"
 }
 
 case " $steps " in *" failures "*)
@@ -69,4 +79,25 @@ case " $steps " in *" test "*)
     search "$scenario" "$out/$scenario" --surrogates random,extra-trees --seeds 10 --first-seed 1001 \
       --true-rate-samples 200000 $chosen
   done
+esac
+
+case " $steps " in *" transfer "*)
+  for file in scenarios/alks/*.yaml; do
+    [ "$(basename "$file")" = cut_in.yaml ] && continue
+    "$vsd" -q run "$file" --samples 2000 --seed 11 -j 2 --out "$work/priors/$(basename "$file" .yaml)"
+  done
+  # The test step's settings but --probability (extra trees only); one job and thread each.
+  jobs=1
+  set -- --seeds 5 --first-seed 1001 --true-rate-samples 200000 --pool 2000 --threads 1 \
+    --initial 100 --estimate-share 0.2 --diversity 0.3
+  search cut_in "$out/transfer/cold" --surrogates vectornet "$@" > "$work/cold.log" 2>&1 &
+  cold=$!
+  # shellcheck disable=SC2046  # one prior folder per word
+  search cut_in "$out/transfer/prior" --surrogates vectornet --prior $(ls -d "$work"/priors/*) "$@" \
+    > "$work/prior.log" 2>&1 &
+  prior=$!
+  status=0
+  wait "$cold" || { status=1; cat "$work/cold.log" >&2; }
+  wait "$prior" || { status=1; cat "$work/prior.log" >&2; }
+  [ "$status" -eq 0 ] || { echo "alks_search.sh: a transfer benchmark failed" >&2; exit 1; }
 esac
