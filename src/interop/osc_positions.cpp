@@ -29,16 +29,19 @@ double orientation(const Translation& translation, const pugi::xml_node& positio
   if (reader.optionalText(node, "type").value_or("relative") == "absolute") {
     return std::remainder(h - translation.road.headingAt(s), 2.0 * kPi);
   }
-  return base + h;
+  return std::remainder(base + h, 2.0 * kPi);
 }
 
-Placement onRoad(const Translation& translation, const pugi::xml_node& position, double s, double t) {
+/// `heading`: rad relative to the road that a relative <Orientation> counts from (and the
+/// heading without one): pi on a lane whose driving direction is against the reference line.
+Placement onRoad(const Translation& translation, const pugi::xml_node& position, double s, double t,
+                 double heading = 0.0) {
   const CarriagewayRoad& road = translation.road;
   if (!(s >= 0.0 && s <= road.length)) {
     translation.reader.fail(position, fmt::format("s = {} m is off the road (0 .. {} m)", xml::number(s),
                                                   xml::number(road.length)));
   }
-  return {s, t, orientation(translation, position, s, 0.0), road.nearestLane(t)};
+  return {s, t, orientation(translation, position, s, heading), road.nearestLane(t)};
 }
 
 void checkRoad(const Translation& translation, const pugi::xml_node& position) {
@@ -55,8 +58,11 @@ Placement lanePosition(const Translation& translation, const pugi::xml_node& pos
   const long lane_id = static_cast<long>(reader.integer(position, "laneId", -100, 100));
   const int lane = translation.road.languageLane(lane_id, reader.where(position));
   const double offset = reader.optionalNumber(position, "offset").value_or(0.0);
+  // OpenDRIVE drives the left side (positive ids, right-hand traffic) against the reference
+  // line; a relative orientation counts from that direction (as esmini reads it).
+  const double lane_direction = lane_id > 0 ? kPi : 0.0;
   Placement placement = onRoad(translation, position, reader.number(position, "s"),
-                               translation.road.laneCentreT(lane) + offset);
+                               translation.road.laneCentreT(lane) + offset, lane_direction);
   placement.lane = lane;
   return placement;
 }

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <map>
 #include <mutex>
+#include <stdexcept>
 
 #include "vsd/core/files.hpp"
 #include "vsd/core/numbers.hpp"
@@ -167,7 +168,37 @@ void readRightLanes(const xml::Reader& reader, const pugi::xml_node& right, Carr
   result.innerT = -result.shoulderLeft;
 }
 
-void readLanes(const xml::Reader& reader, const pugi::xml_node& road, CarriagewayRoad& result, Findings& findings) {
+/// The left side's driving lanes 1, 2, ... while they continue the right side's carriageway
+/// across the reference line (lane -1 driving, one width), then its shoulder/stop lanes.
+/// Anything else leaves them apart (adjoiningLeftLanes 0): a median, another width.
+void readAdjoiningLeftLanes(const xml::Reader& reader, const pugi::xml_node& left, CarriagewayRoad& result) {
+  reader.requireSubset(left, {"lane"});
+  if (result.innermostLaneId != -1) return;  // a median on the right side
+  bool shoulder = false;
+  for (long id = 1;; ++id) {
+    pugi::xml_node lane;
+    for (const pugi::xml_node& candidate : left.children("lane")) {
+      if (reader.integer(candidate, "id", 1, 100) == id) lane = candidate;
+    }
+    if (!lane) return;
+    const double width = constantWidth(reader, lane);
+    const std::string type = reader.text(lane, "type");
+    if (type == "driving" && !shoulder) {
+      if (std::abs(width - result.laneWidth) > 1e-9) {
+        result.adjoiningLeftLanes = 0;
+        return;
+      }
+      ++result.adjoiningLeftLanes;
+    } else if (result.adjoiningLeftLanes > 0 && (type == "shoulder" || type == "stop")) {
+      shoulder = true;
+      result.adjoiningLeftShoulder += width;
+    } else {
+      return;
+    }
+  }
+}
+
+void readLanes(const xml::Reader& reader, const pugi::xml_node& road, CarriagewayRoad& result) {
   const pugi::xml_node lanes = reader.only(road, "lanes");
   reader.requireSubset(lanes, {"laneSection", "laneOffset"});
   for (const pugi::xml_node& offset : lanes.children("laneOffset")) {
@@ -179,21 +210,34 @@ void readLanes(const xml::Reader& reader, const pugi::xml_node& road, Carriagewa
   }
   const pugi::xml_node section = reader.only(lanes, "laneSection");
   reader.requireSubset(section, {"left", "center", "right", "userData"});
-  if (section.child("left")) {
-    findings.note(reader.where(section.child("left")),
-                  "the left side (lanes driven against the reference line) is not part of vsd-sumo's road");
-  }
   readRightLanes(reader, reader.only(section, "right"), result);
+  if (const pugi::xml_node left = section.child("left")) {
+    result.leftSide = reader.where(left);
+    readAdjoiningLeftLanes(reader, left, result);
+  }
 }
 
 }  // namespace
 
+void CarriagewayRoad::joinLeftLanes() {
+  if (adjoiningLeftLanes == 0 || leftLanesJoined) throw std::logic_error("joinLeftLanes: no left lanes to join");
+  leftLanesJoined = true;
+  lanes += adjoiningLeftLanes;
+  innerT = adjoiningLeftLanes * laneWidth;
+  shoulderLeft = adjoiningLeftShoulder;
+}
+
 int CarriagewayRoad::languageLane(long lane_id, const std::string& where) const {
-  const long outermost = innermostLaneId - lanes + 1;
+  if (leftLanesJoined && lane_id >= 1 && lane_id <= adjoiningLeftLanes) {
+    return rightLanes() + static_cast<int>(lane_id) - 1;
+  }
+  const long outermost = innermostLaneId - rightLanes() + 1;
   if (lane_id > innermostLaneId || lane_id < outermost) {
-    throw ConfigError(fmt::format("{}: laneId {}: expected a driving lane of the road's right side, {} .. {} "
-                                  "(lanes driven against the reference line are not part of vsd-sumo's road)",
-                                  where, lane_id, innermostLaneId, outermost));
+    throw ConfigError(fmt::format(
+        "{}: laneId {}: expected a driving lane of the road's right side, {} .. {}{} (lanes driven against the "
+        "reference line are not part of vsd-sumo's road)",
+        where, lane_id, innermostLaneId, outermost,
+        leftLanesJoined ? fmt::format(", or of its left side driven along it, 1 .. {}", adjoiningLeftLanes) : ""));
   }
   return static_cast<int>(lane_id - outermost);
 }
@@ -461,7 +505,7 @@ CarriagewayRoad readRoad(const std::filesystem::path& file, std::string text, Fi
   if (std::abs(result.length - reader.number(road, "length", kLength)) > kJoinTolerance) {
     reader.fail(road, "length: differs from the sum of its geometries' lengths");
   }
-  readLanes(reader, road, result, findings);
+  readLanes(reader, road, result);
   for (const char* planar : {"elevationProfile", "lateralProfile"}) {
     const pugi::xml_node profile = road.child(planar);
     if (profile && profile.first_child()) {

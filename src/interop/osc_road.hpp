@@ -5,7 +5,9 @@
 // and on its right side (negative lane ids, driven towards +s) a contiguous run of
 // `driving` lanes of one width. Lanes between the reference line and that run and
 // `shoulder`/`stop` lanes right of it become the language's shoulders; the left side
-// (positive ids) is not part of vsd-sumo's road. Elevation, superelevation, road marks,
+// (positive ids) is not part of vsd-sumo's road, unless its driving lanes continue the
+// right side's across the reference line (no median, one width) and the scenario drives
+// them along the reference line (joinLeftLanes). Elevation, superelevation, road marks,
 // links, objects and signals do not change the planar lanes: they are reported as not
 // simulated.
 //
@@ -99,10 +101,26 @@ struct CarriagewayRoad {
   double shoulderRight = 0.0;  ///< m of shoulder/stop lanes right of the driving lanes
   MeasuredPolyline referenceSamples;  ///< the reference line within 1 mm (roads of several curvatures)
   std::vector<double> sampleS;        ///< m, reference-line s of each of referenceSamples' points
+  /// "file:line: <left>" of the lane section's left side; empty: the road has none.
+  std::string leftSide;
+  /// Driving lanes of the left side (ids 1 .. adjoiningLeftLanes) that continue the right
+  /// side's driving lanes across the reference line: lane -1 and lane 1 both driving, every
+  /// one of them of the right side's width. 0: none (a median, another width, no left side).
+  int adjoiningLeftLanes = 0;
+  double adjoiningLeftShoulder = 0.0;  ///< m of shoulder/stop lanes left of them
+  bool leftLanesJoined = false;        ///< joinLeftLanes() was called
+
+  /// Makes the adjoining left lanes the language's lanes `lanes` .. (leftmost last), driven
+  /// along the reference line, and their shoulder/stop lanes its left shoulder. Only for a
+  /// road with adjoining left lanes, once.
+  void joinLeftLanes();
+  /// Driving lanes of the right side.
+  int rightLanes() const { return leftLanesJoined ? lanes - adjoiningLeftLanes : lanes; }
 
   /// t of the driving lanes' centre line (the language's road centre).
   double centreT() const { return innerT - lanes * laneWidth / 2.0; }
-  /// Language lane (0 = rightmost) of a driving lane id; throws ConfigError naming `where` otherwise.
+  /// Language lane (0 = rightmost) of a driving lane id (with joined left lanes: id 1 is the
+  /// lane left of id -1); throws ConfigError naming `where` otherwise.
   int languageLane(long lane_id, const std::string& where) const;
   /// t of a language lane's centre.
   double laneCentreT(int lane) const;

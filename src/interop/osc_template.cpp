@@ -319,6 +319,49 @@ std::string identifier(const std::string& name, std::set<std::string>& used) {
   return unique;
 }
 
+namespace {
+
+/// Whether the file drives road users on the road's left side: a LanePosition or an
+/// AbsoluteTargetLane naming a positive lane id, or (on a road with one driving lane on its
+/// right side, where a move left can go nowhere else) a RelativeTargetLane or a
+/// RelativeLanePosition moving left. A value that does not resolve counts as not; reading
+/// the element later reports it.
+bool drivesLeftLanes(const xml::Reader& reader, const pugi::xml_node& root, const CarriagewayRoad& road) {
+  const auto any_positive = [&](const char* xpath, const char* attribute) {
+    for (const pugi::xpath_node& hit : root.select_nodes(xpath)) {
+      try {
+        if (reader.integer(hit.node(), attribute, -100, 100) > 0) return true;
+      } catch (const ConfigError&) {
+      }
+    }
+    return false;
+  };
+  if (any_positive(".//LanePosition", "laneId") || any_positive(".//AbsoluteTargetLane", "value")) return true;
+  return road.lanes == 1 && (any_positive(".//RelativeTargetLane", "value") ||
+                             any_positive(".//RelativeLanePosition", "dLane"));
+}
+
+/// esmini's two-lane roads (one lane each way, no median) carry cut-ins from the left lane
+/// driven along the reference line: where the file drives road users there, the adjoining
+/// left lanes join the language's road; otherwise the left side stays outside it.
+void joinOrLeaveLeftLanes(Translation& translation, const pugi::xml_node& root) {
+  CarriagewayRoad& road = translation.road;
+  if (road.leftSide.empty()) return;
+  if (road.adjoiningLeftLanes > 0 && drivesLeftLanes(translation.reader, root, road)) {
+    road.joinLeftLanes();
+    translation.findings.mapped(
+        road.leftSide,
+        fmt::format("lanes 1 .. {} (left of the reference line, no median) are the language's lanes {} .. {}, driven "
+                    "along the reference line: the scenario places or moves road users there",
+                    road.adjoiningLeftLanes, road.rightLanes(), road.lanes - 1));
+    return;
+  }
+  translation.findings.note(road.leftSide,
+                            "the left side (lanes driven against the reference line) is not part of vsd-sumo's road");
+}
+
+}  // namespace
+
 /// Reads the whole file into the language. Refusals go to `findings` (and throw unless it collects).
 TranslationResult translate(const fs::path& xosc, const OscImportOptions& options, const ParameterValues& assigned,
                             const std::string& assigned_where, Findings& findings, const StringCodes& codes) {
@@ -345,6 +388,7 @@ TranslationResult translate(const fs::path& xosc, const OscImportOptions& option
   const fs::path xodr = referencedFile(options, xosc, reader.text(logic, "filepath"), reader.where(logic), "filepath");
   if (!fs::exists(xodr)) reader.fail(logic, fmt::format("the road network {} does not exist", xodr.string()));
   translation.road = readCarriagewayRoad(xodr, findings);
+  joinOrLeaveLeftLanes(translation, root);
   const CarriagewayRoad& road = translation.road;
   findings.mapped(reader.where(logic),
                   road.oneCurvature

@@ -1034,3 +1034,90 @@ TEST(OscImport, ATinyGeometryAndATurnPastTheLimitStillGiveAPolylineRoad) {
     }
   }
 }
+
+namespace {
+
+/// A straight 1 km road of one lane each way with no median (esmini's two-lane roads), the
+/// left lane `left_width` m wide, each with a 1 m shoulder outside.
+std::string twoWayRoad(const std::string& left_width) {
+  return fmt::format(R"(<?xml version="1.0" encoding="UTF-8"?>
+<OpenDRIVE>
+  <header revMajor="1" revMinor="6" name="two way"/>
+  <road name="two way" length="1000" id="7" junction="-1" rule="RHT">
+    <planView><geometry s="0" x="0" y="0" hdg="0" length="1000"><line/></geometry></planView>
+    <lanes>
+      <laneSection s="0">
+        <left>
+          <lane id="2" type="shoulder" level="false"><width sOffset="0" a="1.0" b="0" c="0" d="0"/></lane>
+          <lane id="1" type="driving" level="false"><width sOffset="0" a="{}" b="0" c="0" d="0"/></lane>
+        </left>
+        <center><lane id="0" type="none" level="false"/></center>
+        <right>
+          <lane id="-1" type="driving" level="false"><width sOffset="0" a="3.5" b="0" c="0" d="0"/></lane>
+          <lane id="-2" type="shoulder" level="false"><width sOffset="0" a="1.0" b="0" c="0" d="0"/></lane>
+        </right>
+      </laneSection>
+    </lanes>
+  </road>
+</OpenDRIVE>
+)",
+                     left_width);
+}
+
+/// cut_in.xosc on twoWayRoad: the Ego on lane -1, the cutter placed on lane 1 by
+/// `cutter_position`, the walker on the right shoulder.
+std::unique_ptr<TemporaryDirectory> twoWayCutIn(const std::string& left_width, const std::string& cutter_position) {
+  std::string text = cutInWith("./roads/three_lanes.xodr", "./roads/two_way.xodr");
+  const auto replace = [&text](const std::string& from, const std::string& to) {
+    const auto at = text.find(from);
+    EXPECT_NE(at, std::string::npos) << from;
+    text.replace(at, from.size(), to);
+  };
+  replace(R"(laneId="-3" s="20")", R"(laneId="-1" s="20")");
+  replace(R"(<RelativeLanePosition entityRef="Ego" dLane="$Cutter_Side" ds="${$Cutter_Ahead_m}" offset="0"/>)",
+          cutter_position);
+  replace(R"(y="-12.75")", R"(y="-4")");
+  return folderWith({{"roads/two_way.xodr", twoWayRoad(left_width)}, {"two_way.xosc", text}});
+}
+
+}  // namespace
+
+// esmini's ALKS cut-ins start the cutter on lane 1 of a road with one lane each way, turned
+// (relative h = pi) to drive along the reference line: those left lanes join the language's
+// road, numbered after the right side's; a vehicle facing lane 1's own direction (against
+// the reference line), or a left lane that does not continue the carriageway (another
+// width), stays refused. By hand: the language's road centre is the reference line (lanes
+// -1 and 1 are both 3.5 m), lane 0's centre at y = -1.75; the cutter cuts into it and
+// swerves 0.5 m left (ScriptedRoadUsersEndWhereTheFileSays): it ends at y = -1.25, 10 m/s.
+TEST(OscRun, LeftLanesDrivenAlongTheReferenceLineJoinTheRoad) {
+  const std::string turned =
+      R"(<LanePosition roadId="7" laneId="1" s="60" offset="0"><Orientation type="relative" h="3.141592653589793"/></LanePosition>)";
+  const auto folder = twoWayCutIn("3.5", turned);
+  const auto logical = importTemplate(folder->path() / "two_way.xosc", {});
+  EXPECT_EQ(logical->road.lanes, 2);
+  EXPECT_DOUBLE_EQ(logical->road.shoulderLeft, 1.0);
+  EXPECT_DOUBLE_EQ(logical->road.shoulderRight, 1.0);
+  EXPECT_EQ(logical->ego.lane, 0);
+  EXPECT_EQ(other(*logical, "Cutter").lane, 1);
+  const auto cutter = simulatedTrack(folder->path() / "two_way.xosc", "Cutter");
+  ASSERT_TRUE(cutter);
+  EXPECT_NEAR(cutter->states.front().y, 1.75, 1e-6);
+  EXPECT_NEAR(cutter->states.back().y, -1.25, 0.2);
+  EXPECT_NEAR(cutter->states.back().speed, 10.0, 0.2);
+
+  const auto facing_its_lane = twoWayCutIn("3.5", R"(<LanePosition roadId="7" laneId="1" s="60" offset="0"/>)");
+  EXPECT_THAT(test::configErrorOf([&] { importTemplate(facing_its_lane->path() / "two_way.xosc", {}); }),
+              HasSubstr("'Cutter' starts 180 deg off the road's direction"));
+  const auto other_width = twoWayCutIn("3.25", turned);
+  EXPECT_THAT(test::configErrorOf([&] { importTemplate(other_width->path() / "two_way.xosc", {}); }),
+              HasSubstr("laneId 1: expected a driving lane of the road's right side, -1 .. -1"));
+}
+
+// On a road with one driving lane on its right side, a lane change to the left can only go
+// onto the left side; on the three-lane road of cut_in.xosc the left side (behind a median)
+// stays outside the road, as it does where nothing uses it.
+TEST(OscImport, AMoveLeftFromTheOnlyRightLaneJoinsTheLeftLanes) {
+  const auto folder = twoWayCutIn("3.5", R"(<RelativeLanePosition entityRef="Ego" dLane="1" ds="40" offset="0"/>)");
+  EXPECT_EQ(importTemplate(folder->path() / "two_way.xosc", {})->road.lanes, 2);
+  EXPECT_EQ(importTemplate(data("cut_in.xosc"), {}, {{"Cutter_Side", "1"}})->road.lanes, 3);
+}
