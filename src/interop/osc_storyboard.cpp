@@ -469,6 +469,108 @@ std::optional<YAML::Node> entityCondition(Translation& translation, const Entity
   return combined;
 }
 
+std::optional<YAML::Node> startTrigger(Translation& translation, const Entity& actor, const pugi::xml_node& event,
+                                       bool note);
+
+/// `trigger` as one that fires at a time or when an action ends ({time: t} or {after: id},
+/// a delay folded into the time); nullopt if it is any other (it depends on a road user).
+std::optional<YAML::Node> timeOrActionEnd(const YAML::Node& trigger) {
+  const auto number = [](const YAML::Node& node) -> std::optional<double> {
+    try {
+      return parseReal(node.as<std::string>(), NumberRange::atLeast(0.0), "", "");
+    } catch (const ConfigError&) {
+      return std::nullopt;
+    }
+  };
+  if (!trigger.IsMap()) return std::nullopt;
+  for (const auto& entry : trigger) {
+    const auto key = entry.first.as<std::string>();
+    if (key != "time" && key != "after" && key != "delay") return std::nullopt;
+  }
+  if (trigger["after"]) return trigger["time"] ? std::nullopt : std::optional<YAML::Node>(trigger);
+  if (!trigger["time"]) return std::nullopt;
+  const auto time = number(trigger["time"]);
+  const auto delay = trigger["delay"] ? number(trigger["delay"]) : std::optional<double>(0.0);
+  if (!time || !delay) return std::nullopt;
+  YAML::Node folded;
+  folded["time"] = num(*time + *delay);
+  return folded;
+}
+
+/// When the Event `name` starts, as a trigger any road user's action can use: its own
+/// StartTrigger, translated for its actor in its Story's parameters, if that is a time or an
+/// action's end; nullopt: it never starts.
+std::optional<YAML::Node> eventStart(Translation& translation, const pugi::xml_node& condition, const std::string& name) {
+  xml::Reader& reader = translation.reader;
+  const auto found = translation.events.find(name);
+  if (found == translation.events.end() || !found->second.actor) {
+    reader.fail(condition, fmt::format("storyboardElementRef=\"{}\": expected one Event (or an action of one) of a "
+                                       "scripted road user", name));
+  }
+  if (translation.eventStartsFollowed >= 8) {
+    reader.fail(condition, "Event starts that follow each other more than 8 deep (a cycle?)");
+  }
+  const Translation::EventRecord& event = found->second;
+  const ParameterValues own = reader.parameters();
+  ++translation.eventStartsFollowed;
+  reader.setParameters(event.scope);
+  std::optional<YAML::Node> start;
+  try {
+    start = startTrigger(translation, *event.actor, event.node, /*note=*/false);
+  } catch (...) {
+    --translation.eventStartsFollowed;
+    reader.setParameters(own);
+    throw;
+  }
+  --translation.eventStartsFollowed;
+  reader.setParameters(own);
+  if (!start) return std::nullopt;
+  const auto usable = timeOrActionEnd(*start);
+  if (!usable) {
+    YAML::Emitter flow;
+    flow << YAML::Flow << *start;
+    reader.fail(condition, fmt::format("the start of Event '{}' ({}) depends on a road user's state: the language "
+                                       "starts another action by a time or an action's end only",
+                                       name, flow.c_str()));
+  }
+  return usable;
+}
+
+/// A StoryboardElementStateCondition on an Event or an action: its end is its one action's
+/// end (`after`); its start (startTransition, runningState) is its Event's start (eventStart).
+std::optional<YAML::Node> storyboardElementState(Translation& translation, const pugi::xml_node& condition) {
+  const xml::Reader& reader = translation.reader;
+  const std::string type = reader.text(condition, "storyboardElementType");
+  if (type != "action" && type != "event") {
+    reader.fail(condition, fmt::format("storyboardElementType=\"{}\": the language follows an Event or an action",
+                                       type));
+  }
+  const std::string name = reader.text(condition, "storyboardElementRef");
+  const std::string state = reader.text(condition, "state");
+  if (state == "startTransition" || state == "runningState") {
+    const auto event = translation.eventOfAction.find(name);
+    return eventStart(translation, condition,
+                      type == "event" ? name : event == translation.eventOfAction.end() ? "" : event->second);
+  }
+  if (state != "endTransition" && state != "completeState") {
+    reader.fail(condition, fmt::format("state=\"{}\": the language follows an action's start or end", state));
+  }
+  const std::vector<std::string>* ids = nullptr;
+  if (type == "action") {
+    const auto found = translation.actionIds.find(name);
+    if (found != translation.actionIds.end()) ids = &found->second;
+  } else if (const auto found = translation.events.find(name); found != translation.events.end() && found->second.actor) {
+    ids = &found->second.actionIds;
+  }
+  if (!ids || ids->size() != 1) {
+    reader.fail(condition, fmt::format("storyboardElementRef=\"{}\": expected {} with one action of a scripted road "
+                                       "user", name, type == "action" ? "an action" : "an Event"));
+  }
+  YAML::Node trigger;
+  trigger["after"] = ids->front();
+  return trigger;
+}
+
 std::optional<YAML::Node> valueCondition(Translation& translation, const pugi::xml_node& by_value) {
   const xml::Reader& reader = translation.reader;
   const pugi::xml_node condition = reader.choice(by_value, {"SimulationTimeCondition", "StoryboardElementStateCondition",
@@ -484,20 +586,7 @@ std::optional<YAML::Node> valueCondition(Translation& translation, const pugi::x
     }
     trigger["time"] = num(reader.number(condition, "value", NumberRange::atLeast(0.0)));
   } else if (kind == "StoryboardElementStateCondition") {
-    if (reader.text(condition, "storyboardElementType") != "action") {
-      reader.fail(condition, "storyboardElementType: the language's `after` refers to an action");
-    }
-    const std::string state = reader.text(condition, "state");
-    if (state != "endTransition" && state != "completeState") {
-      reader.fail(condition, fmt::format("state=\"{}\": the language's `after` fires when an action ends", state));
-    }
-    const std::string name = reader.text(condition, "storyboardElementRef");
-    const auto ids = translation.actionIds.find(name);
-    if (ids == translation.actionIds.end() || ids->second.size() != 1) {
-      reader.fail(condition, fmt::format("storyboardElementRef=\"{}\": expected one action of a scripted road user",
-                                         name));
-    }
-    trigger["after"] = ids->second.front();
+    return storyboardElementState(translation, condition);
   } else {
     // Parameters are constants of a concrete scenario: the condition is decided here.
     const std::string rule = reader.oneOf(condition, "rule", {"equalTo", "greaterThan", "lessThan", "greaterOrEqual",
@@ -647,16 +736,23 @@ void readEvent(Translation& translation, const std::vector<Entity*>& actors, con
     reader.fail(event, "maximumExecutionCount: the language runs each action once");
   }
   PendingEvent pending{event, {}, reader.parameters()};
+  const std::string event_name = reader.text(event, "name");
+  const bool first = translation.events.count(event_name) == 0;
+  Translation::EventRecord& record = translation.events[event_name];
+  record = first ? Translation::EventRecord{event, actors.empty() ? nullptr : actors.front(), reader.parameters(), {}}
+                 : Translation::EventRecord{};  // a name given twice names no one Event
   for (const pugi::xml_node& action : event.children("Action")) {
     translation.findings.attempt([&] {
       reader.requireSubset(action, {"PrivateAction"});
       const std::string name = reader.text(action, "name");
+      translation.eventOfAction[name] = event_name;
       for (Entity* actor : actors) {
         const auto item = privateAction(translation, *actor, reader.only(action, "PrivateAction"));
         if (!item) continue;
         YAML::Node copy = *item;
         copy["id"] = identifier(actors.size() == 1 ? name : name + "_" + actor->name, translation.usedIds);
         translation.actionIds[name].push_back(copy["id"].as<std::string>());
+        if (first) record.actionIds.push_back(copy["id"].as<std::string>());
         pending.actions.push_back({actor, copy});
         translation.findings.mapped(reader.where(action), fmt::format("action '{}' of '{}'", copy["id"].as<std::string>(),
                                                                       actor->name));

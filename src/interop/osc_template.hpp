@@ -79,6 +79,17 @@ struct Translation {
   ControllerChoice controller;
   /// Language action ids by the file's Action name (an Action with several actors has several).
   std::map<std::string, std::vector<std::string>> actionIds;
+  /// The file's Events by name, for conditions on their state. A name given twice is kept
+  /// without an actor (ambiguous).
+  struct EventRecord {
+    pugi::xml_node node;
+    const Entity* actor = nullptr;        ///< its first actor; null: the name is not unique
+    ParameterValues scope;                ///< the parameters its Story sees
+    std::vector<std::string> actionIds;  ///< its actions' language ids
+  };
+  std::map<std::string, EventRecord> events;
+  std::map<std::string, std::string> eventOfAction;  ///< the file's Action name -> its Event's name
+  int eventStartsFollowed = 0;  ///< nesting of Event starts being translated (a cycle is refused)
   std::set<std::string> usedIds = {"ego"};
   double duration = 0.0;  ///< s; 0: not known from the file
 

@@ -1121,3 +1121,44 @@ TEST(OscImport, AMoveLeftFromTheOnlyRightLaneJoinsTheLeftLanes) {
   EXPECT_EQ(importTemplate(folder->path() / "two_way.xosc", {})->road.lanes, 2);
   EXPECT_EQ(importTemplate(data("cut_in.xosc"), {}, {{"Cutter_Side", "1"}})->road.lanes, 3);
 }
+
+// A condition on an Event's or an action's state: its end is its one action's end; its start
+// is its Event's own start trigger, where that is a time or an action's end (esmini's
+// alks_r157_cut_in_quick_brake brakes 2 s after its lane-change Event starts). By hand from
+// cut_in.xosc: Event "Activate" starts at t >= 1 s, so its start plus the condition's 1 s
+// delay starts the swerve at 1 s + 1 s.
+TEST(OscImport, ConditionsOnAnEventsStartOrEndFollowItsTriggerOrItsAction) {
+  const std::string on_change =
+      R"(storyboardElementType="action" storyboardElementRef="CutInChange" state="endTransition")";
+  const auto swerve_trigger = [&](const std::string& condition) {
+    const auto folder = folderWith({{"variant.xosc", cutInWith(on_change, condition)}});
+    return other(*importTemplate(folder->path() / "variant.xosc", {}), "Cutter").actions[2].trigger;
+  };
+  const auto after_start =
+      swerve_trigger(R"(storyboardElementType="event" storyboardElementRef="Activate" state="startTransition")");
+  EXPECT_EQ(after_start.kind, scenario::TriggerSpec::Kind::Time);
+  EXPECT_DOUBLE_EQ(after_start.value.evaluate({}), 1.0);
+  EXPECT_DOUBLE_EQ(after_start.delay.evaluate({}), 1.0);
+  const auto action_start =
+      swerve_trigger(R"(storyboardElementType="action" storyboardElementRef="ActivateEgo" state="runningState")");
+  EXPECT_EQ(action_start.kind, scenario::TriggerSpec::Kind::Time);
+
+  const std::vector<std::pair<std::string, std::string>> refused = {
+      {R"(storyboardElementType="event" storyboardElementRef="CutInEvent" state="endTransition")",
+       "storyboardElementRef=\"CutInEvent\": expected an Event with one action of a scripted road user"},
+      {R"(storyboardElementType="event" storyboardElementRef="CutInEvent" state="startTransition")",
+       "the start of Event 'CutInEvent' ({gap: 30}) depends on a road user's state"},
+      {R"(storyboardElementType="event" storyboardElementRef="SwerveEvent" state="startTransition")",
+       "Event starts that follow each other more than 8 deep (a cycle?)"},
+      {R"(storyboardElementType="maneuver" storyboardElementRef="CutInManeuver" state="startTransition")",
+       "storyboardElementType=\"maneuver\": the language follows an Event or an action"},
+      {R"(storyboardElementType="event" storyboardElementRef="NoSuchEvent" state="startTransition")",
+       "storyboardElementRef=\"NoSuchEvent\": expected one Event (or an action of one)"},
+  };
+  for (const auto& [condition, expected] : refused) {
+    const auto folder = folderWith({{"variant.xosc", cutInWith(on_change, condition)}});
+    const std::string message = test::configErrorOf([&] { importTemplate(folder->path() / "variant.xosc", {}); });
+    EXPECT_THAT(message, HasSubstr(expected)) << condition;
+    EXPECT_EQ(std::count(message.begin(), message.end(), '\n'), 0) << message;
+  }
+}
