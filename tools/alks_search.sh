@@ -88,9 +88,10 @@ case " $steps " in *" transfer "*)
   done
   # The test step's settings but --probability (extra trees only); one job and thread each.
   jobs=1
-  set -- --seeds 5 --first-seed 1001 --true-rate-samples 200000 --pool 2000 --threads 1 \
+  set -- --seeds 5 --first-seed 1001 --pool 2000 --threads 1 \
     --initial 100 --estimate-share 0.2 --diversity 0.3
-  search cut_in "$out/transfer/cold" --surrogates vectornet "$@" > "$work/cold.log" 2>&1 &
+  # The true rate (the same scenario and criterion for both) once, in the cold folder.
+  search cut_in "$out/transfer/cold" --surrogates vectornet --true-rate-samples 200000 "$@" > "$work/cold.log" 2>&1 &
   cold=$!
   # shellcheck disable=SC2046  # one prior folder per word
   search cut_in "$out/transfer/prior" --surrogates vectornet --prior $(ls -d "$work"/priors/*) "$@" \

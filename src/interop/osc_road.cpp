@@ -170,30 +170,41 @@ void readRightLanes(const xml::Reader& reader, const pugi::xml_node& right, Carr
 
 /// The left side's driving lanes 1, 2, ... while they continue the right side's carriageway
 /// across the reference line (lane -1 driving, one width), then its shoulder/stop lanes.
-/// Anything else leaves them apart (adjoiningLeftLanes 0): a median, another width.
+/// Anything else leaves them apart (adjoiningLeftLanes 0): a median, another width. The
+/// left side is not part of the road otherwise, so nothing on it refuses the road: a lane
+/// the language could not read (a varying width, an unknown element) ends the run there,
+/// and one among the adjoining driving lanes leaves them all apart.
 void readAdjoiningLeftLanes(const xml::Reader& reader, const pugi::xml_node& left, CarriagewayRoad& result) {
-  reader.requireSubset(left, {"lane"});
   if (result.innermostLaneId != -1) return;  // a median on the right side
+  const auto lane_with_id = [&left](long id) {
+    for (const pugi::xml_node& candidate : left.children("lane")) {
+      if (candidate.attribute("id").as_llong(0) == id) return candidate;
+    }
+    return pugi::xml_node();
+  };
   bool shoulder = false;
   for (long id = 1;; ++id) {
-    pugi::xml_node lane;
-    for (const pugi::xml_node& candidate : left.children("lane")) {
-      if (reader.integer(candidate, "id", 1, 100) == id) lane = candidate;
-    }
+    const pugi::xml_node lane = lane_with_id(id);
     if (!lane) return;
-    const double width = constantWidth(reader, lane);
-    const std::string type = reader.text(lane, "type");
-    if (type == "driving" && !shoulder) {
-      if (std::abs(width - result.laneWidth) > 1e-9) {
-        result.adjoiningLeftLanes = 0;
-        return;
-      }
+    const std::string type = lane.attribute("type").value();
+    const bool driving = type == "driving" && !shoulder;
+    if (!driving && !(result.adjoiningLeftLanes > 0 && (type == "shoulder" || type == "stop"))) return;
+    double width = 0.0;
+    try {
+      width = constantWidth(reader, lane);
+    } catch (const ConfigError&) {
+      if (driving) result.adjoiningLeftLanes = 0;
+      return;
+    }
+    if (driving && std::abs(width - result.laneWidth) > 1e-9) {
+      result.adjoiningLeftLanes = 0;
+      return;
+    }
+    if (driving) {
       ++result.adjoiningLeftLanes;
-    } else if (result.adjoiningLeftLanes > 0 && (type == "shoulder" || type == "stop")) {
+    } else {
       shoulder = true;
       result.adjoiningLeftShoulder += width;
-    } else {
-      return;
     }
   }
 }

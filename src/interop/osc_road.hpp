@@ -93,11 +93,11 @@ struct CarriagewayRoad {
   double heading = 0.0;     ///< rad, of the reference line at s = 0
   double curvature = 0.0;   ///< 1/m of the reference line, > 0 left (roads of one curvature)
   double length = 0.0;      ///< m of reference line
-  int lanes = 0;            ///< driving lanes on the right side
-  int innermostLaneId = -1; ///< OpenDRIVE id of the driving lane next to the reference line
+  int lanes = 0;            ///< the language's driving lanes: the right side's (and the joined left ones)
+  int innermostLaneId = -1; ///< OpenDRIVE id of the right side's driving lane next to the reference line
   double laneWidth = 0.0;   ///< m
-  double innerT = 0.0;      ///< m, t of the driving lanes' inner edge (<= 0)
-  double shoulderLeft = 0.0;   ///< m between the reference line and the driving lanes
+  double innerT = 0.0;      ///< m, t of the driving lanes' left edge (<= 0; > 0 with joined left lanes)
+  double shoulderLeft = 0.0;   ///< m left of the driving lanes (towards the reference line, or beyond joined left lanes)
   double shoulderRight = 0.0;  ///< m of shoulder/stop lanes right of the driving lanes
   MeasuredPolyline referenceSamples;  ///< the reference line within 1 mm (roads of several curvatures)
   std::vector<double> sampleS;        ///< m, reference-line s of each of referenceSamples' points

@@ -131,6 +131,15 @@ std::optional<bool> Criterion::verdict(const std::vector<double>& metric_values)
   return value != 0.0;
 }
 
+std::optional<bool> Criterion::verdictOfUsed(const std::vector<double>& used_values) const {
+  for (const double value : used_values) {
+    if (std::isnan(value)) return std::nullopt;
+  }
+  const double value = onUsed_.evaluate(used_values);
+  if (std::isnan(value)) return std::nullopt;
+  return value != 0.0;
+}
+
 bool Criterion::meetsUsed(const std::vector<double>& used_values) const {
   const double value = onUsed_.evaluate(used_values);
   return !std::isnan(value) && value != 0.0;

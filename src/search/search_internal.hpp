@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "vsd/baseline/baseline.hpp"
 #include "vsd/core/files.hpp"
 #include "vsd/core/random.hpp"
 #include "vsd/metrics/metrics.hpp"
@@ -18,6 +19,11 @@
 #include "vsd/search/surrogate.hpp"
 
 namespace vsd::search::detail {
+
+/// One extra-trees forest of `trees` trees on x -> y, seeded `seed`: the model of one
+/// criterion column in the surrogates that fit the inputs (extra-trees, and vectornet's
+/// --reference columns).
+baseline::ExtraTrees fitForest(const Matrix& x, const Eigen::VectorXd& y, int trees, std::uint64_t seed);
 
 /// Sample-index ranges of the streams (disjoint, so no concrete scenario is drawn twice):
 /// the random stream starts at 0; round r's candidates at kPoolBase + r * kPoolStride;

@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "search_internal.hpp"
 #include "vsd/baseline/baseline.hpp"
 #include "vsd/search/surrogate.hpp"
 
@@ -35,12 +36,7 @@ class ExtraTreesSurrogate final : public Surrogate {
         std::sort(quantiles_.back().begin(), quantiles_.back().end());
         for (Eigen::Index r = 0; r < values.size(); ++r) values(r) = rankOf(quantiles_.back(), values(r));
       }
-      baseline::ExtraTreesOptions tree_options;
-      tree_options.trees = options_.trees;
-      tree_options.seed = options_.seed + static_cast<std::uint64_t>(target);
-      baseline::ExtraTrees forest(tree_options);
-      forest.fit(x, values);
-      forests_.push_back(std::move(forest));
+      forests_.push_back(detail::fitForest(x, values, options_.trees, options_.seed + static_cast<std::uint64_t>(target)));
     }
   }
 

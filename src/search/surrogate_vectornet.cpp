@@ -20,6 +20,7 @@
 #include <map>
 #include <stdexcept>
 
+#include "search_internal.hpp"
 #include "vsd/baseline/baseline.hpp"
 #include "vsd/core/error.hpp"
 #include "vsd/core/interrupt.hpp"
@@ -151,11 +152,12 @@ class VectorNetSurrogate final : public Surrogate {
   }
 
   /// Share of the (sampled future, input-model tree) pairs whose values meet the criterion
-  /// (futures whose criterion metrics cannot be computed do not count; without input
-  /// models every future is one pair). Where none meets it (a rare criterion: most
-  /// candidates), the share is 0 everywhere and cannot rank; then the Gaussian tail of the
-  /// criterion's values (their mean and spread, tailProbability) ranks by closeness, scaled
-  /// below 1 / (2 S) so that it stays below every candidate with a future that meets it.
+  /// (pairs it cannot judge — a metric that cannot be computed, an expression that gives
+  /// NaN — do not count; without input models every future is one pair). Where none meets
+  /// it (a rare criterion: most candidates), the share is 0 everywhere and cannot rank; then
+  /// the Gaussian tail of the criterion's values (their mean and spread, tailProbability)
+  /// ranks by closeness, scaled below 1 / (2 P), P the pairs judged, so that it stays below
+  /// every candidate with a pair that meets it.
   double shareMeeting(const vector::VectorizedScene& scene, const model::Prediction& prediction,
                       const std::vector<std::vector<double>>& input_draws, const Criterion& criterion) const {
     const auto& used = criterion.usedColumns();
@@ -164,7 +166,7 @@ class VectorNetSurrogate final : public Surrogate {
     for (std::size_t k = 0; k < inputModels_.size(); ++k) draws[inputModels_[k].slot] = input_draws[k];
     const std::size_t pairs_per_future = inputModels_.empty() ? 1 : input_draws.front().size();
     std::vector<double> values(used.size());
-    std::size_t futures = 0;
+    std::size_t judged = 0;
     std::size_t meeting = 0;
     for (const auto& future : prediction.samples) {
       const auto metrics = pipeline::metricsOfFuture(*options_.metricSet, scene, future.positions, future.states);
@@ -175,19 +177,24 @@ class VectorNetSurrogate final : public Surrogate {
         computable = computable && !std::isnan(values[m]);
       }
       if (!computable) continue;
-      ++futures;
+      std::size_t judged_here = 0;
+      for (std::size_t t = 0; t < pairs_per_future; ++t) {
+        for (std::size_t k = 0; k < inputModels_.size(); ++k) values[inputModels_[k].slot] = input_draws[k][t];
+        const auto verdict = criterion.verdictOfUsed(values);
+        if (!verdict) continue;
+        ++judged_here;
+        meeting += *verdict ? 1 : 0;
+      }
+      if (judged_here == 0) continue;
+      judged += judged_here;
       for (std::size_t m = 0; m < used.size(); ++m) {
         if (used[m] < own) draws[m].push_back(values[m]);
       }
-      for (std::size_t t = 0; t < pairs_per_future; ++t) {
-        for (std::size_t k = 0; k < inputModels_.size(); ++k) values[inputModels_[k].slot] = input_draws[k][t];
-        meeting += criterion.meetsUsed(values) ? 1 : 0;
-      }
     }
-    if (futures == 0) return 0.0;
-    const double pairs = static_cast<double>(futures * pairs_per_future);
-    if (meeting > 0) return static_cast<double>(meeting) / pairs;
-    return tailProbabilityOf(draws, criterion) / (2.0 * static_cast<double>(futures));
+    if (judged == 0) return 0.0;
+    if (meeting > 0) return static_cast<double>(meeting) / static_cast<double>(judged);
+    // Below every candidate with a pair that meets it: the smallest such share is 1 / judged.
+    return tailProbabilityOf(draws, criterion) / (2.0 * static_cast<double>(judged));
   }
 
   /// One forest per criterion column that is not a metric of the Ego's own future (the
@@ -197,12 +204,8 @@ class VectorNetSurrogate final : public Surrogate {
     inputModels_.clear();
     for (std::size_t slot = 0; slot < data.columns.size(); ++slot) {
       if (data.columns[slot] < own) continue;
-      baseline::ExtraTreesOptions tree_options;
-      tree_options.trees = options_.trees;
-      tree_options.seed = options_.seed + static_cast<std::uint64_t>(slot);
-      baseline::ExtraTrees forest(tree_options);
-      forest.fit(data.x, data.y.col(static_cast<Eigen::Index>(slot)));
-      inputModels_.push_back({slot, std::move(forest)});
+      inputModels_.push_back({slot, detail::fitForest(data.x, data.y.col(static_cast<Eigen::Index>(slot)),
+                                                      options_.trees, options_.seed + static_cast<std::uint64_t>(slot))});
     }
   }
 

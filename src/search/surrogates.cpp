@@ -7,6 +7,7 @@
 #include <limits>
 
 #include "vsd/core/error.hpp"
+#include "search_internal.hpp"
 #include "vsd/search/surrogate.hpp"
 
 namespace vsd::search {
@@ -109,5 +110,18 @@ double tailProbability(const std::vector<double>& centre, const std::vector<doub
   if (meets) return standardNormalCdf(smallestMove(centre, spread, criterion, toMetrics, false));
   return standardNormalCdf(-smallestMove(centre, spread, criterion, toMetrics, true));
 }
+
+namespace detail {
+
+baseline::ExtraTrees fitForest(const Matrix& x, const Eigen::VectorXd& y, int trees, std::uint64_t seed) {
+  baseline::ExtraTreesOptions options;
+  options.trees = trees;
+  options.seed = seed;
+  baseline::ExtraTrees forest(options);
+  forest.fit(x, y);
+  return forest;
+}
+
+}  // namespace detail
 
 }  // namespace vsd::search

@@ -1122,6 +1122,37 @@ TEST(OscImport, AMoveLeftFromTheOnlyRightLaneJoinsTheLeftLanes) {
   EXPECT_EQ(importTemplate(data("cut_in.xosc"), {}, {{"Cutter_Side", "1"}})->road.lanes, 3);
 }
 
+// Which left lanes adjoin the carriageway, read from the road alone: lane 1 next to lane -1
+// does; behind a border strip on the right side (a median) it does not; a left lane the
+// language could not read (a varying width) leaves them apart instead of refusing the road,
+// which does not use its left side unless the scenario drives there.
+TEST(OscRoad, LeftLanesAdjoinOnlyAcrossTheReferenceLineWithoutAMedian) {
+  TemporaryDirectory dir("vsd-osc-road");
+  const auto adjoining = [&](const std::string& text) {
+    const fs::path file = dir.path() / "road.xodr";
+    test::writeFile(file, text);
+    osc::Findings findings(false);
+    return osc::readCarriagewayRoad(file, findings).adjoiningLeftLanes;
+  };
+  const std::string road = twoWayRoad("3.5");
+  EXPECT_EQ(adjoining(road), 1);
+  std::string median = road;
+  const std::string right_lane = R"(<lane id="-1" type="driving")";
+  median.replace(median.find(right_lane), right_lane.size(),
+                 R"(<lane id="-1" type="border" level="false"><width sOffset="0" a="0.5" b="0" c="0" d="0"/></lane>
+          <lane id="-2" type="driving")");
+  const std::string right_shoulder = R"(<lane id="-2" type="shoulder")";
+  median.replace(median.find(right_shoulder), right_shoulder.size(), R"(<lane id="-3" type="shoulder")");
+  EXPECT_EQ(adjoining(median), 0);
+  std::string varying = road;
+  const std::string left_width = R"(a="3.5" b="0" c="0" d="0"/></lane>
+        </left>)";
+  ASSERT_NE(varying.find(left_width), std::string::npos);
+  varying.replace(varying.find(left_width), left_width.size(), R"(a="3.5" b="0.001" c="0" d="0"/></lane>
+        </left>)");
+  EXPECT_EQ(adjoining(varying), 0);
+}
+
 // A condition on an Event's or an action's state: its end is its one action's end; its start
 // is its Event's own start trigger, where that is a time or an action's end (esmini's
 // alks_r157_cut_in_quick_brake brakes 2 s after its lane-change Event starts). By hand from

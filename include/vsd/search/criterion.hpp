@@ -36,6 +36,9 @@ class Criterion {
   std::optional<bool> verdict(const std::vector<double>& metricValues) const;
   /// Verdict for values of usedMetrics() only (what surrogates predict); never NaN inputs.
   bool meetsUsed(const std::vector<double>& usedValues) const;
+  /// Verdict for values of usedMetrics() only; nullopt when one is NaN or the expression
+  /// gives NaN (as verdict() on all values).
+  std::optional<bool> verdictOfUsed(const std::vector<double>& usedValues) const;
 
  private:
   std::string name_;

@@ -50,7 +50,7 @@ struct CandidateSet {
 /// Settings shared by every surrogate; each takes what applies to it.
 struct SurrogateOptions {
   std::uint64_t seed = 1;  ///< derived per round by the loop, so a resumed search refits identically
-  int trees = 50;          ///< extra-trees: forest size per target metric
+  int trees = 50;          ///< extra-trees (and vectornet's --reference columns): forest size per target metric
   int bnnEpochs = 200;     ///< bnn: training epochs per fit
   int threads = 2;         ///< bnn: libtorch threads
   /// extra-trees: how the trees' predictions become a probability: "shifts" (share of
