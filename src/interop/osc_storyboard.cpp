@@ -472,8 +472,9 @@ std::optional<YAML::Node> entityCondition(Translation& translation, const Entity
 std::optional<YAML::Node> startTrigger(Translation& translation, const Entity& actor, const pugi::xml_node& event,
                                        bool note);
 
-/// `trigger` as one that fires at a time or when an action ends ({time: t} or {after: id},
-/// a delay folded into the time); nullopt if it is any other (it depends on a road user).
+/// `trigger` as one that fires at a time or when an action ends ({time: t}, a delay folded
+/// into the time, or {after: id} without a delay, which the condition's own delay would
+/// replace); nullopt if it is any other.
 std::optional<YAML::Node> timeOrActionEnd(const YAML::Node& trigger) {
   const auto number = [](const YAML::Node& node) -> std::optional<double> {
     try {
@@ -487,7 +488,7 @@ std::optional<YAML::Node> timeOrActionEnd(const YAML::Node& trigger) {
     const auto key = entry.first.as<std::string>();
     if (key != "time" && key != "after" && key != "delay") return std::nullopt;
   }
-  if (trigger["after"]) return trigger["time"] ? std::nullopt : std::optional<YAML::Node>(trigger);
+  if (trigger["after"]) return trigger["time"] || trigger["delay"] ? std::nullopt : std::optional<YAML::Node>(trigger);
   if (!trigger["time"]) return std::nullopt;
   const auto time = number(trigger["time"]);
   const auto delay = trigger["delay"] ? number(trigger["delay"]) : std::optional<double>(0.0);
@@ -529,8 +530,9 @@ std::optional<YAML::Node> eventStart(Translation& translation, const pugi::xml_n
   if (!usable) {
     YAML::Emitter flow;
     flow << YAML::Flow << *start;
-    reader.fail(condition, fmt::format("the start of Event '{}' ({}) depends on a road user's state: the language "
-                                       "starts another action by a time or an action's end only",
+    reader.fail(condition, fmt::format("the start of Event '{}' ({}) is neither a time nor an action's end: another "
+                                       "road user's action cannot follow it (a road user's state is measured by the "
+                                       "acting one)",
                                        name, flow.c_str()));
   }
   return usable;
@@ -745,7 +747,9 @@ void readEvent(Translation& translation, const std::vector<Entity*>& actors, con
     translation.findings.attempt([&] {
       reader.requireSubset(action, {"PrivateAction"});
       const std::string name = reader.text(action, "name");
-      translation.eventOfAction[name] = event_name;
+      // An Action name in two Events names neither's start.
+      const auto known = translation.eventOfAction.find(name);
+      translation.eventOfAction[name] = known == translation.eventOfAction.end() || known->second == event_name ? event_name : "";
       for (Entity* actor : actors) {
         const auto item = privateAction(translation, *actor, reader.only(action, "PrivateAction"));
         if (!item) continue;

@@ -1,10 +1,11 @@
 // `vectornet`: the model module's VectorNet with the probabilistic `kinematic` decoder in
 // the lane frame, learning from vectorized scenes instead of inputs: the executions' scenes with their
-// simulated futures (plus the --prior datasets) train it; each candidate is vectorized
-// before simulation (pipeline::plannedScene), S futures are sampled from its predictive
-// distribution, every future's metrics come from the metric registry (the code `compare`
-// scores predictions with), and the probability is the share of futures meeting the
-// criterion (where none does, a Gaussian tail below 1 / (2 S) that ranks by closeness).
+// simulated futures train it (fine-tuned from a model of the --prior datasets); each
+// candidate is vectorized before simulation (pipeline::plannedScene), S futures are sampled
+// from its predictive distribution, every future's metrics come from the metric registry
+// (the code `compare` scores predictions with), and the probability is the share of futures
+// meeting the criterion (where none does, a Gaussian tail below 1 / (2 S) that ranks by
+// closeness).
 // Every round trains on all the search's scenes so far: from scratch, or with --prior
 // fine-tuning a model pre-trained on the prior datasets once per search.
 // A criterion column that is no metric of the Ego's own future (with --reference the
@@ -21,7 +22,6 @@
 #include <stdexcept>
 
 #include "search_internal.hpp"
-#include "vsd/baseline/baseline.hpp"
 #include "vsd/core/error.hpp"
 #include "vsd/core/interrupt.hpp"
 #include "vsd/metrics/metrics.hpp"

@@ -1178,7 +1178,7 @@ TEST(OscImport, ConditionsOnAnEventsStartOrEndFollowItsTriggerOrItsAction) {
       {R"(storyboardElementType="event" storyboardElementRef="CutInEvent" state="endTransition")",
        "storyboardElementRef=\"CutInEvent\": expected an Event with one action of a scripted road user"},
       {R"(storyboardElementType="event" storyboardElementRef="CutInEvent" state="startTransition")",
-       "the start of Event 'CutInEvent' ({gap: 30}) depends on a road user's state"},
+       "the start of Event 'CutInEvent' ({gap: 30}) is neither a time nor an action's end"},
       {R"(storyboardElementType="event" storyboardElementRef="SwerveEvent" state="startTransition")",
        "Event starts that follow each other more than 8 deep (a cycle?)"},
       {R"(storyboardElementType="maneuver" storyboardElementRef="CutInManeuver" state="startTransition")",
