@@ -349,11 +349,13 @@ void joinOrLeaveLeftLanes(Translation& translation, const pugi::xml_node& root) 
   if (road.leftSide.empty()) return;
   if (road.adjoiningLeftLanes > 0 && drivesLeftLanes(translation.reader, root, road)) {
     road.joinLeftLanes();
+    const std::string which =
+        road.adjoiningLeftLanes == 1
+            ? fmt::format("lane 1 (left of the reference line, no median) is the language's lane {}", road.rightLanes())
+            : fmt::format("lanes 1 .. {} (left of the reference line, no median) are the language's lanes {} .. {}",
+                          road.adjoiningLeftLanes, road.rightLanes(), road.lanes - 1);
     translation.findings.mapped(
-        road.leftSide,
-        fmt::format("lanes 1 .. {} (left of the reference line, no median) are the language's lanes {} .. {}, driven "
-                    "along the reference line: the scenario places or moves road users there",
-                    road.adjoiningLeftLanes, road.rightLanes(), road.lanes - 1));
+        road.leftSide, which + ", driven along the reference line: the scenario places or moves road users there");
     return;
   }
   translation.findings.note(road.leftSide,

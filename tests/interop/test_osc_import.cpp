@@ -1099,6 +1099,9 @@ TEST(OscRun, LeftLanesDrivenAlongTheReferenceLineJoinTheRoad) {
   EXPECT_DOUBLE_EQ(logical->road.shoulderRight, 1.0);
   EXPECT_EQ(logical->ego.lane, 0);
   EXPECT_EQ(other(*logical, "Cutter").lane, 1);
+  EXPECT_THAT(checkOpenScenario(folder->path() / "two_way.xosc", {}).report(),
+              HasSubstr("<left>: lane 1 (left of the reference line, no median) is the language's lane 1, driven "
+                        "along the reference line"));
   const auto cutter = simulatedTrack(folder->path() / "two_way.xosc", "Cutter");
   ASSERT_TRUE(cutter);
   EXPECT_NEAR(cutter->states.front().y, 1.75, 1e-6);
