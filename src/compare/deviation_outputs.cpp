@@ -117,8 +117,9 @@ report::SceneDrawing drawScene(const DeviationResult& result, const SceneDeviati
     overlays.push_back(std::move(ellipse));
   }
   const auto& tail = row.metrics.at(row.worstMetric);
-  const std::string what = row.pathWorst ? fmt::format("path: mean region excess {}", cell(row.regionMeanExcess, 1))
-                                         : fmt::format("{} {}", result.metricNames[row.worstMetric], cell(tail.recorded));
+  const std::string what = row.pathWorst
+                               ? fmt::format("path: mean region excess {}", cell(row.regionMeanExcess, 1))
+                               : fmt::format("{} {}", result.metricNames[row.worstMetric], cell(tail.recorded));
   const std::string title = fmt::format("#{} {} sample {}: p {:.3g} ({})", rank, row.label, row.sample, row.p, what);
   return {row.sample, row.reason,
           vector::renderSceneSvg(scene, overlays, title, 560, "recorded future", /*focus_margin_m=*/8.0)};
@@ -164,8 +165,8 @@ std::string pValueNote(const DeviationResult& result) {
         "Metrics scored: {}, and the path. p-values are conformal ranks among {} clean calibration runs the model "
         "never trained on (per label): a metric's score is its distance from the most likely future's value, the "
         "path's its squared distance from the most likely future over the calibrated 90 % region's, averaged over "
-        "the steps; p = (1 + runs scoring at least as high) / (n + 1). A metric's 90 % interval is the most likely value +- the runs' 90 "
-        "% score. A scene's p combines them by Simes' rule.",
+        "the steps; p = (1 + runs scoring at least as high) / (n + 1). A metric's 90 % interval is the most likely "
+        "value +- the runs' 90 % score. A scene's p combines them by Simes' rule.",
         fmt::join(result.metricNames, ", "), result.calibrationRuns);
   }
   return fmt::format(
@@ -180,7 +181,8 @@ std::string pValueNote(const DeviationResult& result) {
 
 std::vector<std::string> csvHeader(const DeviationResult& result) {
   std::vector<std::string> header = {"source", "row", "sample", "label", "status", "p", "flagged", "rank", "group",
-                                     "worst_metric", "axis", "region_excess_90", "region_mean_excess_90", "path_p", columnWithUnit("region_time", "s"),
+                                     "worst_metric", "axis", "region_excess_90", "region_mean_excess_90", "path_p",
+                                     columnWithUnit("region_time", "s"),
                                      columnWithUnit("along", "m"), columnWithUnit("across", "m")};
   for (std::size_t m = 0; m < result.metricNames.size(); ++m) {
     const auto& name = result.metricNames[m];

@@ -201,9 +201,11 @@ std::size_t RunCalibration::runs() const {
 void RunCalibration::requireRuns(const std::string& label, std::size_t metrics) const {
   const std::size_t needed = runsNeeded(metrics, level_);
   if (runs(label) >= needed) return;
-  throw ConfigError::field("command line", "--calibration " + source_, fmt::format("{} runs of label '{}'", runs(label), label),
-                           fmt::format("at least {} clean runs of each label of the field data (with fewer, one of the {} "
-                                       "p-values - {} metrics and the path - cannot flag a scene alone at the level {:g})",
+  throw ConfigError::field("command line", "--calibration " + source_,
+                           fmt::format("{} runs of label '{}'", runs(label), label),
+                           fmt::format("at least {} clean runs of each label of the field data (with fewer, one of "
+                                       "the {} p-values - {} metrics and the path - cannot flag a scene alone at the "
+                                       "level {:g})",
                                        needed, metrics + 1, metrics, level_));
 }
 

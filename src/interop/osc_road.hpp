@@ -97,7 +97,8 @@ struct CarriagewayRoad {
   int innermostLaneId = -1; ///< OpenDRIVE id of the right side's driving lane next to the reference line
   double laneWidth = 0.0;   ///< m
   double innerT = 0.0;      ///< m, t of the driving lanes' left edge (<= 0; > 0 with joined left lanes)
-  double shoulderLeft = 0.0;   ///< m left of the driving lanes (towards the reference line, or beyond joined left lanes)
+  /// m left of the driving lanes (towards the reference line, or beyond joined left lanes)
+  double shoulderLeft = 0.0;
   double shoulderRight = 0.0;  ///< m of shoulder/stop lanes right of the driving lanes
   MeasuredPolyline referenceSamples;  ///< the reference line within 1 mm (roads of several curvatures)
   std::vector<double> sampleS;        ///< m, reference-line s of each of referenceSamples' points

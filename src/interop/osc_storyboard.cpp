@@ -501,7 +501,8 @@ std::optional<YAML::Node> timeOrActionEnd(const YAML::Node& trigger) {
 /// When the Event `name` starts, as a trigger any road user's action can use: its own
 /// StartTrigger, translated for its actor in its Story's parameters, if that is a time or an
 /// action's end; nullopt: it never starts.
-std::optional<YAML::Node> eventStart(Translation& translation, const pugi::xml_node& condition, const std::string& name) {
+std::optional<YAML::Node> eventStart(Translation& translation, const pugi::xml_node& condition,
+                                     const std::string& name) {
   xml::Reader& reader = translation.reader;
   const auto found = translation.events.find(name);
   if (found == translation.events.end() || !found->second.actor) {
@@ -561,8 +562,9 @@ std::optional<YAML::Node> storyboardElementState(Translation& translation, const
   if (type == "action") {
     const auto found = translation.actionIds.find(name);
     if (found != translation.actionIds.end()) ids = &found->second;
-  } else if (const auto found = translation.events.find(name); found != translation.events.end() && found->second.actor) {
-    ids = &found->second.actionIds;
+  } else {
+    const auto found = translation.events.find(name);
+    if (found != translation.events.end() && found->second.actor) ids = &found->second.actionIds;
   }
   if (!ids || ids->size() != 1) {
     reader.fail(condition, fmt::format("storyboardElementRef=\"{}\": expected {} with one action of a scripted road "
@@ -749,7 +751,8 @@ void readEvent(Translation& translation, const std::vector<Entity*>& actors, con
       const std::string name = reader.text(action, "name");
       // An Action name in two Events names neither's start.
       const auto known = translation.eventOfAction.find(name);
-      translation.eventOfAction[name] = known == translation.eventOfAction.end() || known->second == event_name ? event_name : "";
+      const bool unique = known == translation.eventOfAction.end() || known->second == event_name;
+      translation.eventOfAction[name] = unique ? event_name : "";
       for (Entity* actor : actors) {
         const auto item = privateAction(translation, *actor, reader.only(action, "PrivateAction"));
         if (!item) continue;
