@@ -339,18 +339,21 @@ YAML::Node relationLeaf(Translation& translation, const Entity& actor, const Ent
   const double value = reader.number(condition, "value", NumberRange::atLeast(0.0));
   // The language's gap / headway / ttc fire at most at a bound; `_at_least` at least.
   const bool at_least = boundOf(reader, condition, /*never_negative=*/quantity != "gap", value) == "at_least";
-  if (at_least && quantity != "gap") {
-    // OpenSCENARIO's headway and time to collision run from the triggering entity to the reference
-    // ahead of it and are undefined (false) otherwise; the language's are the rear one's,
-    // whichever of the two that is - a lower bound would hold while the order is the other way.
-    reader.fail(condition, fmt::format("rule=\"{}\": a lower bound on a {} measured from the triggering entity "
-                                       "(the language measures from the rear one of the two, whichever it is)",
-                                       reader.text(condition, "rule"), quantity == "headway" ? "time headway"
-                                                                                              : "time to collision"));
+  if (at_least && quantity == "ttc") {
+    // OpenSCENARIO's time to collision runs from the triggering entity to the reference ahead of
+    // it and is undefined (false) otherwise; the language's is the rear one's, whichever of the
+    // two that is - a lower bound would hold while the order is the other way.
+    reader.fail(condition, fmt::format("rule=\"{}\": a lower bound on a time to collision measured from the "
+                                       "triggering entity (the language measures from the rear one of the two, "
+                                       "whichever it is)",
+                                       reader.text(condition, "rule")));
   }
   trigger[at_least ? quantity + "_at_least" : quantity] = num(value);
   const std::string other = counterpart(translation, actor, condition, triggering, reference);
   if (other != "ego") trigger["to"] = other;
+  // OpenSCENARIO's headway is the triggering entity's, to the reference ahead of it (undefined
+  // while the reference is not ahead): the language's `of`.
+  if (quantity == "headway") trigger["of"] = triggering.id;
   return trigger;
 }
 

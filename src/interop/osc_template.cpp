@@ -341,13 +341,31 @@ bool drivesLeftLanes(const xml::Reader& reader, const pugi::xml_node& root, cons
                              any_positive(".//RelativeLanePosition", "dLane"));
 }
 
+/// Whether the Init places a road user on the road's adjoining left lanes, as a relative
+/// position does without naming a lane (esmini's cut-in_simple: `dt` from the Ego): placed
+/// on a trial copy, whose findings are dropped (placing for real reports them).
+bool placesOnLeftLanes(const Translation& translation) {
+  const CarriagewayRoad& road = translation.road;
+  Findings dropped(/*collect=*/true);
+  Translation trial{translation.reader, dropped, translation.options};
+  trial.road = road;
+  trial.entities = translation.entities;
+  placeEntities(trial);
+  const double left_edge = road.innerT + road.adjoiningLeftLanes * road.laneWidth;
+  return std::any_of(trial.entities.begin(), trial.entities.end(), [&](const Entity& entity) {
+    return entity.placement && entity.placement->t > road.innerT && entity.placement->t < left_edge;
+  });
+}
+
 /// esmini's two-lane roads (one lane each way, no median) carry cut-ins from the left lane
-/// driven along the reference line: where the file drives road users there, the adjoining
-/// left lanes join the language's road; otherwise the left side stays outside it.
+/// driven along the reference line: where the file places or drives road users there, the
+/// adjoining left lanes join the language's road; otherwise the left side stays outside it.
+/// After the Init is read (its positions decide), before anything is placed for real.
 void joinOrLeaveLeftLanes(Translation& translation, const pugi::xml_node& root) {
   CarriagewayRoad& road = translation.road;
   if (road.leftSide.empty()) return;
-  if (road.adjoiningLeftLanes > 0 && drivesLeftLanes(translation.reader, root, road)) {
+  if (road.adjoiningLeftLanes > 0 &&
+      (drivesLeftLanes(translation.reader, root, road) || placesOnLeftLanes(translation))) {
     road.joinLeftLanes();
     const std::string which =
         road.adjoiningLeftLanes == 1
@@ -390,6 +408,11 @@ TranslationResult translate(const fs::path& xosc, const OscImportOptions& option
   const fs::path xodr = referencedFile(options, xosc, reader.text(logic, "filepath"), reader.where(logic), "filepath");
   if (!fs::exists(xodr)) reader.fail(logic, fmt::format("the road network {} does not exist", xodr.string()));
   translation.road = readCarriagewayRoad(xodr, findings);
+  readEntities(translation, root, catalogs);
+  for (auto& entity : translation.entities) entity.id = identifier(entity.name, translation.usedIds);
+  const pugi::xml_node storyboard = reader.only(root, "Storyboard");
+  reader.requireSubset(storyboard, {"Init", "Story", "StopTrigger"});
+  readInit(translation, storyboard);
   joinOrLeaveLeftLanes(translation, root);
   const CarriagewayRoad& road = translation.road;
   findings.mapped(reader.where(logic),
@@ -398,11 +421,6 @@ TranslationResult translate(const fs::path& xosc, const OscImportOptions& option
                                     num(road.laneWidth), num(road.curvature))
                       : fmt::format("road '{}': {} driving lanes of {} m, {} geometries of varying curvature", road.id,
                                     road.lanes, num(road.laneWidth), road.geometries.size()));
-  readEntities(translation, root, catalogs);
-  for (auto& entity : translation.entities) entity.id = identifier(entity.name, translation.usedIds);
-  const pugi::xml_node storyboard = reader.only(root, "Storyboard");
-  reader.requireSubset(storyboard, {"Init", "Story", "StopTrigger"});
-  readInit(translation, storyboard);
   placeEntities(translation);
   findings.attempt([&] {
     translation.ego = &findEgo(translation, translation.controller);

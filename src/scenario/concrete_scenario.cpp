@@ -232,6 +232,7 @@ ConcreteTrigger evaluateTrigger(const TriggerSpec& spec, int owner, const Logica
   }
   trigger.reference = roadUserIndex(logical, spec.reference);
   trigger.subject = spec.subject.empty() ? owner : roadUserIndex(logical, spec.subject);
+  trigger.directed = spec.kind == TriggerSpec::Kind::Headway && !spec.subject.empty();
   if (spec.kind == TriggerSpec::Kind::After) trigger.action = actionIndex(logical, spec.action);
   if (spec.kind == TriggerSpec::Kind::Distance) evaluatePosition(spec, logical, concrete, trigger);
   for (const auto& member : spec.members) trigger.members.push_back(evaluateTrigger(member, owner, logical, concrete));

@@ -229,7 +229,7 @@ bool isRelation(TriggerSpec::Kind kind) {
 }
 bool hasSubject(TriggerSpec::Kind kind) {
   return kind != TriggerSpec::Kind::Time && kind != TriggerSpec::Kind::After && kind != TriggerSpec::Kind::All &&
-         kind != TriggerSpec::Kind::Any && kind != TriggerSpec::Kind::Gap && kind != TriggerSpec::Kind::Headway &&
+         kind != TriggerSpec::Kind::Any && kind != TriggerSpec::Kind::Gap &&
          kind != TriggerSpec::Kind::Ttc;
 }
 
@@ -298,7 +298,8 @@ void parseTrigger(const YamlReader& reader, const YAML::Node& node, const std::s
   }
   if (node["of"]) {
     if (!hasSubject(trigger.kind)) {
-      reader.fail(node["of"], field + ".of", "'of' names whose speed, acceleration, distance or road end a condition measures");
+      reader.fail(node["of"], field + ".of",
+                  "'of' names whose speed, acceleration, distance, road end or headway a condition measures");
     }
     trigger.subject = reader.scalar(node["of"], field + ".of");
   }
@@ -502,10 +503,16 @@ void checkTriggerReferences(const TriggerSpec& trigger, const std::string& owner
     throw ConfigError(fmt::format("{}.of: got '{}', expected a road user of the file: {}", trigger.where,
                                   trigger.subject, fmt::join(users, ", ")));
   }
-  if (isRelation(trigger.kind) &&
-      (std::find(users.begin(), users.end(), trigger.reference) == users.end() || trigger.reference == subject)) {
+  // A headway's `of` is one of its two road users: the acting one and `to`.
+  const bool headway = trigger.kind == TriggerSpec::Kind::Headway;
+  if (isRelation(trigger.kind) && (std::find(users.begin(), users.end(), trigger.reference) == users.end() ||
+                                   trigger.reference == (headway ? owner : subject))) {
     throw ConfigError(fmt::format("{}.to: got '{}', expected another road user of the file: {}", trigger.where,
                                   trigger.reference, fmt::join(users, ", ")));
+  }
+  if (headway && !trigger.subject.empty() && trigger.subject != owner && trigger.subject != trigger.reference) {
+    throw ConfigError(fmt::format("{}.of: got '{}', expected one of the headway's two road users: '{}' or '{}'",
+                                  trigger.where, trigger.subject, owner, trigger.reference));
   }
   if (trigger.kind == TriggerSpec::Kind::After && !actions.count(trigger.action)) {
     throw ConfigError(fmt::format("{}.after: got '{}', expected the id of an action of the file: {}", trigger.where,

@@ -245,6 +245,11 @@ double ScriptedTraffic::Impl::relationValue(const scenario::ConcreteTrigger& tri
   const bool self_ahead = relation.longitudinalDistance > 0.0;
   const double rear = self_ahead ? along(other) : along(states[owner]);
   const double front = self_ahead ? along(states[owner]) : along(other);
+  if (trigger.kind == TriggerSpec::Kind::Headway && trigger.directed) {
+    // OpenSCENARIO's: the subject's to the other, undefined while the other is not ahead of it.
+    const bool of_self = trigger.subject == static_cast<int>(owner);
+    return of_self != self_ahead && rear > 0.1 ? gap / rear : kInf;
+  }
   if (trigger.kind == TriggerSpec::Kind::Headway) return rear > 0.1 ? gap / rear : kInf;
   return rear - front > 1e-9 ? gap / (rear - front) : kInf;  // Ttc
 }

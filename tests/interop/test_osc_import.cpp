@@ -618,6 +618,12 @@ TEST(OscRun, EachConditionStartsItsEventWhereTheFileSays) {
       {group(entityCondition("Lead", R"(<SpeedCondition value="24" rule="greaterOrEqual"/>)") + timeCondition("4.5")) +
            group(entityCondition("Lead", R"(<TraveledDistanceCondition value="30"/>)", "1")),
        2.6},
+      // Slow's time headway to the lead ahead of it: (35.5 + 2 t + t^2 / 2) / 18 > 2.5 after 2.80 s
+      {group(entityCondition("Slow", R"(<TimeHeadwayCondition entityRef="Lead" value="2.5" freespace="true"
+          rule="greaterThan"/>)")), 2.8 + kNext},
+      // The lead's to Slow: undefined with Slow behind it (the rear one's, Slow's, would hold at once)
+      {group(entityCondition("Lead", R"(<TimeHeadwayCondition entityRef="Slow" value="0.5" freespace="true"
+          rule="greaterThan"/>)")), -1.0},
       // The lead pulls away from Slow (18 m/s, 40 m behind, both 4.5 m long): gap 35.5 + 2 t + t^2 / 2 >= 45.5
       // after 2.90 s
       {group(entityCondition("Lead", R"(<RelativeDistanceCondition entityRef="Slow" value="45.5" freespace="true"
@@ -682,11 +688,8 @@ TEST(OscImport, ConditionsTheLanguageCannotExpressAreOneLineEach) {
        "element <RelativeLanePosition> is outside the supported subset"},
       {group(timeCondition("1") + entityCondition("Lead", R"(<TraveledDistanceCondition value="30"/>)", "2")),
        "delay 2 s, another condition of its group 0 s: the language delays a group as a whole"},
-      // OpenSCENARIO measures these from the triggering entity to the reference ahead of it
-      // (false otherwise); the language from the rear one of the two.
-      {group(entityCondition("Lead", R"(<TimeHeadwayCondition entityRef="Slow" value="2.5" freespace="true"
-          rule="greaterOrEqual"/>)")),
-       "<TimeHeadwayCondition>: rule=\"greaterOrEqual\": a lower bound on a time headway measured from the triggering"},
+      // OpenSCENARIO measures it from the triggering entity to the reference ahead of it (false
+      // otherwise); the language from the rear one of the two.
       {group(entityCondition("Lead", R"(<TimeToCollisionCondition value="100" freespace="true" rule="greaterThan">
           <TimeToCollisionConditionTarget><EntityRef entityRef="Slow"/></TimeToCollisionConditionTarget>
           </TimeToCollisionCondition>)")),
@@ -1118,11 +1121,20 @@ TEST(OscRun, LeftLanesDrivenAlongTheReferenceLineJoinTheRoad) {
 
 // On a road with one driving lane on its right side, a lane change to the left can only go
 // onto the left side; on the three-lane road of cut_in.xosc the left side (behind a median)
-// stays outside the road, as it does where nothing uses it.
+// stays outside the road, as it does where nothing uses it. A position relative to the Ego
+// that lands on the left lane (esmini's cut-in_simple: dt from the Ego) joins it too; one on
+// the Ego's lane leaves it outside.
 TEST(OscImport, AMoveLeftFromTheOnlyRightLaneJoinsTheLeftLanes) {
   const auto folder = twoWayCutIn("3.5", R"(<RelativeLanePosition entityRef="Ego" dLane="1" ds="40" offset="0"/>)");
   EXPECT_EQ(importTemplate(folder->path() / "two_way.xosc", {})->road.lanes, 2);
   EXPECT_EQ(importTemplate(data("cut_in.xosc"), {}, {{"Cutter_Side", "1"}})->road.lanes, 3);
+
+  const auto across = twoWayCutIn("3.5", R"(<RelativeRoadPosition entityRef="Ego" ds="40" dt="3.4"/>)");
+  const auto joined = importTemplate(across->path() / "two_way.xosc", {});
+  EXPECT_EQ(joined->road.lanes, 2);
+  EXPECT_EQ(other(*joined, "Cutter").lane, 1);
+  const auto along = twoWayCutIn("3.5", R"(<RelativeRoadPosition entityRef="Ego" ds="40" dt="0"/>)");
+  EXPECT_EQ(importTemplate(along->path() / "two_way.xosc", {})->road.lanes, 1);
 }
 
 // Which left lanes adjoin the carriageway, read from the road alone: lane 1 next to lane -1

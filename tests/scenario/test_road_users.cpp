@@ -89,6 +89,16 @@ TEST(RoadUsers, ACycleOfTriggersIsRefused) {
 
 // Triggers on motion and their combinations: bad input is one line naming the field, the
 // value and what is allowed.
+// A headway's `of` says whose headway counts: one of the two road users it relates.
+TEST(RoadUsers, AHeadwayIsOfOneOfItsTwoRoadUsers) {
+  const auto error = errorOf(R"(    - {id: a, gap: 20, relative_lane: 0, speed: 5,
+       actions: [{id: one, trigger: {headway: 1, of: b}, stop: {decel: 3}}]}
+    - {id: b, gap: 40, relative_lane: 1, speed: 5})");
+  EXPECT_NE(error.find("actions[0].trigger.of: got 'b', expected one of the headway's two road users: 'a' or 'ego'"),
+            std::string::npos)
+      << error;
+}
+
 TEST(RoadUsers, BadMotionTriggersAreRefused) {
   const auto with = [](const std::string& trigger) {
     return errorOf(fmt::format(R"(    - {{id: a, gap: 20, relative_lane: 0, speed: 5,
@@ -107,7 +117,7 @@ TEST(RoadUsers, BadMotionTriggersAreRefused) {
       {"{distance_at_least: 5}", "'position' goes with distance_at_most and distance_at_least"},
       {"{distance_at_most: 1, position: {s: 10}}", "trigger.position: expected {s, lane[, offset]} along the road or {x, y}"},
       {"{speed_at_least: 5, to: ego}", "trigger.to: 'to' names the other road user of a gap, headway, ttc or relative_speed"},
-      {"{gap: 5, of: ego}", "trigger.of: 'of' names whose speed, acceleration, distance or road end"},
+      {"{gap: 5, of: ego}", "trigger.of: 'of' names whose speed, acceleration, distance, road end or headway"},
       {"{distance_at_most: 1, position: {s: 10, lane: 3}}",
        "trigger.position.lane: got 3 in sample 0, expected a lane the road has (0 .. 2)"},
       {"{fast: 3}", "trigger.fast: unknown key 'fast' (allowed: accel_at_least"},

@@ -120,6 +120,32 @@ TEST(ScriptedTraffic, AtLeastRelationTriggersFireWhenTheGapOpens) {
   EXPECT_TRUE(std::isnan(timings[2].start)) << timings[2].start;
 }
 
+// A headway `of` one road user is its own, to the other ahead of it, and undefined while the
+// other is not ahead (OpenSCENARIO's); without `of` it is the rear one's, whichever that is.
+// The passer (5 m long, as the Ego) starts 25.5 m (centres) behind the stand-in Ego at 15 m/s
+// to its 10 m/s: it closes in at 5 m/s and is ahead after 5.1 s.
+TEST(ScriptedTraffic, AHeadwayOfOneRoadUserIsUndefinedWhileTheOtherIsNotAheadOfIt) {
+  const auto logical = scenarioWith(R"(
+    - {id: passer, ds: -25.5, relative_lane: 1, speed: 15,
+       actions: [{id: rear, trigger: {headway_at_least: 0.5}, lateral_offset: {offset: 0.1, duration: 1}},
+                 {id: egos, trigger: {headway_at_least: 0.5, of: ego}, lateral_offset: {offset: 0.2, duration: 1}},
+                 {id: close, trigger: {headway: 1, of: ego}, lateral_offset: {offset: 0.3, duration: 1}},
+                 {id: own, trigger: {headway: 1, of: passer}, lateral_offset: {offset: 0.4, duration: 1}}]})");
+  const Planned run = plan(logical);
+  ScriptedTraffic traffic(run.concrete, run.road);
+  const EgoStandIn ego(run.concrete, run.road);
+  for (int k = 0; k < 50; ++k) traffic.step(ego.at(0.2 * k));
+  const auto& timings = traffic.timings();
+  // The rear one's (the passer's) at once: 20.5 m / 15 m/s >= 0.5 s.
+  EXPECT_NEAR(timings[0].start, 0.0, 1e-9);
+  // The Ego's, once the passer is 5 m (bumper to bumper) ahead: 35.5 m closed at 5 m/s (7.1 s).
+  EXPECT_NEAR(timings[1].start, 7.2, 1e-9);
+  // The Ego's at most 1 s: undefined until the passer is ahead (after 5.1 s), then at once.
+  EXPECT_NEAR(timings[2].start, 5.2, 1e-9);
+  // The passer's own, to the Ego ahead of it: (20.5 - 5 t) / 15 <= 1 from t = 1.1.
+  EXPECT_NEAR(timings[3].start, 1.2, 1e-9);
+}
+
 TEST(ScriptedTraffic, APedestrianCrossesAtItsSpeedFacingAcross) {
   const auto logical = scenarioWith(R"(
     - {id: walker, type: pedestrian, gap: 30, relative_lane: 0, offset: -4, heading_deg: 90,

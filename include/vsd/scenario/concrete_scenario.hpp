@@ -20,7 +20,9 @@ struct ConcreteTrigger {
   double value = 0.0;   ///< s, m, m/s or m/s^2
   double delay = 0.0;   ///< s
   int reference = -1;   ///< road user the condition relates to: -1 = the Ego, else index into `others`
-  int subject = -1;     ///< whose quantity (Speed .. EndOfRoad): -1 = the Ego, else index into `others`
+  /// Whose quantity (Speed .. EndOfRoad; Headway if `directed`): -1 = the Ego, else index into `others`.
+  int subject = -1;
+  bool directed = false;  ///< Headway: `subject`'s to the other (undefined unless it is ahead), else the rear one's
   int action = -1;      ///< After: index into ConcreteScenario::actions
   // Distance: the place, along the road (s from the region's start, lane, offset) or in the frame (x, y).
   bool inFrame = false;

@@ -124,7 +124,7 @@ struct TriggerSpec {
   enum class Kind {
     Time,     ///< simulation time >= value (s); not quantised to instants
     Gap,      ///< bumper-to-bumper gap along the Ego's lane to `reference` vs value (m, `bound`)
-    Headway,  ///< time headway of the rear one of the two (gap / its speed) vs value (s; undefined standing)
+    Headway,  ///< time headway of the rear one of the two, or of `subject` (gap / its speed) vs value (s)
     Ttc,      ///< time to collision along the Ego's lane (gap / closing speed) vs value (s; undefined not closing)
     After,    ///< `action` ended (+ delay)
     Speed,          ///< the subject's speed vs value (m/s, `bound`)
@@ -144,7 +144,10 @@ struct TriggerSpec {
   Expression value;
   Expression delay;           ///< s, >= 0
   std::string reference = "ego";  ///< road user the condition relates to (Gap, Headway, Ttc, RelativeSpeed)
-  std::string subject;        ///< `of`: whose quantity (the new kinds); empty: the acting road user
+  /// `of`: whose quantity (the new kinds); empty: the acting road user. Headway: the acting one
+  /// or `reference`, whose headway to the other counts, undefined unless the other is ahead
+  /// (OpenSCENARIO's); empty: the rear one's, whichever it is.
+  std::string subject;
   std::string action;         ///< After: id of the action whose end starts this one
   PositionSpec position;      ///< Distance
   std::vector<TriggerSpec> members;  ///< All, Any
