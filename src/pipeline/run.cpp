@@ -1084,9 +1084,14 @@ std::string RunSummary::report() const {
   }
   if (!metrics.empty()) {
     text += fmt::format("  {:<16} {:>10} {:>10} {:>10}  {}\n", "metric", "min", "mean", "max", "unit");
+    // A metric with no finite value (e.g. a clearance to a road user that never came alongside)
+    // has no min, mean or max: '-', not NaN.
+    const auto cell = [](double value) {
+      return std::isnan(value) ? fmt::format("{:>10}", "-") : fmt::format("{:>10.3f}", value);
+    };
     for (const auto& metric : metrics) {
-      text += fmt::format("  {:<16} {:>10.3f} {:>10.3f} {:>10.3f}  {}{}\n", metric.name, metric.min, metric.mean,
-                          metric.max, metric.unit,
+      text += fmt::format("  {:<16} {} {} {}  {}{}\n", metric.name, cell(metric.min), cell(metric.mean),
+                          cell(metric.max), metric.unit,
                           metric.infinite > 0 ? fmt::format("  (+{} x inf)", metric.infinite) : std::string());
     }
   }

@@ -362,6 +362,20 @@ TEST(Run, AStationaryObjectSimulates) {
   EXPECT_EQ(summary.failed, 0u);
 }
 
+// The partially blocking target is never alongside the Ego: its lateral clearance is infinite
+// in every run, and the summary says so instead of printing NaN as its min, mean and max.
+TEST(Run, TheSummaryOfAMetricWithoutFiniteValuesShowsDashes) {
+  TemporaryDirectory dir;
+  const auto summary =
+      runScenarios(options(test::scenarioFile("alks/partially_blocking_target.yaml"), dir.path() / "out", 3));
+  const std::string report = summary.report();
+  const auto row = report.find("lat_clearance_min");
+  ASSERT_NE(row, std::string::npos) << report;
+  const std::string line = report.substr(row, report.find('\n', row) - row);
+  EXPECT_EQ(line, "lat_clearance_min          -          -          -  m  (+3 x inf)") << report;
+  EXPECT_EQ(report.find("nan"), std::string::npos) << report;
+}
+
 // --reference: every concrete scenario again with the reference driver as the Ego, both
 // outcomes side by side; without it concrete.csv keeps its columns.
 TEST(Run, ReferenceRunsEveryScenarioAgainBesideTheSystem) {
