@@ -1,8 +1,9 @@
 #!/bin/sh
 # results/deviations/bench_deviations.txt: the deviations finder on field data with known
 # answers (issue 25 item 4; docs/deviations.md "Benchmark with known answers"), the
-# benchmark's defaults: the recommended model trained on 2,000 clean acc_lk scenes,
-# validation seed 101 (where the settings were chosen) and sealed test seeds 201-203, each
+# benchmark's defaults: the recommended model trained on 10,000 clean acc_lk scenes (12,000
+# steps), validation seeds 101 and 102 (where the settings were chosen) and sealed test
+# seeds 201-203, each
 # 2,900 field scenes of which 30 % carry the friction limit (max_decel 3 m/s^2), scored with
 # the model's own calibration and ranked among 2,000 clean calibration runs (seed 301); and
 # bench_deviations_braking.txt: the same field scored on a_min and the path only.

@@ -29,15 +29,18 @@ struct DeviationsBenchOptions {
   std::filesystem::path oodScenario = "scenarios/lk.yaml";  ///< scenes of a label the model never trained on
   std::filesystem::path work = "out/bench_deviations";      ///< training run and model (reused when present)
   std::filesystem::path model;                              ///< given: no training
-  std::uint64_t trainSamples = 2000;
+  // The model of the tests: 10,000 clean scenes and 12,000 steps, chosen on validation seeds
+  // 101 and 102 over train's defaults on 2,000 scenes (docs/deviations.md "Measured": the
+  // sharper model finds more of the moved scenes at the same false-alarm rate).
+  std::uint64_t trainSamples = 10000;
   std::uint64_t trainSeed = 1;
-  int steps = model::TrainOptions{}.steps;  ///< train's: the configuration the docs report
+  int steps = 12000;
   std::uint64_t fieldSamples = 2900;  ///< per seed; about 2,000 clean ones at share 0.3
   std::uint64_t oodSamples = 100;
   /// Clean runs the field is also ranked among (`deviations --calibration`); 0: not scored so.
   std::uint64_t calibrationSamples = 2000;
   std::uint64_t calibrationSeed = 301;  ///< data, not a choice: no other part of the bench uses it
-  std::vector<std::uint64_t> validationSeeds = {101};
+  std::vector<std::uint64_t> validationSeeds = {101, 102};
   std::vector<std::uint64_t> testSeeds = {201};
   double share = 0.3;        ///< of the field scenes that carry the factor
   double maxDecel = 3.0;     ///< m/s^2: the friction limit (the controller's max_decel)
