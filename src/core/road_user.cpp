@@ -5,7 +5,8 @@ namespace vsd {
 const std::vector<RoadUserKind>& roadUserKinds() {
   // Car: the paper's Ego and Co (5.0 x 1.8 m). Truck and bus: the EU's 2.55 m maximum width
   // (Directive 96/53/EC) and a 12 m rigid vehicle. Pedestrian: 0.5 m deep along the walking
-  // direction, 0.7 m across the shoulders and swinging arms.
+  // direction, 0.7 m across the shoulders and swinging arms. Bicycle: an adult's bicycle with
+  // its rider, 1.8 m long and 0.65 m across the handlebars; it rides in lanes.
   static const std::vector<RoadUserKind> kinds = {
       {RoadUserType::Car, "car", "passenger car", kCarLength, kCarWidth, true, false},
       {RoadUserType::Van, "van", "light commercial vehicle", 5.5, 2.0, true, false},
@@ -15,6 +16,7 @@ const std::vector<RoadUserKind>& roadUserKinds() {
       {RoadUserType::Pedestrian, "pedestrian", "person on foot", 0.5, 0.7, false, false},
       {RoadUserType::StationaryObject, "stationary_object", "object that never moves (debris, a barrier)", 1.0, 1.0,
        false, true},
+      {RoadUserType::Bicycle, "bicycle", "pedal cycle with its rider", 1.8, 0.65, true, false},
   };
   return kinds;
 }

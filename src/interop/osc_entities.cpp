@@ -1,6 +1,7 @@
 // Entities and the Init of an OpenSCENARIO file, translated into the scenario language.
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include <cmath>
 
@@ -28,9 +29,13 @@ RoadUserType categoryType(const xml::Reader& reader, const pugi::xml_node& objec
   }
   const std::string category = reader.text(object, "vehicleCategory");
   const auto type = findRoadUserType(category);
-  if (!type || *type == RoadUserType::Pedestrian || *type == RoadUserType::StationaryObject) {
-    reader.fail(object, fmt::format("vehicleCategory=\"{}\": vehicles of the language are car, van, truck, bus, "
-                                    "motorbike", category));
+  if (!type || !roadUserKind(*type).drivesInLanes) {
+    std::vector<std::string> vehicles;
+    for (const auto& entry : roadUserKinds()) {
+      if (entry.drivesInLanes) vehicles.emplace_back(entry.name);
+    }
+    reader.fail(object, fmt::format("vehicleCategory=\"{}\": vehicles of the language are {}", category,
+                                    fmt::join(vehicles, ", ")));
   }
   return *type;
 }

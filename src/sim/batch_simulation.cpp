@@ -35,6 +35,7 @@ const char* sumoClassOf(RoadUserType type) {
     case RoadUserType::Motorbike: return "motorcycle";
     case RoadUserType::Pedestrian: return "pedestrian";
     case RoadUserType::StationaryObject: return "ignoring";
+    case RoadUserType::Bicycle: return "bicycle";
   }
   return "passenger";
 }

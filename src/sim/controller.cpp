@@ -226,7 +226,8 @@ namespace {
 
 static_assert(VSD_OBJECT_CAR == static_cast<int>(RoadUserType::Car) &&
                   VSD_OBJECT_PEDESTRIAN == static_cast<int>(RoadUserType::Pedestrian) &&
-                  VSD_OBJECT_STATIONARY == static_cast<int>(RoadUserType::StationaryObject),
+                  VSD_OBJECT_STATIONARY == static_cast<int>(RoadUserType::StationaryObject) &&
+                  VSD_OBJECT_BICYCLE == static_cast<int>(RoadUserType::Bicycle),
               "controller_abi.h's object kinds follow RoadUserType");
 
 vsd_object toAbi(const ObservedObject& object) {

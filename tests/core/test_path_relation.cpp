@@ -105,7 +105,7 @@ TEST(RoadUserKinds, EveryKindHasANameAPositiveSizeAndIsFoundByName) {
     EXPECT_EQ(findRoadUserType(kind.name), kind.type);
   }
   EXPECT_FALSE(findRoadUserType("tank").has_value());
-  EXPECT_EQ(roadUserTypeList(), "car, van, truck, bus, motorbike, pedestrian, stationary_object");
+  EXPECT_EQ(roadUserTypeList(), "car, van, truck, bus, motorbike, pedestrian, stationary_object, bicycle");
   // The paper's vehicles: every default of a car is the paper's 5.0 x 1.8 m.
   EXPECT_EQ(roadUserKind(RoadUserType::Car).length, 5.0);
   EXPECT_EQ(roadUserKind(RoadUserType::Car).width, 1.8);

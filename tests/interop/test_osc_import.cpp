@@ -127,6 +127,11 @@ TEST(OscImport, AssignedParametersAndCatalogEntriesChangeTheScenario) {
   EXPECT_EQ(cutter.lane, 2);
   EXPECT_DOUBLE_EQ(cutter.length, 12.0);
   EXPECT_DOUBLE_EQ(cutter.alongValue.evaluate({}), 65.0);  // reference at 20 + 40, box centre 5 m ahead of it
+  // A bicycle (esmini's catalogs have them) rides in lanes like the other vehicles, its box its size.
+  const auto bike = other(*importTemplate(data("cut_in.xosc"), {}, {{"Vehicle_Model", "bike"}}), "Cutter");
+  EXPECT_EQ(bike.type, RoadUserType::Bicycle);
+  EXPECT_DOUBLE_EQ(bike.length, 1.9);
+  EXPECT_DOUBLE_EQ(bike.width, 0.6);
 }
 
 TEST(OscImport, ViolatedConstraintIsReportedWithItsDeclaration) {

@@ -5,6 +5,9 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <sstream>
+#include <string>
+#include <vector>
 
 #include "test_support.hpp"
 #include "vsd/core/csv.hpp"
@@ -349,17 +352,54 @@ TEST(Run, VehicleSizesTravelIntoTheDatasetAndItsMetrics) {
   }
 }
 
+namespace {
+
+/// Three scenarios of fully_blocking_target.yaml with `kind` as the blocking target, into dir/out.
+RunSummary runWithBlockingTarget(const TemporaryDirectory& dir, const std::string& kind) {
+  const auto file = dir.path() / (kind + ".yaml");
+  test::writeFile(file, test::scenarioVariant("alks/fully_blocking_target.yaml",
+                                              "choices: [pedestrian, car, truck, van, bus, motorbike]",
+                                              "choices: [" + kind + "]"));
+  return runScenarios(options(file, dir.path() / "out", 3));
+}
+
+}  // namespace
+
 // A stationary object is a road user SUMO loads and sees like the others (its type has a
 // shape SUMO knows), so a scenario with one simulates.
 TEST(Run, AStationaryObjectSimulates) {
   TemporaryDirectory dir;
-  const auto file = dir.path() / "object.yaml";
-  test::writeFile(file, test::scenarioVariant("alks/fully_blocking_target.yaml",
-                                              "choices: [pedestrian, car, truck, van, bus, motorbike]",
-                                              "choices: [stationary_object]"));
-  const auto summary = runScenarios(options(file, dir.path() / "out", 3));
+  const auto summary = runWithBlockingTarget(dir, "stationary_object");
   EXPECT_EQ(summary.ok, 3u);
   EXPECT_EQ(summary.failed, 0u);
+}
+
+// A bicycle (appended to the road-user table, code 7) rides in the Ego's lane as a blocking
+// target: SUMO takes its class, the run completes.
+TEST(Run, ABicycleSimulates) {
+  TemporaryDirectory dir;
+  const auto summary = runWithBlockingTarget(dir, "bicycle");
+  EXPECT_EQ(summary.ok, 3u);
+  EXPECT_EQ(summary.failed, 0u);
+  // The type input's column holds the bicycle's code in every row.
+  std::istringstream csv(readTextFile(dir.path() / "out" / "concrete.csv"));
+  std::string line;
+  std::getline(csv, line);
+  const auto split = [](const std::string& text) {
+    std::vector<std::string> cells;
+    std::istringstream row(text);
+    for (std::string cell; std::getline(row, cell, ',');) cells.push_back(cell);
+    return cells;
+  };
+  const auto header = split(line);
+  const auto column = std::find(header.begin(), header.end(), "TargetBlocking_Model") - header.begin();
+  ASSERT_LT(static_cast<std::size_t>(column), header.size()) << line;
+  int rows = 0;
+  while (std::getline(csv, line)) {
+    EXPECT_EQ(split(line).at(static_cast<std::size_t>(column)), "7") << line;
+    ++rows;
+  }
+  EXPECT_EQ(rows, 3);
 }
 
 // The partially blocking target is never alongside the Ego: its lateral clearance is infinite

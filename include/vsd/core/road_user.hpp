@@ -19,7 +19,8 @@ namespace vsd {
 inline constexpr double kCarLength = 5.0;
 inline constexpr double kCarWidth = 1.8;
 
-enum class RoadUserType : std::uint8_t { Car = 0, Van, Truck, Bus, Motorbike, Pedestrian, StationaryObject };
+/// Codes are stable (concrete.csv, datasets, the controller ABI): new kinds are appended.
+enum class RoadUserType : std::uint8_t { Car = 0, Van, Truck, Bus, Motorbike, Pedestrian, StationaryObject, Bicycle };
 
 /// One entry of the road-user table: what the kind is and what it can do.
 struct RoadUserKind {

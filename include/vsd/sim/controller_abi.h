@@ -48,7 +48,8 @@ enum {
   VSD_OBJECT_BUS = 3,
   VSD_OBJECT_MOTORBIKE = 4,
   VSD_OBJECT_PEDESTRIAN = 5,
-  VSD_OBJECT_STATIONARY = 6
+  VSD_OBJECT_STATIONARY = 6,
+  VSD_OBJECT_BICYCLE = 7 /* appended: a plugin built before it sees an unknown kind */
 };
 
 /* One road user of the object list (version 2). The relation fields follow
