@@ -49,6 +49,14 @@ Planned plan(const std::shared_ptr<const scenario::LogicalScenario>& logical, st
   return run;
 }
 
+/// The actions' timings after `instants` instants (0.2 s) of the stand-in Ego.
+std::vector<ScriptedTraffic::ActionTiming> timingsAfter(const Planned& run, int instants) {
+  ScriptedTraffic traffic(run.concrete, run.road);
+  const EgoStandIn ego(run.concrete, run.road);
+  for (int k = 0; k < instants; ++k) traffic.step(ego.at(0.2 * k));
+  return traffic.timings();
+}
+
 /// Offset (m, > 0 left) of a state from the road centre line.
 double offsetOf(const road::RoadGeometry& road, const VehicleState& state) {
   return road::LaneFrame(road.centre).coordinates(state.position()).second;
@@ -110,11 +118,7 @@ TEST(ScriptedTraffic, AtLeastRelationTriggersFireWhenTheGapOpens) {
        actions: [{id: wide, trigger: {gap_at_least: 30}, stop: {decel: 1}},
                  {id: slow, trigger: {headway_at_least: 2.5}, lateral_offset: {offset: 0.5, duration: 1}},
                  {id: apart, trigger: {ttc_at_least: 100}, lateral_offset: {offset: 0, duration: 1}, }]})");
-  const Planned run = plan(logical);
-  ScriptedTraffic traffic(run.concrete, run.road);
-  const EgoStandIn ego(run.concrete, run.road);
-  for (int k = 0; k < 30; ++k) traffic.step(ego.at(0.2 * k));
-  const auto& timings = traffic.timings();
+  const auto timings = timingsAfter(plan(logical), 30);
   EXPECT_NEAR(timings[0].start, 4.0, 1e-9);
   EXPECT_NEAR(timings[1].start, 3.0, 1e-9);
   EXPECT_TRUE(std::isnan(timings[2].start)) << timings[2].start;
@@ -131,11 +135,7 @@ TEST(ScriptedTraffic, AHeadwayOfOneRoadUserIsUndefinedWhileTheOtherIsNotAheadOfI
                  {id: egos, trigger: {headway_at_least: 0.5, of: ego}, lateral_offset: {offset: 0.2, duration: 1}},
                  {id: close, trigger: {headway: 1, of: ego}, lateral_offset: {offset: 0.3, duration: 1}},
                  {id: own, trigger: {headway: 1, of: passer}, lateral_offset: {offset: 0.4, duration: 1}}]})");
-  const Planned run = plan(logical);
-  ScriptedTraffic traffic(run.concrete, run.road);
-  const EgoStandIn ego(run.concrete, run.road);
-  for (int k = 0; k < 50; ++k) traffic.step(ego.at(0.2 * k));
-  const auto& timings = traffic.timings();
+  const auto timings = timingsAfter(plan(logical), 50);
   // The rear one's (the passer's) at once: 20.5 m / 15 m/s >= 0.5 s.
   EXPECT_NEAR(timings[0].start, 0.0, 1e-9);
   // The Ego's, once the passer is 5 m (bumper to bumper) ahead: 35.5 m closed at 5 m/s (7.1 s).
@@ -224,11 +224,9 @@ TEST(ScriptedTraffic, MotionTriggersFireWhereTheNumbersSay) {
                                                 mark),
                                     0.0, 5.0);
   const Planned run = plan(logical);
-  ScriptedTraffic traffic(run.concrete, run.road);
-  const EgoStandIn ego(run.concrete, run.road);
-  for (int k = 0; k < 25; ++k) traffic.step(ego.at(0.2 * k));
+  const auto timings = timingsAfter(run, 25);
   std::map<std::string, double> start;
-  for (std::size_t a = 0; a < run.concrete.actions.size(); ++a) start[run.concrete.actions[a].id] = traffic.timings()[a].start;
+  for (std::size_t a = 0; a < run.concrete.actions.size(); ++a) start[run.concrete.actions[a].id] = timings[a].start;
   EXPECT_NEAR(start["pushes"], 2.2, 1e-9);    // the first step of 2 m/s^2 ends at 2.2 s
   EXPECT_NEAR(start["at11"], 2.6, 1e-9);      // 10 + 2 (t - 2) = 11 at 2.5 s, between instants: 2.6 s
   EXPECT_NEAR(start["ego_went"], 2.4, 1e-9);  // the stand-in at 10 m/s: 24 m at 2.4 s
