@@ -157,11 +157,7 @@ void readInitAction(Translation& translation, Entity& entity, const pugi::xml_no
     if (reader.text(dynamics, "dynamicsShape") == "step") {
       entity.speedTarget = reader.only(speed, "SpeedActionTarget");
     } else {
-      // A gradual change from the start: the language's speed action at t = 0.
-      YAML::Node item;
-      item["speed"] = speedAction(translation, entity, speed);
-      item["trigger"]["time"] = "0";
-      entity.actions.push_back(item);
+      entity.gradualSpeed = speed;  // the language's speed action at t = 0, once the Ego is known
     }
   } else if (kind == "ControllerAction") {
     reader.requireSubset(action, {"AssignControllerAction", "ActivateControllerAction"});
@@ -184,6 +180,31 @@ void readInitAction(Translation& translation, Entity& entity, const pugi::xml_no
 }
 
 }  // namespace
+
+void addInitialSpeedActions(Translation& translation) {
+  const xml::Reader& reader = translation.reader;
+  for (Entity& entity : translation.entities) {
+    translation.findings.attempt([&] {
+      YAML::Node item;
+      if (entity.gradualSpeed) {
+        // A gradual change from the start.
+        item["speed"] = speedAction(translation, entity, entity.gradualSpeed);
+      } else if (const pugi::xml_node target = entity.speedTarget.child("RelativeTargetSpeed");
+                 target && reader.optionalText(target, "continuous") == std::optional<std::string>("true")) {
+        // A step to a continuous relative speed: the initial speed, and tracking from t = 0.
+        item["speed"] = continuousSpeed(translation, entity, target);
+      } else {
+        return;
+      }
+      if (&entity == translation.ego) {
+        reader.fail(entity.gradualSpeed ? entity.gradualSpeed : entity.speedTarget,
+                    "a speed action of the Ego: its controller drives it (the language scripts other road users only)");
+      }
+      item["trigger"]["time"] = "0";
+      entity.actions.push_back(item);
+    });
+  }
+}
 
 void readInit(Translation& translation, const pugi::xml_node& storyboard) {
   const xml::Reader& reader = translation.reader;

@@ -178,6 +178,36 @@ YAML::Node crossing(Translation& translation, const Entity& actor, const pugi::x
 
 }  // namespace
 
+namespace {
+
+/// The target of a <RelativeTargetSpeed> into `item`: a delta to the road user's own speed, or
+/// a delta or factor of another's (kept up with if `continuous`).
+void relativeSpeed(Translation& translation, const Entity& actor, const pugi::xml_node& target, bool continuous,
+                   YAML::Node& item) {
+  const xml::Reader& reader = translation.reader;
+  const double value = reader.number(target, "value");
+  const bool factor = reader.oneOf(target, "speedTargetValueType", {"delta", "factor"}) == "factor";
+  const Entity& reference = translation.entity(target, reader.text(target, "entityRef"));
+  if (&reference == &actor && !continuous && !factor) {
+    item["delta"] = num(value);
+    return;
+  }
+  if (&reference == &actor) {
+    reader.fail(target, "a speed relative to the road user's own that is continuous or a factor: it would follow "
+                        "itself (the language adds a fixed delta to its own speed)");
+  }
+  item[factor ? "relative_factor" : "relative_target"] = num(value);
+  if (&reference != translation.ego) item["to"] = reference.id;
+  if (continuous) {
+    item["continuous"] = true;
+    const char* relation = factor ? "a factor of" : "a delta to";
+    translation.findings.mapped(reader.where(target),
+                                fmt::format("'{}' keeps {} the speed of '{}'", actor.name, relation, reference.name));
+  }
+}
+
+}  // namespace
+
 YAML::Node speedAction(Translation& translation, const Entity& actor, const pugi::xml_node& action) {
   const xml::Reader& reader = translation.reader;
   reader.requireSubset(action, {"SpeedActionDynamics", "SpeedActionTarget"});
@@ -194,21 +224,20 @@ YAML::Node speedAction(Translation& translation, const Entity& actor, const pugi
     item["target"] = num(value);
     return item;
   }
-  if (reader.text(target, "continuous") == "true") {
-    reader.fail(target, "continuous=\"true\": the language's speed actions end at their target");
+  const bool continuous = reader.oneOf(target, "continuous", {"false", "true"}) == "true";
+  if (continuous && item["shape"].as<std::string>() != "step") {
+    reader.fail(dynamics, fmt::format("dynamicsShape=\"{}\" with a continuous target: the language follows the other's "
+                                      "speed at once (step)",
+                                      reader.text(dynamics, "dynamicsShape")));
   }
-  if (reader.oneOf(target, "speedTargetValueType", {"delta", "factor"}) != "delta") {
-    reader.fail(target, "speedTargetValueType=\"factor\": the language adds to a speed");
-  }
-  const std::string reference = reader.text(target, "entityRef");
-  if (reference == actor.name) {
-    item["delta"] = num(value);
-  } else if (translation.ego && reference == translation.ego->name) {
-    item["relative_target"] = num(value);
-  } else {
-    reader.fail(target, fmt::format("a speed relative to '{}': the language relates speeds to the Ego's or the "
-                                    "road user's own", reference));
-  }
+  relativeSpeed(translation, actor, target, continuous, item);
+  return item;
+}
+
+YAML::Node continuousSpeed(Translation& translation, const Entity& actor, const pugi::xml_node& target) {
+  YAML::Node item;
+  item["shape"] = "step";
+  relativeSpeed(translation, actor, target, /*continuous=*/true, item);
   return item;
 }
 
@@ -296,12 +325,6 @@ std::string boundOf(const xml::Reader& reader, const pugi::xml_node& node, bool 
                                 rule));
 }
 
-void requireFreespace(const xml::Reader& reader, const pugi::xml_node& node) {
-  if (reader.text(node, "freespace") != "true") {
-    reader.fail(node, "freespace=\"false\": the language measures bumper to bumper (freespace)");
-  }
-}
-
 /// Speeds and accelerations: along the road user's direction (the language's), not across or up.
 void requireLongitudinal(const xml::Reader& reader, const pugi::xml_node& condition) {
   const auto direction = reader.optionalText(condition, "direction");
@@ -326,7 +349,8 @@ YAML::Node relationLeaf(Translation& translation, const Entity& actor, const Ent
   } else {
     reference = reader.text(condition, "entityRef");
   }
-  requireFreespace(reader, condition);
+  // freespace="false": between the entities' reference points (their places in the language).
+  const bool freespace = reader.oneOf(condition, "freespace", {"true", "false"}) == "true";
   for (const char* attribute : {"relativeDistanceType", "coordinateSystem"}) {
     const auto value = reader.optionalText(condition, attribute);
     if (value && *value != "longitudinal" && *value != "entity" && *value != "road" && *value != "lane") {
@@ -351,6 +375,10 @@ YAML::Node relationLeaf(Translation& translation, const Entity& actor, const Ent
   trigger[at_least ? quantity + "_at_least" : quantity] = num(value);
   const std::string other = counterpart(translation, actor, condition, triggering, reference);
   if (other != "ego") trigger["to"] = other;
+  if (!freespace) {
+    trigger["between"] = "reference_points";
+    translation.measuresReferencePoints = true;
+  }
   // OpenSCENARIO's headway is the triggering entity's, to the reference ahead of it (undefined
   // while the reference is not ahead): the language's `of`.
   if (quantity == "headway") trigger["of"] = triggering.id;
@@ -542,17 +570,43 @@ std::optional<YAML::Node> eventStart(Translation& translation, const pugi::xml_n
   return usable;
 }
 
+/// A StoryboardElementStateCondition on a Story's or Act's start (startTransition, runningState):
+/// every Story and Act starts at t = 0 (requireStartsAtZero), so it holds from then on.
+YAML::Node containerStarted(Translation& translation, const pugi::xml_node& condition, const std::string& type,
+                            const std::string& name, const std::string& state) {
+  const xml::Reader& reader = translation.reader;
+  if (state != "startTransition" && state != "runningState") {
+    reader.fail(condition, fmt::format("state=\"{}\" of {} '{}': the language follows a Story's or Act's start only "
+                                       "(each runs until the scenario ends)",
+                                       state, type, name));
+  }
+  const std::string element = type == "act" ? "Act" : "Story";
+  bool found = false;
+  for (const pugi::xpath_node& candidate : condition.root().select_nodes(("//" + element).c_str())) {
+    found = found || reader.text(candidate.node(), "name") == name;
+  }
+  if (!found) reader.fail(condition, fmt::format("storyboardElementRef=\"{}\": no {} of that name", name, element));
+  translation.findings.note(reader.where(condition), fmt::format("the start of {} '{}': t = 0 (every Story and Act "
+                                                                 "starts then)",
+                                                                 element, name));
+  YAML::Node trigger;
+  trigger["time"] = 0;
+  return trigger;
+}
+
 /// A StoryboardElementStateCondition on an Event or an action: its end is its one action's
 /// end (`after`); its start (startTransition, runningState) is its Event's start (eventStart).
 std::optional<YAML::Node> storyboardElementState(Translation& translation, const pugi::xml_node& condition) {
   const xml::Reader& reader = translation.reader;
   const std::string type = reader.text(condition, "storyboardElementType");
-  if (type != "action" && type != "event") {
-    reader.fail(condition, fmt::format("storyboardElementType=\"{}\": the language follows an Event or an action",
-                                       type));
-  }
   const std::string name = reader.text(condition, "storyboardElementRef");
   const std::string state = reader.text(condition, "state");
+  if (type == "act" || type == "story") return containerStarted(translation, condition, type, name, state);
+  if (type != "action" && type != "event") {
+    reader.fail(condition, fmt::format("storyboardElementType=\"{}\": the language follows a Story's or Act's start, "
+                                       "an Event or an action",
+                                       type));
+  }
   if (state == "startTransition" || state == "runningState") {
     const auto event = translation.eventOfAction.find(name);
     return eventStart(translation, condition,

@@ -231,6 +231,9 @@ YAML::Node roadUserNode(Translation& translation, const Entity& entity, bool ego
   node["type"] = roadUserKind(entity.type).name;
   node["length"] = num(entity.length);
   node["width"] = num(entity.width);
+  if (translation.measuresReferencePoints && entity.centreAhead != 0.0) {
+    node["reference_point"] = num(-entity.centreAhead);
+  }
   node["s"] = num(place.s);
   node["lane"] = std::to_string(place.lane);
   const double heading_deg = entity.placement->heading * 180.0 / kPi;
@@ -427,6 +430,7 @@ TranslationResult translate(const fs::path& xosc, const OscImportOptions& option
     translation.ego->id = "ego";
   });
   if (!translation.ego) return result;
+  addInitialSpeedActions(translation);
   readStories(translation, storyboard);
   findings.attempt([&] { readStopTrigger(translation, storyboard); });
   if (findings.anyRefused()) return result;

@@ -51,6 +51,7 @@ struct Entity {
   std::optional<Placement> placement;
   bool placing = false;         ///< cycle guard while resolving relative positions
   pugi::xml_node speedTarget;   ///< the Init's <SpeedActionTarget> (step)
+  pugi::xml_node gradualSpeed;  ///< the Init's <SpeedAction> if it is not a step
   pugi::xml_node distanceAction;  ///< the Init's <LongitudinalDistanceAction>: a place relative to another
   std::optional<double> speed;  ///< m/s, initial
   bool speeding = false;
@@ -92,6 +93,8 @@ struct Translation {
   int eventStartsFollowed = 0;  ///< nesting of Event starts being translated (a cycle is refused)
   std::set<std::string> usedIds = {"ego"};
   double duration = 0.0;  ///< s; 0: not known from the file
+  /// A condition measures between reference points: road users carry theirs (centreAhead).
+  bool measuresReferencePoints = false;
 
   Entity& entity(const pugi::xml_node& node, const std::string& name);
   std::string where(const pugi::xml_node& node) const { return reader.where(node); }
@@ -152,6 +155,12 @@ SetVerdict judgeSet(const ParameterGrid& grid, const OscImportOptions& import, c
 
 /// A speed action's YAML (`speed:` item) from <SpeedAction>, for Init and Story.
 YAML::Node speedAction(Translation& translation, const Entity& actor, const pugi::xml_node& action);
+/// A speed action's YAML that keeps tracking a <RelativeTargetSpeed continuous="true"> of
+/// `actor` at once (shape step).
+YAML::Node continuousSpeed(Translation& translation, const Entity& actor, const pugi::xml_node& target);
+/// The Init's speed actions that act after t = 0 (gradual ones, continuous targets) as the
+/// language's actions at t = 0; after the Ego is known (their references name it).
+void addInitialSpeedActions(Translation& translation);
 
 /// The parameter sets of a <Stochastic> distribution (osc_stochastic.cpp): numberOfTestRuns
 /// sets, run i drawn from (seed, i); the seed is the file's randomSeed, else `run_seed`.

@@ -101,6 +101,13 @@ ConcreteVehicle placeVehicle(const VehicleSpec& spec, const std::vector<double>&
     if (!spec.lengthGiven) vehicle.length = roadUserKind(vehicle.type).length;
     if (!spec.widthGiven) vehicle.width = roadUserKind(vehicle.type).width;
   }
+  vehicle.referencePoint = spec.referencePoint;
+  if (std::abs(vehicle.referencePoint) > 0.5 * vehicle.length) {
+    throw ConfigError(fmt::format("{}.reference_point: got {} m in sample {}, expected within half its length "
+                                  "({} m) of its centre",
+                                  spec.where, formatValue(vehicle.referencePoint), sample,
+                                  formatValue(0.5 * vehicle.length)));
+  }
   vehicle.lane = spec.lane;
   if (spec.laneExpression) {
     vehicle.lane = evaluateLane(*spec.laneExpression, inputs, spec.laneRelativeToEgo ? ego_lane : 0, lanes, spec.where,
@@ -233,6 +240,7 @@ ConcreteTrigger evaluateTrigger(const TriggerSpec& spec, int owner, const Logica
   trigger.reference = roadUserIndex(logical, spec.reference);
   trigger.subject = spec.subject.empty() ? owner : roadUserIndex(logical, spec.subject);
   trigger.directed = spec.kind == TriggerSpec::Kind::Headway && !spec.subject.empty();
+  trigger.betweenReferencePoints = spec.betweenReferencePoints;
   if (spec.kind == TriggerSpec::Kind::After) trigger.action = actionIndex(logical, spec.action);
   if (spec.kind == TriggerSpec::Kind::Distance) evaluatePosition(spec, logical, concrete, trigger);
   for (const auto& member : spec.members) trigger.members.push_back(evaluateTrigger(member, owner, logical, concrete));
@@ -248,6 +256,8 @@ ConcreteAction evaluateAction(const ActionSpec& spec, int owner, const LogicalSc
   action.trigger = evaluateTrigger(spec.trigger, owner, logical, concrete);
   action.shape = spec.shape;
   action.speedTarget = spec.speedTarget;
+  action.speedReference = roadUserIndex(logical, spec.speedReference);
+  action.continuous = spec.continuous;
   action.target = evaluateFinite(spec.target, concrete.inputs, spec.where, "target");
   action.relativeToEgoLane = spec.relativeToEgoLane;
   action.pace = spec.pace;
@@ -261,6 +271,11 @@ ConcreteAction evaluateAction(const ActionSpec& spec, int owner, const LogicalSc
   }
   if (spec.kind == ActionSpec::Kind::Speed && spec.speedTarget == ActionSpec::SpeedTarget::Absolute) {
     checkSpeed(action.target, spec.where, "speed.target", spec.target.text(), concrete.index);
+  }
+  if (spec.kind == ActionSpec::Kind::Speed && spec.speedTarget == ActionSpec::SpeedTarget::Factor &&
+      !(action.target >= 0.0)) {
+    throw ConfigError(fmt::format("{}.speed.relative_factor: got {} in sample {}, expected a factor >= 0", spec.where,
+                                  formatValue(action.target), concrete.index));
   }
   return action;
 }

@@ -4,6 +4,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <cmath>
 #include <functional>
 #include <map>
 #include <regex>
@@ -68,6 +69,11 @@ void parseType(const YamlReader& reader, const YAML::Node& node, const std::stri
   vehicle.width = reader.number(node, "width", field + ".width", kind.width);
   if (!(vehicle.length > 0.0 && vehicle.length <= 100.0) || !(vehicle.width > 0.0 && vehicle.width <= 20.0)) {
     reader.fail(node, field, "expected a length in (0, 100] m and a width in (0, 20] m");
+  }
+  vehicle.referencePoint = reader.number(node, "reference_point", field + ".reference_point", 0.0);
+  // Within half its length: checked per sample (a drawn type sets the length).
+  if (!std::isfinite(vehicle.referencePoint)) {
+    reader.fail(node["reference_point"], field + ".reference_point", "expected a finite number of m from its centre");
   }
 }
 
@@ -257,13 +263,26 @@ void parsePosition(const YamlReader& reader, const YAML::Node& node, const std::
   position.offset = optionalExpression(reader, node, "offset", field, inputs, 0.0);
 }
 
+/// `between`: which points of the two road users a gap, headway or ttc measures between.
+void parseBetween(const YamlReader& reader, const YAML::Node& node, const std::string& field, TriggerSpec& trigger) {
+  if (trigger.kind != TriggerSpec::Kind::Gap && trigger.kind != TriggerSpec::Kind::Headway &&
+      trigger.kind != TriggerSpec::Kind::Ttc) {
+    reader.fail(node, field, "'between' goes with gap, headway and ttc (and their _at_least forms)");
+  }
+  const std::string value = reader.scalar(node, field);
+  if (value != "bumpers" && value != "reference_points") {
+    throw ConfigError::field(reader.where(node, field), field, value, "bumpers or reference_points");
+  }
+  trigger.betweenReferencePoints = value == "reference_points";
+}
+
 /// A trigger; `delay_allowed`: where a member's own start time counts (the trigger itself
 /// and the members of its `any`), not inside `all` (whose members hold at one instant).
 void parseTrigger(const YamlReader& reader, const YAML::Node& node, const std::string& field,
                   const std::vector<std::string>& inputs, bool delay_allowed, TriggerSpec& trigger) {
   trigger.where = reader.where(node, field);
   reader.requireMap(node, field);
-  std::set<std::string> allowed = {"to", "of", "position", "delay"};
+  std::set<std::string> allowed = {"to", "of", "between", "position", "delay"};
   std::vector<std::string> keys;
   for (const auto& entry : kTriggerKeys) {
     allowed.insert(entry.key);
@@ -303,6 +322,7 @@ void parseTrigger(const YamlReader& reader, const YAML::Node& node, const std::s
     }
     trigger.subject = reader.scalar(node["of"], field + ".of");
   }
+  if (node["between"]) parseBetween(reader, node["between"], field + ".between", trigger);
   if ((trigger.kind == TriggerSpec::Kind::Distance) != static_cast<bool>(node["position"])) {
     reader.fail(node, field, "'position' goes with distance_at_most and distance_at_least (and only there)");
   }
@@ -340,6 +360,26 @@ void parsePace(const YamlReader& reader, const YAML::Node& node, const std::stri
                      key == "duration" ? "s" : "");
 }
 
+/// `to` and `continuous` of a speed action relative to another road user's speed.
+void parseSpeedReference(const YamlReader& reader, const YAML::Node& node, const std::string& field,
+                         const std::string& target, ActionSpec& action) {
+  const bool relative = target == "relative_target" || target == "relative_factor";
+  for (const char* key : {"to", "continuous"}) {
+    if (node[key] && !relative) {
+      reader.fail(node[key], field + "." + key, "goes with relative_target and relative_factor (and only there)");
+    }
+  }
+  if (node["to"]) action.speedReference = reader.scalar(node["to"], field + ".to");
+  if (node["continuous"]) {
+    const std::string value = reader.scalar(node["continuous"], field + ".continuous");
+    if (value != "true" && value != "false") {
+      throw ConfigError::field(reader.where(node["continuous"], field + ".continuous"), field + ".continuous", value,
+                               "true or false");
+    }
+    action.continuous = value == "true";
+  }
+}
+
 void parseSpeedAction(const YamlReader& reader, const YAML::Node& node, const std::string& field, bool stop,
                       const std::vector<std::string>& inputs, ActionSpec& action) {
   action.kind = ActionSpec::Kind::Speed;
@@ -349,15 +389,25 @@ void parseSpeedAction(const YamlReader& reader, const YAML::Node& node, const st
     parsePace(reader, node, field, {{"decel", ActionSpec::Pace::Rate}, {"duration", ActionSpec::Pace::Duration}},
               inputs, action);
   } else {
-    reader.checkKeys(node, field, {"target", "relative_target", "delta", "shape", "rate", "duration"});
-    const std::string target = oneOf(reader, node, field, {"target", "relative_target", "delta"}, true);
+    reader.checkKeys(node, field, {"target", "relative_target", "relative_factor", "to", "continuous", "delta", "shape",
+                                   "rate", "duration"});
+    const std::string target =
+        oneOf(reader, node, field, {"target", "relative_target", "relative_factor", "delta"}, true);
     action.speedTarget = target == "target"            ? ActionSpec::SpeedTarget::Absolute
-                         : target == "relative_target" ? ActionSpec::SpeedTarget::RelativeToEgo
+                         : target == "relative_target" ? ActionSpec::SpeedTarget::Relative
+                         : target == "relative_factor" ? ActionSpec::SpeedTarget::Factor
                                                        : ActionSpec::SpeedTarget::Delta;
     action.target = reader.expression(node[target], field + "." + target, inputs);
-    if (target == "target") requireNonNegative(reader, node[target], field + ".target", action.target, false, "m/s");
+    if (target == "target" || target == "relative_factor") {
+      requireNonNegative(reader, node[target], field + "." + target, action.target, false,
+                         target == "target" ? "m/s" : "");
+    }
+    parseSpeedReference(reader, node, field, target, action);
   }
   action.shape = parseShape(reader, node, field, TransitionShape::Linear, true);
+  if (action.continuous && action.shape != TransitionShape::Step) {
+    reader.fail(node, field + ".continuous", "a continuous target follows the other's speed at once: shape step");
+  }
   if (action.shape == TransitionShape::Step) {
     for (const char* key : {"rate", "decel", "duration"}) {
       if (node[key]) reader.fail(node[key], field + "." + key, "a step changes the speed at once: no rate or duration");
@@ -477,7 +527,9 @@ void parseOther(const YamlReader& reader, const YAML::Node& item, const std::str
 void parseEgo(const YamlReader& reader, const YAML::Node& ego, const std::vector<std::string>& inputs,
               LogicalScenario& scenario) {
   const std::string field = "vehicles.ego";
-  reader.checkKeys(ego, field, {"type", "x", "s", "lane", "speed", "length", "width", "heading_noise_deg", "controller"});
+  reader.checkKeys(ego, field,
+                   {"type", "x", "s", "lane", "speed", "length", "width", "reference_point", "heading_noise_deg",
+                    "controller"});
   VehicleSpec& spec = scenario.ego;
   spec.id = "ego";
   spec.where = reader.where(ego, field);
@@ -519,6 +571,17 @@ void checkTriggerReferences(const TriggerSpec& trigger, const std::string& owner
                                   trigger.action, action_ids.empty() ? "none" : fmt::format("{}", fmt::join(action_ids, ", "))));
   }
   for (const auto& member : trigger.members) checkTriggerReferences(member, owner, users, actions, action_ids);
+}
+
+/// A speed relative to another road user's names one of the file, not the acting one.
+void checkSpeedReference(const ActionSpec& action, const std::string& owner, const std::vector<std::string>& users) {
+  const bool relative =
+      action.speedTarget == ActionSpec::SpeedTarget::Relative || action.speedTarget == ActionSpec::SpeedTarget::Factor;
+  if (action.kind != ActionSpec::Kind::Speed || !relative) return;
+  if (std::find(users.begin(), users.end(), action.speedReference) == users.end() || action.speedReference == owner) {
+    throw ConfigError(fmt::format("{}.speed.to: got '{}', expected another road user of the file: {}", action.where,
+                                  action.speedReference, fmt::join(users, ", ")));
+  }
 }
 
 /// The `after` conditions a trigger cannot fire without (itself, or members of an `all`),
@@ -570,7 +633,10 @@ void resolveReferences(const LogicalScenario& scenario) {
   std::vector<std::string> action_ids;
   for (const auto& [id, action] : actions) action_ids.push_back(id);
   for (const auto& other : scenario.others) {
-    for (const auto& action : other.actions) checkTriggerReferences(action.trigger, other.id, users, actions, action_ids);
+    for (const auto& action : other.actions) {
+      checkTriggerReferences(action.trigger, other.id, users, actions, action_ids);
+      checkSpeedReference(action, other.id, users);
+    }
   }
   std::map<std::string, int> visited;
   for (const auto& [id, action] : actions) {
@@ -597,6 +663,7 @@ void parseRoadUsers(const YamlReader& reader, const YAML::Node& node, LogicalSce
     const std::string field = fmt::format("vehicles.others[{}]", i);
     reader.checkKeys(item, field,
                      {"id", "type", "x", "s", "ds", "gap", "from", "lane", "relative_lane", "offset", "heading_deg", "length", "width",
+                      "reference_point",
                       "speed_profile", "speed", "relative_speed", "speed_noise", "heading_noise_deg", "actions"});
     VehicleSpec other;
     other.id = item["id"] ? reader.scalar(item["id"], field + ".id") : fmt::format("other{}", i);

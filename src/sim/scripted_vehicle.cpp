@@ -76,9 +76,13 @@ struct Mover {
   std::optional<Transition> speed;    ///< the latest speed action (none: the scripted speed)
   std::optional<Transition> lateral;  ///< the latest lateral action (none: stays at d)
   double speedAlong = 0.0;            ///< m/s, longitudinal speed at the current instant
+  /// The latest speed action if it is continuous (it tracks another road user's speed): its index.
+  std::optional<std::size_t> tracking;
+  double trackedSpeed = 0.0;  ///< m/s, what the tracking action asks for over the current step
 
   /// Nominal (noise-free) longitudinal speed at t.
   double nominalSpeed(double t, double step) const {
+    if (tracking) return trackedSpeed;
     if (speed) return speed->at(t);
     // Before any speed action: the scripted speed without its noise, between instants linearly.
     const auto& scripted = spec->scriptedSpeed;
@@ -91,6 +95,7 @@ struct Mover {
   }
   /// Longitudinal speed at instant k (noise included, never below 0).
   double speedAt(std::size_t k, double step) const {
+    if (tracking) return std::max(0.0, trackedSpeed + spec->speedNoise[k]);
     if (!speed) return spec->scriptedSpeed[k];
     return std::max(0.0, speed->at(static_cast<double>(k) * step) + spec->speedNoise[k]);
   }
@@ -153,6 +158,7 @@ struct ScriptedTraffic::Impl {
 
   void init();
   void checkOverlaps() const;
+  double referenceArcLength(const VehicleState& state, const scenario::ConcreteVehicle& spec) const;
   double relationValue(const scenario::ConcreteTrigger& trigger, std::size_t owner, const VehicleState& ego) const;
   const VehicleState& stateOf(int user, const VehicleState& ego) const {
     return user < 0 ? ego : states[static_cast<std::size_t>(user)];
@@ -162,7 +168,11 @@ struct ScriptedTraffic::Impl {
   double fireTime(const scenario::ConcreteTrigger& trigger, std::size_t owner, const VehicleState& ego) const;
   void offer(std::size_t a, const VehicleState& ego);
   void fireTriggers(const VehicleState& ego);
+  double speedTargetOf(const ConcreteAction& action, double from, const VehicleState& ego) const;
+  void startSpeedAction(std::size_t a, Mover& mover, Transition transition, const VehicleState& ego);
+  void track(const VehicleState& ego);
   void activate(std::size_t a, const VehicleState& ego);
+  void scheduleWaiters(std::size_t a, const VehicleState& ego);
   void activateDue(const VehicleState& ego);
   VehicleState advancePurePursuit(Mover& mover);
   VehicleState advanceExact(Mover& mover);
@@ -226,6 +236,13 @@ void ScriptedTraffic::Impl::checkOverlaps() const {
   }
 }
 
+/// m along the Ego's starting lane to a road user's reference point.
+double ScriptedTraffic::Impl::referenceArcLength(const VehicleState& state,
+                                                 const scenario::ConcreteVehicle& spec) const {
+  const Vec2 point = state.position() + spec.referencePoint * Vec2(std::cos(state.heading), std::sin(state.heading));
+  return projectExtended(egoLane, point).arcLength;
+}
+
 /// The value a gap, headway or ttc trigger of road user `owner` compares (inf: never).
 double ScriptedTraffic::Impl::relationValue(const scenario::ConcreteTrigger& trigger, std::size_t owner,
                                             const VehicleState& ego) const {
@@ -233,16 +250,26 @@ double ScriptedTraffic::Impl::relationValue(const scenario::ConcreteTrigger& tri
   const VehicleState& other = to_ego ? ego : states[static_cast<std::size_t>(trigger.reference)];
   const auto& other_spec = to_ego ? concrete->ego : concrete->others[static_cast<std::size_t>(trigger.reference)];
   const auto& self_spec = concrete->others[owner];
-  const PathRelation relation =
-      relateToPath(egoLane, road->laneWidth, footprintOf(other, other_spec.length, other_spec.width),
-                   footprintOf(states[owner], self_spec.length, self_spec.width));
-  const double gap = std::max(relation.longitudinalGap, 0.0);
-  if (trigger.kind == TriggerSpec::Kind::Gap) return relation.longitudinalGap;
+  double signed_gap = 0.0;  // > 0: `self` ahead of `other`
+  bool self_ahead = false;
+  if (trigger.betweenReferencePoints) {
+    const double self_s = referenceArcLength(states[owner], self_spec);
+    const double other_s = referenceArcLength(other, other_spec);
+    self_ahead = self_s > other_s;
+    signed_gap = std::abs(self_s - other_s);
+  } else {
+    const PathRelation relation =
+        relateToPath(egoLane, road->laneWidth, footprintOf(other, other_spec.length, other_spec.width),
+                     footprintOf(states[owner], self_spec.length, self_spec.width));
+    self_ahead = relation.longitudinalDistance > 0.0;
+    signed_gap = relation.longitudinalGap;
+  }
+  const double gap = std::max(signed_gap, 0.0);
+  if (trigger.kind == TriggerSpec::Kind::Gap) return signed_gap;
   // Speeds along the line; the rear one of the two closes in on the front one.
   const auto along = [&](const VehicleState& state) {
     return state.speed * std::cos(state.heading - projectExtended(egoLane, state.position()).heading);
   };
-  const bool self_ahead = relation.longitudinalDistance > 0.0;
   const double rear = self_ahead ? along(other) : along(states[owner]);
   const double front = self_ahead ? along(states[owner]) : along(other);
   if (trigger.kind == TriggerSpec::Kind::Headway && trigger.directed) {
@@ -343,6 +370,49 @@ void ScriptedTraffic::Impl::fireTriggers(const VehicleState& ego) {
   }
 }
 
+/// The speed (m/s) a speed action of target kind `action.speedTarget` aims at, starting from `from`.
+double ScriptedTraffic::Impl::speedTargetOf(const ConcreteAction& action, double from, const VehicleState& ego) const {
+  double to = 0.0;
+  switch (action.speedTarget) {
+    case ActionSpec::SpeedTarget::Absolute: to = action.target; break;
+    case ActionSpec::SpeedTarget::Relative: to = stateOf(action.speedReference, ego).speed + action.target; break;
+    case ActionSpec::SpeedTarget::Factor: to = stateOf(action.speedReference, ego).speed * action.target; break;
+    case ActionSpec::SpeedTarget::Delta: to = from + action.target; break;
+  }
+  return std::max(0.0, to);  // a relative target below 0 means: stop
+}
+
+/// Starts speed action `a` of `mover`: a transition to its target, or (continuous) tracking
+/// the reference's speed, which ends a tracking action before it.
+void ScriptedTraffic::Impl::startSpeedAction(std::size_t a, Mover& mover, Transition transition,
+                                             const VehicleState& ego) {
+  const auto& action = concrete->actions[a];
+  transition.from = mover.nominalSpeed(transition.start, step);
+  transition.to = speedTargetOf(action, transition.from, ego);
+  transition.duration = durationOf(action, transition.to - transition.from);
+  if (mover.tracking) {  // replaced: it ends here
+    timings[*mover.tracking].end = transition.start;
+    scheduleWaiters(*mover.tracking, ego);
+  }
+  mover.speed = transition;
+  mover.tracking.reset();
+  if (action.continuous) {
+    mover.tracking = a;
+    mover.trackedSpeed = transition.to;
+  }
+  // A continuous action runs until another speed action replaces it.
+  timings[a] = {transition.start, action.continuous ? kInf : transition.end()};
+  scheduleWaiters(a, ego);
+}
+
+/// Tracking actions take the speed their reference has at the current instant for the step
+/// ahead (one step behind it, as every road user moves on what it sees at the instant).
+void ScriptedTraffic::Impl::track(const VehicleState& ego) {
+  for (Mover& mover : movers) {
+    if (mover.tracking) mover.trackedSpeed = speedTargetOf(concrete->actions[*mover.tracking], 0.0, ego);
+  }
+}
+
 void ScriptedTraffic::Impl::activate(std::size_t a, const VehicleState& ego) {
   const auto& action = concrete->actions[a];
   Mover& mover = movers[static_cast<std::size_t>(action.owner)];
@@ -351,18 +421,11 @@ void ScriptedTraffic::Impl::activate(std::size_t a, const VehicleState& ego) {
   transition.start = t0;
   transition.shape = action.shape;
   if (action.kind == ActionSpec::Kind::Speed) {
-    transition.from = mover.nominalSpeed(t0, step);
-    switch (action.speedTarget) {
-      case ActionSpec::SpeedTarget::Absolute: transition.to = action.target; break;
-      case ActionSpec::SpeedTarget::RelativeToEgo: transition.to = ego.speed + action.target; break;
-      case ActionSpec::SpeedTarget::Delta: transition.to = transition.from + action.target; break;
-    }
-    transition.to = std::max(0.0, transition.to);  // a relative target below 0 means: stop
-    transition.duration = durationOf(action, transition.to - transition.from);
-    mover.speed = transition;
-  } else {
-    transition.from = mover.lateral ? mover.lateral->at(t0) : mover.d;
-    if (action.kind == ActionSpec::Kind::LaneChange) {
+    startSpeedAction(a, mover, transition, ego);
+    return;
+  }
+  transition.from = mover.lateral ? mover.lateral->at(t0) : mover.d;
+  if (action.kind == ActionSpec::Kind::LaneChange) {
       const int ego_lane = concrete->ego.lane +
                            static_cast<int>(std::lround(projectExtended(egoLane, ego.position()).lateralOffset / road->laneWidth));
       const int target = (action.relativeToEgoLane ? ego_lane : mover.laneIndex) + static_cast<int>(std::lround(action.target));
@@ -371,21 +434,25 @@ void ScriptedTraffic::Impl::activate(std::size_t a, const VehicleState& ego) {
                                       "has (0 .. {})",
                                       concrete->where(), action.where, t0, target, road->lanes - 1));
       }
-      mover.laneIndex = target;
-      transition.to = road->laneOffset(target);
-    } else {
-      // Lateral offsets count from the current lane's centre, crossings from the starting lane's.
-      transition.to = road->laneOffset(mover.laneIndex) + action.target;
-    }
-    transition.duration = durationOf(action, transition.to - transition.from);
-    mover.lateral = transition;
+    mover.laneIndex = target;
+    transition.to = road->laneOffset(target);
+  } else {
+    // Lateral offsets count from the current lane's centre, crossings from the starting lane's.
+    transition.to = road->laneOffset(mover.laneIndex) + action.target;
   }
+  transition.duration = durationOf(action, transition.to - transition.from);
+  mover.lateral = transition;
   timings[a] = {t0, transition.end()};
-  // Actions waiting for this one's end can be scheduled now.
+  scheduleWaiters(a, ego);
+}
+
+/// Once action `a` has started and its end is known: the actions waiting for that end.
+void ScriptedTraffic::Impl::scheduleWaiters(std::size_t a, const VehicleState& ego) {
+  const double end = timings[a].end;
   for (std::size_t b = 0; b < concrete->actions.size(); ++b) {
     const auto& trigger = concrete->actions[b].trigger;
     if (trigger.kind == TriggerSpec::Kind::After && trigger.action == static_cast<int>(a) && std::isnan(scheduled[b])) {
-      scheduled[b] = transition.end() + trigger.delay;
+      if (std::isfinite(end)) scheduled[b] = end + trigger.delay;
     } else if (trigger.kind == TriggerSpec::Kind::Any && std::isnan(timings[b].start)) {
       offer(b, ego);  // a member waiting for this action's end
     }
@@ -467,6 +534,7 @@ void ScriptedTraffic::step(const VehicleState& ego) {
   Impl& impl = *impl_;
   if (impl.tracksProgress) impl.trackProgress(ego);
   impl.fireTriggers(ego);
+  impl.track(ego);
   impl.activateDue(ego);
   for (std::size_t o = 0; o < impl.movers.size(); ++o) {
     Mover& mover = impl.movers[o];

@@ -645,6 +645,68 @@ TEST(OscRun, EachConditionStartsItsEventWhereTheFileSays) {
   }
 }
 
+// freespace="false" measures between the entities' reference points (which a catalog's
+// BoundingBox places: the lorry's 5 m behind its box centre, a sedan's 1.25 m), "true" bumper
+// to bumper. Slow, here a 12 m lorry with its reference point at s = 60 (box 59 .. 71), at
+// 18 m/s behind the lead (reference point at s = 100, box 99 .. 103.5): its time headway
+// between reference points (40 + 2 t + t^2 / 2) / 18 > 2.5 after 1.74 s, between bumpers
+// (28 + 2 t + t^2 / 2) / 18 > 2.5 after 4.16 s.
+TEST(OscRun, AHeadwayBetweenReferencePointsCountsFromThem) {
+  constexpr double kNext = 0.2;
+  const std::string slow_sedan = R"(<ScenarioObject name="Slow">
+      <CatalogReference catalogName="fleet" entryName="sedan"/>)";
+  const std::string slow_lorry = R"(<ScenarioObject name="Slow">
+      <CatalogReference catalogName="fleet" entryName="lorry"/>)";
+  for (const auto& [freespace, seen] : {std::pair{"false", 1.8 + kNext}, std::pair{"true", 4.2 + kNext}}) {
+    std::string text = conditionsWith(group(entityCondition(
+        "Slow", fmt::format(R"(<TimeHeadwayCondition entityRef="Lead" value="2.5" freespace="{}"
+            rule="greaterThan"/>)", freespace))));
+    text.replace(text.find(slow_sedan), slow_sedan.size(), slow_lorry);
+    const auto dir = folderWith({{"headway.xosc", text}});
+    const auto logical = importTemplate(dir->path() / "headway.xosc", {});
+    EXPECT_EQ(other(*logical, "Slow").referencePoint, std::string(freespace) == "false" ? -5.0 : 0.0);
+    EXPECT_NEAR(stepDownSeen(dir->path() / "headway.xosc"), seen, 1e-9) << freespace;
+  }
+}
+
+// A continuous relative target keeps up with the other's speed; in the Init from t = 0. Slow
+// keeps 0.9 times the lead's speed (one step behind it): 0.9 (20 + t) until the lead steps
+// down to 10 m/s at 3 s, 9 m/s from then on, to the end.
+TEST(OscRun, AContinuousRelativeSpeedKeepsUpWithTheOther) {
+  const std::string absolute = R"(<AbsoluteTargetSpeed value="18"/>)";
+  std::string text = readTextFile(data("conditions.xosc"));
+  text.replace(text.find(absolute), absolute.size(),
+               R"(<RelativeTargetSpeed entityRef="Lead" value="0.9" speedTargetValueType="factor"
+                  continuous="true"/>)");
+  const auto dir = folderWith({{"keep_up.xosc", text}});
+  const auto logical = importTemplate(dir->path() / "keep_up.xosc", {});
+  const auto& slow = other(*logical, "Slow");
+  ASSERT_EQ(slow.actions.size(), 1u);
+  EXPECT_EQ(slow.actions[0].speedTarget, scenario::ActionSpec::SpeedTarget::Factor);
+  EXPECT_EQ(slow.actions[0].speedReference, "Lead");
+  EXPECT_TRUE(slow.actions[0].continuous);
+  const auto track = simulatedTrack(dir->path() / "keep_up.xosc", "Slow");
+  ASSERT_TRUE(track);
+  EXPECT_NEAR(track->states[0].speed, 18.0, 1e-9);
+  EXPECT_NEAR(track->states[10].speed, 0.9 * 21.8, 1e-6);
+  EXPECT_NEAR(track->states.back().speed, 9.0, 1e-6);
+  // Continuous, but not a step: the language follows at once.
+  std::string gradual = text;
+  const std::string step_down = R"(<AbsoluteTargetSpeed value="10"/>)";
+  const auto target = gradual.find(step_down);
+  gradual.replace(target, step_down.size(),
+                  R"(<RelativeTargetSpeed entityRef="Slow" value="1" speedTargetValueType="delta"
+                      continuous="true"/>)");
+  const std::string step = R"(dynamicsShape="step" dynamicsDimension="time" value="0")";
+  gradual.replace(gradual.rfind(step, target), step.size(),
+                  R"(dynamicsShape="linear" dynamicsDimension="rate" value="2")");
+  const auto bad = folderWith({{"gradual.xosc", gradual}});
+  const std::string error = test::configErrorOf([&] { importTemplate(bad->path() / "gradual.xosc", {}); });
+  EXPECT_THAT(error, HasSubstr("gradual.xosc:"));
+  EXPECT_THAT(error, HasSubstr("dynamicsShape=\"linear\" with a continuous target: the language follows the other's"));
+  EXPECT_EQ(error.find('\n'), std::string::npos) << error;
+}
+
 // Triggers without conditions, read as esmini reads them: an empty (or absent) StartTrigger
 // starts its Act or Event at t = 0, an Act's empty StopTrigger never fires. An Act's
 // StopTrigger with conditions would cut its actions short, which the language does not do.
@@ -1193,6 +1255,11 @@ TEST(OscImport, ConditionsOnAnEventsStartOrEndFollowItsTriggerOrItsAction) {
   const auto action_start =
       swerve_trigger(R"(storyboardElementType="action" storyboardElementRef="ActivateEgo" state="runningState")");
   EXPECT_EQ(action_start.kind, scenario::TriggerSpec::Kind::Time);
+  // Every Story and Act starts at t = 0 (esmini's cut-in starts its events on its Act's start).
+  const auto act_start =
+      swerve_trigger(R"(storyboardElementType="act" storyboardElementRef="CutInAct" state="startTransition")");
+  EXPECT_EQ(act_start.kind, scenario::TriggerSpec::Kind::Time);
+  EXPECT_DOUBLE_EQ(act_start.value.evaluate({}), 0.0);
 
   const std::vector<std::pair<std::string, std::string>> refused = {
       {R"(storyboardElementType="event" storyboardElementRef="CutInEvent" state="endTransition")",
@@ -1202,7 +1269,11 @@ TEST(OscImport, ConditionsOnAnEventsStartOrEndFollowItsTriggerOrItsAction) {
       {R"(storyboardElementType="event" storyboardElementRef="SwerveEvent" state="startTransition")",
        "Event starts that follow each other more than 8 deep (a cycle?)"},
       {R"(storyboardElementType="maneuver" storyboardElementRef="CutInManeuver" state="startTransition")",
-       "storyboardElementType=\"maneuver\": the language follows an Event or an action"},
+       "storyboardElementType=\"maneuver\": the language follows a Story's or Act's start, an Event or an action"},
+      {R"(storyboardElementType="act" storyboardElementRef="CutInAct" state="endTransition")",
+       "state=\"endTransition\" of act 'CutInAct': the language follows a Story's or Act's start only"},
+      {R"(storyboardElementType="story" storyboardElementRef="NoSuchStory" state="startTransition")",
+       "storyboardElementRef=\"NoSuchStory\": no Story of that name"},
       {R"(storyboardElementType="event" storyboardElementRef="NoSuchEvent" state="startTransition")",
        "storyboardElementRef=\"NoSuchEvent\": expected one Event (or an action of one)"},
   };

@@ -2,6 +2,8 @@
 
 #include <fmt/format.h>
 
+#include <tuple>
+
 #include "test_support.hpp"
 #include "vsd/core/error.hpp"
 #include "vsd/scenario/concrete_scenario.hpp"
@@ -177,4 +179,41 @@ TEST(RoadUsers, LateralActionsNeedTheExactModel) {
   const auto error = errorOf(R"(    - {id: a, gap: 20, relative_lane: 0, speed: 5, heading_noise_deg: {min: -1, max: 1},
        actions: [{trigger: {time: 1}, lane_change: {lanes: 1, duration: 3}}]})");
   EXPECT_NE(error.find("keeps its lane by pure pursuit"), std::string::npos) << error;
+}
+
+TEST(RoadUsers, BadRelativeSpeedsAndReferencePointsAreRefused) {
+  const auto with = [](const std::string& user, const std::string& action) {
+    return errorOf(fmt::format(R"(    - {{id: a, gap: 20, relative_lane: 0, speed: 5{},
+       actions: [{{id: one, speed: {}}}]}}
+    - {{id: b, gap: 40, relative_lane: 1, speed: 5}})",
+                               user, action));
+  };
+  const std::vector<std::tuple<std::string, std::string, std::string>> cases = {
+      {"", "{relative_factor: 1.2, to: ghost, shape: step}",
+       "actions[0].speed.to: got 'ghost', expected another road user"},
+      {"", "{relative_target: 1, to: a, shape: step}", "actions[0].speed.to: got 'a', expected another road user"},
+      {"", "{target: 3, to: b}", "speed.to: goes with relative_target and relative_factor (and only there)"},
+      {"", "{delta: 3, continuous: true}", "speed.continuous: goes with relative_target and relative_factor"},
+      {"", "{relative_factor: 1.2, to: b, continuous: true, rate: 2}",
+       "speed.continuous: a continuous target follows the other's speed at once: shape step"},
+      {"", "{relative_factor: 1.2, continuous: yes, shape: step}",
+       "speed.continuous: got 'yes', expected true or false"},
+      {"", "{relative_factor: -1, shape: step}", "speed.relative_factor"},
+      {", reference_point: -2.6", "{target: 3, rate: 1}",
+       "reference_point: got -2.6 m in sample 0, expected within half its length (2.5 m) of its centre"},
+  };
+  for (const auto& [user, action, message] : cases) {
+    const std::string error = with(user, action);
+    EXPECT_NE(error.find("bad.yaml:"), std::string::npos) << action << ": " << error;
+    EXPECT_NE(error.find(message), std::string::npos) << action << ": " << error;
+    EXPECT_EQ(error.find('\n'), std::string::npos) << error;
+  }
+  const auto between = errorOf(R"(    - {id: a, gap: 20, relative_lane: 0, speed: 5,
+       actions: [{trigger: {speed_at_least: 6, between: reference_points}, stop: {decel: 3}},
+                 {trigger: {gap: 6, between: centres}, stop: {decel: 3}}]})");
+  EXPECT_NE(between.find("trigger.between: 'between' goes with gap, headway and ttc"), std::string::npos) << between;
+  const auto centres = errorOf(R"(    - {id: a, gap: 20, relative_lane: 0, speed: 5,
+       actions: [{trigger: {gap: 6, between: centres}, stop: {decel: 3}}]})");
+  EXPECT_NE(centres.find("trigger.between: got 'centres', expected bumpers or reference_points"), std::string::npos)
+      << centres;
 }

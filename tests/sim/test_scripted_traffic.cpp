@@ -250,3 +250,60 @@ TEST(ScriptedTraffic, ASpeedTriggerStartsItsActionWhenTheSpeedIsReached) {
   EXPECT_NEAR(path[25].speed, 25.0, 1e-9);  // t = 5 s: still accelerating
   EXPECT_NEAR(path[26].speed, 24.0, 1e-9);  // braking at 5 m/s^2 from t = 5 s
 }
+
+// A continuous target keeps up with the other's speed (one step behind it: a road user moves
+// on what it sees at the instant) until another speed action replaces it, which ends it and
+// starts what waits for its end. `lead` accelerates at 1 m/s^2 from 10 m/s: the follower's
+// speed at instant k + 1 is 1.5 times the lead's at instant k, until its stop at t = 4 s.
+TEST(ScriptedTraffic, AContinuousTargetFollowsTheOthersSpeedUntilReplaced) {
+  const Planned run = plan(scenarioWith(R"(
+    - {id: lead, s: 150, lane: 2, speed_profile: {initial: 10, phases: [{duration: 10, accel: 1}]},
+       actions: [{id: after_track, trigger: {after: track}, lateral_offset: {offset: 0.5, duration: 1}}]}
+    - {id: follower, s: 100, lane: 0, speed: 3,
+       actions: [{id: track, speed: {relative_factor: 1.5, to: lead, continuous: true, shape: step}},
+                 {id: brake, trigger: {time: 4}, stop: {decel: 5, shape: linear}},
+                 {id: fixed, trigger: {time: 7}, speed: {relative_target: -2, to: lead, shape: step}}]})",
+                                        0.0, 9.0));
+  const auto& lead = run.paths[0];
+  const auto& follower = run.paths[1];
+  EXPECT_NEAR(follower[0].speed, 3.0, 1e-9);
+  for (std::size_t k = 0; k < 20; ++k) {
+    EXPECT_NEAR(lead[k].speed, 10.0 + 0.2 * static_cast<double>(k), 1e-9) << k;
+    EXPECT_NEAR(follower[k + 1].speed, 1.5 * lead[k].speed, 1e-9) << k;
+  }
+  EXPECT_NEAR(follower[21].speed, 1.5 * lead[19].speed - 1.0, 1e-9);  // braking at 5 m/s^2 from t = 4 s
+  // Not continuous: the lead's speed as the step to t = 7 s starts (16.8 m/s) less 2, fixed from then on.
+  EXPECT_NEAR(follower[35].speed, 14.8, 1e-9);
+  EXPECT_NEAR(follower[45].speed, 14.8, 1e-9);
+  const auto timings = timingsAfter(run, 45);  // in file order: after_track, track, brake, fixed
+  EXPECT_NEAR(timings[1].start, 0.0, 1e-9);
+  EXPECT_NEAR(timings[1].end, 4.0, 1e-9);  // replaced by the stop
+  EXPECT_NEAR(timings[0].start, 4.0, 1e-9);
+  // Tracking that is never replaced never ends.
+  const auto open = timingsAfter(plan(scenarioWith(R"(
+    - {id: follower, s: 100, lane: 0, speed: 3,
+       actions: [{id: track, speed: {relative_target: 1, continuous: true, shape: step}},
+                 {trigger: {after: track}, lateral_offset: {offset: 0.5, duration: 1}}]})")),
+                                  50);
+  EXPECT_TRUE(std::isinf(open[0].end)) << open[0].end;
+  EXPECT_TRUE(std::isnan(open[1].start)) << open[1].start;
+}
+
+// `between: reference_points` measures from each road user's reference point (here the
+// chaser's lies 1 m behind its centre, the Ego's at its centre) instead of bumper to bumper.
+// The chaser starts 30.3 m (centres) behind the stand-in Ego at 15 m/s to its 10 m/s: the
+// reference points are 31.3 - 5t apart, the bumpers (5 m cars) 25.3 - 5t.
+TEST(ScriptedTraffic, RelationsBetweenReferencePointsCountFromThem) {
+  const auto logical = scenarioWith(R"(
+    - {id: chaser, ds: -30.3, relative_lane: 1, speed: 15, reference_point: -1,
+       actions: [{trigger: {headway: 1.5, of: chaser, between: reference_points},
+                  lateral_offset: {offset: 0.1, duration: 1}},
+                 {trigger: {headway: 1.5, of: chaser}, lateral_offset: {offset: 0.2, duration: 1}},
+                 {trigger: {gap: 20, between: reference_points}, lateral_offset: {offset: 0.3, duration: 1}},
+                 {trigger: {ttc: 4, between: reference_points}, lateral_offset: {offset: 0.4, duration: 1}}]})");
+  const auto timings = timingsAfter(plan(logical), 30);
+  EXPECT_NEAR(timings[0].start, 1.8, 1e-9);  // (31.3 - 5t) / 15 <= 1.5 from t = 1.76
+  EXPECT_NEAR(timings[1].start, 0.6, 1e-9);  // (25.3 - 5t) / 15 <= 1.5 from t = 0.56
+  EXPECT_NEAR(timings[2].start, 2.4, 1e-9);  // 31.3 - 5t <= 20 from t = 2.26
+  EXPECT_NEAR(timings[3].start, 2.4, 1e-9);  // (31.3 - 5t) / 5 <= 4 from t = 2.26
+}

@@ -23,6 +23,7 @@ struct ConcreteTrigger {
   /// Whose quantity (Speed .. EndOfRoad; Headway if `directed`): -1 = the Ego, else index into `others`.
   int subject = -1;
   bool directed = false;  ///< Headway: `subject`'s to the other (undefined unless it is ahead), else the rear one's
+  bool betweenReferencePoints = false;  ///< Gap, Headway, Ttc: between reference points, else bumper to bumper
   int action = -1;      ///< After: index into ConcreteScenario::actions
   // Distance: the place, along the road (s from the region's start, lane, offset) or in the frame (x, y).
   bool inFrame = false;
@@ -42,7 +43,9 @@ struct ConcreteAction {
   ConcreteTrigger trigger;
   TransitionShape shape = TransitionShape::Smooth;
   ActionSpec::SpeedTarget speedTarget = ActionSpec::SpeedTarget::Absolute;
-  double target = 0.0;  ///< m/s | lanes | m
+  int speedReference = -1;  ///< Relative, Factor: -1 = the Ego, else index into ConcreteScenario::others
+  bool continuous = false;  ///< Relative, Factor: tracks the reference's speed until replaced
+  double target = 0.0;  ///< m/s (a factor for SpeedTarget::Factor) | lanes | m
   bool relativeToEgoLane = false;
   ActionSpec::Pace pace = ActionSpec::Pace::Duration;
   double paceValue = 0.0;  ///< > 0 (a duration may be 0)
@@ -55,6 +58,7 @@ struct ConcreteVehicle {
   int lane = 0;         ///< starting lane, resolved (relative lanes counted from the Ego's)
   double length = 0.0;  ///< m; no default: from the scenario (which takes it from the type's table entry)
   double width = 0.0;   ///< m
+  double referencePoint = 0.0;  ///< m ahead of the centre (VehicleSpec::referencePoint)
   VehicleSpec::Along along = VehicleSpec::Along::X;
   double x = 0.0;       ///< m, initial x of the centre (on the lane's centre line; Along::X)
   double alongValue = 0.0;  ///< m, s, ds or gap (VehicleSpec::Along)

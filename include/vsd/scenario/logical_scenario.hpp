@@ -148,6 +148,9 @@ struct TriggerSpec {
   /// or `reference`, whose headway to the other counts, undefined unless the other is ahead
   /// (OpenSCENARIO's); empty: the rear one's, whichever it is.
   std::string subject;
+  /// Gap, Headway, Ttc: measured between the two road users' reference points (VehicleSpec::
+  /// referencePoint) along the Ego's lane, else bumper to bumper.
+  bool betweenReferencePoints = false;
   std::string action;         ///< After: id of the action whose end starts this one
   PositionSpec position;      ///< Distance
   std::vector<TriggerSpec> members;  ///< All, Any
@@ -176,9 +179,14 @@ struct ActionSpec {
   Kind kind = Kind::Speed;
   TriggerSpec trigger;
   TransitionShape shape = TransitionShape::Smooth;
-  // Speed: target = value (absolute), the Ego's speed at the start + value, or own speed + value.
-  enum class SpeedTarget { Absolute, RelativeToEgo, Delta };
+  // Speed: target = value (absolute), another road user's speed (`speedReference`, the Ego's
+  // by default) + value or * value, or its own speed + value.
+  enum class SpeedTarget { Absolute, Relative, Factor, Delta };
   SpeedTarget speedTarget = SpeedTarget::Absolute;
+  std::string speedReference = "ego";  ///< Relative, Factor: whose speed ("ego" or a road user's id)
+  /// Relative, Factor: keep tracking the reference's speed (shape step) until another speed
+  /// action replaces this one; else the target is fixed when the action starts.
+  bool continuous = false;
   Expression target;     ///< m/s (Speed); lanes (LaneChange); m (LateralOffset, Cross)
   /// LaneChange: target is relative to the road user's own lane (false) or the Ego's (true).
   bool relativeToEgoLane = false;
@@ -217,6 +225,10 @@ struct VehicleSpec {
   Expression headingDeg;   ///< deg, heading relative to the road's direction (pedestrians, objects)
   double length = 0.0;     ///< m, from the type's table entry unless given
   double width = 0.0;      ///< m
+  /// m ahead of its centre along its heading (< 0 behind; within half its length): the point
+  /// gap, headway and ttc triggers measure from with `between: reference_points` (an imported
+  /// vehicle's OpenSCENARIO reference point, e.g. its rear axle).
+  double referencePoint = 0.0;
   // Ego, and others without a speed_profile:
   Expression speed;                   ///< m/s, initial speed
   bool speedRelativeToEgo = false;    ///< others: `relative_speed`, added to the Ego's initial speed
