@@ -60,7 +60,7 @@ void writePlanView(pugi::xml_node road_node, const Polyline& centre) {
 void writeLanes(pugi::xml_node road_node, const road::RoadGeometry& road) {
   pugi::xml_node lanes = road_node.append_child("lanes");
   // Lane 0 (the centre lane) sits on the left edge of the road; the road is centred on the reference line.
-  addPolynomial(lanes, "laneOffset", "s", 0.5 * road.lanes * road.laneWidth);
+  addPolynomial(lanes, "laneOffset", "s", road.halfWidth());
   pugi::xml_node section = xml::child(lanes, "laneSection", {{"s", "0"}});
   pugi::xml_node centre_lane = xml::child(section.append_child("center"), "lane",
                                           {{"id", "0"}, {"type", "none"}, {"level", "false"}});
@@ -70,7 +70,7 @@ void writeLanes(pugi::xml_node road_node, const road::RoadGeometry& road) {
   pugi::xml_node right = section.append_child("right");
   for (int id = -1; id >= -road.lanes; --id) {
     pugi::xml_node lane = xml::child(right, "lane", {{"id", std::to_string(id)}, {"type", "driving"}, {"level", "false"}});
-    addPolynomial(lane, "width", "sOffset", road.laneWidth);
+    addPolynomial(lane, "width", "sOffset", road.laneWidthOf(road.lanes + id));  // id -1: the leftmost lane
     addRoadMark(lane, id == -road.lanes ? "solid" : "broken");
   }
 }
@@ -164,13 +164,13 @@ double constantPolynomial(const xml::Reader& reader, const pugi::xml_node& node)
   return reader.number(node, "a");
 }
 
-/// Width of the right lanes (all equal, constant) and their number.
-std::pair<int, double> readRightLanes(const xml::Reader& reader, const pugi::xml_node& section) {
+/// Widths of the right lanes (constant), lane 0 (the rightmost) first.
+std::vector<double> readRightLanes(const xml::Reader& reader, const pugi::xml_node& section) {
   reader.requireSubset(section, {"center", "right", "userData"});
   const pugi::xml_node right = reader.only(section, "right");
   reader.requireSubset(right, {"lane", "userData"});
   int lanes = 0;
-  double width = 0.0;
+  std::vector<double> widths;
   for (const pugi::xml_node& lane : right.children("lane")) {
     reader.requireSubset(lane, {"link", "width", "roadMark", "userData"});
     if (lanes == scenario_bounds::kMaxLanes) {
@@ -184,16 +184,11 @@ std::pair<int, double> readRightLanes(const xml::Reader& reader, const pugi::xml
       reader.fail(lane, fmt::format("width {} m: expected > 0.5 m and {} m", xml::number(lane_width),
                                     scenario_bounds::kLaneWidth.text()));
     }
-    if (lanes > 0 && std::abs(lane_width - width) > 1e-9) {
-      reader.fail(lane, fmt::format("width {} m differs from the first lane's {} m (the supported subset has equal "
-                                    "lane widths)",
-                                    xml::number(lane_width), xml::number(width)));
-    }
-    width = lane_width;
+    widths.insert(widths.begin(), lane_width);  // ids run from the reference line outwards
     ++lanes;
   }
   if (lanes == 0) reader.fail(right, "expected at least one <lane>");
-  return {lanes, width};
+  return widths;
 }
 
 /// The number of geometries and their summed length, bounded before any point is made.
@@ -248,14 +243,13 @@ OpenDriveRoad readOpenDrive(const fs::path& file) {
     if (reader.number(offset, "s") != 0.0) reader.fail(offset, "s: expected 0 (one constant lane offset)");
     lane_offset = constantPolynomial(reader, offset);
   }
-  const auto [lane_count, width] = readRightLanes(reader, reader.only(lanes, "laneSection"));
-  road.lanes = lane_count;
-  road.laneWidth = width;
+  road.laneWidths = readRightLanes(reader, reader.only(lanes, "laneSection"));
+  road.lanes = static_cast<int>(road.laneWidths.size());
   // vsd-sumo spreads lanes symmetrically around the reference line (SUMO spreadType=center).
-  if (std::abs(lane_offset - 0.5 * lane_count * width) > 1e-6) {
+  if (std::abs(lane_offset - road.halfWidth()) > 1e-6) {
     reader.fail(lanes, fmt::format("laneOffset {} m: the supported subset centres the lanes on the reference line "
-                                   "(expected lanes x width / 2 = {} m)",
-                                   xml::number(lane_offset), xml::number(0.5 * lane_count * width)));
+                                   "(expected half the lanes' width, {} m)",
+                                   xml::number(lane_offset), xml::number(road.halfWidth())));
   }
   road.speedLimit = scenario::RoadSpec{}.speedLimit;
   for (const pugi::xml_node& type : road_node.children("type")) {

@@ -212,8 +212,8 @@ void readPosition(Document& document, Entity& entity, const pugi::xml_node& posi
     reader.requireSubset(position, {});
     const NumberRange coordinates = NumberRange::closed(-1e7, 1e7);
     coordinate = toRoadCoordinate(road, Vec2(reader.number(position, "x", coordinates), reader.number(position, "y", coordinates)));
-    lane = static_cast<int>(std::lround((coordinate.t - road.laneOffset(0)) / road.laneWidth));
-    if (lane < 0 || lane >= road.lanes || std::abs(coordinate.t - road.laneOffset(lane)) > kOnLaneTolerance) {
+    lane = road.laneAt(coordinate.t);
+    if (std::abs(coordinate.t - road.laneOffset(lane)) > kOnLaneTolerance) {
       reader.fail(position, fmt::format("({}, {}) is not on a lane's centre line (vehicles start there)",
                                         reader.text(position, "x"), reader.text(position, "y")));
     }
@@ -457,7 +457,11 @@ void readRoadSpec(const Document& document, scenario::LogicalScenario& logical) 
   logical.road.extensionBefore = before;
   logical.road.extensionAfter = after;
   logical.road.lanes = road.lanes;
-  logical.road.laneWidth = scenario::Expression::constant(road.laneWidth);
+  if (std::all_of(road.laneWidths.begin(), road.laneWidths.end(), [&](double w) { return w == road.laneWidths[0]; })) {
+    logical.road.laneWidth = scenario::Expression::constant(road.laneWidths.front());
+  } else {
+    for (const double width : road.laneWidths) logical.road.laneWidths.push_back(scenario::Expression::constant(width));
+  }
   logical.road.speedLimit = road.speedLimit;
   logical.road.points = static_cast<int>(std::count_if(road.centre.begin(), road.centre.end(), [&](const Vec2& p) {
     return p.x() >= x_min - 1e-6 && p.x() <= x_max + 1e-6;
@@ -595,7 +599,7 @@ ImportedScenario buildScenario(const Document& document, const fs::path& xosc) {
                                 headerWhere(document), names::kSeed);
   concrete.index = parseUnsigned(property(document, names::kSample, "0"), scenario_bounds::kMaxSampleIndex,
                                  headerWhere(document), names::kSample);
-  concrete.laneWidth = document.road.geometry.laneWidth;
+  concrete.laneWidths = document.road.geometry.laneWidths;
   imported.road = document.road.geometry;
   imported.road.regionBegin = 0;
   imported.road.regionEnd = imported.road.centre.size();

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <map>
 #include <mutex>
+#include <numeric>
 #include <stdexcept>
 
 #include "vsd/core/files.hpp"
@@ -124,7 +125,7 @@ double constantWidth(const xml::Reader& reader, const pugi::xml_node& lane) {
   const pugi::xml_node width = reader.only(lane, "width");
   for (const char* coefficient : {"b", "c", "d"}) {
     if (reader.optionalNumber(width, coefficient).value_or(0.0) != 0.0) {
-      reader.fail(width, "a width that varies along the road: the scenario language's lanes have one width");
+      reader.fail(width, "a width that varies along the road: the scenario language's lanes keep their width");
     }
   }
   if (reader.optionalNumber(width, "sOffset").value_or(0.0) != 0.0) reader.fail(width, "sOffset: expected 0");
@@ -147,13 +148,12 @@ void readRightLanes(const xml::Reader& reader, const pugi::xml_node& right, Carr
       if (part == Part::Shoulder || part == Part::Outer) {
         reader.fail(lane, "a second run of driving lanes: the scenario language has one carriageway");
       }
-      if (part == Part::Driving && std::abs(width - result.laneWidth) > 1e-9) {
-        reader.fail(lane, fmt::format("width {} m, the lanes before are {} m: the language's lanes have one width",
-                                      xml::number(width), xml::number(result.laneWidth)));
+      if (!(width > 0.5)) {
+        reader.fail(lane, fmt::format("width {} m: expected a driving lane wider than 0.5 m", xml::number(width)));
       }
       if (part == Part::Inner) result.innermostLaneId = static_cast<int>(id);
       part = Part::Driving;
-      result.laneWidth = width;
+      result.laneWidths.insert(result.laneWidths.begin(), width);  // ids run outwards: lane 0 is the last
       ++result.lanes;
     } else if (part == Part::Inner) {
       result.shoulderLeft += width;
@@ -169,8 +169,8 @@ void readRightLanes(const xml::Reader& reader, const pugi::xml_node& right, Carr
 }
 
 /// The left side's driving lanes 1, 2, ... while they continue the right side's carriageway
-/// across the reference line (lane -1 driving, one width), then its shoulder/stop lanes.
-/// Anything else leaves them apart (adjoiningLeftLanes 0): a median, another width. The
+/// across the reference line (lane -1 driving), then its shoulder/stop lanes.
+/// Anything else leaves them apart (adjoiningLeftLanes 0): a median. The
 /// left side is not part of the road otherwise, so nothing on it refuses the road: a lane
 /// the language could not read (a varying width, an unknown element) ends the run there,
 /// and one among the adjoining driving lanes leaves them all apart.
@@ -193,15 +193,20 @@ void readAdjoiningLeftLanes(const xml::Reader& reader, const pugi::xml_node& lef
     try {
       width = constantWidth(reader, lane);
     } catch (const ConfigError&) {
-      if (driving) result.adjoiningLeftLanes = 0;
+      if (driving) {
+        result.adjoiningLeftLanes = 0;
+        result.adjoiningLeftWidths.clear();
+      }
       return;
     }
-    if (driving && std::abs(width - result.laneWidth) > 1e-9) {
+    if (driving && !(width > 0.5)) {
       result.adjoiningLeftLanes = 0;
+      result.adjoiningLeftWidths.clear();
       return;
     }
     if (driving) {
       ++result.adjoiningLeftLanes;
+      result.adjoiningLeftWidths.push_back(width);
     } else {
       shoulder = true;
       result.adjoiningLeftShoulder += width;
@@ -234,7 +239,8 @@ void CarriagewayRoad::joinLeftLanes() {
   if (adjoiningLeftLanes == 0 || leftLanesJoined) throw std::logic_error("joinLeftLanes: no left lanes to join");
   leftLanesJoined = true;
   lanes += adjoiningLeftLanes;
-  innerT = adjoiningLeftLanes * laneWidth;
+  laneWidths.insert(laneWidths.end(), adjoiningLeftWidths.begin(), adjoiningLeftWidths.end());
+  innerT = std::accumulate(adjoiningLeftWidths.begin(), adjoiningLeftWidths.end(), 0.0);
   shoulderLeft = adjoiningLeftShoulder;
 }
 
@@ -253,11 +259,23 @@ int CarriagewayRoad::languageLane(long lane_id, const std::string& where) const 
   return static_cast<int>(lane_id - outermost);
 }
 
-double CarriagewayRoad::laneCentreT(int lane) const { return innerT - (lanes - lane - 0.5) * laneWidth; }
+double CarriagewayRoad::centreT() const { return innerT - scenario::halfRoadWidth(laneWidths); }
+
+double CarriagewayRoad::laneCentreT(int lane) const {
+  if (oneLaneWidth()) return innerT - (lanes - lane - 0.5) * laneWidths.front();
+  return centreT() + scenario::laneCentreOffset(lane, laneWidths);
+}
 
 int CarriagewayRoad::nearestLane(double t) const {
-  const long lane = std::lround((t - laneCentreT(0)) / laneWidth);
-  return static_cast<int>(std::clamp<long>(lane, 0, lanes - 1));
+  if (oneLaneWidth()) {
+    const long lane = std::lround((t - laneCentreT(0)) / laneWidths.front());
+    return static_cast<int>(std::clamp<long>(lane, 0, lanes - 1));
+  }
+  return scenario::laneAtOffset(t - centreT(), laneWidths);
+}
+
+bool CarriagewayRoad::oneLaneWidth() const {
+  return std::all_of(laneWidths.begin(), laneWidths.end(), [&](double w) { return w == laneWidths.front(); });
 }
 
 PlanGeometry PlanGeometry::line(double s, const Vec2& start, double heading, double length) {

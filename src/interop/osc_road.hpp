@@ -3,10 +3,10 @@
 //
 // A file maps if it has one road with one lane section, no lane offset, constant widths,
 // and on its right side (negative lane ids, driven towards +s) a contiguous run of
-// `driving` lanes of one width. Lanes between the reference line and that run and
+// `driving` lanes (each of its own width). Lanes between the reference line and that run and
 // `shoulder`/`stop` lanes right of it become the language's shoulders; the left side
 // (positive ids) is not part of vsd-sumo's road, unless its driving lanes continue the
-// right side's across the reference line (no median, one width) and the scenario drives
+// right side's across the reference line (no median) and the scenario drives
 // them along the reference line (joinLeftLanes). Elevation, superelevation, road marks,
 // links, objects and signals do not change the planar lanes: they are reported as not
 // simulated.
@@ -95,7 +95,7 @@ struct CarriagewayRoad {
   double length = 0.0;      ///< m of reference line
   int lanes = 0;            ///< the language's driving lanes: the right side's (and the joined left ones)
   int innermostLaneId = -1; ///< OpenDRIVE id of the right side's driving lane next to the reference line
-  double laneWidth = 0.0;   ///< m
+  std::vector<double> laneWidths;  ///< m, each driving lane's, the language's lane 0 (rightmost) first
   double innerT = 0.0;      ///< m, t of the driving lanes' left edge (<= 0; > 0 with joined left lanes)
   /// m left of the driving lanes (towards the reference line, or beyond joined left lanes)
   double shoulderLeft = 0.0;
@@ -105,9 +105,10 @@ struct CarriagewayRoad {
   /// "file:line: <left>" of the lane section's left side; empty: the road has none.
   std::string leftSide;
   /// Driving lanes of the left side (ids 1 .. adjoiningLeftLanes) that continue the right
-  /// side's driving lanes across the reference line: lane -1 and lane 1 both driving, every
-  /// one of them of the right side's width. 0: none (a median, another width, no left side).
+  /// side's driving lanes across the reference line: lane -1 and lane 1 both driving.
+  /// 0: none (a median, a lane the language cannot read, no left side).
   int adjoiningLeftLanes = 0;
+  std::vector<double> adjoiningLeftWidths;  ///< m, of the adjoining left lanes, id 1 first
   double adjoiningLeftShoulder = 0.0;  ///< m of shoulder/stop lanes left of them
   bool leftLanesJoined = false;        ///< joinLeftLanes() was called
 
@@ -119,7 +120,9 @@ struct CarriagewayRoad {
   int rightLanes() const { return leftLanesJoined ? lanes - adjoiningLeftLanes : lanes; }
 
   /// t of the driving lanes' centre line (the language's road centre).
-  double centreT() const { return innerT - lanes * laneWidth / 2.0; }
+  double centreT() const;
+  /// True if every driving lane has the same width.
+  bool oneLaneWidth() const;
   /// Language lane (0 = rightmost) of a driving lane id (with joined left lanes: id 1 is the
   /// lane left of id -1); throws ConfigError naming `where` otherwise.
   int languageLane(long lane_id, const std::string& where) const;

@@ -8,6 +8,7 @@
 
 #include <cctype>
 #include <cmath>
+#include <numeric>
 
 #include "osc_template.hpp"
 #include "vsd/core/error.hpp"
@@ -209,7 +210,11 @@ YAML::Node roadNode(Translation& translation) {
     node["centre_line"] = centreLineNode(road);
   }
   node["lanes"] = std::to_string(road.lanes);
-  node["lane_width"] = num(road.laneWidth);
+  if (road.oneLaneWidth()) {
+    node["lane_width"] = num(road.laneWidths.front());
+  } else {
+    for (const double width : road.laneWidths) node["lane_widths"].push_back(num(width));
+  }
   node["shoulders"]["left"] = num(road.shoulderLeft);
   node["shoulders"]["right"] = num(road.shoulderRight);
   node["extension"]["before"] = "0";
@@ -354,7 +359,8 @@ bool placesOnLeftLanes(const Translation& translation) {
   trial.road = road;
   trial.entities = translation.entities;
   placeEntities(trial);
-  const double left_edge = road.innerT + road.adjoiningLeftLanes * road.laneWidth;
+  const double left_edge =
+      road.innerT + std::accumulate(road.adjoiningLeftWidths.begin(), road.adjoiningLeftWidths.end(), 0.0);
   return std::any_of(trial.entities.begin(), trial.entities.end(), [&](const Entity& entity) {
     return entity.placement && entity.placement->t > road.innerT && entity.placement->t < left_edge;
   });
@@ -418,12 +424,15 @@ TranslationResult translate(const fs::path& xosc, const OscImportOptions& option
   readInit(translation, storyboard);
   joinOrLeaveLeftLanes(translation, root);
   const CarriagewayRoad& road = translation.road;
-  findings.mapped(reader.where(logic),
-                  road.oneCurvature
-                      ? fmt::format("road '{}': {} driving lanes of {} m, curvature {} 1/m", road.id, road.lanes,
-                                    num(road.laneWidth), num(road.curvature))
-                      : fmt::format("road '{}': {} driving lanes of {} m, {} geometries of varying curvature", road.id,
-                                    road.lanes, num(road.laneWidth), road.geometries.size()));
+  std::vector<std::string> widths;
+  for (const double width : road.laneWidths) widths.push_back(num(width));
+  const std::string lanes =
+      road.oneLaneWidth() ? fmt::format("{} driving lanes of {} m", road.lanes, widths.front())
+                          : fmt::format("{} driving lanes of {} m (lane 0 first)", road.lanes, fmt::join(widths, ", "));
+  const std::string shape = road.oneCurvature
+                                ? fmt::format("curvature {} 1/m", num(road.curvature))
+                                : fmt::format("{} geometries of varying curvature", road.geometries.size());
+  findings.mapped(reader.where(logic), fmt::format("road '{}': {}, {}", road.id, lanes, shape));
   placeEntities(translation);
   findings.attempt([&] {
     translation.ego = &findEgo(translation, translation.controller);

@@ -47,15 +47,16 @@ void checkLaneChanges(const ScenarioOutcome& outcome, const scenario::ConcreteSc
     }
     const int own_lane = concrete.others[o].lane;
     const double target_lane = (lane_change->relativeToEgoLane ? concrete.ego.lane : own_lane) + lane_change->target;
-    if (std::abs(target_lane - own_lane) != 1.0) continue;  // one lane over: the magnitude is the lane width
+    if (std::abs(target_lane - own_lane) != 1.0) continue;  // one lane over: the magnitude is known
     const auto& track = outcome.trace.vehicles.at(1 + o);
     std::vector<double> d;
     for (const auto& state : track.states) d.push_back(frame.coordinates(state.position()).second);
     double peak = 0.0;
     for (std::size_t k = 0; k + 1 < d.size(); ++k) peak = std::max(peak, std::abs(d[k + 1] - d[k]) / outcome.trace.step);
     const double moved = std::abs(d.back() - d.front());
+    const double span = std::abs(road.laneOffset(static_cast<int>(target_lane)) - road.laneOffset(own_lane));
     // A smooth profile peaks at its midpoint: past it (with a step to spare), the peak is in the record.
-    if (moved < 0.5 * road.laneWidth + lane_change->paceValue * outcome.trace.step) continue;
+    if (moved < 0.5 * span + lane_change->paceValue * outcome.trace.step) continue;
     ++check.laneChangesPastPeak;
     const double error = std::abs(peak / lane_change->paceValue - 1.0);
     check.worstLateralSpeedError = std::max(check.worstLateralSpeedError, error);
@@ -63,7 +64,7 @@ void checkLaneChanges(const ScenarioOutcome& outcome, const scenario::ConcreteSc
     const double last_step = std::abs(d.back() - d[d.size() - 2]);
     if (last_step > 1e-6) continue;  // still moving at the end of the window
     ++check.laneChangesEnded;
-    const double target = d.front() + std::copysign(road.laneWidth, d.back() - d.front());
+    const double target = d.front() + std::copysign(span, d.back() - d.front());
     if (std::abs(d.back() - target) <= 0.01) ++check.laneChangesOnLane;
   }
 }

@@ -40,7 +40,7 @@ vector::VectorizedScene simulatedScene(const scenario::LogicalScenario& logical,
 std::vector<LaneGeometry> plannedLanes(const road::RoadGeometry& road) {
   std::vector<LaneGeometry> lanes;
   for (int lane = 0; lane < road.lanes; ++lane) {
-    lanes.push_back({std::to_string(lane), road.laneCentre(lane), road.laneWidth});
+    lanes.push_back({std::to_string(lane), road.laneCentre(lane), road.laneWidthOf(lane)});
   }
   return lanes;
 }

@@ -83,6 +83,21 @@ Polyline NetworkBuilder::edgeShape(const PlacedRoad& placed) {
   return shape;
 }
 
+namespace {
+
+/// Ends an edge's element: lanes wider or narrower than lane 0 each get their own (spreadType
+/// center keeps them around the shape).
+void writeOtherLaneWidths(fmt::memory_buffer& edges, const RoadGeometry& road) {
+  std::string lanes;
+  for (int lane = 1; lane < road.lanes; ++lane) {
+    if (road.laneWidthOf(lane) == road.laneWidthOf(0)) continue;
+    lanes += fmt::format("    <lane index=\"{}\" width=\"{:.6f}\"/>\n", lane, road.laneWidthOf(lane));
+  }
+  fmt::format_to(std::back_inserter(edges), lanes.empty() ? "\"/>\n" : "\">\n{}  </edge>\n", lanes);
+}
+
+}  // namespace
+
 void NetworkBuilder::writePlainXml(const fs::path& stem) const {
   fmt::memory_buffer nodes;
   fmt::memory_buffer edges;
@@ -100,11 +115,11 @@ void NetworkBuilder::writePlainXml(const fs::path& stem) const {
     fmt::format_to(std::back_inserter(edges),
                    "  <edge id=\"{0}\" from=\"{0}_a\" to=\"{0}_b\" numLanes=\"{1}\" width=\"{2:.6f}\" speed=\"{3:.3f}\" "
                    "spreadType=\"center\" shape=\"",
-                   id, placed.road.lanes, placed.road.laneWidth, placed.road.speedLimit);
+                   id, placed.road.lanes, placed.road.laneWidthOf(0), placed.road.speedLimit);
     for (std::size_t i = 0; i < shape.size(); ++i) {
       fmt::format_to(std::back_inserter(edges), "{}{:.6f},{:.6f}", i == 0 ? "" : " ", shape[i].x(), shape[i].y());
     }
-    fmt::format_to(std::back_inserter(edges), "\"/>\n");
+    writeOtherLaneWidths(edges, placed.road);
   }
   fmt::format_to(std::back_inserter(nodes), "</nodes>\n");
   fmt::format_to(std::back_inserter(edges), "</edges>\n");

@@ -8,7 +8,13 @@
 
 namespace vsd::road {
 
-double RoadGeometry::laneOffset(int lane) const { return scenario::laneCentreOffset(lane, lanes, laneWidth); }
+double RoadGeometry::laneOffset(int lane) const { return scenario::laneCentreOffset(lane, laneWidths); }
+
+double RoadGeometry::laneWidthOf(int lane) const { return laneWidths.at(static_cast<std::size_t>(lane)); }
+
+double RoadGeometry::halfWidth() const { return scenario::halfRoadWidth(laneWidths); }
+
+int RoadGeometry::laneAt(double offset) const { return scenario::laneAtOffset(offset, laneWidths); }
 
 double RoadGeometry::regionStart() const {
   double s = 0.0;
@@ -28,7 +34,7 @@ std::pair<Vec2, Vec2> RoadGeometry::bounds() const {
     lo = lo.cwiseMin(p);
     hi = hi.cwiseMax(p);
   }
-  const double half_width = 0.5 * laneWidth * lanes;
+  const double half_width = halfWidth();
   return {lo.array() - half_width, hi.array() + half_width};
 }
 
@@ -128,7 +134,7 @@ RoadGeometry buildRoadGeometry(const scenario::ConcreteScenario& concrete) {
   const auto& spec = concrete.logical->road;
   RoadGeometry road;
   road.lanes = spec.lanes;
-  road.laneWidth = concrete.laneWidth;
+  road.laneWidths = concrete.laneWidths;
   road.speedLimit = spec.speedLimit;
 
   Vec2 tangent_begin;

@@ -128,9 +128,9 @@ struct NetEdge {
   std::string id;
   Polyline shape;  ///< net coordinates
   int lanes = 1;
-  double laneWidth = 0.0;
+  std::vector<double> laneWidths;  ///< m, lane 0 first
   double speed = 0.0;
-  double laneOffset(int lane) const { return (lane - 0.5 * (lanes - 1)) * laneWidth; }
+  double laneOffset(int lane) const { return scenario::laneCentreOffset(lane, laneWidths); }
 };
 
 void writeEdge(Out out, const NetEdge& edge) {
@@ -142,7 +142,7 @@ void writeEdge(Out out, const NetEdge& edge) {
   for (int lane = 0; lane < edge.lanes; ++lane) {
     const double offset = edge.laneOffset(lane);
     fmt::format_to(out, "        <lane id=\"{}_{}\" index=\"{}\" speed=\"{:.2f}\" length=\"{:.2f}\" width=\"{:.2f}\" shape=\"",
-                   edge.id, lane, lane, edge.speed, length, edge.laneWidth);
+                   edge.id, lane, lane, edge.speed, length, edge.laneWidths[static_cast<std::size_t>(lane)]);
     writePoints(out, sumoLaneShape(edge.shape, offset));
     fmt::format_to(out, "\"/>\n");
   }
@@ -155,7 +155,7 @@ void writeJunction(Out out, const NetEdge& edge, bool at_start) {
   const Polyline& s = edge.shape;
   const Vec2& node = at_start ? s.front() : s.back();
   const Vec2 normal = at_start ? leftNormal(s[0], s[1]) : leftNormal(s[s.size() - 2], s.back());
-  const Vec2 half = 0.5 * edge.lanes * edge.laneWidth * normal;
+  const Vec2 half = scenario::halfRoadWidth(edge.laneWidths) * normal;
   fmt::format_to(out, "    <junction id=\"{}_{}\" type=\"dead_end\" x=\"{:.2f}\" y=\"{:.2f}\" incLanes=\"", edge.id,
                  at_start ? 'a' : 'b', node.x(), node.y());
   if (!at_start) {
@@ -186,13 +186,18 @@ bool foldsWhenMoved(const Polyline& shape, double left_offset) {
 
 NetEdge netEdgeOf(const std::string& id, const Polyline& plain_xml_shape, const RoadGeometry& road) {
   // netconvert drops points within 0.1 m of their predecessor from the edge's geometry.
-  return {id, withoutNearDuplicates(plain_xml_shape), road.lanes, road.laneWidth, road.speedLimit};
+  return {id, withoutNearDuplicates(plain_xml_shape), road.lanes, road.laneWidths, road.speedLimit};
 }
 
 }  // namespace
 
 bool NetworkBuilder::directlyWritable() const {
   for (const auto& placed : roads_) {
+    // Lanes of different widths: netconvert's lane lengths then follow a rule of its own.
+    if (scenario::laneCentreOffset(0, placed.road.laneWidths) !=
+        scenario::laneCentreOffset(0, placed.road.lanes, placed.road.laneWidthOf(0))) {
+      return false;
+    }
     const NetEdge edge = netEdgeOf(edgeIdFor(placed.index), edgeShape(placed), placed.road);
     for (int lane = 0; lane < edge.lanes; ++lane) {
       if (foldsWhenMoved(edge.shape, edge.laneOffset(lane))) return false;

@@ -166,12 +166,34 @@ void sampleSpeeds(const VehicleSpec& spec, const ConcreteScenario& concrete, Rng
   other.speed = other.scriptedSpeed.front();
 }
 
+/// Each lane's width: road.lane_width plus its noise (one draw for every lane), or road.lane_widths.
+std::vector<double> realisedLaneWidths(const LogicalScenario& spec, const std::vector<double>& inputs, Rng& road_rng) {
+  const std::string where = spec.sourceFile.string() + ": road.lane_width";
+  std::vector<double> widths;
+  if (spec.road.laneWidths.empty()) {
+    const double width = evaluateFinite(spec.road.laneWidth, inputs, where, "lane_width") +
+                         sampleDistribution(spec.road.laneWidthNoise, road_rng, inputs);
+    widths.assign(static_cast<std::size_t>(spec.road.lanes), width);
+  } else {
+    for (const auto& width : spec.road.laneWidths) {
+      widths.push_back(evaluateFinite(width, inputs, where + "s", "lane_widths"));
+    }
+  }
+  for (const double width : widths) {
+    if (!(width > 0.5 && width <= 50.0)) {
+      throw ConfigError(fmt::format("{}{}: realised lane width {} m (expected 0.5 .. 50 m)", where,
+                                    spec.road.laneWidths.empty() ? "" : "s", width));
+    }
+  }
+  return widths;
+}
+
 /// A pedestrian stands, and crosses to, places on the road's lanes or shoulders.
 void checkOnPavedGround(const ConcreteScenario& concrete, const ConcreteVehicle& user, double offset,
                         const std::string& where, const std::string& field) {
   const auto& road = concrete.logical->road;
-  const double half = 0.5 * road.lanes * concrete.laneWidth;
-  const double d = laneCentreOffset(user.lane, road.lanes, concrete.laneWidth) + offset;
+  const double half = halfRoadWidth(concrete.laneWidths);
+  const double d = laneCentreOffset(user.lane, concrete.laneWidths) + offset;
   if (d < -(half + road.shoulderRight) - 1e-9 || d > half + road.shoulderLeft + 1e-9) {
     const bool right = d < 0.0;
     throw ConfigError(fmt::format(
@@ -307,6 +329,37 @@ double laneCentreOffset(int lane, int lanes, double lane_width) {
   return (static_cast<double>(lane) - 0.5 * static_cast<double>(lanes - 1)) * lane_width;
 }
 
+namespace {
+bool oneWidth(const std::vector<double>& lane_widths) {
+  return std::all_of(lane_widths.begin(), lane_widths.end(), [&](double w) { return w == lane_widths.front(); });
+}
+}  // namespace
+
+double laneCentreOffset(int lane, const std::vector<double>& lane_widths) {
+  const int lanes = static_cast<int>(lane_widths.size());
+  if (oneWidth(lane_widths)) return laneCentreOffset(lane, lanes, lane_widths.front());
+  double right_edge = -halfRoadWidth(lane_widths);
+  for (int i = 0; i < lane; ++i) right_edge += lane_widths[static_cast<std::size_t>(i)];
+  return right_edge + 0.5 * lane_widths[static_cast<std::size_t>(lane)];
+}
+
+double halfRoadWidth(const std::vector<double>& lane_widths) {
+  if (lane_widths.empty()) return 0.0;
+  if (oneWidth(lane_widths)) return 0.5 * lane_widths.front() * static_cast<double>(lane_widths.size());
+  double total = 0.0;
+  for (const double width : lane_widths) total += width;
+  return 0.5 * total;
+}
+
+int laneAtOffset(double offset, const std::vector<double>& lane_widths) {
+  double left_edge = -halfRoadWidth(lane_widths);
+  for (std::size_t lane = 0; lane + 1 < lane_widths.size(); ++lane) {
+    left_edge += lane_widths[lane];
+    if (offset < left_edge) return static_cast<int>(lane);
+  }
+  return static_cast<int>(lane_widths.size()) - 1;
+}
+
 std::string ConcreteScenario::where() const {
   return fmt::format("{}: sample {}", logical->sourceFile.string(), index);
 }
@@ -342,13 +395,7 @@ ConcreteScenario sampleConcreteScenario(const std::shared_ptr<const LogicalScena
   Rng road_rng = Rng::derive(seed, index, RandomStream::RoadNoise);
   concrete.centreNoise.resize(static_cast<std::size_t>(spec.road.points));
   for (auto& noise : concrete.centreNoise) noise = sampleDistribution(spec.road.centreNoise, road_rng, inputs);
-  concrete.laneWidth = evaluateFinite(spec.road.laneWidth, inputs, spec.sourceFile.string() + ": road.lane_width",
-                                      "lane_width") +
-                       sampleDistribution(spec.road.laneWidthNoise, road_rng, inputs);
-  if (!(concrete.laneWidth > 0.5 && concrete.laneWidth <= 50.0)) {
-    throw ConfigError(fmt::format("{}: road.lane_width: realised lane width {} m (expected 0.5 .. 50 m)",
-                                  spec.sourceFile.string(), concrete.laneWidth));
-  }
+  concrete.laneWidths = realisedLaneWidths(spec, inputs, road_rng);
 
   const int steps = spec.steps();
   Rng vehicle_rng = Rng::derive(seed, index, RandomStream::VehicleNoise);

@@ -202,10 +202,32 @@ void parseShoulders(const YamlReader& reader, const YAML::Node& node, RoadSpec& 
   }
 }
 
+/// `lane_widths: [w0, w1, ...]`: one width per lane, lane 0 (the rightmost) first.
+void parseLaneWidths(const YamlReader& reader, const YAML::Node& node, const std::vector<std::string>& inputs,
+                     RoadSpec& road) {
+  const YAML::Node list = node["lane_widths"];
+  if (node["lane_width"] || node["lane_width_noise"]) {
+    reader.fail(list, "road.lane_widths", "either lane_widths or lane_width (with its noise), not both");
+  }
+  if (!list.IsSequence() || static_cast<int>(list.size()) != road.lanes) {
+    reader.fail(list, "road.lane_widths", fmt::format("expected a list of {} widths (road.lanes), lane 0 first",
+                                                      road.lanes));
+  }
+  for (std::size_t lane = 0; lane < list.size(); ++lane) {
+    const std::string field = fmt::format("road.lane_widths[{}]", lane);
+    road.laneWidths.push_back(reader.expression(list[lane], field, inputs));
+    const Expression& width = road.laneWidths.back();
+    if (width.isConstant() && !(width.evaluate({}) > 0.5 && width.evaluate({}) <= 50.0)) {
+      throw ConfigError::field(reader.where(list[lane], field), field, width.text(), "a width in (0.5, 50] m");
+    }
+  }
+}
+
 void parseRoad(const YamlReader& reader, const YAML::Node& node, LogicalScenario& scenario) {
   if (!node) reader.fail(YAML::Node(), "road", "missing section 'road'");
   reader.checkKeys(node, "road", {"shape", "x_range", "points", "centre", "centre_noise", "centre_line", "curvature", "length", "lanes",
-                                  "lane_width", "lane_width_noise", "speed_limit", "extension", "shoulders"});
+                                  "lane_width", "lane_widths", "lane_width_noise", "speed_limit", "extension",
+                                  "shoulders"});
   const auto inputs = scenario.inputNames();
   RoadSpec& road = scenario.road;
   const std::string shape = node["shape"] ? reader.scalar(node["shape"], "road.shape") : "polynomial";
@@ -231,6 +253,7 @@ void parseRoad(const YamlReader& reader, const YAML::Node& node, LogicalScenario
   if (node["lane_width_noise"]) {
     road.laneWidthNoise = reader.distribution(node["lane_width_noise"], "road.lane_width_noise", inputs);
   }
+  if (node["lane_widths"]) parseLaneWidths(reader, node, inputs, road);
   road.speedLimit = reader.number(node, "speed_limit", "road.speed_limit", road.speedLimit);
   if (!(road.speedLimit > 0.0)) {
     throw ConfigError::field(reader.where(node["speed_limit"], "road.speed_limit"), "road.speed_limit",

@@ -259,7 +259,8 @@ double ScriptedTraffic::Impl::relationValue(const scenario::ConcreteTrigger& tri
     signed_gap = std::abs(self_s - other_s);
   } else {
     const PathRelation relation =
-        relateToPath(egoLane, road->laneWidth, footprintOf(other, other_spec.length, other_spec.width),
+        relateToPath(egoLane, road->laneWidthOf(concrete->ego.lane),
+                     footprintOf(other, other_spec.length, other_spec.width),
                      footprintOf(states[owner], self_spec.length, self_spec.width));
     self_ahead = relation.longitudinalDistance > 0.0;
     signed_gap = relation.longitudinalGap;
@@ -426,8 +427,8 @@ void ScriptedTraffic::Impl::activate(std::size_t a, const VehicleState& ego) {
   }
   transition.from = mover.lateral ? mover.lateral->at(t0) : mover.d;
   if (action.kind == ActionSpec::Kind::LaneChange) {
-      const int ego_lane = concrete->ego.lane +
-                           static_cast<int>(std::lround(projectExtended(egoLane, ego.position()).lateralOffset / road->laneWidth));
+      const int ego_lane =
+          road->laneAt(road->laneOffset(concrete->ego.lane) + projectExtended(egoLane, ego.position()).lateralOffset);
       const int target = (action.relativeToEgoLane ? ego_lane : mover.laneIndex) + static_cast<int>(std::lround(action.target));
       if (target < 0 || target >= road->lanes) {
         throw ConfigError(fmt::format("{}: {}.lane_change: at t = {:.1f} s that is lane {}, expected a lane the road "
@@ -483,7 +484,8 @@ VehicleState ScriptedTraffic::Impl::advancePurePursuit(Mover& mover) {
   limits.maxDecel = 1e6;
   Observation observation;
   observation.ego = mover.state;
-  observation.lane = observeLane(mover.lane, mover.lane.project(mover.state.position()), mover.state, road->laneWidth);
+  observation.lane = observeLane(mover.lane, mover.lane.project(mover.state.position()), mover.state,
+                                  road->laneWidthOf(mover.laneIndex));
   Command command;
   command.accel = (mover.speedAt(k + 1, step) - mover.state.speed) / step;
   command.curvature = laneKeeping.curvature(observation);

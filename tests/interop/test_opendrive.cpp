@@ -65,9 +65,21 @@ TEST(OpenDrive, ExportedRoadReadsBackExactly) {
       EXPECT_NEAR((read.geometry.centre[i] - road.centre[i]).norm(), 0.0, 1e-9) << "point " << i;
     }
     EXPECT_EQ(read.geometry.lanes, road.lanes);
-    EXPECT_DOUBLE_EQ(read.geometry.laneWidth, road.laneWidth);
+    EXPECT_EQ(read.geometry.laneWidths, road.laneWidths);
     EXPECT_DOUBLE_EQ(read.geometry.speedLimit, road.speedLimit);
   }
+}
+
+// Lanes of different widths: OpenDRIVE numbers them from the reference line (-1 the leftmost).
+TEST(OpenDrive, LanesOfDifferentWidthsReadBackInTheirPlaces) {
+  TemporaryDirectory work("vsd-od");
+  auto road = road::buildRoadGeometry(sample(threeLaneAccLk(), 4));
+  road.laneWidths = {3.65, 3.5, 3.9};
+  writeOpenDrive(road, "s4", work.path() / "s4.xodr");
+  const auto read = readOpenDrive(work.path() / "s4.xodr");
+  EXPECT_EQ(read.geometry.laneWidths, road.laneWidths);
+  EXPECT_NEAR(read.geometry.laneOffset(0), -(3.65 + 3.5 + 3.9) / 2 + 3.65 / 2, 1e-12);
+  EXPECT_NEAR(read.geometry.laneOffset(2), (3.65 + 3.5 + 3.9) / 2 - 3.9 / 2, 1e-12);
 }
 
 TEST(OpenDrive, RoadCoordinatesInvertOnLaneCentres) {

@@ -800,12 +800,12 @@ std::map<std::string, std::map<int, Polyline>> laneShapes(const fs::path& net) {
 
 /// The road's driving lanes, as the import evaluates its plan view, against the lanes SUMO's
 /// netconvert builds from the same file (an independent reading of spirals and paramPoly3).
-void expectTheLanesNetconvertBuilds(const std::string& road_file) {
+void expectTheLanesNetconvertBuilds(const fs::path& road_file) {
   osc::Findings findings(true);
-  const auto road = osc::readCarriagewayRoad(data(road_file), findings);
+  const auto road = osc::readCarriagewayRoad(road_file, findings);
   EXPECT_FALSE(road.oneCurvature);
   TemporaryDirectory work("vsd-osc-road");
-  road::convertOpenDrive(data(road_file), work.path() / "road.net.xml", road::OpenDriveOrigin::AsWritten);
+  road::convertOpenDrive(road_file, work.path() / "road.net.xml", road::OpenDriveOrigin::AsWritten);
   // Edge -7 holds road 7's right lanes, SUMO index 0 = the rightmost = the language's lane 0.
   const auto lanes = laneShapes(work.path() / "road.net.xml").at("-7");
   ASSERT_EQ(lanes.size(), 3u);
@@ -824,8 +824,31 @@ void expectTheLanesNetconvertBuilds(const std::string& road_file) {
 }  // namespace
 
 TEST(OscRoad, SpiralsAndParamPoly3LieWhereNetconvertPutsThem) {
-  expectTheLanesNetconvertBuilds("roads/s_curve.xodr");
-  expectTheLanesNetconvertBuilds("roads/param_poly3.xodr");
+  expectTheLanesNetconvertBuilds(data("roads/s_curve.xodr"));
+  expectTheLanesNetconvertBuilds(data("roads/param_poly3.xodr"));
+}
+
+// Driving lanes of different widths (as esmini's e6mini.xodr: 3.65, 3.5, 3.9 m from the
+// reference line out) lie where netconvert puts them, and the language gets one width per lane.
+TEST(OscRoad, LanesOfDifferentWidthsLieWhereNetconvertPutsThem) {
+  std::string text = readTextFile(data("roads/s_curve.xodr"));
+  for (const auto& [id, width] : {std::pair{"-2", "3.65"}, std::pair{"-4", "3.9"}}) {
+    const std::string lane =
+        fmt::format(R"(<lane id="{}" type="driving" level="false"><width sOffset="0" a="3.5")", id);
+    ASSERT_NE(text.find(lane), std::string::npos) << lane;
+    text.replace(text.find(lane), lane.size(),
+                 fmt::format(R"(<lane id="{}" type="driving" level="false"><width sOffset="0" a="{}")", id, width));
+  }
+  TemporaryDirectory dir("vsd-osc-road");
+  test::writeFile(dir.path() / "widths.xodr", text);
+  expectTheLanesNetconvertBuilds(dir.path() / "widths.xodr");
+  osc::Findings findings(true);
+  const auto road = osc::readCarriagewayRoad(dir.path() / "widths.xodr", findings);
+  EXPECT_EQ(road.laneWidths, (std::vector<double>{3.9, 3.5, 3.65}));
+  EXPECT_NEAR(road.centreT(), -1.0 - (3.65 + 3.5 + 3.9) / 2, 1e-12);
+  EXPECT_EQ(road.nearestLane(-1.0 - 3.65 - 3.5 - 0.1), 0);
+  EXPECT_EQ(road.nearestLane(-1.0 - 3.65 - 0.1), 1);
+  EXPECT_EQ(road.nearestLane(-1.0 - 0.1), 2);
 }
 
 TEST(OscRoad, AlongAndAcrossARoadOfSeveralCurvatures) {
@@ -1154,10 +1177,9 @@ std::unique_ptr<TemporaryDirectory> twoWayCutIn(const std::string& left_width, c
 
 // esmini's ALKS cut-ins start the cutter on lane 1 of a road with one lane each way, turned
 // (relative h = pi) to drive along the reference line: those left lanes join the language's
-// road, numbered after the right side's; a vehicle facing lane 1's own direction (against
-// the reference line), or a left lane that does not continue the carriageway (another
-// width), stays refused. By hand: the language's road centre is the reference line (lanes
-// -1 and 1 are both 3.5 m), lane 0's centre at y = -1.75; the cutter cuts into it and
+// road, numbered after the right side's (each with its own width); a vehicle facing lane
+// 1's own direction (against the reference line) stays refused. By hand: the language's road
+// centre is the reference line (lanes -1 and 1 both 3.5 m), lane 0's centre at y = -1.75; the cutter cuts into it and
 // swerves 0.5 m left (ScriptedRoadUsersEndWhereTheFileSays): it ends at y = -1.25, 10 m/s.
 TEST(OscRun, LeftLanesDrivenAlongTheReferenceLineJoinTheRoad) {
   const std::string turned =
@@ -1181,9 +1203,12 @@ TEST(OscRun, LeftLanesDrivenAlongTheReferenceLineJoinTheRoad) {
   const auto facing_its_lane = twoWayCutIn("3.5", R"(<LanePosition roadId="7" laneId="1" s="60" offset="0"/>)");
   EXPECT_THAT(test::configErrorOf([&] { importTemplate(facing_its_lane->path() / "two_way.xosc", {}); }),
               HasSubstr("'Cutter' starts 180 deg off the road's direction"));
+  // A left lane of another width joins as well, with its own width.
   const auto other_width = twoWayCutIn("3.25", turned);
-  EXPECT_THAT(test::configErrorOf([&] { importTemplate(other_width->path() / "two_way.xosc", {}); }),
-              HasSubstr("laneId 1: expected a driving lane of the road's right side, -1 .. -1"));
+  const auto wider = importTemplate(other_width->path() / "two_way.xosc", {});
+  ASSERT_EQ(wider->road.laneWidths.size(), 2u);
+  EXPECT_DOUBLE_EQ(wider->road.laneWidths[0].evaluate({}), 3.5);
+  EXPECT_DOUBLE_EQ(wider->road.laneWidths[1].evaluate({}), 3.25);
 }
 
 // On a road with one driving lane on its right side, a lane change to the left can only go

@@ -34,7 +34,7 @@ TEST(RoadGeometry, LanePointsFollowThePolynomialPlusNoise) {
     const double polynomial = in[0] + in[1] * x + in[2] * x * x + in[3] * x * x * x;
     EXPECT_NEAR(p.y(), polynomial + concrete.centreNoise[i], 1e-9);
   }
-  EXPECT_DOUBLE_EQ(road.laneWidth, concrete.laneWidth);
+  EXPECT_EQ(road.laneWidths, concrete.laneWidths);
 }
 
 TEST(RoadGeometry, ExtensionsAreStraightAlongTheEndTangents) {
@@ -50,7 +50,7 @@ TEST(RoadGeometry, LanesSpreadAroundTheCentreWithLaneZeroRightmost) {
   RoadGeometry road;
   road.centre = {{0, 0}, {100, 0}};
   road.lanes = 3;
-  road.laneWidth = 3.0;
+  road.laneWidths.assign(static_cast<std::size_t>(road.lanes), 3.0);
   EXPECT_DOUBLE_EQ(road.laneOffset(0), -3.0);
   EXPECT_DOUBLE_EQ(road.laneOffset(1), 0.0);
   EXPECT_DOUBLE_EQ(road.laneOffset(2), 3.0);
@@ -99,7 +99,7 @@ TEST(Network, SumoBuildsExactlyTheGeneratedLanesForManyScenariosInOneNet) {
   sim::SumoSession session({"--net-file", net.string()});
   for (std::uint64_t i = 0; i < 20; ++i) {
     const auto lane = sim::fetchLane(edgeIdFor(i) + "_0", layout.offsetFor(i));
-    EXPECT_NEAR(lane.width, roads[i].laneWidth, 0.01);
+    EXPECT_NEAR(lane.width, roads[i].laneWidthOf(0), 0.01);
     // Every generated point is in SUMO's lane shape, at netconvert's 0.01 m precision.
     ASSERT_EQ(lane.centre.size(), roads[i].centre.size());
     for (std::size_t k = 0; k < lane.centre.size(); ++k) {
@@ -114,7 +114,7 @@ TEST(Network, NetconvertFailureNamesTheInputAndTheReason) {
   NetworkBuilder builder;
   RoadGeometry road;
   road.centre = {{0, 0}, {100, 0}};
-  road.laneWidth = kDefaultLaneWidth;
+  road.laneWidths.assign(static_cast<std::size_t>(road.lanes), kDefaultLaneWidth);
   builder.add(0, road, {1000, 1000});
   builder.writePlainXml(dir.path() / "net");
   try {
@@ -186,18 +186,18 @@ std::vector<RoadGeometry> awkwardRoads() {
   std::vector<RoadGeometry> roads;
   RoadGeometry dense;
   dense.lanes = 3;
-  dense.laneWidth = 3.2;
+  dense.laneWidths.assign(static_cast<std::size_t>(dense.lanes), 3.2);
   for (int i = 0; i <= 40; ++i) dense.centre.emplace_back(-100.0 + 0.06 * i, 0.01 * i);
   dense.centre.emplace_back(0.0, 16.0);
   dense.centre.emplace_back(0.03, 16.005);  // the last point closer than 0.1 m to its predecessor
   roads.push_back(dense);
   RoadGeometry single;  // one lane: its shape is the edge's, whatever the bends
-  single.laneWidth = kDefaultLaneWidth;
+  single.laneWidths.assign(static_cast<std::size_t>(single.lanes), kDefaultLaneWidth);
   single.centre = {{-100, 0}, {-99.95, 0.01}, {-99.9, 0.3}, {-60, 40}, {-59, 40}, {0, -10}, {0.05, -10.02}};
   roads.push_back(single);
   RoadGeometry kinks;
   kinks.lanes = 2;
-  kinks.laneWidth = 3.75;
+  kinks.laneWidths.assign(static_cast<std::size_t>(kinks.lanes), 3.75);
   kinks.centre = {{-200, 0}, {-100, 0.05}, {-50, 0.06}, {0, 20}, {10, 21}, {60, 90}, {200, 95}};
   roads.push_back(kinks);
   return roads;
@@ -221,6 +221,7 @@ TEST(DirectNetwork, SumoLoadsTheSameLanesAsNetconvertBuildsForTheSameRoads) {
     for (int i = 0; i < 40; ++i) {
       auto road = buildRoadGeometry(scenario::sampleConcreteScenario(logical, 7, index));
       road.lanes = 1 + i % 3;  // noisy bends moved sideways, too
+      road.laneWidths.assign(static_cast<std::size_t>(road.lanes), road.laneWidths.front());
       add(road, layout);
     }
   }
@@ -255,15 +256,45 @@ TEST(DirectNetwork, RoadsWhoseLanesFoldAtABendAreLeftToNetconvert) {
   // the junction, which the direct writer does not reproduce.
   RoadGeometry road;
   road.lanes = 3;
-  road.laneWidth = 3.2;
+  road.laneWidths.assign(static_cast<std::size_t>(road.lanes), 3.2);
   road.centre = {{-100, 0}, {-2.4, 0.4}, {-2.28, 0.42}, {0, 5}};
   NetworkBuilder folding;
   folding.add(0, road, {1000, 1000});
   EXPECT_FALSE(folding.directlyWritable());
   road.lanes = 1;  // the centre lane alone never folds
+  road.laneWidths.resize(1);
   NetworkBuilder single;
   single.add(0, road, {1000, 1000});
   EXPECT_TRUE(single.directlyWritable());
+  // Lanes of different widths (esmini's e6mini: 3.65, 3.5, 3.9 m) go to netconvert too.
+  road.lanes = 3;
+  road.laneWidths = {3.65, 3.5, 3.9};
+  road.centre = {{-100, 0}, {0, 0}, {100, 0}};
+  NetworkBuilder widths;
+  widths.add(0, road, {0, 0});
+  EXPECT_FALSE(widths.directlyWritable());
+}
+
+// netconvert puts lanes of different widths where the road's geometry has them (on a bend too).
+TEST(DirectNetwork, NetconvertPlacesLanesOfDifferentWidthsWhereTheRoadHasThem) {
+  TemporaryDirectory dir;
+  RoadGeometry road;
+  road.lanes = 3;
+  road.laneWidths = {3.65, 3.5, 3.9};
+  for (int i = 0; i <= 40; ++i) {
+    const double angle = 0.005 * i;  // 200 m radius
+    road.centre.emplace_back(200.0 * std::sin(angle) - 100.0, 200.0 * (1.0 - std::cos(angle)));
+  }
+  NetworkBuilder builder;
+  builder.add(0, road, {0, 0});
+  builder.writePlainXml(dir.path() / "widths");
+  const auto loaded = loadWithSumo(PendingNetwork::start(dir.path() / "widths", {}).wait());
+  for (int lane = 0; lane < road.lanes; ++lane) {
+    const auto& built = loaded.lanes.at(edgeIdFor(0) + "_" + std::to_string(lane));
+    EXPECT_NEAR(built.width, road.laneWidthOf(lane), 1e-9);
+    const MeasuredPolyline centre(road.laneCentre(lane));
+    for (const Vec2& point : built.shape) EXPECT_LT(std::abs(centre.project(point).lateralOffset), 0.02) << lane;
+  }
 }
 
 namespace {

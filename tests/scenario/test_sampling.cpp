@@ -35,8 +35,9 @@ TEST(Sampling, RespectsTheTableIncludingDependentRanges) {
     ASSERT_LE(std::abs(input(c, "a3")), 0.001);
     // Random variations of the paper: lane width 3.5 + U(-0.3, 0.3), centre noise U(-0.5, 0.5)
     // at each of the 25 points, heading noise U(-2.9, 2.9) deg per step of the Ego and of the Co.
-    ASSERT_GE(c.laneWidth, 3.2);
-    ASSERT_LE(c.laneWidth, 3.8);
+    ASSERT_EQ(c.laneWidths.size(), 1u);
+    ASSERT_GE(c.laneWidths[0], 3.2);
+    ASSERT_LE(c.laneWidths[0], 3.8);
     ASSERT_EQ(c.centreNoise.size(), 25u);
     for (double n : c.centreNoise) ASSERT_LE(std::abs(n), 0.5);
     for (const auto* vehicle : {&c.ego, &c.others.at(0)}) {

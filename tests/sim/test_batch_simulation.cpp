@@ -69,7 +69,7 @@ TEST(BatchSimulation, EgoAndCoStartWhereTheScenarioSays) {
     EXPECT_NEAR(co.y, pointAtX(batch.roads[i].centre, x_co)->y(), 1e-9);
     EXPECT_NEAR(co.speed, concrete.others[0].scriptedSpeed[0], 1e-12);
     ASSERT_EQ(result.lanes.size(), 1u);
-    EXPECT_NEAR(result.lanes[0].width, concrete.laneWidth, 0.01);
+    EXPECT_NEAR(result.lanes[0].width, concrete.laneWidths.at(0), 0.01);
     for (std::size_t k = 0; k < result.trace.instants(); ++k) {
       ASSERT_TRUE(result.trace.vehicles[0].validAt(k));
       ASSERT_TRUE(result.trace.vehicles[1].validAt(k));

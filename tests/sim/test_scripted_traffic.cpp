@@ -307,3 +307,59 @@ TEST(ScriptedTraffic, RelationsBetweenReferencePointsCountFromThem) {
   EXPECT_NEAR(timings[2].start, 2.4, 1e-9);  // 31.3 - 5t <= 20 from t = 2.26
   EXPECT_NEAR(timings[3].start, 2.4, 1e-9);  // (31.3 - 5t) / 5 <= 4 from t = 2.26
 }
+
+namespace {
+
+std::shared_ptr<const scenario::LogicalScenario> unequalLanes(const std::string& road_keys, const std::string& others) {
+  return scenario::parseLogicalScenario(fmt::format(R"(
+name: widths
+time: {{step: 0.2, duration: 8}}
+road: {{shape: arc, length: 300, lanes: 3, {}}}
+vehicles:
+  ego: {{s: 30, lane: 1, speed: 10, controller: {{name: idm}}}}
+  others:
+{}
+)",
+                                                    road_keys, others),
+                                        "widths.yaml");
+}
+
+std::string loadErrorOf(const std::string& road_keys) {
+  try {
+    const auto logical = unequalLanes(road_keys, "    - {id: a, gap: 20, relative_lane: 0, speed: 5}");
+    scenario::sampleConcreteScenario(logical, 1, 0);
+  } catch (const ConfigError& error) {
+    return error.what();
+  }
+  return "";
+}
+
+}  // namespace
+
+// `lane_widths` gives each lane its own width (lane 0 first): lanes lie side by side around the
+// road centre, and a lane change, `ego_lane` included, ends on its target lane's centre.
+// Lanes 3.9, 3.5 and 3.65 m wide (esmini's e6mini.xodr): 11.05 m in all, lane 0's centre
+// 11.05 / 2 - 3.9 / 2 = 3.575 m right of the centre, lane 2's 3.7 m left of it.
+TEST(ScriptedTraffic, LanesOfTheirOwnWidthsLieSideBySide) {
+  const Planned run = plan(unequalLanes("lane_widths: [3.9, 3.5, 3.65]", R"(
+    - {id: mover, gap: 10, relative_lane: -1, speed: 12,
+       actions: [{trigger: {time: 1}, lane_change: {ego_lane: 1, duration: 3}}]})"));
+  EXPECT_EQ(run.concrete.laneWidths, (std::vector<double>{3.9, 3.5, 3.65}));
+  EXPECT_NEAR(run.road.laneOffset(0), -3.575, 1e-12);
+  EXPECT_NEAR(run.road.laneOffset(1), -3.575 + 3.9 / 2 + 3.5 / 2, 1e-12);
+  EXPECT_NEAR(run.road.laneOffset(2), 3.7, 1e-12);
+  EXPECT_EQ(run.road.laneAt(-3.575 + 1.94), 0);
+  EXPECT_EQ(run.road.laneAt(-3.575 + 1.96), 1);
+  const auto& mover = run.paths[0];
+  EXPECT_NEAR(offsetOf(run.road, mover.front()), -3.575, 1e-9);
+  EXPECT_NEAR(offsetOf(run.road, mover.back()), 3.7, 1e-9);  // the lane left of the Ego's
+  EXPECT_NE(loadErrorOf("lane_widths: [3.9, 3.5]").find("road.lane_widths: expected a list of 3 widths (road.lanes)"),
+            std::string::npos);
+  EXPECT_NE(loadErrorOf("lane_width: 3.5, lane_widths: [3.9, 3.5, 3.65]")
+                .find("road.lane_widths: either lane_widths or lane_width (with its noise), not both"),
+            std::string::npos);
+  EXPECT_NE(loadErrorOf("lane_widths: [3.9, 0.4, 3.65]").find("road.lane_widths[1]: got '0.4', expected a width in "
+                                                             "(0.5, 50] m"),
+            std::string::npos)
+      << loadErrorOf("lane_widths: [3.9, 0.4, 3.65]");
+}

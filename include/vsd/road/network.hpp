@@ -74,7 +74,8 @@ class NetworkBuilder {
   std::filesystem::path writeSumoNet(const std::filesystem::path& stem) const;
   /// False if some lane's shape folds (a bend too sharp for its segment lengths and
   /// offset from the centre), where netconvert cuts lanes at the junctions in ways
-  /// writeSumoNet does not reproduce: such networks need netconvert.
+  /// writeSumoNet does not reproduce, and roads whose lanes differ in width (netconvert's
+  /// lane lengths there follow a rule of its own): such networks need netconvert.
   bool directlyWritable() const;
 
  private:

@@ -16,13 +16,20 @@ struct RoadGeometry {
   std::size_t regionBegin = 0;  ///< index in `centre` of the first scenario-region point
   std::size_t regionEnd = 0;    ///< one past the last scenario-region point
   int lanes = 1;
-  double laneWidth = 0.0;   ///< m, every lane; no default: from the concrete scenario
+  std::vector<double> laneWidths;  ///< m, lane 0 (rightmost) first; no default: from the concrete scenario
   double speedLimit = 50.0; ///< m/s
 
   /// Centre line of lane `lane` (0 = rightmost) over the whole edge.
   Polyline laneCentre(int lane) const;
   /// Lateral offset (m, left positive) of lane `lane`'s centre from the road centre.
   double laneOffset(int lane) const;
+  /// m, lane `lane`'s width.
+  double laneWidthOf(int lane) const;
+  /// m from the road centre to either outer lane edge.
+  double halfWidth() const;
+  /// The lane whose span holds `offset` (m from the road centre, left positive); the outer
+  /// lanes beyond the edges.
+  int laneAt(double offset) const;
   /// Axis-aligned bounds of the road including its width: {min corner, max corner}.
   std::pair<Vec2, Vec2> bounds() const;
   /// m along `centre` from its first point to the scenario region's start (s = 0 there).

@@ -85,7 +85,9 @@ struct ConcreteScenario {
   std::uint64_t index = 0;  ///< sample index within the run
   std::vector<double> inputs;        ///< values in logical->inputs order
   std::vector<double> centreNoise;   ///< m, lateral shift at each road point (logical->road.points values)
-  double laneWidth = 0.0;            ///< m, realised (nominal + noise)
+  /// m, each lane's realised width (lane 0 rightmost): road.lane_width + lane_width_noise for
+  /// every lane, or road.lane_widths.
+  std::vector<double> laneWidths;
   ConcreteVehicle ego;
   std::vector<ConcreteVehicle> others;
   std::vector<ConcreteAction> actions;  ///< every road user's actions, road user by road user, in file order
@@ -107,6 +109,14 @@ ConcreteScenario sampleConcreteScenario(const std::shared_ptr<const LogicalScena
 /// Lateral offset (m, left positive) of lane `lane`'s centre from the road centre, for
 /// `lanes` lanes of `lane_width` spread symmetrically around it (lane 0 is rightmost).
 double laneCentreOffset(int lane, int lanes, double lane_width);
+/// The same for lanes of these widths (m, lane 0 rightmost) spread around the road centre
+/// (their middle); lanes of one width as above, to the last bit.
+double laneCentreOffset(int lane, const std::vector<double>& lane_widths);
+/// m from the road centre to either outer edge of lanes of these widths.
+double halfRoadWidth(const std::vector<double>& lane_widths);
+/// The lane whose span holds `offset` (m from the road centre, left positive), the outermost
+/// lane beyond the edges.
+int laneAtOffset(double offset, const std::vector<double>& lane_widths);
 
 /// Scripted speed of a profile at time t (s), without noise; never below 0.
 double scriptedSpeedAt(double initial, const std::vector<std::pair<double, double>>& duration_accel_phases, double t);

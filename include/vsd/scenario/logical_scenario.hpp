@@ -72,6 +72,8 @@ struct RoadSpec {
   int lanes = 1;
   Expression laneWidth = Expression::constant(kDefaultLaneWidth);  ///< m
   Distribution laneWidthNoise;  ///< m, drawn once per concrete scenario
+  /// m, one width per lane (lane 0 first) instead of laneWidth (and without noise); empty: laneWidth.
+  std::vector<Expression> laneWidths;
   double speedLimit = 50.0;     ///< m/s (SUMO edge speed; scripted vehicles ignore it)
   double extensionBefore = 30.0;  ///< m, straight lead-in before the region
   double extensionAfter = 150.0;  ///< m, straight lead-out after the region
