@@ -85,15 +85,17 @@ Polyline NetworkBuilder::edgeShape(const PlacedRoad& placed) {
 
 namespace {
 
-/// Ends an edge's element: lanes wider or narrower than lane 0 each get their own (spreadType
+/// Ends an edge's element with its lanes: none changes lanes by SUMO's model
+/// (kNoSumoLaneChanges); lanes wider or narrower than lane 0 get their own width (spreadType
 /// center keeps them around the shape).
-void writeOtherLaneWidths(fmt::memory_buffer& edges, const RoadGeometry& road) {
-  std::string lanes;
-  for (int lane = 1; lane < road.lanes; ++lane) {
-    if (road.laneWidthOf(lane) == road.laneWidthOf(0)) continue;
-    lanes += fmt::format("    <lane index=\"{}\" width=\"{:.6f}\"/>\n", lane, road.laneWidthOf(lane));
+void writeLanes(fmt::memory_buffer& edges, const RoadGeometry& road) {
+  fmt::format_to(std::back_inserter(edges), "\">\n");
+  for (int lane = 0; lane < road.lanes; ++lane) {
+    const bool own_width = road.laneWidthOf(lane) != road.laneWidthOf(0);
+    fmt::format_to(std::back_inserter(edges), "    <lane index=\"{}\" {}{}/>\n", lane, kNoSumoLaneChanges,
+                   own_width ? fmt::format(" width=\"{:.6f}\"", road.laneWidthOf(lane)) : "");
   }
-  fmt::format_to(std::back_inserter(edges), lanes.empty() ? "\"/>\n" : "\">\n{}  </edge>\n", lanes);
+  fmt::format_to(std::back_inserter(edges), "  </edge>\n");
 }
 
 }  // namespace
@@ -119,7 +121,7 @@ void NetworkBuilder::writePlainXml(const fs::path& stem) const {
     for (std::size_t i = 0; i < shape.size(); ++i) {
       fmt::format_to(std::back_inserter(edges), "{}{:.6f},{:.6f}", i == 0 ? "" : " ", shape[i].x(), shape[i].y());
     }
-    writeOtherLaneWidths(edges, placed.road);
+    writeLanes(edges, placed.road);
   }
   fmt::format_to(std::back_inserter(nodes), "</nodes>\n");
   fmt::format_to(std::back_inserter(edges), "</edges>\n");

@@ -141,8 +141,10 @@ void writeEdge(Out out, const NetEdge& edge) {
   const double length = polylineLength(edge.shape);
   for (int lane = 0; lane < edge.lanes; ++lane) {
     const double offset = edge.laneOffset(lane);
-    fmt::format_to(out, "        <lane id=\"{}_{}\" index=\"{}\" speed=\"{:.2f}\" length=\"{:.2f}\" width=\"{:.2f}\" shape=\"",
-                   edge.id, lane, lane, edge.speed, length, edge.laneWidths[static_cast<std::size_t>(lane)]);
+    fmt::format_to(out, "        <lane id=\"{}_{}\" index=\"{}\" speed=\"{:.2f}\" length=\"{:.2f}\" width=\"{:.2f}\" "
+                   "{} shape=\"",
+                   edge.id, lane, lane, edge.speed, length, edge.laneWidths[static_cast<std::size_t>(lane)],
+                   kNoSumoLaneChanges);
     writePoints(out, sumoLaneShape(edge.shape, offset));
     fmt::format_to(out, "\"/>\n");
   }

@@ -42,6 +42,13 @@ class BatchLayout {
   double cellSize_;
 };
 
+/// Lane attributes of every generated road that forbid SUMO's own lane changes to every
+/// vehicle class vsd-sumo uses ("custom1" is none of them). vsd-sumo places each road user
+/// itself (moveToXY, lane-change mode 0), so SUMO never changes lanes for them anyway; with
+/// these SUMO's lane changer skips the lane-change model of every vehicle in every step.
+/// (sumo-gui draws the lane markings solid.)
+inline constexpr const char* kNoSumoLaneChanges = "changeLeft=\"custom1\" changeRight=\"custom1\"";
+
 /// SUMO ids of sample `index`: edge "s<index>", its lanes "s<index>_<lane>".
 std::string edgeIdFor(std::uint64_t index);
 
