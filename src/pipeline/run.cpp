@@ -127,6 +127,9 @@ struct PreparedBatch {
   std::vector<std::string> preFailure;  ///< per scenario: why it cannot be simulated (empty: fine)
   std::optional<road::PendingNetwork> pending;
   fs::path readyNet;  ///< a network a previous worker finished for this batch
+  /// Per scenario: its lanes as SUMO loads them from the full-detail network, when the
+  /// network is written directly (empty: the simulation asks SUMO).
+  std::vector<std::vector<LaneGeometry>> lanes;
 };
 
 std::vector<std::string> netconvertOptions(const Context& context) { return context.logical->sumo.netconvertOptions; }
@@ -186,19 +189,26 @@ class BatchProcessor {
       }
       batch.preFailure.push_back(failure);
     }
+    const bool direct = !builder.empty() && context_.netWriter == road::NetWriter::Direct && builder.directlyWritable();
+    batch.lanes.resize(batch.scenarios.size());
+    if (direct) {
+      for (std::size_t i = 0; i < batch.scenarios.size(); ++i) {
+        batch.lanes[i] = builder.lanesAsLoaded(batch.scenarios[i].index);
+      }
+    }
     const fs::path ready = batch.stem.string() + ".net.xml";
     if (plan_.netReady.count(number) && fs::exists(ready)) {
       batch.readyNet = ready;
     } else if (!builder.empty()) {
-      batch.pending = buildNetwork(builder, batch.stem);
+      batch.pending = buildNetwork(builder, batch.stem, direct);
     }
     spdlog::debug("batch {}: sampled and wrote {} roads in {:.3f} s", number, batch.scenarios.size(),
                   secondsSince(t_start));
     return batch;
   }
 
-  road::PendingNetwork buildNetwork(const road::NetworkBuilder& builder, const fs::path& stem) const {
-    if (context_.netWriter == road::NetWriter::Direct && builder.directlyWritable()) {
+  road::PendingNetwork buildNetwork(const road::NetworkBuilder& builder, const fs::path& stem, bool direct) const {
+    if (direct) {
       if (context_.keepBatchFiles) builder.writePlainXml(stem);  // for netedit users
       return road::PendingNetwork::ready(builder.writeSumoNet(stem));
     }
@@ -320,7 +330,7 @@ class BatchProcessor {
     std::vector<sim::ScenarioRun> runs;
     for (const auto i : members) {
       const auto index = batch.scenarios[i].index;
-      runs.push_back({&batch.scenarios[i], &batch.roads[i], context_.layout.offsetFor(index)});
+      runs.push_back({&batch.scenarios[i], &batch.roads[i], context_.layout.offsetFor(index), &batch.lanes[i]});
     }
     sim::BatchOptions options;
     options.step = context_.logical->step;

@@ -21,6 +21,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <charconv>
 #include <cmath>
 #include <fstream>
 #include <limits>
@@ -186,6 +187,31 @@ bool foldsWhenMoved(const Polyline& shape, double left_offset) {
   return false;
 }
 
+/// The shape without the inner points of straight runs (a point exactly on the line from
+/// the last kept point through the next one, between them): SUMO's cost of matching a
+/// vehicle to its lane (moveToXY) grows with the points of the lanes' shapes.
+Polyline withoutStraightRunPoints(const Polyline& points) {
+  if (points.size() <= 2) return points;
+  Polyline kept{points.front()};
+  for (std::size_t i = 1; i + 1 < points.size(); ++i) {
+    const Vec2 in = points[i] - kept.back();
+    const Vec2 out = points[i + 1] - points[i];
+    if (in.x() * out.y() - in.y() * out.x() == 0.0 && in.dot(out) > 0.0) continue;
+    kept.push_back(points[i]);
+  }
+  kept.push_back(points.back());
+  return kept;
+}
+
+/// A coordinate as SUMO reads it back from the 2-decimal text of the network.
+double asWritten(double value) {
+  char text[64];
+  const auto end = fmt::format_to_n(text, sizeof(text), "{:.2f}", value).out;
+  double parsed = 0.0;
+  std::from_chars(text, end, parsed);
+  return parsed;
+}
+
 NetEdge netEdgeOf(const std::string& id, const Polyline& plain_xml_shape, const RoadGeometry& road) {
   // netconvert drops points within 0.1 m of their predecessor from the edge's geometry.
   return {id, withoutNearDuplicates(plain_xml_shape), road.lanes, road.laneWidths, road.speedLimit};
@@ -208,12 +234,32 @@ bool NetworkBuilder::directlyWritable() const {
   return true;
 }
 
+std::vector<LaneGeometry> NetworkBuilder::lanesAsLoaded(std::uint64_t index) const {
+  std::vector<LaneGeometry> lanes;
+  for (const auto& placed : roads_) {
+    if (placed.index != index) continue;
+    const NetEdge edge = netEdgeOf(edgeIdFor(placed.index), edgeShape(placed), placed.road);
+    for (int lane = 0; lane < edge.lanes; ++lane) {
+      LaneGeometry geometry;
+      geometry.id = fmt::format("{}_{}", edge.id, lane);
+      for (const Vec2& point : sumoLaneShape(edge.shape, edge.laneOffset(lane))) {
+        geometry.centre.emplace_back(asWritten(point.x()) - placed.offset.x(), asWritten(point.y()) - placed.offset.y());
+      }
+      geometry.width = asWritten(edge.laneWidths[static_cast<std::size_t>(lane)]);
+      lanes.push_back(std::move(geometry));
+    }
+    break;
+  }
+  return lanes;
+}
+
 fs::path NetworkBuilder::writeSumoNet(const fs::path& stem) const {
   std::vector<NetEdge> edges;
   edges.reserve(roads_.size());
   Bounds bounds;
   for (const auto& placed : roads_) {
     NetEdge edge = netEdgeOf(edgeIdFor(placed.index), edgeShape(placed), placed.road);
+    edge.shape = withoutStraightRunPoints(edge.shape);
     bounds.add(edge.shape);
     edges.push_back(std::move(edge));
   }

@@ -198,8 +198,13 @@ class BatchRun {
     member.edge = road::edgeIdFor(concrete.index);
     member.route = "r" + member.edge;
     libsumo::Route::add(member.route, {member.edge});
-    for (int lane = 0; lane < run.road->lanes; ++lane) {
-      member.result.lanes.push_back(fetchLane(fmt::format("{}_{}", member.edge, lane), run.offset));
+    if (run.lanes != nullptr && !run.lanes->empty()) {
+      member.result.lanes = *run.lanes;
+      for (const auto& lane : member.result.lanes) lanes_.put(lane);
+    } else {
+      for (int lane = 0; lane < run.road->lanes; ++lane) {
+        member.result.lanes.push_back(fetchLane(fmt::format("{}_{}", member.edge, lane), run.offset));
+      }
     }
     if (matchToLanes_) member.placement = SumoPlacement(member.result.lanes);
     // The scripted road users start where the scenario puts them; the Ego on its lane's

@@ -20,6 +20,10 @@ const LaneCache::Entry& LaneCache::get(const std::string& lane_id, const Vec2& o
   return it->second;
 }
 
+void LaneCache::put(const LaneGeometry& lane) {
+  entries_.insert_or_assign(lane.id, Entry{MeasuredPolyline(lane.centre), lane.width});
+}
+
 const MeasuredPolyline& LaneCache::centre(const std::string& lane_id, const Vec2& offset) {
   return get(lane_id, offset).centre;
 }

@@ -84,6 +84,12 @@ class NetworkBuilder {
   /// writeSumoNet does not reproduce, and roads whose lanes differ in width (netconvert's
   /// lane lengths there follow a rule of its own): such networks need netconvert.
   bool directlyWritable() const;
+  /// The lanes of road `index` (added before) as SUMO loads them from a network built from
+  /// these roads by netconvert or, in full detail, by writeSumoNet: ids, centre lines and
+  /// widths, moved by -offset into the scenario frame. (writeSumoNet leaves out points of
+  /// straight runs, which changes SUMO's positions along a lane by rounding only; vsd-sumo
+  /// measures its lanes on these full-detail shapes.) Empty if the road is not in the builder.
+  std::vector<LaneGeometry> lanesAsLoaded(std::uint64_t index) const;
 
  private:
   struct PlacedRoad {

@@ -24,6 +24,9 @@ struct ScenarioRun {
   const scenario::ConcreteScenario* scenario = nullptr;
   const road::RoadGeometry* road = nullptr;
   Vec2 offset = Vec2::Zero();  ///< net coordinates of the scenario frame's origin
+  /// The road's lanes as SUMO loads them (scenario frame; road::NetworkBuilder::lanesAsLoaded)
+  /// when known without asking SUMO; null or empty: asked from SUMO.
+  const std::vector<LaneGeometry>* lanes = nullptr;
 };
 
 struct SimulatedScenario {

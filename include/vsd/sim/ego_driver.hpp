@@ -22,6 +22,8 @@ class LaneCache {
   /// The lane in the frame net - offset (the offset must be the same on every call for a lane).
   const MeasuredPolyline& centre(const std::string& lane_id, const Vec2& offset);
   double width(const std::string& lane_id, const Vec2& offset);
+  /// Stores a lane known without asking SUMO (its centre in the frame its users pass the offset of).
+  void put(const LaneGeometry& lane);
 
  private:
   struct Entry {
