@@ -54,7 +54,7 @@ void ensureSumoHome() {
 }
 
 void NetworkBuilder::add(std::uint64_t index, const RoadGeometry& road, const Vec2& offset) {
-  roads_.push_back({index, road, offset});
+  roads_.push_back({index, road, offset, edgeShape(road, offset)});
 }
 
 NetWriter parseNetWriter(const std::string& text, const std::string& where) {
@@ -65,19 +65,20 @@ NetWriter parseNetWriter(const std::string& text, const std::string& where) {
 
 std::string netWriterName(NetWriter writer) { return writer == NetWriter::Direct ? "direct" : "netconvert"; }
 
-Polyline NetworkBuilder::edgeShape(const PlacedRoad& placed) {
-  // Exactly the decimal text of the plain XML, parsed back.
+Polyline NetworkBuilder::edgeShape(const RoadGeometry& road, const Vec2& offset) {
+  // Exactly the decimal text of the plain XML ({:.6f}: both are the exactly rounded
+  // decimal), parsed back.
   auto as_plain_xml = [](double value) {
-    char text[64];
-    const auto end = fmt::format_to_n(text, sizeof(text), "{:.6f}", value).out;
+    char text[400];
+    const auto end = std::to_chars(text, text + sizeof(text), value, std::chars_format::fixed, 6).ptr;
     double parsed = 0.0;
     std::from_chars(text, end, parsed);
     return parsed;
   };
   Polyline shape;
-  shape.reserve(placed.road.centre.size());
-  for (const Vec2& point : placed.road.centre) {
-    const Vec2 net = point + placed.offset;
+  shape.reserve(road.centre.size());
+  for (const Vec2& point : road.centre) {
+    const Vec2 net = point + offset;
     shape.emplace_back(as_plain_xml(net.x()), as_plain_xml(net.y()));
   }
   return shape;

@@ -205,8 +205,8 @@ Polyline withoutStraightRunPoints(const Polyline& points) {
 
 /// A coordinate as SUMO reads it back from the 2-decimal text of the network.
 double asWritten(double value) {
-  char text[64];
-  const auto end = fmt::format_to_n(text, sizeof(text), "{:.2f}", value).out;
+  char text[400];  // the exactly rounded decimal, as {:.2f} writes it
+  const auto end = std::to_chars(text, text + sizeof(text), value, std::chars_format::fixed, 2).ptr;
   double parsed = 0.0;
   std::from_chars(text, end, parsed);
   return parsed;

@@ -96,10 +96,12 @@ class NetworkBuilder {
     std::uint64_t index;
     RoadGeometry road;
     Vec2 offset;
+    Polyline shape;  ///< edgeShape(road, offset), worked out once
   };
   /// The road centre in net coordinates as netconvert reads it from the plain XML
   /// (6 decimals), so both writers start from the same numbers.
-  static Polyline edgeShape(const PlacedRoad& placed);
+  static Polyline edgeShape(const RoadGeometry& road, const Vec2& offset);
+  static const Polyline& edgeShape(const PlacedRoad& placed) { return placed.shape; }
   std::vector<PlacedRoad> roads_;
 };
 
