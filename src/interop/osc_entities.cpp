@@ -154,7 +154,11 @@ void readInitAction(Translation& translation, Entity& entity, const pugi::xml_no
   } else if (kind == "LongitudinalAction") {
     const pugi::xml_node speed = reader.choice(action, {"SpeedAction"});
     const pugi::xml_node dynamics = reader.only(speed, "SpeedActionDynamics");
-    if (reader.text(dynamics, "dynamicsShape") == "step") {
+    // A change over no time is a step, whatever its shape (esmini's override_bb: linear over 0 s).
+    const bool at_once = reader.text(dynamics, "dynamicsShape") == "step" ||
+                         (reader.optionalText(dynamics, "dynamicsDimension") == std::optional<std::string>("time") &&
+                          reader.optionalNumber(dynamics, "value") == std::optional<double>(0.0));
+    if (at_once) {
       entity.speedTarget = reader.only(speed, "SpeedActionTarget");
     } else {
       entity.gradualSpeed = speed;  // the language's speed action at t = 0, once the Ego is known

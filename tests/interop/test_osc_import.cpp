@@ -707,6 +707,26 @@ TEST(OscRun, AContinuousRelativeSpeedKeepsUpWithTheOther) {
   EXPECT_EQ(error.find('\n'), std::string::npos) << error;
 }
 
+// The Init's speed of the Ego: a change over no time is a step, whatever its shape (esmini's
+// override_bb: linear over 0 s); a gradual one is its controller's business and refused.
+TEST(OscImport, TheEgosInitialSpeedIsAStepOverNoTime) {
+  const std::string step = R"(<SpeedActionDynamics dynamicsShape="step" dynamicsDimension="time" value="0"/>)";
+  const auto with = [&](const std::string& dynamics) {
+    std::string text = readTextFile(data("conditions.xosc"));
+    text.replace(text.find(step), step.size(), dynamics);  // the first one: the Ego's
+    return text;
+  };
+  const auto dir = folderWith({{"instant.xosc", with(R"(<SpeedActionDynamics dynamicsShape="linear"
+      dynamicsDimension="time" value="0"/>)")},
+                               {"gradual.xosc", with(R"(<SpeedActionDynamics dynamicsShape="linear"
+      dynamicsDimension="rate" value="2"/>)")}});
+  EXPECT_DOUBLE_EQ(importTemplate(dir->path() / "instant.xosc", {})->ego.speed.evaluate({}), 20.0);
+  const std::string error = test::configErrorOf([&] { importTemplate(dir->path() / "gradual.xosc", {}); });
+  EXPECT_THAT(error, HasSubstr("gradual.xosc:"));
+  EXPECT_THAT(error, HasSubstr("a speed action of the Ego: its controller drives it"));
+  EXPECT_EQ(error.find('\n'), std::string::npos) << error;
+}
+
 // Triggers without conditions, read as esmini reads them: an empty (or absent) StartTrigger
 // starts its Act or Event at t = 0, an Act's empty StopTrigger never fires. An Act's
 // StopTrigger with conditions would cut its actions short, which the language does not do.
