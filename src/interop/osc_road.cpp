@@ -250,11 +250,14 @@ int CarriagewayRoad::languageLane(long lane_id, const std::string& where) const 
   }
   const long outermost = innermostLaneId - rightLanes() + 1;
   if (lane_id > innermostLaneId || lane_id < outermost) {
+    // Why that lane is not one: the left side is driven against the reference line; on the right
+    // side it is a shoulder, a stop lane, a border or a median strip (no road user drives there).
+    const char* why = lane_id > 0 ? "lanes driven against the reference line are not part of vsd-sumo's road"
+                                  : "a shoulder, stop lane, border or median: no road user drives there";
     throw ConfigError(fmt::format(
-        "{}: laneId {}: expected a driving lane of the road's right side, {} .. {}{} (lanes driven against the "
-        "reference line are not part of vsd-sumo's road)",
-        where, lane_id, innermostLaneId, outermost,
-        leftLanesJoined ? fmt::format(", or of its left side driven along it, 1 .. {}", adjoiningLeftLanes) : ""));
+        "{}: laneId {}: expected a driving lane of the road's right side, {} .. {}{} ({})", where, lane_id,
+        innermostLaneId, outermost,
+        leftLanesJoined ? fmt::format(", or of its left side driven along it, 1 .. {}", adjoiningLeftLanes) : "", why));
   }
   return static_cast<int>(lane_id - outermost);
 }

@@ -250,7 +250,7 @@ double ScriptedTraffic::Impl::relationValue(const scenario::ConcreteTrigger& tri
   const VehicleState& other = to_ego ? ego : states[static_cast<std::size_t>(trigger.reference)];
   const auto& other_spec = to_ego ? concrete->ego : concrete->others[static_cast<std::size_t>(trigger.reference)];
   const auto& self_spec = concrete->others[owner];
-  double signed_gap = 0.0;  // > 0: `self` ahead of `other`
+  double signed_gap = 0.0;  // m, what a gap trigger compares (bumpers: < 0 side by side)
   bool self_ahead = false;
   if (trigger.betweenReferencePoints) {
     const double self_s = referenceArcLength(states[owner], self_spec);

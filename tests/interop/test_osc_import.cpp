@@ -727,6 +727,26 @@ TEST(OscImport, TheEgosInitialSpeedIsAStepOverNoTime) {
   EXPECT_EQ(error.find('\n'), std::string::npos) << error;
 }
 
+// A position on a lane that is not a driving lane says why: the left side is driven against the
+// reference line; on the right side it is a border, a shoulder or the like (three_lanes.xodr:
+// lane -1 a border strip, -5 a shoulder).
+TEST(OscImport, APositionOffTheDrivingLanesSaysWhatLaneItIs) {
+  const std::string ego_lane = R"(<LanePosition roadId="7" laneId="-3" s="20" offset="0"/>)";
+  const auto with = [&](const std::string& lane) {
+    std::string text = readTextFile(data("conditions.xosc"));
+    text.replace(text.find(ego_lane), ego_lane.size(),
+                 fmt::format(R"(<LanePosition roadId="7" laneId="{}" s="20" offset="0"/>)", lane));
+    return text;
+  };
+  const auto dir = folderWith({{"border.xosc", with("-1")}, {"left.xosc", with("1")}});
+  EXPECT_THAT(test::configErrorOf([&] { importTemplate(dir->path() / "border.xosc", {}); }),
+              HasSubstr("laneId -1: expected a driving lane of the road's right side, -2 .. -4 (a shoulder, stop "
+                        "lane, border or median: no road user drives there)"));
+  EXPECT_THAT(test::configErrorOf([&] { importTemplate(dir->path() / "left.xosc", {}); }),
+              HasSubstr("laneId 1: expected a driving lane of the road's right side, -2 .. -4 (lanes driven against "
+                        "the reference line are not part of vsd-sumo's road)"));
+}
+
 // Triggers without conditions, read as esmini reads them: an empty (or absent) StartTrigger
 // starts its Act or Event at t = 0, an Act's empty StopTrigger never fires. An Act's
 // StopTrigger with conditions would cut its actions short, which the language does not do.
