@@ -193,4 +193,12 @@ int checkDurationSteps(double duration, double step, const std::string& where, c
   return static_cast<int>(std::lround(steps));
 }
 
+double asFixedDecimalText(double value, int decimals) {
+  char text[400];  // room for any double in fixed notation
+  const auto end = std::to_chars(text, text + sizeof(text), value, std::chars_format::fixed, decimals).ptr;
+  double parsed = 0.0;
+  std::from_chars(text, end, parsed);
+  return parsed;
+}
+
 }  // namespace vsd

@@ -457,7 +457,7 @@ void readRoadSpec(const Document& document, scenario::LogicalScenario& logical) 
   logical.road.extensionBefore = before;
   logical.road.extensionAfter = after;
   logical.road.lanes = road.lanes;
-  if (std::all_of(road.laneWidths.begin(), road.laneWidths.end(), [&](double w) { return w == road.laneWidths[0]; })) {
+  if (scenario::oneLaneWidth(road.laneWidths)) {
     logical.road.laneWidth = scenario::Expression::constant(road.laneWidths.front());
   } else {
     for (const double width : road.laneWidths) logical.road.laneWidths.push_back(scenario::Expression::constant(width));

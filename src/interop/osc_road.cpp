@@ -277,9 +277,7 @@ int CarriagewayRoad::nearestLane(double t) const {
   return scenario::laneAtOffset(t - centreT(), laneWidths);
 }
 
-bool CarriagewayRoad::oneLaneWidth() const {
-  return std::all_of(laneWidths.begin(), laneWidths.end(), [&](double w) { return w == laneWidths.front(); });
-}
+bool CarriagewayRoad::oneLaneWidth() const { return scenario::oneLaneWidth(laneWidths); }
 
 PlanGeometry PlanGeometry::line(double s, const Vec2& start, double heading, double length) {
   PlanGeometry geometry;

@@ -2,12 +2,12 @@
 
 #include <fmt/format.h>
 
-#include <charconv>
 #include <cmath>
 #include <cstdlib>
 #include <fstream>
 
 #include "vsd/core/error.hpp"
+#include "vsd/core/numbers.hpp"
 
 namespace fs = std::filesystem;
 
@@ -66,20 +66,12 @@ NetWriter parseNetWriter(const std::string& text, const std::string& where) {
 std::string netWriterName(NetWriter writer) { return writer == NetWriter::Direct ? "direct" : "netconvert"; }
 
 Polyline NetworkBuilder::edgeShape(const RoadGeometry& road, const Vec2& offset) {
-  // Exactly the decimal text of the plain XML ({:.6f}: both are the exactly rounded
-  // decimal), parsed back.
-  auto as_plain_xml = [](double value) {
-    char text[400];
-    const auto end = std::to_chars(text, text + sizeof(text), value, std::chars_format::fixed, 6).ptr;
-    double parsed = 0.0;
-    std::from_chars(text, end, parsed);
-    return parsed;
-  };
+  // Exactly the decimal text of the plain XML ({:.6f}), parsed back.
   Polyline shape;
   shape.reserve(road.centre.size());
   for (const Vec2& point : road.centre) {
     const Vec2 net = point + offset;
-    shape.emplace_back(as_plain_xml(net.x()), as_plain_xml(net.y()));
+    shape.emplace_back(asFixedDecimalText(net.x(), 6), asFixedDecimalText(net.y(), 6));
   }
   return shape;
 }

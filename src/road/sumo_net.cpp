@@ -21,7 +21,6 @@
 #include <fmt/format.h>
 
 #include <algorithm>
-#include <charconv>
 #include <cmath>
 #include <fstream>
 #include <limits>
@@ -29,6 +28,7 @@
 
 #include "vsd/core/error.hpp"
 #include "vsd/core/log.hpp"
+#include "vsd/core/numbers.hpp"
 #include "vsd/road/network.hpp"
 
 namespace fs = std::filesystem;
@@ -203,14 +203,8 @@ Polyline withoutStraightRunPoints(const Polyline& points) {
   return kept;
 }
 
-/// A coordinate as SUMO reads it back from the 2-decimal text of the network.
-double asWritten(double value) {
-  char text[400];  // the exactly rounded decimal, as {:.2f} writes it
-  const auto end = std::to_chars(text, text + sizeof(text), value, std::chars_format::fixed, 2).ptr;
-  double parsed = 0.0;
-  std::from_chars(text, end, parsed);
-  return parsed;
-}
+/// A number as SUMO reads it back from the 2-decimal text of the network.
+double asWritten(double value) { return asFixedDecimalText(value, 2); }
 
 NetEdge netEdgeOf(const std::string& id, const Polyline& plain_xml_shape, const RoadGeometry& road) {
   // netconvert drops points within 0.1 m of their predecessor from the edge's geometry.
@@ -222,10 +216,7 @@ NetEdge netEdgeOf(const std::string& id, const Polyline& plain_xml_shape, const 
 bool NetworkBuilder::directlyWritable() const {
   for (const auto& placed : roads_) {
     // Lanes of different widths: netconvert's lane lengths then follow a rule of its own.
-    if (scenario::laneCentreOffset(0, placed.road.laneWidths) !=
-        scenario::laneCentreOffset(0, placed.road.lanes, placed.road.laneWidthOf(0))) {
-      return false;
-    }
+    if (!scenario::oneLaneWidth(placed.road.laneWidths)) return false;
     const NetEdge edge = netEdgeOf(edgeIdFor(placed.index), edgeShape(placed), placed.road);
     for (int lane = 0; lane < edge.lanes; ++lane) {
       if (foldsWhenMoved(edge.shape, edge.laneOffset(lane))) return false;

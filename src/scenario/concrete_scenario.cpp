@@ -329,15 +329,13 @@ double laneCentreOffset(int lane, int lanes, double lane_width) {
   return (static_cast<double>(lane) - 0.5 * static_cast<double>(lanes - 1)) * lane_width;
 }
 
-namespace {
-bool oneWidth(const std::vector<double>& lane_widths) {
+bool oneLaneWidth(const std::vector<double>& lane_widths) {
   return std::all_of(lane_widths.begin(), lane_widths.end(), [&](double w) { return w == lane_widths.front(); });
 }
-}  // namespace
 
 double laneCentreOffset(int lane, const std::vector<double>& lane_widths) {
   const int lanes = static_cast<int>(lane_widths.size());
-  if (oneWidth(lane_widths)) return laneCentreOffset(lane, lanes, lane_widths.front());
+  if (oneLaneWidth(lane_widths)) return laneCentreOffset(lane, lanes, lane_widths.front());
   double right_edge = -halfRoadWidth(lane_widths);
   for (int i = 0; i < lane; ++i) right_edge += lane_widths[static_cast<std::size_t>(i)];
   return right_edge + 0.5 * lane_widths[static_cast<std::size_t>(lane)];
@@ -345,7 +343,7 @@ double laneCentreOffset(int lane, const std::vector<double>& lane_widths) {
 
 double halfRoadWidth(const std::vector<double>& lane_widths) {
   if (lane_widths.empty()) return 0.0;
-  if (oneWidth(lane_widths)) return 0.5 * lane_widths.front() * static_cast<double>(lane_widths.size());
+  if (oneLaneWidth(lane_widths)) return 0.5 * lane_widths.front() * static_cast<double>(lane_widths.size());
   double total = 0.0;
   for (const double width : lane_widths) total += width;
   return 0.5 * total;

@@ -52,6 +52,10 @@ std::int64_t parseInteger(const std::string& text, std::int64_t min, std::int64_
 std::uint64_t parseUnsigned(const std::string& text, std::uint64_t max, const std::string& where,
                             const std::string& field);
 
+/// `value` as it reads back from its exactly rounded fixed-point text with `decimals` digits
+/// (what fmt's {:.Nf} writes and a reader of that file gets), e.g. a coordinate of a network file.
+double asFixedDecimalText(double value, int decimals);
+
 /// Checks a number that is already a double (computed, or read by another parser)
 /// against `range`, NaN and infinities included; returns it. `shown` is the text
 /// the message quotes (empty: the value's shortest form).

@@ -112,6 +112,8 @@ double laneCentreOffset(int lane, int lanes, double lane_width);
 /// The same for lanes of these widths (m, lane 0 rightmost) spread around the road centre
 /// (their middle); lanes of one width as above, to the last bit.
 double laneCentreOffset(int lane, const std::vector<double>& lane_widths);
+/// True if every lane has the width of the first (also for no lanes).
+bool oneLaneWidth(const std::vector<double>& lane_widths);
 /// m from the road centre to either outer edge of lanes of these widths.
 double halfRoadWidth(const std::vector<double>& lane_widths);
 /// The lane whose span holds `offset` (m from the road centre, left positive), the outermost
