@@ -190,19 +190,22 @@ void addInitialSpeedActions(Translation& translation) {
   for (Entity& entity : translation.entities) {
     translation.findings.attempt([&] {
       YAML::Node item;
-      if (entity.gradualSpeed) {
+      if (&entity == translation.ego && entity.gradualSpeed) {
+        // Its controller takes the target as its set speed from t = 0 and gets there its own way.
+        item["set_speed"] = egoSetSpeed(translation, entity.gradualSpeed);
+      } else if (entity.gradualSpeed) {
         // A gradual change from the start.
         item["speed"] = speedAction(translation, entity, entity.gradualSpeed);
       } else if (const pugi::xml_node target = entity.speedTarget.child("RelativeTargetSpeed");
                  target && reader.optionalText(target, "continuous") == std::optional<std::string>("true")) {
+        if (&entity == translation.ego) {
+          reader.fail(target, "a continuous relative speed of the Ego: its controller drives it (the language sets "
+                              "its set speed, an absolute one)");
+        }
         // A step to a continuous relative speed: the initial speed, and tracking from t = 0.
         item["speed"] = continuousSpeed(translation, entity, target);
       } else {
         return;
-      }
-      if (&entity == translation.ego) {
-        reader.fail(entity.gradualSpeed ? entity.gradualSpeed : entity.speedTarget,
-                    "a speed action of the Ego: its controller drives it (the language scripts other road users only)");
       }
       item["trigger"]["time"] = "0";
       entity.actions.push_back(item);

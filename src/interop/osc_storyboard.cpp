@@ -234,6 +234,26 @@ YAML::Node speedAction(Translation& translation, const Entity& actor, const pugi
   return item;
 }
 
+YAML::Node egoSetSpeed(Translation& translation, const pugi::xml_node& action) {
+  const xml::Reader& reader = translation.reader;
+  reader.requireSubset(action, {"SpeedActionDynamics", "SpeedActionTarget"});
+  const pugi::xml_node dynamics = reader.only(action, "SpeedActionDynamics");
+  reader.requireSubset(dynamics, {});
+  const pugi::xml_node target = reader.choice(reader.only(action, "SpeedActionTarget"),
+                                              {"AbsoluteTargetSpeed", "RelativeTargetSpeed"});
+  if (std::string(target.name()) != "AbsoluteTargetSpeed") {
+    reader.fail(target, "a relative speed of the Ego: the language sets its controller's set speed, an absolute one");
+  }
+  const double value = reader.number(target, "value", NumberRange::closed(0.0, 1e3));
+  translation.findings.mapped(reader.where(action),
+                              fmt::format("the Ego's controller takes {} m/s as its set speed and reaches it its own "
+                                          "way (the dynamics are not followed)",
+                                          num(value)));
+  YAML::Node item;
+  item["target"] = num(value);
+  return item;
+}
+
 YAML::Node continuousSpeed(Translation& translation, const Entity& actor, const pugi::xml_node& target) {
   YAML::Node item;
   item["shape"] = "step";
@@ -254,7 +274,13 @@ std::optional<YAML::Node> privateAction(Translation& translation, Entity& actor,
       translation.findings.note(reader.where(action), "the Ego's controller drives from t = 0 in any case");
       return std::nullopt;
     }
-    reader.fail(action, "an action of the Ego: its controller drives it (the language scripts other road users only)");
+    if (kind == "LongitudinalAction") {
+      YAML::Node item;
+      item["set_speed"] = egoSetSpeed(translation, reader.choice(action, {"SpeedAction"}));
+      return item;
+    }
+    reader.fail(action, "an action of the Ego: its controller drives it (the language scripts its set speed only: "
+                        "a SpeedAction)");
   }
   YAML::Node item;
   if (kind == "LongitudinalAction") {

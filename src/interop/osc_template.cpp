@@ -259,7 +259,7 @@ YAML::Node roadUserNode(Translation& translation, const Entity& entity, bool ego
   if (entity.type != RoadUserType::StationaryObject && (ego || entity.isVehicle() || speed != 0.0)) {
     node["speed"] = num(speed);
   }
-  if (!ego && entity.actions.size() > 0) node["actions"] = entity.actions;
+  if (entity.actions.size() > 0) node["actions"] = entity.actions;  // the Ego's: set_speed only
   return node;
 }
 

@@ -155,6 +155,10 @@ SetVerdict judgeSet(const ParameterGrid& grid, const OscImportOptions& import, c
 
 /// A speed action's YAML (`speed:` item) from <SpeedAction>, for Init and Story.
 YAML::Node speedAction(Translation& translation, const Entity& actor, const pugi::xml_node& action);
+/// The Ego's `set_speed:` item from a <SpeedAction> on it (Init or Story): its controller's
+/// set speed from then on, as esmini's ACC takes a speed action on its Ego; the dynamics are
+/// the controller's own (noted). Refuses a relative target.
+YAML::Node egoSetSpeed(Translation& translation, const pugi::xml_node& action);
 /// A speed action's YAML that keeps tracking a <RelativeTargetSpeed continuous="true"> of
 /// `actor` at once (shape step).
 YAML::Node continuousSpeed(Translation& translation, const Entity& actor, const pugi::xml_node& target);

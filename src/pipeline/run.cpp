@@ -764,12 +764,13 @@ void probeController(const std::shared_ptr<const scenario::LogicalScenario>& log
   auto make_controller = [&] {
     auto concrete = concreteScenario(logical, options, options.firstSample).concrete;
     auto registry = sim::ControllerRegistry::withBuiltins();
+    const sim::ControllerNeeds needs = sim::controllerNeeds(*logical);
     sim::makeController(registry, logical->ego.controller.name, logical->ego.controller.library,
                         logical->sourceFile.parent_path(),
-                        sim::ControllerParams(concrete.controllerParams, logical->ego.controller.where));
+                        sim::ControllerParams(concrete.controllerParams, logical->ego.controller.where), needs);
     if (!options.reference.empty()) {
       sim::makeController(registry, options.reference, {}, logical->sourceFile.parent_path(),
-                          sim::ControllerParams({}, "--reference " + options.reference));
+                          sim::ControllerParams({}, "--reference " + options.reference), needs);
     }
   };
   if (options.isolation == RunOptions::Isolation::None) {

@@ -213,6 +213,10 @@ int actionIndex(const LogicalScenario& logical, const std::string& id) {
       ++index;
     }
   }
+  for (const auto& action : logical.ego.actions) {
+    if (action.id == id) return index;
+    ++index;
+  }
   return -1;
 }
 
@@ -293,6 +297,9 @@ ConcreteAction evaluateAction(const ActionSpec& spec, int owner, const LogicalSc
   }
   if (spec.kind == ActionSpec::Kind::Speed && spec.speedTarget == ActionSpec::SpeedTarget::Absolute) {
     checkSpeed(action.target, spec.where, "speed.target", spec.target.text(), concrete.index);
+  }
+  if (spec.kind == ActionSpec::Kind::SetSpeed) {
+    checkSpeed(action.target, spec.where, "set_speed.target", spec.target.text(), concrete.index);
   }
   if (spec.kind == ActionSpec::Kind::Speed && spec.speedTarget == ActionSpec::SpeedTarget::Factor &&
       !(action.target >= 0.0)) {
@@ -423,6 +430,8 @@ ConcreteScenario sampleConcreteScenario(const std::shared_ptr<const LogicalScena
     }
     checkLateralTargets(concrete, first_action, concrete.others[o]);
   }
+  // The Ego's set_speed actions come last (actionIndex counts them so).
+  for (const auto& action : spec.ego.actions) concrete.actions.push_back(evaluateAction(action, -1, spec, concrete));
   for (const auto& [name, expression] : spec.ego.controller.params) {
     concrete.controllerParams.emplace_back(
         name, evaluateFinite(expression, inputs, spec.ego.controller.where, "parameter " + name));

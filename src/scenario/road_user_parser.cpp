@@ -453,11 +453,25 @@ void parseLateralAction(const YamlReader& reader, const YAML::Node& node, const 
   }
 }
 
+/// The Ego's `set_speed: {target}`: its controller aims at `target` m/s from then on.
+void parseSetSpeedAction(const YamlReader& reader, const YAML::Node& node, const std::string& field,
+                         const std::vector<std::string>& inputs, ActionSpec& action) {
+  reader.checkKeys(node, field, {"target"});
+  if (!node["target"]) reader.fail(node, field, "missing 'target' (the controller's new set speed, m/s)");
+  action.kind = ActionSpec::Kind::SetSpeed;
+  action.target = reader.expression(node["target"], field + ".target", inputs);
+  requireNonNegative(reader, node["target"], field + ".target", action.target, false, "m/s");
+  action.shape = TransitionShape::Step;
+  action.pace = ActionSpec::Pace::Duration;
+  action.paceValue = Expression::constant(0.0);
+}
+
 void parseAction(const YamlReader& reader, const YAML::Node& node, const std::string& field,
-                 const std::vector<std::string>& inputs, const VehicleSpec& owner, std::size_t index,
-                 ActionSpec& action) {
+                 const std::vector<std::string>& inputs, const LogicalScenario& scenario, const VehicleSpec& owner,
+                 std::size_t index, ActionSpec& action) {
   action.where = reader.where(node, field);
-  reader.checkKeys(node, field, {"id", "trigger", "speed", "stop", "lane_change", "lateral_offset", "cross"});
+  reader.checkKeys(node, field,
+                   {"id", "trigger", "speed", "stop", "lane_change", "lateral_offset", "cross", "set_speed"});
   action.id = node["id"] ? reader.scalar(node["id"], field + ".id") : fmt::format("{}_{}", owner.id, index);
   if (!isIdentifier(action.id)) {
     throw ConfigError::field(reader.where(node["id"], field + ".id"), field + ".id", action.id,
@@ -469,7 +483,18 @@ void parseAction(const YamlReader& reader, const YAML::Node& node, const std::st
     action.trigger.where = action.where;
     action.trigger.value = Expression::constant(0.0);
   }
-  const std::string kind = oneOf(reader, node, field, {"speed", "stop", "lane_change", "lateral_offset", "cross"}, true);
+  const std::string kind =
+      oneOf(reader, node, field, {"speed", "stop", "lane_change", "lateral_offset", "cross", "set_speed"}, true);
+  const bool of_ego = &owner == &scenario.ego;
+  if (of_ego != (kind == "set_speed")) {
+    reader.fail(node[kind], field + "." + kind,
+                of_ego ? "the Ego's controller drives it: the Ego's actions set its controller's set speed (set_speed)"
+                       : "only the Ego's controller has a set speed (set_speed is an action of the Ego)");
+  }
+  if (of_ego) {
+    parseSetSpeedAction(reader, node[kind], field + "." + kind, inputs, action);
+    return;
+  }
   const auto& type = roadUserKind(owner.type);
   if (type.stationary) reader.fail(node[kind], field + "." + kind, "a stationary object does not move");
   if ((kind == "lane_change" || kind == "lateral_offset") && !type.drivesInLanes) {
@@ -485,6 +510,19 @@ void parseAction(const YamlReader& reader, const YAML::Node& node, const std::st
   }
   if (kind == "speed" || kind == "stop") parseSpeedAction(reader, node[kind], field + "." + kind, kind == "stop", inputs, action);
   else parseLateralAction(reader, node[kind], field + "." + kind, kind, inputs, action);
+}
+
+/// A road user's `actions` list, if it has one.
+void parseActions(const YamlReader& reader, const YAML::Node& item, const std::string& field,
+                  const std::vector<std::string>& inputs, const LogicalScenario& scenario, VehicleSpec& user) {
+  const auto actions = item["actions"];
+  if (!actions) return;
+  if (!actions.IsSequence()) reader.fail(actions, field + ".actions", "expected a list of actions");
+  for (std::size_t a = 0; a < actions.size(); ++a) {
+    ActionSpec action;
+    parseAction(reader, actions[a], fmt::format("{}.actions[{}]", field, a), inputs, scenario, user, a, action);
+    user.actions.push_back(std::move(action));
+  }
 }
 
 void parseOtherSpeed(const YamlReader& reader, const YAML::Node& item, const std::string& field,
@@ -514,14 +552,7 @@ void parseOther(const YamlReader& reader, const YAML::Node& item, const std::str
   parsePlacement(reader, item, field, /*is_ego=*/false, inputs, scenario, other);
   parseOtherSpeed(reader, item, field, inputs, other);
   parseHeadingNoise(reader, item, field, inputs, other);
-  if (const auto actions = item["actions"]) {
-    if (!actions.IsSequence()) reader.fail(actions, field + ".actions", "expected a list of actions");
-    for (std::size_t a = 0; a < actions.size(); ++a) {
-      ActionSpec action;
-      parseAction(reader, actions[a], fmt::format("{}.actions[{}]", field, a), inputs, other, a, action);
-      other.actions.push_back(std::move(action));
-    }
-  }
+  parseActions(reader, item, field, inputs, scenario, other);
 }
 
 void parseEgo(const YamlReader& reader, const YAML::Node& ego, const std::vector<std::string>& inputs,
@@ -529,7 +560,7 @@ void parseEgo(const YamlReader& reader, const YAML::Node& ego, const std::vector
   const std::string field = "vehicles.ego";
   reader.checkKeys(ego, field,
                    {"type", "x", "s", "lane", "speed", "length", "width", "reference_point", "heading_noise_deg",
-                    "controller"});
+                    "controller", "actions"});
   VehicleSpec& spec = scenario.ego;
   spec.id = "ego";
   spec.where = reader.where(ego, field);
@@ -544,6 +575,7 @@ void parseEgo(const YamlReader& reader, const YAML::Node& ego, const std::vector
   parseHeadingNoise(reader, ego, field, inputs, spec);
   if (!ego["controller"]) reader.fail(ego, field, "missing 'controller'");
   parseController(reader, ego["controller"], field + ".controller", inputs, spec.controller);
+  parseActions(reader, ego, field, inputs, scenario, spec);
 }
 
 /// A trigger's road users (`to`, `of`) and actions (`after`), members included, exist.
@@ -621,9 +653,11 @@ void checkNoCycle(const std::string& id, const std::map<std::string, const Actio
 void resolveReferences(const LogicalScenario& scenario) {
   std::vector<std::string> users = {"ego"};
   for (const auto& other : scenario.others) users.push_back(other.id);
+  std::vector<const VehicleSpec*> acting = {&scenario.ego};
+  for (const auto& other : scenario.others) acting.push_back(&other);
   std::map<std::string, const ActionSpec*> actions;
-  for (const auto& other : scenario.others) {
-    for (const auto& action : other.actions) {
+  for (const VehicleSpec* user : acting) {
+    for (const auto& action : user->actions) {
       if (!actions.emplace(action.id, &action).second) {
         throw ConfigError(fmt::format("{}.id: got '{}', expected an action id used once in the file", action.where,
                                       action.id));
@@ -632,10 +666,10 @@ void resolveReferences(const LogicalScenario& scenario) {
   }
   std::vector<std::string> action_ids;
   for (const auto& [id, action] : actions) action_ids.push_back(id);
-  for (const auto& other : scenario.others) {
-    for (const auto& action : other.actions) {
-      checkTriggerReferences(action.trigger, other.id, users, actions, action_ids);
-      checkSpeedReference(action, other.id, users);
+  for (const VehicleSpec* user : acting) {
+    for (const auto& action : user->actions) {
+      checkTriggerReferences(action.trigger, user->id, users, actions, action_ids);
+      checkSpeedReference(action, user->id, users);
     }
   }
   std::map<std::string, int> visited;

@@ -221,10 +221,12 @@ class BatchRun {
     const bool overridden = !options_.egoControllerOverride.empty();
     const ControllerParams params(overridden ? std::vector<std::pair<std::string, double>>{} : concrete.controllerParams,
                                   overridden ? "--reference " + options_.egoControllerOverride : spec.ego.controller.where);
-    return withStepCost(overridden ? makeController(registry_, options_.egoControllerOverride, {}, options_.scenarioDir, params)
-                                   : makeController(registry_, spec.ego.controller.name, spec.ego.controller.library,
-                                                    options_.scenarioDir, params),
-                        options_.egoStepCost);
+    const ControllerNeeds needs = controllerNeeds(spec);
+    return withStepCost(
+        overridden ? makeController(registry_, options_.egoControllerOverride, {}, options_.scenarioDir, params, needs)
+                   : makeController(registry_, spec.ego.controller.name, spec.ego.controller.library,
+                                    options_.scenarioDir, params, needs),
+        options_.egoStepCost);
   }
 
   void addEgo(std::size_t m, Member& member) {
@@ -286,6 +288,7 @@ class BatchRun {
     const std::vector<RoadUserState> road_users = roadUsersOf(member);
     // The others move on from instant k with the Ego where it is at k (triggers see it there).
     member.traffic->step(member.ego->state());
+    member.ego->commandSetSpeed(member.traffic->egoSetSpeedAt(time));
     try {
       member.ego->step(time, options_.step, member.run->scenario->ego.headingNoise[static_cast<std::size_t>(k)], lanes_,
                        road_users);
@@ -376,6 +379,19 @@ class BatchRun {
 };
 
 }  // namespace
+
+ControllerNeeds controllerNeeds(const scenario::LogicalScenario& logical) {
+  ControllerNeeds needs;
+  for (std::size_t a = 0; a < logical.ego.actions.size() && !needs.setSpeed; ++a) {
+    const auto& action = logical.ego.actions[a];
+    if (action.kind != scenario::ActionSpec::Kind::SetSpeed) continue;
+    needs.setSpeed = true;
+    needs.where = action.where;
+    needs.field = "set_speed";
+    needs.value = action.target.text();
+  }
+  return needs;
+}
 
 std::vector<SimulatedScenario> simulateBatch(const std::filesystem::path& net, const std::vector<ScenarioRun>& runs,
                                              ControllerRegistry& registry, const BatchOptions& options) {

@@ -56,7 +56,17 @@ int ControllerRegistry::abiVersion(const std::string& name) const { return entri
 
 void ControllerRegistry::require(const std::string& name, const ControllerNeeds& needs) const {
   const auto it = entries_.find(name);
-  if (it == entries_.end() || it->second.abiVersion >= needs.abiVersion) return;  // unknown: create() says so
+  if (it == entries_.end()) return;  // unknown: create() says so
+  // An instance says whether it follows a set speed (only asked when a scenario commands one).
+  if (needs.setSpeed && !it->second.factory()->followsSetSpeed()) {
+    std::vector<std::string> allowed;
+    for (const auto& [known, entry] : entries_) {
+      if (entry.factory()->followsSetSpeed()) allowed.push_back(known);
+    }
+    throw ConfigError(fmt::format("{}: {}: {}: controller '{}' takes no set speed (allowed: {})", needs.where,
+                                  needs.field, needs.value, name, fmt::join(allowed, ", ")));
+  }
+  if (it->second.abiVersion >= needs.abiVersion) return;
   std::vector<std::string> allowed;
   for (const auto& [known, entry] : entries_) {
     if (entry.abiVersion >= needs.abiVersion) allowed.push_back(known);

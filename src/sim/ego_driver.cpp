@@ -98,6 +98,7 @@ void EgoDriver::pushToSumo() const { placeInSumo(vehicleId_, state_, length_, wi
 
 Observation EgoDriver::observe(double time, LaneCache& lanes, const std::vector<RoadUserState>& road_users) const {
   Observation observation;
+  observation.commandedSetSpeed = commandedSetSpeed_;
   observation.time = time;
   observation.ego = state_;
   observation.egoLength = length_;

@@ -146,6 +146,8 @@ struct ScriptedTraffic::Impl {
   std::vector<VehicleState> states;
   std::vector<ActionTiming> timings;
   std::vector<double> scheduled;  ///< per action: start time once its trigger fired (NaN before)
+  /// The Ego's set_speed actions that started: (start time s, set speed m/s), in start order.
+  std::vector<std::pair<double, double>> egoSetSpeeds;
   PurePursuitLateral laneKeeping;  // the Ego's defaults: lookahead max(4 m, 0.4 s * v)
   // What travelled and end_of_road conditions measure, per road user (0: the Ego, 1 + o: others[o]);
   // tracked only if a trigger asks.
@@ -159,13 +161,17 @@ struct ScriptedTraffic::Impl {
   void init();
   void checkOverlaps() const;
   double referenceArcLength(const VehicleState& state, const scenario::ConcreteVehicle& spec) const;
-  double relationValue(const scenario::ConcreteTrigger& trigger, std::size_t owner, const VehicleState& ego) const;
+  double relationValue(const scenario::ConcreteTrigger& trigger, int owner, const VehicleState& ego) const;
+  /// Road user `user`'s state and description: -1 the Ego, else others[user].
   const VehicleState& stateOf(int user, const VehicleState& ego) const {
     return user < 0 ? ego : states[static_cast<std::size_t>(user)];
   }
+  const scenario::ConcreteVehicle& specOf(int user) const {
+    return user < 0 ? concrete->ego : concrete->others[static_cast<std::size_t>(user)];
+  }
   void trackProgress(const VehicleState& ego);
-  bool holds(const scenario::ConcreteTrigger& trigger, std::size_t owner, const VehicleState& ego) const;
-  double fireTime(const scenario::ConcreteTrigger& trigger, std::size_t owner, const VehicleState& ego) const;
+  bool holds(const scenario::ConcreteTrigger& trigger, int owner, const VehicleState& ego) const;
+  double fireTime(const scenario::ConcreteTrigger& trigger, int owner, const VehicleState& ego) const;
   void offer(std::size_t a, const VehicleState& ego);
   void fireTriggers(const VehicleState& ego);
   double speedTargetOf(const ConcreteAction& action, double from, const VehicleState& ego) const;
@@ -243,17 +249,17 @@ double ScriptedTraffic::Impl::referenceArcLength(const VehicleState& state,
   return projectExtended(egoLane, point).arcLength;
 }
 
-/// The value a gap, headway or ttc trigger of road user `owner` compares (inf: never).
-double ScriptedTraffic::Impl::relationValue(const scenario::ConcreteTrigger& trigger, std::size_t owner,
+/// The value a gap, headway or ttc trigger of road user `owner` (-1: the Ego) compares (inf: never).
+double ScriptedTraffic::Impl::relationValue(const scenario::ConcreteTrigger& trigger, int owner,
                                             const VehicleState& ego) const {
-  const bool to_ego = trigger.reference < 0;
-  const VehicleState& other = to_ego ? ego : states[static_cast<std::size_t>(trigger.reference)];
-  const auto& other_spec = to_ego ? concrete->ego : concrete->others[static_cast<std::size_t>(trigger.reference)];
-  const auto& self_spec = concrete->others[owner];
+  const VehicleState& other = stateOf(trigger.reference, ego);
+  const auto& other_spec = specOf(trigger.reference);
+  const VehicleState& self = stateOf(owner, ego);
+  const auto& self_spec = specOf(owner);
   double signed_gap = 0.0;  // m, what a gap trigger compares (bumpers: < 0 side by side)
   bool self_ahead = false;
   if (trigger.betweenReferencePoints) {
-    const double self_s = referenceArcLength(states[owner], self_spec);
+    const double self_s = referenceArcLength(self, self_spec);
     const double other_s = referenceArcLength(other, other_spec);
     self_ahead = self_s > other_s;
     signed_gap = std::abs(self_s - other_s);
@@ -261,7 +267,7 @@ double ScriptedTraffic::Impl::relationValue(const scenario::ConcreteTrigger& tri
     const PathRelation relation =
         relateToPath(egoLane, road->laneWidthOf(concrete->ego.lane),
                      footprintOf(other, other_spec.length, other_spec.width),
-                     footprintOf(states[owner], self_spec.length, self_spec.width));
+                     footprintOf(self, self_spec.length, self_spec.width));
     self_ahead = relation.longitudinalDistance > 0.0;
     signed_gap = relation.longitudinalGap;
   }
@@ -271,11 +277,11 @@ double ScriptedTraffic::Impl::relationValue(const scenario::ConcreteTrigger& tri
   const auto along = [&](const VehicleState& state) {
     return state.speed * std::cos(state.heading - projectExtended(egoLane, state.position()).heading);
   };
-  const double rear = self_ahead ? along(other) : along(states[owner]);
-  const double front = self_ahead ? along(states[owner]) : along(other);
+  const double rear = self_ahead ? along(other) : along(self);
+  const double front = self_ahead ? along(self) : along(other);
   if (trigger.kind == TriggerSpec::Kind::Headway && trigger.directed) {
     // OpenSCENARIO's: the subject's to the other, undefined while the other is not ahead of it.
-    const bool of_self = trigger.subject == static_cast<int>(owner);
+    const bool of_self = trigger.subject == owner;
     return of_self != self_ahead && rear > 0.1 ? gap / rear : kInf;
   }
   if (trigger.kind == TriggerSpec::Kind::Headway) return rear > 0.1 ? gap / rear : kInf;
@@ -295,7 +301,7 @@ void ScriptedTraffic::Impl::trackProgress(const VehicleState& ego) {
 }
 
 /// Whether a condition holds at the current instant (members of `all` and `any` alike).
-bool ScriptedTraffic::Impl::holds(const scenario::ConcreteTrigger& trigger, std::size_t owner,
+bool ScriptedTraffic::Impl::holds(const scenario::ConcreteTrigger& trigger, int owner,
                                   const VehicleState& ego) const {
   const double now = static_cast<double>(k) * step;
   const auto user = static_cast<std::size_t>(trigger.subject + 1);
@@ -336,7 +342,7 @@ bool ScriptedTraffic::Impl::holds(const scenario::ConcreteTrigger& trigger, std:
 
 /// When a trigger fires as far as the current instant tells (NaN: not yet): a time or an
 /// action's end exactly, `any` at its earliest member, any other at this instant; plus delays.
-double ScriptedTraffic::Impl::fireTime(const scenario::ConcreteTrigger& trigger, std::size_t owner,
+double ScriptedTraffic::Impl::fireTime(const scenario::ConcreteTrigger& trigger, int owner,
                                        const VehicleState& ego) const {
   if (trigger.kind == TriggerSpec::Kind::Time) return trigger.value + trigger.delay;
   if (trigger.kind == TriggerSpec::Kind::After) {
@@ -356,7 +362,7 @@ double ScriptedTraffic::Impl::fireTime(const scenario::ConcreteTrigger& trigger,
 /// Schedules action `a` at its trigger's fire time if that is earlier than what it has.
 void ScriptedTraffic::Impl::offer(std::size_t a, const VehicleState& ego) {
   const auto& action = concrete->actions[a];
-  const double when = fireTime(action.trigger, static_cast<std::size_t>(action.owner), ego);
+  const double when = fireTime(action.trigger, action.owner, ego);
   if (!std::isnan(when) && !(when >= scheduled[a])) scheduled[a] = when;
 }
 
@@ -416,8 +422,14 @@ void ScriptedTraffic::Impl::track(const VehicleState& ego) {
 
 void ScriptedTraffic::Impl::activate(std::size_t a, const VehicleState& ego) {
   const auto& action = concrete->actions[a];
-  Mover& mover = movers[static_cast<std::size_t>(action.owner)];
   const double t0 = scheduled[a];
+  if (action.kind == ActionSpec::Kind::SetSpeed) {  // the Ego's controller takes it from t0 on; done at once
+    egoSetSpeeds.emplace_back(t0, action.target);
+    timings[a] = {t0, t0};
+    scheduleWaiters(a, ego);
+    return;
+  }
+  Mover& mover = movers[static_cast<std::size_t>(action.owner)];
   Transition transition;
   transition.start = t0;
   transition.shape = action.shape;
@@ -531,6 +543,14 @@ const VehicleState& ScriptedTraffic::egoStart() const { return impl_->egoStart; 
 std::size_t ScriptedTraffic::instant() const { return impl_->k; }
 const std::vector<VehicleState>& ScriptedTraffic::states() const { return impl_->states; }
 const std::vector<ScriptedTraffic::ActionTiming>& ScriptedTraffic::timings() const { return impl_->timings; }
+
+std::optional<double> ScriptedTraffic::egoSetSpeedAt(double time) const {
+  std::optional<double> set_speed;
+  for (const auto& [start, speed] : impl_->egoSetSpeeds) {
+    if (start <= time + 1e-9) set_speed = speed;
+  }
+  return set_speed;
+}
 
 void ScriptedTraffic::step(const VehicleState& ego) {
   Impl& impl = *impl_;

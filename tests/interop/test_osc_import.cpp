@@ -708,7 +708,8 @@ TEST(OscRun, AContinuousRelativeSpeedKeepsUpWithTheOther) {
 }
 
 // The Init's speed of the Ego: a change over no time is a step, whatever its shape (esmini's
-// override_bb: linear over 0 s); a gradual one is its controller's business and refused.
+// override_bb: linear over 0 s); a gradual one is its controller's business: its set speed
+// from t = 0 (it starts at 0 m/s, the speed no step gave it).
 TEST(OscImport, TheEgosInitialSpeedIsAStepOverNoTime) {
   const std::string step = R"(<SpeedActionDynamics dynamicsShape="step" dynamicsDimension="time" value="0"/>)";
   const auto with = [&](const std::string& dynamics) {
@@ -721,9 +722,45 @@ TEST(OscImport, TheEgosInitialSpeedIsAStepOverNoTime) {
                                {"gradual.xosc", with(R"(<SpeedActionDynamics dynamicsShape="linear"
       dynamicsDimension="rate" value="2"/>)")}});
   EXPECT_DOUBLE_EQ(importTemplate(dir->path() / "instant.xosc", {})->ego.speed.evaluate({}), 20.0);
-  const std::string error = test::configErrorOf([&] { importTemplate(dir->path() / "gradual.xosc", {}); });
-  EXPECT_THAT(error, HasSubstr("gradual.xosc:"));
-  EXPECT_THAT(error, HasSubstr("a speed action of the Ego: its controller drives it"));
+  const auto gradual = importTemplate(dir->path() / "gradual.xosc", {});
+  EXPECT_DOUBLE_EQ(gradual->ego.speed.evaluate({}), 0.0);
+  ASSERT_EQ(gradual->ego.actions.size(), 1u);
+  EXPECT_EQ(gradual->ego.actions[0].kind, scenario::ActionSpec::Kind::SetSpeed);
+  EXPECT_DOUBLE_EQ(gradual->ego.actions[0].target.evaluate({}), 20.0);
+  EXPECT_DOUBLE_EQ(gradual->ego.actions[0].trigger.value.evaluate({}), 0.0);
+}
+
+// A speed action on the Ego is its controller's new set speed from the event's start (as
+// esmini's ACC takes it); the dynamics are the controller's. The ALKS-like Ego at 20 m/s with
+// no one in its lane is told 12 m/s at t = 3 s: its cruise law a = 0.5 1/s * (12 - v) leaves
+// 20 m/s until then and 12 + 8 * 0.9^n after n steps of 0.2 s (the file stops at 7 s: n = 20).
+TEST(OscRun, ASpeedActionOnTheEgoSetsItsControllersSetSpeed) {
+  std::string text = readTextFile(data("conditions.xosc"));
+  // The story's event slows the Ego down instead of 'Slow'.
+  const std::string slow_down = R"(<Event name="SlowDown" priority="overwrite">)";
+  const auto event = text.find(slow_down);
+  ASSERT_NE(event, std::string::npos);
+  const auto actors = text.rfind("<EntityRef entityRef=", event);
+  text.replace(actors, text.find("/>", actors) + 2 - actors, R"(<EntityRef entityRef="Ego"/>)");
+  const std::string ten = R"(<AbsoluteTargetSpeed value="10"/>)";
+  text.replace(text.find(ten, event), ten.size(), R"(<AbsoluteTargetSpeed value="12"/>)");
+  const auto dir = folderWith({{"set_speed.xosc", text}});
+  const auto logical = importTemplate(dir->path() / "set_speed.xosc", {});
+  ASSERT_EQ(logical->ego.actions.size(), 1u);
+  EXPECT_EQ(logical->ego.actions[0].kind, scenario::ActionSpec::Kind::SetSpeed);
+  const auto ego = simulatedTrack(dir->path() / "set_speed.xosc", "ego");
+  ASSERT_TRUE(ego);
+  EXPECT_NEAR(ego->states[15].speed, 20.0, 1e-6);
+  EXPECT_NEAR(ego->states.back().speed, 12.0 + 8.0 * std::pow(0.9, 20.0), 1e-6);
+  // A relative target would need the other's speed: refused.
+  std::string relative = text;
+  relative.replace(relative.find(R"(<AbsoluteTargetSpeed value="12"/>)"), 33,
+                   R"(<RelativeTargetSpeed entityRef="Lead" value="1" speedTargetValueType="delta"
+                        continuous="false"/>)");
+  const auto bad = folderWith({{"relative.xosc", relative}});
+  const std::string error = test::configErrorOf([&] { importTemplate(bad->path() / "relative.xosc", {}); });
+  EXPECT_THAT(error, HasSubstr("relative.xosc:"));
+  EXPECT_THAT(error, HasSubstr("a relative speed of the Ego: the language sets its controller's set speed"));
   EXPECT_EQ(error.find('\n'), std::string::npos) << error;
 }
 

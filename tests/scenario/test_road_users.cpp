@@ -217,3 +217,59 @@ TEST(RoadUsers, BadRelativeSpeedsAndReferencePointsAreRefused) {
   EXPECT_NE(centres.find("trigger.between: got 'centres', expected bumpers or reference_points"), std::string::npos)
       << centres;
 }
+
+TEST(RoadUsers, TheEgosActionsSetItsControllersSetSpeedOnly) {
+  const auto yaml = [](const std::string& ego_actions, const std::string& other_actions) {
+    return fmt::format(R"(
+name: users
+road: {{shape: arc, length: 200, lanes: 3}}
+vehicles:
+  ego: {{s: 20, lane: 1, speed: 10, controller: {{name: idm}}, actions: {}}}
+  others:
+    - {{id: a, gap: 20, relative_lane: 0, speed: 5, actions: {}}}
+)",
+                       ego_actions, other_actions);
+  };
+  const auto logical = parseLogicalScenario(
+      yaml("[{id: slower, trigger: {gap: 8, to: a}, set_speed: {target: 4}}, {trigger: {after: slower, delay: 2}, "
+           "set_speed: {target: 12}}]",
+           "[{id: brake, trigger: {after: slower}, stop: {decel: 2}}]"),
+      "ok.yaml");
+  const auto concrete = sampleConcreteScenario(logical, 1, 0);
+  ASSERT_EQ(concrete.actions.size(), 3u);
+  // The others' actions first, the Ego's last: `after` indices count them so.
+  EXPECT_EQ(concrete.actions[0].id, "brake");
+  EXPECT_EQ(concrete.actions[0].trigger.action, 1);
+  EXPECT_EQ(concrete.actions[1].owner, -1);
+  EXPECT_EQ(concrete.actions[1].kind, ActionSpec::Kind::SetSpeed);
+  EXPECT_DOUBLE_EQ(concrete.actions[1].target, 4.0);
+  EXPECT_EQ(concrete.actions[1].trigger.reference, 0);  // its gap to 'a'
+  EXPECT_EQ(concrete.actions[2].trigger.action, 1);
+
+  const auto error = [&](const std::string& ego_actions, const std::string& other_actions) {
+    try {
+      sampleConcreteScenario(parseLogicalScenario(yaml(ego_actions, other_actions), "bad.yaml"), 1, 0);
+    } catch (const ConfigError& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  const std::vector<std::tuple<std::string, std::string, std::string>> cases = {
+      {"[{speed: {target: 3, rate: 1}}]", "[]",
+       "vehicles.ego.actions[0].speed: the Ego's controller drives it: the Ego's actions set its controller's set "
+       "speed (set_speed)"},
+      {"[]", "[{set_speed: {target: 3}}]",
+       "actions[0].set_speed: only the Ego's controller has a set speed"},
+      {"[{set_speed: {target: -3}}]", "[]", "set_speed.target"},
+      {"[{set_speed: {target: 3, rate: 2}}]", "[]", "set_speed"},
+      {"[{set_speed: {}}]", "[]", "missing 'target'"},
+      {"[{trigger: {gap: 5}, set_speed: {target: 3}}]", "[]",
+       "trigger.to: got 'ego', expected another road user of the file"},
+  };
+  for (const auto& [ego_actions, other_actions, message] : cases) {
+    const std::string got = error(ego_actions, other_actions);
+    EXPECT_NE(got.find("bad.yaml:"), std::string::npos) << ego_actions << other_actions << ": " << got;
+    EXPECT_NE(got.find(message), std::string::npos) << ego_actions << other_actions << ": " << got;
+    EXPECT_EQ(got.find('\n'), std::string::npos) << got;
+  }
+}

@@ -281,3 +281,44 @@ vehicles:
   EXPECT_NEAR(side.at(12).speed, 10.0, 1e-9);
   EXPECT_NEAR(side.at(13).speed, 15.0, 1e-9);
 }
+
+// A set_speed action reaches the Ego's controller at its start: the ALKS-like system cruises
+// at 20 m/s until t = 1 s, then its cruise law a = 0.5 1/s * (10 - v) (no lead; within its
+// 6 m/s^2) takes the speed down by 10 % of the difference per 0.2 s step: 10 + 10 * 0.9^n.
+TEST(BatchSimulation, TheEgoFollowsTheSetSpeedItsActionsCommand) {
+  TemporaryDirectory dir;
+  const std::string yaml = R"(
+name: set_speed
+time: {step: 0.2, duration: 8}
+road: {shape: arc, length: 400, lanes: 2, lane_width: 3.5}
+vehicles:
+  ego: {s: 20, lane: 0, speed: 20, controller: {name: CONTROLLER, params: {PARAMS}},
+        actions: [{trigger: {time: 1}, set_speed: {target: 10}}]}
+)";
+  const auto variant = [&](const std::string& controller, const std::string& params) {
+    return std::regex_replace(std::regex_replace(yaml, std::regex("CONTROLLER"), controller), std::regex("PARAMS"),
+                              params);
+  };
+  const Batch batch(scenario::parseLogicalScenario(variant("alks", "set_speed: 20"), "set_speed.yaml"), 1,
+                    dir.path());
+  ASSERT_TRUE(batch.results[0].ok()) << batch.results[0].failure;
+  const auto& ego = batch.results[0].trace.vehicles[0];
+  for (std::size_t k = 0; k < ego.states.size(); ++k) {
+    const double expected = k <= 5 ? 20.0 : 10.0 + 10.0 * std::pow(0.9, static_cast<double>(k - 5));
+    EXPECT_NEAR(ego.states[k].speed, expected, 1e-6) << "instant " << k;
+  }
+  // A controller that takes no set speed is refused before anything runs.
+  ControllerRegistry registry = ControllerRegistry::withBuiltins();
+  test::registerSteadyBrake(registry);
+  try {
+    const Batch refused(scenario::parseLogicalScenario(variant("steady_brake", "decel: 1"), "set_speed.yaml"), 1,
+                        dir.path(), registry);
+    FAIL() << "a set speed for a controller without one ran";
+  } catch (const ConfigError& error) {
+    const std::string message = error.what();
+    EXPECT_NE(message.find("set_speed.yaml:"), std::string::npos) << message;
+    EXPECT_NE(message.find("set_speed: 10: controller 'steady_brake' takes no set speed (allowed: alks"),
+              std::string::npos)
+        << message;
+  }
+}

@@ -363,3 +363,44 @@ TEST(ScriptedTraffic, LanesOfTheirOwnWidthsLieSideBySide) {
             std::string::npos)
       << loadErrorOf("lane_widths: [3.9, 0.4, 3.65]");
 }
+
+// The Ego's set_speed actions start like any action and hand their target to its controller
+// from their start on: one at t = 2.1 s (between instants), one when the gap to 'a' (40 m
+// at t = 0, closing at 10 - 5 = 5 m/s) is at most 20.5 m, i.e. at the instant t = 4.0 s.
+TEST(ScriptedTraffic, TheEgosSetSpeedActionsCommandItsSetSpeedFromTheirStart) {
+  const auto logical = scenario::parseLogicalScenario(R"(
+name: set_speeds
+time: {step: 0.2, duration: 10}
+road: {shape: arc, length: 300, lanes: 3, lane_width: 3.5}
+vehicles:
+  ego: {s: 30, lane: 1, speed: 10, controller: {name: alks},
+        actions: [{id: slower, trigger: {time: 2.1}, set_speed: {target: 7}},
+                  {trigger: {gap: 20.5, to: a}, set_speed: {target: 4}}]}
+  others:
+    - {id: a, gap: 40, relative_lane: 0, speed: 5,
+       actions: [{trigger: {after: slower}, lateral_offset: {offset: 0.5, duration: 1}}]}
+)",
+                                                      "set_speeds.yaml");
+  const auto concrete = scenario::sampleConcreteScenario(logical, 1, 0);
+  const auto road = road::buildRoadGeometry(concrete);
+  ScriptedTraffic traffic(concrete, road);
+  const EgoStandIn ego(concrete, road);
+  EXPECT_FALSE(traffic.egoSetSpeedAt(0.0));
+  std::vector<std::optional<double>> commanded;  // what the Ego's controller sees at instant k
+  for (int k = 0; k < 30; ++k) {
+    traffic.step(ego.at(0.2 * k));
+    commanded.push_back(traffic.egoSetSpeedAt(0.2 * k));
+  }
+  for (int k = 0; k < 30; ++k) {
+    const double t = 0.2 * k;
+    const std::optional<double> expected =
+        t < 2.1 ? std::nullopt : t < 4.0 - 1e-9 ? std::optional<double>(7.0) : std::optional<double>(4.0);
+    EXPECT_EQ(commanded[static_cast<std::size_t>(k)], expected) << "t = " << t;
+  }
+  EXPECT_EQ(traffic.egoSetSpeedAt(2.1), std::optional<double>(7.0));
+  const auto& timings = traffic.timings();  // a's lateral offset, then the Ego's two
+  EXPECT_NEAR(timings[1].start, 2.1, 1e-9);
+  EXPECT_NEAR(timings[1].end, 2.1, 1e-9);
+  EXPECT_NEAR(timings[0].start, 2.1, 1e-9);  // `after` a set speed: at once
+  EXPECT_NEAR(timings[2].start, 4.0, 1e-9);
+}

@@ -38,7 +38,7 @@ struct ConcreteTrigger {
 /// An action with its numbers evaluated (see ActionSpec).
 struct ConcreteAction {
   std::string id;
-  int owner = 0;  ///< index into ConcreteScenario::others
+  int owner = 0;  ///< -1: the Ego (set_speed actions), else index into ConcreteScenario::others
   ActionSpec::Kind kind = ActionSpec::Kind::Speed;
   ConcreteTrigger trigger;
   TransitionShape shape = TransitionShape::Smooth;
@@ -90,7 +90,8 @@ struct ConcreteScenario {
   std::vector<double> laneWidths;
   ConcreteVehicle ego;
   std::vector<ConcreteVehicle> others;
-  std::vector<ConcreteAction> actions;  ///< every road user's actions, road user by road user, in file order
+  /// Every road user's actions, road user by road user, in file order; the Ego's last.
+  std::vector<ConcreteAction> actions;
   std::vector<std::pair<std::string, double>> controllerParams;  ///< evaluated
 
   double step() const { return logical->step; }

@@ -176,6 +176,9 @@ struct ActionSpec {
     LaneChange,     ///< move to the centre of another lane
     LateralOffset,  ///< move to an offset from the current lane's centre (0: back)
     Cross,          ///< walk across the road at a speed to an offset (pedestrians)
+    /// the Ego only: its controller's set speed (m/s) from the action's start on; the
+    /// controller decides how to reach it (as esmini's ACC reads a speed action on its Ego)
+    SetSpeed,
   };
   std::string id;
   Kind kind = Kind::Speed;
@@ -189,7 +192,7 @@ struct ActionSpec {
   /// Relative, Factor: keep tracking the reference's speed (shape step) until another speed
   /// action replaces this one; else the target is fixed when the action starts.
   bool continuous = false;
-  Expression target;     ///< m/s (Speed); lanes (LaneChange); m (LateralOffset, Cross)
+  Expression target;     ///< m/s (Speed, SetSpeed); lanes (LaneChange); m (LateralOffset, Cross)
   /// LaneChange: target is relative to the road user's own lane (false) or the Ego's (true).
   bool relativeToEgoLane = false;
   // How fast: exactly one of these (Speed: rate or duration; lateral: lateral speed,
@@ -239,6 +242,7 @@ struct VehicleSpec {
   bool hasSpeedProfile = false;
   SpeedProfile speedProfile;
   Distribution speedNoise;            ///< m/s, added to the scripted speed at every instant
+  /// Others: their manoeuvres; the Ego: set_speed actions only (its controller drives it).
   std::vector<ActionSpec> actions;
   std::string where;
 

@@ -54,6 +54,10 @@ struct BatchOptions {
   double lateralResolution = 0.0;
 };
 
+/// What a scenario asks of its Ego's controller (ControllerRegistry::require): to follow the
+/// set speed its Ego's set_speed actions command, if it has any.
+ControllerNeeds controllerNeeds(const scenario::LogicalScenario& logical);
+
 /// Runs all `runs` in one simulation of `net`. Per-scenario faults (a vehicle
 /// SUMO removes, a controller that fails) are recorded in `failure`; faults of
 /// the whole batch (SUMO cannot load the net, an unknown controller) throw.

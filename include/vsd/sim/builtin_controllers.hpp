@@ -37,6 +37,8 @@ struct FollowingParameters {
   void read(const ControllerParams& params, bool with_time_gap = true);
   /// Forgets the set speed taken from a previous scenario's first step.
   void reset() { setSpeed_ = configuredSetSpeed_; }
+  /// The cruise speed: the scenario's commanded set speed once it has one, else set_speed,
+  /// else the Ego's speed at its first step.
   double setSpeed(const Observation& observation);
   double clamp(double accel) const;
 

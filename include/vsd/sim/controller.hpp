@@ -62,6 +62,10 @@ struct Observation {
   /// The object list (ObjectSensor's coverage, in the scenario's order of road users);
   /// filled only for a controller that observesObjects().
   std::vector<ObservedObject> objects;
+  /// m/s: the set speed the scenario commands the driver (its latest set_speed action, e.g.
+  /// an imported OpenSCENARIO speed action on the Ego); absent until the first. Controllers
+  /// that followsSetSpeed() take it in place of their own from then on.
+  std::optional<double> commandedSetSpeed;
 };
 
 /// A road user of the object list as the lead of a car-following law: the bumper gap and
@@ -108,6 +112,8 @@ class EgoController {
   /// True if step() reads Observation::objects: the Ego's driver builds the object list
   /// only then (after init(), so a parameter may decide it).
   virtual bool observesObjects() const { return false; }
+  /// True if step() follows Observation::commandedSetSpeed (the scenario's set_speed actions).
+  virtual bool followsSetSpeed() const { return false; }
 };
 
 /// A setting of a scenario that only a controller observing a version of the observation
@@ -118,6 +124,9 @@ struct ControllerNeeds {
   std::string where;  ///< file (and line) of the setting
   std::string field;  ///< the setting's key, e.g. "ego.sensor"
   std::string value;  ///< the setting as written
+  /// The scenario commands the Ego's set speed (set_speed actions): only a controller that
+  /// followsSetSpeed() honours it.
+  bool setSpeed = false;
 };
 
 /// Registry of controllers by name. Built-ins are added by withBuiltins();
@@ -141,7 +150,7 @@ class ControllerRegistry {
   /// The version of the observation `name` reads (it must be registered).
   int abiVersion(const std::string& name) const;
   /// Throws ConfigError (one line: where, field, value, what is allowed) if `name` reads an
-  /// older observation than `needs` asks for.
+  /// older observation than `needs` asks for, or does not follow a set speed it commands.
   void require(const std::string& name, const ControllerNeeds& needs) const;
 
   /// dlopen()s a plugin (see controller_abi.h) and registers its controllers.

@@ -5,6 +5,7 @@
 // Used for generated scenarios and for closed-loop Egos on arbitrary maps.
 
 #include <memory>
+#include <optional>
 #include <string>
 #include <unordered_map>
 #include <utility>
@@ -89,6 +90,8 @@ class EgoDriver {
   void placeBy(SumoPlacement placement) { placement_ = std::move(placement); }
   /// The coverage of the object list from now on (default: ObjectSensor{}, UN R157's ranges).
   void observeWith(const ObjectSensor& sensor) { sensor_ = sensor; }
+  /// The set speed (m/s) the scenario commands from now on (Observation::commandedSetSpeed).
+  void commandSetSpeed(std::optional<double> set_speed) { commandedSetSpeed_ = set_speed; }
   /// Places the vehicle in SUMO at the current state (moveToXY + speed).
   void pushToSumo() const;
   /// Builds the controller's observation from SUMO's current state; for a controller that
@@ -117,6 +120,7 @@ class EgoDriver {
   double minGap_ = 0.0;
   SumoPlacement placement_;
   ObjectSensor sensor_;
+  std::optional<double> commandedSetSpeed_;
 };
 
 }  // namespace vsd::sim

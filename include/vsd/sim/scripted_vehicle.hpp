@@ -20,6 +20,7 @@
 
 #include <cstddef>
 #include <memory>
+#include <optional>
 #include <vector>
 
 #include "vsd/core/trace.hpp"
@@ -72,6 +73,10 @@ class ScriptedTraffic {
   };
   /// Per action of ConcreteScenario::actions.
   const std::vector<ActionTiming>& timings() const;
+  /// The set speed (m/s) the Ego's latest set_speed action started by `time` (s) commands its
+  /// controller; none before the first. Actions start while stepping to the instant after
+  /// their start, so ask with the time the controller acts at.
+  std::optional<double> egoSetSpeedAt(double time) const;
 
  private:
   struct Impl;

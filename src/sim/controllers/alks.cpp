@@ -61,6 +61,7 @@ class AlksController final : public EgoController {
   void reset() override { longitudinal_.reset(); }
 
   bool observesObjects() const override { return true; }
+  bool followsSetSpeed() const override { return true; }
 
   Command step(const Observation& observation, double /*dt*/) override {
     return {longitudinal_.accel(observation, lead(observation)), lateral_.curvature(observation)};

@@ -98,8 +98,10 @@ class FuzzySafetyModel final : public EgoController {
   }
 
   bool observesObjects() const override { return true; }
+  bool followsSetSpeed() const override { return true; }
 
   Command step(const Observation& observation, double dt) override {
+    if (observation.commandedSetSpeed) setSpeed_ = *observation.commandedSetSpeed;
     if (!setSpeed_) setSpeed_ = std::max(observation.ego.speed, 0.1);
     return {longitudinal(observation, dt), lateral_.curvature(observation)};
   }

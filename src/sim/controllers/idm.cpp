@@ -31,6 +31,7 @@ class IdmController final : public EgoController {
   void reset() override { following_.reset(); }
 
   bool observesObjects() const override { return leader_.fromObjects(); }
+  bool followsSetSpeed() const override { return true; }
 
   Command step(const Observation& observation, double /*dt*/) override {
     const double speed = observation.ego.speed;

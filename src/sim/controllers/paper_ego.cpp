@@ -30,6 +30,7 @@ class PaperEgoController final : public EgoController {
   void reset() override { longitudinal_.reset(); }
 
   bool observesObjects() const override { return leader_.fromObjects(); }
+  bool followsSetSpeed() const override { return true; }
 
   Command step(const Observation& observation, double /*dt*/) override {
     return {longitudinal_.accel(observation, leader_.leader(observation)), lateral_.curvature(observation)};

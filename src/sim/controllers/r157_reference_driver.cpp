@@ -93,6 +93,7 @@ class R157ReferenceDriver final : public EgoController {
   }
 
   bool observesObjects() const override { return true; }
+  bool followsSetSpeed() const override { return true; }
 
   Command step(const Observation& observation, double dt) override {
     const double t = observation.time;

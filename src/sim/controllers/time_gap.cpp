@@ -70,6 +70,7 @@ void FollowingParameters::read(const ControllerParams& params, bool with_time_ga
 }
 
 double FollowingParameters::setSpeed(const Observation& observation) {
+  if (observation.commandedSetSpeed) return *observation.commandedSetSpeed;
   if (!setSpeed_) setSpeed_ = std::max(observation.ego.speed, 0.1);
   return *setSpeed_;
 }
