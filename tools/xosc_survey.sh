@@ -13,9 +13,10 @@
 #   - ASAM's variation files: `scenario check --duration 60` imports every parameter set
 #     (skipped by the template's constraints / refused / would fail / would run), then `run --samples 200
 #     --duration 60` simulates 200 sets drawn from the grid (seed 1).
-#   - esmini's resources/xosc: `scenario check --duration 30 --data-root resources
-#     --controller-map tools/esmini_controllers.yaml` (its scenarios name roads in ../xodr; its
-#     human-driver controllers map onto built-ins), then `run` of each file that would run:
+#   - esmini's resources/xosc: `scenario check --data-root resources --controller-map
+#     tools/esmini_controllers.yaml` (its scenarios name roads in ../xodr; its human-driver
+#     controllers map onto built-ins; `--duration 30` only where the StopTrigger is no
+#     simulation time), then `run` of each file that would run (with the same options):
 #     ran, or the first refusal. Each file is also placed in or outside the issue's goal
 #     ("roads netconvert reads", actions and conditions in its list): tools/xosc_scope.py,
 #     then netconvert on the road it names.
@@ -80,8 +81,8 @@ done
 echo "  variation files run: $ran of $total"
 
 echo
-echo "## esmini resources/xosc: scenario check --duration 30 --data-root resources" \
-  "--controller-map tools/esmini_controllers.yaml, run if it would"
+echo "## esmini resources/xosc: scenario check --data-root resources --controller-map" \
+  "tools/esmini_controllers.yaml (--duration 30 where it asks for it), run if it would"
 echo "   scope: in the issue's goal = netconvert reads its road and its actions and conditions are in the issue's list"
 ran=0; total=0; in_scope=0; ran_in_scope=0
 declare -A netconvert_reads
@@ -100,11 +101,15 @@ for file in "$esmini"/resources/xosc/*.xosc; do
     fi
     [ "${netconvert_reads[$road]}" = yes ] && scope="in scope" || scope="outside: ${netconvert_reads[$road]}"
   fi
-  "$vsd" scenario check --duration 30 --data-root "$esmini/resources" \
-    --controller-map "$root/tools/esmini_controllers.yaml" "$file" >"$work/check" 2>&1 || status=$?
+  # The file's own end where its StopTrigger is a simulation time; 30 s where it asks for one.
+  options=(--data-root "$esmini/resources" --controller-map "$root/tools/esmini_controllers.yaml")
+  "$vsd" scenario check "${options[@]}" "$file" >"$work/check" 2>&1 || status=$?
+  if grep -q 'pass --duration' "$work/check"; then
+    options+=(--duration 30); status=0
+    "$vsd" scenario check "${options[@]}" "$file" >"$work/check" 2>&1 || status=$?
+  fi
   if [ "$status" -eq 0 ]; then
-    "$vsd" run "$file" --duration 30 --data-root "$esmini/resources" \
-      --controller-map "$root/tools/esmini_controllers.yaml" --out "$work/e$total" >"$work/log" 2>&1 || status=$?
+    "$vsd" run "$file" "${options[@]}" --out "$work/e$total" >"$work/log" 2>&1 || status=$?
     if [ "$status" -eq 0 ]; then line="ran: $(run_line "$work/log" 0)"; ran=$((ran + 1))
     else line="run failed (exit $status): $(run_line "$work/log" "$status" | cut -c1-200)"; fi
   else line="$(grep -m1 -E '^REFUSED|^vsd-sumo: ' "$work/check" | sed "s|$esmini/||g" | cut -c1-220)"; fi
