@@ -4,6 +4,7 @@
 #include <fmt/format.h>
 
 #include <cmath>
+#include <iterator>
 
 #include "osc_parameters.hpp"
 #include "osc_template.hpp"
@@ -961,10 +962,20 @@ void readStopTrigger(Translation& translation, const pugi::xml_node& storyboard)
     return;
   }
   if (!stop) reader.fail(storyboard, "no StopTrigger: pass --duration (s)");
-  const pugi::xml_node condition = onlyCondition(reader, stop);
-  const pugi::xml_node time = condition.child("ByValueCondition").child("SimulationTimeCondition");
+  // One simulation time is the scenario's end. Anything else - another condition, several
+  // conditions (AND) or groups (OR) - ends it at a moment only a run can tell, so the user says
+  // how long to simulate.
+  reader.requireSubset(stop, {"ConditionGroup"});
+  const auto groups = stop.children("ConditionGroup");
+  const pugi::xml_node group = stop.child("ConditionGroup");
+  const auto conditions = group.children("Condition");
+  const bool one = std::distance(groups.begin(), groups.end()) == 1 &&
+                   std::distance(conditions.begin(), conditions.end()) == 1;
+  const pugi::xml_node condition = group.child("Condition");
+  const pugi::xml_node time = one ? condition.child("ByValueCondition").child("SimulationTimeCondition") : pugi::xml_node();
   if (!time) {
-    reader.fail(condition, "a StopTrigger other than a simulation time: pass --duration (s) to say how long to simulate");
+    reader.fail(one ? condition : stop,
+                "a StopTrigger other than a simulation time: pass --duration (s) to say how long to simulate");
   }
   const double end = reader.number(time, "value", NumberRange::atLeast(0.0)) +
                      reader.number(condition, "delay", NumberRange::atLeast(0.0));

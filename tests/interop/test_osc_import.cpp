@@ -1386,3 +1386,31 @@ TEST(OscImport, ConditionsOnAnEventsStartOrEndFollowItsTriggerOrItsAction) {
     EXPECT_EQ(std::count(message.begin(), message.end(), '\n'), 0) << message;
   }
 }
+
+// A StopTrigger of one simulation time ends the scenario there; any other - several conditions
+// (AND) or groups (OR), as esmini's cut-in_simple and cut-in_interactive end theirs - ends at a
+// moment only a run can tell: one line asks for --duration, which then replaces it.
+TEST(OscImport, AStopTriggerOtherThanOneSimulationTimeAsksForADuration) {
+  const std::string text = readTextFile(data("conditions.xosc"));
+  EXPECT_DOUBLE_EQ(importTemplate(data("conditions.xosc"), {})->duration, 7.0);
+  const std::string end = R"(<ByValueCondition><SimulationTimeCondition value="7" rule="greaterOrEqual"/></ByValueCondition>
+      </Condition>)";
+  const auto at = text.find(end);
+  ASSERT_NE(at, std::string::npos);
+  const std::string second = R"(<Condition name="Late" delay="0" conditionEdge="rising">
+        <ByValueCondition><SimulationTimeCondition value="9" rule="greaterOrEqual"/></ByValueCondition>
+      </Condition>)";
+  const std::string and_conditions = std::string(text).insert(at + end.size(), second);
+  const std::string or_groups =
+      std::string(text).insert(at + end.size(), "</ConditionGroup><ConditionGroup>" + second);
+  const auto dir = folderWith({{"and.xosc", and_conditions}, {"or.xosc", or_groups}});
+  for (const char* name : {"and.xosc", "or.xosc"}) {
+    const std::string error = test::configErrorOf([&] { importTemplate(dir->path() / name, {}); });
+    EXPECT_THAT(error, HasSubstr(std::string(name) + ":"));
+    EXPECT_THAT(error, HasSubstr("a StopTrigger other than a simulation time: pass --duration (s)"));
+    EXPECT_EQ(error.find('\n'), std::string::npos) << error;
+    interop::OscImportOptions options;
+    options.duration = 5.0;
+    EXPECT_DOUBLE_EQ(importTemplate(dir->path() / name, options)->duration, 5.0) << name;
+  }
+}
