@@ -152,10 +152,27 @@ void ScenarioExportOptions::validate() const {
   }
 }
 
+/// The files carry each scripted road user's speed at every step, not actions and their
+/// triggers: a scenario with actions would come back as another scenario (a cut-in without
+/// its lane change), so it is refused before anything is written.
+void refuseActions(const scenario::LogicalScenario& logical) {
+  std::vector<const scenario::VehicleSpec*> users = {&logical.ego};
+  for (const auto& other : logical.others) users.push_back(&other);
+  for (const scenario::VehicleSpec* user : users) {
+    if (user->actions.empty()) continue;
+    const auto& action = user->actions.front();
+    throw ConfigError(fmt::format("{}: action '{}' of '{}': the OpenSCENARIO export carries scripted speed profiles "
+                                  "only, not actions and their triggers (docs/interop.md); without them the file "
+                                  "would re-simulate another scenario",
+                                  action.where, action.id, user->id));
+  }
+}
+
 ScenarioExportSummary exportScenarios(const ScenarioExportOptions& options) {
   options.validate();
   const auto start = std::chrono::steady_clock::now();
   const Plan plan = fs::is_directory(options.input) ? planFromRunFolder(options) : planFromLogicalScenario(options);
+  refuseActions(*plan.logical);
   OutputFolder::Options folder_options;
   folder_options.refuseExisting = !options.force;
   OutputFolder folder(options.outputDir, folder_options);

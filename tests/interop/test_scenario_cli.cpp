@@ -147,6 +147,14 @@ TEST(ScenarioCli, BadInputIsOneLineAndLeavesNothingBehind) {
   expectOneLineError(errorsOf({"scenario", "export", run.string(), "--out", out.string()}, dir.path()),
                      "has changed since the run");
   EXPECT_FALSE(fs::exists(out));
+
+  // A scenario with actions: the files would carry a cut-in without its lane change.
+  const auto cut_in = test::sourceDir() / "scenarios" / "alks" / "cut_in.yaml";
+  expectOneLineError(errorsOf({"scenario", "export", cut_in.string(), "--samples", "1", "--out", out.string()},
+                              dir.path()),
+                     "action 'cut_in' of 'cut_in_vehicle': the OpenSCENARIO export carries scripted speed "
+                     "profiles only");
+  EXPECT_FALSE(fs::exists(out));
 }
 
 TEST(ScenarioCli, RunRefusesOpenScenarioFilesItCannotSimulate) {
