@@ -152,19 +152,26 @@ void ScenarioExportOptions::validate() const {
   }
 }
 
-/// The files carry each scripted road user's speed at every step, not actions and their
-/// triggers: a scenario with actions would come back as another scenario (a cut-in without
-/// its lane change), so it is refused before anything is written.
-void refuseActions(const scenario::LogicalScenario& logical) {
+/// The files carry what the paper's scenarios are made of: a polynomial road, road users
+/// placed by x, each scripted road user's speed at every step. Anything else comes back as
+/// another scenario (a cut-in without its lane change, an arc road's road users 30 m off), so
+/// it is refused before anything is written.
+void refuseWhatTheFilesCannotCarry(const scenario::LogicalScenario& logical) {
+  const std::string limit = "the OpenSCENARIO export carries the paper's kind of scenario only (docs/interop.md); "
+                            "a file of this one would re-simulate another scenario";
+  if (logical.road.shape != scenario::RoadSpec::Shape::Polynomial) {
+    throw ConfigError(fmt::format("{}: road.shape: an arc or polyline road: {}", logical.sourceFile.string(), limit));
+  }
   std::vector<const scenario::VehicleSpec*> users = {&logical.ego};
   for (const auto& other : logical.others) users.push_back(&other);
   for (const scenario::VehicleSpec* user : users) {
+    if (user->along != scenario::VehicleSpec::Along::X) {
+      throw ConfigError(fmt::format("{}: '{}' placed by s, ds or gap rather than x: {}", user->where, user->id, limit));
+    }
     if (user->actions.empty()) continue;
     const auto& action = user->actions.front();
-    throw ConfigError(fmt::format("{}: action '{}' of '{}': the OpenSCENARIO export carries scripted speed profiles "
-                                  "only, not actions and their triggers (docs/interop.md); without them the file "
-                                  "would re-simulate another scenario",
-                                  action.where, action.id, user->id));
+    throw ConfigError(fmt::format("{}: action '{}' of '{}': actions and their triggers are not written: {}",
+                                  action.where, action.id, user->id, limit));
   }
 }
 
@@ -172,7 +179,7 @@ ScenarioExportSummary exportScenarios(const ScenarioExportOptions& options) {
   options.validate();
   const auto start = std::chrono::steady_clock::now();
   const Plan plan = fs::is_directory(options.input) ? planFromRunFolder(options) : planFromLogicalScenario(options);
-  refuseActions(*plan.logical);
+  refuseWhatTheFilesCannotCarry(*plan.logical);
   OutputFolder::Options folder_options;
   folder_options.refuseExisting = !options.force;
   OutputFolder folder(options.outputDir, folder_options);

@@ -148,13 +148,27 @@ TEST(ScenarioCli, BadInputIsOneLineAndLeavesNothingBehind) {
                      "has changed since the run");
   EXPECT_FALSE(fs::exists(out));
 
-  // A scenario with actions: the files would carry a cut-in without its lane change.
-  const auto cut_in = test::sourceDir() / "scenarios" / "alks" / "cut_in.yaml";
-  expectOneLineError(errorsOf({"scenario", "export", cut_in.string(), "--samples", "1", "--out", out.string()},
-                              dir.path()),
-                     "action 'cut_in' of 'cut_in_vehicle': the OpenSCENARIO export carries scripted speed "
-                     "profiles only");
-  EXPECT_FALSE(fs::exists(out));
+  // Beyond the paper's kind of scenario the files would carry another one (measured: a cut-in
+  // without its lane change, road users 30 m off on an arc road).
+  const std::string paper_road = "road: {x_range: [-55, 55], lanes: 2}\n";
+  const std::string with_actions =
+      paper_road + "vehicles:\n  ego: {x: -50, lane: 0, speed: 10, controller: {name: idm}}\n  others:\n"
+                   "    - {id: a, x: -20, lane: 1, speed: 8, actions: [{id: over, lane_change: {lanes: -1, duration: 3}}]}\n";
+  const std::string by_s = paper_road + "vehicles:\n  ego: {s: 5, lane: 0, speed: 10, controller: {name: idm}}\n";
+  const std::vector<std::pair<fs::path, std::string>> refused = {
+      {test::sourceDir() / "scenarios" / "alks" / "free_driving.yaml", "road.shape: an arc or polyline road"},
+      {test::writeFile(dir.path() / "by_s.yaml", "name: by_s\n" + by_s), "'ego' placed by s, ds or gap rather than x"},
+      {test::writeFile(dir.path() / "actions.yaml", "name: actions\n" + with_actions),
+       "action 'over' of 'a': actions and their triggers are not written"}};
+  for (const auto& [file, message] : refused) {
+    expectOneLineError(errorsOf({"scenario", "export", file.string(), "--samples", "1", "--out", out.string()},
+                                dir.path()),
+                       message);
+    expectOneLineError(errorsOf({"scenario", "export", file.string(), "--samples", "1", "--out", out.string()},
+                                dir.path()),
+                       "the OpenSCENARIO export carries the paper's kind of scenario only");
+    EXPECT_FALSE(fs::exists(out));
+  }
 }
 
 TEST(ScenarioCli, RunRefusesOpenScenarioFilesItCannotSimulate) {
