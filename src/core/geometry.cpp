@@ -19,12 +19,58 @@ Vec2 headingVector(double heading_rad) { return {std::cos(heading_rad), std::sin
 
 double headingOf(const Vec2& direction) { return std::atan2(direction.y(), direction.x()); }
 
+namespace {
+
+constexpr std::size_t kNoSegment = std::numeric_limits<std::size_t>::max();
+/// Beyond this |coordinate| project() scans every segment (squares stay far from overflow).
+constexpr double kLargestIndexedCoordinate = 1e100;
+
+/// The point of segment start-end nearest to `point`, as a fraction along it, and the
+/// squared distance to it. The one definition both searches of project() use.
+struct SegmentFoot {
+  double fraction = 0.0;
+  double distanceSq = 0.0;
+  double lengthSq = 0.0;  ///< of the segment
+};
+
+inline SegmentFoot footOn(const Vec2& point, const Vec2& start, const Vec2& end) {
+  SegmentFoot foot;
+  const Vec2 delta = end - start;
+  foot.lengthSq = delta.squaredNorm();
+  if (foot.lengthSq > 0.0) foot.fraction = std::clamp((point - start).dot(delta) / foot.lengthSq, 0.0, 1.0);
+  foot.distanceSq = (point - (start + foot.fraction * delta)).squaredNorm();
+  return foot;
+}
+
+}  // namespace
+
 MeasuredPolyline::MeasuredPolyline(Polyline points) : points_(std::move(points)) {
   if (points_.size() < 2) throw Error("MeasuredPolyline needs at least 2 points, got " + std::to_string(points_.size()));
   cumulative_.resize(points_.size());
   cumulative_[0] = 0.0;
   for (std::size_t i = 1; i < points_.size(); ++i) {
     cumulative_[i] = cumulative_[i - 1] + (points_[i] - points_[i - 1]).norm();
+  }
+  // Bounding boxes of blocks of segments for project(); only where they can pay off and
+  // where every coordinate is finite and small enough that no square overflows.
+  const std::size_t segments = points_.size() - 1;
+  if (segments < 2 * kBlock) return;
+  for (const Vec2& p : points_) {
+    if (!std::isfinite(p.x()) || !std::isfinite(p.y())) return;
+    scale_ = std::max({scale_, std::abs(p.x()), std::abs(p.y())});
+  }
+  if (scale_ > kLargestIndexedCoordinate) return;
+  blocks_.reserve((segments + kBlock - 1) / kBlock);
+  for (std::size_t first = 0; first < segments; first += kBlock) {
+    const std::size_t last = std::min(first + kBlock, segments);  // the block's last end point
+    Block box{points_[first].x(), points_[first].y(), points_[first].x(), points_[first].y()};
+    for (std::size_t i = first + 1; i <= last; ++i) {
+      box.minX = std::min(box.minX, points_[i].x());
+      box.minY = std::min(box.minY, points_[i].y());
+      box.maxX = std::max(box.maxX, points_[i].x());
+      box.maxY = std::max(box.maxY, points_[i].y());
+    }
+    blocks_.push_back(box);
   }
 }
 
@@ -52,39 +98,102 @@ double MeasuredPolyline::headingAt(double arc_length) const {
 }
 
 PolylineProjection MeasuredPolyline::project(const Vec2& point) const {
+  if (blocks_.empty() || !std::isfinite(point.x()) || !std::isfinite(point.y()) ||
+      std::max(std::abs(point.x()), std::abs(point.y())) > kLargestIndexedCoordinate) {
+    return projectScan(point);
+  }
+  return projectIndexed(point);
+}
+
+PolylineProjection MeasuredPolyline::projectScan(const Vec2& point) const {
   // The search compares squared distances only; arc length, heading (an atan2) and side
   // are worked out once, for the nearest segment. A zero-length nearest segment keeps the
   // heading of the last nearer segment that has a direction (0 if none has).
-  constexpr std::size_t kNone = std::numeric_limits<std::size_t>::max();
   std::size_t best_segment = 0;
-  std::size_t heading_segment = kNone;
+  std::size_t heading_segment = kNoSegment;
   double best_fraction = 0.0;
   double best_distance_sq = std::numeric_limits<double>::infinity();
   for (std::size_t seg = 0; seg + 1 < points_.size(); ++seg) {
-    const Vec2 start = points_[seg];
-    const Vec2 delta = points_[seg + 1] - start;
-    const double length_sq = delta.squaredNorm();
-    double fraction = 0.0;
-    if (length_sq > 0.0) fraction = std::clamp((point - start).dot(delta) / length_sq, 0.0, 1.0);
-    const double distance_sq = (point - (start + fraction * delta)).squaredNorm();
-    if (distance_sq < best_distance_sq) {
-      best_distance_sq = distance_sq;
+    const SegmentFoot foot = footOn(point, points_[seg], points_[seg + 1]);
+    if (foot.distanceSq < best_distance_sq) {
+      best_distance_sq = foot.distanceSq;
       best_segment = seg;
-      best_fraction = fraction;
-      if (length_sq > 0.0) heading_segment = seg;
+      best_fraction = foot.fraction;
+      if (foot.lengthSq > 0.0) heading_segment = seg;
     }
   }
+  if (best_distance_sq == std::numeric_limits<double>::infinity()) return {};
+  return projectionOn(point, best_segment, best_fraction, best_distance_sq, heading_segment);
+}
+
+PolylineProjection MeasuredPolyline::projectIndexed(const Vec2& point) const {
+  // The scan's answer is the first segment at the least computed distance. Any segment of a
+  // block whose box is farther than the nearest segment found so far - by a margin far above
+  // the rounding of both distances - is farther than that segment in the scan's arithmetic
+  // too, so it can be neither the first nearest segment nor tie with it. The block with the
+  // nearest box goes first; the others follow in order; ties go to the lower index.
+  const double margin = 1e-9 * (std::max({scale_, std::abs(point.x()), std::abs(point.y())}) + 1.0);
+  const auto box_distance_sq = [&](const Block& box) {
+    const double dx = std::max({box.minX - point.x(), point.x() - box.maxX, 0.0});
+    const double dy = std::max({box.minY - point.y(), point.y() - box.maxY, 0.0});
+    return dx * dx + dy * dy;
+  };
+  const std::size_t segments = points_.size() - 1;
+  std::size_t best_segment = kNoSegment;
+  double best_fraction = 0.0;
+  double best_distance_sq = std::numeric_limits<double>::infinity();
+  bool best_has_length = false;
+  double skip_beyond_sq = std::numeric_limits<double>::infinity();  // boxes farther than this are skipped
+  const auto search_block = [&](std::size_t block) {
+    const std::size_t first = block * kBlock;
+    const std::size_t end = std::min(first + kBlock, segments);
+    bool improved = false;
+    for (std::size_t seg = first; seg < end; ++seg) {
+      const SegmentFoot foot = footOn(point, points_[seg], points_[seg + 1]);
+      if (foot.distanceSq < best_distance_sq || (foot.distanceSq == best_distance_sq && seg < best_segment)) {
+        best_distance_sq = foot.distanceSq;
+        best_segment = seg;
+        best_fraction = foot.fraction;
+        best_has_length = foot.lengthSq > 0.0;
+        improved = true;
+      }
+    }
+    if (improved) {
+      constexpr double kSlack = 1.0 + 1e-12;
+      const double reach = std::sqrt(best_distance_sq) * kSlack + margin;
+      skip_beyond_sq = reach * reach * kSlack;
+    }
+  };
+  std::size_t nearest_block = 0;
+  double nearest_box_sq = std::numeric_limits<double>::infinity();
+  for (std::size_t b = 0; b < blocks_.size(); ++b) {
+    const double d = box_distance_sq(blocks_[b]);
+    if (d < nearest_box_sq) {
+      nearest_box_sq = d;
+      nearest_block = b;
+    }
+  }
+  search_block(nearest_block);
+  for (std::size_t b = 0; b < blocks_.size(); ++b) {
+    if (b != nearest_block && !(box_distance_sq(blocks_[b]) > skip_beyond_sq)) search_block(b);
+  }
+  // A zero-length nearest segment takes its heading from the scan's history: scan.
+  if (!best_has_length) return projectScan(point);
+  return projectionOn(point, best_segment, best_fraction, best_distance_sq, best_segment);
+}
+
+PolylineProjection MeasuredPolyline::projectionOn(const Vec2& point, std::size_t segment, double fraction,
+                                                  double distance_sq, std::size_t heading_segment) const {
   PolylineProjection best;
-  if (best_distance_sq == std::numeric_limits<double>::infinity()) return best;
-  const Vec2 start = points_[best_segment];
-  const Vec2 delta = points_[best_segment + 1] - start;
-  best.segment = best_segment;
-  best.foot = start + best_fraction * delta;
-  best.arcLength = cumulative_[best_segment] + best_fraction * std::sqrt(delta.squaredNorm());
-  if (heading_segment != kNone) best.heading = headingOf(points_[heading_segment + 1] - points_[heading_segment]);
+  const Vec2 start = points_[segment];
+  const Vec2 delta = points_[segment + 1] - start;
+  best.segment = segment;
+  best.foot = start + fraction * delta;
+  best.arcLength = cumulative_[segment] + fraction * std::sqrt(delta.squaredNorm());
+  if (heading_segment != kNoSegment) best.heading = headingOf(points_[heading_segment + 1] - points_[heading_segment]);
   const Vec2 relative = point - best.foot;
   const double cross = delta.x() * relative.y() - delta.y() * relative.x();
-  best.lateralOffset = std::copysign(std::sqrt(best_distance_sq), cross);
+  best.lateralOffset = std::copysign(std::sqrt(distance_sq), cross);
   return best;
 }
 

@@ -37,8 +37,12 @@ PolylineProjection projectExtended(const MeasuredPolyline& line, const Vec2& poi
 
 PathRelation relateToPath(const MeasuredPolyline& reference_line, double lane_width, const Footprint& ego,
                           const Footprint& object) {
-  const PolylineProjection ego_foot = projectExtended(reference_line, ego.centre);
-  const PolylineProjection object_foot = projectExtended(reference_line, object.centre);
+  return relateFeet(projectExtended(reference_line, ego.centre), projectExtended(reference_line, object.centre),
+                    lane_width, ego, object);
+}
+
+PathRelation relateFeet(const PolylineProjection& ego_foot, const PolylineProjection& object_foot, double lane_width,
+                        const Footprint& ego, const Footprint& object) {
   const auto [ego_along, ego_across] = halfExtents(ego, wrapAngle(ego.heading - ego_foot.heading));
 
   PathRelation relation;

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <optional>
 
 #include "functions.hpp"
 #include "vsd/core/path_relation.hpp"
@@ -21,9 +22,9 @@ Footprint footprintAt(const VehicleTrack& track, std::size_t k) {
   return {track.states[k].position(), track.states[k].heading, track.length, track.width};
 }
 
-/// Speed along the line at the state's foot point.
-double speedAlong(const MeasuredPolyline& line, const VehicleState& state) {
-  return state.speed * std::cos(state.heading - projectExtended(line, state.position()).heading);
+/// Speed along the line at the state's foot point (its projectExtended).
+double speedAlong(const PolylineProjection& foot, const VehicleState& state) {
+  return state.speed * std::cos(state.heading - foot.heading);
 }
 
 /// Calls visit(k, gap, ego_speed_along, object_speed_along) for the in-path object at each
@@ -38,20 +39,28 @@ bool forEachInPathObject(const MetricContext& context, Visitor&& visit) {
   for (std::size_t k = 0; k < ego.states.size(); ++k) {
     if (!ego.validAt(k)) continue;
     const Footprint ego_footprint = footprintAt(ego, k);
+    // Each centre is projected onto the line once per instant (relateFeet and speedAlong share it).
+    std::optional<PolylineProjection> ego_foot;
     const VehicleTrack* nearest = nullptr;
+    PolylineProjection nearest_foot;
     double nearest_gap = kInf;
     for (std::size_t v = 1; v < context.trace.vehicles.size(); ++v) {
       const VehicleTrack& other = context.trace.vehicles[v];
       if (!other.validAt(k)) continue;
       any = true;
-      const PathRelation relation = relateToPath(line, kAnyLaneWidth, ego_footprint, footprintAt(other, k));
+      if (!ego_foot) ego_foot = projectExtended(line, ego_footprint.centre);
+      const Footprint other_footprint = footprintAt(other, k);
+      const PolylineProjection other_foot = projectExtended(line, other_footprint.centre);
+      const PathRelation relation = relateFeet(*ego_foot, other_foot, kAnyLaneWidth, ego_footprint, other_footprint);
       if (relation.inPath && relation.longitudinalGap < nearest_gap) {
         nearest_gap = relation.longitudinalGap;
         nearest = &other;
+        nearest_foot = other_foot;
       }
     }
     if (nearest != nullptr) {
-      visit(k, std::max(nearest_gap, 0.0), speedAlong(line, ego.states[k]), speedAlong(line, nearest->states[k]));
+      visit(k, std::max(nearest_gap, 0.0), speedAlong(*ego_foot, ego.states[k]),
+            speedAlong(nearest_foot, nearest->states[k]));
     }
   }
   return any;

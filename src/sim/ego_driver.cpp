@@ -54,8 +54,16 @@ int SumoPlacement::keepRoute(const Vec2& front, double width) const {
   // SUMO keeps a vehicle on its lane while |lateral offset| < (lane width + vehicle width) / 2,
   // measured from the nearest lane's shape; 1 cm covers the rounding of the frame shift.
   constexpr double kMargin = 0.01;
-  for (const auto& lane : lanes_) {
-    if (std::abs(lane.project(front).lateralOffset) < 0.5 * (narrowest_ + width) - kMargin) return 1;
+  const auto inside = [&](std::size_t lane) {
+    return std::abs(lanes_[lane].project(front).lateralOffset) < 0.5 * (narrowest_ + width) - kMargin;
+  };
+  // Any lane will do: the one that held the last vehicle placed is asked first (a vehicle
+  // mostly stays in its lane from step to step), then the others in order.
+  if (lastInside_ < lanes_.size() && inside(lastInside_)) return 1;
+  for (std::size_t lane = 0; lane < lanes_.size(); ++lane) {
+    if (lane == lastInside_ || !inside(lane)) continue;
+    lastInside_ = lane;
+    return 1;
   }
   return 3;
 }

@@ -45,9 +45,12 @@ std::vector<ObservedObject> observeObjects(const MeasuredPolyline& reference_lin
   const double lateral_range = sensor.lateralRange.value_or(1.5 * lane_width - 0.5 * ego.width);
   std::vector<ObservedObject> objects;
   objects.reserve(others.size());
+  if (others.empty()) return objects;
+  const PolylineProjection ego_foot = projectExtended(reference_line, ego.centre);
   for (const auto& other : others) {
     const Footprint footprint{other.state.position(), other.state.heading, other.length, other.width};
-    const PathRelation relation = relateToPath(reference_line, lane_width, ego, footprint);
+    const PathRelation relation =
+        relateFeet(ego_foot, projectExtended(reference_line, footprint.centre), lane_width, ego, footprint);
     if (!covered(sensor, lateral_range, ego, other, relation)) continue;
     ObservedObject object;
     static_cast<RoadUserState&>(object) = other;

@@ -1,7 +1,14 @@
 #include <gtest/gtest.h>
 
+#include <fmt/format.h>
+
+#include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <limits>
 #include <random>
+#include <string>
 
 #include "vsd/core/geometry.hpp"
 #include "vsd/core/trace.hpp"
@@ -137,6 +144,143 @@ TEST(Geometry, FootprintGapMatchesABruteForceReference) {
   EXPECT_NEAR(footprintGap({Vec2(0, 0), 0.0, 5.0, 1.8}, {Vec2(1.0, 3.5), 0.0, 5.0, 1.8}), 1.7, 1e-12);
   // One behind the other in the same lane: the bumper gap.
   EXPECT_NEAR(footprintGap({Vec2(0, 0), 0.0, 5.0, 1.8}, {Vec2(12.0, 0.1), 0.0, 4.0, 1.8}), 7.5, 1e-12);
+}
+
+namespace {
+
+/// project() as the plain scan over every segment it replaced (the reference).
+PolylineProjection projectByScan(const Polyline& points, const Vec2& point) {
+  std::vector<double> cumulative(points.size(), 0.0);
+  for (std::size_t i = 1; i < points.size(); ++i) {
+    cumulative[i] = cumulative[i - 1] + (points[i] - points[i - 1]).norm();
+  }
+  constexpr std::size_t kNone = std::numeric_limits<std::size_t>::max();
+  std::size_t best_segment = 0;
+  std::size_t heading_segment = kNone;
+  double best_fraction = 0.0;
+  double best_distance_sq = std::numeric_limits<double>::infinity();
+  for (std::size_t seg = 0; seg + 1 < points.size(); ++seg) {
+    const Vec2 start = points[seg];
+    const Vec2 delta = points[seg + 1] - start;
+    const double length_sq = delta.squaredNorm();
+    double fraction = 0.0;
+    if (length_sq > 0.0) fraction = std::clamp((point - start).dot(delta) / length_sq, 0.0, 1.0);
+    const double distance_sq = (point - (start + fraction * delta)).squaredNorm();
+    if (distance_sq < best_distance_sq) {
+      best_distance_sq = distance_sq;
+      best_segment = seg;
+      best_fraction = fraction;
+      if (length_sq > 0.0) heading_segment = seg;
+    }
+  }
+  PolylineProjection best;
+  if (best_distance_sq == std::numeric_limits<double>::infinity()) return best;
+  const Vec2 start = points[best_segment];
+  const Vec2 delta = points[best_segment + 1] - start;
+  best.segment = best_segment;
+  best.foot = start + best_fraction * delta;
+  best.arcLength = cumulative[best_segment] + best_fraction * std::sqrt(delta.squaredNorm());
+  if (heading_segment != kNone) best.heading = headingOf(points[heading_segment + 1] - points[heading_segment]);
+  const Vec2 relative = point - best.foot;
+  const double cross = delta.x() * relative.y() - delta.y() * relative.x();
+  best.lateralOffset = std::copysign(std::sqrt(best_distance_sq), cross);
+  return best;
+}
+
+std::uint64_t bitsOf(double value) {
+  std::uint64_t bits = 0;
+  std::memcpy(&bits, &value, sizeof bits);
+  return bits;
+}
+
+/// Every field of the projections, bit for bit ("" if equal).
+std::string projectionDifference(const PolylineProjection& a, const PolylineProjection& b) {
+  std::string difference;
+  const auto field = [&](const char* name, double x, double y) {
+    if (bitsOf(x) != bitsOf(y)) difference += fmt::format(" {} {} != {}", name, x, y);
+  };
+  field("arcLength", a.arcLength, b.arcLength);
+  field("lateralOffset", a.lateralOffset, b.lateralOffset);
+  field("heading", a.heading, b.heading);
+  field("foot.x", a.foot.x(), b.foot.x());
+  field("foot.y", a.foot.y(), b.foot.y());
+  if (a.segment != b.segment) difference += fmt::format(" segment {} != {}", a.segment, b.segment);
+  return difference;
+}
+
+}  // namespace
+
+// project() skips blocks of segments by their bounding boxes; its answers must be those of
+// the scan over every segment, bit for bit: on random walks, arcs far from the origin,
+// grids with exact ties, lines that double back over themselves, repeated (zero-length)
+// points, and at points beyond the ends, on vertices and far away.
+TEST(Geometry, ProjectionEqualsTheScanOverEverySegment) {
+  std::mt19937_64 rng(23);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  std::uniform_int_distribution<int> small(-3, 3);
+  const auto polyline_of_kind = [&](int kind, std::size_t n) {
+    Polyline points;
+    Vec2 p(unit(rng) * 100.0, unit(rng) * 100.0);
+    double heading = unit(rng) * 2.0 * kPi;
+    const double curvature = (unit(rng) - 0.5) * 0.05;
+    const Vec2 origin(1e5 * unit(rng), -4e6 * unit(rng));
+    for (std::size_t i = 0; i < n; ++i) {
+      switch (kind) {
+        case 0:  // scattered around the origin at 1 cm to 100 m, some points repeated: where
+                 // a + (b - a) != b, such a zero-length segment can be the nearest
+          if (i == 0 || unit(rng) > 0.2) {
+            p = Vec2(unit(rng) - 0.5, unit(rng) - 0.5) * std::pow(10.0, 4.0 * unit(rng) - 2.0);
+          }
+          points.push_back(p);
+          break;
+        case 1:  // an arc sampled every 10 m in SUMO-like net coordinates
+          points.push_back(origin + Vec2(std::cos(heading), std::sin(heading)) * (static_cast<double>(i) * 10.0));
+          heading += curvature;
+          break;
+        case 2:  // small integers: many exact ties
+          points.emplace_back(small(rng), small(rng));
+          break;
+        default: {  // back and forth along one line, every point twice: ties between distant segments
+          const std::size_t k = (i / 2) % 6;
+          points.emplace_back(static_cast<double>(k <= 3 ? k : 6 - k), 0.0);
+          break;
+        }
+      }
+    }
+    return points;
+  };
+  int compared = 0;
+  int zero_length_nearest = 0;
+  for (int trial = 0; trial < 400; ++trial) {
+    const int kind = trial % 4;
+    const std::size_t n = 2 + static_cast<std::size_t>(unit(rng) * (trial < 40 ? 20 : 180));
+    const Polyline points = polyline_of_kind(kind, n);
+    const MeasuredPolyline line(points);
+    std::vector<Vec2> queries;
+    for (int q = 0; q < 40; ++q) {
+      const auto pick = static_cast<std::size_t>(unit(rng) * static_cast<double>(points.size()));
+      const Vec2& vertex = points[pick % points.size()];
+      const Vec2 spread(unit(rng) - 0.5, unit(rng) - 0.5);
+      switch (q % 5) {
+        case 0: queries.push_back(vertex); break;                                       // on a vertex
+        case 1: queries.push_back(vertex + spread * 8.0); break;                        // near the line
+        case 2: queries.push_back(points.front() + (points.front() - points.back()) * unit(rng)); break;  // beyond
+        case 3: queries.push_back(vertex + spread * 1e4); break;                        // far away
+        default: queries.emplace_back(small(rng) * 0.5, small(rng) * 0.5); break;  // half-grid: ties on grids
+      }
+    }
+    queries.push_back(points.back() + (points.back() - points.front()));  // beyond the end
+    for (const Vec2& query : queries) {
+      const PolylineProjection reference = projectByScan(points, query);
+      const std::string difference = projectionDifference(line.project(query), reference);
+      if (reference.segment > 0 && points[reference.segment] == points[reference.segment + 1]) ++zero_length_nearest;
+      ASSERT_EQ(difference, "") << "kind " << kind << ", " << n << " points, query (" << query.x() << ", " << query.y()
+                                << ")";
+      ++compared;
+    }
+  }
+  EXPECT_EQ(compared, 400 * 41);
+  EXPECT_GT(zero_length_nearest, 0);
 }
 
 TEST(Trace, AccelerationFromSpeedDifferences) {

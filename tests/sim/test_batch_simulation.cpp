@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <random>
 #include <regex>
 
 #include "extension/steady_brake_controller.hpp"
@@ -11,6 +12,7 @@
 #include "vsd/road/network.hpp"
 #include "vsd/sim/batch_simulation.hpp"
 #include "vsd/sim/builtin_controllers.hpp"
+#include "vsd/sim/ego_driver.hpp"
 
 using namespace vsd;
 using namespace vsd::sim;
@@ -172,6 +174,32 @@ TEST(BatchSimulation, MatchingVehiclesToTheirLanesChangesNothingSumoComputes) {
     }
   }
   EXPECT_GT(off_lane, 0u);  // the exact placement's case happened
+}
+
+// keepRoute asks first the lane that matched the vehicle placed before: its answer must not
+// depend on what was placed before (a fresh SumoPlacement has no history).
+TEST(BatchSimulation, PlacementDoesNotDependOnTheVehiclesPlacedBefore) {
+  std::vector<LaneGeometry> lanes;
+  for (int lane = 0; lane < 3; ++lane) {
+    Polyline centre;
+    for (int i = 0; i <= 40; ++i) centre.emplace_back(10.0 * i, 3.5 * lane + 0.002 * i * i);
+    lanes.push_back({"e_" + std::to_string(lane), centre, 3.5});
+  }
+  const SumoPlacement placement(lanes);
+  std::mt19937_64 rng(43);
+  std::uniform_real_distribution<double> along(-20.0, 420.0);
+  std::uniform_real_distribution<double> across(-6.0, 13.0);
+  int matched = 0;
+  int exact = 0;
+  for (int i = 0; i < 2000; ++i) {
+    const Vec2 front(along(rng), across(rng));
+    const double width = i % 2 == 0 ? 1.8 : 2.5;
+    const int route = placement.keepRoute(front, width);
+    EXPECT_EQ(route, SumoPlacement(lanes).keepRoute(front, width)) << i;
+    (route == 1 ? matched : exact)++;
+  }
+  EXPECT_GT(matched, 500);
+  EXPECT_GT(exact, 100);
 }
 
 TEST(BatchSimulation, AVehicleReachingTheEndOfItsRoadFailsOnlyItsScenario) {

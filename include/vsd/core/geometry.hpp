@@ -43,7 +43,9 @@ class MeasuredPolyline {
   double length() const { return cumulative_.empty() ? 0.0 : cumulative_.back(); }
   bool empty() const { return points_.size() < 2; }
 
-  /// Closest point on the polyline.
+  /// Closest point on the polyline: the first segment (lowest index) at the least distance.
+  /// Blocks of segments whose bounding box is provably farther than the nearest segment found
+  /// so far are skipped; the result is bit for bit that of a scan over every segment.
   PolylineProjection project(const Vec2& point) const;
   /// Point at arc length s; beyond either end the end segment is extended linearly.
   Vec2 pointAt(double arc_length) const;
@@ -51,10 +53,25 @@ class MeasuredPolyline {
   double headingAt(double arc_length) const;
 
  private:
+  /// Axis-aligned bounding box of the segments [first, first + kBlock) (their end points).
+  struct Block {
+    double minX, minY, maxX, maxY;
+  };
+  static constexpr std::size_t kBlock = 8;
+
   std::size_t segmentAt(double arc_length) const;
+  /// project() over every segment in order.
+  PolylineProjection projectScan(const Vec2& point) const;
+  /// project() with blocks skipped by their bounding boxes.
+  PolylineProjection projectIndexed(const Vec2& point) const;
+  /// The projection on segment `segment` at `fraction` along it, `distance_sq` from `point`.
+  PolylineProjection projectionOn(const Vec2& point, std::size_t segment, double fraction, double distance_sq,
+                                  std::size_t heading_segment) const;
 
   Polyline points_;
   std::vector<double> cumulative_;
+  std::vector<Block> blocks_;  ///< empty: project() scans every segment
+  double scale_ = 0.0;         ///< largest |coordinate| of the points
 };
 
 /// Sum of segment lengths.

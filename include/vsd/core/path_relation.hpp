@@ -47,4 +47,10 @@ PolylineProjection projectExtended(const MeasuredPolyline& line, const Vec2& poi
 PathRelation relateToPath(const MeasuredPolyline& reference_line, double lane_width, const Footprint& ego,
                           const Footprint& object);
 
+/// relateToPath with the projections (projectExtended) of both centres onto the reference
+/// line already at hand: for callers that relate one Ego to several objects, or need a foot
+/// point again. The same result, bit for bit.
+PathRelation relateFeet(const PolylineProjection& ego_foot, const PolylineProjection& object_foot, double lane_width,
+                        const Footprint& ego, const Footprint& object);
+
 }  // namespace vsd

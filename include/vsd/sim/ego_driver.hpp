@@ -63,6 +63,8 @@ class SumoPlacement {
  private:
   std::vector<MeasuredPolyline> lanes_;
   double narrowest_ = 0.0;  ///< m, the narrowest lane's width
+  /// The lane the last vehicle matched (asked first next time; the answer does not depend on it).
+  mutable std::size_t lastInside_ = 0;
 };
 
 /// True if the running simulation uses no lateral position of a vehicle on a lane: no
