@@ -8,7 +8,8 @@
 # usage: tools/instruction_count.sh SCENARIO SAMPLES BIN [BIN ...]
 set -eu
 scenario=$1; samples=$2; shift 2
-command -v valgrind >/dev/null || { echo "instruction_count.sh: needs valgrind (apt-get install valgrind)" >&2; exit 1; }
+command -v valgrind >/dev/null ||
+  { echo "instruction_count.sh: needs valgrind (apt-get install valgrind)" >&2; exit 1; }
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 echo "# tools/instruction_count.sh $scenario $samples: callgrind, all processes, run --samples $samples --seed 3"

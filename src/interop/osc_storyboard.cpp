@@ -972,7 +972,8 @@ void readStopTrigger(Translation& translation, const pugi::xml_node& storyboard)
   const bool one = std::distance(groups.begin(), groups.end()) == 1 &&
                    std::distance(conditions.begin(), conditions.end()) == 1;
   const pugi::xml_node condition = group.child("Condition");
-  const pugi::xml_node time = one ? condition.child("ByValueCondition").child("SimulationTimeCondition") : pugi::xml_node();
+  const pugi::xml_node time =
+      one ? condition.child("ByValueCondition").child("SimulationTimeCondition") : pugi::xml_node();
   if (!time) {
     reader.fail(one ? condition : stop,
                 "a StopTrigger other than a simulation time: pass --duration (s) to say how long to simulate");

@@ -1393,7 +1393,8 @@ TEST(OscImport, ConditionsOnAnEventsStartOrEndFollowItsTriggerOrItsAction) {
 TEST(OscImport, AStopTriggerOtherThanOneSimulationTimeAsksForADuration) {
   const std::string text = readTextFile(data("conditions.xosc"));
   EXPECT_DOUBLE_EQ(importTemplate(data("conditions.xosc"), {})->duration, 7.0);
-  const std::string end = R"(<ByValueCondition><SimulationTimeCondition value="7" rule="greaterOrEqual"/></ByValueCondition>
+  const std::string end =
+      R"(<ByValueCondition><SimulationTimeCondition value="7" rule="greaterOrEqual"/></ByValueCondition>
       </Condition>)";
   const auto at = text.find(end);
   ASSERT_NE(at, std::string::npos);

@@ -153,7 +153,8 @@ TEST(ScenarioCli, BadInputIsOneLineAndLeavesNothingBehind) {
   const std::string paper_road = "road: {x_range: [-55, 55], lanes: 2}\n";
   const std::string with_actions =
       paper_road + "vehicles:\n  ego: {x: -50, lane: 0, speed: 10, controller: {name: idm}}\n  others:\n"
-                   "    - {id: a, x: -20, lane: 1, speed: 8, actions: [{id: over, lane_change: {lanes: -1, duration: 3}}]}\n";
+                   "    - {id: a, x: -20, lane: 1, speed: 8,\n"
+                   "       actions: [{id: over, lane_change: {lanes: -1, duration: 3}}]}\n";
   const std::string by_s = paper_road + "vehicles:\n  ego: {s: 5, lane: 0, speed: 10, controller: {name: idm}}\n";
   const std::vector<std::pair<fs::path, std::string>> refused = {
       {test::sourceDir() / "scenarios" / "alks" / "free_driving.yaml", "road.shape: an arc or polyline road"},
