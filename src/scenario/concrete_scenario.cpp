@@ -267,6 +267,7 @@ ConcreteTrigger evaluateTrigger(const TriggerSpec& spec, int owner, const Logica
   trigger.subject = spec.subject.empty() ? owner : roadUserIndex(logical, spec.subject);
   trigger.directed = spec.kind == TriggerSpec::Kind::Headway && !spec.subject.empty();
   trigger.betweenReferencePoints = spec.betweenReferencePoints;
+  trigger.rising = spec.rising;
   if (spec.kind == TriggerSpec::Kind::After) trigger.action = actionIndex(logical, spec.action);
   if (spec.kind == TriggerSpec::Kind::Distance) evaluatePosition(spec, logical, concrete, trigger);
   for (const auto& member : spec.members) trigger.members.push_back(evaluateTrigger(member, owner, logical, concrete));
@@ -288,6 +289,7 @@ ConcreteAction evaluateAction(const ActionSpec& spec, int owner, const LogicalSc
   action.relativeToEgoLane = spec.relativeToEgoLane;
   action.pace = spec.pace;
   action.paceValue = evaluateFinite(spec.paceValue, concrete.inputs, spec.where, "pace");
+  action.repeat = spec.repeat;
   action.where = spec.where;
   const bool duration = spec.pace == ActionSpec::Pace::Duration;
   if (duration ? action.paceValue < 0.0 : !(action.paceValue > 0.0)) {

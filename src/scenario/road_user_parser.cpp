@@ -276,13 +276,28 @@ void parseBetween(const YamlReader& reader, const YAML::Node& node, const std::s
   trigger.betweenReferencePoints = value == "reference_points";
 }
 
+/// Whether a trigger's condition can stop holding and hold again (no time or action end in it).
+bool canHoldAgain(const TriggerSpec& trigger) {
+  if (trigger.kind == TriggerSpec::Kind::Time || trigger.kind == TriggerSpec::Kind::After) return false;
+  return std::all_of(trigger.members.begin(), trigger.members.end(), canHoldAgain);
+}
+
+/// true or false.
+bool flag(const YamlReader& reader, const YAML::Node& node, const std::string& field) {
+  const std::string value = reader.scalar(node, field);
+  if (value != "true" && value != "false") {
+    throw ConfigError::field(reader.where(node, field), field, value, "true or false");
+  }
+  return value == "true";
+}
+
 /// A trigger; `delay_allowed`: where a member's own start time counts (the trigger itself
 /// and the members of its `any`), not inside `all` (whose members hold at one instant).
 void parseTrigger(const YamlReader& reader, const YAML::Node& node, const std::string& field,
                   const std::vector<std::string>& inputs, bool delay_allowed, TriggerSpec& trigger) {
   trigger.where = reader.where(node, field);
   reader.requireMap(node, field);
-  std::set<std::string> allowed = {"to", "of", "between", "position", "delay"};
+  std::set<std::string> allowed = {"to", "of", "between", "position", "delay", "rising"};
   std::vector<std::string> keys;
   for (const auto& entry : kTriggerKeys) {
     allowed.insert(entry.key);
@@ -332,6 +347,13 @@ void parseTrigger(const YamlReader& reader, const YAML::Node& node, const std::s
   }
   trigger.delay = optionalExpression(reader, node, "delay", field, inputs, 0.0);
   if (node["delay"]) requireNonNegative(reader, node["delay"], field + ".delay", trigger.delay, false, "s");
+  if (node["rising"]) {
+    trigger.rising = flag(reader, node["rising"], field + ".rising");
+    if (!canHoldAgain(trigger) || trigger.kind == TriggerSpec::Kind::All || trigger.kind == TriggerSpec::Kind::Any) {
+      reader.fail(node["rising"], field + ".rising",
+                  "'rising' goes with a condition (not time, after, all or any; put it on their members)");
+    }
+  }
 }
 
 TransitionShape parseShape(const YamlReader& reader, const YAML::Node& node, const std::string& field,
@@ -370,14 +392,7 @@ void parseSpeedReference(const YamlReader& reader, const YAML::Node& node, const
     }
   }
   if (node["to"]) action.speedReference = reader.scalar(node["to"], field + ".to");
-  if (node["continuous"]) {
-    const std::string value = reader.scalar(node["continuous"], field + ".continuous");
-    if (value != "true" && value != "false") {
-      throw ConfigError::field(reader.where(node["continuous"], field + ".continuous"), field + ".continuous", value,
-                               "true or false");
-    }
-    action.continuous = value == "true";
-  }
+  if (node["continuous"]) action.continuous = flag(reader, node["continuous"], field + ".continuous");
 }
 
 void parseSpeedAction(const YamlReader& reader, const YAML::Node& node, const std::string& field, bool stop,
@@ -471,7 +486,7 @@ void parseAction(const YamlReader& reader, const YAML::Node& node, const std::st
                  std::size_t index, ActionSpec& action) {
   action.where = reader.where(node, field);
   reader.checkKeys(node, field,
-                   {"id", "trigger", "speed", "stop", "lane_change", "lateral_offset", "cross", "set_speed"});
+                   {"id", "trigger", "repeat", "speed", "stop", "lane_change", "lateral_offset", "cross", "set_speed"});
   action.id = node["id"] ? reader.scalar(node["id"], field + ".id") : fmt::format("{}_{}", owner.id, index);
   if (!isIdentifier(action.id)) {
     throw ConfigError::field(reader.where(node["id"], field + ".id"), field + ".id", action.id,
@@ -482,6 +497,12 @@ void parseAction(const YamlReader& reader, const YAML::Node& node, const std::st
   } else {
     action.trigger.where = action.where;
     action.trigger.value = Expression::constant(0.0);
+  }
+  action.repeat = reader.integer(node, "repeat", field + ".repeat", 1, 1);
+  if (action.repeat > 1 && !canHoldAgain(action.trigger)) {
+    reader.fail(node["repeat"], field + ".repeat",
+                "a repeated action needs a trigger that can hold again (no time or after in it): it would restart at "
+                "once");
   }
   const std::string kind =
       oneOf(reader, node, field, {"speed", "stop", "lane_change", "lateral_offset", "cross", "set_speed"}, true);

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <map>
 #include <optional>
 
 #include "vsd/core/error.hpp"
@@ -146,6 +147,15 @@ struct ScriptedTraffic::Impl {
   std::vector<VehicleState> states;
   std::vector<ActionTiming> timings;
   std::vector<double> scheduled;  ///< per action: start time once its trigger fired (NaN before)
+  std::vector<int> starts;        ///< per action: how many times it started (up to its repeat)
+  /// A rising condition's memory: whether it held when last checked, and its answer at instant `instant`.
+  struct Edge {
+    std::size_t instant = std::numeric_limits<std::size_t>::max();
+    bool checked = false;
+    bool held = false;
+    bool fired = false;
+  };
+  mutable std::map<const scenario::ConcreteTrigger*, Edge> edges;
   /// The Ego's set_speed actions that started: (start time s, set speed m/s), in start order.
   std::vector<std::pair<double, double>> egoSetSpeeds;
   PurePursuitLateral laneKeeping;  // the Ego's defaults: lookahead max(4 m, 0.4 s * v)
@@ -171,6 +181,8 @@ struct ScriptedTraffic::Impl {
   }
   void trackProgress(const VehicleState& ego);
   bool holds(const scenario::ConcreteTrigger& trigger, int owner, const VehicleState& ego) const;
+  bool conditionHolds(const scenario::ConcreteTrigger& trigger, int owner, const VehicleState& ego) const;
+  void rearmEnded();
   double fireTime(const scenario::ConcreteTrigger& trigger, int owner, const VehicleState& ego) const;
   void offer(std::size_t a, const VehicleState& ego);
   void fireTriggers(const VehicleState& ego);
@@ -208,6 +220,7 @@ void ScriptedTraffic::Impl::init() {
   }
   timings.assign(concrete->actions.size(), {kNaN, kNaN});
   scheduled.assign(concrete->actions.size(), kNaN);
+  starts.assign(concrete->actions.size(), 0);
   for (std::size_t a = 0; a < concrete->actions.size(); ++a) {
     const auto& trigger = concrete->actions[a].trigger;
     if (trigger.kind == TriggerSpec::Kind::Time) scheduled[a] = trigger.value + trigger.delay;
@@ -300,9 +313,25 @@ void ScriptedTraffic::Impl::trackProgress(const VehicleState& ego) {
   }
 }
 
-/// Whether a condition holds at the current instant (members of `all` and `any` alike).
+/// Whether a trigger holds at the current instant (members of `all` and `any` alike): a rising
+/// one only where its condition holds after a check at which it did not. Asked again within
+/// the instant, it answers the same.
 bool ScriptedTraffic::Impl::holds(const scenario::ConcreteTrigger& trigger, int owner,
                                   const VehicleState& ego) const {
+  if (!trigger.rising) return conditionHolds(trigger, owner, ego);
+  Edge& edge = edges[&trigger];
+  if (edge.instant == k) return edge.fired;
+  const bool held = conditionHolds(trigger, owner, ego);
+  edge.fired = held && edge.checked && !edge.held;
+  edge.checked = true;
+  edge.held = held;
+  edge.instant = k;
+  return edge.fired;
+}
+
+/// Whether a condition holds at the current instant.
+bool ScriptedTraffic::Impl::conditionHolds(const scenario::ConcreteTrigger& trigger, int owner,
+                                           const VehicleState& ego) const {
   const double now = static_cast<double>(k) * step;
   const auto user = static_cast<std::size_t>(trigger.subject + 1);
   const auto member_holds = [&](const scenario::ConcreteTrigger& member) { return holds(member, owner, ego); };
@@ -420,9 +449,23 @@ void ScriptedTraffic::Impl::track(const VehicleState& ego) {
   }
 }
 
+/// Actions that may start again and have ended: their triggers are checked again from now on.
+/// The latest start and end stay in `timings` until they start again.
+void ScriptedTraffic::Impl::rearmEnded() {
+  const double now = static_cast<double>(k) * step;
+  for (std::size_t a = 0; a < timings.size(); ++a) {
+    const bool ended = !std::isnan(timings[a].start) && timings[a].end <= now + 1e-9;
+    if (ended && starts[a] < concrete->actions[a].repeat) {
+      timings[a].start = kNaN;
+      scheduled[a] = kNaN;
+    }
+  }
+}
+
 void ScriptedTraffic::Impl::activate(std::size_t a, const VehicleState& ego) {
   const auto& action = concrete->actions[a];
   const double t0 = scheduled[a];
+  ++starts[a];
   if (action.kind == ActionSpec::Kind::SetSpeed) {  // the Ego's controller takes it from t0 on; done at once
     egoSetSpeeds.emplace_back(t0, action.target);
     timings[a] = {t0, t0};
@@ -555,6 +598,7 @@ std::optional<double> ScriptedTraffic::egoSetSpeedAt(double time) const {
 void ScriptedTraffic::step(const VehicleState& ego) {
   Impl& impl = *impl_;
   if (impl.tracksProgress) impl.trackProgress(ego);
+  impl.rearmEnded();
   impl.fireTriggers(ego);
   impl.track(ego);
   impl.activateDue(ego);

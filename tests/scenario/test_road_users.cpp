@@ -273,3 +273,49 @@ vehicles:
     EXPECT_EQ(got.find('\n'), std::string::npos) << got;
   }
 }
+
+TEST(RoadUsers, RepeatedActionsAndRisingTriggersAreReadAndCheckedAtLoad) {
+  const auto yaml = [](const std::string& actions) {
+    return fmt::format(R"(
+name: users
+road: {{shape: arc, length: 200, lanes: 3}}
+vehicles:
+  ego: {{s: 20, lane: 1, speed: 10, controller: {{name: idm}}}}
+  others:
+    - {{id: a, gap: 20, relative_lane: 0, speed: 5, actions: {}}}
+)",
+                       actions);
+  };
+  const auto logical = parseLogicalScenario(
+      yaml("[{repeat: 4, trigger: {any: [{gap: 8, rising: true}, {speed_at_least: 9}]}, stop: {decel: 2}}]"),
+      "ok.yaml");
+  const auto concrete = sampleConcreteScenario(logical, 1, 0);
+  ASSERT_EQ(concrete.actions.size(), 1u);
+  EXPECT_EQ(concrete.actions[0].repeat, 4);
+  EXPECT_TRUE(concrete.actions[0].trigger.members.at(0).rising);
+  EXPECT_FALSE(concrete.actions[0].trigger.members.at(1).rising);
+
+  const auto error = [&](const std::string& actions) {
+    try {
+      parseLogicalScenario(yaml(actions), "bad.yaml");
+    } catch (const ConfigError& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {"[{repeat: 0, trigger: {gap: 8}, stop: {decel: 2}}]", "vehicles.others[0].actions[0].repeat"},
+      {"[{repeat: 1.5, trigger: {gap: 8}, stop: {decel: 2}}]", "vehicles.others[0].actions[0].repeat"},
+      {"[{repeat: 2, trigger: {time: 1}, stop: {decel: 2}}]", "a repeated action needs a trigger that can hold again"},
+      {"[{repeat: 2, trigger: {any: [{gap: 8}, {after: x}]}, stop: {decel: 2}}, {id: x, speed: {target: 3, rate: 1}}]",
+       "a repeated action needs a trigger that can hold again"},
+      {"[{trigger: {time: 1, rising: true}, stop: {decel: 2}}]", "'rising' goes with a condition"},
+      {"[{trigger: {all: [{gap: 8}], rising: true}, stop: {decel: 2}}]", "'rising' goes with a condition"},
+      {"[{trigger: {gap: 8, rising: yes}, stop: {decel: 2}}]", "true or false"},
+  };
+  for (const auto& [actions, expected] : cases) {
+    const std::string message = error(actions);
+    EXPECT_NE(message.find(expected), std::string::npos) << actions << "\n -> " << message;
+    EXPECT_NE(message.find("bad.yaml:"), std::string::npos) << message;
+  }
+}

@@ -404,3 +404,63 @@ vehicles:
   EXPECT_NEAR(timings[0].start, 2.1, 1e-9);  // `after` a set speed: at once
   EXPECT_NEAR(timings[2].start, 4.0, 1e-9);
 }
+
+// OpenSCENARIO's rising edge: a condition that holds when first checked waits until it has
+// stopped holding. The mover starts 30 m behind the stand-in Ego (centres), 5 m/s faster,
+// one lane to its right: its gap to the Ego is >= 10 m at once, then it draws level, and the
+// gap is 10 m again once it is ahead by 10 m plus the two half lengths.
+TEST(ScriptedTraffic, ARisingTriggerWaitsForItsConditionToBecomeTrue) {
+  for (const bool rising : {false, true}) {
+    const auto logical = scenarioWith(fmt::format(R"(
+    - {{id: mover, ds: -30, relative_lane: -1, speed: 15,
+       actions: [{{trigger: {{gap_at_least: 10, rising: {}}}, lane_change: {{ego_lane: 0, duration: 2}}}}]}})",
+                                                  rising ? "true" : "false"),
+                                      0.0, 14.0);
+    const Planned run = plan(logical);
+    const auto timings = timingsAfter(run, 70);
+    if (!rising) {
+      EXPECT_DOUBLE_EQ(timings[0].start, 0.0);
+      continue;
+    }
+    const double half_lengths = 0.5 * (run.concrete.ego.length + run.concrete.others[0].length);
+    const double expected = (30.0 + 10.0 + half_lengths) / 5.0;  // s: 40 m plus the half lengths at 5 m/s
+    EXPECT_GE(timings[0].start, expected - 1e-9);
+    EXPECT_LT(timings[0].start, expected + 0.2 + 1e-9);  // the first instant at or after it
+  }
+}
+
+// OpenSCENARIO's maximumExecutionCount: an action starts again once it has ended and its
+// trigger fires again, up to `repeat` times. The stand-in Ego (10 m/s) closes on a standing
+// mover; within 20 m the mover speeds off to 20 m/s, beyond 30 m it stops again, and so on.
+TEST(ScriptedTraffic, ARepeatedActionStartsAgainUpToItsRepeatCount) {
+  for (const int repeat : {1, 3}) {
+    const auto logical = scenarioWith(fmt::format(R"(
+    - {{id: mover, gap: 35, relative_lane: 0, speed: 0,
+       actions: [{{id: go, repeat: {0}, trigger: {{gap: 20, rising: true}},
+                   speed: {{target: 20, rate: 10, shape: linear}}}},
+                 {{id: halt, repeat: {0}, trigger: {{gap_at_least: 30, rising: true}},
+                   stop: {{decel: 10, shape: linear}}}}]}})",
+                                                  repeat),
+                                      0.0, 40.0);
+    const Planned run = plan(logical);
+    ScriptedTraffic traffic(run.concrete, run.road);
+    const EgoStandIn ego(run.concrete, run.road);
+    std::vector<std::vector<double>> starts(2);
+    for (int k = 0; k < 200; ++k) {
+      traffic.step(ego.at(0.2 * k));
+      for (std::size_t a = 0; a < 2; ++a) {
+        const double start = traffic.timings()[a].start;
+        if (!std::isnan(start) && (starts[a].empty() || starts[a].back() != start)) starts[a].push_back(start);
+      }
+    }
+    ASSERT_EQ(starts[0].size(), static_cast<std::size_t>(repeat)) << "go";
+    ASSERT_EQ(starts[1].size(), static_cast<std::size_t>(repeat)) << "halt";
+    for (int n = 0; n < repeat; ++n) {
+      EXPECT_LT(starts[0][n], starts[1][n]);                    // go, then halt, in turns
+      if (n > 0) {
+        EXPECT_GT(starts[0][n], starts[1][n - 1] + 2.0 - 1e-9);  // after the halt before it ended
+      }
+    }
+    EXPECT_DOUBLE_EQ(traffic.states()[0].speed, 0.0);  // halted for good after its last start
+  }
+}

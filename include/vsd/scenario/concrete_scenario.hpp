@@ -33,6 +33,7 @@ struct ConcreteTrigger {
   double x = 0.0;
   double y = 0.0;
   std::vector<ConcreteTrigger> members;  ///< All, Any
+  bool rising = false;  ///< TriggerSpec::rising
 };
 
 /// An action with its numbers evaluated (see ActionSpec).
@@ -49,6 +50,7 @@ struct ConcreteAction {
   bool relativeToEgoLane = false;
   ActionSpec::Pace pace = ActionSpec::Pace::Duration;
   double paceValue = 0.0;  ///< > 0 (a duration may be 0)
+  int repeat = 1;          ///< ActionSpec::repeat
   std::string where;
 };
 

@@ -156,6 +156,10 @@ struct TriggerSpec {
   std::string action;         ///< After: id of the action whose end starts this one
   PositionSpec position;      ///< Distance
   std::vector<TriggerSpec> members;  ///< All, Any
+  /// Conditions (not Time, After, All, Any): fires only when the condition becomes true, at an
+  /// instant it holds after an instant it was checked and did not (OpenSCENARIO's rising edge);
+  /// one that holds from its first check waits until it has not held. Else: when it holds.
+  bool rising = false;
   std::string where;
 
   /// True for the kinds whose value may be negative.
@@ -200,6 +204,10 @@ struct ActionSpec {
   enum class Pace { Rate, Duration, LateralSpeed, LateralAccel };
   Pace pace = Pace::Duration;
   Expression paceValue;  ///< m/s^2 | s | m/s | m/s^2
+  /// How many times it may start (>= 1): after it ends, its trigger is checked again from the
+  /// next instant on (OpenSCENARIO's maximumExecutionCount). > 1 only with a trigger that can
+  /// hold again (no time or after in it).
+  int repeat = 1;
   std::string where;
 };
 
