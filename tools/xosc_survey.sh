@@ -15,7 +15,8 @@
 #     --duration 60` simulates 200 sets drawn from the grid (seed 1).
 #   - esmini's resources/xosc: `scenario check --data-root resources --controller-map
 #     tools/esmini_controllers.yaml` (its scenarios name roads in ../xodr; its human-driver
-#     controllers map onto built-ins; `--duration 30` only where the StopTrigger is no
+#     controllers map onto built-ins; `--ego FIRST_ENTITY` only where no entity has a
+#     controller or is named Ego; `--duration 30` only where the StopTrigger is no
 #     simulation time), then `run` of each file that would run (with the same options):
 #     ran, or the first refusal. Each file is also placed in or outside the issue's goal
 #     ("roads netconvert reads", actions and conditions in its list): tools/xosc_scope.py,
@@ -82,7 +83,7 @@ echo "  variation files run: $ran of $total"
 
 echo
 echo "## esmini resources/xosc: scenario check --data-root resources --controller-map" \
-  "tools/esmini_controllers.yaml (--duration 30 where it asks for it), run if it would"
+  "tools/esmini_controllers.yaml (--ego FIRST_ENTITY, --duration 30 where it asks for them), run if it would"
 echo "   scope: in the issue's goal = netconvert reads its road and its actions and conditions are in the issue's list"
 ran=0; total=0; in_scope=0; ran_in_scope=0
 declare -A netconvert_reads
@@ -104,6 +105,16 @@ for file in "$esmini"/resources/xosc/*.xosc; do
   # The file's own end where its StopTrigger is a simulation time; 30 s where it asks for one.
   options=(--data-root "$esmini/resources" --controller-map "$root/tools/esmini_controllers.yaml")
   "$vsd" scenario check "${options[@]}" "$file" >"$work/check" 2>&1 || status=$?
+  # A file without controllers and without an entity named Ego (all scripted): its first entity
+  # is the Ego (driven by the default controller), as a user would say with --ego.
+  if grep -q 'which is the Ego?' "$work/check"; then
+    first="$(python3 -c 'import sys, xml.etree.ElementTree as t
+print(t.parse(sys.argv[1]).find(".//{*}ScenarioObject").get("name"))' "$file" 2>/dev/null || true)"
+    if [ -n "$first" ]; then
+      options+=(--ego "$first"); status=0
+      "$vsd" scenario check "${options[@]}" "$file" >"$work/check" 2>&1 || status=$?
+    fi
+  fi
   if grep -q 'pass --duration' "$work/check"; then
     options+=(--duration 30); status=0
     "$vsd" scenario check "${options[@]}" "$file" >"$work/check" 2>&1 || status=$?

@@ -139,6 +139,15 @@ void readEntities(Translation& translation, const pugi::xml_node& root, Catalogs
 
 namespace {
 
+/// An Init's ActivateControllerAction: the Ego's controller drives from t = 0 anyway, and a
+/// scripted road user follows its script (which of the two the entity is, is not known yet).
+void noteActivation(Translation& translation, const pugi::xml_node& action, const Entity& entity) {
+  translation.findings.note(translation.reader.where(action),
+                            fmt::format("'{}': the Ego's controller drives from t = 0 in any case, a scripted road "
+                                        "user follows its script",
+                                        entity.name));
+}
+
 void readInitAction(Translation& translation, Entity& entity, const pugi::xml_node& private_action) {
   const xml::Reader& reader = translation.reader;
   const pugi::xml_node action = reader.choice(private_action, {"TeleportAction", "LongitudinalAction",
@@ -170,12 +179,10 @@ void readInitAction(Translation& translation, Entity& entity, const pugi::xml_no
       entity.controller = reader.text(reader.only(assign, "Controller"), "name");
       entity.controllerWhere = reader.where(assign);
     }
-    if (action.child("ActivateControllerAction")) {
-      translation.findings.note(reader.where(action), "the Ego's controller drives from t = 0 in any case");
-    }
+    if (action.child("ActivateControllerAction")) noteActivation(translation, action, entity);
     return;
   } else if (kind == "ActivateControllerAction") {
-    translation.findings.note(reader.where(action), "the Ego's controller drives from t = 0 in any case");
+    noteActivation(translation, action, entity);
     return;
   } else {
     reader.fail(action, "lateral actions in the Init: start the action at t = 0 in a Story instead");

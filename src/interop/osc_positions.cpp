@@ -58,11 +58,10 @@ Placement lanePosition(const Translation& translation, const pugi::xml_node& pos
   const long lane_id = static_cast<long>(reader.integer(position, "laneId", -100, 100));
   const int lane = translation.road.languageLane(lane_id, reader.where(position));
   const double offset = reader.optionalNumber(position, "offset").value_or(0.0);
-  // OpenDRIVE drives the left side (positive ids, right-hand traffic) against the reference
-  // line; a relative orientation counts from that direction (as esmini reads it).
-  const double lane_direction = lane_id > 0 ? kPi : 0.0;
+  // A relative orientation counts from the lane's driving direction under the road's rule
+  // (as esmini reads it): against the reference line on the left side in right-hand traffic.
   Placement placement = onRoad(translation, position, reader.number(position, "s"),
-                               translation.road.laneCentreT(lane) + offset, lane_direction);
+                               translation.road.laneCentreT(lane) + offset, translation.road.laneDirection(lane_id));
   placement.lane = lane;
   return placement;
 }
@@ -216,6 +215,24 @@ Placement fixedPlace(Translation& translation, const pugi::xml_node& position_no
   if (kind == "LanePosition") return lanePosition(translation, position);
   checkRoad(translation, position);
   return onRoad(translation, position, reader.number(position, "s"), reader.number(position, "t"));
+}
+
+bool initDrivesLeftSideOnly(const Translation& translation) {
+  const CarriagewayRoad& road = translation.road;
+  bool left = false;
+  bool right = false;
+  for (const Entity& entity : translation.entities) {
+    const pugi::xml_node position = entity.position.child("LanePosition");
+    if (!position) continue;
+    try {  // a value that does not resolve counts as nothing; placing reports it
+      const long lane_id = static_cast<long>(translation.reader.integer(position, "laneId", -100, 100));
+      const double s = translation.reader.number(position, "s");
+      const bool along = std::cos(orientation(translation, position, s, road.laneDirection(lane_id))) > 0.0;
+      (lane_id > 0 ? left : right) = (lane_id > 0 ? left : right) || along;
+    } catch (const ConfigError&) {
+    }
+  }
+  return left && !right;
 }
 
 void placeEntities(Translation& translation) {

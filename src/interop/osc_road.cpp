@@ -120,26 +120,43 @@ void classifyCurvature(CarriagewayRoad& road) {
   road.referenceSamples = MeasuredPolyline(std::move(points));
 }
 
+/// A lane's width, which must be one constant along the road: one <width> from sOffset 0, or
+/// several that all give the same constant (esmini's velodrome repeats its entries).
 double constantWidth(const xml::Reader& reader, const pugi::xml_node& lane) {
   reader.requireSubset(lane, {"link", "width", "roadMark", "speed", "userData", "height", "material"});
-  const pugi::xml_node width = reader.only(lane, "width");
-  for (const char* coefficient : {"b", "c", "d"}) {
-    if (reader.optionalNumber(width, coefficient).value_or(0.0) != 0.0) {
-      reader.fail(width, "a width that varies along the road: the scenario language's lanes keep their width");
+  std::optional<double> constant;
+  for (const pugi::xml_node& width : lane.children("width")) {
+    for (const char* coefficient : {"b", "c", "d"}) {
+      if (reader.optionalNumber(width, coefficient).value_or(0.0) != 0.0) {
+        reader.fail(width, "a width that varies along the road: the scenario language's lanes keep their width");
+      }
+    }
+    const double a = reader.number(width, "a", NumberRange::atLeast(0.0));
+    if (!constant) {
+      if (reader.optionalNumber(width, "sOffset").value_or(0.0) != 0.0) reader.fail(width, "sOffset: expected 0");
+      constant = a;
+    } else if (a != *constant) {
+      reader.fail(width, fmt::format("a = {} m after {} m: a width that changes along the road (the scenario "
+                                     "language's lanes keep their width)",
+                                     xml::number(a), xml::number(*constant)));
     }
   }
-  if (reader.optionalNumber(width, "sOffset").value_or(0.0) != 0.0) reader.fail(width, "sOffset: expected 0");
-  return reader.number(width, "a", NumberRange::atLeast(0.0));
+  if (!constant) reader.fail(lane, "expected a <width>");
+  return *constant;
 }
 
-/// The right side: [inner non-driving lanes] driving lanes [shoulder/stop lanes] [others].
-void readRightLanes(const xml::Reader& reader, const pugi::xml_node& right, CarriagewayRoad& result) {
-  reader.requireSubset(right, {"lane"});
+/// One side of the reference line: [inner non-driving lanes] driving lanes [shoulder/stop
+/// lanes] [others], read outwards from the reference line (`sign` -1: the right side, ids
+/// -1, -2, ...; +1: the left side, ids 1, 2, ...), as a carriageway driven along the
+/// reference line: lane 0 is the rightmost in that direction.
+DrivenRun readRun(const xml::Reader& reader, const pugi::xml_node& side, int sign) {
+  reader.requireSubset(side, {"lane"});
+  DrivenRun run;
   enum class Part { Inner, Driving, Shoulder, Outer } part = Part::Inner;
-  for (long id = -1;; --id) {
+  for (long id = sign;; id += sign) {
     pugi::xml_node lane;
-    for (const pugi::xml_node& candidate : right.children("lane")) {
-      if (reader.integer(candidate, "id", -100, -1) == id) lane = candidate;
+    for (const pugi::xml_node& candidate : side.children("lane")) {
+      if (reader.integer(candidate, "id", sign < 0 ? -100 : 1, sign < 0 ? -1 : 100) == id) lane = candidate;
     }
     if (!lane) break;
     const double width = constantWidth(reader, lane);
@@ -151,21 +168,37 @@ void readRightLanes(const xml::Reader& reader, const pugi::xml_node& right, Carr
       if (!(width > 0.5)) {
         reader.fail(lane, fmt::format("width {} m: expected a driving lane wider than 0.5 m", xml::number(width)));
       }
-      if (part == Part::Inner) result.innermostLaneId = static_cast<int>(id);
+      if (part == Part::Inner) run.innermostLaneId = static_cast<int>(id);
       part = Part::Driving;
-      result.laneWidths.insert(result.laneWidths.begin(), width);  // ids run outwards: lane 0 is the last
-      ++result.lanes;
+      // Outwards is rightwards on the right side (lane 0 is the last read), leftwards on the left.
+      run.laneWidths.insert(sign < 0 ? run.laneWidths.begin() : run.laneWidths.end(), width);
     } else if (part == Part::Inner) {
-      result.shoulderLeft += width;
+      run.innerShoulder += width;
     } else if (part != Part::Outer && (type == "shoulder" || type == "stop")) {
       part = Part::Shoulder;
-      result.shoulderRight += width;
+      run.outerShoulder += width;
     } else {
       part = Part::Outer;
     }
   }
-  if (result.lanes == 0) reader.fail(right, "no driving lane on the right side (negative lane ids)");
-  result.innerT = -result.shoulderLeft;
+  if (run.laneWidths.empty()) {
+    reader.fail(side, sign < 0 ? "no driving lane on the right side (negative lane ids)"
+                               : "no driving lane on the left side (positive lane ids)");
+  }
+  return run;
+}
+
+/// Makes `run` the road's carriageway (`sign` as readRun's).
+void takeRun(CarriagewayRoad& result, const DrivenRun& run, int sign) {
+  result.lanes = static_cast<int>(run.laneWidths.size());
+  result.laneWidths = run.laneWidths;
+  result.innermostLaneId = run.innermostLaneId;
+  const double driving = std::accumulate(run.laneWidths.begin(), run.laneWidths.end(), 0.0);
+  // The driving lanes' left edge; the inner lanes lie left of a right-side run, right of a left-side one.
+  result.innerT = sign < 0 ? -run.innerShoulder : run.innerShoulder + driving;
+  result.shoulderLeft = sign < 0 ? run.innerShoulder : run.outerShoulder;
+  result.shoulderRight = sign < 0 ? run.outerShoulder : run.innerShoulder;
+  result.leftCarriageway = sign > 0;
 }
 
 /// The left side's driving lanes 1, 2, ... while they continue the right side's carriageway
@@ -226,14 +259,34 @@ void readLanes(const xml::Reader& reader, const pugi::xml_node& road, Carriagewa
   }
   const pugi::xml_node section = reader.only(lanes, "laneSection");
   reader.requireSubset(section, {"left", "center", "right", "userData"});
-  readRightLanes(reader, reader.only(section, "right"), result);
-  if (const pugi::xml_node left = section.child("left")) {
-    result.leftSide = reader.where(left);
-    readAdjoiningLeftLanes(reader, left, result);
+  if (result.leftHandTraffic) {
+    // Left-hand traffic drives the left side along the reference line: that is the road.
+    takeRun(result, readRun(reader, reader.only(section, "left"), +1), +1);
+    if (const pugi::xml_node right = section.child("right")) result.otherSide = reader.where(right);
+    return;
+  }
+  takeRun(result, readRun(reader, reader.only(section, "right"), -1), -1);
+  const pugi::xml_node left = section.child("left");
+  if (!left) return;
+  result.otherSide = reader.where(left);
+  readAdjoiningLeftLanes(reader, left, result);
+  // The left side as a carriageway of its own, for files that drive it along the reference
+  // line (esmini's left-hand traffic "by heading"); what keeps it from being one is kept.
+  try {
+    result.leftRun = readRun(reader, left, +1);
+  } catch (const ConfigError& error) {
+    result.leftRunProblem = error.what();
   }
 }
 
 }  // namespace
+
+void CarriagewayRoad::useLeftCarriageway() {
+  if (!leftRun || leftCarriageway || leftLanesJoined) throw std::logic_error("useLeftCarriageway: no left run to use");
+  takeRun(*this, *leftRun, +1);
+}
+
+double CarriagewayRoad::laneDirection(long lane_id) const { return (lane_id > 0) != leftHandTraffic ? kPi : 0.0; }
 
 void CarriagewayRoad::joinLeftLanes() {
   if (adjoiningLeftLanes == 0 || leftLanesJoined) throw std::logic_error("joinLeftLanes: no left lanes to join");
@@ -247,6 +300,16 @@ void CarriagewayRoad::joinLeftLanes() {
 int CarriagewayRoad::languageLane(long lane_id, const std::string& where) const {
   if (leftLanesJoined && lane_id >= 1 && lane_id <= adjoiningLeftLanes) {
     return rightLanes() + static_cast<int>(lane_id) - 1;
+  }
+  if (leftCarriageway) {
+    const long outermost = innermostLaneId + lanes - 1;
+    if (lane_id >= innermostLaneId && lane_id <= outermost) return static_cast<int>(lane_id - innermostLaneId);
+    const char* why = lane_id < 0 ? "the right side's lanes are not part of vsd-sumo's road here"
+                                  : "a shoulder, stop lane, border or median: no road user drives there";
+    throw ConfigError(fmt::format("{}: laneId {}: expected a driving lane of the road's left side, {} .. {}, driven "
+                                  "along the reference line{} ({})",
+                                  where, lane_id, innermostLaneId, outermost,
+                                  leftHandTraffic ? " (rule LHT)" : " (as the file's Init drives it)", why));
   }
   const long outermost = innermostLaneId - rightLanes() + 1;
   if (lane_id > innermostLaneId || lane_id < outermost) {
@@ -527,9 +590,7 @@ CarriagewayRoad readRoad(const std::filesystem::path& file, std::string text, Fi
   CarriagewayRoad result;
   result.file = file;
   result.id = reader.text(road, "id");
-  if (reader.optionalText(road, "rule").value_or("RHT") != "RHT") {
-    reader.fail(road, "rule: only right-hand traffic (RHT) maps onto the language's lanes");
-  }
+  result.leftHandTraffic = road.attribute("rule") && reader.oneOf(road, "rule", {"RHT", "LHT"}) == "LHT";
   readPlanView(reader, road, result);
   classifyCurvature(result);
   if (std::abs(result.length - reader.number(road, "length", kLength)) > kJoinTolerance) {

@@ -2,14 +2,17 @@
 // An OpenDRIVE road as one of the scenario language's roads (private to the interop module).
 //
 // A file maps if it has one road with one lane section, no lane offset, constant widths,
-// and on its right side (negative lane ids, driven towards +s) a contiguous run of
-// `driving` lanes (each of its own width). Lanes between the reference line and that run and
-// `shoulder`/`stop` lanes right of it become the language's shoulders; the left side
-// (positive ids) is not part of vsd-sumo's road, unless its driving lanes continue the
-// right side's across the reference line (no median) and the scenario drives
-// them along the reference line (joinLeftLanes). Elevation, superelevation, road marks,
-// links, objects and signals do not change the planar lanes: they are reported as not
-// simulated.
+// and on the side driven along the reference line (towards +s) a contiguous run of
+// `driving` lanes (each of its own width): the right side (negative lane ids) in right-hand
+// traffic, the left side (positive ids) with rule="LHT". Lanes between the reference line
+// and that run and `shoulder`/`stop` lanes beyond it become the language's shoulders; the
+// other side is not part of vsd-sumo's road, with two exceptions in right-hand traffic:
+// left driving lanes that continue the right side's across the reference line (no median)
+// join the road where the scenario drives them along the reference line (joinLeftLanes),
+// and the left side's run becomes the road instead of the right side's where the scenario
+// drives it along the reference line (useLeftCarriageway; esmini's left-hand traffic "by
+// heading"). Elevation, superelevation, road marks, links, objects and signals do not
+// change the planar lanes: they are reported as not simulated.
 //
 // The plan view is any chain of `line`, `arc`, `spiral` and `paramPoly3` geometries.
 // A road of one curvature (lines only, or arcs of one curvature) maps onto the language's
@@ -23,6 +26,7 @@
 
 #include <array>
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -83,6 +87,14 @@ class PlanGeometry {
   std::vector<double> arcLengths_;   ///< m along a paramPoly3 at multiples of parameterStep_
 };
 
+/// A run of driving lanes on one side of the reference line, as a carriageway driven along it.
+struct DrivenRun {
+  int innermostLaneId = -1;        ///< OpenDRIVE id of its driving lane next to the reference line
+  std::vector<double> laneWidths;  ///< m, lane 0 (rightmost, driving along the reference line) first
+  double innerShoulder = 0.0;      ///< m of lanes between the reference line and the run
+  double outerShoulder = 0.0;      ///< m of shoulder/stop lanes beyond it
+};
+
 struct CarriagewayRoad {
   std::filesystem::path file;
   std::string id;
@@ -93,8 +105,11 @@ struct CarriagewayRoad {
   double heading = 0.0;     ///< rad, of the reference line at s = 0
   double curvature = 0.0;   ///< 1/m of the reference line, > 0 left (roads of one curvature)
   double length = 0.0;      ///< m of reference line
-  int lanes = 0;            ///< the language's driving lanes: the right side's (and the joined left ones)
-  int innermostLaneId = -1; ///< OpenDRIVE id of the right side's driving lane next to the reference line
+  bool leftHandTraffic = false;  ///< rule="LHT": the left side is driven along the reference line
+  /// The road is the left side's run (left-hand traffic, or useLeftCarriageway), else the right side's.
+  bool leftCarriageway = false;
+  int lanes = 0;            ///< the language's driving lanes: the run's (and the joined left ones)
+  int innermostLaneId = -1; ///< OpenDRIVE id of the run's driving lane next to the reference line
   std::vector<double> laneWidths;  ///< m, each driving lane's, the language's lane 0 (rightmost) first
   double innerT = 0.0;      ///< m, t of the driving lanes' left edge (<= 0; > 0 with joined left lanes)
   /// m left of the driving lanes (towards the reference line, or beyond joined left lanes)
@@ -102,8 +117,13 @@ struct CarriagewayRoad {
   double shoulderRight = 0.0;  ///< m of shoulder/stop lanes right of the driving lanes
   MeasuredPolyline referenceSamples;  ///< the reference line within 1 mm (roads of several curvatures)
   std::vector<double> sampleS;        ///< m, reference-line s of each of referenceSamples' points
-  /// "file:line: <left>" of the lane section's left side; empty: the road has none.
-  std::string leftSide;
+  /// "file:line: <left>" (or, in left-hand traffic, "<right>") of the lane section's side not
+  /// driven along the reference line; empty: the road has none.
+  std::string otherSide;
+  /// Right-hand traffic: the left side's run as a carriageway of its own (useLeftCarriageway);
+  /// none: leftRunProblem says why not (empty: there is no left side).
+  std::optional<DrivenRun> leftRun;
+  std::string leftRunProblem;
   /// Driving lanes of the left side (ids 1 .. adjoiningLeftLanes) that continue the right
   /// side's driving lanes across the reference line: lane -1 and lane 1 both driving.
   /// 0: none (a median, a lane the language cannot read, no left side).
@@ -116,8 +136,14 @@ struct CarriagewayRoad {
   /// along the reference line, and their shoulder/stop lanes its left shoulder. Only for a
   /// road with adjoining left lanes, once.
   void joinLeftLanes();
+  /// Makes the left side's run the road instead of the right side's, driven along the
+  /// reference line. Only in right-hand traffic with a leftRun, once, without joined lanes.
+  void useLeftCarriageway();
   /// Driving lanes of the right side.
   int rightLanes() const { return leftLanesJoined ? lanes - adjoiningLeftLanes : lanes; }
+  /// rad, relative to the reference line: the driving direction of lane `lane_id` under the
+  /// road's rule (0 along it, pi against it), which a relative <Orientation> counts from.
+  double laneDirection(long lane_id) const;
 
   /// t of the driving lanes' centre line (the language's road centre).
   double centreT() const;

@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <iterator>
+#include <utility>
 
 #include "osc_parameters.hpp"
 #include "osc_template.hpp"
@@ -697,6 +698,31 @@ std::optional<YAML::Node> valueCondition(Translation& translation, const pugi::x
   return trigger;
 }
 
+/// A rising edge on the conditions of a language trigger (the members of `all`/`any` the
+/// entities of a TriggeringEntities give). Times and storyboard states are moments, not
+/// levels: an edge changes nothing for them.
+void markRising(YAML::Node trigger) {
+  for (const char* list : {"all", "any"}) {
+    if (const YAML::Node& members = std::as_const(trigger)[list]) {
+      for (YAML::Node member : members) markRising(member);
+      return;
+    }
+  }
+  if (std::as_const(trigger)["time"] || std::as_const(trigger)["after"]) return;
+  trigger["rising"] = "true";
+}
+
+/// Whether a language trigger can stop holding and hold again: no time or action end in it.
+bool canHoldAgain(const YAML::Node& trigger) {
+  if (trigger["time"] || trigger["after"]) return false;
+  for (const char* list : {"all", "any"}) {
+    for (const YAML::Node& member : trigger[list]) {
+      if (!canHoldAgain(member)) return false;
+    }
+  }
+  return true;
+}
+
 /// One <Condition> without its delay; nullopt: it never holds.
 std::optional<YAML::Node> condition(Translation& translation, const Entity& actor, const pugi::xml_node& node) {
   const xml::Reader& reader = translation.reader;
@@ -706,8 +732,10 @@ std::optional<YAML::Node> condition(Translation& translation, const Entity& acto
   }
   reader.requireSubset(node, {"ByValueCondition", "ByEntityCondition"});
   const pugi::xml_node by = reader.choice(node, {"ByValueCondition", "ByEntityCondition"});
-  return std::string(by.name()) == "ByValueCondition" ? valueCondition(translation, by)
-                                                      : entityCondition(translation, actor, by);
+  auto result = std::string(by.name()) == "ByValueCondition" ? valueCondition(translation, by)
+                                                             : entityCondition(translation, actor, by);
+  if (result && edge == "rising") markRising(*result);
+  return result;
 }
 
 /// A <ConditionGroup>: all its conditions at one instant, plus their delay (one for the
@@ -812,6 +840,7 @@ struct PendingEvent {
   pugi::xml_node node;
   std::vector<PendingAction> actions;
   ParameterValues scope;  ///< the parameters its Story sees (the file's, and the Story's own)
+  int executions = 1;     ///< its maximumExecutionCount
 };
 
 void readEvent(Translation& translation, const std::vector<Entity*>& actors, const pugi::xml_node& event,
@@ -820,10 +849,12 @@ void readEvent(Translation& translation, const std::vector<Entity*>& actors, con
   reader.requireSubset(event, {"Action", "StartTrigger"});
   const std::string priority = reader.oneOf(event, "priority", {"overwrite", "override", "parallel", "skip"});
   if (priority == "skip") reader.fail(event, "priority=\"skip\": the language starts every triggered action");
-  if (reader.optionalNumber(event, "maximumExecutionCount").value_or(1.0) != 1.0) {
-    reader.fail(event, "maximumExecutionCount: the language runs each action once");
+  const double executions = reader.optionalNumber(event, "maximumExecutionCount").value_or(1.0);
+  if (!(executions >= 1.0 && executions <= 1e6 && std::floor(executions) == executions)) {
+    reader.fail(event, fmt::format("maximumExecutionCount={}: expected a whole number 1 .. 1000000",
+                                   xml::number(executions)));
   }
-  PendingEvent pending{event, {}, reader.parameters()};
+  PendingEvent pending{event, {}, reader.parameters(), static_cast<int>(executions)};
   const std::string event_name = reader.text(event, "name");
   const bool first = translation.events.count(event_name) == 0;
   Translation::EventRecord& record = translation.events[event_name];
@@ -851,6 +882,25 @@ void readEvent(Translation& translation, const std::vector<Entity*>& actors, con
     });
   }
   events.push_back(std::move(pending));
+}
+
+/// An Event that may run several times (maximumExecutionCount > 1) as its action's `repeat`:
+/// the language restarts an action once it has ended, when its trigger fires again.
+void repeatAction(const Translation& translation, const PendingEvent& event, const YAML::Node& trigger,
+                  YAML::Node& item) {
+  const xml::Reader& reader = translation.reader;
+  if (event.actions.size() > 1) {
+    reader.fail(event.node, fmt::format("maximumExecutionCount={} on an Event of {} actions (or actors): the language "
+                                        "repeats each action on its own, not an Event as a whole",
+                                        event.executions, event.actions.size()));
+  }
+  if (!canHoldAgain(trigger)) {
+    reader.fail(event.node, fmt::format("maximumExecutionCount={} with a start that happens once (a simulation time "
+                                        "or a storyboard element's state): the language repeats an action when its "
+                                        "condition holds again",
+                                        event.executions));
+  }
+  item["repeat"] = event.executions;
 }
 
 void readManeuverGroup(Translation& translation, const pugi::xml_node& group, std::vector<PendingEvent>& events) {
@@ -940,6 +990,7 @@ void readStories(Translation& translation, const pugi::xml_node& storyboard) {
           return;
         }
         pending.item["trigger"] = *trigger;
+        if (event.executions > 1) repeatAction(translation, event, *trigger, pending.item);
         pending.actor->actions.push_back(pending.item);
         YAML::Emitter flow;
         flow << YAML::Flow << *trigger;

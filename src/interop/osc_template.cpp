@@ -65,10 +65,27 @@ ControllerChoice mapController(const OscImportOptions& options, const std::strin
   return {found->second, {}};
 }
 
+/// The controller map's word for a controller vsd-sumo does not simulate: its entity follows
+/// its script (e.g. esmini's sloppyDriver, which adds deviations to a scripted vehicle).
+constexpr const char* kFollowsItsScript = "script";
+
+/// Whether an entity's controller is mapped onto its script (noted): it is no Ego candidate.
+bool followsItsScript(Translation& translation, const Entity& entity) {
+  if (!translation.options.controllerMap.empty() &&
+      mapController(translation.options, *entity.controller, entity.controllerWhere).name == kFollowsItsScript) {
+    translation.findings.note(entity.controllerWhere,
+                              fmt::format("'{}' follows its script: its controller '{}' is mapped to '{}' (the "
+                                          "controller's own behaviour is not simulated)",
+                                          entity.name, *entity.controller, kFollowsItsScript));
+    return true;
+  }
+  return false;
+}
+
 Entity& findEgo(Translation& translation, ControllerChoice& controller) {
   Entity* ego = nullptr;
   for (auto& entity : translation.entities) {
-    if (!entity.controller) continue;
+    if (!entity.controller || followsItsScript(translation, entity)) continue;
     if (ego) {
       throw ConfigError(fmt::format("{}: '{}' and '{}' both have a controller: the language has one controller-driven "
                                     "road user (the Ego)", entity.controllerWhere, ego->name, entity.name));
@@ -366,13 +383,42 @@ bool placesOnLeftLanes(const Translation& translation) {
   });
 }
 
-/// esmini's two-lane roads (one lane each way, no median) carry cut-ins from the left lane
-/// driven along the reference line: where the file places or drives road users there, the
-/// adjoining left lanes join the language's road; otherwise the left side stays outside it.
-/// After the Init is read (its positions decide), before anything is placed for real.
-void joinOrLeaveLeftLanes(Translation& translation, const pugi::xml_node& root) {
+/// In right-hand traffic, a file whose Init drives only the left side, along the reference
+/// line (esmini's left-hand traffic "by heading"), has the left side's run as its road.
+/// Returns whether it has.
+bool takeLeftCarriageway(Translation& translation) {
   CarriagewayRoad& road = translation.road;
-  if (road.leftSide.empty()) return;
+  if (road.leftHandTraffic || !initDrivesLeftSideOnly(translation)) return false;
+  if (!road.leftRun) {
+    throw ConfigError(fmt::format("{}: the Init drives the left side along the reference line, which does not map "
+                                  "onto the language's lanes: {}",
+                                  road.otherSide, road.leftRunProblem));
+  }
+  road.useLeftCarriageway();
+  translation.findings.mapped(
+      road.otherSide,
+      fmt::format("lanes {} .. {} (left of the reference line) are the language's lanes 0 .. {}, driven along the "
+                  "reference line as the Init places road users there; the right side is not part of vsd-sumo's road",
+                  road.innermostLaneId, road.innermostLaneId + road.lanes - 1, road.lanes - 1));
+  return true;
+}
+
+/// Which of the road's sides the language's road is. Left-hand traffic: the left side. Right-
+/// hand traffic: the left side where the Init drives it alone along the reference line;
+/// otherwise the right side, and esmini's two-lane roads (one lane each way, no median) carry
+/// cut-ins from the left lane driven along the reference line: where the file places or
+/// drives road users there, the adjoining left lanes join the language's road; otherwise the
+/// left side stays outside it. After the Init is read (its positions decide), before anything
+/// is placed for real.
+void chooseCarriageway(Translation& translation, const pugi::xml_node& root) {
+  CarriagewayRoad& road = translation.road;
+  if (road.otherSide.empty()) return;
+  if (road.leftHandTraffic) {
+    translation.findings.note(road.otherSide, "the right side (lanes driven against the reference line in left-hand "
+                                              "traffic) is not part of vsd-sumo's road");
+    return;
+  }
+  if (takeLeftCarriageway(translation)) return;
   if (road.adjoiningLeftLanes > 0 &&
       (drivesLeftLanes(translation.reader, root, road) || placesOnLeftLanes(translation))) {
     road.joinLeftLanes();
@@ -382,10 +428,10 @@ void joinOrLeaveLeftLanes(Translation& translation, const pugi::xml_node& root) 
             : fmt::format("lanes 1 .. {} (left of the reference line, no median) are the language's lanes {} .. {}",
                           road.adjoiningLeftLanes, road.rightLanes(), road.lanes - 1);
     translation.findings.mapped(
-        road.leftSide, which + ", driven along the reference line: the scenario places or moves road users there");
+        road.otherSide, which + ", driven along the reference line: the scenario places or moves road users there");
     return;
   }
-  translation.findings.note(road.leftSide,
+  translation.findings.note(road.otherSide,
                             "the left side (lanes driven against the reference line) is not part of vsd-sumo's road");
 }
 
@@ -422,7 +468,7 @@ TranslationResult translate(const fs::path& xosc, const OscImportOptions& option
   const pugi::xml_node storyboard = reader.only(root, "Storyboard");
   reader.requireSubset(storyboard, {"Init", "Story", "StopTrigger"});
   readInit(translation, storyboard);
-  joinOrLeaveLeftLanes(translation, root);
+  chooseCarriageway(translation, root);
   const CarriagewayRoad& road = translation.road;
   std::vector<std::string> widths;
   for (const double width : road.laneWidths) widths.push_back(num(width));
@@ -432,7 +478,12 @@ TranslationResult translate(const fs::path& xosc, const OscImportOptions& option
   const std::string shape = road.oneCurvature
                                 ? fmt::format("curvature {} 1/m", num(road.curvature))
                                 : fmt::format("{} geometries of varying curvature", road.geometries.size());
-  findings.mapped(reader.where(logic), fmt::format("road '{}': {}, {}", road.id, lanes, shape));
+  const std::string side =
+      road.leftCarriageway
+          ? fmt::format(" (laneId {} .. {}, left of the reference line{})", road.innermostLaneId,
+                        road.innermostLaneId + road.lanes - 1, road.leftHandTraffic ? ", rule LHT" : "")
+          : "";
+  findings.mapped(reader.where(logic), fmt::format("road '{}': {}{}, {}", road.id, lanes, side, shape));
   placeEntities(translation);
   findings.attempt([&] {
     translation.ego = &findEgo(translation, translation.controller);

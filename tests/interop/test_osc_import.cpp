@@ -615,10 +615,16 @@ TEST(OscRun, EachConditionStartsItsEventWhereTheFileSays) {
           </DistanceCondition>)")), 4.2 + kNext},
       // the runner's front (960 + 1.25 + 2.25 m) at 15 m/s reaches the road's end (1000 m) after 2.43 s; 1 s later
       {group(entityCondition("Runner", R"(<EndOfRoadCondition duration="1"/>)")), 3.6 + kNext},
-      // AND: 24 m/s at 4.0 s and time 4.5 (an instant: 4.6); OR: 30 m travelled (1.6 s) + 4 s delay = 5.6
+      // AND: 24 m/s reached at 4.0 s (a rising edge: true at that instant only) while time >= 3.5 holds;
+      // OR: 30 m travelled (1.6 s) + 4 s delay = 5.6
+      {group(entityCondition("Lead", R"(<SpeedCondition value="24" rule="greaterOrEqual"/>)") + timeCondition("3.5")) +
+           group(entityCondition("Lead", R"(<TraveledDistanceCondition value="30"/>)", "4")),
+       4.0 + kNext},
+      // The same with time >= 4.5 (from the instant 4.6): the speed's edge at 4.0 is gone by then, the AND
+      // never holds (as esmini evaluates a rising edge in a group); the OR's other group starts it at 5.6
       {group(entityCondition("Lead", R"(<SpeedCondition value="24" rule="greaterOrEqual"/>)") + timeCondition("4.5")) +
            group(entityCondition("Lead", R"(<TraveledDistanceCondition value="30"/>)", "4")),
-       4.6 + kNext},
+       5.6},
       // OR, the other group first: 30 m (1.6 s) + 1 s delay, an instant's time
       {group(entityCondition("Lead", R"(<SpeedCondition value="24" rule="greaterOrEqual"/>)") + timeCondition("4.5")) +
            group(entityCondition("Lead", R"(<TraveledDistanceCondition value="30"/>)", "1")),
@@ -1207,31 +1213,38 @@ TEST(OscImport, ATinyGeometryAndATurnPastTheLimitStillGiveAPolylineRoad) {
 
 namespace {
 
-/// A straight 1 km road of one lane each way with no median (esmini's two-lane roads), the
-/// left lane `left_width` m wide, each with a 1 m shoulder outside.
-std::string twoWayRoad(const std::string& left_width) {
+/// One <lane> of a lane section, of constant width.
+std::string odrLane(int id, const std::string& type, const std::string& width) {
+  return fmt::format(R"(<lane id="{}" type="{}" level="false"><width sOffset="0" a="{}" b="0" c="0" d="0"/></lane>)",
+                     id, type, width);
+}
+
+/// A straight 1 km OpenDRIVE road along +x with the <left> and <right> lanes given.
+std::string straightRoad(const std::string& name, int id, const std::string& rule, const std::string& left,
+                         const std::string& right) {
   return fmt::format(R"(<?xml version="1.0" encoding="UTF-8"?>
 <OpenDRIVE>
-  <header revMajor="1" revMinor="6" name="two way"/>
-  <road name="two way" length="1000" id="7" junction="-1" rule="RHT">
+  <header revMajor="1" revMinor="6" name="{0}"/>
+  <road name="{0}" length="1000" id="{1}" junction="-1" rule="{2}">
     <planView><geometry s="0" x="0" y="0" hdg="0" length="1000"><line/></geometry></planView>
     <lanes>
       <laneSection s="0">
-        <left>
-          <lane id="2" type="shoulder" level="false"><width sOffset="0" a="1.0" b="0" c="0" d="0"/></lane>
-          <lane id="1" type="driving" level="false"><width sOffset="0" a="{}" b="0" c="0" d="0"/></lane>
-        </left>
+        <left>{3}</left>
         <center><lane id="0" type="none" level="false"/></center>
-        <right>
-          <lane id="-1" type="driving" level="false"><width sOffset="0" a="3.5" b="0" c="0" d="0"/></lane>
-          <lane id="-2" type="shoulder" level="false"><width sOffset="0" a="1.0" b="0" c="0" d="0"/></lane>
-        </right>
+        <right>{4}</right>
       </laneSection>
     </lanes>
   </road>
 </OpenDRIVE>
 )",
-                     left_width);
+                     name, id, rule, left, right);
+}
+
+/// A straight 1 km road of one lane each way with no median (esmini's two-lane roads), the
+/// left lane `left_width` m wide, each with a 1 m shoulder outside.
+std::string twoWayRoad(const std::string& left_width) {
+  return straightRoad("two way", 7, "RHT", odrLane(2, "shoulder", "1.0") + odrLane(1, "driving", left_width),
+                      odrLane(-1, "driving", "3.5") + odrLane(-2, "shoulder", "1.0"));
 }
 
 /// cut_in.xosc on twoWayRoad: the Ego on lane -1, the cutter placed on lane 1 by
@@ -1318,23 +1331,15 @@ TEST(OscRoad, LeftLanesAdjoinOnlyAcrossTheReferenceLineWithoutAMedian) {
     osc::Findings findings(false);
     return osc::readCarriagewayRoad(file, findings).adjoiningLeftLanes;
   };
-  const std::string road = twoWayRoad("3.5");
-  EXPECT_EQ(adjoining(road), 1);
-  std::string median = road;
-  const std::string right_lane = R"(<lane id="-1" type="driving")";
-  median.replace(median.find(right_lane), right_lane.size(),
-                 R"(<lane id="-1" type="border" level="false"><width sOffset="0" a="0.5" b="0" c="0" d="0"/></lane>
-          <lane id="-2" type="driving")");
-  const std::string right_shoulder = R"(<lane id="-2" type="shoulder")";
-  median.replace(median.find(right_shoulder), right_shoulder.size(), R"(<lane id="-3" type="shoulder")");
-  EXPECT_EQ(adjoining(median), 0);
-  std::string varying = road;
-  const std::string left_width = R"(a="3.5" b="0" c="0" d="0"/></lane>
-        </left>)";
-  ASSERT_NE(varying.find(left_width), std::string::npos);
-  varying.replace(varying.find(left_width), left_width.size(), R"(a="3.5" b="0.001" c="0" d="0"/></lane>
-        </left>)");
-  EXPECT_EQ(adjoining(varying), 0);
+  EXPECT_EQ(adjoining(twoWayRoad("3.5")), 1);
+  const std::string left = odrLane(2, "shoulder", "1.0") + odrLane(1, "driving", "3.5");
+  const std::string median =
+      odrLane(-1, "border", "0.5") + odrLane(-2, "driving", "3.5") + odrLane(-3, "shoulder", "1.0");
+  EXPECT_EQ(adjoining(straightRoad("median", 7, "RHT", left, median)), 0);
+  const std::string varying =
+      odrLane(2, "shoulder", "1.0") +
+      R"(<lane id="1" type="driving"><width sOffset="0" a="3.5" b="0.001" c="0" d="0"/></lane>)";
+  EXPECT_EQ(adjoining(straightRoad("varying", 7, "RHT", varying, odrLane(-1, "driving", "3.5"))), 0);
 }
 
 // A condition on an Event's or an action's state: its end is its one action's end; its start
@@ -1367,7 +1372,7 @@ TEST(OscImport, ConditionsOnAnEventsStartOrEndFollowItsTriggerOrItsAction) {
       {R"(storyboardElementType="event" storyboardElementRef="CutInEvent" state="endTransition")",
        "storyboardElementRef=\"CutInEvent\": expected an Event with one action of a scripted road user"},
       {R"(storyboardElementType="event" storyboardElementRef="CutInEvent" state="startTransition")",
-       "the start of Event 'CutInEvent' ({gap: 30}) is neither a time nor an action's end"},
+       "the start of Event 'CutInEvent' ({gap: 30, rising: true}) is neither a time nor an action's end"},
       {R"(storyboardElementType="event" storyboardElementRef="SwerveEvent" state="startTransition")",
        "Event starts that follow each other more than 8 deep (a cycle?)"},
       {R"(storyboardElementType="maneuver" storyboardElementRef="CutInManeuver" state="startTransition")",
@@ -1414,4 +1419,164 @@ TEST(OscImport, AStopTriggerOtherThanOneSimulationTimeAsksForADuration) {
     options.duration = 5.0;
     EXPECT_DOUBLE_EQ(importTemplate(dir->path() / name, options)->duration, 5.0) << name;
   }
+}
+
+namespace {
+
+/// A straight 1 km road of two carriageways with a median (border lanes of 0.5 m on both sides of
+/// the reference line): lanes 2 (3.5 m) and 3 (3.25 m) on the left, -2 and -3 (3.5 m) on the
+/// right, each side with a 1 m shoulder outside; `rule` RHT or LHT.
+std::string twoCarriageways(const std::string& rule) {
+  return straightRoad("two carriageways", 3, rule,
+                      odrLane(4, "shoulder", "1.0") + odrLane(3, "driving", "3.25") + odrLane(2, "driving", "3.5") +
+                          odrLane(1, "border", "0.5"),
+                      odrLane(-1, "border", "0.5") + odrLane(-2, "driving", "3.5") + odrLane(-3, "driving", "3.5") +
+                          odrLane(-4, "shoulder", "1.0"));
+}
+
+/// overtake_on_the_left_side.xosc on twoCarriageways(rule), the Ego's LanePosition replaced by `ego_position`.
+std::unique_ptr<TemporaryDirectory> leftSideOvertake(const std::string& rule, const std::string& ego_position) {
+  return folderWith(
+      {{"roads/two_carriageways.xodr", twoCarriageways(rule)},
+       {"overtake.xosc", dataWith("overtake_on_the_left_side.xosc",
+                                  R"(<LanePosition roadId="3" laneId="3" s="100" offset="0"/>)", ego_position)}});
+}
+
+}  // namespace
+
+// Left-hand traffic: with rule="LHT" the left side is driven along the reference line and is
+// the language's road; a file may also drive a right-hand road's left side so, turning its
+// road users by their orientation (esmini's left-hand-traffic_by_heading): the same scenario.
+// By hand: lanes 2 and 3 are the language's lanes 0 and 1 (3.5 and 3.25 m), the 0.5 m border
+// next to the reference line its right shoulder, lane 4 its left one. Their centre line lies
+// 0.5 + 6.75 / 2 = 3.875 m left of the reference line: lane 1's centre (t = 5.625) at y = 1.75,
+// lane 0's (t = 2.25) at y = -1.625. The overtaker (25 m/s) starts 30 m behind the Ego (20 m/s,
+// both 4.5 m long): its gap is above 10 m from the start, so the rising edge comes when it is
+// 10 m ahead, 44.5 m later at 5 m/s: 8.9 s; its 2 s lane change ends before 12 s on lane 1.
+TEST(OscRun, ARoadDrivenOnItsLeftSideIsTheLanguagesRoad) {
+  const auto lht = leftSideOvertake("LHT", R"(<LanePosition roadId="3" laneId="3" s="100" offset="0"/>)");
+  const auto rht_turned = leftSideOvertake(
+      "RHT", R"(<LanePosition roadId="3" laneId="3" s="100" offset="0"><Orientation type="relative" h="3.14159"/>
+      </LanePosition>)");
+  for (const auto* folder : {&lht, &rht_turned}) {
+    const fs::path file = (*folder)->path() / "overtake.xosc";
+    const auto logical = importTemplate(file, {});
+    EXPECT_EQ(logical->road.lanes, 2);
+    ASSERT_EQ(logical->road.laneWidths.size(), 2u);
+    EXPECT_DOUBLE_EQ(logical->road.laneWidths[0].evaluate({}), 3.5);
+    EXPECT_DOUBLE_EQ(logical->road.laneWidths[1].evaluate({}), 3.25);
+    EXPECT_DOUBLE_EQ(logical->road.shoulderRight, 0.5);
+    EXPECT_DOUBLE_EQ(logical->road.shoulderLeft, 1.0);
+    EXPECT_EQ(logical->ego.lane, 1);
+    EXPECT_EQ(other(*logical, "Overtaker").lane, 0);
+    EXPECT_THAT(checkOpenScenario(file, {}).report(), HasSubstr("(laneId 2 .. 3, left of the reference line"));
+    const auto overtaker = simulatedTrack(file, "Overtaker");
+    ASSERT_TRUE(overtaker);
+    EXPECT_NEAR(overtaker->states.front().y, -1.625, 1e-6);
+    EXPECT_NEAR(overtaker->states.at(44).y, -1.625, 1e-6) << "8.8 s: not yet 10 m ahead";
+    EXPECT_GT(overtaker->states.at(48).y, -1.5) << "9.6 s: moving over";
+    EXPECT_NEAR(overtaker->states.back().y, 1.75, 0.01);
+    EXPECT_NEAR(overtaker->states.back().speed, 25.0, 1e-6);
+  }
+  EXPECT_THAT(checkOpenScenario(rht_turned->path() / "overtake.xosc", {}).report(),
+              HasSubstr("<left>: lanes 2 .. 3 (left of the reference line) are the language's lanes 0 .. 1, driven "
+                        "along the reference line as the Init places road users there"));
+
+  // Facing its lane's own direction on a right-hand road, the Ego drives against the reference
+  // line: not the language's road. In left-hand traffic, the right side is driven against it.
+  const auto rht_facing = leftSideOvertake("RHT", R"(<LanePosition roadId="3" laneId="3" s="100" offset="0"/>)");
+  EXPECT_THAT(test::configErrorOf([&] { importTemplate(rht_facing->path() / "overtake.xosc", {}); }),
+              HasSubstr("laneId 3: expected a driving lane of the road's right side, -2 .. -3"));
+  const auto lht_right = leftSideOvertake("LHT", R"(<LanePosition roadId="3" laneId="-2" s="100" offset="0"/>)");
+  EXPECT_THAT(test::configErrorOf([&] { importTemplate(lht_right->path() / "overtake.xosc", {}); }),
+              HasSubstr("laneId -2: expected a driving lane of the road's left side, 2 .. 3, driven along the "
+                        "reference line (rule LHT)"));
+}
+
+// An Event's maximumExecutionCount becomes its action's `repeat` (the language restarts it once
+// it has ended, when its condition fires again) and conditionEdge="rising" the condition's
+// `rising`. A start that happens once (a simulation time) cannot repeat, nor can an Event of
+// several actions, which the language would repeat one by one.
+TEST(OscImport, AnEventsMaximumExecutionCountRepeatsItsAction) {
+  const auto with = [](const std::string& event_attributes, const std::string& groups, const std::string& extra = "") {
+    std::string text = conditionsWith(groups);
+    const std::string event = R"(<Event name="SlowDown" priority="overwrite">)";
+    text.replace(text.find(event), event.size(),
+                 R"(<Event name="SlowDown" priority="overwrite" )" + event_attributes + ">" + extra);
+    return text;
+  };
+  const std::string speed = group(entityCondition("Lead", R"(<SpeedCondition value="25" rule="greaterOrEqual"/>)"));
+  const auto folder = folderWith({{"repeat.xosc", with(R"(maximumExecutionCount="3")", speed)}});
+  const auto logical = importTemplate(folder->path() / "repeat.xosc", {});
+  const auto& actions = other(*logical, "Lead").actions;  // the Init's speed-up at t = 0, then the Event's
+  ASSERT_EQ(actions.size(), 2u);
+  EXPECT_EQ(actions[0].repeat, 1);
+  EXPECT_EQ(actions[1].id, "StepDown");
+  EXPECT_EQ(actions[1].repeat, 3);
+  EXPECT_TRUE(actions[1].trigger.rising);
+  const auto once = folderWith({{"once.xosc", with(R"(maximumExecutionCount="1")", speed)}});
+  EXPECT_EQ(other(*importTemplate(once->path() / "once.xosc", {}), "Lead").actions.at(1).repeat, 1);
+
+  const std::string second_action = R"(<Action name="StepDownAgain"><PrivateAction><LongitudinalAction><SpeedAction>
+      <SpeedActionDynamics dynamicsShape="step" dynamicsDimension="time" value="0"/>
+      <SpeedActionTarget><AbsoluteTargetSpeed value="12"/></SpeedActionTarget></SpeedAction></LongitudinalAction>
+      </PrivateAction></Action>)";
+  const std::vector<std::pair<std::string, std::string>> refused = {
+      {with(R"(maximumExecutionCount="2")", group(timeCondition("3"))),
+       "maximumExecutionCount=2 with a start that happens once (a simulation time or a storyboard element's state)"},
+      {with(R"(maximumExecutionCount="2.5")", speed),
+       "maximumExecutionCount=2.5: expected a whole number 1 .. 1000000"},
+      {with(R"(maximumExecutionCount="0")", speed), "maximumExecutionCount=0: expected a whole number"},
+      {with(R"(maximumExecutionCount="2")", speed, second_action),
+       "maximumExecutionCount=2 on an Event of 2 actions (or actors): the language repeats each action on its own"},
+  };
+  for (const auto& [text, message] : refused) {
+    const auto bad = folderWith({{"bad.xosc", text}});
+    const std::string error = test::configErrorOf([&] { importTemplate(bad->path() / "bad.xosc", {}); });
+    EXPECT_THAT(error, HasSubstr("bad.xosc:")) << error;
+    EXPECT_THAT(error, HasSubstr(message)) << error;
+    EXPECT_EQ(error.find('\n'), std::string::npos) << error;
+  }
+}
+
+// A controller the map sends to `script` (esmini's sloppyDriver on a cutting-in vehicle) is not
+// simulated: its entity stays scripted and the one with the other controller is the Ego; without
+// the map the file has two controller-driven entities, which the language refuses.
+TEST(OscImport, AControllerMappedToScriptLeavesItsEntityScripted) {
+  const std::string slow = R"(<ScenarioObject name="Slow">
+      <CatalogReference catalogName="fleet" entryName="sedan"/>)";
+  const std::string sloppy = slow + R"(
+      <ObjectController><Controller name="wobbly"><Properties><Property name="sloppiness" value="0.6"/></Properties>
+      </Controller></ObjectController>)";
+  const auto folder = folderWith({{"sloppy.xosc", dataWith("conditions.xosc", slow, sloppy)},
+                                  {"map.yaml", "wobbly: script\n"}});
+  const fs::path file = folder->path() / "sloppy.xosc";
+  EXPECT_THAT(test::configErrorOf([&] { importTemplate(file, {}); }),
+              HasSubstr("'Ego' and 'Slow' both have a controller"));
+  OscImportOptions mapped;
+  mapped.controllerMap = folder->path() / "map.yaml";
+  const auto logical = importTemplate(file, mapped);
+  EXPECT_EQ(logical->ego.controller.name, "alks");  // the Ego's ALKSController, by default
+  EXPECT_EQ(other(*logical, "Slow").lane, 0);  // laneId -4, scripted at its place
+  EXPECT_THAT(checkOpenScenario(file, mapped).report(),
+              HasSubstr("'Slow' follows its script: its controller 'wobbly' is mapped to 'script'"));
+}
+
+// A lane's <width> entries that all give one constant are that width (esmini's velodrome repeats
+// its entries); entries that change it along the road are refused with the one that does.
+TEST(OscRoad, RepeatedWidthEntriesOfOneConstantAreOneWidth) {
+  TemporaryDirectory dir("vsd-osc-road");
+  const auto read = [&](const std::string& second_entry) {
+    const fs::path file = dir.path() / "road.xodr";
+    const std::string first_entry = R"(<width sOffset="0" a="3.5" b="0" c="0" d="0"/>)";
+    test::writeFile(file, straightRoad("widths", 1, "RHT", "",
+                                       R"(<lane id="-1" type="driving">)" + first_entry + second_entry + "</lane>"));
+    osc::Findings findings(false);
+    return osc::readCarriagewayRoad(file, findings);
+  };
+  const auto repeated = read(R"(<width sOffset="0" a="3.5" b="0" c="0" d="0"/><width sOffset="400" a="3.5"/>)");
+  ASSERT_EQ(repeated.laneWidths.size(), 1u);
+  EXPECT_DOUBLE_EQ(repeated.laneWidths[0], 3.5);
+  EXPECT_THAT(test::configErrorOf([&] { read(R"(<width sOffset="400" a="3.25"/>)"); }),
+              HasSubstr("road.xodr:10: <width>: a = 3.25 m after 3.5 m: a width that changes along the road"));
 }
