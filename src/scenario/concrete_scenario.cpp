@@ -438,6 +438,12 @@ ConcreteScenario sampleConcreteScenario(const std::shared_ptr<const LogicalScena
     concrete.controllerParams.emplace_back(
         name, evaluateFinite(expression, inputs, spec.ego.controller.where, "parameter " + name));
   }
+  concrete.controllerActiveFrom = evaluateFinite(spec.ego.controller.activeFrom, inputs, spec.ego.controller.where,
+                                                 "active_from");
+  if (concrete.controllerActiveFrom < 0.0) {
+    throw ConfigError(fmt::format("{}: active_from: got {} s in sample {}, expected a time >= 0 s",
+                                  spec.ego.controller.where, formatValue(concrete.controllerActiveFrom), index));
+  }
   return concrete;
 }
 

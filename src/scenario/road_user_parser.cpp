@@ -133,10 +133,17 @@ void parsePlacement(const YamlReader& reader, const YAML::Node& node, const std:
   }
 }
 
+void requireNonNegative(const YamlReader& reader, const YAML::Node& node, const std::string& field,
+                        const Expression& value, bool strictly_positive, const std::string& unit);
+
 void parseController(const YamlReader& reader, const YAML::Node& node, const std::string& field,
                      const std::vector<std::string>& inputs, ControllerSpec& controller) {
   controller.where = reader.where(node, field);
-  reader.checkKeys(node, field, {"name", "library", "params"});
+  reader.checkKeys(node, field, {"name", "library", "params", "active_from"});
+  if (node["active_from"]) {
+    controller.activeFrom = reader.expression(node["active_from"], field + ".active_from", inputs);
+    requireNonNegative(reader, node["active_from"], field + ".active_from", controller.activeFrom, false, "s");
+  }
   if (!node["name"]) reader.fail(node, field, "missing 'name' (a built-in controller or one exported by 'library')");
   controller.name = reader.scalar(node["name"], field + ".name");
   if (node["library"]) controller.library = reader.scalar(node["library"], field + ".library");

@@ -236,6 +236,7 @@ class BatchRun {
     member.ego.emplace(member.egoId, egoController(*member.run->scenario), member.traffic->egoStart(), ego_spec.length,
                        ego_spec.width, member.run->offset);
     member.ego->placeBy(member.placement);
+    member.ego->activateFrom(member.run->scenario->controllerActiveFrom);
     member.ego->pushToSumo();
     owner_.emplace(member.egoId, m);
     expected_.insert(member.egoId);

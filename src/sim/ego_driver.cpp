@@ -7,6 +7,7 @@
 #include <limits>
 
 #include "vsd/sim/activity.hpp"
+#include "vsd/sim/builtin_controllers.hpp"
 #include "vsd/core/error.hpp"
 
 namespace vsd::sim {
@@ -178,7 +179,11 @@ void EgoDriver::step(double time, double dt, double heading_noise, LaneCache& la
                      const std::vector<RoadUserState>& road_users) {
   const Observation observation = observe(time, lanes, road_users);
   Command command;
-  {
+  if (time + 1e-9 < activeFrom_) {
+    // Before its activation: the Ego's default lane keeping at constant speed.
+    command.accel = 0.0;
+    command.curvature = PurePursuitLateral().curvature(observation);
+  } else {
     const ActivityScope in_controller(Activity::Controller);
     command = controller_->step(observation, dt);
   }

@@ -319,3 +319,29 @@ vehicles:
     EXPECT_NE(message.find("bad.yaml:"), std::string::npos) << message;
   }
 }
+
+TEST(RoadUsers, TheEgosControllerActivationIsATimeOfItsOwn) {
+  const auto yaml = [](const std::string& active_from) {
+    return fmt::format(R"(
+name: users
+inputs: [{{name: t_on, min: -1, max: -1}}]
+road: {{shape: arc, length: 200, lanes: 3}}
+vehicles:
+  ego: {{s: 20, lane: 1, speed: 10, controller: {{name: idm, active_from: {}}}}}
+)",
+                       active_from);
+  };
+  const auto concrete = sampleConcreteScenario(parseLogicalScenario(yaml("2.5"), "ok.yaml"), 1, 0);
+  EXPECT_DOUBLE_EQ(concrete.controllerActiveFrom, 2.5);
+  const auto error = [&](const std::string& active_from) {
+    try {
+      sampleConcreteScenario(parseLogicalScenario(yaml(active_from), "bad.yaml"), 1, 0);
+    } catch (const ConfigError& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  EXPECT_NE(error("-1").find("vehicles.ego.controller.active_from"), std::string::npos) << error("-1");
+  EXPECT_NE(error("t_on").find("active_from: got -1 s in sample 0, expected a time >= 0 s"), std::string::npos)
+      << error("t_on");
+}

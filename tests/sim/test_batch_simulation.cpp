@@ -313,6 +313,41 @@ vehicles:
 // A set_speed action reaches the Ego's controller at its start: the ALKS-like system cruises
 // at 20 m/s until t = 1 s, then its cruise law a = 0.5 1/s * (10 - v) (no lead; within its
 // 6 m/s^2) takes the speed down by 10 % of the difference per 0.2 s step: 10 + 10 * 0.9^n.
+// controller.active_from: before it the controller is not asked and the Ego keeps its initial
+// speed on its lane (OpenSCENARIO's scripted phase before ActivateControllerAction). By hand:
+// steady_brake (-1 m/s^2) from t = 2 s: 20 m/s up to instant 10, then 0.2 m/s less per step; the
+// alks's set speed of 10 m/s (commanded at t = 1 s) from t = 3 s: 10 + 10 * 0.9^(k - 15) after
+// instant 15 (its cruise law, as in TheEgoFollowsTheSetSpeedItsActionsCommand).
+TEST(BatchSimulation, TheControllerDrivesFromItsActivationTime) {
+  TemporaryDirectory dir;
+  ControllerRegistry registry = ControllerRegistry::withBuiltins();
+  test::registerSteadyBrake(registry);
+  const auto run = [&](const std::string& ego) {
+    const std::string yaml = R"(
+name: activation
+time: {step: 0.2, duration: 8}
+road: {shape: arc, length: 400, lanes: 2, lane_width: 3.5}
+vehicles:
+  ego: )" + ego + "\n";
+    const Batch batch(scenario::parseLogicalScenario(yaml, "activation.yaml"), 1, dir.path(), registry);
+    EXPECT_TRUE(batch.results[0].ok()) << batch.results[0].failure;
+    return batch.results[0].trace.vehicles[0];
+  };
+  const auto braking = run("{s: 20, lane: 0, speed: 20, controller: {name: steady_brake, params: {decel: 1}, "
+                           "active_from: 2}}");
+  for (std::size_t k = 0; k < braking.states.size(); ++k) {
+    const double expected = k <= 10 ? 20.0 : 20.0 - 0.2 * static_cast<double>(k - 10);
+    EXPECT_NEAR(braking.states[k].speed, expected, 1e-9) << "instant " << k;
+    EXPECT_NEAR(braking.states[k].y, braking.states[0].y, 1e-9) << "instant " << k;
+  }
+  const auto cruising = run("{s: 20, lane: 0, speed: 20, controller: {name: alks, params: {set_speed: 20}, "
+                            "active_from: 3}, actions: [{trigger: {time: 1}, set_speed: {target: 10}}]}");
+  for (std::size_t k = 0; k < cruising.states.size(); ++k) {
+    const double expected = k <= 15 ? 20.0 : 10.0 + 10.0 * std::pow(0.9, static_cast<double>(k - 15));
+    EXPECT_NEAR(cruising.states[k].speed, expected, 1e-6) << "instant " << k;
+  }
+}
+
 TEST(BatchSimulation, TheEgoFollowsTheSetSpeedItsActionsCommand) {
   TemporaryDirectory dir;
   const std::string yaml = R"(

@@ -95,6 +95,7 @@ struct ConcreteScenario {
   /// Every road user's actions, road user by road user, in file order; the Ego's last.
   std::vector<ConcreteAction> actions;
   std::vector<std::pair<std::string, double>> controllerParams;  ///< evaluated
+  double controllerActiveFrom = 0.0;  ///< s, ControllerSpec::activeFrom evaluated (>= 0)
 
   double step() const { return logical->step; }
   int steps() const { return logical->steps(); }

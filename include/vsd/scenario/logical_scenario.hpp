@@ -104,6 +104,9 @@ struct ControllerSpec {
   std::string name;
   std::filesystem::path library;  ///< empty for built-ins; relative paths are relative to the scenario file
   std::vector<std::pair<std::string, Expression>> params;  ///< numeric, may use inputs
+  /// s (>= 0) from which the controller drives; before, the Ego keeps its initial speed on its
+  /// lane's centre line (OpenSCENARIO's scripted phase before an ActivateControllerAction).
+  Expression activeFrom = Expression::constant(0.0);
   std::string where;
 };
 

@@ -94,6 +94,10 @@ class EgoDriver {
   void observeWith(const ObjectSensor& sensor) { sensor_ = sensor; }
   /// The set speed (m/s) the scenario commands from now on (Observation::commandedSetSpeed).
   void commandSetSpeed(std::optional<double> set_speed) { commandedSetSpeed_ = set_speed; }
+  /// The controller drives from `time` (s) on; before, the Ego keeps its speed and follows its
+  /// lane's centre line by pure pursuit (the scripted phase before a scenario activates it),
+  /// and the controller is not asked.
+  void activateFrom(double time) { activeFrom_ = time; }
   /// Places the vehicle in SUMO at the current state (moveToXY + speed).
   void pushToSumo() const;
   /// Builds the controller's observation from SUMO's current state; for a controller that
@@ -123,6 +127,7 @@ class EgoDriver {
   SumoPlacement placement_;
   ObjectSensor sensor_;
   std::optional<double> commandedSetSpeed_;
+  double activeFrom_ = 0.0;  ///< s
 };
 
 }  // namespace vsd::sim
