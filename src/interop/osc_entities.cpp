@@ -139,12 +139,13 @@ void readEntities(Translation& translation, const pugi::xml_node& root, Catalogs
 
 namespace {
 
-/// An Init's ActivateControllerAction: the Ego's controller drives from t = 0 anyway, and a
-/// scripted road user follows its script (which of the two the entity is, is not known yet).
-void noteActivation(Translation& translation, const pugi::xml_node& action, const Entity& entity) {
+/// An Init's ActivateControllerAction: the Ego's controller drives from t = 0, and a scripted
+/// road user follows its script (which of the two the entity is, is not known yet).
+void noteActivation(Translation& translation, const pugi::xml_node& action, Entity& entity) {
+  entity.activatedAtStart = true;
   translation.findings.note(translation.reader.where(action),
-                            fmt::format("'{}': the Ego's controller drives from t = 0 in any case, a scripted road "
-                                        "user follows its script",
+                            fmt::format("'{}': the Ego's controller drives from t = 0, a scripted road user follows "
+                                        "its script",
                                         entity.name));
 }
 

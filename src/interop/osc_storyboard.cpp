@@ -265,16 +265,31 @@ YAML::Node continuousSpeed(Translation& translation, const Entity& actor, const 
 
 namespace {
 
+/// Marks the item privateAction returns for an ActivateControllerAction of the Ego (no language action).
+constexpr const char* kActivation = "activate_controller";
+
 /// The language's action (without trigger) for one <PrivateAction> of `actor`.
 std::optional<YAML::Node> privateAction(Translation& translation, Entity& actor, const pugi::xml_node& node) {
   const xml::Reader& reader = translation.reader;
   const pugi::xml_node action =
-      reader.choice(node, {"LongitudinalAction", "LateralAction", "ControllerAction", "RoutingAction"});
+      reader.choice(node, {"LongitudinalAction", "LateralAction", "ControllerAction", "ActivateControllerAction",
+                           "RoutingAction"});
   const std::string kind = action.name();
+  // OpenSCENARIO 1.0 puts ActivateControllerAction in PrivateAction, 1.1 and 1.2 in ControllerAction.
+  const pugi::xml_node activate =
+      kind == "ActivateControllerAction" ? action : action.child("ActivateControllerAction");
   if (&actor == translation.ego) {
-    if (kind == "ControllerAction" && action.child("ActivateControllerAction")) {
-      translation.findings.note(reader.where(action), "the Ego's controller drives from t = 0 in any case");
-      return std::nullopt;
+    if (activate) {
+      if (kind == "ControllerAction") reader.requireSubset(action, {"ActivateControllerAction"});
+      for (const char* domain : {"longitudinal", "lateral"}) {
+        if (reader.optionalText(activate, domain) == std::optional<std::string>("false")) {
+          reader.fail(activate, fmt::format("{}=\"false\": the language's Ego controller drives both directions",
+                                            domain));
+        }
+      }
+      YAML::Node item;
+      item[kActivation] = "true";  // the Ego's controller from the Event's start: readStories takes it
+      return item;
     }
     if (kind == "LongitudinalAction") {
       YAML::Node item;
@@ -871,6 +886,10 @@ void readEvent(Translation& translation, const std::vector<Entity*>& actors, con
       for (Entity* actor : actors) {
         const auto item = privateAction(translation, *actor, reader.only(action, "PrivateAction"));
         if (!item) continue;
+        if ((*item)[kActivation]) {  // no language action: its Event's start becomes the controller's active_from
+          pending.actions.push_back({actor, *item});
+          continue;
+        }
         YAML::Node copy = *item;
         copy["id"] = identifier(actors.size() == 1 ? name : name + "_" + actor->name, translation.usedIds);
         translation.actionIds[name].push_back(copy["id"].as<std::string>());
@@ -901,6 +920,31 @@ void repeatAction(const Translation& translation, const PendingEvent& event, con
                                         event.executions));
   }
   item["repeat"] = event.executions;
+}
+
+/// The Ego's ActivateControllerAction in an Event that starts at a time: its controller drives
+/// from the first such time (the language's active_from); before, the Ego keeps its initial
+/// speed on its lane, as esmini's default controller drives it. Activated in the Init, it
+/// drives from t = 0 and a later activation changes nothing.
+void activateEgoController(Translation& translation, const pugi::xml_node& event, const YAML::Node& trigger) {
+  const xml::Reader& reader = translation.reader;
+  if (!trigger["time"] || trigger.size() > 2 || (trigger.size() == 2 && !trigger["delay"])) {
+    YAML::Emitter flow;
+    flow << YAML::Flow << trigger;
+    reader.fail(event, fmt::format("the Ego's ActivateControllerAction starts on {}: the language activates the "
+                                   "Ego's controller at a time (its active_from)",
+                                   flow.c_str()));
+  }
+  if (translation.ego->activatedAtStart) {
+    translation.findings.note(reader.where(event), "the Ego's controller drives from t = 0 (the Init activates it)");
+    return;
+  }
+  const double at = trigger["time"].as<double>() + (trigger["delay"] ? trigger["delay"].as<double>() : 0.0);
+  if (!translation.egoActiveFrom || at < *translation.egoActiveFrom) translation.egoActiveFrom = at;
+  translation.findings.mapped(reader.where(event),
+                              fmt::format("the Ego's controller drives from t = {} s; before, the Ego keeps its "
+                                          "initial speed on its lane's centre line",
+                                          num(at)));
 }
 
 void readManeuverGroup(Translation& translation, const pugi::xml_node& group, std::vector<PendingEvent>& events) {
@@ -988,6 +1032,10 @@ void readStories(Translation& translation, const pugi::xml_node& storyboard) {
         if (!trigger) {
           translation.findings.note(reader.where(event.node), "its condition never holds: the event never starts");
           return;
+        }
+        if (pending.item[kActivation]) {
+          activateEgoController(translation, event.node, *trigger);
+          continue;
         }
         pending.item["trigger"] = *trigger;
         if (event.executions > 1) repeatAction(translation, event, *trigger, pending.item);

@@ -320,6 +320,9 @@ std::string languageYaml(Translation& translation, const Parameters& parameters,
   root["vehicles"]["ego"] = roadUserNode(translation, ego, true);
   root["vehicles"]["ego"]["controller"]["name"] = controller.name;
   if (controller.params && controller.params.IsMap()) root["vehicles"]["ego"]["controller"]["params"] = controller.params;
+  if (translation.egoActiveFrom && *translation.egoActiveFrom > 0.0) {
+    root["vehicles"]["ego"]["controller"]["active_from"] = num(*translation.egoActiveFrom);
+  }
   YAML::Node others(YAML::NodeType::Sequence);
   for (const auto& entity : translation.entities) {
     if (&entity != &ego) others.push_back(roadUserNode(translation, entity, false));

@@ -57,6 +57,7 @@ struct Entity {
   bool speeding = false;
   YAML::Node actions = YAML::Node(YAML::NodeType::Sequence);
   bool movesLaterally = false;
+  bool activatedAtStart = false;  ///< the Init activates its controller
 
   bool isVehicle() const { return type != RoadUserType::Pedestrian && type != RoadUserType::StationaryObject; }
 };
@@ -93,6 +94,8 @@ struct Translation {
   int eventStartsFollowed = 0;  ///< nesting of Event starts being translated (a cycle is refused)
   std::set<std::string> usedIds = {"ego"};
   double duration = 0.0;  ///< s; 0: not known from the file
+  /// s: the first ActivateControllerAction of the Ego in the Story (none: it drives from t = 0).
+  std::optional<double> egoActiveFrom;
   /// A condition measures between reference points: road users carry theirs (centreAhead).
   bool measuresReferencePoints = false;
 

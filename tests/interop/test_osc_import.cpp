@@ -1580,3 +1580,42 @@ TEST(OscRoad, RepeatedWidthEntriesOfOneConstantAreOneWidth) {
   EXPECT_THAT(test::configErrorOf([&] { read(R"(<width sOffset="400" a="3.25"/>)"); }),
               HasSubstr("road.xodr:10: <width>: a = 3.25 m after 3.5 m: a width that changes along the road"));
 }
+
+// The Ego's ActivateControllerAction in an Event at a simulation time (ASAM's templates: 3 s)
+// becomes its controller's active_from; activated in the Init, the controller drives from t = 0;
+// started by a condition, the activation is refused (the language activates at a time).
+TEST(OscImport, TheEgosControllerActivationTimeIsItsActiveFrom) {
+  const auto activation = [](const std::string& condition) {
+    return R"(<ManeuverGroup maximumExecutionCount="1" name="Activation">
+          <Actors selectTriggeringEntities="false"><EntityRef entityRef="Ego"/></Actors>
+          <Maneuver name="Activation"><Event name="Activate" priority="overwrite">
+            <Action name="ActivateALKS"><PrivateAction>
+              <ActivateControllerAction lateral="true" longitudinal="true"/></PrivateAction></Action>
+            <StartTrigger><ConditionGroup>)" +
+           condition + R"(</ConditionGroup></StartTrigger></Event></Maneuver></ManeuverGroup>
+      </Act>)";
+  };
+  const auto folder =
+      folderWith({{"late.xosc", dataWith("conditions.xosc", "</Act>", activation(timeCondition("3")))}});
+  const auto late = importTemplate(folder->path() / "late.xosc", {});
+  EXPECT_DOUBLE_EQ(late->ego.controller.activeFrom.evaluate({}), 3.0);
+  EXPECT_THAT(checkOpenScenario(folder->path() / "late.xosc", {}).report(),
+              HasSubstr("the Ego's controller drives from t = 3 s; before, the Ego keeps its initial speed"));
+
+  const std::string init_activation = R"(<Private entityRef="Ego">
+          <PrivateAction><ActivateControllerAction lateral="true" longitudinal="true"/></PrivateAction>)";
+  std::string early = dataWith("conditions.xosc", "</Act>", activation(timeCondition("3")));
+  early.replace(early.find(R"(<Private entityRef="Ego">)"), std::string(R"(<Private entityRef="Ego">)").size(),
+                init_activation);
+  const auto from_start = folderWith({{"early.xosc", early}});
+  EXPECT_DOUBLE_EQ(importTemplate(from_start->path() / "early.xosc", {})->ego.controller.activeFrom.evaluate({}), 0.0);
+
+  const auto on_condition = folderWith({{"cond.xosc", dataWith("conditions.xosc", "</Act>",
+                                                                activation(entityCondition(
+                                                                    "Lead", R"(<SpeedCondition value="25"
+                                                                    rule="greaterOrEqual"/>)")))}});
+  const std::string error = test::configErrorOf([&] { importTemplate(on_condition->path() / "cond.xosc", {}); });
+  EXPECT_THAT(error, HasSubstr("cond.xosc:"));
+  EXPECT_THAT(error, HasSubstr("the Ego's ActivateControllerAction starts on {speed_at_least: 25"));
+  EXPECT_THAT(error, HasSubstr("the language activates the Ego's controller at a time (its active_from)"));
+}
