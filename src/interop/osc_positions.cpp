@@ -55,28 +55,42 @@ void checkRoad(const Translation& translation, const pugi::xml_node& position) {
 Placement lanePosition(const Translation& translation, const pugi::xml_node& position) {
   const xml::Reader& reader = translation.reader;
   checkRoad(translation, position);
+  const CarriagewayRoad& road = translation.road;
   const long lane_id = static_cast<long>(reader.integer(position, "laneId", -100, 100));
-  const int lane = translation.road.languageLane(lane_id, reader.where(position));
-  const double offset = reader.optionalNumber(position, "offset").value_or(0.0);
+  const int lane = road.languageLane(lane_id, reader.where(position));
+  // The offset counts along t (left of the reference line), as esmini reads it.
+  const double offset = road.ownT(reader.optionalNumber(position, "offset").value_or(0.0));
   // A relative orientation counts from the lane's driving direction under the road's rule
   // (as esmini reads it): against the reference line on the left side in right-hand traffic.
-  Placement placement = onRoad(translation, position, reader.number(position, "s"),
-                               translation.road.laneCentreT(lane) + offset, translation.road.laneDirection(lane_id));
+  Placement placement = onRoad(translation, position, road.ownS(reader.number(position, "s")),
+                               road.laneCentreT(lane) + offset, road.laneDirection(lane_id));
   placement.lane = lane;
   return placement;
+}
+
+/// A RoadPosition: s and t of the file's reference line; a relative orientation counts from its direction.
+Placement roadPosition(const Translation& translation, const pugi::xml_node& position) {
+  const xml::Reader& reader = translation.reader;
+  const CarriagewayRoad& road = translation.road;
+  checkRoad(translation, position);
+  return onRoad(translation, position, road.ownS(reader.number(position, "s")), road.ownT(reader.number(position, "t")),
+                road.reversed ? kPi : 0.0);
 }
 
 Placement relativeLanePosition(Translation& translation, const pugi::xml_node& position) {
   const xml::Reader& reader = translation.reader;
   if (position.attribute("dsLane")) reader.fail(position, "dsLane: use ds (along the road's reference line)");
   const Placement base = placementOf(translation, translation.entity(position, reader.text(position, "entityRef")));
-  const long lane = base.lane + reader.integer(position, "dLane", -100, 100);
+  // dLane counts lane ids (esmini's reading with ds): on a reversed road, the other way.
+  const CarriagewayRoad& road = translation.road;
+  const long d_lane = reader.integer(position, "dLane", -100, 100);
+  const long lane = base.lane + (road.reversed ? -d_lane : d_lane);
   if (lane < 0 || lane >= translation.road.lanes) {
     reader.fail(position, fmt::format("dLane={} from lane {} leaves the road's {} driving lanes",
                                       reader.text(position, "dLane"), base.lane, translation.road.lanes));
   }
-  const double offset = reader.optionalNumber(position, "offset").value_or(0.0);
-  const double s = base.s + reader.optionalNumber(position, "ds").value_or(0.0);
+  const double offset = road.ownT(reader.optionalNumber(position, "offset").value_or(0.0));
+  const double s = base.s + road.ownDs(reader.optionalNumber(position, "ds").value_or(0.0));
   Placement placement = onRoad(translation, position, s, translation.road.laneCentreT(static_cast<int>(lane)) + offset);
   placement.lane = static_cast<int>(lane);
   return placement;
@@ -120,13 +134,12 @@ Placement resolvePosition(Translation& translation, const pugi::xml_node& positi
   reader.requireSubset(position, {"Orientation"});
   if (kind == "LanePosition") return lanePosition(translation, position);
   if (kind == "RelativeLanePosition") return relativeLanePosition(translation, position);
-  if (kind == "RoadPosition") {
-    checkRoad(translation, position);
-    return onRoad(translation, position, reader.number(position, "s"), reader.number(position, "t"));
-  }
+  if (kind == "RoadPosition") return roadPosition(translation, position);
   if (kind == "RelativeRoadPosition") {
+    const CarriagewayRoad& road = translation.road;
     const Placement base = placementOf(translation, translation.entity(position, reader.text(position, "entityRef")));
-    return onRoad(translation, position, base.s + reader.number(position, "ds"), base.t + reader.number(position, "dt"));
+    return onRoad(translation, position, base.s + road.ownDs(reader.number(position, "ds")),
+                  base.t + road.ownT(reader.number(position, "dt")), road.reversed ? kPi : 0.0);
   }
   return planePosition(translation, position);
 }
@@ -213,26 +226,28 @@ Placement fixedPlace(Translation& translation, const pugi::xml_node& position_no
   }
   reader.requireSubset(position, {"Orientation"});
   if (kind == "LanePosition") return lanePosition(translation, position);
-  checkRoad(translation, position);
-  return onRoad(translation, position, reader.number(position, "s"), reader.number(position, "t"));
+  return roadPosition(translation, position);
 }
 
-bool initDrivesLeftSideOnly(const Translation& translation) {
+InitCarriageway initCarriageway(const Translation& translation) {
   const CarriagewayRoad& road = translation.road;
-  bool left = false;
-  bool right = false;
+  bool right_along = false;
+  bool left_along = false;
+  bool left_against = false;
   for (const Entity& entity : translation.entities) {
     const pugi::xml_node position = entity.position.child("LanePosition");
-    if (!position) continue;
+    if (!position || !entity.isVehicle()) continue;  // a pedestrian's heading says no driving direction
     try {  // a value that does not resolve counts as nothing; placing reports it
       const long lane_id = static_cast<long>(translation.reader.integer(position, "laneId", -100, 100));
       const double s = translation.reader.number(position, "s");
       const bool along = std::cos(orientation(translation, position, s, road.laneDirection(lane_id))) > 0.0;
-      (lane_id > 0 ? left : right) = (lane_id > 0 ? left : right) || along;
+      if (lane_id < 0) right_along = right_along || along;
+      if (lane_id > 0) (along ? left_along : left_against) = true;
     } catch (const ConfigError&) {
     }
   }
-  return left && !right;
+  if (right_along || left_along == left_against) return InitCarriageway::Right;
+  return left_along ? InitCarriageway::LeftAlong : InitCarriageway::LeftAgainst;
 }
 
 void placeEntities(Translation& translation) {

@@ -286,7 +286,59 @@ void CarriagewayRoad::useLeftCarriageway() {
   takeRun(*this, *leftRun, +1);
 }
 
-double CarriagewayRoad::laneDirection(long lane_id) const { return (lane_id > 0) != leftHandTraffic ? kPi : 0.0; }
+double CarriagewayRoad::laneDirection(long lane_id) const {
+  const bool against_file_line = (lane_id > 0) != leftHandTraffic;
+  return against_file_line != reversed ? kPi : 0.0;
+}
+
+namespace {
+
+/// `geometry` run backwards: from its end, turned by pi, its curvature negated (a spiral's ends swapped).
+PlanGeometry reversedGeometry(const PlanGeometry& geometry, double s, const std::filesystem::path& file) {
+  const double length = geometry.length();
+  const Vec2 start = geometry.point(length);
+  const double heading = geometry.heading(length) + kPi;
+  switch (geometry.kind()) {
+    case PlanGeometry::Kind::Line: return PlanGeometry::line(s, start, heading, length);
+    case PlanGeometry::Kind::Arc: return PlanGeometry::arc(s, start, heading, length, -geometry.curvature(0.0));
+    case PlanGeometry::Kind::Spiral:
+      return PlanGeometry::spiral(s, start, heading, length, -geometry.curvature(length), -geometry.curvature(0.0));
+    case PlanGeometry::Kind::ParamPoly3: break;
+  }
+  throw ConfigError(fmt::format("{}: a paramPoly3 geometry at s = {} m: the left side is driven against the reference "
+                                "line, and vsd-sumo reverses lines, arcs and spirals only",
+                                file.string(), xml::number(geometry.s())));
+}
+
+}  // namespace
+
+void CarriagewayRoad::useReversedLeftCarriageway() {
+  if (!leftRun || leftCarriageway || leftLanesJoined || reversed || leftHandTraffic) {
+    throw std::logic_error("useReversedLeftCarriageway: no left run to use");
+  }
+  std::vector<PlanGeometry> backwards;
+  for (auto it = geometries.rbegin(); it != geometries.rend(); ++it) {
+    backwards.push_back(reversedGeometry(*it, length - (it->s() + it->length()), file));
+  }
+  geometries = std::move(backwards);
+  start = geometries.front().point(0.0);
+  heading = geometries.front().heading(0.0);
+  turnBefore = {0.0};
+  for (std::size_t g = 1; g < geometries.size(); ++g) {
+    turnBefore.push_back(turnBefore.back() + geometries[g - 1].turn(geometries[g - 1].length()));
+  }
+  referenceSamples = MeasuredPolyline();
+  sampleS.clear();
+  classifyCurvature(*this);
+  // The left side's run, seen from the reversed line: its right side, ids turned, lane 0 the outermost.
+  DrivenRun run = *leftRun;
+  run.innermostLaneId = -run.innermostLaneId;
+  std::reverse(run.laneWidths.begin(), run.laneWidths.end());
+  takeRun(*this, run, -1);
+  adjoiningLeftLanes = 0;
+  adjoiningLeftWidths.clear();
+  reversed = true;
+}
 
 void CarriagewayRoad::joinLeftLanes() {
   if (adjoiningLeftLanes == 0 || leftLanesJoined) throw std::logic_error("joinLeftLanes: no left lanes to join");
@@ -300,6 +352,16 @@ void CarriagewayRoad::joinLeftLanes() {
 int CarriagewayRoad::languageLane(long lane_id, const std::string& where) const {
   if (leftLanesJoined && lane_id >= 1 && lane_id <= adjoiningLeftLanes) {
     return rightLanes() + static_cast<int>(lane_id) - 1;
+  }
+  if (reversed) {  // the left side driven against the reference line: own ids are the file's turned
+    const long own = -lane_id;
+    const long outermost = innermostLaneId - lanes + 1;
+    if (own <= innermostLaneId && own >= outermost) return static_cast<int>(own - outermost);
+    const char* why = lane_id < 0 ? "the right side's lanes are not part of vsd-sumo's road here"
+                                  : "a shoulder, stop lane, border or median: no road user drives there";
+    throw ConfigError(fmt::format("{}: laneId {}: expected a driving lane of the road's left side, {} .. {}, driven "
+                                  "against the reference line (as the file's Init drives it) ({})",
+                                  where, lane_id, -innermostLaneId, -outermost, why));
   }
   if (leftCarriageway) {
     const long outermost = innermostLaneId + lanes - 1;

@@ -11,8 +11,11 @@
 // join the road where the scenario drives them along the reference line (joinLeftLanes),
 // and the left side's run becomes the road instead of the right side's where the scenario
 // drives it along the reference line (useLeftCarriageway; esmini's left-hand traffic "by
-// heading"). Elevation, superelevation, road marks, links, objects and signals do not
-// change the planar lanes: they are reported as not simulated.
+// heading"), or the left side's run driven against the reference line where the scenario
+// drives it so (useReversedLeftCarriageway: the road is read on the reversed reference line,
+// and the file's s, t, lane ids and offsets are turned with it: ownS, ownT, ownLaneId).
+// Elevation, superelevation, road marks, links, objects and signals do not change the planar
+// lanes: they are reported as not simulated.
 //
 // The plan view is any chain of `line`, `arc`, `spiral` and `paramPoly3` geometries.
 // A road of one curvature (lines only, or arcs of one curvature) maps onto the language's
@@ -108,6 +111,9 @@ struct CarriagewayRoad {
   bool leftHandTraffic = false;  ///< rule="LHT": the left side is driven along the reference line
   /// The road is the left side's run (left-hand traffic, or useLeftCarriageway), else the right side's.
   bool leftCarriageway = false;
+  /// The road is the left side's run driven against the reference line (right-hand traffic),
+  /// read on the reversed reference line: its s runs from the file's road end (useReversedLeftCarriageway).
+  bool reversed = false;
   int lanes = 0;            ///< the language's driving lanes: the run's (and the joined left ones)
   int innermostLaneId = -1; ///< OpenDRIVE id of the run's driving lane next to the reference line
   std::vector<double> laneWidths;  ///< m, each driving lane's, the language's lane 0 (rightmost) first
@@ -139,18 +145,30 @@ struct CarriagewayRoad {
   /// Makes the left side's run the road instead of the right side's, driven along the
   /// reference line. Only in right-hand traffic with a leftRun, once, without joined lanes.
   void useLeftCarriageway();
+  /// Makes the left side's run the road, driven against the reference line: the reference
+  /// line is reversed (geometries in reverse order, each run backwards) and the left side
+  /// becomes its right side. Only in right-hand traffic with a leftRun, once; throws ConfigError
+  /// for a paramPoly3 geometry (not reversed).
+  void useReversedLeftCarriageway();
+  /// The file's s, t (or a lateral offset along t) and lane id on the road's own reference
+  /// line: the same, or turned on a reversed road (length - s, -t, -id).
+  double ownS(double file_s) const { return reversed ? length - file_s : file_s; }
+  double ownT(double file_t) const { return reversed ? -file_t : file_t; }
+  double ownDs(double file_ds) const { return reversed ? -file_ds : file_ds; }
+  long ownLaneId(long file_id) const { return reversed ? -file_id : file_id; }
   /// Driving lanes of the right side.
   int rightLanes() const { return leftLanesJoined ? lanes - adjoiningLeftLanes : lanes; }
-  /// rad, relative to the reference line: the driving direction of lane `lane_id` under the
-  /// road's rule (0 along it, pi against it), which a relative <Orientation> counts from.
+  /// rad, relative to the road's own reference line: the driving direction of the file's lane
+  /// `lane_id` under the road's rule (0 along it, pi against it), which a relative
+  /// <Orientation> counts from.
   double laneDirection(long lane_id) const;
 
   /// t of the driving lanes' centre line (the language's road centre).
   double centreT() const;
   /// True if every driving lane has the same width.
   bool oneLaneWidth() const;
-  /// Language lane (0 = rightmost) of a driving lane id (with joined left lanes: id 1 is the
-  /// lane left of id -1); throws ConfigError naming `where` otherwise.
+  /// Language lane (0 = rightmost) of the file's driving lane id (with joined left lanes: id 1
+  /// is the lane left of id -1); throws ConfigError naming `where` otherwise.
   int languageLane(long lane_id, const std::string& where) const;
   /// t of a language lane's centre.
   double laneCentreT(int lane) const;

@@ -100,7 +100,8 @@ YAML::Node laneOffset(Translation& translation, const Entity& actor, const pugi:
   item["lateral_accel"] = num(*accel);
   const pugi::xml_node target = reader.choice(reader.only(action, "LaneOffsetTarget"),
                                               {"AbsoluteTargetLaneOffset", "RelativeTargetLaneOffset"});
-  double offset = reader.number(target, "value");
+  // Along t (left of the reference line), as esmini reads it: turned on a reversed road.
+  double offset = translation.road.ownT(reader.number(target, "value"));
   if (std::string(target.name()) == "RelativeTargetLaneOffset") {
     const Entity& other = translation.entity(target, reader.text(target, "entityRef"));
     if (&other == &actor || other.placement->lane != actor.placement->lane || other.movesLaterally) {

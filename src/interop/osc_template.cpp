@@ -386,23 +386,35 @@ bool placesOnLeftLanes(const Translation& translation) {
   });
 }
 
-/// In right-hand traffic, a file whose Init drives only the left side, along the reference
-/// line (esmini's left-hand traffic "by heading"), has the left side's run as its road.
-/// Returns whether it has.
+/// In right-hand traffic, a file whose Init drives only the left side has the left side's run
+/// as its road: along the reference line (esmini's left-hand traffic "by heading"), or against
+/// it, the reference line reversed (the other carriageway, as ASAM's 4.2.3 varies the Ego's
+/// lane over both). Returns whether it has.
 bool takeLeftCarriageway(Translation& translation) {
   CarriagewayRoad& road = translation.road;
-  if (road.leftHandTraffic || !initDrivesLeftSideOnly(translation)) return false;
+  if (road.leftHandTraffic) return false;
+  const InitCarriageway side = initCarriageway(translation);
+  if (side == InitCarriageway::Right) return false;
+  const char* direction = side == InitCarriageway::LeftAlong ? "along" : "against";
   if (!road.leftRun) {
-    throw ConfigError(fmt::format("{}: the Init drives the left side along the reference line, which does not map "
-                                  "onto the language's lanes: {}",
-                                  road.otherSide, road.leftRunProblem));
+    throw ConfigError(fmt::format("{}: the Init drives the left side {} the reference line, which does not map onto "
+                                  "the language's lanes: {}",
+                                  road.otherSide, direction, road.leftRunProblem));
   }
-  road.useLeftCarriageway();
+  if (side == InitCarriageway::LeftAlong) {
+    road.useLeftCarriageway();
+  } else {
+    road.useReversedLeftCarriageway();
+  }
+  // Lane 0 is the innermost along the reference line, the outermost against it.
+  const long innermost = side == InitCarriageway::LeftAlong ? road.innermostLaneId : -road.innermostLaneId;
+  const long outermost = innermost + road.lanes - 1;
+  const bool along = side == InitCarriageway::LeftAlong;
   translation.findings.mapped(
       road.otherSide,
-      fmt::format("lanes {} .. {} (left of the reference line) are the language's lanes 0 .. {}, driven along the "
+      fmt::format("lanes {} .. {} (left of the reference line) are the language's lanes 0 .. {}, driven {} the "
                   "reference line as the Init places road users there; the right side is not part of vsd-sumo's road",
-                  road.innermostLaneId, road.innermostLaneId + road.lanes - 1, road.lanes - 1));
+                  along ? innermost : outermost, along ? outermost : innermost, road.lanes - 1, direction));
   return true;
 }
 
@@ -481,11 +493,15 @@ TranslationResult translate(const fs::path& xosc, const OscImportOptions& option
   const std::string shape = road.oneCurvature
                                 ? fmt::format("curvature {} 1/m", num(road.curvature))
                                 : fmt::format("{} geometries of varying curvature", road.geometries.size());
-  const std::string side =
-      road.leftCarriageway
-          ? fmt::format(" (laneId {} .. {}, left of the reference line{})", road.innermostLaneId,
-                        road.innermostLaneId + road.lanes - 1, road.leftHandTraffic ? ", rule LHT" : "")
-          : "";
+  std::string side;
+  if (road.leftCarriageway) {
+    side = fmt::format(" (laneId {} .. {}, left of the reference line{})", road.innermostLaneId,
+                       road.innermostLaneId + road.lanes - 1, road.leftHandTraffic ? ", rule LHT" : "");
+  } else if (road.reversed) {
+    side = fmt::format(" (laneId {} .. {}, left of the reference line, driven against it: vsd-sumo's road starts at "
+                       "the file's s = {} m)",
+                       -road.innermostLaneId, -road.innermostLaneId + road.lanes - 1, num(road.length));
+  }
   findings.mapped(reader.where(logic), fmt::format("road '{}': {}{}, {}", road.id, lanes, side, shape));
   placeEntities(translation);
   findings.attempt([&] {

@@ -111,10 +111,11 @@ void readEntities(Translation& translation, const pugi::xml_node& root, Catalogs
 void readInit(Translation& translation, const pugi::xml_node& storyboard);
 /// Resolves every entity's start (relative positions and speeds after their references).
 void placeEntities(Translation& translation);
-/// Whether the Init places road users on lanes of the road's left side heading along the
-/// reference line (LanePositions with their orientations), and none on the right side's so:
-/// in right-hand traffic, the file drives the left side as its carriageway.
-bool initDrivesLeftSideOnly(const Translation& translation);
+/// Where the Init's vehicles drive (LanePositions with their orientations): on the left side
+/// only, all along the reference line or all against it (in right-hand traffic, the file
+/// drives the left side as its carriageway, that way); anything else: Right.
+enum class InitCarriageway { Right, LeftAlong, LeftAgainst };
+InitCarriageway initCarriageway(const Translation& translation);
 /// A place that does not move (WorldPosition, LanePosition, RoadPosition), for conditions:
 /// a position relative to a road user would move with it, which the language's places do not.
 Placement fixedPlace(Translation& translation, const pugi::xml_node& position);

@@ -508,7 +508,9 @@ TEST(OscRun, ASetTheImportRefusesFailsAloneAndCheckSaysTheFileStillRuns) {
   EXPECT_EQ(summary.refused, 1u);
   EXPECT_EQ(summary.run.ok, 1u);
   EXPECT_THAT(summary.firstRefused, HasSubstr("parameter set 0:"));
-  EXPECT_THAT(summary.firstRefused, HasSubstr("laneId 2: expected a driving lane of the road's right side"));
+  // Its Ego on lane 2, facing that lane's direction: the left side driven against the reference
+  // line, which has lane 1 only.
+  EXPECT_THAT(summary.firstRefused, HasSubstr("laneId 2: expected a driving lane of the road's left side, 1 .. 1"));
   const auto check = checkOpenScenario(data("blocking_targets_lanes_variation.xosc"), {});
   EXPECT_TRUE(check.runnable()) << check.report();
   EXPECT_THAT(check.report(), HasSubstr("1 parameter sets refused (they fail alone in run), the first: set 0:"));
@@ -1483,10 +1485,10 @@ TEST(OscRun, ARoadDrivenOnItsLeftSideIsTheLanguagesRoad) {
                         "along the reference line as the Init places road users there"));
 
   // Facing its lane's own direction on a right-hand road, the Ego drives against the reference
-  // line: not the language's road. In left-hand traffic, the right side is driven against it.
+  // line: the road reversed, lane 3 its rightmost (TheLeftSideDrivenAgainstTheReferenceLineIsTheLanguagesRoad).
+  // In left-hand traffic, the right side is driven against it.
   const auto rht_facing = leftSideOvertake("RHT", R"(<LanePosition roadId="3" laneId="3" s="100" offset="0"/>)");
-  EXPECT_THAT(test::configErrorOf([&] { importTemplate(rht_facing->path() / "overtake.xosc", {}); }),
-              HasSubstr("laneId 3: expected a driving lane of the road's right side, -2 .. -3"));
+  EXPECT_EQ(importTemplate(rht_facing->path() / "overtake.xosc", {})->ego.lane, 0);
   const auto lht_right = leftSideOvertake("LHT", R"(<LanePosition roadId="3" laneId="-2" s="100" offset="0"/>)");
   EXPECT_THAT(test::configErrorOf([&] { importTemplate(lht_right->path() / "overtake.xosc", {}); }),
               HasSubstr("laneId -2: expected a driving lane of the road's left side, 2 .. 3, driven along the "
@@ -1618,4 +1620,68 @@ TEST(OscImport, TheEgosControllerActivationTimeIsItsActiveFrom) {
   EXPECT_THAT(error, HasSubstr("cond.xosc:"));
   EXPECT_THAT(error, HasSubstr("the Ego's ActivateControllerAction starts on {speed_at_least: 25"));
   EXPECT_THAT(error, HasSubstr("the language activates the Ego's controller at a time (its active_from)"));
+}
+
+// The left side driven against the reference line (right-hand traffic's other carriageway) is
+// read on the reversed reference line: every point of the file's road (s, t) is the reversed
+// road's (length - s, -t), headings turned by pi, across lines, spirals and arcs; lane 1 is its
+// one lane; the right side's lanes are not part of it.
+TEST(OscRoad, TheLeftSideDrivenAgainstTheReferenceLineIsTheRoadRunBackwards) {
+  osc::Findings findings(false);
+  const osc::CarriagewayRoad forward = osc::readCarriagewayRoad(data("roads/s_curve.xodr"), findings);
+  osc::CarriagewayRoad backward = forward;
+  backward.useReversedLeftCarriageway();
+  EXPECT_TRUE(backward.reversed);
+  EXPECT_FALSE(backward.oneCurvature);
+  EXPECT_DOUBLE_EQ(backward.length, forward.length);
+  for (double s = 0.0; s <= forward.length; s += forward.length / 100.0) {
+    for (const double t : {-3.0, 0.0, 1.75, 4.0}) {
+      EXPECT_LT((backward.point(backward.ownS(s), backward.ownT(t)) - forward.point(s, t)).norm(), 1e-3)
+          << "s " << s << ", t " << t;
+    }
+    EXPECT_NEAR(std::remainder(backward.headingAt(backward.ownS(s)) - forward.headingAt(s) - kPi, 2.0 * kPi), 0.0, 1e-6)
+        << "s " << s;
+  }
+  EXPECT_EQ(backward.lanes, 1);
+  EXPECT_EQ(backward.languageLane(1, "here"), 0);
+  EXPECT_DOUBLE_EQ(backward.laneCentreT(0), backward.ownT(1.75));
+  EXPECT_THAT(test::configErrorOf([&] { backward.languageLane(-2, "here"); }),
+              HasSubstr("here: laneId -2: expected a driving lane of the road's left side, 1 .. 1, driven against the "
+                        "reference line (as the file's Init drives it) (the right side's lanes are not part of"));
+}
+
+// A right-hand road whose Init drives the left side against the reference line (its own
+// direction): the other carriageway is the language's road, so ASAM's 4.2.3 runs with the
+// Ego's lane varied over both. By hand on twoCarriageways("RHT"): driving against the
+// reference line, lane 3 (3.25 m, the outermost) is the language's lane 0 and lane 2 (3.5 m)
+// its lane 1; their centres lie at y = -1.75 and 1.625 about the centre line. The Ego starts
+// at s = 900, heading towards s = 0; ds = 30 puts the overtaker 30 m behind it (along the file's
+// s), its dLane -1 on lane 2, and RelativeTargetLane -1 moves it right, into the Ego's lane
+// (esmini counts it in the overtaker's direction), once it is 10 m ahead: 8.9 s as on the left
+// side driven along the line.
+TEST(OscRun, TheLeftSideDrivenAgainstTheReferenceLineIsTheLanguagesRoad) {
+  std::string text = dataWith("overtake_on_the_left_side.xosc", R"(laneId="3" s="100")", R"(laneId="3" s="900")");
+  text.replace(text.find(R"(dLane="-1" ds="-30")"), std::string(R"(dLane="-1" ds="-30")").size(),
+               R"(dLane="-1" ds="30")");
+  const std::string leftwards = R"(entityRef="Overtaker" value="1")";
+  text.replace(text.find(leftwards), leftwards.size(), R"(entityRef="Overtaker" value="-1")");
+  const auto folder = folderWith({{"roads/two_carriageways.xodr", twoCarriageways("RHT")}, {"against.xosc", text}});
+  const fs::path file = folder->path() / "against.xosc";
+  const auto logical = importTemplate(file, {});
+  ASSERT_EQ(logical->road.laneWidths.size(), 2u);
+  EXPECT_DOUBLE_EQ(logical->road.laneWidths[0].evaluate({}), 3.25);
+  EXPECT_DOUBLE_EQ(logical->road.laneWidths[1].evaluate({}), 3.5);
+  EXPECT_DOUBLE_EQ(logical->road.shoulderLeft, 0.5);  // the border next to the reference line
+  EXPECT_DOUBLE_EQ(logical->road.shoulderRight, 1.0);
+  EXPECT_EQ(logical->ego.lane, 0);
+  EXPECT_EQ(other(*logical, "Overtaker").lane, 1);
+  EXPECT_THAT(checkOpenScenario(file, {}).report(),
+              HasSubstr("<left>: lanes 3 .. 2 (left of the reference line) are the language's lanes 0 .. 1, driven "
+                        "against the reference line as the Init places road users there"));
+  const auto overtaker = simulatedTrack(file, "Overtaker");
+  ASSERT_TRUE(overtaker);
+  EXPECT_NEAR(overtaker->states.front().y, 1.625, 1e-6);
+  EXPECT_NEAR(overtaker->states.at(44).y, 1.625, 1e-6) << "8.8 s: not yet 10 m ahead";
+  EXPECT_LT(overtaker->states.at(48).y, 1.5) << "9.6 s: moving over";
+  EXPECT_NEAR(overtaker->states.back().y, -1.75, 0.01);
 }
