@@ -772,6 +772,15 @@ void probeController(const std::shared_ptr<const scenario::LogicalScenario>& log
       sim::makeController(registry, options.reference, {}, logical->sourceFile.parent_path(),
                           sim::ControllerParams({}, "--reference " + options.reference), needs);
     }
+    // The controllers the Ego's controller actions hand it to (the Ego's actions come last).
+    const std::size_t first = concrete.actions.size() - logical->ego.actions.size();
+    for (std::size_t j = 0; j < logical->ego.actions.size(); ++j) {
+      const auto& spec = logical->ego.actions[j];
+      if (spec.kind != scenario::ActionSpec::Kind::Controller) continue;
+      sim::makeController(registry, spec.controller.name, spec.controller.library, logical->sourceFile.parent_path(),
+                          sim::ControllerParams(concrete.actions[first + j].controllerParams, spec.controller.where),
+                          needs);
+    }
   };
   if (options.isolation == RunOptions::Isolation::None) {
     make_controller();

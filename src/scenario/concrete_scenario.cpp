@@ -303,6 +303,10 @@ ConcreteAction evaluateAction(const ActionSpec& spec, int owner, const LogicalSc
   if (spec.kind == ActionSpec::Kind::SetSpeed) {
     checkSpeed(action.target, spec.where, "set_speed.target", spec.target.text(), concrete.index);
   }
+  for (const auto& [name, expression] : spec.controller.params) {
+    action.controllerParams.emplace_back(
+        name, evaluateFinite(expression, concrete.inputs, spec.controller.where, "parameter " + name));
+  }
   if (spec.kind == ActionSpec::Kind::Speed && spec.speedTarget == ActionSpec::SpeedTarget::Factor &&
       !(action.target >= 0.0)) {
     throw ConfigError(fmt::format("{}.speed.relative_factor: got {} in sample {}, expected a factor >= 0", spec.where,

@@ -488,12 +488,26 @@ void parseSetSpeedAction(const YamlReader& reader, const YAML::Node& node, const
   action.paceValue = Expression::constant(0.0);
 }
 
+/// The Ego's `controller: {name, library, params}`: that controller drives it from the action's start.
+void parseControllerAction(const YamlReader& reader, const YAML::Node& node, const std::string& field,
+                           const std::vector<std::string>& inputs, ActionSpec& action) {
+  action.kind = ActionSpec::Kind::Controller;
+  parseController(reader, node, field, inputs, action.controller);
+  if (node["active_from"]) {
+    reader.fail(node["active_from"], field + ".active_from", "the action's trigger says when this controller drives");
+  }
+  action.shape = TransitionShape::Step;
+  action.pace = ActionSpec::Pace::Duration;
+  action.paceValue = Expression::constant(0.0);
+}
+
 void parseAction(const YamlReader& reader, const YAML::Node& node, const std::string& field,
                  const std::vector<std::string>& inputs, const LogicalScenario& scenario, const VehicleSpec& owner,
                  std::size_t index, ActionSpec& action) {
   action.where = reader.where(node, field);
   reader.checkKeys(node, field,
-                   {"id", "trigger", "repeat", "speed", "stop", "lane_change", "lateral_offset", "cross", "set_speed"});
+                   {"id", "trigger", "repeat", "speed", "stop", "lane_change", "lateral_offset", "cross", "set_speed",
+                    "controller"});
   action.id = node["id"] ? reader.scalar(node["id"], field + ".id") : fmt::format("{}_{}", owner.id, index);
   if (!isIdentifier(action.id)) {
     throw ConfigError::field(reader.where(node["id"], field + ".id"), field + ".id", action.id,
@@ -511,13 +525,18 @@ void parseAction(const YamlReader& reader, const YAML::Node& node, const std::st
                 "a repeated action needs a trigger that can hold again (no time or after in it): it would restart at "
                 "once");
   }
-  const std::string kind =
-      oneOf(reader, node, field, {"speed", "stop", "lane_change", "lateral_offset", "cross", "set_speed"}, true);
+  const std::string kind = oneOf(
+      reader, node, field, {"speed", "stop", "lane_change", "lateral_offset", "cross", "set_speed", "controller"}, true);
   const bool of_ego = &owner == &scenario.ego;
-  if (of_ego != (kind == "set_speed")) {
+  if (of_ego != (kind == "set_speed" || kind == "controller")) {
     reader.fail(node[kind], field + "." + kind,
-                of_ego ? "the Ego's controller drives it: the Ego's actions set its controller's set speed (set_speed)"
-                       : "only the Ego's controller has a set speed (set_speed is an action of the Ego)");
+                of_ego ? "the Ego's controller drives it: the Ego's actions set its controller's set speed (set_speed) "
+                         "or change its controller (controller)"
+                       : "only the Ego has a controller (set_speed and controller are actions of the Ego)");
+  }
+  if (of_ego && kind == "controller") {
+    parseControllerAction(reader, node[kind], field + "." + kind, inputs, action);
+    return;
   }
   if (of_ego) {
     parseSetSpeedAction(reader, node[kind], field + "." + kind, inputs, action);

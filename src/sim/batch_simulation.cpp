@@ -85,6 +85,8 @@ struct Member {
   /// user's states at the current instant (their types and sizes: run->scenario->others).
   std::optional<ScriptedTraffic> traffic;
   std::optional<EgoDriver> ego;
+  /// The Ego's controller actions (index into the concrete scenario's actions) -> their controller's slot in `ego`.
+  std::map<std::size_t, std::size_t> controllerSlots;
   SumoPlacement placement;  ///< how this scenario's vehicles are put on its road in SUMO
   SimulatedScenario result;
   bool active = true;
@@ -229,6 +231,24 @@ class BatchRun {
         options_.egoStepCost);
   }
 
+  /// The controllers the scenario's controller actions hand the Ego to, one per action (made
+  /// like its own controller). A --reference run keeps the reference driver throughout.
+  void addSwitchedControllers(Member& member) {
+    if (!options_.egoControllerOverride.empty()) return;
+    const auto& concrete = *member.run->scenario;
+    const ControllerNeeds needs = controllerNeeds(*concrete.logical);
+    std::size_t ego_action = 0;  // the Ego's actions come last, in its spec's order
+    const std::size_t first = concrete.actions.size() - concrete.logical->ego.actions.size();
+    for (std::size_t a = first; a < concrete.actions.size(); ++a, ++ego_action) {
+      const auto& action = concrete.actions[a];
+      if (action.kind != scenario::ActionSpec::Kind::Controller) continue;
+      const auto& spec = concrete.logical->ego.actions[ego_action].controller;
+      const ControllerParams params(action.controllerParams, spec.where);
+      member.controllerSlots[a] = member.ego->addController(withStepCost(
+          makeController(registry_, spec.name, spec.library, options_.scenarioDir, params, needs), options_.egoStepCost));
+    }
+  }
+
   void addEgo(std::size_t m, Member& member) {
     const auto& ego_spec = member.run->scenario->ego;
     member.egoId = member.edge + "." + ego_spec.id;
@@ -237,6 +257,7 @@ class BatchRun {
                        ego_spec.width, member.run->offset);
     member.ego->placeBy(member.placement);
     member.ego->activateFrom(member.run->scenario->controllerActiveFrom);
+    addSwitchedControllers(member);
     member.ego->pushToSumo();
     owner_.emplace(member.egoId, m);
     expected_.insert(member.egoId);
@@ -290,6 +311,9 @@ class BatchRun {
     // The others move on from instant k with the Ego where it is at k (triggers see it there).
     member.traffic->step(member.ego->state());
     member.ego->commandSetSpeed(member.traffic->egoSetSpeedAt(time));
+    if (const auto switched = member.traffic->egoControllerAt(time); switched && !member.controllerSlots.empty()) {
+      member.ego->useController(member.controllerSlots.at(*switched));
+    }
     try {
       member.ego->step(time, options_.step, member.run->scenario->ego.headingNoise[static_cast<std::size_t>(k)], lanes_,
                        road_users);

@@ -34,14 +34,22 @@ double LaneCache::width(const std::string& lane_id, const Vec2& offset) { return
 EgoDriver::EgoDriver(std::string vehicle_id, std::unique_ptr<EgoController> controller, const VehicleState& initial,
                      double length, double width, const Vec2& offset, VehicleLimits limits)
     : vehicleId_(std::move(vehicle_id)),
-      controller_(std::move(controller)),
       state_(initial),
       length_(length),
       width_(width),
       offset_(offset),
       limits_(limits) {
+  controllers_.push_back(std::move(controller));
+  controller_ = controllers_.front().get();
   minGap_ = libsumo::Vehicle::getMinGap(vehicleId_);
 }
+
+std::size_t EgoDriver::addController(std::unique_ptr<EgoController> controller) {
+  controllers_.push_back(std::move(controller));  // the driving one stays: it does not move in memory
+  return controllers_.size() - 1;
+}
+
+void EgoDriver::useController(std::size_t slot) { controller_ = controllers_.at(slot).get(); }
 
 SumoPlacement::SumoPlacement(const std::vector<LaneGeometry>& lanes) {
   narrowest_ = std::numeric_limits<double>::infinity();

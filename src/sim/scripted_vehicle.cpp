@@ -158,6 +158,8 @@ struct ScriptedTraffic::Impl {
   mutable std::map<const scenario::ConcreteTrigger*, Edge> edges;
   /// The Ego's set_speed actions that started: (start time s, set speed m/s), in start order.
   std::vector<std::pair<double, double>> egoSetSpeeds;
+  /// The Ego's controller actions that started: (start time s, action index), in start order.
+  std::vector<std::pair<double, std::size_t>> egoControllers;
   PurePursuitLateral laneKeeping;  // the Ego's defaults: lookahead max(4 m, 0.4 s * v)
   // What travelled and end_of_road conditions measure, per road user (0: the Ego, 1 + o: others[o]);
   // tracked only if a trigger asks.
@@ -183,6 +185,8 @@ struct ScriptedTraffic::Impl {
   bool holds(const scenario::ConcreteTrigger& trigger, int owner, const VehicleState& ego) const;
   bool conditionHolds(const scenario::ConcreteTrigger& trigger, int owner, const VehicleState& ego) const;
   void rearmEnded();
+  /// Its rising conditions (and its members') as if never checked.
+  void forgetEdges(const scenario::ConcreteTrigger& trigger) const;
   double fireTime(const scenario::ConcreteTrigger& trigger, int owner, const VehicleState& ego) const;
   void offer(std::size_t a, const VehicleState& ego);
   void fireTriggers(const VehicleState& ego);
@@ -449,8 +453,9 @@ void ScriptedTraffic::Impl::track(const VehicleState& ego) {
   }
 }
 
-/// Actions that may start again and have ended: their triggers are checked again from now on.
-/// The latest start and end stay in `timings` until they start again.
+/// Actions that may start again and have ended: their triggers are checked again from now on,
+/// their rising conditions afresh (as esmini resets a trigger's conditions when it fires: the
+/// first check after it never fires). Their start is cleared; their latest end stays in `timings`.
 void ScriptedTraffic::Impl::rearmEnded() {
   const double now = static_cast<double>(k) * step;
   for (std::size_t a = 0; a < timings.size(); ++a) {
@@ -458,16 +463,24 @@ void ScriptedTraffic::Impl::rearmEnded() {
     if (ended && starts[a] < concrete->actions[a].repeat) {
       timings[a].start = kNaN;
       scheduled[a] = kNaN;
+      forgetEdges(concrete->actions[a].trigger);
     }
   }
+}
+
+void ScriptedTraffic::Impl::forgetEdges(const scenario::ConcreteTrigger& trigger) const {
+  if (trigger.rising) edges[&trigger].checked = false;
+  for (const auto& member : trigger.members) forgetEdges(member);
 }
 
 void ScriptedTraffic::Impl::activate(std::size_t a, const VehicleState& ego) {
   const auto& action = concrete->actions[a];
   const double t0 = scheduled[a];
   ++starts[a];
-  if (action.kind == ActionSpec::Kind::SetSpeed) {  // the Ego's controller takes it from t0 on; done at once
-    egoSetSpeeds.emplace_back(t0, action.target);
+  if (action.kind == ActionSpec::Kind::SetSpeed || action.kind == ActionSpec::Kind::Controller) {
+    // The Ego's controller takes it (or the new controller drives) from t0 on; done at once.
+    if (action.kind == ActionSpec::Kind::SetSpeed) egoSetSpeeds.emplace_back(t0, action.target);
+    if (action.kind == ActionSpec::Kind::Controller) egoControllers.emplace_back(t0, a);
     timings[a] = {t0, t0};
     scheduleWaiters(a, ego);
     return;
@@ -586,6 +599,14 @@ const VehicleState& ScriptedTraffic::egoStart() const { return impl_->egoStart; 
 std::size_t ScriptedTraffic::instant() const { return impl_->k; }
 const std::vector<VehicleState>& ScriptedTraffic::states() const { return impl_->states; }
 const std::vector<ScriptedTraffic::ActionTiming>& ScriptedTraffic::timings() const { return impl_->timings; }
+
+std::optional<std::size_t> ScriptedTraffic::egoControllerAt(double time) const {
+  std::optional<std::size_t> controller;
+  for (const auto& [start, action] : impl_->egoControllers) {
+    if (start <= time + 1e-9) controller = action;
+  }
+  return controller;
+}
 
 std::optional<double> ScriptedTraffic::egoSetSpeedAt(double time) const {
   std::optional<double> set_speed;

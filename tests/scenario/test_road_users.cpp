@@ -259,7 +259,11 @@ vehicles:
        "vehicles.ego.actions[0].speed: the Ego's controller drives it: the Ego's actions set its controller's set "
        "speed (set_speed)"},
       {"[]", "[{set_speed: {target: 3}}]",
-       "actions[0].set_speed: only the Ego's controller has a set speed"},
+       "actions[0].set_speed: only the Ego has a controller (set_speed and controller are actions of the Ego)"},
+      {"[]", "[{controller: {name: idm}}]", "actions[0].controller: only the Ego has a controller"},
+      {"[{controller: {name: idm, active_from: 2}}]", "[]",
+       "controller.active_from: the action's trigger says when this controller drives"},
+      {"[{controller: {params: {a: 1}}}]", "[]", "controller: missing 'name'"},
       {"[{set_speed: {target: -3}}]", "[]", "set_speed.target"},
       {"[{set_speed: {target: 3, rate: 2}}]", "[]", "set_speed"},
       {"[{set_speed: {}}]", "[]", "missing 'target'"},

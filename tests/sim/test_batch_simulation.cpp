@@ -348,6 +348,32 @@ vehicles:
   }
 }
 
+// The Ego's controller actions hand it to another controller from their start: by hand,
+// steady_brake at 1 m/s^2 from 20 m/s (0.2 m/s less per 0.2 s step), at 3 m/s^2 from t = 2 s
+// (instant 10, 18 m/s), at 1 m/s^2 again from t = 4 s (instant 20, 12 m/s).
+TEST(BatchSimulation, TheEgosControllerActionsHandItToAnotherController) {
+  TemporaryDirectory dir;
+  ControllerRegistry registry = ControllerRegistry::withBuiltins();
+  test::registerSteadyBrake(registry);
+  const std::string yaml = R"(
+name: handover
+time: {step: 0.2, duration: 6}
+road: {shape: arc, length: 400, lanes: 2, lane_width: 3.5}
+vehicles:
+  ego: {s: 20, lane: 0, speed: 20, controller: {name: steady_brake, params: {decel: 1}},
+        actions: [{trigger: {time: 2}, controller: {name: steady_brake, params: {decel: 3}}},
+                  {trigger: {time: 4}, controller: {name: steady_brake, params: {decel: 1}}}]}
+)";
+  const Batch batch(scenario::parseLogicalScenario(yaml, "handover.yaml"), 1, dir.path(), registry);
+  ASSERT_TRUE(batch.results[0].ok()) << batch.results[0].failure;
+  const auto& ego = batch.results[0].trace.vehicles[0];
+  for (std::size_t k = 0; k < ego.states.size(); ++k) {
+    const double t = 0.2 * static_cast<double>(k);
+    const double expected = t <= 2.0 + 1e-9 ? 20.0 - t : t <= 4.0 + 1e-9 ? 18.0 - 3.0 * (t - 2.0) : 12.0 - (t - 4.0);
+    EXPECT_NEAR(ego.states[k].speed, expected, 1e-9) << "instant " << k;
+  }
+}
+
 TEST(BatchSimulation, TheEgoFollowsTheSetSpeedItsActionsCommand) {
   TemporaryDirectory dir;
   const std::string yaml = R"(

@@ -51,6 +51,8 @@ struct ConcreteAction {
   ActionSpec::Pace pace = ActionSpec::Pace::Duration;
   double paceValue = 0.0;  ///< > 0 (a duration may be 0)
   int repeat = 1;          ///< ActionSpec::repeat
+  /// Controller: its parameters, evaluated (its name and library: the ActionSpec's).
+  std::vector<std::pair<std::string, double>> controllerParams;
   std::string where;
 };
 

@@ -186,6 +186,9 @@ struct ActionSpec {
     /// the Ego only: its controller's set speed (m/s) from the action's start on; the
     /// controller decides how to reach it (as esmini's ACC reads a speed action on its Ego)
     SetSpeed,
+    /// the Ego only: from the action's start `controller` drives it (OpenSCENARIO's
+    /// AssignControllerAction with ActivateControllerAction)
+    Controller,
   };
   std::string id;
   Kind kind = Kind::Speed;
@@ -211,6 +214,8 @@ struct ActionSpec {
   /// next instant on (OpenSCENARIO's maximumExecutionCount). > 1 only with a trigger that can
   /// hold again (no time or after in it).
   int repeat = 1;
+  /// Controller: the controller that drives the Ego from the action's start (no active_from).
+  ControllerSpec controller;
   std::string where;
 };
 

@@ -98,6 +98,12 @@ class EgoDriver {
   /// lane's centre line by pure pursuit (the scripted phase before a scenario activates it),
   /// and the controller is not asked.
   void activateFrom(double time) { activeFrom_ = time; }
+  /// Adds a controller the scenario may hand the Ego to (useController); returns its slot
+  /// (the one given at construction is slot 0).
+  std::size_t addController(std::unique_ptr<EgoController> controller);
+  /// The controller in `slot` drives from now on (the others are not asked meanwhile and keep
+  /// their state for when they drive again).
+  void useController(std::size_t slot);
   /// Places the vehicle in SUMO at the current state (moveToXY + speed).
   void pushToSumo() const;
   /// Builds the controller's observation from SUMO's current state; for a controller that
@@ -117,7 +123,8 @@ class EgoDriver {
   MeasuredPolyline routeAhead(const std::string& lane_id, LaneCache& lanes, double length) const;
 
   std::string vehicleId_;
-  std::unique_ptr<EgoController> controller_;
+  std::vector<std::unique_ptr<EgoController>> controllers_;
+  EgoController* controller_ = nullptr;  ///< the one that drives: one of controllers_
   VehicleState state_;
   double length_;
   double width_;

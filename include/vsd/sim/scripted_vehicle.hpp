@@ -66,7 +66,8 @@ class ScriptedTraffic {
   /// instant (SUMO would let it arrive there).
   bool pastRoadEnd(std::size_t other) const;
 
-  /// When an action started and ended (s; NaN while not started).
+  /// When an action started and ended (s; NaN while not started; a repeated action waiting to
+  /// start again: start NaN, end its latest end).
   struct ActionTiming {
     double start;
     double end;
@@ -77,6 +78,9 @@ class ScriptedTraffic {
   /// controller; none before the first. Actions start while stepping to the instant after
   /// their start, so ask with the time the controller acts at.
   std::optional<double> egoSetSpeedAt(double time) const;
+  /// The Ego's latest controller action (index into ConcreteScenario::actions) started by
+  /// `time` (s); none before the first (its own controller drives it). Asked as egoSetSpeedAt.
+  std::optional<std::size_t> egoControllerAt(double time) const;
 
  private:
   struct Impl;
