@@ -162,6 +162,11 @@ void refuseWhatTheFilesCannotCarry(const scenario::LogicalScenario& logical) {
   if (logical.road.shape != scenario::RoadSpec::Shape::Polynomial) {
     throw ConfigError(fmt::format("{}: road.shape: an arc or polyline road: {}", logical.sourceFile.string(), limit));
   }
+  const auto& active_from = logical.ego.controller.activeFrom;
+  if (!active_from.isConstant() || active_from.evaluate({}) != 0.0) {
+    throw ConfigError(fmt::format("{}: controller.active_from {}: the Ego's scripted phase is not written: {}",
+                                  logical.ego.controller.where, active_from.text(), limit));
+  }
   std::vector<const scenario::VehicleSpec*> users = {&logical.ego};
   for (const auto& other : logical.others) users.push_back(&other);
   for (const scenario::VehicleSpec* user : users) {

@@ -175,12 +175,17 @@ void readInitAction(Translation& translation, Entity& entity, const pugi::xml_no
     }
   } else if (kind == "ControllerAction") {
     reader.requireSubset(action, {"AssignControllerAction", "ActivateControllerAction"});
+    bool activates = static_cast<bool>(action.child("ActivateControllerAction"));
     if (const pugi::xml_node assign = action.child("AssignControllerAction")) {
       reader.requireSubset(assign, {"Controller"});
       entity.controller = reader.text(reader.only(assign, "Controller"), "name");
       entity.controllerWhere = reader.where(assign);
+      // OpenSCENARIO 1.2 may activate the assigned controller with the assignment.
+      for (const char* domain : {"activateLateral", "activateLongitudinal"}) {
+        activates = activates || reader.optionalText(assign, domain) == std::optional<std::string>("true");
+      }
     }
-    if (action.child("ActivateControllerAction")) noteActivation(translation, action, entity);
+    if (activates) noteActivation(translation, action, entity);
     return;
   } else if (kind == "ActivateControllerAction") {
     noteActivation(translation, action, entity);

@@ -91,7 +91,9 @@ Placement relativeLanePosition(Translation& translation, const pugi::xml_node& p
   }
   const double offset = road.ownT(reader.optionalNumber(position, "offset").value_or(0.0));
   const double s = base.s + road.ownDs(reader.optionalNumber(position, "ds").value_or(0.0));
-  Placement placement = onRoad(translation, position, s, translation.road.laneCentreT(static_cast<int>(lane)) + offset);
+  // With ds, esmini counts a relative orientation from the file's reference line.
+  Placement placement = onRoad(translation, position, s, road.laneCentreT(static_cast<int>(lane)) + offset,
+                               road.reversed ? kPi : 0.0);
   placement.lane = static_cast<int>(lane);
   return placement;
 }
@@ -235,8 +237,12 @@ InitCarriageway initCarriageway(const Translation& translation) {
   bool left_along = false;
   bool left_against = false;
   for (const Entity& entity : translation.entities) {
+    if (!entity.isVehicle()) continue;  // a pedestrian's heading says no driving direction
+    // A vehicle placed on the road by other than a lane (a road or world position) keeps the
+    // right side; one placed relative to another follows it.
+    if (entity.position.child("RoadPosition") || entity.position.child("WorldPosition")) right_along = true;
     const pugi::xml_node position = entity.position.child("LanePosition");
-    if (!position || !entity.isVehicle()) continue;  // a pedestrian's heading says no driving direction
+    if (!position) continue;
     try {  // a value that does not resolve counts as nothing; placing reports it
       const long lane_id = static_cast<long>(translation.reader.integer(position, "laneId", -100, 100));
       const double s = translation.reader.number(position, "s");

@@ -714,18 +714,24 @@ std::optional<YAML::Node> valueCondition(Translation& translation, const pugi::x
   return trigger;
 }
 
-/// A rising edge on the conditions of a language trigger (the members of `all`/`any` the
-/// entities of a TriggeringEntities give). Times and storyboard states are moments, not
-/// levels: an edge changes nothing for them.
-void markRising(YAML::Node trigger) {
-  for (const char* list : {"all", "any"}) {
-    if (const YAML::Node& members = std::as_const(trigger)[list]) {
-      for (YAML::Node member : members) markRising(member);
-      return;
-    }
+/// A rising edge on a condition's language trigger. esmini takes the edge of the condition as
+/// a whole, so one over several triggering entities (an `all`/`any` of one condition per
+/// entity, whose members would each rise on their own) is refused. Times and storyboard
+/// states are moments, not levels: an edge changes nothing for them.
+void markRising(const xml::Reader& reader, const pugi::xml_node& node, YAML::Node trigger) {
+  if (std::as_const(trigger)["all"] || std::as_const(trigger)["any"]) {
+    reader.fail(node, "conditionEdge=\"rising\" over several triggering entities: the language takes the edge of "
+                      "each entity's condition, esmini of their combination");
   }
   if (std::as_const(trigger)["time"] || std::as_const(trigger)["after"]) return;
   trigger["rising"] = "true";
+}
+
+/// Whether a rising SimulationTime or Parameter condition holds when first checked (t = 0: a
+/// time from 0 on, a parameter comparison that holds): it never rises, so esmini never fires it.
+bool holdsAtFirstCheck(const pugi::xml_node& by, const YAML::Node& trigger) {
+  const bool level = by.child("SimulationTimeCondition") || by.child("ParameterCondition");
+  return level && trigger["time"] && !trigger["delay"] && trigger["time"].as<double>() <= 0.0;
 }
 
 /// Whether a language trigger can stop holding and hold again: no time or action end in it.
@@ -750,7 +756,14 @@ std::optional<YAML::Node> condition(Translation& translation, const Entity& acto
   const pugi::xml_node by = reader.choice(node, {"ByValueCondition", "ByEntityCondition"});
   auto result = std::string(by.name()) == "ByValueCondition" ? valueCondition(translation, by)
                                                              : entityCondition(translation, actor, by);
-  if (result && edge == "rising") markRising(*result);
+  if (result && edge == "rising") {
+    if (holdsAtFirstCheck(by, *result)) {
+      translation.findings.note(reader.where(node), "conditionEdge=\"rising\" on a condition that holds from t = 0: "
+                                                    "it never rises, so it never fires (as esmini reads it)");
+      return std::nullopt;
+    }
+    markRising(reader, node, *result);
+  }
   return result;
 }
 

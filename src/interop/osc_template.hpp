@@ -113,7 +113,8 @@ void readInit(Translation& translation, const pugi::xml_node& storyboard);
 void placeEntities(Translation& translation);
 /// Where the Init's vehicles drive (LanePositions with their orientations): on the left side
 /// only, all along the reference line or all against it (in right-hand traffic, the file
-/// drives the left side as its carriageway, that way); anything else: Right.
+/// drives the left side as its carriageway, that way); anything else, or a vehicle placed by a
+/// road or world position: Right.
 enum class InitCarriageway { Right, LeftAlong, LeftAgainst };
 InitCarriageway initCarriageway(const Translation& translation);
 /// A place that does not move (WorldPosition, LanePosition, RoadPosition), for conditions:
