@@ -79,6 +79,8 @@ void readObject(const xml::Reader& reader, const pugi::xml_node& object, Entity&
   }
 }
 
+}  // namespace
+
 std::string controllerName(Translation& translation, Catalogs& catalogs, const pugi::xml_node& parent,
                            std::string& where) {
   const xml::Reader& reader = translation.reader;
@@ -92,6 +94,8 @@ std::string controllerName(Translation& translation, Catalogs& catalogs, const p
   where = reader.where(controller);
   return reader.text(controller, "name");
 }
+
+namespace {
 
 void readScenarioObject(Translation& translation, Catalogs& catalogs, const pugi::xml_node& object) {
   const xml::Reader& reader = translation.reader;

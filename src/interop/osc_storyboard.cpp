@@ -266,8 +266,34 @@ YAML::Node continuousSpeed(Translation& translation, const Entity& actor, const 
 
 namespace {
 
-/// Marks the item privateAction returns for an ActivateControllerAction of the Ego (no language action).
+/// Mark the items privateAction returns for an ActivateControllerAction and for an
+/// AssignControllerAction of the Ego (no language actions of their own).
 constexpr const char* kActivation = "activate_controller";
+constexpr const char* kAssignment = "assign_controller";
+
+/// The language's controller an AssignControllerAction of the Ego names (through the controller
+/// map; `script` is no controller for the Ego). Its activateLateral/activateLongitudinal
+/// attributes (OpenSCENARIO 1.2) mark `item` as an activation too.
+YAML::Node assignedController(Translation& translation, const pugi::xml_node& assign, YAML::Node& item) {
+  const xml::Reader& reader = translation.reader;
+  std::string where;
+  const std::string name = controllerName(translation, *translation.catalogs, assign, where);
+  const ControllerChoice choice = mapController(translation.options, name, where);
+  if (choice.name == kFollowsItsScript) {
+    reader.fail(assign, fmt::format("controller '{}' is mapped to '{}': the Ego is driven by a controller", name,
+                                    kFollowsItsScript));
+  }
+  for (const char* domain : {"activateLateral", "activateLongitudinal"}) {
+    if (reader.optionalText(assign, domain) == std::optional<std::string>("true")) item[kActivation] = "true";
+  }
+  YAML::Node controller;
+  controller["name"] = choice.name;
+  if (choice.params && choice.params.IsMap()) controller["params"] = choice.params;
+  translation.findings.mapped(where, fmt::format("the Ego's controller '{}' is vsd-sumo's '{}' (its properties are "
+                                                 "not passed on)",
+                                                 name, choice.name));
+  return controller;
+}
 
 /// The language's action (without trigger) for one <PrivateAction> of `actor`.
 std::optional<YAML::Node> privateAction(Translation& translation, Entity& actor, const pugi::xml_node& node) {
@@ -280,16 +306,24 @@ std::optional<YAML::Node> privateAction(Translation& translation, Entity& actor,
   const pugi::xml_node activate =
       kind == "ActivateControllerAction" ? action : action.child("ActivateControllerAction");
   if (&actor == translation.ego) {
-    if (activate) {
-      if (kind == "ControllerAction") reader.requireSubset(action, {"ActivateControllerAction"});
-      for (const char* domain : {"longitudinal", "lateral"}) {
-        if (reader.optionalText(activate, domain) == std::optional<std::string>("false")) {
-          reader.fail(activate, fmt::format("{}=\"false\": the language's Ego controller drives both directions",
-                                            domain));
-        }
+    const pugi::xml_node assign =
+        kind == "ControllerAction" ? action.child("AssignControllerAction") : pugi::xml_node();
+    if (activate || assign) {
+      // No language action: readStories turns the Event into active_from or a controller action.
+      if (kind == "ControllerAction") {
+        reader.requireSubset(action, {"ActivateControllerAction", "AssignControllerAction"});
       }
       YAML::Node item;
-      item[kActivation] = "true";  // the Ego's controller from the Event's start: readStories takes it
+      if (activate) {
+        for (const char* domain : {"longitudinal", "lateral"}) {
+          if (reader.optionalText(activate, domain) == std::optional<std::string>("false")) {
+            reader.fail(activate, fmt::format("{}=\"false\": the language's Ego controller drives both directions",
+                                              domain));
+          }
+        }
+        item[kActivation] = "true";
+      }
+      if (assign) item[kAssignment] = assignedController(translation, assign, item);
       return item;
     }
     if (kind == "LongitudinalAction") {
@@ -900,7 +934,7 @@ void readEvent(Translation& translation, const std::vector<Entity*>& actors, con
       for (Entity* actor : actors) {
         const auto item = privateAction(translation, *actor, reader.only(action, "PrivateAction"));
         if (!item) continue;
-        if ((*item)[kActivation]) {  // no language action: its Event's start becomes the controller's active_from
+        if ((*item)[kActivation] || (*item)[kAssignment]) {  // the Ego's controller: readStories takes the Event
           pending.actions.push_back({actor, *item});
           continue;
         }
@@ -959,6 +993,50 @@ void activateEgoController(Translation& translation, const pugi::xml_node& event
                               fmt::format("the Ego's controller drives from t = {} s; before, the Ego keeps its "
                                           "initial speed on its lane's centre line",
                                           num(at)));
+}
+
+/// An Event of the Ego's controller actions: an assignment and an activation hand the Ego to
+/// that controller from the Event's start (a language controller action, repeated as the Event
+/// is); an activation alone starts the assigned controller at a time (active_from). Other
+/// actions in such an Event are refused.
+void takeEgoControllerEvent(Translation& translation, const PendingEvent& event, const YAML::Node& trigger) {
+  const xml::Reader& reader = translation.reader;
+  std::optional<YAML::Node> assigned;
+  bool activated = false;
+  for (const auto& pending : event.actions) {
+    if (pending.actor != translation.ego || !(pending.item[kAssignment] || pending.item[kActivation])) {
+      reader.fail(event.node, "an Event of the Ego's controller actions with other actions: the language hands the "
+                              "Ego to a controller by an action of its own (move the others to another Event)");
+    }
+    if (pending.item[kAssignment]) assigned = pending.item[kAssignment];
+    activated = activated || pending.item[kActivation];
+  }
+  if (!assigned) {
+    activateEgoController(translation, event.node, trigger);
+    return;
+  }
+  if (!activated) {
+    reader.fail(event.node, "an AssignControllerAction of the Ego without an activation in its Event: the language "
+                            "hands the Ego to a controller that drives at once (add ActivateControllerAction)");
+  }
+  YAML::Node item;
+  item["controller"] = *assigned;
+  item["id"] = identifier(reader.text(event.node, "name"), translation.usedIds);
+  item["trigger"] = trigger;
+  if (event.executions > 1) {
+    if (!canHoldAgain(trigger)) {
+      reader.fail(event.node, fmt::format("maximumExecutionCount={} with a start that happens once: the language "
+                                          "repeats an action when its condition holds again",
+                                          event.executions));
+    }
+    item["repeat"] = event.executions;
+  }
+  translation.ego->actions.push_back(item);
+  YAML::Emitter flow;
+  flow << YAML::Flow << trigger;
+  translation.findings.mapped(reader.where(event.node), fmt::format("the Ego is handed to '{}' from {}",
+                                                                    (*assigned)["name"].as<std::string>(),
+                                                                    flow.c_str()));
 }
 
 void readManeuverGroup(Translation& translation, const pugi::xml_node& group, std::vector<PendingEvent>& events) {
@@ -1047,9 +1125,9 @@ void readStories(Translation& translation, const pugi::xml_node& storyboard) {
           translation.findings.note(reader.where(event.node), "its condition never holds: the event never starts");
           return;
         }
-        if (pending.item[kActivation]) {
-          activateEgoController(translation, event.node, *trigger);
-          continue;
+        if (pending.item[kAssignment] || pending.item[kActivation]) {
+          takeEgoControllerEvent(translation, event, *trigger);
+          break;  // the Event's other actions of the Ego are its controller markers (checked there)
         }
         pending.item["trigger"] = *trigger;
         if (event.executions > 1) repeatAction(translation, event, *trigger, pending.item);

@@ -43,6 +43,8 @@ std::string num(double value) { return xml::number(value); }
 constexpr double kMaxRegion = 1000.0;
 constexpr double kMaxExtension = 10'000.0;
 
+}  // namespace
+
 ControllerChoice mapController(const OscImportOptions& options, const std::string& name, const std::string& where) {
   if (!options.controllerMap.empty()) {
     const std::string file = options.controllerMap.string();
@@ -65,9 +67,7 @@ ControllerChoice mapController(const OscImportOptions& options, const std::strin
   return {found->second, {}};
 }
 
-/// The controller map's word for a controller vsd-sumo does not simulate: its entity follows
-/// its script (e.g. esmini's sloppyDriver, which adds deviations to a scripted vehicle).
-constexpr const char* kFollowsItsScript = "script";
+namespace {
 
 /// Whether an entity's controller is mapped onto its script (noted): it is no Ego candidate.
 bool followsItsScript(Translation& translation, const Entity& entity) {
@@ -470,6 +470,7 @@ TranslationResult translate(const fs::path& xosc, const OscImportOptions& option
   if (result.violated) return result;
   Translation translation{reader, findings, options};
   Catalogs catalogs(reader, root, options, findings);
+  translation.catalogs = &catalogs;
   const pugi::xml_node network = reader.only(root, "RoadNetwork");
   reader.requireSubset(network, {"LogicFile", "SceneGraphFile"});
   if (network.child("SceneGraphFile")) findings.note(reader.where(network.child("SceneGraphFile")), "3D models are not used");

@@ -79,6 +79,7 @@ struct Translation {
   std::vector<Entity> entities;
   Entity* ego = nullptr;
   ControllerChoice controller;
+  Catalogs* catalogs = nullptr;  ///< the file's catalogs (set while it is translated)
   /// Language action ids by the file's Action name (an Action with several actors has several).
   std::map<std::string, std::vector<std::string>> actionIds;
   /// The file's Events by name, for conditions on their state. A name given twice is kept
@@ -106,7 +107,20 @@ struct Translation {
 /// A name as a language identifier (letters, digits, _; letter first), unique in `used`.
 std::string identifier(const std::string& name, std::set<std::string>& used);
 
+/// The controller map's word for a controller vsd-sumo does not simulate: its entity follows
+/// its script (e.g. esmini's sloppyDriver, which adds deviations to a scripted vehicle).
+inline constexpr const char* kFollowsItsScript = "script";
+
+// osc_template.cpp
+/// The vsd-sumo controller a file's controller name maps onto (--controller-map, then the
+/// defaults); throws ConfigError naming `where` for a name that maps nowhere.
+ControllerChoice mapController(const OscImportOptions& options, const std::string& name, const std::string& where);
+
 // osc_entities.cpp
+/// The name of the controller a <Controller> or controller <CatalogReference> under `parent`
+/// gives; `where` is set to its place in the file.
+std::string controllerName(Translation& translation, Catalogs& catalogs, const pugi::xml_node& parent,
+                           std::string& where);
 void readEntities(Translation& translation, const pugi::xml_node& root, Catalogs& catalogs);
 void readInit(Translation& translation, const pugi::xml_node& storyboard);
 /// Resolves every entity's start (relative positions and speeds after their references).

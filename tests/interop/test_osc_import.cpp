@@ -1699,3 +1699,48 @@ TEST(OscRun, TheLeftSideDrivenAgainstTheReferenceLineIsTheLanguagesRoad) {
   EXPECT_LT(overtaker->states.at(48).y, 1.5) << "9.6 s: moving over";
   EXPECT_NEAR(overtaker->states.back().y, -1.75, 0.01);
 }
+
+// An Event that assigns the Ego a controller and activates it becomes a controller action of the
+// Ego with the Event's start (repeated as the Event is: esmini's acc-toggle switches between
+// an ACC and a human driver so); an assignment without an activation, or one that maps onto
+// `script`, is refused.
+TEST(OscImport, AnEventThatAssignsAndActivatesAControllerHandsTheEgoToIt) {
+  const auto event = [](const std::string& actions) {
+    return R"(<ManeuverGroup maximumExecutionCount="1" name="Handover">
+          <Actors selectTriggeringEntities="false"><EntityRef entityRef="Ego"/></Actors>
+          <Maneuver name="Handover"><Event name="TakeOver" priority="overwrite" maximumExecutionCount="5">)" +
+           actions + R"(<StartTrigger><ConditionGroup>)" +
+           entityCondition("Lead", R"(<SpeedCondition value="25" rule="greaterOrEqual"/>)") +
+           R"(</ConditionGroup></StartTrigger></Event></Maneuver></ManeuverGroup>
+      </Act>)";
+  };
+  const std::string assign = R"(<Action name="Assign"><PrivateAction><ControllerAction><AssignControllerAction>
+      <Controller name="Driver"><Properties/></Controller></AssignControllerAction></ControllerAction></PrivateAction>
+      </Action>)";
+  const std::string activate = R"(<Action name="Activate"><PrivateAction><ControllerAction>
+      <ActivateControllerAction lateral="true" longitudinal="true"/></ControllerAction></PrivateAction></Action>)";
+  const auto folder = folderWith({{"handover.xosc", dataWith("conditions.xosc", "</Act>", event(assign + activate))},
+                                  {"lonely.xosc", dataWith("conditions.xosc", "</Act>", event(assign))},
+                                  {"map.yaml", "Driver: {controller: idm, params: {time_gap: 2}}\n"},
+                                  {"script.yaml", "Driver: script\n"}});
+  OscImportOptions mapped;
+  mapped.controllerMap = folder->path() / "map.yaml";
+  const auto logical = importTemplate(folder->path() / "handover.xosc", mapped);
+  ASSERT_EQ(logical->ego.actions.size(), 1u);
+  const auto& handover = logical->ego.actions[0];
+  EXPECT_EQ(handover.kind, scenario::ActionSpec::Kind::Controller);
+  EXPECT_EQ(handover.controller.name, "idm");
+  ASSERT_EQ(handover.controller.params.size(), 1u);
+  EXPECT_EQ(handover.controller.params[0].first, "time_gap");
+  EXPECT_EQ(handover.repeat, 5);
+  EXPECT_TRUE(handover.trigger.rising);
+  EXPECT_THAT(checkOpenScenario(folder->path() / "handover.xosc", mapped).report(),
+              HasSubstr("the Ego is handed to 'idm' from {speed_at_least: 25, of: Lead, rising: true}"));
+
+  EXPECT_THAT(test::configErrorOf([&] { importTemplate(folder->path() / "lonely.xosc", mapped); }),
+              HasSubstr("an AssignControllerAction of the Ego without an activation in its Event"));
+  OscImportOptions scripted;
+  scripted.controllerMap = folder->path() / "script.yaml";
+  EXPECT_THAT(test::configErrorOf([&] { importTemplate(folder->path() / "handover.xosc", scripted); }),
+              HasSubstr("controller 'Driver' is mapped to 'script': the Ego is driven by a controller"));
+}
