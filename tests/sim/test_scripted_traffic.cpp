@@ -464,3 +464,27 @@ TEST(ScriptedTraffic, ARepeatedActionStartsAgainUpToItsRepeatCount) {
     EXPECT_DOUBLE_EQ(traffic.states()[0].speed, 0.0);  // halted for good after its last start
   }
 }
+
+// A repeated action's rising conditions start afresh when it is re-armed (esmini resets a
+// trigger's conditions when it fires): the first check after its end never fires. The stand-in
+// Ego (10 m/s) has travelled 10 m at 1 s, which starts the 4 s offset; meanwhile the gap to the
+// standing mover falls to 30 m (3 s). At the re-arm (5 s) the gap condition holds, but it rose
+// while nobody checked it, and it holds from then on: the action does not start again.
+TEST(ScriptedTraffic, ARepeatedActionsRisingConditionsStartAfreshWhenItIsReArmed) {
+  const auto logical = scenarioWith(R"(
+    - {id: mover, gap: 60, relative_lane: 0, speed: 0,
+       actions: [{id: dodge, repeat: 2, lateral_offset: {offset: 0.5, duration: 4},
+                  trigger: {any: [{gap: 30, rising: true}, {travelled: 10, of: ego, rising: true}]}}]})",
+                                    0.0, 10.0);
+  const Planned run = plan(logical);
+  ScriptedTraffic traffic(run.concrete, run.road);
+  const EgoStandIn ego(run.concrete, run.road);
+  std::vector<double> starts;
+  for (int k = 0; k < 50; ++k) {
+    traffic.step(ego.at(0.2 * k));
+    const double start = traffic.timings()[0].start;
+    if (!std::isnan(start) && (starts.empty() || starts.back() != start)) starts.push_back(start);
+  }
+  ASSERT_EQ(starts.size(), 1u);
+  EXPECT_NEAR(starts[0], 1.0, 0.2 + 1e-9);
+}
