@@ -32,7 +32,8 @@ fs::path referencedFile(const OscImportOptions& options, const fs::path& naming_
 }
 
 Catalogs::Catalogs(const xml::Reader& scenario, const pugi::xml_node& root, const OscImportOptions& options,
-                   Findings& findings) {
+                   Findings& findings)
+    : findings_(findings) {
   const pugi::xml_node locations = root.child("CatalogLocations");
   if (!locations) return;
   scenario.requireSubset(locations, {"VehicleCatalog", "PedestrianCatalog", "MiscObjectCatalog", "ControllerCatalog",
@@ -100,7 +101,18 @@ CatalogEntry Catalogs::resolve(const xml::Reader& scenario, const pugi::xml_node
   if (const pugi::xml_node assignments = reference.child("ParameterAssignments")) {
     scenario.requireSubset(assignments, {"ParameterAssignment"});
     for (const pugi::xml_node& assignment : assignments.children("ParameterAssignment")) {
-      assigned[scenario.text(assignment, "parameterRef")] = scenario.text(assignment, "value");
+      // OpenSCENARIO names the parameter; esmini also reads a name written as a reference ("$Name").
+      std::string name = assignment.attribute("parameterRef").value();
+      if (!name.empty() && name[0] == '$') {
+        name.erase(0, 1);
+        findings_.note(scenario.where(assignment),
+                       fmt::format("parameterRef=\"${0}\": read as the parameter '{0}' (OpenSCENARIO names it "
+                                   "without '$'), as esmini reads it",
+                                   name));
+      } else {
+        name = scenario.text(assignment, "parameterRef");
+      }
+      assigned[name] = scenario.text(assignment, "value");
     }
   }
   CatalogEntry entry;

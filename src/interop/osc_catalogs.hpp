@@ -53,6 +53,7 @@ class Catalogs {
   std::shared_ptr<xml::Reader> catalog(const xml::Reader& scenario, const pugi::xml_node& reference,
                                        const std::string& name);
 
+  Findings& findings_;
   std::vector<std::filesystem::path> directories_;
   std::vector<std::filesystem::path> missing_;  ///< named in the file, not directories: listed in errors
   std::map<std::filesystem::path, std::shared_ptr<xml::Reader>> files_;

@@ -134,6 +134,19 @@ TEST(OscImport, AssignedParametersAndCatalogEntriesChangeTheScenario) {
   EXPECT_DOUBLE_EQ(bike.width, 0.6);
 }
 
+// A ParameterAssignment names its parameter; one written as a reference ("$Length", as some of
+// esmini's files do) is read as that name, noted - not as a reference to a scenario parameter.
+TEST(OscImport, AParameterRefWrittenAsAReferenceNamesTheParameter) {
+  const std::string plain = R"(<ParameterAssignment parameterRef="Length" value="5.0"/>)";
+  const std::string dollar = R"(<ParameterAssignment parameterRef="$Length" value="6.5"/>)";
+  const auto folder = folderWith({{"dollar.xosc", dataWith("cut_in.xosc", plain, dollar)}});
+  const fs::path file = folder->path() / "dollar.xosc";
+  EXPECT_DOUBLE_EQ(importTemplate(file, {})->ego.length, 6.5);
+  EXPECT_THAT(checkOpenScenario(file, {}).report(),
+              HasSubstr("parameterRef=\"$Length\": read as the parameter 'Length' (OpenSCENARIO names it without "
+                        "'$')"));
+}
+
 TEST(OscImport, ViolatedConstraintIsReportedWithItsDeclaration) {
   const std::string message = test::configErrorOf([] { importTemplate(data("cut_in.xosc"), {}, {{"LaneChange_Vy", "25"}}); });
   EXPECT_THAT(message, HasSubstr("cut_in.xosc:19: <ParameterDeclaration>: parameter 'LaneChange_Vy' = '25' violates "
