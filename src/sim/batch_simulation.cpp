@@ -312,7 +312,7 @@ class BatchRun {
     member.traffic->step(member.ego->state());
     member.ego->commandSetSpeed(member.traffic->egoSetSpeedAt(time));
     if (const auto switched = member.traffic->egoControllerAt(time); switched && !member.controllerSlots.empty()) {
-      member.ego->useController(member.controllerSlots.at(*switched));
+      member.ego->useController(member.controllerSlots.at(*switched), time);
     }
     try {
       member.ego->step(time, options_.step, member.run->scenario->ego.headingNoise[static_cast<std::size_t>(k)], lanes_,

@@ -49,7 +49,14 @@ std::size_t EgoDriver::addController(std::unique_ptr<EgoController> controller) 
   return controllers_.size() - 1;
 }
 
-void EgoDriver::useController(std::size_t slot) { controller_ = controllers_.at(slot).get(); }
+void EgoDriver::useController(std::size_t slot, double time) {
+  EgoController* next = controllers_.at(slot).get();
+  if (next != controller_) {
+    next->reset();
+    controller_ = next;
+  }
+  activeFrom_ = std::min(activeFrom_, time);
+}
 
 SumoPlacement::SumoPlacement(const std::vector<LaneGeometry>& lanes) {
   narrowest_ = std::numeric_limits<double>::infinity();

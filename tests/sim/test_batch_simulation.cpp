@@ -372,6 +372,17 @@ vehicles:
     const double expected = t <= 2.0 + 1e-9 ? 20.0 - t : t <= 4.0 + 1e-9 ? 18.0 - 3.0 * (t - 2.0) : 12.0 - (t - 4.0);
     EXPECT_NEAR(ego.states[k].speed, expected, 1e-9) << "instant " << k;
   }
+  // A hand-over activates: before its own active_from (4 s), the Ego is braked from 2 s at 3 m/s^2.
+  std::string early = yaml;
+  early.replace(early.find("params: {decel: 1}},"), std::string("params: {decel: 1}},").size(),
+                "params: {decel: 1}, active_from: 4},");
+  const Batch activated(scenario::parseLogicalScenario(early, "handover.yaml"), 1, dir.path(), registry);
+  ASSERT_TRUE(activated.results[0].ok()) << activated.results[0].failure;
+  const auto& held = activated.results[0].trace.vehicles[0];
+  for (std::size_t k = 0; k <= 20; ++k) {
+    const double t = 0.2 * static_cast<double>(k);
+    EXPECT_NEAR(held.states[k].speed, t <= 2.0 + 1e-9 ? 20.0 : 20.0 - 3.0 * (t - 2.0), 1e-9) << "instant " << k;
+  }
 }
 
 TEST(BatchSimulation, TheEgoFollowsTheSetSpeedItsActionsCommand) {

@@ -101,9 +101,10 @@ class EgoDriver {
   /// Adds a controller the scenario may hand the Ego to (useController); returns its slot
   /// (the one given at construction is slot 0).
   std::size_t addController(std::unique_ptr<EgoController> controller);
-  /// The controller in `slot` drives from now on (the others are not asked meanwhile and keep
-  /// their state for when they drive again).
-  void useController(std::size_t slot);
+  /// The controller in `slot` drives from `time` (s) on, also before activateFrom's time (a
+  /// hand-over activates it); one that takes over from another starts afresh (reset), as a
+  /// newly activated controller does. The others are not asked meanwhile.
+  void useController(std::size_t slot, double time);
   /// Places the vehicle in SUMO at the current state (moveToXY + speed).
   void pushToSumo() const;
   /// Builds the controller's observation from SUMO's current state; for a controller that
