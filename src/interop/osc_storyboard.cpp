@@ -3,6 +3,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
 #include <iterator>
 #include <utility>
@@ -283,9 +284,13 @@ YAML::Node assignedController(Translation& translation, const pugi::xml_node& as
     reader.fail(assign, fmt::format("controller '{}' is mapped to '{}': the Ego is driven by a controller", name,
                                     kFollowsItsScript));
   }
-  for (const char* domain : {"activateLateral", "activateLongitudinal"}) {
-    if (reader.optionalText(assign, domain) == std::optional<std::string>("true")) item[kActivation] = "true";
+  const bool lateral = reader.optionalText(assign, "activateLateral") == std::optional<std::string>("true");
+  const bool longitudinal = reader.optionalText(assign, "activateLongitudinal") == std::optional<std::string>("true");
+  if (lateral != longitudinal) {
+    reader.fail(assign, fmt::format("activate{}=\"true\" alone: the language's Ego controller drives both directions",
+                                    lateral ? "Lateral" : "Longitudinal"));
   }
+  if (lateral) item[kActivation] = "true";
   YAML::Node controller;
   controller["name"] = choice.name;
   if (choice.params && choice.params.IsMap()) controller["params"] = choice.params;
@@ -1011,10 +1016,6 @@ void takeEgoControllerEvent(Translation& translation, const PendingEvent& event,
     if (pending.item[kAssignment]) assigned = pending.item[kAssignment];
     activated = activated || pending.item[kActivation];
   }
-  if (!assigned) {
-    activateEgoController(translation, event.node, trigger);
-    return;
-  }
   if (!activated) {
     reader.fail(event.node, "an AssignControllerAction of the Ego without an activation in its Event: the language "
                             "hands the Ego to a controller that drives at once (add ActivateControllerAction)");
@@ -1030,6 +1031,14 @@ void takeEgoControllerEvent(Translation& translation, const PendingEvent& event,
                                           event.executions));
     }
     item["repeat"] = event.executions;
+  }
+  // The Ego's own controller, never activated, drives until the hand-over's time at most.
+  if (!translation.ego->activatedAtStart && trigger["time"] && trigger.size() <= 2 &&
+      (trigger.size() == 1 || trigger["delay"])) {
+    activateEgoController(translation, event.node, trigger);
+  } else if (!translation.ego->activatedAtStart && !translation.egoActiveFrom) {
+    translation.findings.note(reader.where(event.node), "the Ego's own controller, never activated, drives until this "
+                                                        "hand-over (its start is a condition, not a time)");
   }
   translation.ego->actions.push_back(item);
   YAML::Emitter flow;
@@ -1125,9 +1134,18 @@ void readStories(Translation& translation, const pugi::xml_node& storyboard) {
           translation.findings.note(reader.where(event.node), "its condition never holds: the event never starts");
           return;
         }
-        if (pending.item[kAssignment] || pending.item[kActivation]) {
+        if (pending.item[kAssignment]) {
           takeEgoControllerEvent(translation, event, *trigger);
-          break;  // the Event's other actions of the Ego are its controller markers (checked there)
+          break;  // the Event's other actions are its controller markers (checked there)
+        }
+        if (pending.item[kActivation]) {  // an activation alone: the Event's other actions stay
+          if (!std::any_of(event.actions.begin(), event.actions.end(),
+                           [](const PendingAction& other) { return static_cast<bool>(other.item[kAssignment]); })) {
+            activateEgoController(translation, event.node, *trigger);
+            continue;
+          }
+          takeEgoControllerEvent(translation, event, *trigger);
+          break;
         }
         pending.item["trigger"] = *trigger;
         if (event.executions > 1) repeatAction(translation, event, *trigger, pending.item);

@@ -1626,6 +1626,19 @@ TEST(OscImport, TheEgosControllerActivationTimeIsItsActiveFrom) {
       folderWith({{"late.xosc", dataWith("conditions.xosc", "</Act>", activation(timeCondition("3")))}});
   const auto late = importTemplate(folder->path() / "late.xosc", {});
   EXPECT_DOUBLE_EQ(late->ego.controller.activeFrom.evaluate({}), 3.0);
+  // An activation alone keeps its Event's other actions (a set speed of the Ego).
+  const std::string with_speed = activation(timeCondition("3"));
+  std::string speed_too = dataWith("conditions.xosc", "</Act>", with_speed);
+  const std::string activate_action = R"(<Action name="ActivateALKS">)";
+  speed_too.replace(speed_too.find(activate_action), 0, R"(<Action name="Slower"><PrivateAction><LongitudinalAction>
+      <SpeedAction><SpeedActionDynamics dynamicsShape="step" dynamicsDimension="time" value="0"/>
+      <SpeedActionTarget><AbsoluteTargetSpeed value="15"/></SpeedActionTarget></SpeedAction></LongitudinalAction>
+      </PrivateAction></Action>)");
+  const auto both = folderWith({{"both.xosc", speed_too}});
+  const auto slower = importTemplate(both->path() / "both.xosc", {});
+  EXPECT_DOUBLE_EQ(slower->ego.controller.activeFrom.evaluate({}), 3.0);
+  ASSERT_EQ(slower->ego.actions.size(), 1u);
+  EXPECT_EQ(slower->ego.actions[0].kind, scenario::ActionSpec::Kind::SetSpeed);
   EXPECT_THAT(checkOpenScenario(folder->path() / "late.xosc", {}).report(),
               HasSubstr("the Ego's controller drives from t = 3 s; before, the Ego keeps its initial speed"));
 
@@ -1752,6 +1765,23 @@ TEST(OscImport, AnEventThatAssignsAndActivatesAControllerHandsTheEgoToIt) {
 
   EXPECT_THAT(test::configErrorOf([&] { importTemplate(folder->path() / "lonely.xosc", mapped); }),
               HasSubstr("an AssignControllerAction of the Ego without an activation in its Event"));
+  // Started at a condition while the Ego's own controller was never activated: noted. At a time:
+  // that time is also the own controller's activation (it never drives before).
+  EXPECT_THAT(checkOpenScenario(folder->path() / "handover.xosc", mapped).report(),
+              HasSubstr("the Ego's own controller, never activated, drives until this hand-over"));
+  std::string at_three = dataWith("conditions.xosc", "</Act>", event(assign + activate));
+  const std::string condition = entityCondition("Lead", R"(<SpeedCondition value="25" rule="greaterOrEqual"/>)");
+  at_three.replace(at_three.find(condition), condition.size(), timeCondition("3"));
+  at_three.replace(at_three.find(R"(maximumExecutionCount="5")"), std::string(R"(maximumExecutionCount="5")").size(),
+                   R"(maximumExecutionCount="1")");
+  std::string half = dataWith("conditions.xosc", "</Act>", event(assign));
+  half.replace(half.find("<AssignControllerAction>"), std::string("<AssignControllerAction>").size(),
+               R"(<AssignControllerAction activateLongitudinal="true">)");
+  const auto timed = folderWith({{"timed.xosc", at_three}, {"half.xosc", half}, {"map.yaml", "Driver: idm\n"}});
+  const auto handed_at_three = importTemplate(timed->path() / "timed.xosc", mapped);
+  EXPECT_DOUBLE_EQ(handed_at_three->ego.controller.activeFrom.evaluate({}), 3.0);
+  EXPECT_THAT(test::configErrorOf([&] { importTemplate(timed->path() / "half.xosc", mapped); }),
+              HasSubstr("activateLongitudinal=\"true\" alone: the language's Ego controller drives both directions"));
   OscImportOptions scripted;
   scripted.controllerMap = folder->path() / "script.yaml";
   EXPECT_THAT(test::configErrorOf([&] { importTemplate(folder->path() / "handover.xosc", scripted); }),
