@@ -1649,6 +1649,16 @@ TEST(OscImport, TheEgosControllerActivationTimeIsItsActiveFrom) {
                 init_activation);
   const auto from_start = folderWith({{"early.xosc", early}});
   EXPECT_DOUBLE_EQ(importTemplate(from_start->path() / "early.xosc", {})->ego.controller.activeFrom.evaluate({}), 0.0);
+  // So does an AssignControllerAction in the Init that activates both directions (OpenSCENARIO 1.2).
+  std::string assigned = dataWith("conditions.xosc", "</Act>", activation(timeCondition("3")));
+  assigned.replace(assigned.find(R"(<Private entityRef="Ego">)"), std::string(R"(<Private entityRef="Ego">)").size(),
+                   R"(<Private entityRef="Ego"><PrivateAction><ControllerAction>
+          <AssignControllerAction activateLateral="true" activateLongitudinal="true">
+          <Controller name="ALKSController"><Properties/></Controller></AssignControllerAction>
+          </ControllerAction></PrivateAction>)");
+  const auto assigned_at_start = folderWith({{"assigned.xosc", assigned}});
+  EXPECT_DOUBLE_EQ(
+      importTemplate(assigned_at_start->path() / "assigned.xosc", {})->ego.controller.activeFrom.evaluate({}), 0.0);
 
   const auto on_condition = folderWith({{"cond.xosc", dataWith("conditions.xosc", "</Act>",
                                                                 activation(entityCondition(
