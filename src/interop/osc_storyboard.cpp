@@ -770,7 +770,7 @@ void markRising(const xml::Reader& reader, const pugi::xml_node& node, YAML::Nod
 /// time from 0 on, a parameter comparison that holds): it never rises, so esmini never fires it.
 bool holdsAtFirstCheck(const pugi::xml_node& by, const YAML::Node& trigger) {
   const bool level = by.child("SimulationTimeCondition") || by.child("ParameterCondition");
-  return level && trigger["time"] && !trigger["delay"] && trigger["time"].as<double>() <= 0.0;
+  return level && trigger["time"] && trigger["time"].as<double>() <= 0.0;  // a condition's own trigger has no delay
 }
 
 /// Whether a language trigger can stop holding and hold again: no time or action end in it.
@@ -975,13 +975,18 @@ void repeatAction(const Translation& translation, const PendingEvent& event, con
   item["repeat"] = event.executions;
 }
 
+/// Whether a language trigger is a time alone (with its delay, if any).
+bool startsAtATime(const YAML::Node& trigger) {
+  return trigger["time"] && (trigger.size() == 1 || (trigger.size() == 2 && trigger["delay"]));
+}
+
 /// The Ego's ActivateControllerAction in an Event that starts at a time: its controller drives
 /// from the first such time (the language's active_from); before, the Ego keeps its initial
 /// speed on its lane, as esmini's default controller drives it. Activated in the Init, it
 /// drives from t = 0 and a later activation changes nothing.
 void activateEgoController(Translation& translation, const pugi::xml_node& event, const YAML::Node& trigger) {
   const xml::Reader& reader = translation.reader;
-  if (!trigger["time"] || trigger.size() > 2 || (trigger.size() == 2 && !trigger["delay"])) {
+  if (!startsAtATime(trigger)) {
     YAML::Emitter flow;
     flow << YAML::Flow << trigger;
     reader.fail(event, fmt::format("the Ego's ActivateControllerAction starts on {}: the language activates the "
@@ -1033,8 +1038,7 @@ void takeEgoControllerEvent(Translation& translation, const PendingEvent& event,
     item["repeat"] = event.executions;
   }
   // The Ego's own controller, never activated, drives until the hand-over's time at most.
-  if (!translation.ego->activatedAtStart && trigger["time"] && trigger.size() <= 2 &&
-      (trigger.size() == 1 || trigger["delay"])) {
+  if (!translation.ego->activatedAtStart && startsAtATime(trigger)) {
     activateEgoController(translation, event.node, trigger);
   } else if (!translation.ego->activatedAtStart && !translation.egoActiveFrom) {
     translation.findings.note(reader.where(event.node), "the Ego's own controller, never activated, drives until this "
@@ -1128,24 +1132,22 @@ void readStories(Translation& translation, const pugi::xml_node& storyboard) {
   for (auto& event : events) {
     translation.findings.attempt([&] {
       reader.setParameters(event.scope);
+      const bool hands_over = std::any_of(event.actions.begin(), event.actions.end(), [](const PendingAction& pending) {
+        return static_cast<bool>(pending.item[kAssignment]);
+      });
       for (auto& pending : event.actions) {
         const auto trigger = startTrigger(translation, *pending.actor, event.node, &pending == &event.actions.front());
         if (!trigger) {
           translation.findings.note(reader.where(event.node), "its condition never holds: the event never starts");
           return;
         }
-        if (pending.item[kAssignment]) {
-          takeEgoControllerEvent(translation, event, *trigger);
-          break;  // the Event's other actions are its controller markers (checked there)
-        }
-        if (pending.item[kActivation]) {  // an activation alone: the Event's other actions stay
-          if (!std::any_of(event.actions.begin(), event.actions.end(),
-                           [](const PendingAction& other) { return static_cast<bool>(other.item[kAssignment]); })) {
-            activateEgoController(translation, event.node, *trigger);
-            continue;
-          }
+        if (hands_over) {  // the whole Event is one controller action (its other actions are refused there)
           takeEgoControllerEvent(translation, event, *trigger);
           break;
+        }
+        if (pending.item[kActivation]) {  // an activation alone: the Event's other actions stay
+          activateEgoController(translation, event.node, *trigger);
+          continue;
         }
         pending.item["trigger"] = *trigger;
         if (event.executions > 1) repeatAction(translation, event, *trigger, pending.item);
