@@ -193,7 +193,53 @@ int checkDurationSteps(double duration, double step, const std::string& where, c
   return static_cast<int>(std::lround(steps));
 }
 
+double powerOfTen(int decimals) {
+  static constexpr double kPowers[] = {1e0, 1e1, 1e2,  1e3,  1e4,  1e5,  1e6,  1e7,
+                                       1e8, 1e9, 1e10, 1e11, 1e12, 1e13, 1e14, 1e15};
+  if (decimals < 0 || decimals > 15) throw Error(fmt::format("internal: 10^{} asked for (0..15 supported)", decimals));
+  return kPowers[decimals];
+}
+
+std::optional<std::int64_t> fixedDecimalDigits(double value, int decimals) {
+  // Below 2^52 every n + 0.5 is a double, and rounding the product to the nearest double is
+  // monotonic: the computed product lies on the same side of each n + 0.5 as the exact one, or
+  // on it. Only a product that lands on a half is undecided (an exact tie or a near one).
+  constexpr double kLimit = 4503599627370496.0;  // 2^52
+  if (decimals < 0 || decimals > 15) return std::nullopt;
+  const double scaled = value * powerOfTen(decimals);
+  if (!(std::abs(scaled) < kLimit)) return std::nullopt;  // also NaN
+  const double below = std::floor(scaled);
+  const double fraction = scaled - below;  // exact in [0, 1), but ~1 for tiny negative products (rounds up)
+  if (fraction == 0.5) return std::nullopt;
+  return static_cast<std::int64_t>(fraction < 0.5 ? below : below + 1.0);
+}
+
+std::string_view fixedDecimalText(double value, int decimals, FixedDecimalBuffer& buffer) {
+  const auto digits = fixedDecimalDigits(value, decimals);
+  if (!digits) {
+    const auto written = fmt::format_to_n(buffer.data(), buffer.size(), "{:.{}f}", value, decimals);
+    return {buffer.data(), std::min(written.size, buffer.size())};
+  }
+  const auto scale = static_cast<std::int64_t>(powerOfTen(decimals));
+  const std::int64_t magnitude = *digits < 0 ? -*digits : *digits;
+  char* end = buffer.data();
+  if (std::signbit(value)) *end++ = '-';  // also for a value that rounds to zero, as fmt writes it
+  end = std::to_chars(end, buffer.data() + buffer.size(), magnitude / scale).ptr;
+  if (decimals == 0) return {buffer.data(), static_cast<std::size_t>(end - buffer.data())};
+  *end++ = '.';
+  std::int64_t fraction = magnitude % scale;
+  for (int d = decimals - 1; d >= 0; --d, fraction /= 10) end[d] = static_cast<char>('0' + fraction % 10);
+  end += decimals;
+  return {buffer.data(), static_cast<std::size_t>(end - buffer.data())};
+}
+
 double asFixedDecimalText(double value, int decimals) {
+  if (const auto digits = fixedDecimalDigits(value, decimals)) {
+    // The text "digits / 10^decimals" reads back as the double nearest to that quotient, which
+    // is what the correctly rounded division gives; a zero keeps the sign the text writes.
+    if (*digits == 0) return std::copysign(0.0, value);
+    return static_cast<double>(*digits) / powerOfTen(decimals);
+  }
   char text[400];  // room for any double in fixed notation
   const auto end = std::to_chars(text, text + sizeof(text), value, std::chars_format::fixed, decimals).ptr;
   double parsed = 0.0;

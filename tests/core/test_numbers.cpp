@@ -1,14 +1,19 @@
 // Issue 29: one reading of numbers for every format, bounded reads of whole files, paths
 // a file names kept inside its folder, and the allow-list of SUMO/netconvert options.
 #include <gmock/gmock.h>
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <charconv>
+#include <cmath>
 #include <cstdlib>
+#include <cstring>
 #include <fstream>
 #include <limits>
 #include <nlohmann/json.hpp>
+#include <random>
 
 #include "vsd/core/error.hpp"
 #include "vsd/core/files.hpp"
@@ -32,7 +37,74 @@ std::string refusal(Action action) {
   return {};
 }
 
+/// What asFixedDecimalText stands for: the number's fixed-point text, read back.
+double readBackFromText(double value, int decimals) {
+  char text[400];
+  const auto end = std::to_chars(text, text + sizeof(text), value, std::chars_format::fixed, decimals).ptr;
+  double parsed = 0.0;
+  std::from_chars(text, end, parsed);
+  return parsed;
+}
+
+bool sameBits(double a, double b) {
+  if (std::isnan(a) || std::isnan(b)) return std::isnan(a) && std::isnan(b);
+  return std::memcmp(&a, &b, sizeof(double)) == 0;
+}
+
+/// Coordinates of a network file and numbers around them: signed, near zero, near and at the
+/// ties of two decimals, huge, and not finite.
+std::vector<double> numbersToWrite() {
+  std::mt19937_64 random(20261127);
+  std::uniform_real_distribution<double> coordinate(-2e5, 2e5);
+  std::uniform_real_distribution<double> small(-0.02, 0.02);
+  std::uniform_int_distribution<std::int64_t> hundredths(-20'000'000, 20'000'000);
+  std::vector<double> numbers = {0.0, -0.0, 0.125, -0.125, 0.375, 2.5, -2.5, 1.005, 2.675, 1e12, -1e20, 4.35e15,
+                                 std::numeric_limits<double>::quiet_NaN(), std::numeric_limits<double>::infinity(),
+                                 -std::numeric_limits<double>::infinity(), std::numeric_limits<double>::denorm_min()};
+  for (int i = 0; i < 200'000; ++i) numbers.push_back(coordinate(random));
+  for (int i = 0; i < 20'000; ++i) numbers.push_back(small(random));
+  for (int i = 0; i < 50'000; ++i) {
+    const double tie = (static_cast<double>(hundredths(random)) + 0.5) / 100.0;  // x.xx5, as near as a double gets
+    numbers.push_back(tie);
+    numbers.push_back(std::nextafter(tie, 0.0));
+    numbers.push_back(std::nextafter(tie, 1e300));
+  }
+  return numbers;
+}
+
 }  // namespace
+
+// Network files are written and read back with two (SUMO) or six (plain XML) decimals for
+// every coordinate; the digits are found by arithmetic where that is certain, and the result
+// must be the text's, bit for bit, or the lanes vsd-sumo measures on would differ from SUMO's.
+TEST(FixedDecimal, ReadsBackAndWritesEveryNumberExactlyAsItsTextDoes) {
+  const auto numbers = numbersToWrite();
+  FixedDecimalBuffer buffer;
+  for (const int decimals : {0, 2, 6}) {
+    std::size_t decided = 0;
+    std::size_t coordinates = 0;
+    for (std::size_t i = 0; i < numbers.size(); ++i) {
+      const double value = numbers[i];
+      ASSERT_TRUE(sameBits(asFixedDecimalText(value, decimals), readBackFromText(value, decimals)))
+          << fmt::format("{:.17g} with {} decimals: {:.17g}, the text reads back as {:.17g}", value, decimals,
+                         asFixedDecimalText(value, decimals), readBackFromText(value, decimals));
+      ASSERT_EQ(fixedDecimalText(value, decimals, buffer), fmt::format("{:.{}f}", value, decimals))
+          << fmt::format("{:.17g} with {} decimals", value, decimals);
+      if (std::abs(value) >= 0.02 && std::abs(value) <= 2e5 && i < 220'016) {
+        ++coordinates;
+        decided += fixedDecimalDigits(value, decimals).has_value() ? 1 : 0;
+      }
+    }
+    // The cheap path is the usual one: only products that land exactly on a half take the text.
+    EXPECT_GT(static_cast<double>(decided), 0.99 * static_cast<double>(coordinates)) << decimals << " decimals";
+  }
+  EXPECT_EQ(fixedDecimalDigits(1.236, 2), 124);
+  EXPECT_EQ(fixedDecimalDigits(-1.234, 2), -123);
+  EXPECT_EQ(fixedDecimalDigits(-0.004, 2), 0);
+  EXPECT_EQ(fixedDecimalText(-0.004, 2, buffer), "-0.00");
+  EXPECT_FALSE(fixedDecimalDigits(0.125, 2).has_value());  // a tie: only the text decides
+  EXPECT_FALSE(fixedDecimalDigits(1e16, 0).has_value());   // beyond 2^52
+}
 
 TEST(Numbers, DecimalTextIsReadWholeAndFiniteNumbersAreRefusedByName) {
   EXPECT_EQ(parseReal("12.5", NumberRange::any(), "f", "x"), 12.5);

@@ -14,9 +14,12 @@
 //   "<where>: <field>: got '<text>', expected <what> (<why>)"
 // e.g. "a.xosc:12: <Dimensions>: length: got 'nan', expected a finite number in (0, 100] (NaN is not a number)".
 
+#include <array>
 #include <cstdint>
 #include <limits>
+#include <optional>
 #include <string>
+#include <string_view>
 
 namespace vsd {
 
@@ -55,6 +58,25 @@ std::uint64_t parseUnsigned(const std::string& text, std::uint64_t max, const st
 /// `value` as it reads back from its exactly rounded fixed-point text with `decimals` digits
 /// (what fmt's {:.Nf} writes and a reader of that file gets), e.g. a coordinate of a network file.
 double asFixedDecimalText(double value, int decimals);
+
+/// The integer value · 10^decimals rounds to in `value`'s fixed-point text with `decimals`
+/// digits (1.236 with 2 decimals: 124; -0.004: 0), where double arithmetic decides it for
+/// certain: |value · 10^decimals| < 2^52 and the product not exactly on a half. std::nullopt
+/// otherwise (ties and near ties, NaN, infinities, `decimals` outside 0..15): then only writing
+/// the text decides. Exists so that writers of many numbers (network files) need not format
+/// and parse each one.
+std::optional<std::int64_t> fixedDecimalDigits(double value, int decimals);
+
+/// 10^decimals for decimals 0..15 (exact in a double).
+double powerOfTen(int decimals);
+
+/// Room for any number fixedDecimalText writes (a double in fixed notation).
+using FixedDecimalBuffer = std::array<char, 400>;
+
+/// `value` with `decimals` (0..15) digits after the point, exactly as fmt's "{:.Nf}" writes it
+/// (-0.004 with 2 decimals: "-0.00"), written into `buffer`. Cheaper than fmt where
+/// fixedDecimalDigits decides the digits (the coordinates of network files); fmt writes the rest.
+std::string_view fixedDecimalText(double value, int decimals, FixedDecimalBuffer& buffer);
 
 /// Checks a number that is already a double (computed, or read by another parser)
 /// against `range`, NaN and infinities included; returns it. `shown` is the text
