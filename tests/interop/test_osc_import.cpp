@@ -1520,6 +1520,28 @@ TEST(OscRun, ARoadDrivenOnItsLeftSideIsTheLanguagesRoad) {
                         "reference line (rule LHT)"));
 }
 
+// Which side a right-hand road's Init drives is read from the vehicles placed on a lane; one placed
+// by a road or world position (no lane, no driving direction of its own) keeps the right side,
+// the road's own. So the Ego turned onto the left side (as above) beside an overtaker placed on
+// the right side by t or by y is refused on the right side's terms, not read on the left's.
+TEST(OscImport, AVehiclePlacedByARoadOrWorldPositionKeepsTheRightSide) {
+  const std::string turned_ego =
+      R"(<LanePosition roadId="3" laneId="3" s="100" offset="0"><Orientation type="relative" h="3.14159"/>
+      </LanePosition>)";
+  const std::string relative = R"(<RelativeLanePosition entityRef="Ego" dLane="-1" ds="-30"/>)";
+  for (const std::string position :
+       {R"(<RoadPosition roadId="3" s="70" t="-2.25"/>)", R"(<WorldPosition x="70" y="-2.25" h="0"/>)"}) {
+    std::string text = dataWith("overtake_on_the_left_side.xosc",
+                                R"(<LanePosition roadId="3" laneId="3" s="100" offset="0"/>)", turned_ego);
+    text.replace(text.find(relative), relative.size(), position);
+    const auto folder =
+        folderWith({{"roads/two_carriageways.xodr", twoCarriageways("RHT")}, {"overtake.xosc", text}});
+    EXPECT_THAT(test::configErrorOf([&] { importTemplate(folder->path() / "overtake.xosc", {}); }),
+                HasSubstr("laneId 3: expected a driving lane of the road's right side"))
+        << position;
+  }
+}
+
 // An Event's maximumExecutionCount becomes its action's `repeat` (the language restarts it once
 // it has ended, when its condition fires again) and conditionEdge="rising" the condition's
 // `rising`. A start that happens once (a simulation time) cannot repeat, nor can an Event of
