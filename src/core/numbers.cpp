@@ -209,18 +209,21 @@ std::optional<std::int64_t> fixedDecimalDigits(double value, int decimals) {
   const double scaled = value * powerOfTen(decimals);
   if (!(std::abs(scaled) < kLimit)) return std::nullopt;  // also NaN
   const double below = std::floor(scaled);
-  const double fraction = scaled - below;  // exact in [0, 1), but ~1 for tiny negative products (rounds up)
+  // In [0, 1]: exact, but for a product in (-1, 0), where it is rounded - monotonically, and one
+  // half is a double, so it still lies on the exact fraction's side of one half, or on it.
+  const double fraction = scaled - below;
   if (fraction == 0.5) return std::nullopt;
   return static_cast<std::int64_t>(fraction < 0.5 ? below : below + 1.0);
 }
 
 std::string_view fixedDecimalText(double value, int decimals, FixedDecimalBuffer& buffer) {
+  const double scale_of_digits = powerOfTen(decimals);  // also refuses decimals outside 0..15
   const auto digits = fixedDecimalDigits(value, decimals);
   if (!digits) {
     const auto written = fmt::format_to_n(buffer.data(), buffer.size(), "{:.{}f}", value, decimals);
     return {buffer.data(), std::min(written.size, buffer.size())};
   }
-  const auto scale = static_cast<std::int64_t>(powerOfTen(decimals));
+  const auto scale = static_cast<std::int64_t>(scale_of_digits);
   const std::int64_t magnitude = *digits < 0 ? -*digits : *digits;
   char* end = buffer.data();
   if (std::signbit(value)) *end++ = '-';  // also for a value that rounds to zero, as fmt writes it
