@@ -17,9 +17,15 @@ trap 'rm -rf "$work"' EXIT
 echo "# tools/instruction_count.sh $scenario $samples: callgrind, all processes, run --samples $samples --seed 3"
 for bin in "$@"; do
   rm -rf "$work/out" "$work"/cg.*
-  valgrind --tool=callgrind --trace-children=yes --dump-before=fork --callgrind-out-file="$work/cg.%p" \
+  valgrind --tool=callgrind --trace-children=yes --dump-before='*fork' --callgrind-out-file="$work/cg.%p" \
     "$bin" --quiet run "$scenario" --samples "$samples" --seed 3 --out "$work/out" >/dev/null 2>"$work/log" ||
     { echo "instruction_count.sh: $bin failed:" >&2; tail -3 "$work/log" >&2; exit 1; }
+  # A run of several processes whose parent never dumped at a fork would count them twice.
+  processes=$(ls "$work" | sed -n 's/^cg\.\([0-9]*\).*/\1/p' | sort -u | wc -l)
+  if [ "$processes" -gt 1 ] && ! ls "$work" | grep -q '^cg\.[0-9]*\.[0-9]*$'; then
+    echo "instruction_count.sh: $processes processes but no dump at a fork: counts would repeat inherited ones" >&2
+    exit 1
+  fi
   # Per dump (cg.PID and cg.PID.N): its "totals:" line, else its "summary:" line.
   total=$(awk '$1 == "totals:" {t[FILENAME] = $2} $1 == "summary:" {s[FILENAME] = $2}
     END {for (f in s) if (!(f in t)) t[f] = s[f]; for (f in t) sum += t[f]; printf "%.0f", sum}' "$work"/cg.*)

@@ -11,22 +11,37 @@ command -v valgrind >/dev/null ||
   { echo "instruction_profile.sh: needs valgrind (apt-get install valgrind)" >&2; exit 1; }
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
-valgrind --tool=callgrind --trace-children=yes --dump-before=fork --callgrind-out-file="$work/cg.%p" \
+valgrind --tool=callgrind --trace-children=yes --dump-before='*fork' --callgrind-out-file="$work/cg.%p" \
   "$bin" --quiet run "$scenario" --samples "$samples" --seed 3 --out "$work/out" >/dev/null 2>"$work/log" ||
   { echo "instruction_profile.sh: $bin failed:" >&2; tail -3 "$work/log" >&2; exit 1; }
-for dump in "$work"/cg.*; do callgrind_annotate --inclusive=yes --threshold=100 "$dump" 2>/dev/null; done >"$work/inclusive"
+# One listing per dump, each line "count (share)  file:function [object]"; no source annotation.
+for dump in "$work"/cg.*; do
+  echo "== $dump"
+  callgrind_annotate --inclusive=yes --threshold=100 --auto=no "$dump" 2>>"$work/log" ||
+    { echo "instruction_profile.sh: callgrind_annotate $dump failed:" >&2; tail -3 "$work/log" >&2; exit 1; }
+done >"$work/inclusive"
 total=$(awk '$1 == "totals:" {t[FILENAME] = $2} $1 == "summary:" {s[FILENAME] = $2}
   END {for (f in s) if (!(f in t)) t[f] = s[f]; for (f in t) sum += t[f]; printf "%.0f", sum}' "$work"/cg.*)
 echo "# tools/instruction_profile.sh $scenario $samples: $($bin --version), callgrind inclusive counts, all processes"
 printf '%-62s %12s %14s %7s\n' "part (function)" "M instr" "K per scenario" "share"
-# label|pattern matched against callgrind_annotate's function column (one function each)
+# label|pattern: the start of the function's name in callgrind_annotate's "file:function" column.
+# Per dump the largest matching entry counts (a function split into clones or, with debug
+# information, listed once per file it was inlined from holds its whole cost in its own entry).
 while IFS='|' read -r label pattern; do
-  count=$(awk -v p="$pattern" 'index($0, p) { gsub(",", "", $1); sum += $1 } END { printf "%.0f", sum }' "$work/inclusive")
+  count=$(awk -v p="$pattern" '
+    $1 == "==" { dump = $2; next }
+    $1 ~ /^[0-9,]+$/ && $0 !~ /\[clone / {
+      count = $1; gsub(",", "", count)
+      entry = $0; sub(/^ *[0-9,]+ +\([ 0-9.]+%\) +/, "", entry)  # "file:function [object]"
+      name = entry; sub(/^[^:]*:/, "", name)
+      if (index(name, p) == 1 && count + 0 > best[dump]) best[dump] = count + 0
+    }
+    END { for (d in best) sum += best[d]; printf "%.0f", sum }' "$work/inclusive")
   echo "$label $count" | awk -v total="$total" -v n="$samples" -v label="$label" '{
     printf "%-62s %12.1f %14.1f %6.1f%%\n", label, $NF / 1e6, $NF / 1e3 / n, 100 * $NF / total }'
 done <<'PARTS'
-loading the shared libraries (dynamic linker; once per run)|dl-sysdep.c:_dl_sysdep_start
-running the libraries' initialisers (once per run)|dl-init.c:_dl_init [
+loading the shared libraries (dynamic linker; once per run)|_dl_sysdep_start
+running the libraries' initialisers (once per run)|_dl_init
 simulating the batches (worker)|vsd::sim::simulateBatch(
   SUMO: loading each batch's network|libsumo::Simulation::load(
   SUMO: adding the road users|libsumo::Vehicle::add(
@@ -36,12 +51,11 @@ simulating the batches (worker)|vsd::sim::simulateBatch(
   SUMO: stepping|libsumo::Simulation::step(
   the Ego's observation (incl. SUMO's leader and lane)|vsd::sim::EgoDriver::observe(
   the scripted road users|vsd::sim::ScriptedTraffic::step(
-sampling and writing each batch's network (worker)|BatchProcessor::prepare(
+sampling and writing each batch's network (worker)|vsd::pipeline::(anonymous namespace)::BatchProcessor::prepare(
 metrics (worker)|vsd::metrics::MetricSet::evaluate(
 writing concrete.csv, dataset.h5, traces.h5 rows (main)|vsd::pipeline::OutcomeFiles::write(
 closing the HDF5 files (main)|vsd::pipeline::OutcomeFiles::close(
-HDF5's deflate compression, wherever it runs (main)|???:compress2 [
+HDF5's deflate compression, wherever it runs (main)|compress2
 checksums of the outputs for the manifest (main)|vsd::OutputFolder::commit(
 PARTS
-printf '%-62s %12.1f %14.1f %6.1f%%\n' "the whole run" "$(echo "$total" | awk '{print $1 / 1e6}')" \
-  "$(echo "$total $samples" | awk '{print $1 / 1e3 / $2}')" 100
+echo "$total $samples" | awk '{ printf "%-62s %12.1f %14.1f %6.1f%%\n", "the whole run", $1 / 1e6, $1 / 1e3 / $2, 100 }'
