@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <memory>
 #include <optional>
 
 #include "functions.hpp"
@@ -27,43 +28,76 @@ double speedAlong(const PolylineProjection& foot, const VehicleState& state) {
   return state.speed * std::cos(state.heading - foot.heading);
 }
 
+}  // namespace
+
+/// For every instant at which the Ego and at least one other road user are valid: the Ego's
+/// foot on its lane line and each such road user's foot and relation to the Ego's path
+/// (relateFeet: what relateToPath gives, each centre projected once).
+struct PathRelations {
+  struct Pair {
+    std::size_t vehicle = 0;  ///< index in the trace (>= 1)
+    PolylineProjection foot;  ///< projectExtended of its centre
+    PathRelation relation;
+  };
+  struct Instant {
+    std::size_t k = 0;
+    PolylineProjection egoFoot;
+    std::vector<Pair> pairs;  ///< in the trace's order of road users
+  };
+  std::vector<Instant> instants;
+};
+
+namespace {
+
+const PathRelations& pathRelationsOf(const MetricContext& context) {
+  if (context.pathRelations) return *context.pathRelations;
+  auto relations = std::make_shared<PathRelations>();
+  const VehicleTrack& ego = context.trace.ego();
+  const MeasuredPolyline line(context.egoLaneCentre);
+  for (std::size_t k = 0; k < ego.states.size(); ++k) {
+    if (!ego.validAt(k)) continue;
+    const Footprint ego_footprint = footprintAt(ego, k);
+    PathRelations::Instant instant;
+    instant.k = k;
+    for (std::size_t v = 1; v < context.trace.vehicles.size(); ++v) {
+      const VehicleTrack& other = context.trace.vehicles[v];
+      if (!other.validAt(k)) continue;
+      if (instant.pairs.empty()) instant.egoFoot = projectExtended(line, ego_footprint.centre);
+      const Footprint other_footprint = footprintAt(other, k);
+      PathRelations::Pair pair;
+      pair.vehicle = v;
+      pair.foot = projectExtended(line, other_footprint.centre);
+      pair.relation = relateFeet(instant.egoFoot, pair.foot, kAnyLaneWidth, ego_footprint, other_footprint);
+      instant.pairs.push_back(pair);
+    }
+    if (!instant.pairs.empty()) relations->instants.push_back(std::move(instant));
+  }
+  context.pathRelations = relations;
+  return *relations;
+}
+
 /// Calls visit(k, gap, ego_speed_along, object_speed_along) for the in-path object at each
 /// instant where there is one: the nearest (smallest bumper gap along the Ego's lane) of the
 /// road users ahead that reach into the corridor the Ego sweeps. Returns false if the trace
 /// has no valid pair of instants at all.
 template <typename Visitor>
 bool forEachInPathObject(const MetricContext& context, Visitor&& visit) {
-  const VehicleTrack& ego = context.trace.ego();
-  const MeasuredPolyline line(context.egoLaneCentre);
-  bool any = false;
-  for (std::size_t k = 0; k < ego.states.size(); ++k) {
-    if (!ego.validAt(k)) continue;
-    const Footprint ego_footprint = footprintAt(ego, k);
-    // Each centre is projected onto the line once per instant (relateFeet and speedAlong share it).
-    std::optional<PolylineProjection> ego_foot;
-    const VehicleTrack* nearest = nullptr;
-    PolylineProjection nearest_foot;
+  const PathRelations& relations = pathRelationsOf(context);
+  for (const auto& instant : relations.instants) {
+    const PathRelations::Pair* nearest = nullptr;
     double nearest_gap = kInf;
-    for (std::size_t v = 1; v < context.trace.vehicles.size(); ++v) {
-      const VehicleTrack& other = context.trace.vehicles[v];
-      if (!other.validAt(k)) continue;
-      any = true;
-      if (!ego_foot) ego_foot = projectExtended(line, ego_footprint.centre);
-      const Footprint other_footprint = footprintAt(other, k);
-      const PolylineProjection other_foot = projectExtended(line, other_footprint.centre);
-      const PathRelation relation = relateFeet(*ego_foot, other_foot, kAnyLaneWidth, ego_footprint, other_footprint);
-      if (relation.inPath && relation.longitudinalGap < nearest_gap) {
-        nearest_gap = relation.longitudinalGap;
-        nearest = &other;
-        nearest_foot = other_foot;
+    for (const auto& pair : instant.pairs) {
+      if (pair.relation.inPath && pair.relation.longitudinalGap < nearest_gap) {
+        nearest_gap = pair.relation.longitudinalGap;
+        nearest = &pair;
       }
     }
-    if (nearest != nullptr) {
-      visit(k, std::max(nearest_gap, 0.0), speedAlong(*ego_foot, ego.states[k]),
-            speedAlong(nearest_foot, nearest->states[k]));
-    }
+    if (nearest == nullptr) continue;
+    const std::size_t k = instant.k;
+    visit(k, std::max(nearest_gap, 0.0), speedAlong(instant.egoFoot, context.trace.ego().states[k]),
+          speedAlong(nearest->foot, context.trace.vehicles[nearest->vehicle].states[k]));
   }
-  return any;
+  return !relations.instants.empty();
 }
 
 }  // namespace
@@ -89,21 +123,15 @@ double minInPathTimeHeadway(const MetricContext& context) {
 
 double minLateralClearance(const MetricContext& context) {
   if (context.egoLaneCentre.size() < 2) return kNaN;
-  const VehicleTrack& ego = context.trace.ego();
-  const MeasuredPolyline line(context.egoLaneCentre);
-  bool any = false;
+  const PathRelations& relations = pathRelationsOf(context);
   double result = kInf;
-  for (std::size_t v = 1; v < context.trace.vehicles.size(); ++v) {
-    const VehicleTrack& other = context.trace.vehicles[v];
-    for (std::size_t k = 0; k < ego.states.size() && k < other.states.size(); ++k) {
-      if (!ego.validAt(k) || !other.validAt(k)) continue;
-      any = true;
-      const PathRelation relation = relateToPath(line, kAnyLaneWidth, footprintAt(ego, k), footprintAt(other, k));
+  for (const auto& instant : relations.instants) {
+    for (const auto& pair : instant.pairs) {
       // Beside the Ego: their extents along the lane overlap.
-      if (relation.longitudinalGap < 0.0) result = std::min(result, relation.lateralGap);
+      if (pair.relation.longitudinalGap < 0.0) result = std::min(result, pair.relation.lateralGap);
     }
   }
-  return any ? result : kNaN;
+  return relations.instants.empty() ? kNaN : result;
 }
 
 double egoMaxDeceleration(const MetricContext& context) {

@@ -20,6 +20,7 @@
 //               (d_lon_min, and the gaps of ttc_min and thw_min).
 
 #include <functional>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -29,6 +30,10 @@
 namespace vsd::metrics {
 
 /// What a metric is computed from: one run's trace and the lane the Ego starts on.
+namespace detail {
+struct PathRelations;
+}  // namespace detail
+
 struct MetricContext {
   const Trace& trace;            ///< vehicles[0] is the Ego; each track carries its length and width
   const Polyline& egoLaneCentre; ///< centre line of the Ego's starting lane (scene frame); empty if unknown
@@ -37,6 +42,10 @@ struct MetricContext {
   /// end and split): lane offsets are then measured at each instant against the lane the
   /// Ego is in. MetricSet::evaluate passes it on only for such sources.
   const std::vector<Polyline>* laneBoundaries = nullptr;
+  /// How each road user relates to the Ego's path at each instant: worked out by the first
+  /// metric that needs it (in-path time to collision and headway, lateral clearance) and
+  /// shared by the others of the same evaluation.
+  mutable std::shared_ptr<const detail::PathRelations> pathRelations = nullptr;
 };
 
 /// What a source of traces can provide to metrics.
