@@ -29,11 +29,11 @@
 
 namespace vsd::metrics {
 
-/// What a metric is computed from: one run's trace and the lane the Ego starts on.
 namespace detail {
-struct PathRelations;
+struct PathRelations;  ///< path_metrics.cpp
 }  // namespace detail
 
+/// What a metric is computed from: one run's trace and the lane the Ego starts on.
 struct MetricContext {
   const Trace& trace;            ///< vehicles[0] is the Ego; each track carries its length and width
   const Polyline& egoLaneCentre; ///< centre line of the Ego's starting lane (scene frame); empty if unknown
