@@ -1,27 +1,22 @@
 #!/bin/sh
 # Where the instructions of `BIN run SCENARIO --samples SAMPLES --seed 3` go: callgrind over
-# every process (each dumps and zeroes its counters before a fork, so nothing is counted twice;
-# tools/instruction_count.sh), then the inclusive count of each part below summed over all
-# processes, per scenario and as a share of the whole run. Inclusive: an indented part is
+# every process (each instruction counted once: tools/callgrind_run.sh), then the inclusive
+# count of each part below summed over all processes, per scenario and as a share of the run. Inclusive: an indented part is
 # inside the one above it. Counts, unlike CPU times, do not move with the shared VM's load.
 # usage: tools/instruction_profile.sh SCENARIO SAMPLES BIN
 set -eu
 scenario=$1; samples=$2; bin=$3
-command -v valgrind >/dev/null ||
-  { echo "instruction_profile.sh: needs valgrind (apt-get install valgrind)" >&2; exit 1; }
+. "$(dirname "$0")/callgrind_run.sh"
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
-valgrind --tool=callgrind --trace-children=yes --dump-before='*fork' --callgrind-out-file="$work/cg.%p" \
-  "$bin" --quiet run "$scenario" --samples "$samples" --seed 3 --out "$work/out" >/dev/null 2>"$work/log" ||
-  { echo "instruction_profile.sh: $bin failed:" >&2; tail -3 "$work/log" >&2; exit 1; }
+callgrind_run "$work" "$bin" "$scenario" "$samples"
 # One listing per dump, each line "count (share)  file:function [object]"; no source annotation.
 for dump in "$work"/cg.*; do
   echo "== $dump"
   callgrind_annotate --inclusive=yes --threshold=100 --auto=no "$dump" 2>>"$work/log" ||
     { echo "instruction_profile.sh: callgrind_annotate $dump failed:" >&2; tail -3 "$work/log" >&2; exit 1; }
 done >"$work/inclusive"
-total=$(awk '$1 == "totals:" {t[FILENAME] = $2} $1 == "summary:" {s[FILENAME] = $2}
-  END {for (f in s) if (!(f in t)) t[f] = s[f]; for (f in t) sum += t[f]; printf "%.0f", sum}' "$work"/cg.*)
+total=$(callgrind_total "$work")
 echo "# tools/instruction_profile.sh $scenario $samples: $($bin --version), callgrind inclusive counts, all processes"
 printf '%-62s %12s %14s %7s\n' "part (function)" "M instr" "K per scenario" "share"
 # label|pattern: the start of the function's name in callgrind_annotate's "file:function" column.

@@ -6,7 +6,6 @@
 #include <cmath>
 #include <limits>
 #include <memory>
-#include <optional>
 
 #include "functions.hpp"
 #include "vsd/core/path_relation.hpp"
