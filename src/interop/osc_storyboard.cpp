@@ -279,13 +279,13 @@ YAML::Node assignedController(Translation& translation, const pugi::xml_node& as
   const xml::Reader& reader = translation.reader;
   std::string where;
   const std::string name = controllerName(translation, *translation.catalogs, assign, where);
-  const ControllerChoice choice = mapController(translation.options, name, where);
+  const ControllerChoice choice = translation.controllerMap.choice(name, where);
   if (choice.name == kFollowsItsScript) {
     reader.fail(assign, fmt::format("controller '{}' is mapped to '{}': the Ego is driven by a controller", name,
                                     kFollowsItsScript));
   }
-  const bool lateral = reader.optionalText(assign, "activateLateral") == std::optional<std::string>("true");
-  const bool longitudinal = reader.optionalText(assign, "activateLongitudinal") == std::optional<std::string>("true");
+  const bool lateral = reader.optionalBoolean(assign, "activateLateral").value_or(false);
+  const bool longitudinal = reader.optionalBoolean(assign, "activateLongitudinal").value_or(false);
   if (lateral != longitudinal) {
     reader.fail(assign, fmt::format("activate{}=\"true\" alone: the language's Ego controller drives both directions",
                                     lateral ? "Lateral" : "Longitudinal"));
@@ -321,7 +321,7 @@ std::optional<YAML::Node> privateAction(Translation& translation, Entity& actor,
       YAML::Node item;
       if (activate) {
         for (const char* domain : {"longitudinal", "lateral"}) {
-          if (reader.optionalText(activate, domain) == std::optional<std::string>("false")) {
+          if (!reader.optionalBoolean(activate, domain).value_or(true)) {
             reader.fail(activate, fmt::format("{}=\"false\": the language's Ego controller drives both directions",
                                               domain));
           }

@@ -45,10 +45,11 @@ constexpr double kMaxExtension = 10'000.0;
 
 }  // namespace
 
-ControllerChoice mapController(const OscImportOptions& options, const std::string& name, const std::string& where) {
-  if (!options.controllerMap.empty()) {
-    const std::string file = options.controllerMap.string();
-    const YAML::Node map = scenario::loadYaml(readTextFile(options.controllerMap, read_limits::kSpec), file);
+ControllerChoice ControllerMap::choice(const std::string& name, const std::string& where) const {
+  if (given()) {
+    const std::string file = file_.string();
+    if (!map_) map_ = scenario::loadYaml(readTextFile(file_, read_limits::kSpec), file);
+    const YAML::Node& map = *map_;
     if (!map.IsMap()) throw ConfigError(fmt::format("{}: expected a map from controller names to vsd-sumo controllers", file));
     if (const YAML::Node entry = map[name]) {
       if (entry.IsScalar()) return {entry.as<std::string>(), {}};
@@ -71,8 +72,8 @@ namespace {
 
 /// Whether an entity's controller is mapped onto its script (noted): it is no Ego candidate.
 bool followsItsScript(Translation& translation, const Entity& entity) {
-  if (!translation.options.controllerMap.empty() &&
-      mapController(translation.options, *entity.controller, entity.controllerWhere).name == kFollowsItsScript) {
+  if (translation.controllerMap.given() &&
+      translation.controllerMap.choice(*entity.controller, entity.controllerWhere).name == kFollowsItsScript) {
     translation.findings.note(entity.controllerWhere,
                               fmt::format("'{}' follows its script: its controller '{}' is mapped to '{}' (the "
                                           "controller's own behaviour is not simulated)",
@@ -93,7 +94,7 @@ Entity& findEgo(Translation& translation, ControllerChoice& controller) {
     ego = &entity;
   }
   if (ego) {
-    controller = mapController(translation.options, *ego->controller, ego->controllerWhere);
+    controller = translation.controllerMap.choice(*ego->controller, ego->controllerWhere);
     translation.findings.mapped(ego->controllerWhere, fmt::format("the Ego '{}' is driven by vsd-sumo's '{}' (the file's "
                                                                   "controller '{}'; its properties are not passed on)",
                                                                   ego->name, controller.name, *ego->controller));

@@ -68,13 +68,29 @@ struct ControllerChoice {
   YAML::Node params;  ///< null: its defaults
 };
 
+/// The --controller-map file (read at the first lookup, once per translation) and the defaults.
+class ControllerMap {
+ public:
+  explicit ControllerMap(const OscImportOptions& options) : file_(options.controllerMap) {}
+  bool given() const { return !file_.empty(); }
+  /// The vsd-sumo controller a file's controller name maps onto (the map file, then the
+  /// defaults); throws ConfigError naming `where` for a name that maps nowhere.
+  ControllerChoice choice(const std::string& name, const std::string& where) const;
+
+ private:
+  std::filesystem::path file_;
+  mutable std::optional<YAML::Node> map_;  ///< the file's map, once read
+};
+
 /// One file's translation in progress.
 struct Translation {
-  Translation(xml::Reader& r, Findings& f, const OscImportOptions& o) : reader(r), findings(f), options(o) {}
+  Translation(xml::Reader& r, Findings& f, const OscImportOptions& o)
+      : reader(r), findings(f), options(o), controllerMap(o) {}
 
   xml::Reader& reader;
   Findings& findings;
   const OscImportOptions& options;
+  ControllerMap controllerMap;
   CarriagewayRoad road;
   std::vector<Entity> entities;
   Entity* ego = nullptr;
@@ -110,11 +126,6 @@ std::string identifier(const std::string& name, std::set<std::string>& used);
 /// The controller map's word for a controller vsd-sumo does not simulate: its entity follows
 /// its script (e.g. esmini's sloppyDriver, which adds deviations to a scripted vehicle).
 inline constexpr const char* kFollowsItsScript = "script";
-
-// osc_template.cpp
-/// The vsd-sumo controller a file's controller name maps onto (--controller-map, then the
-/// defaults); throws ConfigError naming `where` for a name that maps nowhere.
-ControllerChoice mapController(const OscImportOptions& options, const std::string& name, const std::string& where);
 
 // osc_entities.cpp
 /// The name of the controller a <Controller> or controller <CatalogReference> under `parent`
