@@ -186,7 +186,7 @@ void readInitAction(Translation& translation, Entity& entity, const pugi::xml_no
       entity.controllerWhere = reader.where(assign);
       // OpenSCENARIO 1.2 may activate the assigned controller with the assignment.
       for (const char* domain : {"activateLateral", "activateLongitudinal"}) {
-        activates = activates || reader.optionalText(assign, domain) == std::optional<std::string>("true");
+        activates = activates || reader.optionalBoolean(assign, domain).value_or(false);
       }
     }
     if (activates) noteActivation(translation, action, entity);

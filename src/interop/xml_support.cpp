@@ -131,6 +131,12 @@ std::string Reader::oneOf(const pugi::xml_node& node, const char* attribute,
                          fmt::join(allowed, ", ")));
 }
 
+std::optional<bool> Reader::optionalBoolean(const pugi::xml_node& node, const char* attribute) const {
+  if (!node.attribute(attribute)) return std::nullopt;
+  const std::string value = oneOf(node, attribute, {"true", "false", "1", "0"});
+  return value == "true" || value == "1";
+}
+
 pugi::xml_node Reader::only(const pugi::xml_node& parent, const char* name) const {
   pugi::xml_node found;
   for (const pugi::xml_node& node : parent.children(name)) {

@@ -71,6 +71,9 @@ class Reader {
   std::int64_t integer(const pugi::xml_node& node, const char* attribute, std::int64_t min, std::int64_t max) const;
   /// An attribute that must be one of `allowed`.
   std::string oneOf(const pugi::xml_node& node, const char* attribute, std::initializer_list<const char*> allowed) const;
+  /// An xsd:boolean attribute ("true", "false", "1", "0"; any other value refused by name);
+  /// std::nullopt if absent.
+  std::optional<bool> optionalBoolean(const pugi::xml_node& node, const char* attribute) const;
 
   /// The single child element `name`; throws ConfigError if it is missing or repeated.
   pugi::xml_node only(const pugi::xml_node& parent, const char* name) const;

@@ -1681,6 +1681,21 @@ TEST(OscImport, TheEgosControllerActivationTimeIsItsActiveFrom) {
   const auto assigned_at_start = folderWith({{"assigned.xosc", assigned}});
   EXPECT_DOUBLE_EQ(
       importTemplate(assigned_at_start->path() / "assigned.xosc", {})->ego.controller.activeFrom.evaluate({}), 0.0);
+  // Booleans are xsd:boolean ("1" is true); any other word is refused by name, not read as false.
+  std::string assigned_as_digits = assigned;
+  for (const std::string domain : {"activateLateral", "activateLongitudinal"}) {
+    const std::string from = domain + R"(="true")";
+    assigned_as_digits.replace(assigned_as_digits.find(from), from.size(), domain + R"(="1")");
+  }
+  const auto digits = folderWith({{"digits.xosc", assigned_as_digits}});
+  EXPECT_DOUBLE_EQ(importTemplate(digits->path() / "digits.xosc", {})->ego.controller.activeFrom.evaluate({}), 0.0);
+  std::string assigned_as_yes = assigned;
+  assigned_as_yes.replace(assigned_as_yes.find(R"(activateLateral="true")"), 22, R"(activateLateral="yes")");
+  const auto yes = folderWith({{"yes.xosc", assigned_as_yes}});
+  const std::string refused = test::configErrorOf([&] { importTemplate(yes->path() / "yes.xosc", {}); });
+  EXPECT_THAT(refused, HasSubstr("yes.xosc:"));
+  EXPECT_THAT(refused, HasSubstr(R"(activateLateral="yes" is outside the supported subset (supported: true, false, 1, 0))"));
+  EXPECT_EQ(refused.find('\n'), std::string::npos) << refused;
 
   const auto on_condition = folderWith({{"cond.xosc", dataWith("conditions.xosc", "</Act>",
                                                                 activation(entityCondition(
