@@ -600,21 +600,23 @@ std::size_t ScriptedTraffic::instant() const { return impl_->k; }
 const std::vector<VehicleState>& ScriptedTraffic::states() const { return impl_->states; }
 const std::vector<ScriptedTraffic::ActionTiming>& ScriptedTraffic::timings() const { return impl_->timings; }
 
-std::optional<std::size_t> ScriptedTraffic::egoControllerAt(double time) const {
-  std::optional<std::size_t> controller;
-  for (const auto& [start, action] : impl_->egoControllers) {
-    if (start <= time + 1e-9) controller = action;
+namespace {
+/// The value of the last started entry (start time, value) that has started by `time`: asked every
+/// step, so searched from the end (a repeated action adds an entry each time it starts again).
+template <typename Value>
+std::optional<Value> lastStartedBy(const std::vector<std::pair<double, Value>>& started, double time) {
+  for (auto it = started.rbegin(); it != started.rend(); ++it) {
+    if (it->first <= time + 1e-9) return it->second;
   }
-  return controller;
+  return std::nullopt;
+}
+}  // namespace
+
+std::optional<std::size_t> ScriptedTraffic::egoControllerAt(double time) const {
+  return lastStartedBy(impl_->egoControllers, time);
 }
 
-std::optional<double> ScriptedTraffic::egoSetSpeedAt(double time) const {
-  std::optional<double> set_speed;
-  for (const auto& [start, speed] : impl_->egoSetSpeeds) {
-    if (start <= time + 1e-9) set_speed = speed;
-  }
-  return set_speed;
-}
+std::optional<double> ScriptedTraffic::egoSetSpeedAt(double time) const { return lastStartedBy(impl_->egoSetSpeeds, time); }
 
 void ScriptedTraffic::step(const VehicleState& ego) {
   Impl& impl = *impl_;
