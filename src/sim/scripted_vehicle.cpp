@@ -616,7 +616,9 @@ std::optional<std::size_t> ScriptedTraffic::egoControllerAt(double time) const {
   return lastStartedBy(impl_->egoControllers, time);
 }
 
-std::optional<double> ScriptedTraffic::egoSetSpeedAt(double time) const { return lastStartedBy(impl_->egoSetSpeeds, time); }
+std::optional<double> ScriptedTraffic::egoSetSpeedAt(double time) const {
+  return lastStartedBy(impl_->egoSetSpeeds, time);
+}
 
 void ScriptedTraffic::step(const VehicleState& ego) {
   Impl& impl = *impl_;

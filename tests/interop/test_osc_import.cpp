@@ -1694,7 +1694,8 @@ TEST(OscImport, TheEgosControllerActivationTimeIsItsActiveFrom) {
   const auto yes = folderWith({{"yes.xosc", assigned_as_yes}});
   const std::string refused = test::configErrorOf([&] { importTemplate(yes->path() / "yes.xosc", {}); });
   EXPECT_THAT(refused, HasSubstr("yes.xosc:"));
-  EXPECT_THAT(refused, HasSubstr(R"(activateLateral="yes" is outside the supported subset (supported: true, false, 1, 0))"));
+  EXPECT_THAT(refused,
+              HasSubstr(R"(activateLateral="yes" is outside the supported subset (supported: true, false, 1, 0))"));
   EXPECT_EQ(refused.find('\n'), std::string::npos) << refused;
 
   const auto on_condition = folderWith({{"cond.xosc", dataWith("conditions.xosc", "</Act>",
