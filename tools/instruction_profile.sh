@@ -1,8 +1,9 @@
 #!/bin/sh
 # Where the instructions of `BIN run SCENARIO --samples SAMPLES --seed 3` go: callgrind over
 # every process (each instruction counted once: tools/callgrind_run.sh), then the inclusive
-# count of each part below summed over all processes, per scenario and as a share of the run. Inclusive: an indented part is
-# inside the one above it. Counts, unlike CPU times, do not move with the shared VM's load.
+# count of each part below summed over all processes, per scenario and as a share of the run.
+# Inclusive: an indented part is inside the one above it. Counts, unlike CPU times, do not move
+# with the shared VM's load.
 # usage: tools/instruction_profile.sh SCENARIO SAMPLES BIN
 set -eu
 scenario=$1; samples=$2; bin=$3

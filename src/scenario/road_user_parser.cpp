@@ -526,7 +526,8 @@ void parseAction(const YamlReader& reader, const YAML::Node& node, const std::st
                 "once");
   }
   const std::string kind = oneOf(
-      reader, node, field, {"speed", "stop", "lane_change", "lateral_offset", "cross", "set_speed", "controller"}, true);
+      reader, node, field, {"speed", "stop", "lane_change", "lateral_offset", "cross", "set_speed", "controller"},
+      true);
   const bool of_ego = &owner == &scenario.ego;
   if (of_ego != (kind == "set_speed" || kind == "controller")) {
     reader.fail(node[kind], field + "." + kind,

@@ -245,7 +245,8 @@ class BatchRun {
       const auto& spec = concrete.logical->ego.actions[ego_action].controller;
       const ControllerParams params(action.controllerParams, spec.where);
       member.controllerSlots[a] = member.ego->addController(withStepCost(
-          makeController(registry_, spec.name, spec.library, options_.scenarioDir, params, needs), options_.egoStepCost));
+          makeController(registry_, spec.name, spec.library, options_.scenarioDir, params, needs),
+          options_.egoStepCost));
     }
   }
 

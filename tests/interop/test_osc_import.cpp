@@ -665,7 +665,8 @@ TEST(OscRun, EachConditionStartsItsEventWhereTheFileSays) {
     const auto dir = folderWith({{name, conditionsWith(groups)}});
     const ScenarioCheck check = checkOpenScenario(dir->path() / name, {});
     EXPECT_TRUE(check.runnable()) << name << "\n" << check.report();
-    EXPECT_THAT(check.report(), AnyOf(HasSubstr("start of 'StepDown': {"), HasSubstr("the event never starts"))) << name;
+    EXPECT_THAT(check.report(), AnyOf(HasSubstr("start of 'StepDown': {"), HasSubstr("the event never starts")))
+        << name;
     EXPECT_NEAR(stepDownSeen(dir->path() / name), seen, 1e-9) << name;
   }
 }
@@ -1742,9 +1743,9 @@ TEST(OscRoad, TheLeftSideDrivenAgainstTheReferenceLineIsTheRoadRunBackwards) {
 // reference line, lane 3 (3.25 m, the outermost) is the language's lane 0 and lane 2 (3.5 m)
 // its lane 1; their centres lie at y = -1.75 and 1.625 about the centre line. The Ego starts
 // at s = 900, heading towards s = 0; ds = 30 puts the overtaker 30 m behind it (along the file's
-// s; turned by its orientation to face its lane's direction), its dLane -1 on lane 2, and RelativeTargetLane -1 moves it right, into the Ego's lane
-// (esmini counts it in the overtaker's direction), once it is 10 m ahead: 8.9 s as on the left
-// side driven along the line.
+// s; turned by its orientation to face its lane's direction), its dLane -1 on lane 2, and
+// RelativeTargetLane -1 moves it right, into the Ego's lane (esmini counts it in the overtaker's
+// direction), once it is 10 m ahead: 8.9 s as on the left side driven along the line.
 TEST(OscRun, TheLeftSideDrivenAgainstTheReferenceLineIsTheLanguagesRoad) {
   std::string text = dataWith("overtake_on_the_left_side.xosc", R"(laneId="3" s="100")", R"(laneId="3" s="900")");
   // Placed by ds, it is turned to face its lane's direction (esmini counts from the reference line).
