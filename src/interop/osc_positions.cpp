@@ -84,7 +84,7 @@ Placement relativeLanePosition(Translation& translation, const pugi::xml_node& p
   // dLane counts lane ids (esmini's reading with ds): on a reversed road, the other way.
   const CarriagewayRoad& road = translation.road;
   const long d_lane = reader.integer(position, "dLane", -100, 100);
-  const long lane = base.lane + (road.reversed ? -d_lane : d_lane);
+  const long lane = base.lane + road.ownLaneId(d_lane);
   if (lane < 0 || lane >= translation.road.lanes) {
     reader.fail(position, fmt::format("dLane={} from lane {} leaves the road's {} driving lanes",
                                       reader.text(position, "dLane"), base.lane, translation.road.lanes));
