@@ -14,6 +14,12 @@ depend on what vsd-sumo happens to support:
 - the file must name a road (RoadNetwork/LogicFile), whose path it prints for the survey to
   give to netconvert (the first half of the sentence).
 
+Catalog entries the file references (CatalogReference, followed into the directories of its
+CatalogLocations, also from within entries) count as part of it: a maneuver catalog's actions
+are the file's actions. A file that contradicts the standard is not a file whose actions "are
+in the list": a ParameterDeclaration of a numeric or boolean type whose literal value is no
+such value (the file or a referenced entry declares it so) places it outside, named as invalid.
+
 usage: tools/xosc_scope.py FILE.xosc
 prints one line: "in scope ROAD_PATH" or "outside: <what>"; exit 0 either way, 1 on unreadable
 input.
@@ -53,8 +59,95 @@ def scenario_of(path):
     return path, root
 
 
-def outside_the_issue(root):
-    names = {local_name(element.tag) for element in root.iter()}
+NUMERIC_TYPES = {"double", "int", "integer", "unsignedInt", "unsignedShort"}
+
+
+def parameter_values(root):
+    """The scenario's own parameters (name -> literal value), to resolve `$name` entry names."""
+    declarations = root.find("ParameterDeclarations")
+    if declarations is None:
+        return {}
+    return {d.get("name", ""): d.get("value", "") for d in declarations if local_name(d.tag) == "ParameterDeclaration"}
+
+
+def catalog_directories(path, root):
+    """catalog element name (e.g. "VehicleCatalog") -> directories, relative to the file's folder."""
+    folders = {}
+    locations = root.find("CatalogLocations")
+    for catalog in (locations if locations is not None else []):
+        for directory in catalog.iter("Directory"):
+            folders.setdefault(local_name(catalog.tag), []).append(
+                os.path.normpath(os.path.join(os.path.dirname(path), directory.get("path", ""))))
+    return folders
+
+
+def catalog_entry(folders, catalog_name, entry_name):
+    """The entry `entry_name` of the catalog named `catalog_name` in any of the folders, or None."""
+    for directory in [d for ds in folders.values() for d in ds]:
+        if not os.path.isdir(directory):
+            continue
+        for name in sorted(os.listdir(directory)):
+            if not name.endswith(".xosc"):
+                continue
+            catalog = ElementTree.parse(os.path.join(directory, name)).getroot().find("Catalog")
+            if catalog is None or catalog.get("name") != catalog_name:
+                continue
+            for entry in catalog:
+                if entry.get("name") == entry_name:
+                    return entry
+    return None
+
+
+def referenced_entries(path, root):
+    """Every catalog entry the file references, directly or from another entry."""
+    folders = catalog_directories(path, root)
+    parameters = parameter_values(root)
+    entries, pending, seen = [], [root], set()
+    while pending:
+        for reference in pending.pop().iter("CatalogReference"):
+            name = reference.get("entryName", "")
+            name = parameters.get(name[1:], name) if name.startswith("$") else name
+            key = (reference.get("catalogName", ""), name)
+            if key in seen:
+                continue
+            seen.add(key)
+            entry = catalog_entry(folders, *key)
+            if entry is not None:
+                entries.append(entry)
+                pending.append(entry)
+    return entries
+
+
+def is_reference(value):
+    return value.startswith("$")
+
+
+def contradicts_its_type(declaration):
+    kind, value = declaration.get("parameterType", ""), declaration.get("value", "")
+    if is_reference(value):
+        return False
+    if kind == "boolean":
+        return value not in ("true", "false")
+    if kind in NUMERIC_TYPES:
+        try:
+            float(value)
+        except ValueError:
+            return True
+    return False
+
+
+def invalid_declarations(parts):
+    found = []
+    for part in parts:
+        for declaration in part.iter("ParameterDeclaration"):
+            if contradicts_its_type(declaration):
+                found.append("invalid: parameter {} declared {} with value '{}'".format(
+                    declaration.get("name"), declaration.get("parameterType"), declaration.get("value")))
+    return found
+
+
+def outside_the_issue(parts):
+    names = {local_name(element.tag) for part in parts for element in part.iter()}
     actions = {n for n in names if n.endswith("Action") and n not in ACTION_CONTAINERS}
     conditions = {n for n in names if n.endswith("Condition") and n not in CONDITION_CONTAINERS}
     return sorted(actions - ISSUE_ACTIONS) + sorted(conditions - ISSUE_CONDITIONS)
@@ -67,7 +160,8 @@ def main():
         path, root = scenario_of(sys.argv[1])
     except (OSError, ElementTree.ParseError) as error:
         sys.exit(f"xosc_scope.py: {sys.argv[1]}: {error}")
-    outside = outside_the_issue(root)
+    parts = [root] + referenced_entries(path, root)
+    outside = outside_the_issue(parts) + invalid_declarations(parts)
     logic = root.find(".//RoadNetwork/LogicFile")
     if logic is None:
         outside.append("no road (RoadNetwork/LogicFile)")
