@@ -40,43 +40,115 @@ RoadUserType categoryType(const xml::Reader& reader, const pugi::xml_node& objec
   return *type;
 }
 
-/// OpenSCENARIO 1.2's trailer elements of a <Vehicle>. Where a trailer would attach
-/// (TrailerHitch, TrailerCoupler) is harmless without one — esmini's catalog cars declare both,
-/// with a <Trailer> whose TrailerRef is an empty parameter by default, which attaches none. A
-/// trailer that is attached is refused: the language has no articulated road users.
-void refuseAttachedTrailer(const xml::Reader& reader, const pugi::xml_node& vehicle) {
-  const pugi::xml_node trailer = vehicle.child("Trailer");
-  if (!trailer) return;
-  reader.requireSubset(trailer, {"TrailerRef"});
-  const pugi::xml_node reference = reader.only(trailer, "TrailerRef");
-  const std::string attached = reader.text(reference, "entityRef");
-  if (!attached.empty()) {
-    reader.fail(reference, fmt::format("entityRef=\"{}\": trailers are not simulated (the scenario language has no "
-                                       "articulated road users)", attached));
-  }
-}
+/// m along a road user's axis from its reference point (OpenSCENARIO's, the rear axle for
+/// vehicles), and across it: where its bounding box lies.
+struct Body {
+  double rear = 0.0;
+  double front = 0.0;
+  double width = 0.0;
+};
 
-/// Type and bounding box of a <Vehicle>, <Pedestrian> or <MiscObject>.
-void readObject(const xml::Reader& reader, const pugi::xml_node& object, Entity& entity) {
-  const std::string kind = object.name();
-  if (kind == "Vehicle") {
-    reader.requireSubset(object, {"ParameterDeclarations", "BoundingBox", "Performance", "Axles", "TrailerHitch",
-                                  "TrailerCoupler", "Trailer", "Properties"});
-    refuseAttachedTrailer(reader, object);
-  } else {
-    reader.requireSubset(object, {"ParameterDeclarations", "BoundingBox", "Properties"});
-  }
-  entity.type = categoryType(reader, object);
+/// The <BoundingBox> of a <Vehicle>, <Pedestrian> or <MiscObject>.
+Body boxOf(const xml::Reader& reader, const pugi::xml_node& object) {
   const pugi::xml_node box = reader.only(object, "BoundingBox");
   reader.requireSubset(box, {"Center", "Dimensions"});
   const pugi::xml_node dimensions = reader.only(box, "Dimensions");
-  entity.length = reader.number(dimensions, "length", scenario_bounds::kVehicleLength);
-  entity.width = reader.number(dimensions, "width", scenario_bounds::kVehicleWidth);
+  const double length = reader.number(dimensions, "length", scenario_bounds::kVehicleLength);
+  const double width = reader.number(dimensions, "width", scenario_bounds::kVehicleWidth);
   const pugi::xml_node centre = reader.only(box, "Center");
-  entity.centreAhead = reader.number(centre, "x", NumberRange::closed(-100.0, 100.0));
+  const double ahead = reader.number(centre, "x", NumberRange::closed(-100.0, 100.0));
   if (std::abs(reader.number(centre, "y")) > kAxisTolerance) {
     reader.fail(centre, "y: expected 0 (the language's road users are centred on their axis)");
   }
+  return {ahead - length / 2, ahead + length / 2, width};
+}
+
+/// Trailers towing trailers: deeper than this is refused (a catalog entry that tows itself).
+constexpr int kMaxTrailers = 4;
+
+Body vehicleBody(Translation& translation, Catalogs& catalogs, const xml::Reader& reader,
+                 const pugi::xml_node& vehicle, int towed);
+
+/// The <Vehicle> of a trailer defined in place (OpenSCENARIO 1.3: <Trailer name> holding a
+/// <Vehicle>, or a <CatalogReference> to one: then `entry` keeps the catalog file's reader).
+struct TrailerVehicle {
+  CatalogEntry entry;
+  const xml::Reader* reader = nullptr;
+  pugi::xml_node vehicle;
+};
+
+TrailerVehicle trailerVehicle(const xml::Reader& reader, Catalogs& catalogs, const pugi::xml_node& trailer) {
+  reader.requireSubset(trailer, {"Vehicle", "CatalogReference"});
+  const pugi::xml_node inline_or_reference = reader.choice(trailer, {"Vehicle", "CatalogReference"});
+  if (std::string(inline_or_reference.name()) == "Vehicle") return {{}, &reader, inline_or_reference};
+  TrailerVehicle found{catalogs.resolve(reader, inline_or_reference, {"Vehicle"}), nullptr, {}};
+  found.reader = found.entry.reader.get();
+  found.vehicle = found.entry.node;
+  return found;
+}
+
+/// A <Vehicle>'s trailer (OpenSCENARIO 1.2/1.3). Where a trailer would attach (TrailerHitch,
+/// TrailerCoupler) is harmless without one — esmini's catalog cars declare both, with a
+/// <Trailer> whose TrailerRef is an empty parameter by default, which attaches none. A trailer
+/// defined in place (<Trailer name>) is hitched straight behind: its coupler on the vehicle's
+/// hitch, one rigid body from the vehicle's front to the trailer's rear, as wide as the wider
+/// (the language has no articulated road users: on a bend the real trailer runs inside the
+/// tractor's path; noted). A TrailerRef naming another entity is refused.
+Body withTrailer(Translation& translation, Catalogs& catalogs, const xml::Reader& reader,
+                 const pugi::xml_node& vehicle, Body body, int towed) {
+  const pugi::xml_node trailer = vehicle.child("Trailer");
+  if (!trailer) return body;
+  reader.requireSubset(trailer, {"TrailerRef", "Trailer"});
+  const pugi::xml_node attached = reader.choice(trailer, {"TrailerRef", "Trailer"});
+  if (std::string(attached.name()) == "TrailerRef") {
+    const std::string entity = reader.text(attached, "entityRef");
+    if (!entity.empty()) {
+      reader.fail(attached, fmt::format("entityRef=\"{}\": a trailer that is an entity of its own is not simulated "
+                                        "(the scenario language has no articulated road users)", entity));
+    }
+    return body;
+  }
+  if (towed >= kMaxTrailers) reader.fail(attached, fmt::format("more than {} trailers in a row", kMaxTrailers));
+  const pugi::xml_node hitch = reader.only(vehicle, "TrailerHitch");
+  const double hitch_ahead = reader.number(hitch, "dx", NumberRange::closed(-100.0, 100.0));
+  const TrailerVehicle towed_vehicle = trailerVehicle(reader, catalogs, attached);
+  const xml::Reader& towed_reader = *towed_vehicle.reader;
+  const pugi::xml_node coupler = towed_reader.only(towed_vehicle.vehicle, "TrailerCoupler");
+  const double coupler_ahead = towed_reader.number(coupler, "dx", NumberRange::closed(-100.0, 100.0));
+  const Body towed_body = vehicleBody(translation, catalogs, towed_reader, towed_vehicle.vehicle, towed + 1);
+  const double shift = hitch_ahead - coupler_ahead;  // the trailer's reference point in the vehicle's frame
+  body.rear = std::min(body.rear, towed_body.rear + shift);
+  body.front = std::max(body.front, towed_body.front + shift);
+  body.width = std::max(body.width, towed_body.width);
+  translation.findings.note(reader.where(attached),
+                            fmt::format("trailer '{}' hitched straight behind: one rigid road user {} m long (on a "
+                                        "bend the real trailer runs inside the tractor's path)",
+                                        reader.text(attached, "name"), xml::number(body.front - body.rear)));
+  return body;
+}
+
+/// A <Vehicle>'s bounding box with the trailers it tows.
+Body vehicleBody(Translation& translation, Catalogs& catalogs, const xml::Reader& reader,
+                 const pugi::xml_node& vehicle, int towed) {
+  reader.requireSubset(vehicle, {"ParameterDeclarations", "BoundingBox", "Performance", "Axles", "TrailerHitch",
+                                 "TrailerCoupler", "Trailer", "Properties"});
+  return withTrailer(translation, catalogs, reader, vehicle, boxOf(reader, vehicle), towed);
+}
+
+/// Type and bounding box of a <Vehicle> (with its trailers), <Pedestrian> or <MiscObject>.
+void readObject(Translation& translation, Catalogs& catalogs, const xml::Reader& reader,
+                const pugi::xml_node& object, Entity& entity) {
+  Body body;
+  if (std::string(object.name()) == "Vehicle") {
+    body = vehicleBody(translation, catalogs, reader, object, 0);
+  } else {
+    reader.requireSubset(object, {"ParameterDeclarations", "BoundingBox", "Properties"});
+    body = boxOf(reader, object);
+  }
+  entity.type = categoryType(reader, object);
+  entity.length = body.front - body.rear;
+  entity.width = body.width;
+  entity.centreAhead = (body.front + body.rear) / 2;
 }
 
 }  // namespace
@@ -108,9 +180,10 @@ void readScenarioObject(Translation& translation, Catalogs& catalogs, const pugi
   }
   if (const pugi::xml_node reference = object.child("CatalogReference")) {
     const CatalogEntry entry = catalogs.resolve(translation.reader, reference, {"Vehicle", "Pedestrian", "MiscObject"});
-    readObject(*entry.reader, entry.node, entity);
+    readObject(translation, catalogs, *entry.reader, entry.node, entity);
   } else {
-    readObject(reader, reader.choice(object, {"Vehicle", "Pedestrian", "MiscObject", "ObjectController"}), entity);
+    readObject(translation, catalogs, reader,
+               reader.choice(object, {"Vehicle", "Pedestrian", "MiscObject", "ObjectController"}), entity);
   }
   if (const pugi::xml_node controller = object.child("ObjectController")) {
     entity.controller = controllerName(translation, catalogs, controller, entity.controllerWhere);

@@ -240,7 +240,8 @@ TEST(OscImport, TheDataRootAdmitsSiblingFoldersAndNothingOutsideIt) {
 }
 
 // OpenSCENARIO 1.2 vehicles may say where a trailer would attach (esmini's catalog cars do,
-// with an empty TrailerRef parameter): that imports; a trailer actually attached is refused.
+// with an empty TrailerRef parameter): that imports; a trailer that is an entity of its own is
+// refused; one defined in place (1.3: <Trailer name>) makes one rigid road user with its tractor.
 TEST(OscImport, TrailerPointsImportAndAnAttachedTrailerIsRefused) {
   TemporaryDirectory dir("vsd-osc");
   fs::copy(data(""), dir.path(), fs::copy_options::recursive);
@@ -263,7 +264,28 @@ TEST(OscImport, TrailerPointsImportAndAnAttachedTrailerIsRefused) {
                  ego_length + "<ParameterAssignment parameterRef=\"Towed\" value=\"Caravan\"/>");
   test::writeFile(dir.path() / "towing.xosc", towing);
   EXPECT_THAT(test::configErrorOf([&] { importTemplate(dir.path() / "towing.xosc", {}); }),
-              HasSubstr("<TrailerRef>: entityRef=\"Caravan\": trailers are not simulated"));
+              HasSubstr("<TrailerRef>: entityRef=\"Caravan\": a trailer that is an entity of its own is not "
+                        "simulated"));
+
+  // The Ego's sedan (box -1.25 .. 3.75 m from its rear axle, 1.8 m wide) tows the camper: its
+  // coupler (3.5 m ahead of the camper's axle) on the hitch (1.2 m behind the sedan's) puts the
+  // camper's box (-1 .. 3 m, 2 m wide) at -5.7 .. -1.7 m: one body -5.7 .. 3.75 m, 2 m wide.
+  const std::string towed = "<TrailerRef entityRef=\"$Towed\"/>";
+  for (const std::string& camper : {std::string("<CatalogReference catalogName=\"fleet\" entryName=\"camper\"/>"),
+                                    std::string("<Vehicle name=\"camper\" vehicleCategory=\"trailer\"><BoundingBox>"
+                                                "<Center x=\"1\" y=\"0\" z=\"1\"/><Dimensions width=\"2\" "
+                                                "length=\"4\" height=\"2\"/></BoundingBox><TrailerCoupler "
+                                                "dx=\"3.5\"/></Vehicle>")}) {
+    std::string with_camper = catalog;
+    with_camper.replace(with_camper.find(towed), towed.size(), "<Trailer name=\"camper\">" + camper + "</Trailer>");
+    test::writeFile(fleet, with_camper);
+    const auto logical = importTemplate(scenario, {});
+    EXPECT_DOUBLE_EQ(logical->ego.length, 9.45) << camper;
+    EXPECT_DOUBLE_EQ(logical->ego.width, 2.0);
+    EXPECT_DOUBLE_EQ(logical->ego.alongValue.evaluate({}), 20.0 - 0.975);  // s = 20 plus the body's centre
+    EXPECT_THAT(checkOpenScenario(scenario, {}).report(), HasSubstr("trailer 'camper' hitched straight behind: one "
+                                                                    "rigid road user 9.45 m long"));
+  }
 }
 
 TEST(OscImport, CheckListsEveryRefusalWithItsLine) {
