@@ -1634,6 +1634,46 @@ TEST(OscImport, AControllerMappedToScriptLeavesItsEntityScripted) {
               HasSubstr("'Slow' follows its script: its controller 'wobbly' is mapped to 'script'"));
 }
 
+// continuous="true" holds a fixed lane offset until another action replaces it (esmini's
+// cut-in_cr): the road user moves as with "false", but the action never ends, so a condition on
+// its end never holds; its completeState (reached only when another stops it) is refused.
+TEST(OscImport, AContinuousLaneOffsetIsHeldAndNeverEnds) {
+  const std::string swerve = "<LaneOffsetAction continuous=\"false\">";
+  const std::string held = "<LaneOffsetAction continuous=\"true\">";
+  const std::string group_end = "</Event>\n          </Maneuver>\n        </ManeuverGroup>\n        <ManeuverGroup "
+                                "maximumExecutionCount=\"1\" name=\"EgoGroup\">";
+  const auto after_swerve = [&](const std::string& state) {
+    std::string text = cutInWith(swerve, held);
+    text.replace(text.find(group_end), std::string("</Event>").size(), R"(</Event>
+            <Event name="BrakeAfterSwerve" priority="parallel">
+              <Action name="Brake"><PrivateAction><LongitudinalAction><SpeedAction>
+                <SpeedActionDynamics dynamicsShape="step" value="0" dynamicsDimension="time"/>
+                <SpeedActionTarget><AbsoluteTargetSpeed value="5"/></SpeedActionTarget>
+              </SpeedAction></LongitudinalAction></PrivateAction></Action>
+              <StartTrigger><ConditionGroup><Condition name="SwerveEnded" delay="0" conditionEdge="none">
+                <ByValueCondition><StoryboardElementStateCondition storyboardElementType="action"
+                  storyboardElementRef="SwerveOut" state=")" + state + R"("/></ByValueCondition>
+              </Condition></ConditionGroup></StartTrigger>
+            </Event>)");
+    return text;
+  };
+  const auto folder = folderWith({{"ended.xosc", cutInWith(swerve, swerve)}, {"held.xosc", after_swerve("endTransition")},
+                                  {"completed.xosc", after_swerve("completeState")}});
+  const auto ended_logical = importTemplate(folder->path() / "ended.xosc", {});
+  const auto& ended = other(*ended_logical, "Cutter");
+  const auto logical = importTemplate(folder->path() / "held.xosc", {});
+  const auto& cutter = other(*logical, "Cutter");
+  ASSERT_EQ(cutter.actions.size(), 3u);  // the brake after the swerve's end never starts: left out
+  ASSERT_EQ(cutter.actions[2].kind, scenario::ActionSpec::Kind::LateralOffset);
+  EXPECT_DOUBLE_EQ(cutter.actions[2].target.evaluate({}), ended.actions[2].target.evaluate({}));
+  EXPECT_DOUBLE_EQ(cutter.actions[2].target.evaluate({}), 0.5);
+  const std::string report = checkOpenScenario(folder->path() / "held.xosc", {}).report();
+  EXPECT_THAT(report, HasSubstr("continuous=\"true\": the offset is held, the action never ends"));
+  EXPECT_THAT(report, HasSubstr("the end of 'SwerveOut', an action that never ends: the condition never holds"));
+  EXPECT_THAT(test::configErrorOf([&] { importTemplate(folder->path() / "completed.xosc", {}); }),
+              HasSubstr("state=\"completeState\" of 'SwerveOut', an action that never ends"));
+}
+
 // A lane's <width> entries that all give one constant are that width (esmini's velodrome repeats
 // its entries); entries that change it along the road are refused with the one that does.
 TEST(OscRoad, RepeatedWidthEntriesOfOneConstantAreOneWidth) {
