@@ -379,15 +379,6 @@ std::optional<YAML::Node> privateAction(Translation& translation, Entity& actor,
 
 namespace {
 
-/// The one <Condition> of a trigger; refuses OR-groups and AND-conditions (the language
-/// has one condition per trigger).
-pugi::xml_node onlyCondition(const xml::Reader& reader, const pugi::xml_node& trigger) {
-  reader.requireSubset(trigger, {"ConditionGroup"});
-  const pugi::xml_node group = reader.only(trigger, "ConditionGroup");
-  reader.requireSubset(group, {"Condition"});
-  return reader.only(group, "Condition");
-}
-
 /// A relation between two road users (gap, headway, TTC) as seen from `actor`: the other
 /// one's language id, or a refusal if neither is the actor.
 std::string counterpart(Translation& translation, const Entity& actor, const pugi::xml_node& condition,
@@ -592,18 +583,63 @@ std::optional<YAML::Node> entityCondition(Translation& translation, const Entity
 
 std::optional<YAML::Node> startTrigger(Translation& translation, const Entity& actor, const pugi::xml_node& event,
                                        bool note);
+std::optional<YAML::Node> eventTrigger(Translation& translation, const Entity& actor, const pugi::xml_node& event,
+                                       const std::string& act, bool note);
+std::optional<YAML::Node> actStart(Translation& translation, const pugi::xml_node& node, const std::string& name);
+std::optional<YAML::Node> actEnd(Translation& translation, const pugi::xml_node& node, const std::string& name);
+
+/// A number of a language trigger written by the import (a time, a delay); nullopt if it is an
+/// expression (of a distribution's inputs) or no number >= 0.
+std::optional<double> constantOf(const YAML::Node& node) {
+  if (!node || !node.IsScalar()) return std::nullopt;
+  try {
+    return parseReal(node.as<std::string>(), NumberRange::atLeast(0.0), "", "");
+  } catch (const ConfigError&) {
+    return std::nullopt;
+  }
+}
+
+/// Runs `body` with `scope` as the reader's parameters, one level deeper into Event and Act
+/// starts (more than 8 levels: a cycle, refused at `node`).
+template <typename Body>
+auto followingStarts(Translation& translation, const pugi::xml_node& node, const ParameterValues& scope, Body body) {
+  xml::Reader& reader = translation.reader;
+  if (translation.eventStartsFollowed >= 8) {
+    reader.fail(node, "Event and Act starts that follow each other more than 8 deep (a cycle?)");
+  }
+  const ParameterValues own = reader.parameters();
+  ++translation.eventStartsFollowed;
+  reader.setParameters(scope);
+  try {
+    auto result = body();
+    --translation.eventStartsFollowed;
+    reader.setParameters(own);
+    return result;
+  } catch (...) {
+    --translation.eventStartsFollowed;
+    reader.setParameters(own);
+    throw;
+  }
+}
+
+/// Whether a language trigger holds for good once it holds - a time, an action's end, all of
+/// them - so that it can start an Act (whose Events then check their own conditions).
+bool isMoment(const YAML::Node& trigger) {
+  if (!trigger.IsMap() || !(trigger["time"] || trigger["after"] || trigger["all"])) return false;
+  for (const auto& entry : trigger) {
+    const auto key = entry.first.as<std::string>();
+    if (key != "time" && key != "after" && key != "delay" && key != "all") return false;
+  }
+  for (const YAML::Node& member : trigger["all"]) {
+    if (member["delay"] || !isMoment(member)) return false;
+  }
+  return true;
+}
 
 /// `trigger` as one that fires at a time or when an action ends ({time: t}, a delay folded
 /// into the time, or {after: id} without a delay, which the condition's own delay would
 /// replace); nullopt if it is any other.
 std::optional<YAML::Node> timeOrActionEnd(const YAML::Node& trigger) {
-  const auto number = [](const YAML::Node& node) -> std::optional<double> {
-    try {
-      return parseReal(node.as<std::string>(), NumberRange::atLeast(0.0), "", "");
-    } catch (const ConfigError&) {
-      return std::nullopt;
-    }
-  };
   if (!trigger.IsMap()) return std::nullopt;
   for (const auto& entry : trigger) {
     const auto key = entry.first.as<std::string>();
@@ -611,8 +647,8 @@ std::optional<YAML::Node> timeOrActionEnd(const YAML::Node& trigger) {
   }
   if (trigger["after"]) return trigger["time"] || trigger["delay"] ? std::nullopt : std::optional<YAML::Node>(trigger);
   if (!trigger["time"]) return std::nullopt;
-  const auto time = number(trigger["time"]);
-  const auto delay = trigger["delay"] ? number(trigger["delay"]) : std::optional<double>(0.0);
+  const auto time = constantOf(trigger["time"]);
+  const auto delay = trigger["delay"] ? constantOf(trigger["delay"]) : std::optional<double>(0.0);
   if (!time || !delay) return std::nullopt;
   YAML::Node folded;
   folded["time"] = num(*time + *delay);
@@ -630,23 +666,10 @@ std::optional<YAML::Node> eventStart(Translation& translation, const pugi::xml_n
     reader.fail(condition, fmt::format("storyboardElementRef=\"{}\": expected one Event (or an action of one) of a "
                                        "scripted road user", name));
   }
-  if (translation.eventStartsFollowed >= 8) {
-    reader.fail(condition, "Event starts that follow each other more than 8 deep (a cycle?)");
-  }
   const Translation::EventRecord& event = found->second;
-  const ParameterValues own = reader.parameters();
-  ++translation.eventStartsFollowed;
-  reader.setParameters(event.scope);
-  std::optional<YAML::Node> start;
-  try {
-    start = startTrigger(translation, *event.actor, event.node, /*note=*/false);
-  } catch (...) {
-    --translation.eventStartsFollowed;
-    reader.setParameters(own);
-    throw;
-  }
-  --translation.eventStartsFollowed;
-  reader.setParameters(own);
+  const auto start = followingStarts(translation, condition, event.scope, [&] {
+    return eventTrigger(translation, *event.actor, event.node, event.act, /*note=*/false);
+  });
   if (!start) return std::nullopt;
   const auto usable = timeOrActionEnd(*start);
   if (!usable) {
@@ -660,25 +683,38 @@ std::optional<YAML::Node> eventStart(Translation& translation, const pugi::xml_n
   return usable;
 }
 
-/// A StoryboardElementStateCondition on a Story's or Act's start (startTransition, runningState):
-/// every Story and Act starts at t = 0 (requireStartsAtZero), so it holds from then on.
-YAML::Node containerStarted(Translation& translation, const pugi::xml_node& condition, const std::string& type,
-                            const std::string& name, const std::string& state) {
+/// A StoryboardElementStateCondition on a Story or an Act: a Story starts at t = 0 (it has no
+/// StartTrigger) and runs until the scenario ends; an Act starts as actStart and ends as actEnd
+/// say (its StopTrigger has no conditions: requireActRunsToItsEnd). nullopt: it never holds.
+std::optional<YAML::Node> containerState(Translation& translation, const pugi::xml_node& condition,
+                                         const std::string& type, const std::string& name, const std::string& state) {
   const xml::Reader& reader = translation.reader;
-  if (state != "startTransition" && state != "runningState") {
-    reader.fail(condition, fmt::format("state=\"{}\" of {} '{}': the language follows a Story's or Act's start only "
-                                       "(each runs until the scenario ends)",
+  const bool starts = state == "startTransition" || state == "runningState";
+  if (type == "act" && (starts || state == "endTransition" || state == "completeState")) {
+    const auto moment = starts ? actStart(translation, condition, name) : actEnd(translation, condition, name);
+    std::string when = "never";
+    if (moment) {
+      YAML::Emitter flow;
+      flow << YAML::Flow << *moment;
+      when = flow.c_str();
+    }
+    translation.findings.note(reader.where(condition), fmt::format("the {} of Act '{}': {}", starts ? "start" : "end",
+                                                                   name, when));
+    return moment;
+  }
+  if (!starts) {
+    reader.fail(condition, fmt::format("state=\"{}\" of {} '{}': the language follows a Story's start and an Act's "
+                                       "start and end (a Story runs until the scenario ends)",
                                        state, type, name));
   }
-  const std::string element = type == "act" ? "Act" : "Story";
   bool found = false;
-  for (const pugi::xpath_node& candidate : condition.root().select_nodes(("//" + element).c_str())) {
+  for (const pugi::xpath_node& candidate : condition.root().select_nodes("//Story")) {
     found = found || reader.text(candidate.node(), "name") == name;
   }
-  if (!found) reader.fail(condition, fmt::format("storyboardElementRef=\"{}\": no {} of that name", name, element));
-  translation.findings.note(reader.where(condition), fmt::format("the start of {} '{}': t = 0 (every Story and Act "
-                                                                 "starts then)",
-                                                                 element, name));
+  if (!found) reader.fail(condition, fmt::format("storyboardElementRef=\"{}\": no Story of that name", name));
+  translation.findings.note(reader.where(condition), fmt::format("the start of Story '{}': t = 0 (every Story starts "
+                                                                 "then)",
+                                                                 name));
   YAML::Node trigger;
   trigger["time"] = 0;
   return trigger;
@@ -691,9 +727,9 @@ std::optional<YAML::Node> storyboardElementState(Translation& translation, const
   const std::string type = reader.text(condition, "storyboardElementType");
   const std::string name = reader.text(condition, "storyboardElementRef");
   const std::string state = reader.text(condition, "state");
-  if (type == "act" || type == "story") return containerStarted(translation, condition, type, name, state);
+  if (type == "act" || type == "story") return containerState(translation, condition, type, name, state);
   if (type != "action" && type != "event") {
-    reader.fail(condition, fmt::format("storyboardElementType=\"{}\": the language follows a Story's or Act's start, "
+    reader.fail(condition, fmt::format("storyboardElementType=\"{}\": the language follows a Story's start, an Act, "
                                        "an Event or an action",
                                        type));
   }
@@ -861,9 +897,10 @@ bool startsAtOnce(Translation& translation, const pugi::xml_node& parent, bool n
   if (start) translation.reader.requireSubset(start, {"ConditionGroup"});
   if (start && start.child("ConditionGroup")) return false;
   if (!note || (!start && !note_absent)) return true;
+  const bool event = std::string(parent.name()) == "Event";
   translation.findings.note(translation.reader.where(start ? start : parent),
-                            fmt::format("{} StartTrigger: <{}> starts at t = 0", start ? "an empty" : "no",
-                                        parent.name()));
+                            fmt::format("{} StartTrigger: <{}> starts {}", start ? "an empty" : "no", parent.name(),
+                                        event ? "with its Act" : "at t = 0"));
   return true;
 }
 
@@ -890,16 +927,150 @@ std::optional<YAML::Node> startTrigger(Translation& translation, const Entity& a
   return trigger;
 }
 
-/// An Act's or Story's start must hold from t = 0 (the language has no nested triggers).
-void requireStartsAtZero(Translation& translation, const pugi::xml_node& parent) {
-  const xml::Reader& reader = translation.reader;
-  if (startsAtOnce(translation, parent, /*note_absent=*/false)) return;
-  const pugi::xml_node condition = onlyCondition(reader, parent.child("StartTrigger"));
-  const pugi::xml_node time = condition.child("ByValueCondition").child("SimulationTimeCondition");
-  if (!time || reader.number(time, "value") > 0 || reader.number(condition, "delay") > 0) {
-    reader.fail(condition, "an Act that starts later than t = 0: the language starts each action by its own "
-                           "condition (move the condition to the Events)");
+const Translation::ActRecord& actRecord(Translation& translation, const pugi::xml_node& node, const std::string& name) {
+  const auto found = translation.acts.find(name);
+  if (found == translation.acts.end() || !found->second.node) {
+    translation.reader.fail(node, fmt::format("storyboardElementRef=\"{}\": expected the name of one Act", name));
   }
+  return found->second;
+}
+
+/// Whether an Act's StartTrigger is one simulation time of at most 0 s without a delay: it
+/// starts the Act at t = 0, whatever its edge (esmini's examples write `SimulationTime > 0`
+/// with a rising or risingOrFalling edge for Acts that run from the start).
+bool startsAtZero(const Translation& translation, const pugi::xml_node& act) {
+  const xml::Reader& reader = translation.reader;
+  const pugi::xml_node start = act.child("StartTrigger");
+  const pugi::xml_node group = start.child("ConditionGroup");
+  if (!group || group.next_sibling("ConditionGroup")) return false;
+  const pugi::xml_node condition = group.child("Condition");
+  if (!condition || condition.next_sibling("Condition")) return false;
+  const pugi::xml_node time = condition.child("ByValueCondition").child("SimulationTimeCondition");
+  return time && reader.number(time, "value") <= 0 && reader.number(condition, "delay") <= 0;
+}
+
+/// When the Act `name` starts: at once ({time: 0}), or at the moment its StartTrigger gives
+/// (a time, with its delay folded in, or actions' ends); nullopt: it never starts.
+std::optional<YAML::Node> actStart(Translation& translation, const pugi::xml_node& node, const std::string& name) {
+  const Translation::ActRecord& act = actRecord(translation, node, name);
+  if (startsAtOnce(translation, act.node, /*note_absent=*/false, /*note=*/false) || startsAtZero(translation, act.node)) {
+    YAML::Node now;
+    now["time"] = 0;
+    return now;
+  }
+  const auto start = followingStarts(translation, node, act.scope, [&] {
+    return startTrigger(translation, translation.entities.front(), act.node, /*note=*/false);
+  });
+  if (!start) return std::nullopt;
+  if (!isMoment(*start)) {
+    translation.reader.fail(act.node.child("StartTrigger"), "an Act started by a condition on road users: the language "
+                                                            "starts an Act at a time or at actions' ends (move the "
+                                                            "condition to its Events)");
+  }
+  return timeOrActionEnd(*start).value_or(*start);
+}
+
+/// When the Act `name` ends: when every action of its Events has ended ({after} or {all:
+/// [{after}, ...]}); nullopt: it never ends (an Event that never starts, an action that never
+/// ends). Acts whose Events hand the Ego's controller over, or run more than once, are refused.
+std::optional<YAML::Node> actEnd(Translation& translation, const pugi::xml_node& node, const std::string& name) {
+  const Translation::ActRecord& act = actRecord(translation, node, name);
+  for (const std::string& event_name : act.events) {
+    const Translation::EventRecord& event = translation.events.at(event_name);
+    if (!event.actor || event.actionIds.empty() ||
+        translation.reader.optionalNumber(event.node, "maximumExecutionCount").value_or(1.0) != 1.0) {
+      translation.reader.fail(node, fmt::format("the end of Act '{}': its Event '{}' is not one run of actions of "
+                                                "scripted road users (the language follows those ends only)",
+                                                name, event_name));
+    }
+  }
+  YAML::Node ends;
+  for (const std::string& event_name : act.events) {
+    const Translation::EventRecord& event = translation.events.at(event_name);
+    const bool starts = followingStarts(translation, node, event.scope, [&] {
+      return eventTrigger(translation, *event.actor, event.node, event.act, /*note=*/false).has_value();
+    });
+    if (!starts) return std::nullopt;
+    for (const std::string& id : event.actionIds) {
+      if (translation.endlessActions.count(id)) return std::nullopt;
+      YAML::Node end;
+      end["after"] = id;
+      ends.push_back(end);
+    }
+  }
+  if (ends.size() == 0) translation.reader.fail(node, fmt::format("the end of Act '{}': it has no Event", name));
+  if (ends.size() == 1) return ends[0];
+  YAML::Node all;
+  all["all"] = ends;
+  return all;
+}
+
+/// Whether `trigger` (an Event's own) can only hold once its Act has started: it waits for the
+/// end of an action of that Act.
+bool waitsForItsAct(const Translation& translation, const Translation::ActRecord& act, const YAML::Node& trigger) {
+  std::set<std::string> ids;
+  for (const std::string& event : act.events) {
+    for (const std::string& id : translation.events.at(event).actionIds) ids.insert(id);
+  }
+  const auto waits = [&](const YAML::Node& node) { return node["after"] && ids.count(node["after"].as<std::string>()); };
+  if (waits(trigger)) return true;
+  for (const YAML::Node& member : trigger["all"]) {
+    if (waits(member)) return true;
+  }
+  return false;
+}
+
+/// An Event's own trigger checked from `start` (a time, s) on, as OpenSCENARIO checks the
+/// conditions of an Event once its Act runs: a time becomes the later of the two; any other
+/// condition must hold at or after `start` (an `all` with it); a delay stays the condition's.
+YAML::Node fromTime(const YAML::Node& start, const YAML::Node& own) {
+  YAML::Node result;
+  if (own["any"]) {
+    for (const YAML::Node& member : own["any"]) result["any"].push_back(fromTime(start, member));
+    return result;
+  }
+  const auto from = constantOf(start["time"]);
+  const auto time = own["time"] ? constantOf(own["time"]) : std::nullopt;
+  if (from && time && own["time"] && (own.size() == 1 || (own.size() == 2 && own["delay"]))) {
+    result["time"] = num(std::max(*from, *time));
+  } else {
+    result["all"].push_back(start);
+    for (const YAML::Node& member : own["all"] ? own["all"] : YAML::Node(YAML::NodeType::Sequence)) {
+      result["all"].push_back(member);
+    }
+    if (!own["all"]) {
+      YAML::Node condition = YAML::Clone(own);
+      condition.remove("delay");
+      result["all"].push_back(condition);
+    }
+  }
+  if (own["delay"]) result["delay"] = own["delay"];
+  return result;
+}
+
+/// The trigger of an Event in the Act `act_name`: its own StartTrigger (startTrigger), checked
+/// once the Act has started; nullopt: it never starts.
+std::optional<YAML::Node> eventTrigger(Translation& translation, const Entity& actor, const pugi::xml_node& event,
+                                       const std::string& act_name, bool note) {
+  const auto own = startTrigger(translation, actor, event, note);
+  if (!own) return std::nullopt;
+  const auto act_start = actStart(translation, event, act_name);
+  if (!act_start) return std::nullopt;
+  const YAML::Node& start = *act_start;
+  const bool at_a_time = start["time"] && start.size() == 1;
+  if (at_a_time && constantOf(start["time"]) == 0.0) return own;  // the Act runs from t = 0
+  if (!event.child("StartTrigger").child("ConditionGroup")) return start;  // no condition of its own
+  const Translation::ActRecord& act = translation.acts.at(act_name);
+  if (waitsForItsAct(translation, act, *own)) return own;
+  if (!at_a_time) {
+    YAML::Emitter flow;
+    flow << YAML::Flow << start;
+    translation.reader.fail(event, fmt::format("an Event with a condition of its own in Act '{}', which starts at {}: "
+                                               "the language checks a condition from a time on, or after an action "
+                                               "of the same Act",
+                                               act_name, flow.c_str()));
+  }
+  return fromTime(start, *own);
 }
 
 /// An Act's StopTrigger: an empty one never fires (accepted, noted); one with conditions would
@@ -925,6 +1096,7 @@ struct PendingEvent {
   std::vector<PendingAction> actions;
   ParameterValues scope;  ///< the parameters its Story sees (the file's, and the Story's own)
   int executions = 1;     ///< its maximumExecutionCount
+  std::string act;        ///< the name of the Act it is in
 };
 
 /// Whether a <PrivateAction> never ends on its own: a LaneOffsetAction with continuous="true"
@@ -945,11 +1117,11 @@ void readEvent(Translation& translation, const std::vector<Entity*>& actors, con
     reader.fail(event, fmt::format("maximumExecutionCount={}: expected a whole number 1 .. 1000000",
                                    xml::number(executions)));
   }
-  PendingEvent pending{event, {}, reader.parameters(), static_cast<int>(executions)};
+  PendingEvent pending{event, {}, reader.parameters(), static_cast<int>(executions), ""};
   const std::string event_name = reader.text(event, "name");
   const bool first = translation.events.count(event_name) == 0;
   Translation::EventRecord& record = translation.events[event_name];
-  record = first ? Translation::EventRecord{event, actors.empty() ? nullptr : actors.front(), reader.parameters(), {}}
+  record = first ? Translation::EventRecord{event, actors.empty() ? nullptr : actors.front(), reader.parameters(), {}, ""}
                  : Translation::EventRecord{};  // a name given twice names no one Event
   for (const pugi::xml_node& action : event.children("Action")) {
     translation.findings.attempt([&] {
@@ -1099,6 +1271,24 @@ void readManeuverGroup(Translation& translation, const pugi::xml_node& group, st
   }
 }
 
+/// Records the Act `act` whose Events are events[first..]: the Act of each, its Events by name.
+void recordAct(Translation& translation, const pugi::xml_node& act, std::vector<PendingEvent>& events,
+               std::size_t first) {
+  const xml::Reader& reader = translation.reader;
+  const std::string name = reader.text(act, "name");
+  startsAtOnce(translation, act, /*note_absent=*/false);  // notes an empty StartTrigger, once
+  const bool unique = translation.acts.count(name) == 0;
+  Translation::ActRecord record{unique ? act : pugi::xml_node(), reader.parameters(), {}};
+  for (std::size_t e = first; e < events.size(); ++e) {
+    events[e].act = name;
+    const std::string event_name = reader.text(events[e].node, "name");
+    auto& known = translation.events[event_name];
+    if (known.node == events[e].node) known.act = name;
+    record.events.push_back(event_name);
+  }
+  translation.acts[name] = unique ? record : Translation::ActRecord{};  // a name given twice names no one Act
+}
+
 /// Marks the road users that move across lanes in the file (relative lane and offset targets need to know).
 void markLateralMotion(Translation& translation, const pugi::xml_node& storyboard) {
   for (const pugi::xpath_node& found : storyboard.select_nodes(".//ManeuverGroup[.//LateralAction]/Actors/EntityRef")) {
@@ -1138,15 +1328,15 @@ void readStories(Translation& translation, const pugi::xml_node& storyboard) {
       reader.setParameters(global);
       reader.requireSubset(story, {"ParameterDeclarations", "Act"});
       readStoryParameters(translation, story, global);
-      requireStartsAtZero(translation, story);
       for (const pugi::xml_node& act : story.children("Act")) {
         translation.findings.attempt([&] {
           reader.requireSubset(act, {"ManeuverGroup", "StartTrigger", "StopTrigger"});
-          requireStartsAtZero(translation, act);
           requireActRunsToItsEnd(translation, act);
+          const std::size_t first = events.size();
           for (const pugi::xml_node& group : act.children("ManeuverGroup")) {
             translation.findings.attempt([&] { readManeuverGroup(translation, group, events); });
           }
+          recordAct(translation, act, events, first);
         });
       }
     });
@@ -1160,7 +1350,8 @@ void readStories(Translation& translation, const pugi::xml_node& storyboard) {
         return static_cast<bool>(pending.item[kAssignment]);
       });
       for (auto& pending : event.actions) {
-        const auto trigger = startTrigger(translation, *pending.actor, event.node, &pending == &event.actions.front());
+        const auto trigger =
+            eventTrigger(translation, *pending.actor, event.node, event.act, &pending == &event.actions.front());
         if (!trigger) {
           translation.findings.note(reader.where(event.node), "its condition never holds: the event never starts");
           return;

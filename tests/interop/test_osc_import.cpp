@@ -851,8 +851,8 @@ TEST(OscRun, TriggersWithoutConditionsStartAtOnceAndNeverStop) {
   EXPECT_THAT(act.report(), HasSubstr("an empty StartTrigger: <Act> starts at t = 0"));
   EXPECT_THAT(act.report(), HasSubstr("an empty StopTrigger: it never fires"));
   EXPECT_NEAR(stepDownSeen(dir->path() / "empty_act.xosc"), 3.0, 1e-9);  // the Event's own time trigger, exact
-  for (const auto& [name, note] : {std::pair{"empty_event.xosc", "an empty StartTrigger: <Event> starts at t = 0"},
-                                   std::pair{"no_event_trigger.xosc", "no StartTrigger: <Event> starts at t = 0"}}) {
+  for (const auto& [name, note] : {std::pair{"empty_event.xosc", "an empty StartTrigger: <Event> starts with its Act"},
+                                   std::pair{"no_event_trigger.xosc", "no StartTrigger: <Event> starts with its Act"}}) {
     const ScenarioCheck check = checkOpenScenario(dir->path() / name, {});
     EXPECT_TRUE(check.runnable()) << check.report();
     EXPECT_THAT(check.report(), HasSubstr(note));
@@ -864,6 +864,76 @@ TEST(OscRun, TriggersWithoutConditionsStartAtOnceAndNeverStop) {
   EXPECT_THAT(error, HasSubstr("timed.xosc:"));
   EXPECT_THAT(error, HasSubstr("an Act's StopTrigger with conditions: the language runs each started action to its end"));
   EXPECT_EQ(error.find('\n'), std::string::npos) << error;
+}
+
+// An Act that starts later checks its Events' conditions from its start on, as OpenSCENARIO
+// does: the Act starts at 3 s (time >= 2, delay 1); the lead's step down (at 20 + t m/s)
+// shows at the instant its Event starts (a time) or at the next (a condition checked at
+// instants). An Act may start at another's end; one started by a road user's state is refused.
+TEST(OscRun, AnActThatStartsLaterChecksItsEventsFromThen) {
+  const std::string act_start = "<StartTrigger>" + group(R"(<Condition name="a" delay="1" conditionEdge="none">
+      <ByValueCondition><SimulationTimeCondition value="2" rule="greaterOrEqual"/></ByValueCondition></Condition>)") +
+                                "</StartTrigger>";
+  const auto with_act_start = [&](std::string text, const std::string& start) {
+    return text.insert(text.find("</Act>"), start);
+  };
+  const std::string speed_at_least_21 = R"(<Condition name="s" delay="0" conditionEdge="none"><ByEntityCondition>
+      <TriggeringEntities triggeringEntitiesRule="any"><EntityRef entityRef="Lead"/></TriggeringEntities>
+      <EntityCondition><SpeedCondition value="21" rule="greaterOrEqual"/></EntityCondition></ByEntityCondition>
+      </Condition>)";
+  std::string no_trigger = readTextFile(data("conditions.xosc"));
+  const auto trigger_begin = no_trigger.find("<StartTrigger>");
+  no_trigger.erase(trigger_begin, no_trigger.find("</StartTrigger>") + 15 - trigger_begin);
+  const std::vector<std::tuple<std::string, std::string, double>> cases = {
+      {"earlier_time.xosc", with_act_start(conditionsWith(group(timeCondition("1"))), act_start), 3.0},  // max(3, 1)
+      {"later_time.xosc", with_act_start(conditionsWith(group(timeCondition("5"))), act_start), 5.0},
+      {"speed.xosc", with_act_start(conditionsWith(group(speed_at_least_21)), act_start), 3.2},  // holds from 1 s
+      {"no_trigger.xosc", with_act_start(no_trigger, act_start), 3.0},  // the Act's start
+  };
+  std::map<std::string, std::string> files;
+  for (const auto& [name, text, seen] : cases) files[name] = text;
+  const std::string later_act = R"(<Act name="Later"><ManeuverGroup maximumExecutionCount="1" name="SlowGroup">
+        <Actors selectTriggeringEntities="false"><EntityRef entityRef="Slow"/></Actors>
+        <Maneuver name="SlowManeuver"><Event name="SlowDown2" priority="overwrite"><Action name="SlowStep">
+          <PrivateAction><LongitudinalAction><SpeedAction>
+            <SpeedActionDynamics dynamicsShape="step" dynamicsDimension="time" value="0"/>
+            <SpeedActionTarget><AbsoluteTargetSpeed value="12"/></SpeedActionTarget>
+          </SpeedAction></LongitudinalAction></PrivateAction></Action></Event>
+          <Event name="SpeedUp2" priority="overwrite"><Action name="SlowBack">
+          <PrivateAction><LongitudinalAction><SpeedAction>
+            <SpeedActionDynamics dynamicsShape="step" dynamicsDimension="time" value="0"/>
+            <SpeedActionTarget><AbsoluteTargetSpeed value="18"/></SpeedActionTarget>
+          </SpeedAction></LongitudinalAction></PrivateAction></Action>
+          <StartTrigger><ConditionGroup><Condition name="AfterStep" delay="1" conditionEdge="none"><ByValueCondition>
+            <StoryboardElementStateCondition storyboardElementType="action" storyboardElementRef="SlowStep"
+                                             state="endTransition"/></ByValueCondition></Condition></ConditionGroup>
+          </StartTrigger></Event></Maneuver></ManeuverGroup>
+        <StartTrigger><ConditionGroup><Condition name="AfterAct" delay="2" conditionEdge="none"><ByValueCondition>
+          <StoryboardElementStateCondition storyboardElementType="act" storyboardElementRef="Act"
+                                           state="endTransition"/></ByValueCondition></Condition></ConditionGroup>
+        </StartTrigger></Act>)";
+  std::string two_acts = readTextFile(data("conditions.xosc"));
+  two_acts.insert(two_acts.find("</Act>") + 6, later_act);
+  files["two_acts.xosc"] = two_acts;
+  files["by_speed.xosc"] =
+      with_act_start(readTextFile(data("conditions.xosc")), "<StartTrigger>" + group(speed_at_least_21) + "</StartTrigger>");
+  const auto folder = folderWith(files);
+  for (const auto& [name, text, seen] : cases) {
+    EXPECT_NEAR(stepDownSeen(folder->path() / name), seen, 1e-9) << name;
+  }
+  const auto logical = importTemplate(folder->path() / "two_acts.xosc", {});
+  const auto& trigger = other(*logical, "Slow").actions.at(0).trigger;  // the Act's end: its one action's end, + 2 s
+  EXPECT_EQ(trigger.kind, scenario::TriggerSpec::Kind::After);
+  EXPECT_EQ(trigger.action, "StepDown");
+  EXPECT_DOUBLE_EQ(trigger.delay.evaluate({}), 2.0);
+  // An Event of the later Act after another action of that Act: its own trigger, which can only hold once the Act runs.
+  const auto& back = other(*logical, "Slow").actions.at(1).trigger;
+  EXPECT_EQ(back.kind, scenario::TriggerSpec::Kind::After);
+  EXPECT_EQ(back.action, "SlowStep");
+  EXPECT_DOUBLE_EQ(back.delay.evaluate({}), 1.0);
+  EXPECT_THAT(test::configErrorOf([&] { importTemplate(folder->path() / "by_speed.xosc", {}); }),
+              HasSubstr("an Act started by a condition on road users: the language starts an Act at a time or at "
+                        "actions' ends"));
 }
 
 TEST(OscImport, ConditionsTheLanguageCannotExpressAreOneLineEach) {
@@ -1410,7 +1480,7 @@ TEST(OscImport, ConditionsOnAnEventsStartOrEndFollowItsTriggerOrItsAction) {
   const auto action_start =
       swerve_trigger(R"(storyboardElementType="action" storyboardElementRef="ActivateEgo" state="runningState")");
   EXPECT_EQ(action_start.kind, scenario::TriggerSpec::Kind::Time);
-  // Every Story and Act starts at t = 0 (esmini's cut-in starts its events on its Act's start).
+  // An Act without a StartTrigger starts at t = 0 (esmini's cut-in starts its events on its Act's start).
   const auto act_start =
       swerve_trigger(R"(storyboardElementType="act" storyboardElementRef="CutInAct" state="startTransition")");
   EXPECT_EQ(act_start.kind, scenario::TriggerSpec::Kind::Time);
@@ -1422,11 +1492,14 @@ TEST(OscImport, ConditionsOnAnEventsStartOrEndFollowItsTriggerOrItsAction) {
       {R"(storyboardElementType="event" storyboardElementRef="CutInEvent" state="startTransition")",
        "the start of Event 'CutInEvent' ({gap: 30, rising: true}) is neither a time nor an action's end"},
       {R"(storyboardElementType="event" storyboardElementRef="SwerveEvent" state="startTransition")",
-       "Event starts that follow each other more than 8 deep (a cycle?)"},
+       "Event and Act starts that follow each other more than 8 deep (a cycle?)"},
       {R"(storyboardElementType="maneuver" storyboardElementRef="CutInManeuver" state="startTransition")",
-       "storyboardElementType=\"maneuver\": the language follows a Story's or Act's start, an Event or an action"},
+       "storyboardElementType=\"maneuver\": the language follows a Story's start, an Act, an Event or an action"},
       {R"(storyboardElementType="act" storyboardElementRef="CutInAct" state="endTransition")",
-       "state=\"endTransition\" of act 'CutInAct': the language follows a Story's or Act's start only"},
+       "the end of Act 'CutInAct': its Event 'Activate' is not one run of actions of scripted road users"},
+      {R"(storyboardElementType="story" storyboardElementRef="CutInStory" state="endTransition")",
+       "state=\"endTransition\" of story 'CutInStory': the language follows a Story's start and an Act's start and "
+       "end"},
       {R"(storyboardElementType="story" storyboardElementRef="NoSuchStory" state="startTransition")",
        "storyboardElementRef=\"NoSuchStory\": no Story of that name"},
       {R"(storyboardElementType="event" storyboardElementRef="NoSuchEvent" state="startTransition")",
