@@ -953,7 +953,8 @@ bool startsAtZero(const Translation& translation, const pugi::xml_node& act) {
 /// (a time, with its delay folded in, or actions' ends); nullopt: it never starts.
 std::optional<YAML::Node> actStart(Translation& translation, const pugi::xml_node& node, const std::string& name) {
   const Translation::ActRecord& act = actRecord(translation, node, name);
-  if (startsAtOnce(translation, act.node, /*note_absent=*/false, /*note=*/false) || startsAtZero(translation, act.node)) {
+  if (startsAtOnce(translation, act.node, /*note_absent=*/false, /*note=*/false) ||
+      startsAtZero(translation, act.node)) {
     YAML::Node now;
     now["time"] = 0;
     return now;
@@ -1012,7 +1013,9 @@ bool waitsForItsAct(const Translation& translation, const Translation::ActRecord
   for (const std::string& event : act.events) {
     for (const std::string& id : translation.events.at(event).actionIds) ids.insert(id);
   }
-  const auto waits = [&](const YAML::Node& node) { return node["after"] && ids.count(node["after"].as<std::string>()); };
+  const auto waits = [&](const YAML::Node& node) {
+    return node["after"] && ids.count(node["after"].as<std::string>()) > 0;
+  };
   if (waits(trigger)) return true;
   for (const YAML::Node& member : trigger["all"]) {
     if (waits(member)) return true;
@@ -1121,7 +1124,8 @@ void readEvent(Translation& translation, const std::vector<Entity*>& actors, con
   const std::string event_name = reader.text(event, "name");
   const bool first = translation.events.count(event_name) == 0;
   Translation::EventRecord& record = translation.events[event_name];
-  record = first ? Translation::EventRecord{event, actors.empty() ? nullptr : actors.front(), reader.parameters(), {}, ""}
+  const Entity* first_actor = actors.empty() ? nullptr : actors.front();
+  record = first ? Translation::EventRecord{event, first_actor, reader.parameters(), {}, ""}
                  : Translation::EventRecord{};  // a name given twice names no one Event
   for (const pugi::xml_node& action : event.children("Action")) {
     translation.findings.attempt([&] {
@@ -1141,7 +1145,9 @@ void readEvent(Translation& translation, const std::vector<Entity*>& actors, con
         YAML::Node copy = *item;
         copy["id"] = identifier(actors.size() == 1 ? name : name + "_" + actor->name, translation.usedIds);
         translation.actionIds[name].push_back(copy["id"].as<std::string>());
-        if (neverEnds(reader, action.child("PrivateAction"))) translation.endlessActions.insert(copy["id"].as<std::string>());
+        if (neverEnds(reader, action.child("PrivateAction"))) {
+          translation.endlessActions.insert(copy["id"].as<std::string>());
+        }
         if (first) record.actionIds.push_back(copy["id"].as<std::string>());
         pending.actions.push_back({actor, copy});
         translation.findings.mapped(reader.where(action), fmt::format("action '{}' of '{}'", copy["id"].as<std::string>(),

@@ -851,8 +851,9 @@ TEST(OscRun, TriggersWithoutConditionsStartAtOnceAndNeverStop) {
   EXPECT_THAT(act.report(), HasSubstr("an empty StartTrigger: <Act> starts at t = 0"));
   EXPECT_THAT(act.report(), HasSubstr("an empty StopTrigger: it never fires"));
   EXPECT_NEAR(stepDownSeen(dir->path() / "empty_act.xosc"), 3.0, 1e-9);  // the Event's own time trigger, exact
-  for (const auto& [name, note] : {std::pair{"empty_event.xosc", "an empty StartTrigger: <Event> starts with its Act"},
-                                   std::pair{"no_event_trigger.xosc", "no StartTrigger: <Event> starts with its Act"}}) {
+  for (const auto& [name, note] :
+       {std::pair{"empty_event.xosc", "an empty StartTrigger: <Event> starts with its Act"},
+        std::pair{"no_event_trigger.xosc", "no StartTrigger: <Event> starts with its Act"}}) {
     const ScenarioCheck check = checkOpenScenario(dir->path() / name, {});
     EXPECT_TRUE(check.runnable()) << check.report();
     EXPECT_THAT(check.report(), HasSubstr(note));
@@ -915,8 +916,8 @@ TEST(OscRun, AnActThatStartsLaterChecksItsEventsFromThen) {
   std::string two_acts = readTextFile(data("conditions.xosc"));
   two_acts.insert(two_acts.find("</Act>") + 6, later_act);
   files["two_acts.xosc"] = two_acts;
-  files["by_speed.xosc"] =
-      with_act_start(readTextFile(data("conditions.xosc")), "<StartTrigger>" + group(speed_at_least_21) + "</StartTrigger>");
+  files["by_speed.xosc"] = with_act_start(readTextFile(data("conditions.xosc")),
+                                          "<StartTrigger>" + group(speed_at_least_21) + "</StartTrigger>");
   const auto folder = folderWith(files);
   for (const auto& [name, text, seen] : cases) {
     EXPECT_NEAR(stepDownSeen(folder->path() / name), seen, 1e-9) << name;
@@ -1730,7 +1731,8 @@ TEST(OscImport, AContinuousLaneOffsetIsHeldAndNeverEnds) {
             </Event>)");
     return text;
   };
-  const auto folder = folderWith({{"ended.xosc", cutInWith(swerve, swerve)}, {"held.xosc", after_swerve("endTransition")},
+  const auto folder = folderWith({{"ended.xosc", cutInWith(swerve, swerve)},
+                                  {"held.xosc", after_swerve("endTransition")},
                                   {"completed.xosc", after_swerve("completeState")}});
   const auto ended_logical = importTemplate(folder->path() / "ended.xosc", {});
   const auto& ended = other(*ended_logical, "Cutter");
