@@ -28,7 +28,15 @@ class Findings {
   /// A supported element and what it became.
   void mapped(const std::string& where, const std::string& what) { lines_.push_back({Kind::Mapped, where + ": " + what}); }
   /// Supported, but not exactly as the file says (or not simulated at all): said once, here.
-  void note(const std::string& where, const std::string& what) { lines_.push_back({Kind::Note, where + ": " + what}); }
+  /// A note already made (the same place and words: a condition translated again for another
+  /// Event) is not repeated.
+  void note(const std::string& where, const std::string& what) {
+    std::string text = where + ": " + what;
+    for (const Line& line : lines_) {
+      if (line.kind == Kind::Note && line.text == text) return;
+    }
+    lines_.push_back({Kind::Note, std::move(text)});
+  }
   /// A refusal: ConfigError now (run), or recorded (check).
   void refuse(const std::string& message) {
     if (!collect_) throw ConfigError(message);

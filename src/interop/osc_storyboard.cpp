@@ -52,6 +52,27 @@ void pace(Translation& translation, const pugi::xml_node& dynamics, const char* 
   action[dimension == "rate" ? rate_key : "duration"] = num(value);
 }
 
+/// The target of a lane change of the Ego: its own lane and a number of lanes (`lanes`), or a
+/// lane of the road (`lane`: an absolute lane, or another road user's that keeps its lane).
+YAML::Node egoLaneChange(Translation& translation, const pugi::xml_node& target, YAML::Node& item) {
+  const xml::Reader& reader = translation.reader;
+  const bool absolute = std::string(target.name()) == "AbsoluteTargetLane";
+  if (absolute) {
+    item["lane"] = translation.road.languageLane(reader.integer(target, "value", -100, 100), reader.where(target));
+    return item;
+  }
+  const std::string reference = reader.text(target, "entityRef");
+  const long lanes = reader.integer(target, "value", -100, 100);
+  if (reference == translation.ego->name) {
+    item["lanes"] = std::to_string(lanes);
+    return item;
+  }
+  const Entity& other = translation.entity(target, reference);
+  if (other.movesLaterally) reader.fail(target, fmt::format("a lane relative to '{}', who changes lanes", reference));
+  item["lane"] = std::to_string(other.placement->lane + lanes);
+  return item;
+}
+
 YAML::Node laneChange(Translation& translation, const Entity& actor, const pugi::xml_node& action) {
   const xml::Reader& reader = translation.reader;
   reader.requireSubset(action, {"LaneChangeActionDynamics", "LaneChangeTarget"});
@@ -59,12 +80,14 @@ YAML::Node laneChange(Translation& translation, const Entity& actor, const pugi:
     reader.fail(action, "targetLaneOffset: the language's lane changes end on the lane's centre");
   }
   if (!actor.isVehicle()) reader.fail(action, "lane changes are for vehicles (the language's rule)");
+  const bool of_ego = &actor == translation.ego;
   YAML::Node item;
   const pugi::xml_node dynamics = reader.only(action, "LaneChangeActionDynamics");
-  item["shape"] = shapeOf(translation, dynamics, false);
+  item["shape"] = shapeOf(translation, dynamics, /*step_allowed=*/of_ego);
   pace(translation, dynamics, "lateral_speed", item);
   const pugi::xml_node target = reader.choice(reader.only(action, "LaneChangeTarget"),
                                               {"RelativeTargetLane", "AbsoluteTargetLane"});
+  if (of_ego) return egoLaneChange(translation, target, item);
   if (std::string(target.name()) == "AbsoluteTargetLane") {
     const int lane = translation.road.languageLane(reader.integer(target, "value", -100, 100), reader.where(target));
     item["ego_lane"] = std::to_string(lane - translation.ego->placement->lane);
@@ -343,8 +366,21 @@ std::optional<YAML::Node> privateAction(Translation& translation, Entity& actor,
       item["set_speed"] = egoSetSpeed(translation, reader.choice(action, {"SpeedAction"}));
       return item;
     }
-    reader.fail(action, "an action of the Ego: its controller drives it (the language scripts its set speed only: "
-                        "a SpeedAction)");
+    if (kind == "LateralAction") {
+      const pugi::xml_node lateral = reader.choice(action, {"LaneChangeAction", "LaneOffsetAction"});
+      YAML::Node item;
+      if (std::string(lateral.name()) == "LaneChangeAction") {
+        item["lane_change"] = laneChange(translation, actor, lateral);
+      } else {
+        item["lateral_offset"] = laneOffset(translation, actor, lateral);
+      }
+      translation.findings.note(reader.where(lateral), "a lateral action of the Ego moves the lane its controller "
+                                                       "keeps, as the file's dynamics say; the controller follows "
+                                                       "its own way");
+      return item;
+    }
+    reader.fail(action, "an action of the Ego: its controller drives it (the language scripts its set speed, a "
+                        "SpeedAction, and the lane it keeps, a LaneChangeAction or LaneOffsetAction)");
   }
   YAML::Node item;
   if (kind == "LongitudinalAction") {

@@ -287,6 +287,7 @@ ConcreteAction evaluateAction(const ActionSpec& spec, int owner, const LogicalSc
   action.continuous = spec.continuous;
   action.target = evaluateFinite(spec.target, concrete.inputs, spec.where, "target");
   action.relativeToEgoLane = spec.relativeToEgoLane;
+  action.toRoadLane = spec.toRoadLane;
   action.pace = spec.pace;
   action.paceValue = evaluateFinite(spec.paceValue, concrete.inputs, spec.where, "pace");
   action.repeat = spec.repeat;
@@ -323,13 +324,15 @@ void checkLateralTargets(const ConcreteScenario& concrete, std::size_t first_act
     const auto& action = concrete.actions[a];
     if (action.kind == ActionSpec::Kind::Cross) checkOnPavedGround(concrete, user, action.target, action.where, "cross.to_offset");
     if (action.kind != ActionSpec::Kind::LaneChange) continue;
-    const double target = (action.relativeToEgoLane ? concrete.ego.lane : lane) + action.target;
+    const int from = action.toRoadLane ? 0 : action.relativeToEgoLane ? concrete.ego.lane : lane;
+    const double target = from + action.target;
     if (action.target != std::round(action.target) || target < 0 || target >= lanes) {
-      throw ConfigError(fmt::format("{}.lane_change: got {} lanes from lane {} in sample {}, that is lane {}; expected "
-                                    "a lane the road has (0 .. {})",
-                                    action.where, formatValue(action.target),
-                                    action.relativeToEgoLane ? concrete.ego.lane : lane, concrete.index,
-                                    formatValue(target), lanes - 1));
+      const std::string what = action.toRoadLane
+                                   ? fmt::format("lane {}", formatValue(action.target))
+                                   : fmt::format("{} lanes from lane {}", formatValue(action.target), from);
+      throw ConfigError(fmt::format("{}.lane_change: got {} in sample {}, that is lane {}; expected a lane the road "
+                                    "has (0 .. {})",
+                                    action.where, what, concrete.index, formatValue(target), lanes - 1));
     }
     lane = static_cast<int>(target);
   }
@@ -436,8 +439,10 @@ ConcreteScenario sampleConcreteScenario(const std::shared_ptr<const LogicalScena
     }
     checkLateralTargets(concrete, first_action, concrete.others[o]);
   }
-  // The Ego's set_speed actions come last (actionIndex counts them so).
+  // The Ego's actions come last (actionIndex counts them so).
+  const std::size_t first_ego_action = concrete.actions.size();
   for (const auto& action : spec.ego.actions) concrete.actions.push_back(evaluateAction(action, -1, spec, concrete));
+  checkLateralTargets(concrete, first_ego_action, concrete.ego);
   for (const auto& [name, expression] : spec.ego.controller.params) {
     concrete.controllerParams.emplace_back(
         name, evaluateFinite(expression, inputs, spec.ego.controller.where, "parameter " + name));

@@ -442,8 +442,11 @@ void parseSpeedAction(const YamlReader& reader, const YAML::Node& node, const st
   }
 }
 
+/// `of_ego`: the Ego's lateral actions move the lane its controller keeps (a step is a jump of
+/// that lane, which the controller then follows), and count from its own lane only.
 void parseLateralAction(const YamlReader& reader, const YAML::Node& node, const std::string& field,
-                        const std::string& kind, const std::vector<std::string>& inputs, ActionSpec& action) {
+                        const std::string& kind, const std::vector<std::string>& inputs, bool of_ego,
+                        ActionSpec& action) {
   if (kind == "cross") {
     reader.checkKeys(node, field, {"speed", "to_offset"});
     action.kind = ActionSpec::Kind::Cross;
@@ -456,10 +459,15 @@ void parseLateralAction(const YamlReader& reader, const YAML::Node& node, const 
   std::vector<std::pair<std::string, ActionSpec::Pace>> paces = {{"lateral_speed", ActionSpec::Pace::LateralSpeed},
                                                                  {"duration", ActionSpec::Pace::Duration}};
   if (kind == "lane_change") {
-    reader.checkKeys(node, field, {"lanes", "ego_lane", "lateral_speed", "duration", "shape"});
+    reader.checkKeys(node, field, {"lanes", "ego_lane", "lane", "lateral_speed", "duration", "shape"});
     action.kind = ActionSpec::Kind::LaneChange;
-    const std::string target = oneOf(reader, node, field, {"lanes", "ego_lane"}, true);
+    const std::string target = oneOf(reader, node, field, {"lanes", "ego_lane", "lane"}, true);
+    if (of_ego && target == "ego_lane") {
+      reader.fail(node[target], field + ".ego_lane",
+                  "the Ego's own lane: use lanes (from its lane) or lane (of the road)");
+    }
     action.relativeToEgoLane = target == "ego_lane";
+    action.toRoadLane = target == "lane";
     action.target = reader.expression(node[target], field + "." + target, inputs);
   } else {
     reader.checkKeys(node, field, {"offset", "lateral_speed", "lateral_accel", "duration", "shape"});
@@ -468,7 +476,13 @@ void parseLateralAction(const YamlReader& reader, const YAML::Node& node, const 
     action.target = reader.expression(node["offset"], field + ".offset", inputs);
     paces.emplace_back("lateral_accel", ActionSpec::Pace::LateralAccel);
   }
-  action.shape = parseShape(reader, node, field, TransitionShape::Smooth, false);
+  action.shape = parseShape(reader, node, field, TransitionShape::Smooth, /*step_allowed=*/of_ego);
+  const bool paced = std::any_of(paces.begin(), paces.end(), [&](const auto& pace) { return node[pace.first]; });
+  if (action.shape == TransitionShape::Step && !paced) {  // at once: no pace to give
+    action.pace = ActionSpec::Pace::Duration;
+    action.paceValue = Expression::constant(0.0);
+    return;
+  }
   parsePace(reader, node, field, paces, inputs, action);
   if (action.pace == ActionSpec::Pace::LateralAccel && action.shape != TransitionShape::Smooth) {
     reader.fail(node["lateral_accel"], field + ".lateral_accel", "a lateral acceleration paces a smooth shape only");
@@ -529,11 +543,17 @@ void parseAction(const YamlReader& reader, const YAML::Node& node, const std::st
       reader, node, field, {"speed", "stop", "lane_change", "lateral_offset", "cross", "set_speed", "controller"},
       true);
   const bool of_ego = &owner == &scenario.ego;
-  if (of_ego != (kind == "set_speed" || kind == "controller")) {
+  const bool controls = kind == "set_speed" || kind == "controller";
+  if (of_ego ? !(controls || kind == "lane_change" || kind == "lateral_offset") : controls) {
     reader.fail(node[kind], field + "." + kind,
-                of_ego ? "the Ego's controller drives it: the Ego's actions set its controller's set speed (set_speed) "
-                         "or change its controller (controller)"
+                of_ego ? "the Ego's controller drives it: the Ego's actions set its controller's set speed "
+                         "(set_speed), change its controller (controller) or move the lane it keeps (lane_change, "
+                         "lateral_offset)"
                        : "only the Ego has a controller (set_speed and controller are actions of the Ego)");
+  }
+  if (of_ego && !controls) {
+    parseLateralAction(reader, node[kind], field + "." + kind, kind, inputs, /*of_ego=*/true, action);
+    return;
   }
   if (of_ego && kind == "controller") {
     parseControllerAction(reader, node[kind], field + "." + kind, inputs, action);
@@ -557,7 +577,7 @@ void parseAction(const YamlReader& reader, const YAML::Node& node, const std::st
                 "without (they move it exactly in the lane frame)");
   }
   if (kind == "speed" || kind == "stop") parseSpeedAction(reader, node[kind], field + "." + kind, kind == "stop", inputs, action);
-  else parseLateralAction(reader, node[kind], field + "." + kind, kind, inputs, action);
+  else parseLateralAction(reader, node[kind], field + "." + kind, kind, inputs, /*of_ego=*/false, action);
 }
 
 /// A road user's `actions` list, if it has one.

@@ -257,6 +257,11 @@ class BatchRun {
     member.ego.emplace(member.egoId, egoController(*member.run->scenario), member.traffic->egoStart(), ego_spec.length,
                        ego_spec.width, member.run->offset);
     member.ego->placeBy(member.placement);
+    std::vector<double> lane_offsets;
+    for (int lane = 0; lane < member.run->road->lanes; ++lane) {
+      lane_offsets.push_back(member.run->road->laneOffset(lane));
+    }
+    member.ego->knowLaneOffsets(std::move(lane_offsets));
     member.ego->activateFrom(member.run->scenario->controllerActiveFrom);
     addSwitchedControllers(member);
     member.ego->pushToSumo();
@@ -312,6 +317,7 @@ class BatchRun {
     // The others move on from instant k with the Ego where it is at k (triggers see it there).
     member.traffic->step(member.ego->state());
     member.ego->commandSetSpeed(member.traffic->egoSetSpeedAt(time));
+    member.ego->commandLaneOffset(member.traffic->egoLaneOffsetAt(time));
     if (const auto switched = member.traffic->egoControllerAt(time); switched && !member.controllerSlots.empty()) {
       member.ego->useController(member.controllerSlots.at(*switched), time);
     }

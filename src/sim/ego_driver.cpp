@@ -3,6 +3,7 @@
 #include <libsumo/libsumo.h>
 
 #include <algorithm>
+#include <charconv>
 #include <cmath>
 #include <limits>
 
@@ -104,15 +105,18 @@ void placeInSumo(const std::string& vehicle_id, const VehicleState& state, doubl
 }
 
 Observation::Lane observeLane(const MeasuredPolyline& preview_line, const PolylineProjection& projection,
-                              const VehicleState& state, double width) {
+                              const VehicleState& state, double width, double shift) {
   Observation::Lane lane;
-  lane.lateralOffset = projection.lateralOffset;
+  lane.lateralOffset = projection.lateralOffset - shift;
   lane.headingError = wrapAngle(state.heading - projection.heading);
   lane.width = width;
   const double cos_h = std::cos(state.heading);
   const double sin_h = std::sin(state.heading);
   for (int i = 0; i < kPreviewPoints; ++i) {
-    const Vec2 ahead = preview_line.pointAt(projection.arcLength + lane.previewSpacing * (i + 1)) - state.position();
+    const double along = projection.arcLength + lane.previewSpacing * (i + 1);
+    Vec2 point = preview_line.pointAt(along);
+    if (shift != 0.0) point += shift * headingVector(preview_line.headingAt(along) + 0.5 * kPi);
+    const Vec2 ahead = point - state.position();
     lane.preview[static_cast<std::size_t>(i)] = Vec2(cos_h * ahead.x() + sin_h * ahead.y(), -sin_h * ahead.x() + cos_h * ahead.y());
   }
   return lane;
@@ -141,7 +145,8 @@ Observation EgoDriver::observe(double time, LaneCache& lanes, const std::vector<
       extended = routeAhead(lane_id, lanes, preview_end);
       centre_ptr = &extended;
     }
-    observation.lane = observeLane(*centre_ptr, projection, state_, lanes.width(lane_id, offset_));
+    observation.lane =
+        observeLane(*centre_ptr, projection, state_, lanes.width(lane_id, offset_), keptLaneShift(lane_id));
   }
 
   const auto [leader_id, distance] = libsumo::Vehicle::getLeader(vehicleId_, kLeaderRange);
@@ -164,6 +169,20 @@ Observation EgoDriver::observe(double time, LaneCache& lanes, const std::vector<
     }
   }
   return observation;
+}
+
+double EgoDriver::keptLaneShift(const std::string& lane_id) const {
+  if (!commandedLaneOffset_) return 0.0;
+  // SUMO names a lane <edge>_<index>; the index counts the road's lanes from the right.
+  const auto separator = lane_id.rfind('_');
+  std::size_t index = 0;
+  const char* first = lane_id.data() + separator + 1;
+  const char* last = lane_id.data() + lane_id.size();
+  if (separator == std::string::npos || std::from_chars(first, last, index).ptr != last ||
+      index >= laneOffsets_.size()) {
+    return 0.0;  // a lane off the scenario's road (a junction's): the Ego keeps it
+  }
+  return *commandedLaneOffset_ - laneOffsets_[index];
 }
 
 MeasuredPolyline EgoDriver::routeAhead(const std::string& lane_id, LaneCache& lanes, double length) const {

@@ -160,6 +160,10 @@ struct ScriptedTraffic::Impl {
   std::vector<std::pair<double, double>> egoSetSpeeds;
   /// The Ego's controller actions that started: (start time s, action index), in start order.
   std::vector<std::pair<double, std::size_t>> egoControllers;
+  /// The Ego's lane_change and lateral_offset actions that started: (start time s, the move of
+  /// the lane its controller keeps, as offsets across the road in m), in start order.
+  std::vector<std::pair<double, Transition>> egoLaterals;
+  int egoLateralLane = 0;  ///< the road lane the latest of them moves to (valid once one started)
   PurePursuitLateral laneKeeping;  // the Ego's defaults: lookahead max(4 m, 0.4 s * v)
   // What travelled and end_of_road conditions measure, per road user (0: the Ego, 1 + o: others[o]);
   // tracked only if a trigger asks.
@@ -194,6 +198,9 @@ struct ScriptedTraffic::Impl {
   void startSpeedAction(std::size_t a, Mover& mover, Transition transition, const VehicleState& ego);
   void track(const VehicleState& ego);
   void activate(std::size_t a, const VehicleState& ego);
+  void activateEgoLateral(std::size_t a, const VehicleState& ego);
+  /// The road lane a lane change of `owner` (-1: the Ego), now in lane `own_lane`, goes to.
+  int laneChangeTarget(const ConcreteAction& action, int own_lane, const VehicleState& ego, double t0) const;
   void scheduleWaiters(std::size_t a, const VehicleState& ego);
   void activateDue(const VehicleState& ego);
   VehicleState advancePurePursuit(Mover& mover);
@@ -485,6 +492,10 @@ void ScriptedTraffic::Impl::activate(std::size_t a, const VehicleState& ego) {
     scheduleWaiters(a, ego);
     return;
   }
+  if (action.owner < 0) {
+    activateEgoLateral(a, ego);
+    return;
+  }
   Mover& mover = movers[static_cast<std::size_t>(action.owner)];
   Transition transition;
   transition.start = t0;
@@ -495,14 +506,7 @@ void ScriptedTraffic::Impl::activate(std::size_t a, const VehicleState& ego) {
   }
   transition.from = mover.lateral ? mover.lateral->at(t0) : mover.d;
   if (action.kind == ActionSpec::Kind::LaneChange) {
-      const int ego_lane =
-          road->laneAt(road->laneOffset(concrete->ego.lane) + projectExtended(egoLane, ego.position()).lateralOffset);
-      const int target = (action.relativeToEgoLane ? ego_lane : mover.laneIndex) + static_cast<int>(std::lround(action.target));
-      if (target < 0 || target >= road->lanes) {
-        throw ConfigError(fmt::format("{}: {}.lane_change: at t = {:.1f} s that is lane {}, expected a lane the road "
-                                      "has (0 .. {})",
-                                      concrete->where(), action.where, t0, target, road->lanes - 1));
-      }
+    const int target = laneChangeTarget(action, mover.laneIndex, ego, t0);
     mover.laneIndex = target;
     transition.to = road->laneOffset(target);
   } else {
@@ -512,6 +516,54 @@ void ScriptedTraffic::Impl::activate(std::size_t a, const VehicleState& ego) {
   transition.duration = durationOf(action, transition.to - transition.from);
   mover.lateral = transition;
   timings[a] = {t0, transition.end()};
+  scheduleWaiters(a, ego);
+}
+
+int ScriptedTraffic::Impl::laneChangeTarget(const ConcreteAction& action, int own_lane, const VehicleState& ego,
+                                            double t0) const {
+  const auto lanes = static_cast<int>(std::lround(action.target));
+  int target = own_lane + lanes;
+  if (action.toRoadLane) {
+    target = lanes;
+  } else if (action.relativeToEgoLane) {
+    const double ego_offset =
+        road->laneOffset(concrete->ego.lane) + projectExtended(egoLane, ego.position()).lateralOffset;
+    target = road->laneAt(ego_offset) + lanes;
+  }
+  if (target < 0 || target >= road->lanes) {
+    throw ConfigError(fmt::format("{}: {}.lane_change: at t = {:.1f} s that is lane {}, expected a lane the road has "
+                                  "(0 .. {})",
+                                  concrete->where(), action.where, t0, target, road->lanes - 1));
+  }
+  return target;
+}
+
+/// The Ego's lane_change and lateral_offset: the lane its controller keeps moves across the
+/// road, from where the latest such move has put it (before the first: the centre of the lane
+/// the Ego is in) to the target lane's centre or an offset from the current lane's, with the
+/// action's shape and pace (a step jumps: the controller then gets there its own way).
+void ScriptedTraffic::Impl::activateEgoLateral(std::size_t a, const VehicleState& ego) {
+  const auto& action = concrete->actions[a];
+  Transition transition;
+  transition.start = scheduled[a];
+  transition.shape = action.shape;
+  if (egoLaterals.empty()) {
+    egoLateralLane =
+        road->laneAt(road->laneOffset(concrete->ego.lane) + projectExtended(egoLane, ego.position()).lateralOffset);
+    transition.from = road->laneOffset(egoLateralLane);
+  } else {
+    transition.from = egoLaterals.back().second.at(transition.start);
+  }
+  if (action.kind == ActionSpec::Kind::LaneChange) {
+    egoLateralLane = laneChangeTarget(action, egoLateralLane, ego, transition.start);
+    transition.to = road->laneOffset(egoLateralLane);
+  } else {
+    transition.to = road->laneOffset(egoLateralLane) + action.target;
+  }
+  transition.duration =
+      action.shape == TransitionShape::Step ? 0.0 : durationOf(action, transition.to - transition.from);
+  egoLaterals.emplace_back(transition.start, transition);
+  timings[a] = {transition.start, transition.end()};
   scheduleWaiters(a, ego);
 }
 
@@ -618,6 +670,12 @@ std::optional<std::size_t> ScriptedTraffic::egoControllerAt(double time) const {
 
 std::optional<double> ScriptedTraffic::egoSetSpeedAt(double time) const {
   return lastStartedBy(impl_->egoSetSpeeds, time);
+}
+
+std::optional<double> ScriptedTraffic::egoLaneOffsetAt(double time) const {
+  const auto move = lastStartedBy(impl_->egoLaterals, time);
+  if (!move) return std::nullopt;
+  return move->at(time);
 }
 
 void ScriptedTraffic::step(const VehicleState& ego) {

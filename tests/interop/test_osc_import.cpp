@@ -1749,6 +1749,50 @@ TEST(OscImport, AContinuousLaneOffsetIsHeldAndNeverEnds) {
               HasSubstr("state=\"completeState\" of 'SwerveOut', an action that never ends"));
 }
 
+// The Ego's LaneChangeAction and LaneOffsetAction move the lane its controller keeps: an
+// absolute lane (OpenDRIVE -2 on three_lanes.xodr, its leftmost driving lane: the language's lane
+// 2; the Ego starts on -3, lane 1) or a number of lanes
+// from its own, with the file's shape (a step too: the controller follows its own way) and pace.
+TEST(OscImport, TheEgosLateralActionsMoveTheLaneItsControllerKeeps) {
+  const std::string activate_event = R"(<Event name="Activate" priority="overwrite">)";
+  const std::string lateral_events = R"(<Event name="EgoLeft" priority="parallel"><Action name="EgoToLane">
+        <PrivateAction><LateralAction><LaneChangeAction>
+          <LaneChangeActionDynamics dynamicsShape="step" value="0" dynamicsDimension="time"/>
+          <LaneChangeTarget><AbsoluteTargetLane value="-2"/></LaneChangeTarget>
+        </LaneChangeAction></LateralAction></PrivateAction></Action>
+        <StartTrigger><ConditionGroup><Condition name="At2" delay="0" conditionEdge="none"><ByValueCondition>
+          <SimulationTimeCondition value="2" rule="greaterOrEqual"/></ByValueCondition></Condition></ConditionGroup>
+        </StartTrigger></Event>
+      <Event name="EgoRight" priority="parallel"><Action name="EgoBack">
+        <PrivateAction><LateralAction><LaneChangeAction>
+          <LaneChangeActionDynamics dynamicsShape="sinusoidal" value="4" dynamicsDimension="time"/>
+          <LaneChangeTarget><RelativeTargetLane entityRef="Ego" value="-1"/></LaneChangeTarget>
+        </LaneChangeAction></LateralAction></PrivateAction></Action>
+        <StartTrigger><ConditionGroup><Condition name="At5" delay="0" conditionEdge="none"><ByValueCondition>
+          <SimulationTimeCondition value="5" rule="greaterOrEqual"/></ByValueCondition></Condition></ConditionGroup>
+        </StartTrigger></Event>
+      )";
+  const auto folder = folderWith({{"ego_lateral.xosc", cutInWith(activate_event, lateral_events + activate_event)}});
+  const auto file = folder->path() / "ego_lateral.xosc";
+  const auto logical = importTemplate(file, {});
+  ASSERT_EQ(logical->ego.actions.size(), 2u);
+  const auto& to_lane = logical->ego.actions[0];
+  EXPECT_EQ(to_lane.kind, scenario::ActionSpec::Kind::LaneChange);
+  EXPECT_TRUE(to_lane.toRoadLane);
+  EXPECT_DOUBLE_EQ(to_lane.target.evaluate({}), 2.0);
+  EXPECT_EQ(to_lane.shape, scenario::TransitionShape::Step);
+  EXPECT_DOUBLE_EQ(to_lane.trigger.value.evaluate({}), 2.0);
+  const auto& back = logical->ego.actions[1];
+  EXPECT_FALSE(back.toRoadLane);
+  EXPECT_FALSE(back.relativeToEgoLane);
+  EXPECT_DOUBLE_EQ(back.target.evaluate({}), -1.0);
+  EXPECT_EQ(back.shape, scenario::TransitionShape::Smooth);
+  EXPECT_EQ(back.pace, scenario::ActionSpec::Pace::Duration);
+  EXPECT_DOUBLE_EQ(back.paceValue.evaluate({}), 4.0);
+  EXPECT_THAT(checkOpenScenario(file, {}).report(),
+              HasSubstr("a lateral action of the Ego moves the lane its controller keeps"));
+}
+
 // A lane's <width> entries that all give one constant are that width (esmini's velodrome repeats
 // its entries); entries that change it along the road are refused with the one that does.
 TEST(OscRoad, RepeatedWidthEntriesOfOneConstantAreOneWidth) {

@@ -141,6 +141,40 @@ TEST(RoadUsers, BadMotionTriggersAreRefused) {
             "");
 }
 
+// The Ego's lateral actions count from its own lane or name a lane of the road; the Ego's
+// "ego_lane" would be its own, and a lane the road does not have is refused per sample.
+TEST(RoadUsers, TheEgosLaneChangesNameItsOwnLaneOrTheRoads) {
+  const auto ego_with = [](const std::string& action) {
+    try {
+      const auto logical = parseLogicalScenario(R"(
+name: ego_lanes
+time: {step: 0.2, duration: 5}
+road: {shape: arc, length: 300, lanes: 3, lane_width: 3.5}
+vehicles:
+  ego: {s: 30, lane: 1, speed: 20, controller: {name: idm, params: {set_speed: 20}},
+        actions: [{trigger: {time: 1}, )" + action + R"(}]}
+)",
+                                                "ego.yaml");
+      sampleConcreteScenario(logical, 1, 0);
+    } catch (const ConfigError& error) {
+      return std::string(error.what());
+    }
+    return std::string();
+  };
+  EXPECT_EQ(ego_with("lane_change: {lanes: -1, duration: 3}"), "");
+  EXPECT_EQ(ego_with("lane_change: {lane: 2, shape: step}"), "");
+  EXPECT_EQ(ego_with("lateral_offset: {offset: 0.5, duration: 1}"), "");
+  EXPECT_NE(ego_with("lane_change: {ego_lane: 1, duration: 3}").find("the Ego's own lane: use lanes"),
+            std::string::npos);
+  EXPECT_NE(ego_with("lane_change: {lane: 3, duration: 3}")
+                .find("vehicles.ego.actions[0].lane_change: got lane 3 in sample 0, that is lane 3; expected a lane "
+                      "the road has (0 .. 2)"),
+            std::string::npos)
+      << ego_with("lane_change: {lane: 3, duration: 3}");
+  EXPECT_NE(ego_with("cross: {speed: 1, to_offset: 3}").find("move the lane it keeps (lane_change, lateral_offset)"),
+            std::string::npos);
+}
+
 TEST(RoadUsers, ALaneChangeToALaneTheRoadDoesNotHaveIsRefused) {
   const auto error = errorOf(R"(    - {id: a, gap: 20, relative_lane: 1, speed: 5,
        actions: [{trigger: {time: 1}, lane_change: {lanes: 1, duration: 3}}]})");

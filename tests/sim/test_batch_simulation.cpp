@@ -385,6 +385,39 @@ vehicles:
   }
 }
 
+// The Ego's lane_change and lateral_offset actions move the lane its controller keeps (idm:
+// pure pursuit on the observed lane): it follows each move with its own lag and settles on the
+// target. Road of 3 lanes of 3.5 m: lane centres at y = -3.5, 0, 3.5.
+TEST(BatchSimulation, TheEgosLateralActionsMoveTheLaneItsControllerKeeps) {
+  TemporaryDirectory dir;
+  const std::string yaml = R"(
+name: ego_lateral
+time: {step: 0.2, duration: 18}
+road: {shape: arc, curvature: 0, length: 500, lanes: 3, lane_width: 3.5}
+vehicles:
+  ego: {s: 30, lane: 0, speed: 20, controller: {name: idm, params: {set_speed: 20}},
+        actions: [{id: left, trigger: {time: 1}, lane_change: {lanes: 1, duration: 3}},
+                  {id: over, trigger: {time: 8}, lane_change: {lane: 2, shape: step}},
+                  {trigger: {time: 13}, lateral_offset: {offset: -0.5, duration: 1}}]}
+)";
+  const Batch batch(scenario::parseLogicalScenario(yaml, "ego_lateral.yaml"), 1, dir.path());
+  ASSERT_TRUE(batch.results[0].ok()) << batch.results[0].failure;
+  const auto& ego = batch.results[0].trace.vehicles[0].states;
+  const auto y_at = [&](double t) { return ego.at(static_cast<std::size_t>(std::lround(t / 0.2))).y; };
+  EXPECT_NEAR(y_at(1.0), -3.5, 1e-9);   // its own lane until the first move starts
+  EXPECT_GT(y_at(4.0), -2.0);           // following the move (which ends at 4 s) ...
+  EXPECT_LT(y_at(4.0), 0.0);            // ... a little behind it
+  EXPECT_NEAR(y_at(7.8), 0.0, 0.05);    // settled on lane 1
+  EXPECT_NEAR(y_at(8.0), 0.0, 0.05);    // a step moves the lane at once (8 s), the Ego its own way:
+  EXPECT_GT(y_at(8.4), 1.0);            // steering hard for the lane that jumped
+  EXPECT_NEAR(y_at(10.4), 3.5, 0.05);   // on lane 2
+  EXPECT_NEAR(y_at(18.0), 3.0, 0.05);   // 0.5 m right of its centre
+  for (std::size_t k = 1; k < ego.size(); ++k) {
+    if (k > 40 && k <= 52) continue;  // the step's answer, 8 .. 10.4 s
+    EXPECT_LT(std::abs(ego[k].y - ego[k - 1].y), 0.2 * 2.5) << "instant " << k;  // < 2.5 m/s sideways
+  }
+}
+
 TEST(BatchSimulation, TheEgoFollowsTheSetSpeedItsActionsCommand) {
   TemporaryDirectory dir;
   const std::string yaml = R"(

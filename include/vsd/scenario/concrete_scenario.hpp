@@ -39,7 +39,7 @@ struct ConcreteTrigger {
 /// An action with its numbers evaluated (see ActionSpec).
 struct ConcreteAction {
   std::string id;
-  int owner = 0;  ///< -1: the Ego (set_speed actions), else index into ConcreteScenario::others
+  int owner = 0;  ///< -1: the Ego, else index into ConcreteScenario::others
   ActionSpec::Kind kind = ActionSpec::Kind::Speed;
   ConcreteTrigger trigger;
   TransitionShape shape = TransitionShape::Smooth;
@@ -48,6 +48,7 @@ struct ConcreteAction {
   bool continuous = false;  ///< Relative, Factor: tracks the reference's speed until replaced
   double target = 0.0;  ///< m/s (a factor for SpeedTarget::Factor) | lanes | m
   bool relativeToEgoLane = false;
+  bool toRoadLane = false;  ///< ActionSpec::toRoadLane
   ActionSpec::Pace pace = ActionSpec::Pace::Duration;
   double paceValue = 0.0;  ///< > 0 (a duration may be 0)
   int repeat = 1;          ///< ActionSpec::repeat

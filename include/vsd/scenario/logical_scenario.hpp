@@ -205,6 +205,8 @@ struct ActionSpec {
   Expression target;     ///< m/s (Speed, SetSpeed); lanes (LaneChange); m (LateralOffset, Cross)
   /// LaneChange: target is relative to the road user's own lane (false) or the Ego's (true).
   bool relativeToEgoLane = false;
+  /// LaneChange: target is a lane of the road (0: rightmost), not a number of lanes (`lane`).
+  bool toRoadLane = false;
   // How fast: exactly one of these (Speed: rate or duration; lateral: lateral speed,
   // lateral acceleration (smooth only) or duration; Cross: speed).
   enum class Pace { Rate, Duration, LateralSpeed, LateralAccel };

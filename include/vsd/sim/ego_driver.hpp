@@ -37,9 +37,10 @@ class LaneCache {
 
 /// The lane part of an observation: offsets relative to `projection` (the vehicle's foot
 /// point on its lane) and preview points along `preview_line` (the lane, or the lane
-/// continued along the route), in the vehicle's frame.
+/// continued along the route), in the vehicle's frame; `shift` (m, > 0 left) moves the lane
+/// sideways (the scenario's lane changes of the Ego: the lane its controller keeps).
 Observation::Lane observeLane(const MeasuredPolyline& preview_line, const PolylineProjection& projection,
-                              const VehicleState& state, double width);
+                              const VehicleState& state, double width, double shift = 0.0);
 
 /// How exactly placeInSumo puts a vehicle across its lane. SUMO without the sublane model
 /// uses a vehicle's lateral position only for drawing and position outputs: leaders, gaps,
@@ -94,6 +95,13 @@ class EgoDriver {
   void observeWith(const ObjectSensor& sensor) { sensor_ = sensor; }
   /// The set speed (m/s) the scenario commands from now on (Observation::commandedSetSpeed).
   void commandSetSpeed(std::optional<double> set_speed) { commandedSetSpeed_ = set_speed; }
+  /// The road's lanes (m across the road from its centre line to each lane's centre, lane 0
+  /// rightmost: RoadGeometry::laneOffset), for commandLaneOffset.
+  void knowLaneOffsets(std::vector<double> lane_offsets) { laneOffsets_ = std::move(lane_offsets); }
+  /// Where the scenario's lane changes and lateral offsets of the Ego have moved the lane its
+  /// controller keeps (m across the road, as knowLaneOffsets; none: the lane it is in). The
+  /// observation's lane is that lane: a controller that keeps its lane follows the move.
+  void commandLaneOffset(std::optional<double> road_offset) { commandedLaneOffset_ = road_offset; }
   /// The controller drives from `time` (s) on; before, the Ego keeps its speed and follows its
   /// lane's centre line by pure pursuit (the scripted phase before a scenario activates it),
   /// and the controller is not asked.
@@ -120,6 +128,8 @@ class EgoDriver {
   static constexpr double kLeaderRange = 200.0;
 
  private:
+  /// m (> 0 left): how far the commanded lane offset lies from the centre of SUMO's lane `lane_id`.
+  double keptLaneShift(const std::string& lane_id) const;
   /// The lane centre from `lane_id` on along the Ego's route, at least `length` m if the route allows.
   MeasuredPolyline routeAhead(const std::string& lane_id, LaneCache& lanes, double length) const;
 
@@ -135,6 +145,8 @@ class EgoDriver {
   SumoPlacement placement_;
   ObjectSensor sensor_;
   std::optional<double> commandedSetSpeed_;
+  std::vector<double> laneOffsets_;  ///< m, per lane of the road (knowLaneOffsets)
+  std::optional<double> commandedLaneOffset_;
   double activeFrom_ = 0.0;  ///< s
 };
 

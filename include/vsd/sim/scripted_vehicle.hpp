@@ -81,6 +81,10 @@ class ScriptedTraffic {
   /// The Ego's latest controller action (index into ConcreteScenario::actions) started by
   /// `time` (s); none before the first (its own controller drives it). Asked as egoSetSpeedAt.
   std::optional<std::size_t> egoControllerAt(double time) const;
+  /// Where the Ego's lane_change and lateral_offset actions started by `time` (s) have moved
+  /// the lane its controller keeps: m across the road (the road's lane offsets, > 0 left) at
+  /// `time`; none before the first (it keeps its own lane). Asked as egoSetSpeedAt.
+  std::optional<double> egoLaneOffsetAt(double time) const;
 
  private:
   struct Impl;
