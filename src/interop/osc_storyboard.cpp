@@ -305,22 +305,27 @@ constexpr const char* kAssignment = "assign_controller";
 /// The language's controller an AssignControllerAction of the Ego names (through the controller
 /// map; `script` is no controller for the Ego). Its activateLateral/activateLongitudinal
 /// attributes (OpenSCENARIO 1.2) mark `item` as an activation too.
+/// The domains an activation switches on (the others it switches off): "true" (both),
+/// "longitudinal", "lateral" or "none" (the item privateAction marks with kActivation).
+std::string activationOf(bool longitudinal, bool lateral) {
+  return longitudinal && lateral ? "true" : longitudinal ? "longitudinal" : lateral ? "lateral" : "none";
+}
+
 YAML::Node assignedController(Translation& translation, const pugi::xml_node& assign, YAML::Node& item) {
   const xml::Reader& reader = translation.reader;
   std::string where;
   const std::string name = controllerName(translation, *translation.catalogs, assign, where);
-  const ControllerChoice choice = translation.controllerMap.choice(name, where);
+  ControllerChoice choice = translation.controllerMap.choice(name, where);
   if (choice.name == kFollowsItsScript) {
-    reader.fail(assign, fmt::format("controller '{}' is mapped to '{}': the Ego is driven by a controller", name,
-                                    kFollowsItsScript));
+    // The Ego follows its script where this controller drives: it keeps its speed and lane.
+    choice = {kKeepsItsLane, YAML::Node()};
+    translation.findings.note(where, fmt::format("controller '{}' is mapped to '{}': the Ego follows its script where "
+                                                 "it drives (keeps its speed and lane: vsd-sumo's '{}')",
+                                                 name, kFollowsItsScript, kKeepsItsLane));
   }
   const bool lateral = reader.optionalBoolean(assign, "activateLateral").value_or(false);
   const bool longitudinal = reader.optionalBoolean(assign, "activateLongitudinal").value_or(false);
-  if (lateral != longitudinal) {
-    reader.fail(assign, fmt::format("activate{}=\"true\" alone: the language's Ego controller drives both directions",
-                                    lateral ? "Lateral" : "Longitudinal"));
-  }
-  if (lateral) item[kActivation] = "true";
+  if (lateral || longitudinal) item[kActivation] = activationOf(longitudinal, lateral);
   YAML::Node controller;
   controller["name"] = choice.name;
   if (choice.params && choice.params.IsMap()) controller["params"] = choice.params;
@@ -350,13 +355,9 @@ std::optional<YAML::Node> privateAction(Translation& translation, Entity& actor,
       }
       YAML::Node item;
       if (activate) {
-        for (const char* domain : {"longitudinal", "lateral"}) {
-          if (!reader.optionalBoolean(activate, domain).value_or(true)) {
-            reader.fail(activate, fmt::format("{}=\"false\": the language's Ego controller drives both directions",
-                                              domain));
-          }
-        }
-        item[kActivation] = "true";
+        // An absent domain is activated, as esmini reads it.
+        item[kActivation] = activationOf(reader.optionalBoolean(activate, "longitudinal").value_or(true),
+                                         reader.optionalBoolean(activate, "lateral").value_or(true));
       }
       if (assign) item[kAssignment] = assignedController(translation, assign, item);
       return item;
@@ -1243,29 +1244,15 @@ void activateEgoController(Translation& translation, const pugi::xml_node& event
                                           num(at)));
 }
 
-/// An Event of the Ego's controller actions: an assignment and an activation hand the Ego to
-/// that controller from the Event's start (a language controller action, repeated as the Event
-/// is); an activation alone starts the assigned controller at a time (active_from). Other
-/// actions in such an Event are refused.
-void takeEgoControllerEvent(Translation& translation, const PendingEvent& event, const YAML::Node& trigger) {
+/// The language's controller action `controller` (a map: name, params) of the Ego for `event`,
+/// driving `domains` ("true": both), started by `trigger` and repeated as the Event is.
+YAML::Node egoControllerAction(Translation& translation, const PendingEvent& event, const YAML::Node& trigger,
+                               YAML::Node controller, const std::string& domains, const std::string& suffix) {
   const xml::Reader& reader = translation.reader;
-  std::optional<YAML::Node> assigned;
-  bool activated = false;
-  for (const auto& pending : event.actions) {
-    if (pending.actor != translation.ego || !(pending.item[kAssignment] || pending.item[kActivation])) {
-      reader.fail(event.node, "an Event of the Ego's controller actions with other actions: the language hands the "
-                              "Ego to a controller by an action of its own (move the others to another Event)");
-    }
-    if (pending.item[kAssignment]) assigned = pending.item[kAssignment];
-    activated = activated || pending.item[kActivation];
-  }
-  if (!activated) {
-    reader.fail(event.node, "an AssignControllerAction of the Ego without an activation in its Event: the language "
-                            "hands the Ego to a controller that drives at once (add ActivateControllerAction)");
-  }
+  if (domains != "true") controller["domains"] = domains;
   YAML::Node item;
-  item["controller"] = *assigned;
-  item["id"] = identifier(reader.text(event.node, "name"), translation.usedIds);
+  item["controller"] = controller;
+  item["id"] = identifier(reader.text(event.node, "name") + suffix, translation.usedIds);
   item["trigger"] = trigger;
   if (event.executions > 1) {
     if (!canHoldAgain(trigger)) {
@@ -1275,6 +1262,49 @@ void takeEgoControllerEvent(Translation& translation, const PendingEvent& event,
     }
     item["repeat"] = event.executions;
   }
+  YAML::Emitter flow;
+  flow << YAML::Flow << trigger;
+  translation.findings.mapped(reader.where(event.node),
+                              fmt::format("the Ego is handed to '{}'{} from {}", controller["name"].as<std::string>(),
+                                          domains == "true" ? "" : " for its " + domains + " domain", flow.c_str()));
+  return item;
+}
+
+/// An Event of the Ego's controller actions: an assignment and an activation hand the Ego to
+/// that controller from the Event's start (a language controller action, repeated as the Event
+/// is) in the domains activated, and the domains switched off to keep_lane (the Ego follows its
+/// script there); an activation alone starts the assigned controller at a time (active_from).
+/// Other actions in such an Event are refused.
+void takeEgoControllerEvent(Translation& translation, const PendingEvent& event, const YAML::Node& trigger) {
+  const xml::Reader& reader = translation.reader;
+  std::optional<YAML::Node> assigned;
+  std::string activation;
+  for (const auto& pending : event.actions) {
+    if (pending.actor != translation.ego || !(pending.item[kAssignment] || pending.item[kActivation])) {
+      reader.fail(event.node, "an Event of the Ego's controller actions with other actions: the language hands the "
+                              "Ego to a controller by an action of its own (move the others to another Event)");
+    }
+    if (pending.item[kAssignment]) assigned = pending.item[kAssignment];
+    if (!pending.item[kActivation]) continue;
+    const auto domains = pending.item[kActivation].as<std::string>();
+    if (!activation.empty() && activation != domains) {
+      reader.fail(event.node, "activations of different domains in one Event: the language hands each Event's "
+                              "domains over at once");
+    }
+    activation = domains;
+  }
+  if (activation.empty() || activation == "none") {
+    reader.fail(event.node, "an AssignControllerAction of the Ego without an activation in its Event: the language "
+                            "hands the Ego to a controller that drives at once (add ActivateControllerAction)");
+  }
+  translation.ego->actions.push_back(egoControllerAction(translation, event, trigger, *assigned, activation, ""));
+  if (activation != "true") {
+    YAML::Node script;
+    script["name"] = kKeepsItsLane;
+    translation.ego->actions.push_back(egoControllerAction(
+        translation, event, trigger, script, activation == "lateral" ? "longitudinal" : "lateral", "_off"));
+    return;  // one domain: the Ego's own controller is not activated by it
+  }
   // The Ego's own controller, never activated, drives until the hand-over's time at most.
   if (!translation.ego->activatedAtStart && startsAtATime(trigger)) {
     activateEgoController(translation, event.node, trigger);
@@ -1282,12 +1312,25 @@ void takeEgoControllerEvent(Translation& translation, const PendingEvent& event,
     translation.findings.note(reader.where(event.node), "the Ego's own controller, never activated, drives until this "
                                                         "hand-over (its start is a condition, not a time)");
   }
-  translation.ego->actions.push_back(item);
-  YAML::Emitter flow;
-  flow << YAML::Flow << trigger;
-  translation.findings.mapped(reader.where(event.node), fmt::format("the Ego is handed to '{}' from {}",
-                                                                    (*assigned)["name"].as<std::string>(),
-                                                                    flow.c_str()));
+}
+
+/// An ActivateControllerAction of the Ego without an assignment in its Event: both domains on
+/// start its controller (activateEgoController); both off hand the Ego to keep_lane (it follows
+/// its script: keeps its speed and lane); one domain alone is refused.
+void activateAlone(Translation& translation, const PendingEvent& event, const std::string& domains,
+                   const YAML::Node& trigger) {
+  if (domains == "true") {
+    activateEgoController(translation, event.node, trigger);
+    return;
+  }
+  if (domains != "none") {
+    translation.reader.fail(event.node, fmt::format("an activation of the {} domain alone: the language hands a "
+                                                    "domain to a controller an Event assigns",
+                                                    domains));
+  }
+  YAML::Node script;
+  script["name"] = kKeepsItsLane;
+  translation.ego->actions.push_back(egoControllerAction(translation, event, trigger, script, "true", ""));
 }
 
 void readManeuverGroup(Translation& translation, const pugi::xml_node& group, std::vector<PendingEvent>& events) {
@@ -1403,7 +1446,7 @@ void readStories(Translation& translation, const pugi::xml_node& storyboard) {
           break;
         }
         if (pending.item[kActivation]) {  // an activation alone: the Event's other actions stay
-          activateEgoController(translation, event.node, *trigger);
+          activateAlone(translation, event, pending.item[kActivation].as<std::string>(), *trigger);
           continue;
         }
         pending.item["trigger"] = *trigger;

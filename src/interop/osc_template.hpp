@@ -137,6 +137,8 @@ std::string identifier(const std::string& name, std::set<std::string>& used);
 /// The controller map's word for a controller vsd-sumo does not simulate: its entity follows
 /// its script (e.g. esmini's sloppyDriver, which adds deviations to a scripted vehicle).
 inline constexpr const char* kFollowsItsScript = "script";
+/// The built-in controller that keeps the Ego's speed and lane: the Ego following its script.
+inline constexpr const char* kKeepsItsLane = "keep_lane";
 
 // osc_entities.cpp
 /// The name of the controller a <Controller> or controller <CatalogReference> under `parent`

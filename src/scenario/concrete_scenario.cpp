@@ -288,6 +288,7 @@ ConcreteAction evaluateAction(const ActionSpec& spec, int owner, const LogicalSc
   action.target = evaluateFinite(spec.target, concrete.inputs, spec.where, "target");
   action.relativeToEgoLane = spec.relativeToEgoLane;
   action.toRoadLane = spec.toRoadLane;
+  action.domains = spec.domains;
   action.pace = spec.pace;
   action.paceValue = evaluateFinite(spec.paceValue, concrete.inputs, spec.where, "pace");
   action.repeat = spec.repeat;

@@ -136,10 +136,13 @@ void parsePlacement(const YamlReader& reader, const YAML::Node& node, const std:
 void requireNonNegative(const YamlReader& reader, const YAML::Node& node, const std::string& field,
                         const Expression& value, bool strictly_positive, const std::string& unit);
 
+/// `in_action`: a controller action's, which may name the domains it drives.
 void parseController(const YamlReader& reader, const YAML::Node& node, const std::string& field,
-                     const std::vector<std::string>& inputs, ControllerSpec& controller) {
+                     const std::vector<std::string>& inputs, ControllerSpec& controller, bool in_action = false) {
   controller.where = reader.where(node, field);
-  reader.checkKeys(node, field, {"name", "library", "params", "active_from"});
+  std::set<std::string> keys = {"name", "library", "params", "active_from"};
+  if (in_action) keys.insert("domains");
+  reader.checkKeys(node, field, keys);
   if (node["active_from"]) {
     controller.activeFrom = reader.expression(node["active_from"], field + ".active_from", inputs);
     requireNonNegative(reader, node["active_from"], field + ".active_from", controller.activeFrom, false, "s");
@@ -506,9 +509,21 @@ void parseSetSpeedAction(const YamlReader& reader, const YAML::Node& node, const
 void parseControllerAction(const YamlReader& reader, const YAML::Node& node, const std::string& field,
                            const std::vector<std::string>& inputs, ActionSpec& action) {
   action.kind = ActionSpec::Kind::Controller;
-  parseController(reader, node, field, inputs, action.controller);
+  parseController(reader, node, field, inputs, action.controller, /*in_action=*/true);
   if (node["active_from"]) {
     reader.fail(node["active_from"], field + ".active_from", "the action's trigger says when this controller drives");
+  }
+  if (node["domains"]) {
+    const std::string domains = reader.scalar(node["domains"], field + ".domains");
+    const std::map<std::string, ControlDomains> known = {{"both", ControlDomains::Both},
+                                                         {"longitudinal", ControlDomains::Longitudinal},
+                                                         {"lateral", ControlDomains::Lateral}};
+    const auto found = known.find(domains);
+    if (found == known.end()) {
+      throw ConfigError::field(reader.where(node["domains"], field + ".domains"), field + ".domains", domains,
+                               "both, longitudinal or lateral");
+    }
+    action.domains = found->second;
   }
   action.shape = TransitionShape::Step;
   action.pace = ActionSpec::Pace::Duration;

@@ -87,6 +87,7 @@ struct Member {
   std::optional<EgoDriver> ego;
   /// The Ego's controller actions (index into the concrete scenario's actions) -> their controller's slot in `ego`.
   std::map<std::size_t, std::size_t> controllerSlots;
+  std::size_t controllersHandedOver = 0;  ///< the Ego's controller actions applied so far
   SumoPlacement placement;  ///< how this scenario's vehicles are put on its road in SUMO
   SimulatedScenario result;
   bool active = true;
@@ -318,8 +319,11 @@ class BatchRun {
     member.traffic->step(member.ego->state());
     member.ego->commandSetSpeed(member.traffic->egoSetSpeedAt(time));
     member.ego->commandLaneOffset(member.traffic->egoLaneOffsetAt(time));
-    if (const auto switched = member.traffic->egoControllerAt(time); switched && !member.controllerSlots.empty()) {
-      member.ego->useController(member.controllerSlots.at(*switched), time);
+    if (!member.controllerSlots.empty()) {
+      for (const std::size_t a : member.traffic->egoControllersStarted(time, member.controllersHandedOver)) {
+        member.ego->useController(member.controllerSlots.at(a), time, member.run->scenario->actions[a].domains);
+        ++member.controllersHandedOver;
+      }
     }
     try {
       member.ego->step(time, options_.step, member.run->scenario->ego.headingNoise[static_cast<std::size_t>(k)], lanes_,

@@ -41,7 +41,7 @@ EgoDriver::EgoDriver(std::string vehicle_id, std::unique_ptr<EgoController> cont
       offset_(offset),
       limits_(limits) {
   controllers_.push_back(std::move(controller));
-  controller_ = controllers_.front().get();
+  drivers_ = {controllers_.front().get(), controllers_.front().get()};
   minGap_ = libsumo::Vehicle::getMinGap(vehicleId_);
 }
 
@@ -50,13 +50,14 @@ std::size_t EgoDriver::addController(std::unique_ptr<EgoController> controller) 
   return controllers_.size() - 1;
 }
 
-void EgoDriver::useController(std::size_t slot, double time) {
+void EgoDriver::useController(std::size_t slot, double time, ControlDomains domains) {
   EgoController* next = controllers_.at(slot).get();
-  if (next != controller_) {
-    next->reset();
-    controller_ = next;
+  if (next != drivers_[0] && next != drivers_[1]) next->reset();
+  for (const std::size_t domain : {std::size_t{0}, std::size_t{1}}) {
+    if (!drives(domains, domain == 0 ? ControlDomains::Longitudinal : ControlDomains::Lateral)) continue;
+    drivers_[domain] = next;
+    activeFrom_[domain] = std::min(activeFrom_[domain], time);
   }
-  activeFrom_ = std::min(activeFrom_, time);
 }
 
 SumoPlacement::SumoPlacement(const std::vector<LaneGeometry>& lanes) {
@@ -157,7 +158,7 @@ Observation EgoDriver::observe(double time, LaneCache& lanes, const std::vector<
     leader.accel = libsumo::Vehicle::getAcceleration(leader_id);
     observation.leader = leader;
   }
-  if (controller_->observesObjects() && !road_users.empty()) {
+  if ((drivers_[0]->observesObjects() || drivers_[1]->observesObjects()) && !road_users.empty()) {
     const Footprint ego{state_.position(), state_.heading, length_, width_};
     if (observation.lane) {
       observation.objects = observeObjects(*centre_ptr, observation.lane->width, ego, road_users, sensor_);
@@ -212,14 +213,22 @@ MeasuredPolyline EgoDriver::routeAhead(const std::string& lane_id, LaneCache& la
 void EgoDriver::step(double time, double dt, double heading_noise, LaneCache& lanes,
                      const std::vector<RoadUserState>& road_users) {
   const Observation observation = observe(time, lanes, road_users);
+  // Per domain, its controller once activated; before, the Ego's default: constant speed, and
+  // lane keeping by pure pursuit.
+  EgoController* longitudinal = time + 1e-9 < activeFrom_[0] ? nullptr : drivers_[0];
+  EgoController* lateral = time + 1e-9 < activeFrom_[1] ? nullptr : drivers_[1];
   Command command;
-  if (time + 1e-9 < activeFrom_) {
-    // Before its activation: the Ego's default lane keeping at constant speed.
+  if (!longitudinal && !lateral) {
     command.accel = 0.0;
     command.curvature = PurePursuitLateral().curvature(observation);
+  } else if (longitudinal == lateral) {
+    const ActivityScope in_controller(Activity::Controller);
+    command = longitudinal->step(observation, dt);
   } else {
     const ActivityScope in_controller(Activity::Controller);
-    command = controller_->step(observation, dt);
+    command.accel = longitudinal ? longitudinal->step(observation, dt).accel : 0.0;
+    command.curvature =
+        lateral ? lateral->step(observation, dt).curvature : PurePursuitLateral().curvature(observation);
   }
   if (!std::isfinite(command.accel) || !std::isfinite(command.curvature)) {
     throw Error("controller returned a non-finite command");

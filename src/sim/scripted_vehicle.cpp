@@ -664,8 +664,13 @@ std::optional<Value> lastStartedBy(const std::vector<std::pair<double, Value>>& 
 }
 }  // namespace
 
-std::optional<std::size_t> ScriptedTraffic::egoControllerAt(double time) const {
-  return lastStartedBy(impl_->egoControllers, time);
+std::vector<std::size_t> ScriptedTraffic::egoControllersStarted(double time, std::size_t first) const {
+  std::vector<std::size_t> started;
+  for (std::size_t i = first; i < impl_->egoControllers.size(); ++i) {
+    if (impl_->egoControllers[i].first > time + 1e-9) break;
+    started.push_back(impl_->egoControllers[i].second);
+  }
+  return started;
 }
 
 std::optional<double> ScriptedTraffic::egoSetSpeedAt(double time) const {

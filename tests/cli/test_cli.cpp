@@ -107,7 +107,8 @@ TEST(Cli, BadInputGivesOneLineNamingTheProblemAndNoOutput) {
       {"unknown_input", test::scenarioVariant("acc.yaml", "v_ego - 4", "v_egoo - 4"), "unknown name 'v_egoo'"},
       {"negative_duration", test::scenarioVariant("acc.yaml", "duration: 5.0", "duration: -1"), "time.duration"},
       {"unknown_controller", test::scenarioVariant("acc.yaml", "name: paper_ego", "name: tesla_fsd"),
-       "unknown controller 'tesla_fsd' (available: alks, fsm, idm, paper_ego, r157_reference_driver, time_gap_p)"},
+       "unknown controller 'tesla_fsd' (available: alks, fsm, idm, keep_lane, paper_ego, r157_reference_driver, "
+       "time_gap_p)"},
       {"missing_library",
        test::scenarioVariant("acc.yaml", "name: paper_ego", "name: mine\n      library: /nonexistent/libmine.so"),
        "controller library '/nonexistent/libmine.so' does not exist"},

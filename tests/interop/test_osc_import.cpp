@@ -2010,10 +2010,32 @@ TEST(OscImport, AnEventThatAssignsAndActivatesAControllerHandsTheEgoToIt) {
   const auto timed = folderWith({{"timed.xosc", at_three}, {"half.xosc", half}, {"map.yaml", "Driver: idm\n"}});
   const auto handed_at_three = importTemplate(timed->path() / "timed.xosc", mapped);
   EXPECT_DOUBLE_EQ(handed_at_three->ego.controller.activeFrom.evaluate({}), 3.0);
-  EXPECT_THAT(test::configErrorOf([&] { importTemplate(timed->path() / "half.xosc", mapped); }),
-              HasSubstr("activateLongitudinal=\"true\" alone: the language's Ego controller drives both directions"));
+  // One domain activated: the controller drives it, the other domain is switched off (keep_lane:
+  // the Ego follows its script there); the Ego's own controller is not activated by it.
+  const auto half_handed = importTemplate(timed->path() / "half.xosc", mapped);
+  ASSERT_EQ(half_handed->ego.actions.size(), 2u);
+  EXPECT_EQ(half_handed->ego.actions[0].controller.name, "idm");
+  EXPECT_EQ(half_handed->ego.actions[0].domains, ControlDomains::Longitudinal);
+  EXPECT_EQ(half_handed->ego.actions[1].controller.name, "keep_lane");
+  EXPECT_EQ(half_handed->ego.actions[1].domains, ControlDomains::Lateral);
+  EXPECT_EQ(half_handed->ego.actions[1].trigger.rising, half_handed->ego.actions[0].trigger.rising);
+  // Both domains switched off, alone: the Ego follows its script (keep_lane) from then on.
+  std::string off = at_three;
+  off.replace(off.find(assign), assign.size(), "");
+  const std::string both_on = R"(lateral="true" longitudinal="true")";
+  off.replace(off.find(both_on), both_on.size(), R"(lateral="false" longitudinal="false")");
+  const auto switched_off = folderWith({{"off.xosc", off}});
+  const auto scripted_from_three = importTemplate(switched_off->path() / "off.xosc", {});
+  ASSERT_EQ(scripted_from_three->ego.actions.size(), 1u);
+  EXPECT_EQ(scripted_from_three->ego.actions[0].controller.name, "keep_lane");
+  EXPECT_EQ(scripted_from_three->ego.actions[0].domains, ControlDomains::Both);
+  EXPECT_DOUBLE_EQ(scripted_from_three->ego.actions[0].trigger.value.evaluate({}), 3.0);
+  // A controller mapped to script: where it drives the Ego, the Ego follows its script.
   OscImportOptions scripted;
   scripted.controllerMap = folder->path() / "script.yaml";
-  EXPECT_THAT(test::configErrorOf([&] { importTemplate(folder->path() / "handover.xosc", scripted); }),
-              HasSubstr("controller 'Driver' is mapped to 'script': the Ego is driven by a controller"));
+  const auto to_script = importTemplate(folder->path() / "handover.xosc", scripted);
+  ASSERT_EQ(to_script->ego.actions.size(), 1u);
+  EXPECT_EQ(to_script->ego.actions[0].controller.name, "keep_lane");
+  EXPECT_THAT(checkOpenScenario(folder->path() / "handover.xosc", scripted).report(),
+              HasSubstr("controller 'Driver' is mapped to 'script': the Ego follows its script where it drives"));
 }

@@ -418,6 +418,46 @@ vehicles:
   }
 }
 
+// A controller action may hand over one domain: the other stays with its controller. By hand,
+// steady_brake at 1 m/s^2 from 20 m/s; from t = 2 s keep_lane drives the speed (18 m/s held)
+// while steady_brake keeps steering; from t = 4 s steady_brake at 3 m/s^2 drives the speed again.
+// A lateral hand-over leaves the speed alone.
+TEST(BatchSimulation, AControllerActionHandsOverTheDomainsItNames) {
+  TemporaryDirectory dir;
+  ControllerRegistry registry = ControllerRegistry::withBuiltins();
+  test::registerSteadyBrake(registry);
+  const std::string yaml = R"(
+name: domains
+time: {step: 0.2, duration: 6}
+road: {shape: arc, length: 400, lanes: 2, lane_width: 3.5}
+vehicles:
+  ego: {s: 20, lane: 0, speed: 20, controller: {name: steady_brake, params: {decel: 1}},
+        actions: [{trigger: {time: 2}, controller: {name: keep_lane, domains: longitudinal}},
+                  {trigger: {time: 3}, controller: {name: keep_lane, domains: lateral}},
+                  {trigger: {time: 4}, controller: {name: steady_brake, params: {decel: 3}, domains: longitudinal}}]}
+)";
+  const Batch batch(scenario::parseLogicalScenario(yaml, "domains.yaml"), 1, dir.path(), registry);
+  ASSERT_TRUE(batch.results[0].ok()) << batch.results[0].failure;
+  const auto& ego = batch.results[0].trace.vehicles[0];
+  for (std::size_t k = 0; k < ego.states.size(); ++k) {
+    const double t = 0.2 * static_cast<double>(k);
+    const double expected = t <= 2.0 + 1e-9 ? 20.0 - t : t <= 4.0 + 1e-9 ? 18.0 : 18.0 - 3.0 * (t - 4.0);
+    EXPECT_NEAR(ego.states[k].speed, expected, 1e-9) << "instant " << k;
+  }
+  const auto bad = [](const std::string& domains) {
+    return test::configErrorOf([&] {
+      scenario::parseLogicalScenario(
+          "name: d\ntime: {step: 0.2, duration: 2}\nroad: {shape: arc, length: 200, lanes: 2, lane_width: 3.5}\n"
+          "vehicles:\n  ego: {s: 20, lane: 0, speed: 20, controller: {name: idm},\n"
+          "        actions: [{trigger: {time: 1}, controller: {name: idm, domains: " + domains + "}}]}\n",
+          "d.yaml");
+    });
+  };
+  const std::string refused = bad("steering");
+  EXPECT_NE(refused.find("domains: got 'steering', expected both, longitudinal or lateral"), std::string::npos)
+      << refused;
+}
+
 TEST(BatchSimulation, TheEgoFollowsTheSetSpeedItsActionsCommand) {
   TemporaryDirectory dir;
   const std::string yaml = R"(

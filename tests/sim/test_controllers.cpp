@@ -53,7 +53,7 @@ TEST(ControllerRegistry, UnknownNameListsTheAvailableControllers) {
   const auto registry = ControllerRegistry::withBuiltins();
   const auto message = test::configErrorOf([&] { registry.create("paper_eggo"); });
   EXPECT_NE(message.find("unknown controller 'paper_eggo'"), std::string::npos) << message;
-  EXPECT_NE(message.find("idm, paper_ego"), std::string::npos) << message;
+  EXPECT_NE(message.find("idm, keep_lane, paper_ego"), std::string::npos) << message;
 }
 
 TEST(ControllerParams, OutOfRangeAndUnknownParametersAreNamed) {

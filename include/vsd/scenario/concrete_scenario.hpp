@@ -54,6 +54,7 @@ struct ConcreteAction {
   int repeat = 1;          ///< ActionSpec::repeat
   /// Controller: its parameters, evaluated (its name and library: the ActionSpec's).
   std::vector<std::pair<std::string, double>> controllerParams;
+  ControlDomains domains = ControlDomains::Both;  ///< Controller: ActionSpec::domains
   std::string where;
 };
 

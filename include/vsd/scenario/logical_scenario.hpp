@@ -14,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include "vsd/core/control_domains.hpp"
 #include "vsd/core/defaults.hpp"
 #include "vsd/core/road_user.hpp"
 #include "vsd/scenario/expression.hpp"
@@ -218,6 +219,8 @@ struct ActionSpec {
   int repeat = 1;
   /// Controller: the controller that drives the Ego from the action's start (no active_from).
   ControllerSpec controller;
+  /// Controller: what it drives (`domains`); the other domain stays with its controller.
+  ControlDomains domains = ControlDomains::Both;
   std::string where;
 };
 

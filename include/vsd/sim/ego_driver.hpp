@@ -4,6 +4,7 @@
 //   hands over) -> controller -> kinematic model -> moveToXY.
 // Used for generated scenarios and for closed-loop Egos on arbitrary maps.
 
+#include <array>
 #include <memory>
 #include <optional>
 #include <string>
@@ -11,6 +12,7 @@
 #include <utility>
 #include <vector>
 
+#include "vsd/core/control_domains.hpp"
 #include "vsd/sim/controller.hpp"
 #include "vsd/sim/sumo_session.hpp"
 #include "vsd/sim/vehicle_model.hpp"
@@ -105,14 +107,15 @@ class EgoDriver {
   /// The controller drives from `time` (s) on; before, the Ego keeps its speed and follows its
   /// lane's centre line by pure pursuit (the scripted phase before a scenario activates it),
   /// and the controller is not asked.
-  void activateFrom(double time) { activeFrom_ = time; }
+  void activateFrom(double time) { activeFrom_ = {time, time}; }
   /// Adds a controller the scenario may hand the Ego to (useController); returns its slot
   /// (the one given at construction is slot 0).
   std::size_t addController(std::unique_ptr<EgoController> controller);
-  /// The controller in `slot` drives from `time` (s) on, also before activateFrom's time (a
-  /// hand-over activates it); one that takes over from another starts afresh (reset), as a
-  /// newly activated controller does. The others are not asked meanwhile.
-  void useController(std::size_t slot, double time);
+  /// The controller in `slot` drives the `domains` from `time` (s) on, also before
+  /// activateFrom's time (a hand-over activates them); one that takes over while it drives no
+  /// domain starts afresh (reset), as a newly activated controller does. A controller driving
+  /// no domain is not asked; one driving both is asked once per step.
+  void useController(std::size_t slot, double time, ControlDomains domains = ControlDomains::Both);
   /// Places the vehicle in SUMO at the current state (moveToXY + speed).
   void pushToSumo() const;
   /// Builds the controller's observation from SUMO's current state; for a controller that
@@ -135,7 +138,8 @@ class EgoDriver {
 
   std::string vehicleId_;
   std::vector<std::unique_ptr<EgoController>> controllers_;
-  EgoController* controller_ = nullptr;  ///< the one that drives: one of controllers_
+  /// The ones that drive the longitudinal [0] and the lateral [1] domain: of controllers_.
+  std::array<EgoController*, 2> drivers_{};
   VehicleState state_;
   double length_;
   double width_;
@@ -147,7 +151,7 @@ class EgoDriver {
   std::optional<double> commandedSetSpeed_;
   std::vector<double> laneOffsets_;  ///< m, per lane of the road (knowLaneOffsets)
   std::optional<double> commandedLaneOffset_;
-  double activeFrom_ = 0.0;  ///< s
+  std::array<double, 2> activeFrom_{0.0, 0.0};  ///< s, per domain as drivers_
 };
 
 }  // namespace vsd::sim

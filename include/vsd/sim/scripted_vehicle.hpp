@@ -78,9 +78,10 @@ class ScriptedTraffic {
   /// controller; none before the first. Actions start while stepping to the instant after
   /// their start, so ask with the time the controller acts at.
   std::optional<double> egoSetSpeedAt(double time) const;
-  /// The Ego's latest controller action (index into ConcreteScenario::actions) started by
-  /// `time` (s); none before the first (its own controller drives it). Asked as egoSetSpeedAt.
-  std::optional<std::size_t> egoControllerAt(double time) const;
+  /// The Ego's controller actions (index into ConcreteScenario::actions) that started by `time`
+  /// (s), in start order, from the `first`-th one on (the ones a caller has not handed over
+  /// yet); each hands the domains it drives to its controller. Asked as egoSetSpeedAt.
+  std::vector<std::size_t> egoControllersStarted(double time, std::size_t first) const;
   /// Where the Ego's lane_change and lateral_offset actions started by `time` (s) have moved
   /// the lane its controller keeps: m across the road (the road's lane offsets, > 0 left) at
   /// `time`; none before the first (it keeps its own lane). Asked as egoSetSpeedAt.

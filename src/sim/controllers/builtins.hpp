@@ -16,5 +16,7 @@ void registerAlks(ControllerRegistry& registry);
 void registerR157ReferenceDriver(ControllerRegistry& registry);
 /// fuzzy_safety_model.cpp: `fsm`.
 void registerFuzzySafetyModel(ControllerRegistry& registry);
+/// keep_lane.cpp: `keep_lane`.
+void registerKeepLane(ControllerRegistry& registry);
 
 }  // namespace vsd::sim

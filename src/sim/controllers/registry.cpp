@@ -4,6 +4,7 @@
 //   alks                   alks.cpp                   an ALKS-like system under test (UN R157 time gap, object list)
 //   r157_reference_driver  r157_reference_driver.cpp  UN R157's competent and careful human driver
 //   fsm                    fuzzy_safety_model.cpp     the Fuzzy Safety Model (Mattas et al. 2022)
+//   keep_lane              keep_lane.cpp              keeps its speed and lane (the Ego before its controller drives)
 // Their shared parts (lane keeping, time-gap following) are in lane_keeping.cpp and
 // time_gap.cpp (declared in vsd/sim/builtin_controllers.hpp).
 
@@ -18,6 +19,7 @@ ControllerRegistry ControllerRegistry::withBuiltins() {
   registerAlks(registry);
   registerR157ReferenceDriver(registry);
   registerFuzzySafetyModel(registry);
+  registerKeepLane(registry);
   return registry;
 }
 
