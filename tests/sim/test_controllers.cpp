@@ -294,6 +294,28 @@ TEST(PaperEgo, LeaderComesFromSumoUnlessTheObjectListIsSwitchedOn) {
                ConfigError);
 }
 
+// A commanded set speed of 0 (an imported speed action to a stop) is a stop for every built-in
+// that follows set speeds: braking while moving, a finite command at standstill (IDM's free-road
+// term (v / v0)^delta is 0 / 0 there).
+TEST(SetSpeed, ACommandedStopBrakesAndHoldsWithFiniteCommands) {
+  auto registry = ControllerRegistry::withBuiltins();
+  for (const auto& [name, description] : registry.available()) {
+    auto controller = makeController(registry, name, "", "", ControllerParams({}, "c"));
+    if (!controller->followsSetSpeed()) continue;
+    for (const double speed : {8.0, 0.0}) {
+      Observation stop = straightLane(speed, 0.0);
+      stop.commandedSetSpeed = 0.0;
+      const Command command = controller->step(stop, 0.2);
+      EXPECT_TRUE(std::isfinite(command.accel) && std::isfinite(command.curvature)) << name << " at " << speed;
+      if (speed > 0.0) {
+        EXPECT_LT(command.accel, 0.0) << name;
+      } else {
+        EXPECT_LE(command.accel, 1e-12) << name;
+      }
+    }
+  }
+}
+
 TEST(StepCost, TheWrappedControllerDrivesAndEachStepTakesTheExtraTime) {
   auto registry = ControllerRegistry::withBuiltins();
   const ControllerParams params({}, "controller");

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "builtins.hpp"
 #include "vsd/sim/builtin_controllers.hpp"
@@ -35,7 +36,12 @@ class IdmController final : public EgoController {
 
   Command step(const Observation& observation, double /*dt*/) override {
     const double speed = observation.ego.speed;
-    const double free_term = std::pow(speed / following_.setSpeed(observation), exponent_);
+    const double set_speed = following_.setSpeed(observation);
+    // A set speed of 0 (a commanded stop): IDM's free-road term grows without bound while
+    // moving (full braking, clamped) and is 1 at standstill (stays there), where 0/0 would be NaN.
+    const double free_term = set_speed > 0.0   ? std::pow(speed / set_speed, exponent_)
+                             : speed > 0.0     ? std::numeric_limits<double>::infinity()
+                                               : 1.0;
     double interaction = 0.0;
     if (const auto lead = leader_.leader(observation)) {
       const auto& leader = *lead;
