@@ -109,6 +109,9 @@ Body withTrailer(Translation& translation, Catalogs& catalogs, const xml::Reader
     return body;
   }
   if (towed >= kMaxTrailers) reader.fail(attached, fmt::format("more than {} trailers in a row", kMaxTrailers));
+  // Read before the trailer's entry is resolved, which may set this file's parameters anew.
+  const std::string trailer_name = reader.text(attached, "name");
+  const std::string where = reader.where(attached);
   const pugi::xml_node hitch = reader.only(vehicle, "TrailerHitch");
   const double hitch_ahead = reader.number(hitch, "dx", NumberRange::closed(-100.0, 100.0));
   const TrailerVehicle towed_vehicle = trailerVehicle(reader, catalogs, attached);
@@ -120,10 +123,9 @@ Body withTrailer(Translation& translation, Catalogs& catalogs, const xml::Reader
   body.rear = std::min(body.rear, towed_body.rear + shift);
   body.front = std::max(body.front, towed_body.front + shift);
   body.width = std::max(body.width, towed_body.width);
-  translation.findings.note(reader.where(attached),
-                            fmt::format("trailer '{}' hitched straight behind: one rigid road user {} m long (on a "
-                                        "bend the real trailer runs inside the tractor's path)",
-                                        reader.text(attached, "name"), xml::number(body.front - body.rear)));
+  translation.findings.note(where, fmt::format("trailer '{}' hitched straight behind: one rigid road user {} m long "
+                                               "(on a bend the real trailer runs inside the tractor's path)",
+                                               trailer_name, xml::number(body.front - body.rear)));
   return body;
 }
 
@@ -138,6 +140,8 @@ Body vehicleBody(Translation& translation, Catalogs& catalogs, const xml::Reader
 /// Type and bounding box of a <Vehicle> (with its trailers), <Pedestrian> or <MiscObject>.
 void readObject(Translation& translation, Catalogs& catalogs, const xml::Reader& reader,
                 const pugi::xml_node& object, Entity& entity) {
+  // Its type first: a trailer from the same catalog file sets that file's parameters anew.
+  entity.type = categoryType(reader, object);
   Body body;
   if (std::string(object.name()) == "Vehicle") {
     body = vehicleBody(translation, catalogs, reader, object, 0);
@@ -145,7 +149,6 @@ void readObject(Translation& translation, Catalogs& catalogs, const xml::Reader&
     reader.requireSubset(object, {"ParameterDeclarations", "BoundingBox", "Properties"});
     body = boxOf(reader, object);
   }
-  entity.type = categoryType(reader, object);
   entity.length = body.front - body.rear;
   entity.width = body.width;
   entity.centreAhead = (body.front + body.rear) / 2;

@@ -52,24 +52,27 @@ void pace(Translation& translation, const pugi::xml_node& dynamics, const char* 
   action[dimension == "rate" ? rate_key : "duration"] = num(value);
 }
 
-/// The target of a lane change of the Ego: its own lane and a number of lanes (`lanes`), or a
-/// lane of the road (`lane`: an absolute lane, or another road user's that keeps its lane).
-YAML::Node egoLaneChange(Translation& translation, const pugi::xml_node& target, YAML::Node& item) {
+/// The target of a lane change of `actor`: a number of lanes from its own lane (`lanes`, also
+/// relative to itself), from the Ego's lane at the start (`ego_lane`, relative to the Ego), or a
+/// lane of the road (`lane`: an absolute lane, or one relative to another road user that keeps
+/// its lane).
+YAML::Node laneTarget(Translation& translation, const Entity& actor, const pugi::xml_node& target, YAML::Node& item) {
   const xml::Reader& reader = translation.reader;
-  const bool absolute = std::string(target.name()) == "AbsoluteTargetLane";
-  if (absolute) {
+  if (std::string(target.name()) == "AbsoluteTargetLane") {
     item["lane"] = translation.road.languageLane(reader.integer(target, "value", -100, 100), reader.where(target));
     return item;
   }
   const std::string reference = reader.text(target, "entityRef");
   const long lanes = reader.integer(target, "value", -100, 100);
-  if (reference == translation.ego->name) {
+  if (reference == actor.name) {
     item["lanes"] = std::to_string(lanes);
-    return item;
+  } else if (reference == translation.ego->name) {
+    item["ego_lane"] = std::to_string(lanes);
+  } else {
+    const Entity& other = translation.entity(target, reference);
+    if (other.movesLaterally) reader.fail(target, fmt::format("a lane relative to '{}', who changes lanes", reference));
+    item["lane"] = std::to_string(other.placement->lane + lanes);
   }
-  const Entity& other = translation.entity(target, reference);
-  if (other.movesLaterally) reader.fail(target, fmt::format("a lane relative to '{}', who changes lanes", reference));
-  item["lane"] = std::to_string(other.placement->lane + lanes);
   return item;
 }
 
@@ -84,30 +87,14 @@ YAML::Node laneChange(Translation& translation, const Entity& actor, const pugi:
   YAML::Node item;
   const pugi::xml_node dynamics = reader.only(action, "LaneChangeActionDynamics");
   item["shape"] = shapeOf(translation, dynamics, /*step_allowed=*/of_ego);
-  pace(translation, dynamics, "lateral_speed", item);
+  if (item["shape"].as<std::string>() == "step") {  // the Ego's: its lane moves at once
+    translation.findings.note(reader.where(dynamics), "a step moves the lane at once: its value is not used");
+  } else {
+    pace(translation, dynamics, "lateral_speed", item);
+  }
   const pugi::xml_node target = reader.choice(reader.only(action, "LaneChangeTarget"),
                                               {"RelativeTargetLane", "AbsoluteTargetLane"});
-  if (of_ego) return egoLaneChange(translation, target, item);
-  if (std::string(target.name()) == "AbsoluteTargetLane") {
-    const int lane = translation.road.languageLane(reader.integer(target, "value", -100, 100), reader.where(target));
-    item["ego_lane"] = std::to_string(lane - translation.ego->placement->lane);
-    translation.findings.note(reader.where(target), "an absolute lane, counted from the Ego's starting lane");
-    return item;
-  }
-  const std::string reference = reader.text(target, "entityRef");
-  const long lanes = reader.integer(target, "value", -100, 100);
-  if (reference == actor.name) {
-    item["lanes"] = std::to_string(lanes);
-  } else if (reference == translation.ego->name) {
-    item["ego_lane"] = std::to_string(lanes);
-  } else {
-    Entity& other = translation.entity(target, reference);
-    if (other.movesLaterally) reader.fail(target, fmt::format("a lane relative to '{}', who changes lanes", reference));
-    item["ego_lane"] = std::to_string(other.placement->lane + lanes - translation.ego->placement->lane);
-    translation.findings.note(reader.where(target), fmt::format("the lane of '{}' counted from the Ego's starting lane",
-                                                                reference));
-  }
-  return item;
+  return laneTarget(translation, actor, target, item);
 }
 
 YAML::Node laneOffset(Translation& translation, const Entity& actor, const pugi::xml_node& action) {
@@ -302,15 +289,16 @@ namespace {
 constexpr const char* kActivation = "activate_controller";
 constexpr const char* kAssignment = "assign_controller";
 
-/// The language's controller an AssignControllerAction of the Ego names (through the controller
-/// map; `script` is no controller for the Ego). Its activateLateral/activateLongitudinal
-/// attributes (OpenSCENARIO 1.2) mark `item` as an activation too.
 /// The domains an activation switches on (the others it switches off): "true" (both),
 /// "longitudinal", "lateral" or "none" (the item privateAction marks with kActivation).
 std::string activationOf(bool longitudinal, bool lateral) {
   return longitudinal && lateral ? "true" : longitudinal ? "longitudinal" : lateral ? "lateral" : "none";
 }
 
+/// The language's controller an AssignControllerAction of the Ego names (through the controller
+/// map; `script` is keep_lane for the Ego: it follows its script there). Its
+/// activateLateral/activateLongitudinal attributes (OpenSCENARIO 1.2) mark `item` as an
+/// activation too; an ActivateControllerAction beside them must agree.
 YAML::Node assignedController(Translation& translation, const pugi::xml_node& assign, YAML::Node& item) {
   const xml::Reader& reader = translation.reader;
   std::string where;
@@ -325,7 +313,14 @@ YAML::Node assignedController(Translation& translation, const pugi::xml_node& as
   }
   const bool lateral = reader.optionalBoolean(assign, "activateLateral").value_or(false);
   const bool longitudinal = reader.optionalBoolean(assign, "activateLongitudinal").value_or(false);
-  if (lateral || longitudinal) item[kActivation] = activationOf(longitudinal, lateral);
+  if (lateral || longitudinal) {
+    const std::string domains = activationOf(longitudinal, lateral);
+    if (item[kActivation] && item[kActivation].as<std::string>() != domains) {
+      reader.fail(assign, "activateLateral / activateLongitudinal differ from the ActivateControllerAction beside "
+                          "them");
+    }
+    item[kActivation] = domains;
+  }
   YAML::Node controller;
   controller["name"] = choice.name;
   if (choice.params && choice.params.IsMap()) controller["params"] = choice.params;
@@ -621,9 +616,18 @@ std::optional<YAML::Node> entityCondition(Translation& translation, const Entity
 std::optional<YAML::Node> startTrigger(Translation& translation, const Entity& actor, const pugi::xml_node& event,
                                        bool note);
 std::optional<YAML::Node> eventTrigger(Translation& translation, const Entity& actor, const pugi::xml_node& event,
-                                       const std::string& act, bool note);
-std::optional<YAML::Node> actStart(Translation& translation, const pugi::xml_node& node, const std::string& name);
-std::optional<YAML::Node> actEnd(Translation& translation, const pugi::xml_node& node, const std::string& name);
+                                       int act, bool note);
+std::optional<YAML::Node> actStart(Translation& translation, const pugi::xml_node& node, int act);
+std::optional<YAML::Node> actEnd(Translation& translation, const pugi::xml_node& node, int act);
+
+/// The Act a condition names (`node`: the condition): its index into Translation::acts.
+int actNamed(Translation& translation, const pugi::xml_node& node, const std::string& name) {
+  const auto found = translation.actByName.find(name);
+  if (found == translation.actByName.end() || found->second < 0) {
+    translation.reader.fail(node, fmt::format("storyboardElementRef=\"{}\": expected the name of one Act", name));
+  }
+  return found->second;
+}
 
 /// A number of a language trigger written by the import (a time, a delay); nullopt if it is an
 /// expression (of a distribution's inputs) or no number >= 0.
@@ -728,7 +732,8 @@ std::optional<YAML::Node> containerState(Translation& translation, const pugi::x
   const xml::Reader& reader = translation.reader;
   const bool starts = state == "startTransition" || state == "runningState";
   if (type == "act" && (starts || state == "endTransition" || state == "completeState")) {
-    const auto moment = starts ? actStart(translation, condition, name) : actEnd(translation, condition, name);
+    const int act = actNamed(translation, condition, name);
+    const auto moment = starts ? actStart(translation, condition, act) : actEnd(translation, condition, act);
     std::string when = "never";
     if (moment) {
       YAML::Emitter flow;
@@ -964,14 +969,6 @@ std::optional<YAML::Node> startTrigger(Translation& translation, const Entity& a
   return trigger;
 }
 
-const Translation::ActRecord& actRecord(Translation& translation, const pugi::xml_node& node, const std::string& name) {
-  const auto found = translation.acts.find(name);
-  if (found == translation.acts.end() || !found->second.node) {
-    translation.reader.fail(node, fmt::format("storyboardElementRef=\"{}\": expected the name of one Act", name));
-  }
-  return found->second;
-}
-
 /// Whether an Act's StartTrigger is one simulation time of at most 0 s without a delay: it
 /// starts the Act at t = 0, whatever its edge (esmini's examples write `SimulationTime > 0`
 /// with a rising or risingOrFalling edge for Acts that run from the start).
@@ -988,8 +985,8 @@ bool startsAtZero(const Translation& translation, const pugi::xml_node& act) {
 
 /// When the Act `name` starts: at once ({time: 0}), or at the moment its StartTrigger gives
 /// (a time, with its delay folded in, or actions' ends); nullopt: it never starts.
-std::optional<YAML::Node> actStart(Translation& translation, const pugi::xml_node& node, const std::string& name) {
-  const Translation::ActRecord& act = actRecord(translation, node, name);
+std::optional<YAML::Node> actStart(Translation& translation, const pugi::xml_node& node, int index) {
+  const Translation::ActRecord& act = translation.acts.at(static_cast<std::size_t>(index));
   if (startsAtOnce(translation, act.node, /*note_absent=*/false, /*note=*/false) ||
       startsAtZero(translation, act.node)) {
     YAML::Node now;
@@ -1011,8 +1008,9 @@ std::optional<YAML::Node> actStart(Translation& translation, const pugi::xml_nod
 /// When the Act `name` ends: when every action of its Events has ended ({after} or {all:
 /// [{after}, ...]}); nullopt: it never ends (an Event that never starts, an action that never
 /// ends). Acts whose Events hand the Ego's controller over, or run more than once, are refused.
-std::optional<YAML::Node> actEnd(Translation& translation, const pugi::xml_node& node, const std::string& name) {
-  const Translation::ActRecord& act = actRecord(translation, node, name);
+std::optional<YAML::Node> actEnd(Translation& translation, const pugi::xml_node& node, int index) {
+  const Translation::ActRecord& act = translation.acts.at(static_cast<std::size_t>(index));
+  const std::string& name = act.name;
   for (const std::string& event_name : act.events) {
     const Translation::EventRecord& event = translation.events.at(event_name);
     if (!event.actor || event.actionIds.empty() ||
@@ -1091,16 +1089,16 @@ YAML::Node fromTime(const YAML::Node& start, const YAML::Node& own) {
 /// The trigger of an Event in the Act `act_name`: its own StartTrigger (startTrigger), checked
 /// once the Act has started; nullopt: it never starts.
 std::optional<YAML::Node> eventTrigger(Translation& translation, const Entity& actor, const pugi::xml_node& event,
-                                       const std::string& act_name, bool note) {
+                                       int act_index, bool note) {
   const auto own = startTrigger(translation, actor, event, note);
   if (!own) return std::nullopt;
-  const auto act_start = actStart(translation, event, act_name);
+  const auto act_start = actStart(translation, event, act_index);
   if (!act_start) return std::nullopt;
   const YAML::Node& start = *act_start;
   const bool at_a_time = start["time"] && start.size() == 1;
   if (at_a_time && constantOf(start["time"]) == 0.0) return own;  // the Act runs from t = 0
   if (!event.child("StartTrigger").child("ConditionGroup")) return start;  // no condition of its own
-  const Translation::ActRecord& act = translation.acts.at(act_name);
+  const Translation::ActRecord& act = translation.acts.at(static_cast<std::size_t>(act_index));
   if (waitsForItsAct(translation, act, *own)) return own;
   if (!at_a_time) {
     YAML::Emitter flow;
@@ -1108,7 +1106,7 @@ std::optional<YAML::Node> eventTrigger(Translation& translation, const Entity& a
     translation.reader.fail(event, fmt::format("an Event with a condition of its own in Act '{}', which starts at {}: "
                                                "the language checks a condition from a time on, or after an action "
                                                "of the same Act",
-                                               act_name, flow.c_str()));
+                                               act.name, flow.c_str()));
   }
   return fromTime(start, *own);
 }
@@ -1136,7 +1134,7 @@ struct PendingEvent {
   std::vector<PendingAction> actions;
   ParameterValues scope;  ///< the parameters its Story sees (the file's, and the Story's own)
   int executions = 1;     ///< its maximumExecutionCount
-  std::string act;        ///< the name of the Act it is in
+  int act = -1;           ///< the Act it is in (index into Translation::acts)
 };
 
 /// Whether a <PrivateAction> never ends on its own: a LaneOffsetAction with continuous="true"
@@ -1157,12 +1155,12 @@ void readEvent(Translation& translation, const std::vector<Entity*>& actors, con
     reader.fail(event, fmt::format("maximumExecutionCount={}: expected a whole number 1 .. 1000000",
                                    xml::number(executions)));
   }
-  PendingEvent pending{event, {}, reader.parameters(), static_cast<int>(executions), ""};
+  PendingEvent pending{event, {}, reader.parameters(), static_cast<int>(executions), -1};
   const std::string event_name = reader.text(event, "name");
   const bool first = translation.events.count(event_name) == 0;
   Translation::EventRecord& record = translation.events[event_name];
   const Entity* first_actor = actors.empty() ? nullptr : actors.front();
-  record = first ? Translation::EventRecord{event, first_actor, reader.parameters(), {}, ""}
+  record = first ? Translation::EventRecord{event, first_actor, reader.parameters(), {}, -1}
                  : Translation::EventRecord{};  // a name given twice names no one Event
   for (const pugi::xml_node& action : event.children("Action")) {
     translation.findings.attempt([&] {
@@ -1244,11 +1242,19 @@ void activateEgoController(Translation& translation, const pugi::xml_node& event
                                           num(at)));
 }
 
+/// The controller that keeps the Ego's speed and lane (it follows its script).
+YAML::Node keepLane() {
+  YAML::Node script;
+  script["name"] = kKeepsItsLane;
+  return script;
+}
+
 /// The language's controller action `controller` (a map: name, params) of the Ego for `event`,
 /// driving `domains` ("true": both), started by `trigger` and repeated as the Event is.
 YAML::Node egoControllerAction(Translation& translation, const PendingEvent& event, const YAML::Node& trigger,
                                YAML::Node controller, const std::string& domains, const std::string& suffix) {
   const xml::Reader& reader = translation.reader;
+  controller = YAML::Clone(controller);  // the Event's assignment stays as it is
   if (domains != "true") controller["domains"] = domains;
   YAML::Node item;
   item["controller"] = controller;
@@ -1298,12 +1304,10 @@ void takeEgoControllerEvent(Translation& translation, const PendingEvent& event,
                             "hands the Ego to a controller that drives at once (add ActivateControllerAction)");
   }
   translation.ego->actions.push_back(egoControllerAction(translation, event, trigger, *assigned, activation, ""));
-  if (activation != "true") {
-    YAML::Node script;
-    script["name"] = kKeepsItsLane;
-    translation.ego->actions.push_back(egoControllerAction(
-        translation, event, trigger, script, activation == "lateral" ? "longitudinal" : "lateral", "_off"));
-    return;  // one domain: the Ego's own controller is not activated by it
+  if (activation != "true") {  // the domain switched off: the Ego follows its script there
+    translation.ego->actions.push_back(egoControllerAction(translation, event, trigger, keepLane(),
+                                                           activation == "lateral" ? "longitudinal" : "lateral",
+                                                           "_off"));
   }
   // The Ego's own controller, never activated, drives until the hand-over's time at most.
   if (!translation.ego->activatedAtStart && startsAtATime(trigger)) {
@@ -1321,6 +1325,15 @@ void activateAlone(Translation& translation, const PendingEvent& event, const st
                    const YAML::Node& trigger) {
   if (domains == "true") {
     activateEgoController(translation, event.node, trigger);
+    // Where the file hands the Ego over, an activation hands it back to its own controller.
+    if (translation.egoHandedOver) {
+      YAML::Node own;
+      own["name"] = translation.controller.name;
+      if (translation.controller.params && translation.controller.params.IsMap()) {
+        own["params"] = translation.controller.params;
+      }
+      translation.ego->actions.push_back(egoControllerAction(translation, event, trigger, own, "true", ""));
+    }
     return;
   }
   if (domains != "none") {
@@ -1328,9 +1341,7 @@ void activateAlone(Translation& translation, const PendingEvent& event, const st
                                                     "domain to a controller an Event assigns",
                                                     domains));
   }
-  YAML::Node script;
-  script["name"] = kKeepsItsLane;
-  translation.ego->actions.push_back(egoControllerAction(translation, event, trigger, script, "true", ""));
+  translation.ego->actions.push_back(egoControllerAction(translation, event, trigger, keepLane(), "true", ""));
 }
 
 void readManeuverGroup(Translation& translation, const pugi::xml_node& group, std::vector<PendingEvent>& events) {
@@ -1362,16 +1373,19 @@ void recordAct(Translation& translation, const pugi::xml_node& act, std::vector<
   const xml::Reader& reader = translation.reader;
   const std::string name = reader.text(act, "name");
   startsAtOnce(translation, act, /*note_absent=*/false);  // notes an empty StartTrigger, once
-  const bool unique = translation.acts.count(name) == 0;
-  Translation::ActRecord record{unique ? act : pugi::xml_node(), reader.parameters(), {}};
+  const int index = static_cast<int>(translation.acts.size());
+  Translation::ActRecord record{name, act, reader.parameters(), {}};
   for (std::size_t e = first; e < events.size(); ++e) {
-    events[e].act = name;
+    events[e].act = index;
     const std::string event_name = reader.text(events[e].node, "name");
     auto& known = translation.events[event_name];
-    if (known.node == events[e].node) known.act = name;
+    if (known.node == events[e].node) known.act = index;
     record.events.push_back(event_name);
   }
-  translation.acts[name] = unique ? record : Translation::ActRecord{};  // a name given twice names no one Act
+  translation.acts.push_back(std::move(record));
+  // A name given twice names no one Act (for conditions on its state; its Events keep theirs).
+  const bool unique = translation.actByName.count(name) == 0;
+  translation.actByName[name] = unique ? index : -1;
 }
 
 /// Marks the road users that move across lanes in the file (relative lane and offset targets need to know).
@@ -1425,6 +1439,12 @@ void readStories(Translation& translation, const pugi::xml_node& storyboard) {
         });
       }
     });
+  }
+  for (const auto& event : events) {
+    for (const auto& pending : event.actions) {
+      const bool switches = pending.item[kActivation] && pending.item[kActivation].as<std::string>() != "true";
+      translation.egoHandedOver = translation.egoHandedOver || pending.item[kAssignment] || switches;
+    }
   }
   // Triggers after all actions have ids (a condition may name an action of a later Story),
   // each in its Story's parameters.

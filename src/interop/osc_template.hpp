@@ -107,23 +107,26 @@ struct Translation {
     const Entity* actor = nullptr;        ///< its first actor; null: the name is not unique
     ParameterValues scope;                ///< the parameters its Story sees
     std::vector<std::string> actionIds;  ///< its actions' language ids
-    std::string act;                      ///< the name of the Act it is in
+    int act = -1;                         ///< the Act it is in (index into acts)
   };
   std::map<std::string, EventRecord> events;
-  /// The file's Acts by name, for their Events' starts and conditions on their state. A name
-  /// given twice is kept without a node (ambiguous).
+  /// The file's Acts, for their Events' starts and conditions on their state.
   struct ActRecord {
+    std::string name;
     pugi::xml_node node;
     ParameterValues scope;            ///< the parameters its Story sees
     std::vector<std::string> events;  ///< its Events' names
   };
-  std::map<std::string, ActRecord> acts;
+  std::vector<ActRecord> acts;
+  std::map<std::string, int> actByName;  ///< index into acts; -1: a name given twice (names no one Act)
   std::map<std::string, std::string> eventOfAction;  ///< the file's Action name -> its Event's name
   int eventStartsFollowed = 0;  ///< nesting of Event and Act starts being translated (a cycle is refused)
   std::set<std::string> usedIds = {"ego"};
   double duration = 0.0;  ///< s; 0: not known from the file
   /// s: the first ActivateControllerAction of the Ego in the Story (none: it drives from t = 0).
   std::optional<double> egoActiveFrom;
+  /// The Story hands the Ego to another controller, or switches a domain off, somewhere.
+  bool egoHandedOver = false;
   /// A condition measures between reference points: road users carry theirs (centreAhead).
   bool measuresReferencePoints = false;
 

@@ -916,6 +916,16 @@ TEST(OscRun, AnActThatStartsLaterChecksItsEventsFromThen) {
   std::string two_acts = readTextFile(data("conditions.xosc"));
   two_acts.insert(two_acts.find("</Act>") + 6, later_act);
   files["two_acts.xosc"] = two_acts;
+  // Acts of one name in two Stories: each keeps its Events; a condition on that name is refused.
+  std::string same_names = readTextFile(data("conditions.xosc"));
+  std::string second_story = later_act;
+  second_story.replace(second_story.find(R"(<Act name="Later">)"), 18, R"(<Act name="Act">)");
+  second_story.replace(second_story.find("<StartTrigger><ConditionGroup><Condition name=\"AfterAct\""),
+                       second_story.find("</StartTrigger></Act>") + 15 -
+                           second_story.find("<StartTrigger><ConditionGroup><Condition name=\"AfterAct\""),
+                       "");
+  same_names.insert(same_names.find("</Story>") + 8, R"(<Story name="Second">)" + second_story + "</Story>");
+  files["same_names.xosc"] = same_names;
   files["by_speed.xosc"] = with_act_start(readTextFile(data("conditions.xosc")),
                                           "<StartTrigger>" + group(speed_at_least_21) + "</StartTrigger>");
   const auto folder = folderWith(files);
@@ -935,6 +945,15 @@ TEST(OscRun, AnActThatStartsLaterChecksItsEventsFromThen) {
   EXPECT_THAT(test::configErrorOf([&] { importTemplate(folder->path() / "by_speed.xosc", {}); }),
               HasSubstr("an Act started by a condition on road users: the language starts an Act at a time or at "
                         "actions' ends"));
+  const auto same = importTemplate(folder->path() / "same_names.xosc", {});
+  EXPECT_EQ(other(*same, "Slow").actions.at(0).trigger.kind, scenario::TriggerSpec::Kind::Time);
+  std::string on_same = same_names;
+  const std::string slow_back_trigger = R"(storyboardElementType="action" storyboardElementRef="SlowStep")";
+  on_same.replace(on_same.find(slow_back_trigger), slow_back_trigger.size(),
+                  R"(storyboardElementType="act" storyboardElementRef="Act")");
+  const auto ambiguous = folderWith({{"on_same.xosc", on_same}});
+  EXPECT_THAT(test::configErrorOf([&] { importTemplate(ambiguous->path() / "on_same.xosc", {}); }),
+              HasSubstr("storyboardElementRef=\"Act\": expected the name of one Act"));
 }
 
 TEST(OscImport, ConditionsTheLanguageCannotExpressAreOneLineEach) {
@@ -2019,17 +2038,27 @@ TEST(OscImport, AnEventThatAssignsAndActivatesAControllerHandsTheEgoToIt) {
   EXPECT_EQ(half_handed->ego.actions[1].controller.name, "keep_lane");
   EXPECT_EQ(half_handed->ego.actions[1].domains, ControlDomains::Lateral);
   EXPECT_EQ(half_handed->ego.actions[1].trigger.rising, half_handed->ego.actions[0].trigger.rising);
-  // Both domains switched off, alone: the Ego follows its script (keep_lane) from then on.
+  // Both domains switched off, alone: the Ego follows its script (keep_lane) from then on; an
+  // activation of both after it hands the Ego back to its own controller (the default alks).
   std::string off = at_three;
   off.replace(off.find(assign), assign.size(), "");
   const std::string both_on = R"(lateral="true" longitudinal="true")";
   off.replace(off.find(both_on), both_on.size(), R"(lateral="false" longitudinal="false")");
-  const auto switched_off = folderWith({{"off.xosc", off}});
+  std::string back_on = off;
+  const std::string group_end = "</Event></Maneuver></ManeuverGroup>";
+  back_on.replace(back_on.rfind(group_end), group_end.size(),
+                  R"(</Event><Event name="BackOn" priority="parallel">)" + activate + "<StartTrigger>" +
+                      group(timeCondition("5")) + "</StartTrigger>" + group_end);
+  const auto switched_off = folderWith({{"off.xosc", off}, {"back_on.xosc", back_on}});
   const auto scripted_from_three = importTemplate(switched_off->path() / "off.xosc", {});
   ASSERT_EQ(scripted_from_three->ego.actions.size(), 1u);
   EXPECT_EQ(scripted_from_three->ego.actions[0].controller.name, "keep_lane");
   EXPECT_EQ(scripted_from_three->ego.actions[0].domains, ControlDomains::Both);
   EXPECT_DOUBLE_EQ(scripted_from_three->ego.actions[0].trigger.value.evaluate({}), 3.0);
+  const auto handed_back = importTemplate(switched_off->path() / "back_on.xosc", {});
+  ASSERT_EQ(handed_back->ego.actions.size(), 2u);
+  EXPECT_EQ(handed_back->ego.actions[1].controller.name, handed_back->ego.controller.name);
+  EXPECT_DOUBLE_EQ(handed_back->ego.actions[1].trigger.value.evaluate({}), 5.0);
   // A controller mapped to script: where it drives the Ego, the Ego follows its script.
   OscImportOptions scripted;
   scripted.controllerMap = folder->path() / "script.yaml";
