@@ -46,7 +46,7 @@ void checkLaneChanges(const ScenarioOutcome& outcome, const scenario::ConcreteSc
       continue;
     }
     const int own_lane = concrete.others[o].lane;
-    const double target_lane = (lane_change->relativeToEgoLane ? concrete.ego.lane : own_lane) + lane_change->target;
+    const double target_lane = scenario::laneChangeTarget(*lane_change, own_lane, concrete.ego.lane);
     if (std::abs(target_lane - own_lane) != 1.0) continue;  // one lane over: the magnitude is known
     const auto& track = outcome.trace.vehicles.at(1 + o);
     std::vector<double> d;

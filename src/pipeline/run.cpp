@@ -779,7 +779,7 @@ void probeController(const std::shared_ptr<const scenario::LogicalScenario>& log
       if (spec.kind != scenario::ActionSpec::Kind::Controller) continue;
       sim::makeController(registry, spec.controller.name, spec.controller.library, logical->sourceFile.parent_path(),
                           sim::ControllerParams(concrete.actions[first + j].controllerParams, spec.controller.where),
-                          needs);
+                          sim::controllerNeeds(*logical, spec));
     }
   };
   if (options.isolation == RunOptions::Isolation::None) {

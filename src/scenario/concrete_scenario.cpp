@@ -325,8 +325,8 @@ void checkLateralTargets(const ConcreteScenario& concrete, std::size_t first_act
     const auto& action = concrete.actions[a];
     if (action.kind == ActionSpec::Kind::Cross) checkOnPavedGround(concrete, user, action.target, action.where, "cross.to_offset");
     if (action.kind != ActionSpec::Kind::LaneChange) continue;
-    const int from = action.toRoadLane ? 0 : action.relativeToEgoLane ? concrete.ego.lane : lane;
-    const double target = from + action.target;
+    const int from = action.relativeToEgoLane ? concrete.ego.lane : lane;
+    const double target = laneChangeTarget(action, lane, concrete.ego.lane);
     if (action.target != std::round(action.target) || target < 0 || target >= lanes) {
       const std::string what = action.toRoadLane
                                    ? fmt::format("lane {}", formatValue(action.target))
@@ -340,6 +340,11 @@ void checkLateralTargets(const ConcreteScenario& concrete, std::size_t first_act
 }
 
 }  // namespace
+
+double laneChangeTarget(const ConcreteAction& action, int own_lane, int ego_lane) {
+  if (action.toRoadLane) return action.target;
+  return (action.relativeToEgoLane ? ego_lane : own_lane) + action.target;
+}
 
 double laneCentreOffset(int lane, int lanes, double lane_width) {
   // Lanes are spread symmetrically around the road centre; lane 0 is rightmost.

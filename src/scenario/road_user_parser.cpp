@@ -480,8 +480,10 @@ void parseLateralAction(const YamlReader& reader, const YAML::Node& node, const 
     paces.emplace_back("lateral_accel", ActionSpec::Pace::LateralAccel);
   }
   action.shape = parseShape(reader, node, field, TransitionShape::Smooth, /*step_allowed=*/of_ego);
-  const bool paced = std::any_of(paces.begin(), paces.end(), [&](const auto& pace) { return node[pace.first]; });
-  if (action.shape == TransitionShape::Step && !paced) {  // at once: no pace to give
+  if (action.shape == TransitionShape::Step) {  // at once: no pace to give
+    for (const auto& [key, pace] : paces) {
+      if (node[key]) reader.fail(node[key], field + "." + key, "a step moves the lane at once: no pace");
+    }
     action.pace = ActionSpec::Pace::Duration;
     action.paceValue = Expression::constant(0.0);
     return;

@@ -237,16 +237,17 @@ class BatchRun {
   void addSwitchedControllers(Member& member) {
     if (!options_.egoControllerOverride.empty()) return;
     const auto& concrete = *member.run->scenario;
-    const ControllerNeeds needs = controllerNeeds(*concrete.logical);
     std::size_t ego_action = 0;  // the Ego's actions come last, in its spec's order
     const std::size_t first = concrete.actions.size() - concrete.logical->ego.actions.size();
     for (std::size_t a = first; a < concrete.actions.size(); ++a, ++ego_action) {
       const auto& action = concrete.actions[a];
       if (action.kind != scenario::ActionSpec::Kind::Controller) continue;
-      const auto& spec = concrete.logical->ego.actions[ego_action].controller;
+      const auto& handover = concrete.logical->ego.actions[ego_action];
+      const auto& spec = handover.controller;
       const ControllerParams params(action.controllerParams, spec.where);
       member.controllerSlots[a] = member.ego->addController(withStepCost(
-          makeController(registry_, spec.name, spec.library, options_.scenarioDir, params, needs),
+          makeController(registry_, spec.name, spec.library, options_.scenarioDir, params,
+                         controllerNeeds(*concrete.logical, handover)),
           options_.egoStepCost));
     }
   }
@@ -262,7 +263,7 @@ class BatchRun {
     for (int lane = 0; lane < member.run->road->lanes; ++lane) {
       lane_offsets.push_back(member.run->road->laneOffset(lane));
     }
-    member.ego->knowLaneOffsets(std::move(lane_offsets));
+    member.ego->knowRoad(member.edge, std::move(lane_offsets));
     member.ego->activateFrom(member.run->scenario->controllerActiveFrom);
     addSwitchedControllers(member);
     member.ego->pushToSumo();
@@ -426,6 +427,12 @@ ControllerNeeds controllerNeeds(const scenario::LogicalScenario& logical) {
     needs.field = "set_speed";
     needs.value = action.target.text();
   }
+  return needs;
+}
+
+ControllerNeeds controllerNeeds(const scenario::LogicalScenario& logical, const scenario::ActionSpec& handover) {
+  ControllerNeeds needs = controllerNeeds(logical);
+  if (!drives(handover.domains, ControlDomains::Longitudinal)) needs.setSpeed = false;
   return needs;
 }
 

@@ -179,8 +179,8 @@ double EgoDriver::keptLaneShift(const std::string& lane_id) const {
   std::size_t index = 0;
   const char* first = lane_id.data() + separator + 1;
   const char* last = lane_id.data() + lane_id.size();
-  if (separator == std::string::npos || std::from_chars(first, last, index).ptr != last ||
-      index >= laneOffsets_.size()) {
+  if (separator == std::string::npos || lane_id.compare(0, separator, roadEdge_) != 0 ||
+      std::from_chars(first, last, index).ptr != last || index >= laneOffsets_.size()) {
     return 0.0;  // a lane off the scenario's road (a junction's): the Ego keeps it
   }
   return *commandedLaneOffset_ - laneOffsets_[index];

@@ -199,6 +199,8 @@ struct ScriptedTraffic::Impl {
   void track(const VehicleState& ego);
   void activate(std::size_t a, const VehicleState& ego);
   void activateEgoLateral(std::size_t a, const VehicleState& ego);
+  /// The road lane the Ego at `ego` is in.
+  int egoLaneOf(const VehicleState& ego) const;
   /// The road lane a lane change of `owner` (-1: the Ego), now in lane `own_lane`, goes to.
   int laneChangeTarget(const ConcreteAction& action, int own_lane, const VehicleState& ego, double t0) const;
   void scheduleWaiters(std::size_t a, const VehicleState& ego);
@@ -519,17 +521,13 @@ void ScriptedTraffic::Impl::activate(std::size_t a, const VehicleState& ego) {
   scheduleWaiters(a, ego);
 }
 
+int ScriptedTraffic::Impl::egoLaneOf(const VehicleState& ego) const {
+  return road->laneAt(road->laneOffset(concrete->ego.lane) + projectExtended(egoLane, ego.position()).lateralOffset);
+}
+
 int ScriptedTraffic::Impl::laneChangeTarget(const ConcreteAction& action, int own_lane, const VehicleState& ego,
                                             double t0) const {
-  const auto lanes = static_cast<int>(std::lround(action.target));
-  int target = own_lane + lanes;
-  if (action.toRoadLane) {
-    target = lanes;
-  } else if (action.relativeToEgoLane) {
-    const double ego_offset =
-        road->laneOffset(concrete->ego.lane) + projectExtended(egoLane, ego.position()).lateralOffset;
-    target = road->laneAt(ego_offset) + lanes;
-  }
+  const auto target = static_cast<int>(std::lround(scenario::laneChangeTarget(action, own_lane, egoLaneOf(ego))));
   if (target < 0 || target >= road->lanes) {
     throw ConfigError(fmt::format("{}: {}.lane_change: at t = {:.1f} s that is lane {}, expected a lane the road has "
                                   "(0 .. {})",
@@ -548,8 +546,7 @@ void ScriptedTraffic::Impl::activateEgoLateral(std::size_t a, const VehicleState
   transition.start = scheduled[a];
   transition.shape = action.shape;
   if (egoLaterals.empty()) {
-    egoLateralLane =
-        road->laneAt(road->laneOffset(concrete->ego.lane) + projectExtended(egoLane, ego.position()).lateralOffset);
+    egoLateralLane = egoLaneOf(ego);
     transition.from = road->laneOffset(egoLateralLane);
   } else {
     transition.from = egoLaterals.back().second.at(transition.start);

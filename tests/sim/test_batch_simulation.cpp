@@ -420,8 +420,8 @@ vehicles:
 
 // A controller action may hand over one domain: the other stays with its controller. By hand,
 // steady_brake at 1 m/s^2 from 20 m/s; from t = 2 s keep_lane drives the speed (18 m/s held)
-// while steady_brake keeps steering; from t = 4 s steady_brake at 3 m/s^2 drives the speed again.
-// A lateral hand-over leaves the speed alone.
+// while steady_brake keeps steering; from t = 3 s a steady_brake at 2 m/s^2 steers only (the
+// speed stays 18 m/s); from t = 4 s steady_brake at 3 m/s^2 drives the speed again.
 TEST(BatchSimulation, AControllerActionHandsOverTheDomainsItNames) {
   TemporaryDirectory dir;
   ControllerRegistry registry = ControllerRegistry::withBuiltins();
@@ -433,7 +433,7 @@ road: {shape: arc, length: 400, lanes: 2, lane_width: 3.5}
 vehicles:
   ego: {s: 20, lane: 0, speed: 20, controller: {name: steady_brake, params: {decel: 1}},
         actions: [{trigger: {time: 2}, controller: {name: keep_lane, domains: longitudinal}},
-                  {trigger: {time: 3}, controller: {name: keep_lane, domains: lateral}},
+                  {trigger: {time: 3}, controller: {name: steady_brake, params: {decel: 2}, domains: lateral}},
                   {trigger: {time: 4}, controller: {name: steady_brake, params: {decel: 3}, domains: longitudinal}}]}
 )";
   const Batch batch(scenario::parseLogicalScenario(yaml, "domains.yaml"), 1, dir.path(), registry);

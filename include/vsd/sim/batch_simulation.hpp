@@ -57,6 +57,9 @@ struct BatchOptions {
 /// What a scenario asks of its Ego's controller (ControllerRegistry::require): to follow the
 /// set speed its Ego's set_speed actions command, if it has any.
 ControllerNeeds controllerNeeds(const scenario::LogicalScenario& logical);
+/// What the controller of the Ego's controller action `handover` must honour: the scenario's
+/// needs, less the set speed where it drives the lateral domain only.
+ControllerNeeds controllerNeeds(const scenario::LogicalScenario& logical, const scenario::ActionSpec& handover);
 
 /// Runs all `runs` in one simulation of `net`. Per-scenario faults (a vehicle
 /// SUMO removes, a controller that fails) are recorded in `failure`; faults of

@@ -97,11 +97,14 @@ class EgoDriver {
   void observeWith(const ObjectSensor& sensor) { sensor_ = sensor; }
   /// The set speed (m/s) the scenario commands from now on (Observation::commandedSetSpeed).
   void commandSetSpeed(std::optional<double> set_speed) { commandedSetSpeed_ = set_speed; }
-  /// The road's lanes (m across the road from its centre line to each lane's centre, lane 0
-  /// rightmost: RoadGeometry::laneOffset), for commandLaneOffset.
-  void knowLaneOffsets(std::vector<double> lane_offsets) { laneOffsets_ = std::move(lane_offsets); }
+  /// The road's SUMO edge and its lanes (m across the road from its centre line to each lane's
+  /// centre, lane 0 rightmost: RoadGeometry::laneOffset), for commandLaneOffset.
+  void knowRoad(std::string edge, std::vector<double> lane_offsets) {
+    roadEdge_ = std::move(edge);
+    laneOffsets_ = std::move(lane_offsets);
+  }
   /// Where the scenario's lane changes and lateral offsets of the Ego have moved the lane its
-  /// controller keeps (m across the road, as knowLaneOffsets; none: the lane it is in). The
+  /// controller keeps (m across the road, as knowRoad; none: the lane it is in). The
   /// observation's lane is that lane: a controller that keeps its lane follows the move.
   void commandLaneOffset(std::optional<double> road_offset) { commandedLaneOffset_ = road_offset; }
   /// The controller drives from `time` (s) on; before, the Ego keeps its speed and follows its
@@ -149,7 +152,8 @@ class EgoDriver {
   SumoPlacement placement_;
   ObjectSensor sensor_;
   std::optional<double> commandedSetSpeed_;
-  std::vector<double> laneOffsets_;  ///< m, per lane of the road (knowLaneOffsets)
+  std::string roadEdge_;             ///< the road's SUMO edge (knowRoad)
+  std::vector<double> laneOffsets_;  ///< m, per lane of the road (knowRoad)
   std::optional<double> commandedLaneOffset_;
   std::array<double, 2> activeFrom_{0.0, 0.0};  ///< s, per domain as drivers_
 };
