@@ -24,6 +24,7 @@ usage: tools/xosc_scope.py FILE.xosc
 prints one line: "in scope ROAD_PATH" or "outside: <what>"; exit 0 either way, 1 on unreadable
 input.
 """
+import math
 import os
 import sys
 import xml.etree.ElementTree as ElementTree
@@ -59,7 +60,8 @@ def scenario_of(path):
     return path, root
 
 
-NUMERIC_TYPES = {"double", "int", "integer", "unsignedInt", "unsignedShort"}
+INTEGER_TYPES = {"int", "integer", "unsignedInt", "unsignedShort"}
+CATALOG_FILES = {}  # path -> parsed <Catalog> (or None), each catalog file read once
 
 
 def parameter_values(root):
@@ -89,7 +91,10 @@ def catalog_entry(folders, catalog_name, entry_name):
         for name in sorted(os.listdir(directory)):
             if not name.endswith(".xosc"):
                 continue
-            catalog = ElementTree.parse(os.path.join(directory, name)).getroot().find("Catalog")
+            path = os.path.join(directory, name)
+            if path not in CATALOG_FILES:
+                CATALOG_FILES[path] = ElementTree.parse(path).getroot().find("Catalog")
+            catalog = CATALOG_FILES[path]
             if catalog is None or catalog.get("name") != catalog_name:
                 continue
             for entry in catalog:
@@ -127,12 +132,14 @@ def contradicts_its_type(declaration):
     if is_reference(value):
         return False
     if kind == "boolean":
-        return value not in ("true", "false")
-    if kind in NUMERIC_TYPES:
-        try:
-            float(value)
-        except ValueError:
-            return True
+        return value not in ("true", "false", "1", "0")  # xsd:boolean
+    try:
+        if kind == "double":
+            return not math.isfinite(float(value))
+        if kind in INTEGER_TYPES:
+            return int(value) < 0 and kind.startswith("unsigned")
+    except ValueError:
+        return True
     return False
 
 
@@ -158,9 +165,9 @@ def main():
         sys.exit("usage: tools/xosc_scope.py FILE.xosc")
     try:
         path, root = scenario_of(sys.argv[1])
+        parts = [root] + referenced_entries(path, root)
     except (OSError, ElementTree.ParseError) as error:
         sys.exit(f"xosc_scope.py: {sys.argv[1]}: {error}")
-    parts = [root] + referenced_entries(path, root)
     outside = outside_the_issue(parts) + invalid_declarations(parts)
     logic = root.find(".//RoadNetwork/LogicFile")
     if logic is None:
