@@ -222,11 +222,23 @@ namespace {
 /// An Init's ActivateControllerAction: the Ego's controller drives from t = 0, and a scripted
 /// road user follows its script (which of the two the entity is, is not known yet).
 void noteActivation(Translation& translation, const pugi::xml_node& action, Entity& entity) {
+  const xml::Reader& reader = translation.reader;
+  const pugi::xml_node activate =
+      std::string(action.name()) == "ActivateControllerAction" ? action : action.child("ActivateControllerAction");
+  const pugi::xml_node assign = action.child("AssignControllerAction");
+  // An absent attribute of an ActivateControllerAction activates its domain, as esmini reads it.
+  const bool longitudinal = activate ? reader.optionalBoolean(activate, "longitudinal").value_or(true)
+                                     : reader.optionalBoolean(assign, "activateLongitudinal").value_or(false);
+  const bool lateral = activate ? reader.optionalBoolean(activate, "lateral").value_or(true)
+                                : reader.optionalBoolean(assign, "activateLateral").value_or(false);
+  if (!longitudinal && !lateral) return;  // nothing activated: the Ego keeps its initial speed and lane
   entity.activatedAtStart = true;
-  translation.findings.note(translation.reader.where(action),
-                            fmt::format("'{}': the Ego's controller drives from t = 0, a scripted road user follows "
+  entity.initDomains = longitudinal && lateral ? "true" : longitudinal ? "longitudinal" : "lateral";
+  translation.findings.note(reader.where(action),
+                            fmt::format("'{}': the Ego's controller drives {}from t = 0, a scripted road user follows "
                                         "its script",
-                                        entity.name));
+                                        entity.name,
+                                        entity.initDomains == "true" ? "" : "its " + entity.initDomains + " domain "));
 }
 
 void readInitAction(Translation& translation, Entity& entity, const pugi::xml_node& private_action) {

@@ -1417,6 +1417,25 @@ void readStoryParameters(Translation& translation, const pugi::xml_node& story, 
                               fmt::format("parameters of Story '{}', in scope inside it", reader.text(story, "name")));
 }
 
+/// An Init that activates one domain of the Ego's controller: the other is keep_lane's from
+/// t = 0 (the Ego follows its script there), a language controller action.
+static void keepInitiallyOffDomain(Translation& translation) {
+  const Entity& ego = *translation.ego;
+  if (!ego.activatedAtStart || ego.initDomains == "true") return;
+  YAML::Node controller = keepLane();
+  controller["domains"] = ego.initDomains == "lateral" ? "longitudinal" : "lateral";
+  YAML::Node item;
+  item["controller"] = controller;
+  item["id"] = identifier("init_" + controller["domains"].as<std::string>() + "_off", translation.usedIds);
+  item["trigger"]["time"] = 0;
+  translation.ego->actions.push_back(item);
+  translation.findings.note(ego.where, fmt::format("the Init activates the Ego's {} domain only: its {} domain is "
+                                                   "'{}' from t = 0 (it keeps its lane or speed)",
+                                                   ego.initDomains, controller["domains"].as<std::string>(),
+                                                   kKeepsItsLane));
+  translation.egoHandedOver = true;
+}
+
 void readStories(Translation& translation, const pugi::xml_node& storyboard) {
   xml::Reader& reader = translation.reader;
   markLateralMotion(translation, storyboard);
@@ -1446,6 +1465,7 @@ void readStories(Translation& translation, const pugi::xml_node& storyboard) {
       translation.egoHandedOver = translation.egoHandedOver || pending.item[kAssignment] || switches;
     }
   }
+  keepInitiallyOffDomain(translation);
   // Triggers after all actions have ids (a condition may name an action of a later Story),
   // each in its Story's parameters.
   for (auto& event : events) {

@@ -58,6 +58,8 @@ struct Entity {
   YAML::Node actions = YAML::Node(YAML::NodeType::Sequence);
   bool movesLaterally = false;
   bool activatedAtStart = false;  ///< the Init activates its controller
+  /// The domains the Init activates: "true" (both), "longitudinal" or "lateral".
+  std::string initDomains = "true";
 
   bool isVehicle() const { return type != RoadUserType::Pedestrian && type != RoadUserType::StationaryObject; }
 };

@@ -1870,8 +1870,21 @@ TEST(OscImport, TheEgosControllerActivationTimeIsItsActiveFrom) {
   std::string early = dataWith("conditions.xosc", "</Act>", activation(timeCondition("3")));
   early.replace(early.find(R"(<Private entityRef="Ego">)"), std::string(R"(<Private entityRef="Ego">)").size(),
                 init_activation);
-  const auto from_start = folderWith({{"early.xosc", early}});
+  std::string lengthwise = early;  // the Init activates the longitudinal domain only (esmini's acc-test)
+  lengthwise.replace(lengthwise.find(R"(lateral="true" longitudinal="true"/></PrivateAction>)"), 34,
+                     R"(lateral="false" longitudinal="true")");
+  const auto from_start = folderWith({{"early.xosc", early}, {"lengthwise.xosc", lengthwise}});
   EXPECT_DOUBLE_EQ(importTemplate(from_start->path() / "early.xosc", {})->ego.controller.activeFrom.evaluate({}), 0.0);
+  // One domain activated in the Init: the other is keep_lane's from t = 0 (the Ego follows its
+  // script there); the activation of both at 3 s hands both to the Ego's own controller.
+  const auto half_from_start = importTemplate(from_start->path() / "lengthwise.xosc", {});
+  ASSERT_EQ(half_from_start->ego.actions.size(), 2u);
+  EXPECT_EQ(half_from_start->ego.actions[0].controller.name, "keep_lane");
+  EXPECT_EQ(half_from_start->ego.actions[0].domains, ControlDomains::Lateral);
+  EXPECT_DOUBLE_EQ(half_from_start->ego.actions[0].trigger.value.evaluate({}), 0.0);
+  EXPECT_EQ(half_from_start->ego.actions[1].controller.name, half_from_start->ego.controller.name);
+  EXPECT_EQ(half_from_start->ego.actions[1].domains, ControlDomains::Both);
+  EXPECT_DOUBLE_EQ(half_from_start->ego.actions[1].trigger.value.evaluate({}), 3.0);
   // So does an AssignControllerAction in the Init that activates both directions (OpenSCENARIO 1.2).
   std::string assigned = dataWith("conditions.xosc", "</Act>", activation(timeCondition("3")));
   assigned.replace(assigned.find(R"(<Private entityRef="Ego">)"), std::string(R"(<Private entityRef="Ego">)").size(),
