@@ -987,13 +987,14 @@ bool startsAtZero(const Translation& translation, const pugi::xml_node& act) {
 /// (a time, with its delay folded in, or actions' ends); nullopt: it never starts.
 std::optional<YAML::Node> actStart(Translation& translation, const pugi::xml_node& node, int index) {
   const Translation::ActRecord& act = translation.acts.at(static_cast<std::size_t>(index));
-  if (startsAtOnce(translation, act.node, /*note_absent=*/false, /*note=*/false) ||
-      startsAtZero(translation, act.node)) {
-    YAML::Node now;
-    now["time"] = 0;
-    return now;
-  }
-  const auto start = followingStarts(translation, node, act.scope, [&] {
+  // Read in the parameters of the Act's Story.
+  const auto start = followingStarts(translation, node, act.scope, [&]() -> std::optional<YAML::Node> {
+    if (startsAtOnce(translation, act.node, /*note_absent=*/false, /*note=*/false) ||
+        startsAtZero(translation, act.node)) {
+      YAML::Node now;
+      now["time"] = 0;
+      return now;
+    }
     return startTrigger(translation, translation.entities.front(), act.node, /*note=*/false);
   });
   if (!start) return std::nullopt;
@@ -1013,8 +1014,10 @@ std::optional<YAML::Node> actEnd(Translation& translation, const pugi::xml_node&
   const std::string& name = act.name;
   for (const std::string& event_name : act.events) {
     const Translation::EventRecord& event = translation.events.at(event_name);
-    if (!event.actor || event.actionIds.empty() ||
-        translation.reader.optionalNumber(event.node, "maximumExecutionCount").value_or(1.0) != 1.0) {
+    const double executions = followingStarts(translation, node, event.scope, [&] {
+      return translation.reader.optionalNumber(event.node, "maximumExecutionCount").value_or(1.0);
+    });
+    if (!event.actor || event.actionIds.empty() || executions != 1.0) {
       translation.reader.fail(node, fmt::format("the end of Act '{}': its Event '{}' is not one run of actions of "
                                                 "scripted road users (the language follows those ends only)",
                                                 name, event_name));
