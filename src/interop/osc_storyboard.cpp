@@ -19,6 +19,13 @@ namespace {
 
 std::string num(double value) { return xml::number(value); }
 
+/// A language trigger (or any node) on one line, as notes and messages show it.
+std::string flowText(const YAML::Node& node) {
+  YAML::Emitter flow;
+  flow << YAML::Flow << node;
+  return flow.c_str();
+}
+
 /// The language's shape of a transition ("shape"); cubic becomes smooth (said once per use).
 std::string shapeOf(Translation& translation, const pugi::xml_node& dynamics, bool step_allowed) {
   const xml::Reader& reader = translation.reader;
@@ -714,12 +721,11 @@ std::optional<YAML::Node> eventStart(Translation& translation, const pugi::xml_n
   if (!start) return std::nullopt;
   const auto usable = timeOrActionEnd(*start);
   if (!usable) {
-    YAML::Emitter flow;
-    flow << YAML::Flow << *start;
+    const std::string flow = flowText(*start);
     reader.fail(condition, fmt::format("the start of Event '{}' ({}) is neither a time nor an action's end: another "
                                        "road user's action cannot follow it (a road user's state is measured by the "
                                        "acting one)",
-                                       name, flow.c_str()));
+                                       name, flow));
   }
   return usable;
 }
@@ -734,12 +740,7 @@ std::optional<YAML::Node> containerState(Translation& translation, const pugi::x
   if (type == "act" && (starts || state == "endTransition" || state == "completeState")) {
     const int act = actNamed(translation, condition, name);
     const auto moment = starts ? actStart(translation, condition, act) : actEnd(translation, condition, act);
-    std::string when = "never";
-    if (moment) {
-      YAML::Emitter flow;
-      flow << YAML::Flow << *moment;
-      when = flow.c_str();
-    }
+    const std::string when = moment ? flowText(*moment) : "never";
     translation.findings.note(reader.where(condition), fmt::format("the {} of Act '{}': {}", starts ? "start" : "end",
                                                                    name, when));
     return moment;
@@ -1104,12 +1105,11 @@ std::optional<YAML::Node> eventTrigger(Translation& translation, const Entity& a
   const Translation::ActRecord& act = translation.acts.at(static_cast<std::size_t>(act_index));
   if (waitsForItsAct(translation, act, *own)) return own;
   if (!at_a_time) {
-    YAML::Emitter flow;
-    flow << YAML::Flow << start;
+    const std::string flow = flowText(start);
     translation.reader.fail(event, fmt::format("an Event with a condition of its own in Act '{}', which starts at {}: "
                                                "the language checks a condition from a time on, or after an action "
                                                "of the same Act",
-                                               act.name, flow.c_str()));
+                                               act.name, flow));
   }
   return fromTime(start, *own);
 }
@@ -1227,11 +1227,10 @@ bool startsAtATime(const YAML::Node& trigger) {
 void activateEgoController(Translation& translation, const pugi::xml_node& event, const YAML::Node& trigger) {
   const xml::Reader& reader = translation.reader;
   if (!startsAtATime(trigger)) {
-    YAML::Emitter flow;
-    flow << YAML::Flow << trigger;
+    const std::string flow = flowText(trigger);
     reader.fail(event, fmt::format("the Ego's ActivateControllerAction starts on {}: the language activates the "
                                    "Ego's controller at a time (its active_from)",
-                                   flow.c_str()));
+                                   flow));
   }
   if (translation.ego->activatedAtStart) {
     translation.findings.note(reader.where(event), "the Ego's controller drives from t = 0 (the Init activates it)");
@@ -1271,11 +1270,10 @@ YAML::Node egoControllerAction(Translation& translation, const PendingEvent& eve
     }
     item["repeat"] = event.executions;
   }
-  YAML::Emitter flow;
-  flow << YAML::Flow << trigger;
+  const std::string flow = flowText(trigger);
   translation.findings.mapped(reader.where(event.node),
                               fmt::format("the Ego is handed to '{}'{} from {}", controller["name"].as<std::string>(),
-                                          domains == "true" ? "" : " for its " + domains + " domain", flow.c_str()));
+                                          domains == "true" ? "" : " for its " + domains + " domain", flow));
   return item;
 }
 
@@ -1495,11 +1493,10 @@ void readStories(Translation& translation, const pugi::xml_node& storyboard) {
         pending.item["trigger"] = *trigger;
         if (event.executions > 1) repeatAction(translation, event, *trigger, pending.item);
         pending.actor->actions.push_back(pending.item);
-        YAML::Emitter flow;
-        flow << YAML::Flow << *trigger;
+        const std::string flow = flowText(*trigger);
         const pugi::xml_node start = event.node.child("StartTrigger");
         translation.findings.mapped(reader.where(start ? start : event.node),
-                                    fmt::format("start of '{}': {}", pending.item["id"].as<std::string>(), flow.c_str()));
+                                    fmt::format("start of '{}': {}", pending.item["id"].as<std::string>(), flow));
       }
     });
   }
