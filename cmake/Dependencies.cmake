@@ -11,6 +11,9 @@ find_package(muparser REQUIRED)
 find_package(HDF5 REQUIRED COMPONENTS C CXX)
 find_package(pugixml REQUIRED)
 find_package(Torch REQUIRED)
+# libdeflate: compresses the HDF5 outputs' chunks (zlib format, what HDF5's deflate filter reads).
+find_package(PkgConfig REQUIRED)
+pkg_check_modules(LIBDEFLATE REQUIRED IMPORTED_TARGET libdeflate)
 
 # libsumo ships headers and libsumocpp.so in Debian's `sumo` package, but no
 # CMake config: wrap it in an imported target.

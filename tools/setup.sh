@@ -18,7 +18,7 @@ packages=(
   # Gloo's headers for torch.distributed's c10d ProcessGroupGloo (data-parallel training)
   libopenmpi-dev openmpi-bin libgloo-dev
   # libraries
-  libeigen3-dev libyaml-cpp-dev libhdf5-dev libcli11-dev libspdlog-dev libfmt-dev libmuparser-dev
+  libeigen3-dev libyaml-cpp-dev libhdf5-dev libdeflate-dev libcli11-dev libspdlog-dev libfmt-dev libmuparser-dev
   nlohmann-json3-dev libssl-dev libpugixml-dev
   # tests and benchmarks
   libgtest-dev libgmock-dev libbenchmark-dev libxml2-utils python3 python3-h5py python3-numpy python3-sklearn python3-pil chromium

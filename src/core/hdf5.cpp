@@ -1,8 +1,10 @@
 #include "vsd/core/hdf5.hpp"
 
 #include <fmt/format.h>
+#include <libdeflate.h>
 
 #include <algorithm>
+#include <memory>
 #include <numeric>
 
 namespace vsd::h5 {
@@ -11,15 +13,51 @@ namespace {
 hsize_t product(const std::vector<hsize_t>& values) {
   return std::accumulate(values.begin(), values.end(), hsize_t{1}, std::multiplies<>());
 }
+
+/// HDF5's shuffle filter: byte b of every element, then byte b + 1, ... (element order kept).
+void shuffleBytes(const unsigned char* in, std::size_t bytes, std::size_t element_size, unsigned char* out) {
+  const std::size_t elements = bytes / element_size;
+  for (std::size_t b = 0; b < element_size; ++b) {
+    unsigned char* row = out + b * elements;
+    for (std::size_t e = 0; e < elements; ++e) row[e] = in[e * element_size + b];
+  }
+}
+
+struct CompressorDeleter {
+  void operator()(libdeflate_compressor* compressor) const { libdeflate_free_compressor(compressor); }
+};
+
+/// A chunk as HDF5's shuffle + deflate filters store it: shuffled, then a zlib stream at
+/// `level`. The buffer is the calling thread's, valid until its next call.
+const std::vector<unsigned char>& deflateChunk(const unsigned char* chunk, std::size_t bytes,
+                                               std::size_t element_size, int level) {
+  thread_local std::unique_ptr<libdeflate_compressor, CompressorDeleter> compressor;
+  thread_local int compressor_level = -1;
+  thread_local std::vector<unsigned char> shuffled;
+  thread_local std::vector<unsigned char> stored;
+  if (!compressor || compressor_level != level) {
+    compressor.reset(libdeflate_alloc_compressor(level));
+    compressor_level = level;
+    if (!compressor) throw std::bad_alloc();
+  }
+  shuffled.resize(bytes);
+  shuffleBytes(chunk, bytes, element_size, shuffled.data());
+  stored.resize(libdeflate_zlib_compress_bound(compressor.get(), bytes));
+  const std::size_t size =
+      libdeflate_zlib_compress(compressor.get(), shuffled.data(), bytes, stored.data(), stored.size());
+  if (size == 0) throw H5::DataSetIException("deflateChunk", "libdeflate could not compress a chunk");
+  stored.resize(size);
+  return stored;
+}
 }  // namespace
 
 template <typename T>
 Appendable<T>::Appendable(H5::Group& parent, const std::string& name, std::vector<hsize_t> row_shape,
                           hsize_t chunk_rows, int deflate_level)
-    : rowShape_(std::move(row_shape)) {
+    : rowShape_(std::move(row_shape)), chunkRows_(std::max<hsize_t>(chunk_rows, 1)), deflateLevel_(deflate_level) {
   std::vector<hsize_t> dims = {0};
   std::vector<hsize_t> max_dims = {H5S_UNLIMITED};
-  std::vector<hsize_t> chunk = {std::max<hsize_t>(chunk_rows, 1)};
+  std::vector<hsize_t> chunk = {chunkRows_};
   for (hsize_t extent : rowShape_) {
     dims.push_back(extent);
     max_dims.push_back(extent);
@@ -29,7 +67,7 @@ Appendable<T>::Appendable(H5::Group& parent, const std::string& name, std::vecto
   H5::DSetCreatPropList properties;
   properties.setChunk(static_cast<int>(chunk.size()), chunk.data());
   if (deflate_level > 0) {
-    properties.setShuffle();
+    properties.setShuffle();  // the order writeWholeChunk applies them in
     properties.setDeflate(deflate_level);
   }
   H5Pset_obj_track_times(properties.getId(), false);
@@ -42,26 +80,72 @@ hsize_t Appendable<T>::rowSize() const {
 }
 
 template <typename T>
+void Appendable<T>::extendTo(hsize_t rows) {
+  std::vector<hsize_t> new_dims = {rows};
+  new_dims.insert(new_dims.end(), rowShape_.begin(), rowShape_.end());
+  dataset_.extend(new_dims.data());
+}
+
+template <typename T>
+void Appendable<T>::writeThroughFilters(const T* data, hsize_t rows) {
+  extendTo(rows_ + rows);
+  H5::DataSpace file_space = dataset_.getSpace();
+  std::vector<hsize_t> start(rowShape_.size() + 1, 0);
+  start[0] = rows_;
+  std::vector<hsize_t> count = {rows};
+  count.insert(count.end(), rowShape_.begin(), rowShape_.end());
+  file_space.selectHyperslab(H5S_SELECT_SET, count.data(), start.data());
+  H5::DataSpace memory_space(static_cast<int>(count.size()), count.data());
+  dataset_.write(data, nativeType<T>(), memory_space, file_space);
+  rows_ += rows;
+}
+
+template <typename T>
+void Appendable<T>::writeWholeChunk(const T* chunk, hsize_t first) {
+  const auto bytes = static_cast<std::size_t>(chunkRows_ * rowSize()) * sizeof(T);
+  const std::vector<unsigned char>& stored =
+      deflateChunk(reinterpret_cast<const unsigned char*>(chunk), bytes, sizeof(T), deflateLevel_);
+  std::vector<hsize_t> offset(rowShape_.size() + 1, 0);
+  offset[0] = first;
+  extendTo(first + chunkRows_);
+  // Filter mask 0: every filter of the dataset was applied. A cached copy of the chunk
+  // (its head, written through the filters) is dropped, not flushed over this one.
+  if (H5Dwrite_chunk(dataset_.getId(), H5P_DEFAULT, 0, offset.data(), stored.size(), stored.data()) < 0) {
+    throw H5::DataSetIException("H5Dwrite_chunk", "writing a chunk failed");
+  }
+  rows_ = first + chunkRows_;
+}
+
+template <typename T>
 void Appendable<T>::append(const T* data, hsize_t rows) {
   if (rows == 0) return;
-  std::vector<hsize_t> new_dims = {rows_ + rows};
-  new_dims.insert(new_dims.end(), rowShape_.begin(), rowShape_.end());
   try {
-    dataset_.extend(new_dims.data());
-    H5::DataSpace file_space = dataset_.getSpace();
-    std::vector<hsize_t> start(new_dims.size(), 0);
-    start[0] = rows_;
-    std::vector<hsize_t> count = new_dims;
-    count[0] = rows;
-    file_space.selectHyperslab(H5S_SELECT_SET, count.data(), start.data());
-    H5::DataSpace memory_space(static_cast<int>(count.size()), count.data());
-    dataset_.write(data, nativeType<T>(), memory_space, file_space);
+    if (deflateLevel_ <= 0) {
+      writeThroughFilters(data, rows);
+      return;
+    }
+    const hsize_t row_size = rowSize();
+    while (rows > 0) {
+      const hsize_t head_rows = rows_ % chunkRows_;
+      const hsize_t take = std::min(chunkRows_ - head_rows, rows);
+      if (head_rows + take < chunkRows_) {  // the chunk stays incomplete: HDF5 compresses it when it is flushed
+        writeThroughFilters(data, take);
+        chunkHead_.insert(chunkHead_.end(), data, data + take * row_size);
+      } else if (head_rows == 0) {
+        writeWholeChunk(data, rows_);
+      } else {  // completes a chunk whose head is in the file already
+        chunkHead_.insert(chunkHead_.end(), data, data + take * row_size);
+        writeWholeChunk(chunkHead_.data(), rows_ - head_rows);
+        chunkHead_.clear();
+      }
+      data += take * row_size;
+      rows -= take;
+    }
   } catch (const H5::Exception& error) {
     // Which array failed, and why (the cause first: the next HDF5 call clears it).
     const std::string cause = errorCause(error);
     throw H5::DataSetIException("append", fmt::format("writing '{}' failed: {}", dataset_.getObjName(), cause));
   }
-  rows_ += rows;
 }
 
 template <typename T>
