@@ -8,7 +8,8 @@ callgrind_run() {
   command -v valgrind >/dev/null ||
     { echo "$(basename "$0"): needs valgrind (apt-get install valgrind)" >&2; exit 1; }
   rm -rf "$1/out" "$1"/cg.*
-  valgrind --tool=callgrind --trace-children=yes --dump-before='*fork' --callgrind-out-file="$1/cg.%p" \
+  hwy_without_rdtscp "$1/hwy"
+  LD_LIBRARY_PATH="$1/hwy${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}" valgrind --tool=callgrind --trace-children=yes --dump-before='*fork' --callgrind-out-file="$1/cg.%p" \
     "$2" --quiet run "$3" --samples "$4" --seed 3 --out "$1/out" >/dev/null 2>"$1/log" ||
     { echo "$(basename "$0"): $2 failed:" >&2; tail -3 "$1/log" >&2; exit 1; }
   processes=$(ls "$1" | sed -n 's/^cg\.\([0-9]*\).*/\1/p' | sort -u | wc -l)
@@ -16,6 +17,28 @@ callgrind_run() {
     echo "$(basename "$0"): $processes processes but no dump at a fork: counts would repeat inherited ones" >&2
     exit 1
   fi
+}
+
+# hwy_without_rdtscp DIR: Debian 12's valgrind (3.19) does not know RDTSCP on AMD processors,
+# and libhwy (which SUMO's library pulls in through libjxl) executes it while it is loaded. On
+# such a host DIR gets a copy of libhwy.so.1 with every RDTSCP replaced by RDTSC + NOP (it only
+# reads a timer; the counts of vsd-sumo's own work do not change); elsewhere DIR stays empty.
+hwy_without_rdtscp() {
+  mkdir -p "$1"
+  grep -q AuthenticAMD /proc/cpuinfo || return 0
+  library=$(ldconfig -p | sed -n 's/.*libhwy\.so\.1 .*=> //p' | head -1)
+  [ -n "$library" ] || return 0
+  cp "$(readlink -f "$library")" "$1/libhwy.so.1"
+  objdump -d "$1/libhwy.so.1" | awk '/\trdtscp/ {sub(":", "", $1); print $1}' | /usr/bin/python3 -c "
+import sys
+path = sys.argv[1]
+data = bytearray(open(path, 'rb').read())
+for line in sys.stdin:
+    at = int(line, 16)
+    if data[at:at + 3] != b'\\x0f\\x01\\xf9':
+        sys.exit('hwy_without_rdtscp: no RDTSCP at %#x in %s' % (at, path))
+    data[at:at + 3] = b'\\x0f\\x31\\x90'
+open(path, 'wb').write(data)" "$1/libhwy.so.1"
 }
 
 # callgrind_total WORK: the instructions of every dump in WORK/cg.* (cg.PID and cg.PID.N): each

@@ -50,8 +50,9 @@ simulating the batches (worker)|vsd::sim::simulateBatch(
 sampling and writing each batch's network (worker)|vsd::pipeline::(anonymous namespace)::BatchProcessor::prepare(
 metrics (worker)|vsd::metrics::MetricSet::evaluate(
 writing concrete.csv, dataset.h5, traces.h5 rows (main)|vsd::pipeline::OutcomeFiles::write(
+  of which compressing whole chunks (libdeflate)|libdeflate_zlib_compress
 closing the HDF5 files (main)|vsd::pipeline::OutcomeFiles::close(
-HDF5's deflate compression, wherever it runs (main)|compress2
+HDF5's own deflate filter (zlib), wherever it runs (main)|compress2
 checksums of the outputs for the manifest (main)|vsd::OutputFolder::commit(
 PARTS
 echo "$total $samples" | awk '{ printf "%-62s %12.1f %14.1f %6.1f%%\n", "the whole run", $1 / 1e6, $1 / 1e3 / $2, 100 }'
