@@ -867,6 +867,29 @@ TEST(OscRun, TriggersWithoutConditionsStartAtOnceAndNeverStop) {
   EXPECT_EQ(error.find('\n'), std::string::npos) << error;
 }
 
+// A second Act of the Slow vehicle: a step to 12 m/s 2 s after the Act "Act" ends, back to
+// 18 m/s 1 s after that step.
+const std::string kLaterAct = R"(<Act name="Later"><ManeuverGroup maximumExecutionCount="1" name="SlowGroup">
+        <Actors selectTriggeringEntities="false"><EntityRef entityRef="Slow"/></Actors>
+        <Maneuver name="SlowManeuver"><Event name="SlowDown2" priority="overwrite"><Action name="SlowStep">
+          <PrivateAction><LongitudinalAction><SpeedAction>
+            <SpeedActionDynamics dynamicsShape="step" dynamicsDimension="time" value="0"/>
+            <SpeedActionTarget><AbsoluteTargetSpeed value="12"/></SpeedActionTarget>
+          </SpeedAction></LongitudinalAction></PrivateAction></Action></Event>
+          <Event name="SpeedUp2" priority="overwrite"><Action name="SlowBack">
+          <PrivateAction><LongitudinalAction><SpeedAction>
+            <SpeedActionDynamics dynamicsShape="step" dynamicsDimension="time" value="0"/>
+            <SpeedActionTarget><AbsoluteTargetSpeed value="18"/></SpeedActionTarget>
+          </SpeedAction></LongitudinalAction></PrivateAction></Action>
+          <StartTrigger><ConditionGroup><Condition name="AfterStep" delay="1" conditionEdge="none"><ByValueCondition>
+            <StoryboardElementStateCondition storyboardElementType="action" storyboardElementRef="SlowStep"
+                                             state="endTransition"/></ByValueCondition></Condition></ConditionGroup>
+          </StartTrigger></Event></Maneuver></ManeuverGroup>
+        <StartTrigger><ConditionGroup><Condition name="AfterAct" delay="2" conditionEdge="none"><ByValueCondition>
+          <StoryboardElementStateCondition storyboardElementType="act" storyboardElementRef="Act"
+                                           state="endTransition"/></ByValueCondition></Condition></ConditionGroup>
+        </StartTrigger></Act>)";
+
 // An Act that starts later checks its Events' conditions from its start on, as OpenSCENARIO
 // does: the Act starts at 3 s (time >= 2, delay 1); the lead's step down (at 20 + t m/s)
 // shows at the instant its Event starts (a time) or at the next (a condition checked at
@@ -893,32 +916,12 @@ TEST(OscRun, AnActThatStartsLaterChecksItsEventsFromThen) {
   };
   std::map<std::string, std::string> files;
   for (const auto& [name, text, seen] : cases) files[name] = text;
-  const std::string later_act = R"(<Act name="Later"><ManeuverGroup maximumExecutionCount="1" name="SlowGroup">
-        <Actors selectTriggeringEntities="false"><EntityRef entityRef="Slow"/></Actors>
-        <Maneuver name="SlowManeuver"><Event name="SlowDown2" priority="overwrite"><Action name="SlowStep">
-          <PrivateAction><LongitudinalAction><SpeedAction>
-            <SpeedActionDynamics dynamicsShape="step" dynamicsDimension="time" value="0"/>
-            <SpeedActionTarget><AbsoluteTargetSpeed value="12"/></SpeedActionTarget>
-          </SpeedAction></LongitudinalAction></PrivateAction></Action></Event>
-          <Event name="SpeedUp2" priority="overwrite"><Action name="SlowBack">
-          <PrivateAction><LongitudinalAction><SpeedAction>
-            <SpeedActionDynamics dynamicsShape="step" dynamicsDimension="time" value="0"/>
-            <SpeedActionTarget><AbsoluteTargetSpeed value="18"/></SpeedActionTarget>
-          </SpeedAction></LongitudinalAction></PrivateAction></Action>
-          <StartTrigger><ConditionGroup><Condition name="AfterStep" delay="1" conditionEdge="none"><ByValueCondition>
-            <StoryboardElementStateCondition storyboardElementType="action" storyboardElementRef="SlowStep"
-                                             state="endTransition"/></ByValueCondition></Condition></ConditionGroup>
-          </StartTrigger></Event></Maneuver></ManeuverGroup>
-        <StartTrigger><ConditionGroup><Condition name="AfterAct" delay="2" conditionEdge="none"><ByValueCondition>
-          <StoryboardElementStateCondition storyboardElementType="act" storyboardElementRef="Act"
-                                           state="endTransition"/></ByValueCondition></Condition></ConditionGroup>
-        </StartTrigger></Act>)";
   std::string two_acts = readTextFile(data("conditions.xosc"));
-  two_acts.insert(two_acts.find("</Act>") + 6, later_act);
+  two_acts.insert(two_acts.find("</Act>") + 6, kLaterAct);
   files["two_acts.xosc"] = two_acts;
   // Acts of one name in two Stories: each keeps its Events; a condition on that name is refused.
   std::string same_names = readTextFile(data("conditions.xosc"));
-  std::string second_story = later_act;
+  std::string second_story = kLaterAct;
   second_story.replace(second_story.find(R"(<Act name="Later">)"), 18, R"(<Act name="Act">)");
   second_story.replace(second_story.find("<StartTrigger><ConditionGroup><Condition name=\"AfterAct\""),
                        second_story.find("</StartTrigger></Act>") + 15 -
@@ -954,6 +957,30 @@ TEST(OscRun, AnActThatStartsLaterChecksItsEventsFromThen) {
   const auto ambiguous = folderWith({{"on_same.xosc", on_same}});
   EXPECT_THAT(test::configErrorOf([&] { importTemplate(ambiguous->path() / "on_same.xosc", {}); }),
               HasSubstr("storyboardElementRef=\"Act\": expected the name of one Act"));
+}
+
+// An Act's start and its Events' execution counts are read in the parameters of the Act's own
+// Story, also where an Act of another Story starts at its end (a Story-scoped `$Runs` does not
+// resolve in the other Story).
+TEST(OscRun, AnActsEndIsReadInItsOwnStorysParameters) {
+  std::string text = readTextFile(data("conditions.xosc"));
+  const std::string story = R"(<Story name="Story">)";
+  text.replace(text.find(story), story.size(), story + R"(<ParameterDeclarations>
+      <ParameterDeclaration name="Runs" parameterType="unsignedInt" value="1"/>
+      <ParameterDeclaration name="Start" parameterType="double" value="0"/></ParameterDeclarations>)");
+  const std::string event = R"(<Event name="SlowDown" priority="overwrite">)";
+  text.replace(text.find(event), event.size(),
+               R"(<Event name="SlowDown" priority="overwrite" maximumExecutionCount="$Runs">)");
+  text.insert(text.find("</Act>"), "<StartTrigger>" + group(R"(<Condition name="a" delay="0" conditionEdge="none">
+      <ByValueCondition><SimulationTimeCondition value="$Start" rule="greaterOrEqual"/></ByValueCondition>
+      </Condition>)") + "</StartTrigger>");
+  text.insert(text.find("</Story>") + 8, R"(<Story name="Second">)" + kLaterAct + "</Story>");
+  const auto folder = folderWith({{"stories.xosc", text}});
+  const auto logical = importTemplate(folder->path() / "stories.xosc", {});
+  const auto& trigger = other(*logical, "Slow").actions.at(0).trigger;  // the first Story's Act's end, + 2 s
+  EXPECT_EQ(trigger.kind, scenario::TriggerSpec::Kind::After);
+  EXPECT_EQ(trigger.action, "StepDown");
+  EXPECT_DOUBLE_EQ(trigger.delay.evaluate({}), 2.0);
 }
 
 TEST(OscImport, ConditionsTheLanguageCannotExpressAreOneLineEach) {
