@@ -8,7 +8,7 @@ callgrind_run() {
   command -v valgrind >/dev/null ||
     { echo "$(basename "$0"): needs valgrind (apt-get install valgrind)" >&2; exit 1; }
   rm -rf "$1/out" "$1"/cg.*
-  hwy_without_rdtscp "$1/hwy"
+  hwy_without_rdtscp "$1/hwy" "$2"
   LD_LIBRARY_PATH="$1/hwy${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}" valgrind --tool=callgrind --trace-children=yes --dump-before='*fork' --callgrind-out-file="$1/cg.%p" \
     "$2" --quiet run "$3" --samples "$4" --seed 3 --out "$1/out" >/dev/null 2>"$1/log" ||
     { echo "$(basename "$0"): $2 failed:" >&2; tail -3 "$1/log" >&2; exit 1; }
@@ -19,15 +19,18 @@ callgrind_run() {
   fi
 }
 
-# hwy_without_rdtscp DIR: Debian 12's valgrind (3.19) does not know RDTSCP on AMD processors,
-# and libhwy (which SUMO's library pulls in through libjxl) executes it while it is loaded. On
-# such a host DIR gets a copy of libhwy.so.1 with every RDTSCP replaced by RDTSC + NOP (it only
-# reads a timer; the counts of vsd-sumo's own work do not change); elsewhere DIR stays empty.
+# hwy_without_rdtscp DIR BIN: Debian 12's valgrind (3.19) does not know RDTSCP on AMD
+# processors, and libhwy (which SUMO's library pulls in through libjxl) executes it while it is
+# loaded. On such a host DIR gets a copy of the libhwy.so.1 BIN loads with every RDTSCP replaced
+# by RDTSC + NOP (it only reads a timer; the counts of vsd-sumo's own work do not change);
+# elsewhere, or if BIN loads no libhwy, DIR stays empty.
 hwy_without_rdtscp() {
   mkdir -p "$1"
   grep -q AuthenticAMD /proc/cpuinfo || return 0
-  library=$(ldconfig -p | sed -n 's/.*libhwy\.so\.1 .*=> //p' | head -1)
+  library=$(ldd "$2" | awk '$1 == "libhwy.so.1" {print $3}')
   [ -n "$library" ] || return 0
+  command -v objdump >/dev/null ||
+    { echo "$(basename "$0"): needs objdump to run valgrind on this AMD host (apt-get install binutils)" >&2; exit 1; }
   cp "$(readlink -f "$library")" "$1/libhwy.so.1"
   objdump -d "$1/libhwy.so.1" | awk '/\trdtscp/ {sub(":", "", $1); print $1}' | /usr/bin/python3 -c "
 import sys

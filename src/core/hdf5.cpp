@@ -27,24 +27,43 @@ struct CompressorDeleter {
   void operator()(libdeflate_compressor* compressor) const { libdeflate_free_compressor(compressor); }
 };
 
+/// A thread's compressors (one per level: a file's arrays may use two levels, and a level-4
+/// compressor takes 0.7 MB to set up) and its buffers for one chunk.
+struct ChunkCompression {
+  static constexpr int kLevels = 13;  // libdeflate: 0 .. 12
+  std::unique_ptr<libdeflate_compressor, CompressorDeleter> compressors[kLevels];
+  std::vector<unsigned char> shuffled;
+  std::vector<unsigned char> stored;
+
+  /// Gives back buffers a large chunk left behind (a run with many road users or instants).
+  void releaseLargeBuffers() {
+    constexpr std::size_t kKept = std::size_t{16} << 20;
+    if (shuffled.capacity() > kKept) std::vector<unsigned char>().swap(shuffled);
+    if (stored.capacity() > kKept) std::vector<unsigned char>().swap(stored);
+  }
+};
+
+ChunkCompression& chunkCompression() {
+  thread_local ChunkCompression compression;
+  return compression;
+}
+
 /// A chunk as HDF5's shuffle + deflate filters store it: shuffled, then a zlib stream at
-/// `level`. The buffer is the calling thread's, valid until its next call.
+/// `level` (1 .. 9, HDF5's range). The buffer is the calling thread's, valid until its next call.
 const std::vector<unsigned char>& deflateChunk(const unsigned char* chunk, std::size_t bytes,
                                                std::size_t element_size, int level) {
-  thread_local std::unique_ptr<libdeflate_compressor, CompressorDeleter> compressor;
-  thread_local int compressor_level = -1;
-  thread_local std::vector<unsigned char> shuffled;
-  thread_local std::vector<unsigned char> stored;
-  if (!compressor || compressor_level != level) {
+  ChunkCompression& compression = chunkCompression();
+  auto& compressor = compression.compressors[std::clamp(level, 0, ChunkCompression::kLevels - 1)];
+  if (!compressor) {
     compressor.reset(libdeflate_alloc_compressor(level));
-    compressor_level = level;
     if (!compressor) throw std::bad_alloc();
   }
-  shuffled.resize(bytes);
-  shuffleBytes(chunk, bytes, element_size, shuffled.data());
+  compression.shuffled.resize(bytes);
+  shuffleBytes(chunk, bytes, element_size, compression.shuffled.data());
+  std::vector<unsigned char>& stored = compression.stored;
   stored.resize(libdeflate_zlib_compress_bound(compressor.get(), bytes));
   const std::size_t size =
-      libdeflate_zlib_compress(compressor.get(), shuffled.data(), bytes, stored.data(), stored.size());
+      libdeflate_zlib_compress(compressor.get(), compression.shuffled.data(), bytes, stored.data(), stored.size());
   if (size == 0) throw H5::DataSetIException("deflateChunk", "libdeflate could not compress a chunk");
   stored.resize(size);
   return stored;
@@ -110,9 +129,9 @@ void Appendable<T>::writeWholeChunk(const T* chunk, hsize_t first) {
   extendTo(first + chunkRows_);
   // Filter mask 0: every filter of the dataset was applied. A cached copy of the chunk
   // (its head, written through the filters) is dropped, not flushed over this one.
-  if (H5Dwrite_chunk(dataset_.getId(), H5P_DEFAULT, 0, offset.data(), stored.size(), stored.data()) < 0) {
-    throw H5::DataSetIException("H5Dwrite_chunk", "writing a chunk failed");
-  }
+  const herr_t written = H5Dwrite_chunk(dataset_.getId(), H5P_DEFAULT, 0, offset.data(), stored.size(), stored.data());
+  chunkCompression().releaseLargeBuffers();
+  if (written < 0) throw H5::DataSetIException("H5Dwrite_chunk", "writing a chunk failed");
   rows_ = first + chunkRows_;
 }
 
@@ -129,8 +148,8 @@ void Appendable<T>::append(const T* data, hsize_t rows) {
       const hsize_t head_rows = rows_ % chunkRows_;
       const hsize_t take = std::min(chunkRows_ - head_rows, rows);
       if (head_rows + take < chunkRows_) {  // the chunk stays incomplete: HDF5 compresses it when it is flushed
-        writeThroughFilters(data, take);
         chunkHead_.insert(chunkHead_.end(), data, data + take * row_size);
+        writeThroughFilters(data, take);
       } else if (head_rows == 0) {
         writeWholeChunk(data, rows_);
       } else {  // completes a chunk whose head is in the file already
@@ -144,8 +163,18 @@ void Appendable<T>::append(const T* data, hsize_t rows) {
   } catch (const H5::Exception& error) {
     // Which array failed, and why (the cause first: the next HDF5 call clears it).
     const std::string cause = errorCause(error);
+    dropUnwrittenHead();
     throw H5::DataSetIException("append", fmt::format("writing '{}' failed: {}", dataset_.getObjName(), cause));
+  } catch (...) {
+    dropUnwrittenHead();
+    throw;
   }
+}
+
+template <typename T>
+void Appendable<T>::dropUnwrittenHead() {
+  // rows_ counts only rows in the file: the head keeps exactly those of the current chunk.
+  chunkHead_.resize(static_cast<std::size_t>((rows_ % chunkRows_) * rowSize()));
 }
 
 template <typename T>

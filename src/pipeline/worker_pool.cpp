@@ -79,13 +79,12 @@ void killGroup(pid_t pid) {
   ::kill(pid, SIGKILL);
 }
 
-/// A sweep's processes allocate and free about the same memory batch after batch (SUMO's
-/// network and road users, a batch's outcomes and output chunks). By default glibc hands
-/// freed memory at the top of the heap, and every block above 128 KiB, back to the kernel,
-/// which returns it page fault by page fault for the next batch: half of a `cut_in` run's
-/// page faults and system time (docs/alks-scenarios.md). Kept (up to 256 MiB; blocks up to
-/// 32 MiB from the heap), it stays at the peak a batch reaches anyway. Forked workers
-/// inherit the setting.
+/// A worker allocates and frees about the same memory batch after batch (SUMO's network and
+/// road users, the batch's scenes). By default glibc hands freed memory at the top of the heap,
+/// and every block above 128 KiB, back to the kernel, which returns it page fault by page fault
+/// for the next batch (docs/alks-scenarios.md). Kept (up to 256 MiB; blocks up to 32 MiB from
+/// the heap), it stays at the peak a batch reaches anyway. Only in the worker: the parent may
+/// go on to train in the same process (`experiment`), where glibc's own policy serves better.
 void keepFreedMemoryForTheNextBatch() {
   ::mallopt(M_MMAP_THRESHOLD, 32 << 20);
   ::mallopt(M_TRIM_THRESHOLD, 256 << 20);
@@ -138,7 +137,6 @@ void WorkerChannel::send(const std::vector<char>& payload) { sendFrame(kData, pa
 WorkerPool::WorkerPool(int workers, Body body, WatchdogOptions watchdog)
     : body_(std::move(body)), watchdog_(watchdog), workers_(static_cast<std::size_t>(workers)), parent_(::getpid()) {
   watchdog_.validate();
-  keepFreedMemoryForTheNextBatch();
   void* shared = ::mmap(nullptr, sizeof(ActivityRecord) * workers_.size(), PROT_READ | PROT_WRITE,
                         MAP_SHARED | MAP_ANONYMOUS, -1, 0);
   if (shared == MAP_FAILED) throw Error(std::string("cannot map memory shared with workers: ") + std::strerror(errno));
@@ -197,6 +195,7 @@ void WorkerPool::spawn(int w) {
     const struct rlimit no_core {0, 0};
     ::setrlimit(RLIMIT_CORE, &no_core);  // a crashing plugin costs a restart, not a core dump per scenario
     ::on_exit(exitWorkerImmediately, nullptr);
+    keepFreedMemoryForTheNextBatch();
     setActivityRecord(record);
     ::close(fds[0]);
     for (const auto& other : workers_) {

@@ -974,13 +974,22 @@ TEST(OscRun, AnActsEndIsReadInItsOwnStorysParameters) {
   text.insert(text.find("</Act>"), "<StartTrigger>" + group(R"(<Condition name="a" delay="0" conditionEdge="none">
       <ByValueCondition><SimulationTimeCondition value="$Start" rule="greaterOrEqual"/></ByValueCondition>
       </Condition>)") + "</StartTrigger>");
-  text.insert(text.find("</Story>") + 8, R"(<Story name="Second">)" + kLaterAct + "</Story>");
-  const auto folder = folderWith({{"stories.xosc", text}});
-  const auto logical = importTemplate(folder->path() / "stories.xosc", {});
+  // The second Story's Act starts at the first's end, or at its start ($Start: t = 0).
+  std::string at_start = kLaterAct;
+  at_start.replace(at_start.rfind(R"(state="endTransition")"), 21, R"(state="startTransition")");
+  const auto second_story = [&](const std::string& act) {
+    return std::string(text).insert(text.find("</Story>") + 8, R"(<Story name="Second">)" + act + "</Story>");
+  };
+  const auto folder = folderWith({{"at_end.xosc", second_story(kLaterAct)}, {"at_start.xosc", second_story(at_start)}});
+  const auto logical = importTemplate(folder->path() / "at_end.xosc", {});
   const auto& trigger = other(*logical, "Slow").actions.at(0).trigger;  // the first Story's Act's end, + 2 s
   EXPECT_EQ(trigger.kind, scenario::TriggerSpec::Kind::After);
   EXPECT_EQ(trigger.action, "StepDown");
   EXPECT_DOUBLE_EQ(trigger.delay.evaluate({}), 2.0);
+  const auto started = importTemplate(folder->path() / "at_start.xosc", {});
+  const auto& at_time = other(*started, "Slow").actions.at(0).trigger;  // the first Story's Act's start, + 2 s
+  EXPECT_EQ(at_time.kind, scenario::TriggerSpec::Kind::Time);
+  EXPECT_DOUBLE_EQ(at_time.value.evaluate({}) + at_time.delay.evaluate({}), 2.0);
 }
 
 TEST(OscImport, ConditionsTheLanguageCannotExpressAreOneLineEach) {

@@ -68,6 +68,8 @@ class Appendable {
   void writeThroughFilters(const T* data, hsize_t rows);
   /// Writes the chunk that starts at row `first` (chunkRows_ full rows), compressed here.
   void writeWholeChunk(const T* chunk, hsize_t first);
+  /// After a failed write: the chunk head holds again only rows that are in the file.
+  void dropUnwrittenHead();
 
   H5::DataSet dataset_;
   std::vector<hsize_t> rowShape_;
