@@ -114,11 +114,11 @@ struct ConcreteScenario {
 ConcreteScenario sampleConcreteScenario(const std::shared_ptr<const LogicalScenario>& logical, std::uint64_t seed,
                                         std::uint64_t index);
 
-/// Lateral offset (m, left positive) of lane `lane`'s centre from the road centre, for
 /// The road lane (0: rightmost) a lane change `action` goes to, from the road user's lane
 /// `own_lane` with the Ego in `ego_lane` (as written: not checked against the road's lanes).
 double laneChangeTarget(const ConcreteAction& action, int own_lane, int ego_lane);
 
+/// Lateral offset (m, left positive) of lane `lane`'s centre from the road centre, for
 /// `lanes` lanes of `lane_width` spread symmetrically around it (lane 0 is rightmost).
 double laneCentreOffset(int lane, int lanes, double lane_width);
 /// The same for lanes of these widths (m, lane 0 rightmost) spread around the road centre
