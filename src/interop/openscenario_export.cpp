@@ -173,6 +173,10 @@ void refuseWhatTheFilesCannotCarry(const scenario::LogicalScenario& logical) {
     if (user->along != scenario::VehicleSpec::Along::X) {
       throw ConfigError(fmt::format("{}: '{}' placed by s, ds or gap rather than x: {}", user->where, user->id, limit));
     }
+    if (user->againstRoad) {
+      throw ConfigError(fmt::format("{}: '{}' drives against the road (direction: against): {}", user->where, user->id,
+                                    limit));
+    }
     if (user->actions.empty()) continue;
     const auto& action = user->actions.front();
     throw ConfigError(fmt::format("{}: action '{}' of '{}': actions and their triggers are not written: {}",

@@ -24,14 +24,40 @@ const double kMinCrossingAngle = 10.0 * kPi / 180.0;
 
 /// One vehicle ahead of the Ego on its lane at one instant, measured along the lane.
 struct LaneLeader {
-  double gap = 0.0;       ///< m: s(front of O) - L_O - s(front of Ego), s = arc length on the lane centre
-  double egoSpeed = 0.0;  ///< m/s
-  double otherSpeed = 0.0;
+  /// m: s(front of O) - L_O - s(front of Ego), s = arc length on the lane centre; for O driving
+  /// against the lane, s(front of O) - s(front of Ego)
+  double gap = 0.0;
+  double egoSpeed = 0.0;    ///< m/s
+  double otherSpeed = 0.0;  ///< m/s along the lane (< 0 against it)
 };
 
 Vec2 frontOf(const VehicleTrack& track, std::size_t k) {
   const auto& state = track.states[k];
   return state.position() + 0.5 * track.length * headingVector(state.heading);
+}
+
+/// Heading more than 120 deg off the lane's direction: a vehicle driving against the lane
+/// (oncoming traffic). A pedestrian crossing (about 90 deg) is not.
+bool againstLane(double heading, double lane_heading) { return std::cos(heading - lane_heading) < -0.5; }
+
+/// Where another vehicle is along the Ego's lane: the far and near ends of it (m of arc
+/// length), and its speed along the lane (m/s, < 0 against it).
+struct AlongLane {
+  double far = 0.0;
+  double near = 0.0;
+  double speed = 0.0;
+};
+
+AlongLane alongLane(const MeasuredPolyline& lane, const VehicleTrack& track, std::size_t k) {
+  const auto& state = track.states[k];
+  const Vec2 front = frontOf(track, k);
+  const PolylineProjection front_foot = lane.project(front);
+  if (!againstLane(state.heading, front_foot.heading)) {
+    return {front_foot.arcLength, front_foot.arcLength - track.length, state.speed};
+  }
+  // Its rear is ahead along the lane, its front faces the Ego.
+  const Vec2 rear = 2.0 * state.position() - front;
+  return {lane.project(rear).arcLength, front_foot.arcLength, -state.speed};
 }
 
 /// Calls visit(leader) for every instant and other vehicle that is ahead on the Ego's lane:
@@ -53,10 +79,12 @@ bool forEachLaneLeader(const MetricContext& context, Visitor&& visit) {
       const VehicleTrack& other = trace.vehicles[v];
       if (!other.validAt(k)) continue;
       any = true;
-      const double other_front = lane.project(frontOf(other, k)).arcLength;
+      const AlongLane other_along = alongLane(lane, other, k);
       const double other_lateral = lane.project(other.states[k].position()).lateralOffset;
-      if (other_front <= ego_front || std::abs(other_lateral - ego_lateral) >= 0.5 * (ego.width + other.width)) continue;
-      visit(LaneLeader{other_front - other.length - ego_front, ego.states[k].speed, other.states[k].speed});
+      if (other_along.far <= ego_front || std::abs(other_lateral - ego_lateral) >= 0.5 * (ego.width + other.width)) {
+        continue;
+      }
+      visit(LaneLeader{other_along.near - ego_front, ego.states[k].speed, other_along.speed});
     }
   }
   return any;

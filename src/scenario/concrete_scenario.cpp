@@ -118,6 +118,16 @@ ConcreteVehicle placeVehicle(const VehicleSpec& spec, const std::vector<double>&
   else vehicle.alongValue = evaluateFinite(spec.alongValue, inputs, spec.where, "s, ds or gap");
   vehicle.offset = evaluateFinite(spec.offset, inputs, spec.where, "offset");
   vehicle.heading = evaluateFinite(spec.headingDeg, inputs, spec.where, "heading_deg") * kPi / 180.0;
+  vehicle.againstRoad = spec.againstRoad;
+  if (vehicle.againstRoad) {
+    // A drawn type is known per sample only (a fixed one is checked at load).
+    if (!roadUserKind(vehicle.type).drivesInLanes) {
+      throw ConfigError(fmt::format("{}.direction: against with type {} in sample {}, expected a vehicle (pedestrians "
+                                    "and objects face by heading_deg)",
+                                    spec.where, roadUserKind(vehicle.type).name, sample));
+    }
+    vehicle.heading = kPi;
+  }
   vehicle.purePursuit = spec.keepsLaneByPurePursuit();
   return vehicle;
 }

@@ -172,6 +172,30 @@ void parseHeadingNoise(const YamlReader& reader, const YAML::Node& vehicle, cons
   }
 }
 
+/// `direction`: along (default) or against the road's direction (oncoming traffic, or an
+/// overtaker on the other side's lane). After the type and the heading noise.
+void parseDirection(const YamlReader& reader, const YAML::Node& item, const std::string& field, VehicleSpec& other) {
+  const YAML::Node node = item["direction"];
+  if (!node) return;
+  const std::string direction = reader.scalar(node, field + ".direction");
+  if (direction != "along" && direction != "against") {
+    throw ConfigError::field(reader.where(node, field + ".direction"), field + ".direction", direction,
+                             "along or against (the road's direction)");
+  }
+  other.againstRoad = direction == "against";
+  if (!other.againstRoad) return;
+  if (!other.typeCode && !roadUserKind(other.type).drivesInLanes) {
+    reader.fail(node, field + ".direction",
+                fmt::format("a {} does not drive in a lane: pedestrians and objects face by heading_deg",
+                            roadUserKind(other.type).name));
+  }
+  if (other.keepsLaneByPurePursuit()) {
+    reader.fail(node, field + ".direction",
+                "a road user with heading_noise_deg keeps its lane by pure pursuit along the road; one driving "
+                "against it moves in the lane frame (drop heading_noise_deg)");
+  }
+}
+
 void parseSpeedProfile(const YamlReader& reader, const YAML::Node& profile, const std::string& field,
                        const std::vector<std::string>& inputs, VehicleSpec& other) {
   reader.checkKeys(profile, field, {"initial", "phases"});
@@ -637,6 +661,7 @@ void parseOther(const YamlReader& reader, const YAML::Node& item, const std::str
   parsePlacement(reader, item, field, /*is_ego=*/false, inputs, scenario, other);
   parseOtherSpeed(reader, item, field, inputs, other);
   parseHeadingNoise(reader, item, field, inputs, other);
+  parseDirection(reader, item, field, other);
   parseActions(reader, item, field, inputs, scenario, other);
 }
 
@@ -781,8 +806,8 @@ void parseRoadUsers(const YamlReader& reader, const YAML::Node& node, LogicalSce
     const auto item = others[i];
     const std::string field = fmt::format("vehicles.others[{}]", i);
     reader.checkKeys(item, field,
-                     {"id", "type", "x", "s", "ds", "gap", "from", "lane", "relative_lane", "offset", "heading_deg", "length", "width",
-                      "reference_point",
+                     {"id", "type", "x", "s", "ds", "gap", "from", "lane", "relative_lane", "offset", "heading_deg", "direction", "length",
+                      "width", "reference_point",
                       "speed_profile", "speed", "relative_speed", "speed_noise", "heading_noise_deg", "actions"});
     VehicleSpec other;
     other.id = item["id"] ? reader.scalar(item["id"], field + ".id") : fmt::format("other{}", i);

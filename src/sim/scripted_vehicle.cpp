@@ -299,19 +299,24 @@ double ScriptedTraffic::Impl::relationValue(const scenario::ConcreteTrigger& tri
   }
   const double gap = std::max(signed_gap, 0.0);
   if (trigger.kind == TriggerSpec::Kind::Gap) return signed_gap;
-  // Speeds along the line; the rear one of the two closes in on the front one.
+  // Each one's speed along the line towards the other (> 0: it closes in; a road user driving
+  // against the road closes in on one behind it in s, as oncoming traffic does).
   const auto along = [&](const VehicleState& state) {
     return state.speed * std::cos(state.heading - projectExtended(egoLane, state.position()).heading);
   };
-  const double rear = self_ahead ? along(other) : along(self);
-  const double front = self_ahead ? along(self) : along(other);
+  const double self_towards = self_ahead ? -along(self) : along(self);
+  const double other_towards = self_ahead ? along(other) : -along(other);
   if (trigger.kind == TriggerSpec::Kind::Headway && trigger.directed) {
-    // OpenSCENARIO's: the subject's to the other, undefined while the other is not ahead of it.
-    const bool of_self = trigger.subject == owner;
-    return of_self != self_ahead && rear > 0.1 ? gap / rear : kInf;
+    // OpenSCENARIO's: the subject's to the other, undefined while the other is not ahead of it
+    // (in the subject's direction of travel).
+    const double towards = trigger.subject == owner ? self_towards : other_towards;
+    return towards > 0.1 ? gap / towards : kInf;
   }
-  if (trigger.kind == TriggerSpec::Kind::Headway) return rear > 0.1 ? gap / rear : kInf;
-  return rear - front > 1e-9 ? gap / (rear - front) : kInf;  // Ttc
+  // The one that closes in (on a head-on approach both do: the faster one).
+  const double follower = std::max(self_towards, other_towards);
+  if (trigger.kind == TriggerSpec::Kind::Headway) return follower > 0.1 ? gap / follower : kInf;
+  const double closing = self_towards + other_towards;
+  return closing > 1e-9 ? gap / closing : kInf;  // Ttc
 }
 
 void ScriptedTraffic::Impl::trackProgress(const VehicleState& ego) {
@@ -319,10 +324,13 @@ void ScriptedTraffic::Impl::trackProgress(const VehicleState& ego) {
   travelled[0] += (ego.position() - lastEgo.position()).norm();
   lastEgo = ego;
   for (std::size_t u = 0; u < travelled.size(); ++u) {
-    if (!std::isnan(atRoadEndSince[u])) continue;  // road users never drive backwards
+    if (!std::isnan(atRoadEndSince[u])) continue;  // road users never reverse
     const VehicleState& state = u == 0 ? ego : states[u - 1];
-    const double length = u == 0 ? concrete->ego.length : concrete->others[u - 1].length;
-    if (frame.coordinates(state.position()).first + 0.5 * length >= regionEndS) atRoadEndSince[u] = now;
+    const scenario::ConcreteVehicle& spec = u == 0 ? concrete->ego : concrete->others[u - 1];
+    const double s = frame.coordinates(state.position()).first;
+    // Its front: ahead along the road, or behind where it drives against it (to the region's start).
+    const bool at_end = spec.againstRoad ? s - 0.5 * spec.length <= regionStartS : s + 0.5 * spec.length >= regionEndS;
+    if (at_end) atRoadEndSince[u] = now;
   }
 }
 
@@ -617,11 +625,13 @@ VehicleState ScriptedTraffic::Impl::advanceExact(Mover& mover) {
   const double d1 = mover.lateral ? mover.lateral->at(t1) : mover.d;
   // s advances with the mean of the speeds at both instants (trapezoid, as the Ego's model),
   // measured along the line at the mean offset (on a bend, lanes differ in length).
-  mover.s += frame.sRate(mover.s, 0.5 * (mover.d + d1), 0.5 * (mover.speedAlong + speed_along)) * step;
+  // Against the road (its heading pi off), s decreases; speeds are magnitudes either way.
+  const double direction = mover.spec->againstRoad ? -1.0 : 1.0;
+  mover.s += direction * frame.sRate(mover.s, 0.5 * (mover.d + d1), 0.5 * (mover.speedAlong + speed_along)) * step;
   mover.d = d1;
   mover.speedAlong = speed_along;
   const double lateral_rate = mover.lateral ? mover.lateral->rate(t1) : 0.0;
-  const Vec2 velocity = frame.velocity(mover.s, mover.d, speed_along, lateral_rate);
+  const Vec2 velocity = frame.velocity(mover.s, mover.d, direction * speed_along, lateral_rate);
   const Vec2 position = frame.point(mover.s, mover.d);
   VehicleState next;
   next.x = position.x();
@@ -700,6 +710,8 @@ bool ScriptedTraffic::pastRoadEnd(std::size_t other) const {
   const Mover& mover = impl_->movers.at(other);
   const double front = 0.5 * mover.spec->length;
   if (mover.spec->purePursuit) return mover.lane.project(mover.state.position()).arcLength + front >= mover.lane.length();
+  // Against the road, its end is the road's start.
+  if (mover.spec->againstRoad) return mover.s - front <= 0.0;
   return mover.s + front >= impl_->frame.length();
 }
 

@@ -156,6 +156,9 @@ TEST(ScenarioCli, BadInputIsOneLineAndLeavesNothingBehind) {
                    "    - {id: a, x: -20, lane: 1, speed: 8,\n"
                    "       actions: [{id: over, lane_change: {lanes: -1, duration: 3}}]}\n";
   const std::string by_s = paper_road + "vehicles:\n  ego: {s: 5, lane: 0, speed: 10, controller: {name: idm}}\n";
+  const std::string oncoming =
+      paper_road + "vehicles:\n  ego: {x: -50, lane: 0, speed: 10, controller: {name: idm}}\n  others:\n"
+                   "    - {id: a, x: 20, lane: 1, speed: 8, direction: against}\n";
   const std::string late =
       paper_road + "vehicles:\n  ego: {x: -50, lane: 0, speed: 10, controller: {name: idm, active_from: 3}}\n";
   const std::vector<std::pair<fs::path, std::string>> refused = {
@@ -163,6 +166,8 @@ TEST(ScenarioCli, BadInputIsOneLineAndLeavesNothingBehind) {
       {test::writeFile(dir.path() / "by_s.yaml", "name: by_s\n" + by_s), "'ego' placed by s, ds or gap rather than x"},
       {test::writeFile(dir.path() / "actions.yaml", "name: actions\n" + with_actions),
        "action 'over' of 'a': actions and their triggers are not written"},
+      {test::writeFile(dir.path() / "oncoming.yaml", "name: oncoming\n" + oncoming),
+       "'a' drives against the road (direction: against)"},
       {test::writeFile(dir.path() / "late.yaml", "name: late\n" + late),
        "controller.active_from 3: the Ego's scripted phase is not written"}};
   for (const auto& [file, message] : refused) {

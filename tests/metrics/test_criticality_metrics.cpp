@@ -65,6 +65,22 @@ TEST(CriticalityMetrics, FollowingOnAStraightLane) {
   EXPECT_EQ(evaluate("drac_max", trace, lane), 0.0);
 }
 
+TEST(CriticalityMetrics, AnOncomingVehicleOnTheEgosLaneClosesInWithBothSpeeds) {
+  Trace trace;
+  trace.step = kStep;
+  // Centres 30 m apart, the other heading back along the lane at 6 m/s: its front (at 27.5 m)
+  // faces the Ego's (at 2.5 m), 25 m apart, closing at 16 m/s.
+  trace.vehicles = {straight({0.0, 0.0}, 0.0, 10.0, 1), straight({30.0, 0.0}, kPi, 6.0, 1)};
+  const Polyline lane = {{-50.0, 0.0}, {200.0, 0.0}};
+  EXPECT_NEAR(evaluate("gap_min_lane", trace, lane), 25.0, 1e-12);
+  EXPECT_NEAR(evaluate("ttc_min_lane", trace, lane), 25.0 / 16.0, 1e-12);
+  EXPECT_NEAR(evaluate("thw_min_lane", trace, lane), 2.5, 1e-12);
+  EXPECT_NEAR(evaluate("drac_max_lane", trace, lane), 256.0 / 50.0, 1e-12);
+  // Standing, it is an obstacle as one facing along the lane would be.
+  trace.vehicles[1] = straight({30.0, 0.0}, kPi, 0.0, 1);
+  EXPECT_NEAR(evaluate("ttc_min_lane", trace, lane), 2.5, 1e-12);
+}
+
 TEST(CriticalityMetrics, LaneGapFollowsTheArcWhereTheStraightGapTakesTheChord) {
   // Both on a circle of radius 50 m, fronts 20 m of arc apart.
   const double radius = 50.0;

@@ -6,6 +6,7 @@
 
 #include "test_support.hpp"
 #include "vsd/core/error.hpp"
+#include "vsd/core/geometry.hpp"
 #include "vsd/scenario/concrete_scenario.hpp"
 
 using namespace vsd;
@@ -213,6 +214,40 @@ TEST(RoadUsers, LateralActionsNeedTheExactModel) {
   const auto error = errorOf(R"(    - {id: a, gap: 20, relative_lane: 0, speed: 5, heading_noise_deg: {min: -1, max: 1},
        actions: [{trigger: {time: 1}, lane_change: {lanes: 1, duration: 3}}]})");
   EXPECT_NE(error.find("keeps its lane by pure pursuit"), std::string::npos) << error;
+}
+
+TEST(RoadUsers, AVehicleDrivesAgainstTheRoadFacingBack) {
+  const auto logical = parseLogicalScenario(yamlWith(R"(    - {id: a, gap: 50, relative_lane: 1, direction: against, speed: 5}
+    - {id: b, gap: 80, relative_lane: 1, direction: along, speed: 5}
+    - {id: c, type: model, gap: 110, relative_lane: 0, direction: against, speed: 5})",
+                                                     "{name: model, choices: [car, pedestrian]}"),
+                                            "oncoming.yaml");
+  // A drawn type that is no vehicle is refused in the sample that draws it.
+  std::string drawn_error;
+  int cars = 0;
+  for (std::uint64_t sample = 0; sample < 20; ++sample) {
+    try {
+      const auto concrete = sampleConcreteScenario(logical, 1, sample);
+      EXPECT_TRUE(concrete.others[0].againstRoad);
+      EXPECT_DOUBLE_EQ(concrete.others[0].heading, kPi);
+      EXPECT_FALSE(concrete.others[1].againstRoad);
+      EXPECT_DOUBLE_EQ(concrete.others[1].heading, 0.0);
+      EXPECT_EQ(concrete.others[2].type, RoadUserType::Car);
+      ++cars;
+    } catch (const ConfigError& error) {
+      drawn_error = error.what();
+    }
+  }
+  EXPECT_GT(cars, 0);
+  EXPECT_NE(drawn_error.find("direction: against with type pedestrian in sample"), std::string::npos) << drawn_error;
+
+  const auto bad = errorOf("    - {id: a, gap: 20, relative_lane: 1, direction: backwards, speed: 5}");
+  EXPECT_NE(bad.find("direction: got 'backwards', expected along or against"), std::string::npos) << bad;
+  const auto walker = errorOf("    - {id: p, type: pedestrian, gap: 20, relative_lane: 1, direction: against}");
+  EXPECT_NE(walker.find("a pedestrian does not drive in a lane"), std::string::npos) << walker;
+  const auto noisy =
+      errorOf("    - {id: a, gap: 20, relative_lane: 1, direction: against, speed: 5, heading_noise_deg: {min: -1, max: 1}}");
+  EXPECT_NE(noisy.find("keeps its lane by pure pursuit along the road"), std::string::npos) << noisy;
 }
 
 TEST(RoadUsers, BadRelativeSpeedsAndReferencePointsAreRefused) {

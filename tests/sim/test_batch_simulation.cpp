@@ -1,5 +1,7 @@
 #include <gtest/gtest.h>
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -9,10 +11,12 @@
 #include "extension/steady_brake_controller.hpp"
 #include "test_support.hpp"
 #include "vsd/core/error.hpp"
+#include "vsd/core/files.hpp"
 #include "vsd/road/network.hpp"
 #include "vsd/sim/batch_simulation.hpp"
 #include "vsd/sim/builtin_controllers.hpp"
 #include "vsd/sim/ego_driver.hpp"
+#include "vsd/sim/scripted_vehicle.hpp"
 
 using namespace vsd;
 using namespace vsd::sim;
@@ -223,6 +227,53 @@ TEST(BatchSimulation, AVehicleReachingTheEndOfItsRoadFailsOnlyItsScenario) {
   }
   EXPECT_GT(failed, 0);
   EXPECT_LT(failed, 40);
+}
+
+// A vehicle driving against the road (on the left lane, facing back) is simulated where the
+// stepper plans it, SUMO holds it on its lane moving back along it, and it leaves the road at
+// the road's start: its front (s = 180 - 2.5 m from the lead-in's start) gets there after 8.875 s.
+TEST(BatchSimulation, AVehicleDrivingAgainstTheRoadIsSimulatedAsPlannedAndLeavesAtTheRoadsStart) {
+  const auto scenario_of = [](double duration) {
+    return scenario::parseLogicalScenario(fmt::format(R"(
+name: oncoming
+time: {{step: 0.2, duration: {}}}
+road: {{shape: arc, curvature: 0, length: 200, lanes: 2, extension: {{before: 30, after: 150}}}}
+vehicles:
+  ego: {{s: 20, lane: 0, speed: 10, controller: {{name: idm, params: {{set_speed: 10}}}}}}
+  others:
+    - {{id: oncoming, s: 150, lane: 1, length: 5, direction: against, speed: 20}}
+)",
+                                                      duration),
+                                          "oncoming.yaml");
+  };
+  TemporaryDirectory dir;
+  const Batch batch(scenario_of(6.0), 1, dir.path(), ControllerRegistry::withBuiltins(), dir.path() / "fcd.xml");
+  const auto& result = batch.results[0];
+  ASSERT_TRUE(result.ok()) << result.failure;
+  const auto planned = plannedPaths(batch.scenarios[0], batch.roads[0]);
+  const auto& track = result.trace.vehicles[1];
+  for (std::size_t k = 0; k < track.states.size(); ++k) {
+    EXPECT_EQ(track.states[k].x, planned[0][k].x) << k;
+    EXPECT_EQ(track.states[k].heading, planned[0][k].heading) << k;
+  }
+  EXPECT_NEAR(track.states.back().x, 150.0 - 20.0 * 6.0, 1e-9);
+  // SUMO's picture: on lane 1 of the road's edge, 20 m further back along it every second.
+  const std::string fcd = readTextFile(dir.path() / "fcd.xml");
+  const std::regex at_one(R"re(time="1.00">[\s\S]*?id="s0.oncoming"[^>]*pos="([0-9.]+)" lane="s0_1")re");
+  const std::regex at_two(R"re(time="2.00">[\s\S]*?id="s0.oncoming"[^>]*pos="([0-9.]+)" lane="s0_1")re");
+  std::smatch one;
+  std::smatch two;
+  ASSERT_TRUE(std::regex_search(fcd, one, at_one));
+  ASSERT_TRUE(std::regex_search(fcd, two, at_two));
+  EXPECT_NEAR(std::stod(one[1]) - std::stod(two[1]), 20.0, 0.01);
+
+  TemporaryDirectory long_dir;
+  const Batch longer(scenario_of(10.0), 1, long_dir.path());
+  EXPECT_NE(longer.results[0].failure.find("vehicle 'oncoming' reached the end of its road"), std::string::npos)
+      << longer.results[0].failure;
+  const auto& left = longer.results[0].trace.vehicles[1];
+  EXPECT_TRUE(left.validAt(44));    // 8.8 s
+  EXPECT_FALSE(left.validAt(45));   // 9.0 s
 }
 
 namespace {

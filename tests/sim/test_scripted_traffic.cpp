@@ -146,6 +146,50 @@ TEST(ScriptedTraffic, AHeadwayOfOneRoadUserIsUndefinedWhileTheOtherIsNotAheadOfI
   EXPECT_NEAR(timings[3].start, 1.2, 1e-9);
 }
 
+// Road users driving against the road (oncoming traffic on lane 2, an overtaker behind a slow
+// one, a vehicle leaving at the road's start) move back along it, facing back, and their
+// relations count the speeds with which they close in. Straight road: x = s.
+TEST(ScriptedTraffic, RoadUsersDrivingAgainstTheRoadMoveBackAlongItAndCloseInOnWhatIsAhead) {
+  const std::string mark = "lateral_offset: {offset: 0, duration: 0.2}";
+  const auto logical = scenarioWith(fmt::format(R"(
+    - {{id: oncoming, s: 130, lane: 2, length: 5, direction: against, speed: 10,
+       actions: [{{id: ttc3, trigger: {{ttc: 3}}, {0}}},
+                 {{id: own_headway, trigger: {{headway: 2, of: oncoming}}, {0}}},
+                 {{id: egos_headway, trigger: {{headway: 1, of: ego}}, {0}}}]}}
+    - {{id: overtaker, s: 200, lane: 1, length: 5, direction: against, speed: 20,
+       actions: [{{id: closing, trigger: {{ttc: 1, to: slow}}, lane_change: {{lane: 2, duration: 2}}}},
+                 {{id: to_slow, trigger: {{headway: 1, of: overtaker, to: slow}}, {0}}},
+                 {{id: slows_own, trigger: {{headway: 100, of: slow, to: slow}}, {0}}}]}}
+    - {{id: slow, s: 170, lane: 2, length: 5, direction: against, speed: 10}}
+    - {{id: leaver, s: 8, lane: 0, length: 5, direction: against, speed: 10,
+       actions: [{{id: left, trigger: {{end_of_road: 0}}, {0}}}]}})",
+                                                mark),
+                                    0.0, 6.0);
+  const Planned run = plan(logical);
+  const auto& oncoming = run.paths[0];
+  EXPECT_NEAR(oncoming[0].x, 130.0, 1e-9);
+  EXPECT_NEAR(oncoming[10].x, 110.0, 1e-9);  // 2 s at 10 m/s
+  EXPECT_NEAR(std::abs(wrapAngle(oncoming[10].heading)), kPi, 1e-9);
+  EXPECT_NEAR(oncoming[10].speed, 10.0, 1e-9);
+  EXPECT_NEAR(offsetOf(run.road, oncoming[10]), run.road.laneOffset(2), 1e-9);
+  const auto timings = timingsAfter(run, 30);
+  std::map<std::string, double> start;
+  for (std::size_t a = 0; a < run.concrete.actions.size(); ++a) start[run.concrete.actions[a].id] = timings[a].start;
+  // Against the stand-in Ego at 10 m/s: bumpers 95 m apart, closing at 20 m/s.
+  EXPECT_NEAR(start["ttc3"], 1.8, 1e-9);          // (95 - 20 t) / 20 <= 3 from t = 1.75
+  EXPECT_NEAR(start["own_headway"], 3.8, 1e-9);   // (95 - 20 t) / 10 <= 2 from t = 3.75
+  EXPECT_NEAR(start["egos_headway"], 4.4, 1e-9);  // (95 - 20 t) / 10 <= 1 from t = 4.25: instant 4.4
+  // The overtaker 25 m behind the slow one, closing at 10 m/s.
+  EXPECT_NEAR(start["closing"], 1.6, 1e-9);  // (25 - 10 t) / 10 <= 1 from t = 1.5
+  EXPECT_NEAR(start["to_slow"], 0.6, 1e-9);  // (25 - 10 t) / 20 <= 1 from t = 0.5
+  // The slow one's own headway is undefined while the overtaker is behind it (in its direction of
+  // travel): it holds once the overtaker draws level, 200 - 20 t = 170 - 10 t at 3 s.
+  EXPECT_NEAR(start["slows_own"], 3.0, 1e-9);
+  EXPECT_NEAR(offsetOf(run.road, run.paths[1][30]), run.road.laneOffset(2), 1e-9);  // changed lanes by 3.6 s
+  // The leaver's front (at 5.5 m) reaches the region's start at 0.55 s.
+  EXPECT_NEAR(start["left"], 0.6, 1e-9);
+}
+
 TEST(ScriptedTraffic, APedestrianCrossesAtItsSpeedFacingAcross) {
   const auto logical = scenarioWith(R"(
     - {id: walker, type: pedestrian, gap: 30, relative_lane: 0, offset: -4, heading_deg: 90,

@@ -70,7 +70,8 @@ struct ConcreteVehicle {
   double alongValue = 0.0;  ///< m, s, ds or gap (VehicleSpec::Along)
   int alongFrom = -1;       ///< ds and gap count from: -1 = the Ego, else an earlier index into `others`
   double offset = 0.0;  ///< m, lateral offset from the lane centre at the start, > 0 left
-  double heading = 0.0; ///< rad, relative to the road's direction at the start
+  double heading = 0.0; ///< rad, relative to the road's direction at the start (pi: against the road)
+  bool againstRoad = false;  ///< drives against the road's direction, s decreasing (VehicleSpec::againstRoad)
   double speed = 0.0;   ///< m/s, initial speed
   /// Non-Ego vehicles: scripted speed (m/s, >= 0, noise included) at every instant t_k, k = 0..steps,
   /// before any speed action.

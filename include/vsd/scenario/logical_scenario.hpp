@@ -249,6 +249,9 @@ struct VehicleSpec {
   bool laneRelativeToEgo = false;  ///< laneExpression counts from the Ego's lane (+1: left of it)
   Expression offset;       ///< m, lateral offset from the lane centre, > 0 left
   Expression headingDeg;   ///< deg, heading relative to the road's direction (pedestrians, objects)
+  /// Others that drive in lanes (`direction: against`): it drives against the road's direction,
+  /// s decreasing (oncoming traffic, or an overtaker on the Ego's lane); default along it.
+  bool againstRoad = false;
   double length = 0.0;     ///< m, from the type's table entry unless given
   double width = 0.0;      ///< m
   /// m ahead of its centre along its heading (< 0 behind; within half its length): the point
