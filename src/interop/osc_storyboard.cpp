@@ -71,14 +71,16 @@ YAML::Node laneTarget(Translation& translation, const Entity& actor, const pugi:
   }
   const std::string reference = reader.text(target, "entityRef");
   const long lanes = reader.integer(target, "value", -100, 100);
+  // Lanes left (+) of the reference entity as it faces; the language counts to the road's left.
+  const auto road_lanes = [&](const Entity& entity) { return entity.drivesAgainstRoad() ? -lanes : lanes; };
   if (reference == actor.name) {
-    item["lanes"] = std::to_string(lanes);
+    item["lanes"] = std::to_string(road_lanes(actor));
   } else if (reference == translation.ego->name) {
     item["ego_lane"] = std::to_string(lanes);
   } else {
     const Entity& other = translation.entity(target, reference);
     if (other.movesLaterally) reader.fail(target, fmt::format("a lane relative to '{}', who changes lanes", reference));
-    item["lane"] = std::to_string(other.placement->lane + lanes);
+    item["lane"] = std::to_string(other.placement->lane + road_lanes(other));
   }
   return item;
 }

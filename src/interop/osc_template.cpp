@@ -214,6 +214,26 @@ YAML::Node centreLineNode(const CarriagewayRoad& road) {
   return points;
 }
 
+/// m of straight road before the region: where vehicles drive against the road, they leave the
+/// file's road at its start; vsd-sumo's goes on straight there for as far as each of them
+/// drives over the duration at its initial speed (at least 150 m, as after the road's end).
+/// 0 where none does.
+double extensionBefore(Translation& translation) {
+  double needed = -1.0;
+  for (const Entity& entity : translation.entities) {
+    if (&entity == translation.ego || !entity.drivesAgainstRoad()) continue;
+    const double s = languagePlace(translation.road, entity, true).s;
+    needed = std::max(needed, entity.speed.value_or(0.0) * translation.duration + 0.5 * entity.length - s);
+  }
+  if (needed < 0.0) return 0.0;
+  const double before = std::clamp(std::ceil(needed), 150.0, kMaxExtension);
+  translation.findings.note(translation.road.file.string(),
+                            fmt::format("vehicles drive against the road: vsd-sumo's road starts {} m before the "
+                                        "file's, straight, where they leave it",
+                                        num(before)));
+  return before;
+}
+
 YAML::Node roadNode(Translation& translation) {
   const CarriagewayRoad& road = translation.road;
   const double length = road.languageS(road.length);
@@ -235,7 +255,7 @@ YAML::Node roadNode(Translation& translation) {
   }
   node["shoulders"]["left"] = num(road.shoulderLeft);
   node["shoulders"]["right"] = num(road.shoulderRight);
-  node["extension"]["before"] = "0";
+  node["extension"]["before"] = num(extensionBefore(translation));
   node["extension"]["after"] = num(std::clamp(length - region, 150.0, kMaxExtension));
   if ((!road.oneCurvature || road.curvature != 0.0) && length > region + 1e-6) {
     translation.findings.note(fmt::format("{}", road.file.string()),
@@ -260,10 +280,13 @@ YAML::Node roadUserNode(Translation& translation, const Entity& entity, bool ego
   node["s"] = num(place.s);
   node["lane"] = std::to_string(place.lane);
   const double heading_deg = entity.placement->heading * 180.0 / kPi;
-  if (ego || entity.isVehicle()) {
+  if (!ego && entity.drivesAgainstRoad()) {
+    node["direction"] = "against";
+  } else if (ego || entity.isVehicle()) {
     if (std::abs(heading_deg) > 0.01) {
-      throw ConfigError(fmt::format("{}: '{}' starts {} deg off the road's direction: the language's vehicles start "
-                                    "along it", entity.where, entity.name, num(heading_deg)));
+      throw ConfigError(fmt::format("{}: '{}' starts {} deg off the road's direction: the language's {} along it{}",
+                                    entity.where, entity.name, num(heading_deg),
+                                    ego ? "Ego drives" : "vehicles drive", ego ? "" : " or against it (180 deg)"));
     }
   } else if (heading_deg != 0.0) {
     node["heading_deg"] = num(heading_deg);
@@ -443,8 +466,9 @@ void chooseCarriageway(Translation& translation, const pugi::xml_node& root) {
             ? fmt::format("lane 1 (left of the reference line, no median) is the language's lane {}", road.rightLanes())
             : fmt::format("lanes 1 .. {} (left of the reference line, no median) are the language's lanes {} .. {}",
                           road.adjoiningLeftLanes, road.rightLanes(), road.lanes - 1);
-    translation.findings.mapped(
-        road.otherSide, which + ", driven along the reference line: the scenario places or moves road users there");
+    translation.findings.mapped(road.otherSide,
+                                which + ": the scenario places or moves road users there (each drives as the file "
+                                        "heads it: along the reference line, or against it as oncoming traffic)");
     return;
   }
   translation.findings.note(road.otherSide,

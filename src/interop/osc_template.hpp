@@ -11,6 +11,7 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include <cmath>
 #include <filesystem>
 #include <map>
 #include <memory>
@@ -62,6 +63,11 @@ struct Entity {
   std::string initDomains = "true";
 
   bool isVehicle() const { return type != RoadUserType::Pedestrian && type != RoadUserType::StationaryObject; }
+  /// A vehicle placed facing back along the road (within 0.01 deg of 180): it drives against
+  /// it (`direction: against`). Once placed.
+  bool drivesAgainstRoad() const {
+    return isVehicle() && placement && std::abs(std::abs(placement->heading) - kPi) <= 0.01 * kPi / 180.0;
+  }
 };
 
 /// The vsd-sumo controller that drives the Ego.

@@ -1442,7 +1442,7 @@ std::unique_ptr<TemporaryDirectory> twoWayCutIn(const std::string& left_width, c
 // esmini's ALKS cut-ins start the cutter on lane 1 of a road with one lane each way, turned
 // (relative h = pi) to drive along the reference line: those left lanes join the language's
 // road, numbered after the right side's (each with its own width); a vehicle facing lane
-// 1's own direction (against the reference line) stays refused. By hand: the language's road
+// 1's own direction (against the reference line) is oncoming traffic. By hand: the language's road
 // centre is the reference line (lanes -1 and 1 both 3.5 m), lane 0's centre at y = -1.75; the cutter cuts into it and
 // swerves 0.5 m left (ScriptedRoadUsersEndWhereTheFileSays): it ends at y = -1.25, 10 m/s.
 TEST(OscRun, LeftLanesDrivenAlongTheReferenceLineJoinTheRoad) {
@@ -1456,17 +1456,36 @@ TEST(OscRun, LeftLanesDrivenAlongTheReferenceLineJoinTheRoad) {
   EXPECT_EQ(logical->ego.lane, 0);
   EXPECT_EQ(other(*logical, "Cutter").lane, 1);
   EXPECT_THAT(checkOpenScenario(folder->path() / "two_way.xosc", {}).report(),
-              HasSubstr("<left>: lane 1 (left of the reference line, no median) is the language's lane 1, driven "
-                        "along the reference line"));
+              HasSubstr("<left>: lane 1 (left of the reference line, no median) is the language's lane 1: the "
+                        "scenario places or moves road users there"));
   const auto cutter = simulatedTrack(folder->path() / "two_way.xosc", "Cutter");
   ASSERT_TRUE(cutter);
   EXPECT_NEAR(cutter->states.front().y, 1.75, 1e-6);
   EXPECT_NEAR(cutter->states.back().y, -1.25, 0.2);
   EXPECT_NEAR(cutter->states.back().speed, 10.0, 0.2);
 
-  const auto facing_its_lane = twoWayCutIn("3.5", R"(<LanePosition roadId="7" laneId="1" s="60" offset="0"/>)");
-  EXPECT_THAT(test::configErrorOf([&] { importTemplate(facing_its_lane->path() / "two_way.xosc", {}); }),
-              HasSubstr("'Cutter' starts 180 deg off the road's direction"));
+  // Facing lane 1's own direction, it is oncoming traffic (drives against the road), and its lane
+  // change one lane to its own left goes to the road's lane 0.
+  auto facing_its_lane = twoWayCutIn("3.5", R"(<LanePosition roadId="7" laneId="1" s="60" offset="0"/>)");
+  const fs::path facing = facing_its_lane->path() / "two_way.xosc";
+  std::string text = readTextFile(facing);
+  const std::string to_ego = R"(<RelativeTargetLane entityRef="Ego" value="0"/>)";
+  ASSERT_NE(text.find(to_ego), std::string::npos);
+  text.replace(text.find(to_ego), to_ego.size(), R"(<RelativeTargetLane entityRef="Cutter" value="1"/>)");
+  test::writeFile(facing, text);
+  const auto oncoming = importTemplate(facing, {});
+  EXPECT_TRUE(other(*oncoming, "Cutter").againstRoad);
+  EXPECT_EQ(other(*oncoming, "Cutter").lane, 1);
+  // It leaves the file's road at its start: vsd-sumo's road goes on straight before it.
+  EXPECT_GE(oncoming->road.extensionBefore, 150.0);
+  const auto towards = simulatedTrack(facing, "Cutter");
+  ASSERT_TRUE(towards);
+  EXPECT_NEAR(towards->states.front().y, 1.75, 1e-6);
+  EXPECT_NEAR(std::abs(wrapAngle(towards->states.front().heading)), kPi, 1e-6);
+  EXPECT_LT(towards->states[10].x, towards->states.front().x);
+  // On lane 0 (y = -1.75) after its lane change, then its swerve of 0.5 m along t (as esmini
+  // reads lane offsets, whichever way a road user faces).
+  EXPECT_NEAR(towards->states.back().y, -1.25, 0.2);
   // A left lane of another width joins as well, with its own width.
   const auto other_width = twoWayCutIn("3.25", turned);
   const auto wider = importTemplate(other_width->path() / "two_way.xosc", {});
@@ -1662,10 +1681,10 @@ TEST(OscRun, ARoadDrivenOnItsLeftSideIsTheLanguagesRoad) {
   // Facing its lane's own direction on a right-hand road, the Ego drives against the reference
   // line: the road reversed (TheLeftSideDrivenAgainstTheReferenceLineIsTheLanguagesRoad); the
   // overtaker, placed by ds without an orientation, faces along the file's reference line (as
-  // esmini places it): the wrong way. In left-hand traffic, the right side is driven against it.
+  // esmini places it): the wrong way, as oncoming traffic on the Ego's road. In left-hand
+  // traffic, the right side is driven against it.
   const auto rht_facing = leftSideOvertake("RHT", R"(<LanePosition roadId="3" laneId="3" s="100" offset="0"/>)");
-  EXPECT_THAT(test::configErrorOf([&] { importTemplate(rht_facing->path() / "overtake.xosc", {}); }),
-              HasSubstr("'Overtaker' starts 180 deg off the road's direction"));
+  EXPECT_TRUE(other(*importTemplate(rht_facing->path() / "overtake.xosc", {}), "Overtaker").againstRoad);
   const auto lht_right = leftSideOvertake("LHT", R"(<LanePosition roadId="3" laneId="-2" s="100" offset="0"/>)");
   EXPECT_THAT(test::configErrorOf([&] { importTemplate(lht_right->path() / "overtake.xosc", {}); }),
               HasSubstr("laneId -2: expected a driving lane of the road's left side, 2 .. 3, driven along the "
