@@ -276,16 +276,20 @@ class BatchRun {
   /// the Ego's sensors see them there.
   void addOthers(std::size_t m, Member& member) {
     const auto& others = member.run->scenario->others;
+    std::vector<std::string> against_road;
     for (std::size_t o = 0; o < others.size(); ++o) {
       const auto& other = others[o];
       const std::string id = member.edge + "." + other.id;
       addSumoVehicle(id, member.route, other);
-      placeInSumo(id, member.traffic->states()[o], other.length, other.width, member.run->offset, member.placement);
+      placeInSumo(id, member.traffic->states()[o], other.length, other.width, member.run->offset, member.placement,
+                  other.againstRoad);
       member.otherIds.push_back(id);
       owner_.emplace(id, m);
       expected_.insert(id);
       initTrack(member.result.trace.vehicles[1 + o], other, VehicleRole::Other, instants_);
+      if (other.againstRoad) against_road.push_back(id);
     }
+    if (!against_road.empty()) member.ego->knowAgainstRoad(std::move(against_road));
   }
 
   /// A vehicle SUMO neither drives nor changes lanes for: vsd-sumo places it every step.
@@ -349,7 +353,7 @@ class BatchRun {
       // Placed every step, standing or not: left alone, SUMO would turn a standing road
       // user back along its lane.
       placeInSumo(member.otherIds[o], member.traffic->states()[o], others[o].length, others[o].width, member.run->offset,
-                  member.placement);
+                  member.placement, others[o].againstRoad);
     }
   }
 

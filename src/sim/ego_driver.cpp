@@ -97,8 +97,9 @@ bool sumoIgnoresLateralPositions() {
 }
 
 void placeInSumo(const std::string& vehicle_id, const VehicleState& state, double length, double width,
-                 const Vec2& offset, const SumoPlacement& placement) {
-  const Vec2 front = state.position() + 0.5 * length * headingVector(state.heading);
+                 const Vec2& offset, const SumoPlacement& placement, bool against_road) {
+  const double ahead = against_road ? -0.5 * length : 0.5 * length;
+  const Vec2 front = state.position() + ahead * headingVector(state.heading);
   const Vec2 net_front = front + offset;
   libsumo::Vehicle::moveToXY(vehicle_id, "", -1, net_front.x(), net_front.y(), sumoAngleFromHeading(state.heading),
                              placement.keepRoute(front, width));
@@ -123,7 +124,12 @@ Observation::Lane observeLane(const MeasuredPolyline& preview_line, const Polyli
   return lane;
 }
 
-void EgoDriver::pushToSumo() const { placeInSumo(vehicleId_, state_, length_, width_, offset_, placement_); }
+void EgoDriver::pushToSumo() const { placeInSumo(vehicleId_, state_, length_, width_, offset_, placement_, false); }
+
+void EgoDriver::knowAgainstRoad(std::vector<std::string> vehicle_ids) {
+  againstRoad_ = std::move(vehicle_ids);
+  std::sort(againstRoad_.begin(), againstRoad_.end());
+}
 
 Observation EgoDriver::observe(double time, LaneCache& lanes, const std::vector<RoadUserState>& road_users) const {
   Observation observation;
@@ -156,6 +162,10 @@ Observation EgoDriver::observe(double time, LaneCache& lanes, const std::vector<
     leader.gap = distance + minGap_;  // getLeader() measures from the Ego's front + minGap
     leader.speed = libsumo::Vehicle::getSpeed(leader_id);
     leader.accel = libsumo::Vehicle::getAcceleration(leader_id);
+    if (std::binary_search(againstRoad_.begin(), againstRoad_.end(), leader_id)) {
+      leader.speed = -leader.speed;  // SUMO's magnitude, towards the Ego
+      leader.accel = -leader.accel;
+    }
     observation.leader = leader;
   }
   if ((drivers_[0]->observesObjects() || drivers_[1]->observesObjects()) && !road_users.empty()) {

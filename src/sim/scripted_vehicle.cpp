@@ -306,14 +306,20 @@ double ScriptedTraffic::Impl::relationValue(const scenario::ConcreteTrigger& tri
   };
   const double self_towards = self_ahead ? -along(self) : along(self);
   const double other_towards = self_ahead ? along(other) : -along(other);
+  // Rear and front along the line (s); the front one heads for the rear one only where it
+  // drives against the road, and only then is it the one whose headway is defined.
+  const double rear_towards = self_ahead ? other_towards : self_towards;
+  const double front_towards = self_ahead ? self_towards : other_towards;
+  const bool front_against = self_ahead ? self_spec.againstRoad : other_spec.againstRoad;
   if (trigger.kind == TriggerSpec::Kind::Headway && trigger.directed) {
     // OpenSCENARIO's: the subject's to the other, undefined while the other is not ahead of it
     // (in the subject's direction of travel).
-    const double towards = trigger.subject == owner ? self_towards : other_towards;
+    const bool subject_in_front = (trigger.subject == owner) == self_ahead;
+    const double towards = !subject_in_front ? rear_towards : front_against ? front_towards : 0.0;
     return towards > 0.1 ? gap / towards : kInf;
   }
   // The one that closes in (on a head-on approach both do: the faster one).
-  const double follower = std::max(self_towards, other_towards);
+  const double follower = front_against ? std::max(rear_towards, front_towards) : rear_towards;
   if (trigger.kind == TriggerSpec::Kind::Headway) return follower > 0.1 ? gap / follower : kInf;
   const double closing = self_towards + other_towards;
   return closing > 1e-9 ? gap / closing : kInf;  // Ttc

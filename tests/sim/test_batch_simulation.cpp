@@ -289,6 +289,49 @@ class FailingController final : public EgoController {
 };
 }  // namespace
 
+namespace {
+/// Keeps its speed and heading and records SUMO's leader at every step it is asked.
+class LeaderRecorder final : public EgoController {
+ public:
+  explicit LeaderRecorder(std::vector<std::pair<double, Observation::Leader>>* seen) : seen_(seen) {}
+  void init(const ControllerParams& params) override { params.rejectUnknown("leader_recorder"); }
+  void reset() override {}
+  Command step(const Observation& observation, double) override {
+    if (observation.leader) seen_->emplace_back(observation.time, *observation.leader);
+    return {};
+  }
+
+ private:
+  std::vector<std::pair<double, Observation::Leader>>* seen_;
+};
+}  // namespace
+
+// An oncoming vehicle on the Ego's lane is SUMO's leader with its real bumper gap and its speed
+// towards the Ego: centres 130 m apart (both 5 m long), closing at 10 + 20 m/s.
+TEST(BatchSimulation, AnOncomingLeaderClosesInAtItsSpeedAgainstTheLane) {
+  std::vector<std::pair<double, Observation::Leader>> seen;
+  auto registry = ControllerRegistry::withBuiltins();
+  registry.add("leader_recorder", "records SUMO's leader", [&seen] { return std::make_unique<LeaderRecorder>(&seen); });
+  const auto logical = scenario::parseLogicalScenario(R"(
+name: head_on
+time: {step: 0.2, duration: 3}
+road: {shape: arc, curvature: 0, length: 300, lanes: 2}
+vehicles:
+  ego: {s: 20, lane: 0, length: 5, speed: 10, controller: {name: leader_recorder}}
+  others:
+    - {id: oncoming, s: 150, lane: 0, length: 5, direction: against, speed: 20}
+)",
+                                                      "head_on.yaml");
+  TemporaryDirectory dir;
+  const Batch batch(logical, 1, dir.path(), registry);
+  ASSERT_TRUE(batch.results[0].ok()) << batch.results[0].failure;
+  ASSERT_GE(seen.size(), 10u);
+  for (const auto& [time, leader] : seen) {
+    EXPECT_NEAR(leader.gap, 125.0 - 30.0 * time, 0.05) << time;
+    EXPECT_NEAR(leader.speed, -20.0, 1e-9) << time;
+  }
+}
+
 TEST(BatchSimulation, AFailingControllerFailsItsScenarioWithTheReason) {
   TemporaryDirectory dir;
   auto registry = ControllerRegistry::withBuiltins();

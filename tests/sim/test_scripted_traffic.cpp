@@ -157,10 +157,10 @@ TEST(ScriptedTraffic, RoadUsersDrivingAgainstTheRoadMoveBackAlongItAndCloseInOnW
                  {{id: own_headway, trigger: {{headway: 2, of: oncoming}}, {0}}},
                  {{id: egos_headway, trigger: {{headway: 1, of: ego}}, {0}}}]}}
     - {{id: overtaker, s: 200, lane: 1, length: 5, direction: against, speed: 20,
-       actions: [{{id: closing, trigger: {{ttc: 1, to: slow}}, lane_change: {{lane: 2, duration: 2}}}},
+       actions: [{{id: closing, trigger: {{ttc: 1, to: slow}}, lane_change: {{lane: 0, duration: 2}}}},
                  {{id: to_slow, trigger: {{headway: 1, of: overtaker, to: slow}}, {0}}},
                  {{id: slows_own, trigger: {{headway: 100, of: slow, to: slow}}, {0}}}]}}
-    - {{id: slow, s: 170, lane: 2, length: 5, direction: against, speed: 10}}
+    - {{id: slow, s: 171.5, lane: 2, length: 5, direction: against, speed: 10}}
     - {{id: leaver, s: 8, lane: 0, length: 5, direction: against, speed: 10,
        actions: [{{id: left, trigger: {{end_of_road: 0}}, {0}}}]}})",
                                                 mark),
@@ -179,13 +179,13 @@ TEST(ScriptedTraffic, RoadUsersDrivingAgainstTheRoadMoveBackAlongItAndCloseInOnW
   EXPECT_NEAR(start["ttc3"], 1.8, 1e-9);          // (95 - 20 t) / 20 <= 3 from t = 1.75
   EXPECT_NEAR(start["own_headway"], 3.8, 1e-9);   // (95 - 20 t) / 10 <= 2 from t = 3.75
   EXPECT_NEAR(start["egos_headway"], 4.4, 1e-9);  // (95 - 20 t) / 10 <= 1 from t = 4.25: instant 4.4
-  // The overtaker 25 m behind the slow one, closing at 10 m/s.
-  EXPECT_NEAR(start["closing"], 1.6, 1e-9);  // (25 - 10 t) / 10 <= 1 from t = 1.5
-  EXPECT_NEAR(start["to_slow"], 0.6, 1e-9);  // (25 - 10 t) / 20 <= 1 from t = 0.5
+  // The overtaker (on the next lane) 23.5 m behind the slow one, closing at 10 m/s.
+  EXPECT_NEAR(start["closing"], 1.4, 1e-9);  // (23.5 - 10 t) / 10 <= 1 from t = 1.35
+  EXPECT_NEAR(start["to_slow"], 0.4, 1e-9);  // (23.5 - 10 t) / 20 <= 1 from t = 0.35
   // The slow one's own headway is undefined while the overtaker is behind it (in its direction of
-  // travel): it holds once the overtaker draws level, 200 - 20 t = 170 - 10 t at 3 s.
+  // travel): it holds once the overtaker has passed it, 200 - 20 t < 171.5 - 10 t after 2.85 s.
   EXPECT_NEAR(start["slows_own"], 3.0, 1e-9);
-  EXPECT_NEAR(offsetOf(run.road, run.paths[1][30]), run.road.laneOffset(2), 1e-9);  // changed lanes by 3.6 s
+  EXPECT_NEAR(offsetOf(run.road, run.paths[1][30]), run.road.laneOffset(0), 1e-9);  // changed lanes by 3.4 s
   // The leaver's front (at 5.5 m) reaches the region's start at 0.55 s.
   EXPECT_NEAR(start["left"], 0.6, 1e-9);
 }

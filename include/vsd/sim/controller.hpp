@@ -52,8 +52,8 @@ struct Observation {
 
   struct Leader {
     double gap = 0.0;    ///< m, bumper to bumper along the lane
-    double speed = 0.0;  ///< m/s
-    double accel = 0.0;  ///< m/s^2
+    double speed = 0.0;  ///< m/s along the lane (< 0: it drives against it, towards the Ego)
+    double accel = 0.0;  ///< m/s^2 along the lane (the change of `speed`)
   };
   /// SUMO's leader (Vehicle::getLeader: the vehicle SUMO assigns to the Ego's lane ahead);
   /// absent when no vehicle is ahead within range.

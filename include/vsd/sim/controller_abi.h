@@ -98,8 +98,8 @@ typedef struct vsd_observation {
   /* The vehicle ahead on the Ego's lane (has_leader = 0 when there is none within range). */
   int has_leader;
   double leader_gap;   /* m, bumper to bumper along the lane */
-  double leader_speed; /* m/s */
-  double leader_accel; /* m/s^2 */
+  double leader_speed; /* m/s along the lane (< 0: it drives against it, towards the Ego) */
+  double leader_accel; /* m/s^2 along the lane */
 
   /* Version 2 and later: the object list (see vsd_object) in the scenario's
    * order of road users; the array is valid only during the step() call. */

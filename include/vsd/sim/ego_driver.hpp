@@ -78,8 +78,11 @@ bool sumoIgnoresLateralPositions();
 /// the network's): SUMO positions vehicles by their front bumper. keepRoute 3 matches only
 /// along the vehicle's own route (never onto a neighbouring scenario's road) and places it
 /// exactly, even off the lane; keepRoute 1 (where `placement` allows) matches the same way.
+/// `against_road`: it drives against its lanes' direction, and SUMO, whose vehicles occupy the
+/// lane from their front back along it, gets its rear bumper (the end that leads along the
+/// lane), so that its body covers the stretch of lane it does (SUMO's leaders, gaps, collisions).
 void placeInSumo(const std::string& vehicle_id, const VehicleState& state, double length, double width,
-                 const Vec2& offset, const SumoPlacement& placement);
+                 const Vec2& offset, const SumoPlacement& placement, bool against_road);
 
 class EgoDriver {
  public:
@@ -95,6 +98,9 @@ class EgoDriver {
   void placeBy(SumoPlacement placement) { placement_ = std::move(placement); }
   /// The coverage of the object list from now on (default: ObjectSensor{}, UN R157's ranges).
   void observeWith(const ObjectSensor& sensor) { sensor_ = sensor; }
+  /// The SUMO ids of the road users that drive against the road: SUMO reports a leader's speed
+  /// as a magnitude, and one of them closes in with it (Observation::Leader::speed < 0).
+  void knowAgainstRoad(std::vector<std::string> vehicle_ids);
   /// The set speed (m/s) the scenario commands from now on (Observation::commandedSetSpeed).
   void commandSetSpeed(std::optional<double> set_speed) { commandedSetSpeed_ = set_speed; }
   /// The road's SUMO edge and its lanes (m across the road from its centre line to each lane's
@@ -154,6 +160,7 @@ class EgoDriver {
   std::optional<double> commandedSetSpeed_;
   std::string roadEdge_;             ///< the road's SUMO edge (knowRoad)
   std::vector<double> laneOffsets_;  ///< m, per lane of the road (knowRoad)
+  std::vector<std::string> againstRoad_;  ///< sorted SUMO ids of road users driving against the road
   std::optional<double> commandedLaneOffset_;
   std::array<double, 2> activeFrom_{0.0, 0.0};  ///< s, per domain as drivers_
 };
