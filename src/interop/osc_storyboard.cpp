@@ -136,6 +136,8 @@ YAML::Node laneOffset(Translation& translation, const Entity& actor, const pugi:
                           "actor's starting lane and its own offset");
     }
     const double other_offset = other.placement->t - translation.road.laneCentreT(other.placement->lane);
+    // esmini counts the value to the left of the reference entity as it faces.
+    if (other.drivesAgainstRoad()) offset = -offset;
     offset += other_offset;
     if (&other == translation.ego) {
       translation.findings.note(reader.where(target), "relative to the Ego's starting offset (its controller keeps its lane)");

@@ -216,17 +216,18 @@ YAML::Node centreLineNode(const CarriagewayRoad& road) {
 
 /// m of straight road before the region: where vehicles drive against the road, they leave the
 /// file's road at its start; vsd-sumo's goes on straight there for as far as each of them
-/// drives over the duration at its initial speed (at least 150 m, as after the road's end).
-/// 0 where none does.
-double extensionBefore(Translation& translation) {
-  double needed = -1.0;
+/// drives over the simulated duration at its initial speed, plus 10 % (at least 150 m, as
+/// after the road's end). 0 where none does.
+double extensionBefore(Translation& translation, double duration) {
+  std::optional<double> needed;
   for (const Entity& entity : translation.entities) {
     if (&entity == translation.ego || !entity.drivesAgainstRoad()) continue;
     const double s = languagePlace(translation.road, entity, true).s;
-    needed = std::max(needed, entity.speed.value_or(0.0) * translation.duration + 0.5 * entity.length - s);
+    const double reach = 1.1 * entity.speed.value_or(0.0) * duration + 0.5 * entity.length - s;
+    needed = std::max(needed.value_or(reach), reach);
   }
-  if (needed < 0.0) return 0.0;
-  const double before = std::clamp(std::ceil(needed), 150.0, kMaxExtension);
+  if (!needed) return 0.0;
+  const double before = std::clamp(std::ceil(*needed), 150.0, kMaxExtension);
   translation.findings.note(translation.road.file.string(),
                             fmt::format("vehicles drive against the road: vsd-sumo's road starts {} m before the "
                                         "file's, straight, where they leave it",
@@ -234,7 +235,7 @@ double extensionBefore(Translation& translation) {
   return before;
 }
 
-YAML::Node roadNode(Translation& translation) {
+YAML::Node roadNode(Translation& translation, double duration) {
   const CarriagewayRoad& road = translation.road;
   const double length = road.languageS(road.length);
   const double region = regionLength(road);
@@ -255,7 +256,7 @@ YAML::Node roadNode(Translation& translation) {
   }
   node["shoulders"]["left"] = num(road.shoulderLeft);
   node["shoulders"]["right"] = num(road.shoulderRight);
-  node["extension"]["before"] = num(extensionBefore(translation));
+  node["extension"]["before"] = num(extensionBefore(translation, duration));
   node["extension"]["after"] = num(std::clamp(length - region, 150.0, kMaxExtension));
   if ((!road.oneCurvature || road.curvature != 0.0) && length > region + 1e-6) {
     translation.findings.note(fmt::format("{}", road.file.string()),
@@ -319,7 +320,8 @@ std::string languageYaml(Translation& translation, const Parameters& parameters,
   root["description"] = "imported from " + translation.reader.file().filename().string();
   const double step = translation.options.step.value_or(scenario::LogicalScenario{}.step);
   root["time"]["step"] = num(step);
-  root["time"]["duration"] = num(std::ceil(translation.duration / step - 1e-9) * step);
+  const double duration = std::ceil(translation.duration / step - 1e-9) * step;  // s, whole steps
+  root["time"]["duration"] = num(duration);
   YAML::Node inputs(YAML::NodeType::Sequence);
   std::set<std::string> input_names;
   for (const auto& [name, value] : parameters.numeric) {
@@ -340,7 +342,7 @@ std::string languageYaml(Translation& translation, const Parameters& parameters,
     inputs.push_back(input);
   }
   if (inputs.size() > 0) root["inputs"] = inputs;
-  root["road"] = roadNode(translation);
+  root["road"] = roadNode(translation, duration);
   root["vehicles"]["ego"] = roadUserNode(translation, ego, true);
   root["vehicles"]["ego"]["controller"]["name"] = controller.name;
   if (controller.params && controller.params.IsMap()) root["vehicles"]["ego"]["controller"]["params"] = controller.params;

@@ -1486,6 +1486,25 @@ TEST(OscRun, LeftLanesDrivenAlongTheReferenceLineJoinTheRoad) {
   // On lane 0 (y = -1.75) after its lane change, then its swerve of 0.5 m along t (as esmini
   // reads lane offsets, whichever way a road user faces).
   EXPECT_NEAR(towards->states.back().y, -1.25, 0.2);
+  // A swerve of 0.5 m relative to another oncoming vehicle counts to that one's left as it
+  // faces (esmini's): 0.5 m to the road's right, y = -2.25.
+  const std::string swerve = R"(<AbsoluteTargetLaneOffset value="0.5"/>)";
+  const std::string entities_end = "</Entities>";
+  const std::string init = "<Actions>";
+  ASSERT_NE(text.find(swerve), std::string::npos);
+  text.replace(text.find(swerve), swerve.size(), R"(<RelativeTargetLaneOffset entityRef="Other" value="0.5"/>)");
+  text.replace(text.find(entities_end), entities_end.size(),
+               R"(<ScenarioObject name="Other"><CatalogReference catalogName="fleet" entryName="sedan"/></ScenarioObject>
+  </Entities>)");
+  text.replace(text.find(init), init.size(), R"(<Actions>
+        <Private entityRef="Other">
+          <PrivateAction><TeleportAction><Position><LanePosition roadId="7" laneId="1" s="200" offset="0"/></Position>
+          </TeleportAction></PrivateAction>
+        </Private>)");
+  test::writeFile(facing, text);
+  const auto relative = simulatedTrack(facing, "Cutter");
+  ASSERT_TRUE(relative);
+  EXPECT_NEAR(relative->states.back().y, -2.25, 0.2);
   // A left lane of another width joins as well, with its own width.
   const auto other_width = twoWayCutIn("3.25", turned);
   const auto wider = importTemplate(other_width->path() / "two_way.xosc", {});
