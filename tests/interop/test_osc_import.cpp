@@ -1475,6 +1475,8 @@ TEST(OscRun, LeftLanesDrivenAlongTheReferenceLineJoinTheRoad) {
   test::writeFile(facing, text);
   const auto oncoming = importTemplate(facing, {});
   EXPECT_TRUE(other(*oncoming, "Cutter").againstRoad);
+  EXPECT_THAT(checkOpenScenario(facing, {}).report(),
+              HasSubstr("'Cutter' faces back along the road (180 deg): it drives against it, as oncoming traffic"));
   EXPECT_EQ(other(*oncoming, "Cutter").lane, 1);
   // It leaves the file's road at its start: vsd-sumo's road goes on straight before it.
   EXPECT_GE(oncoming->road.extensionBefore, 150.0);
