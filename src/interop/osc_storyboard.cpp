@@ -865,11 +865,13 @@ void markRising(const xml::Reader& reader, const pugi::xml_node& node, YAML::Nod
   trigger["rising"] = "true";
 }
 
-/// Whether a rising SimulationTime or Parameter condition holds when first checked (t = 0: a
-/// time from 0 on, a parameter comparison that holds): it never rises, so esmini never fires it.
-bool holdsAtFirstCheck(const pugi::xml_node& by, const YAML::Node& trigger) {
+/// Whether a rising SimulationTime or Parameter condition holds when first checked (at
+/// `first_check` s: a time reached by then, a parameter comparison that holds): it never rises,
+/// so esmini never fires it.
+bool holdsAtFirstCheck(const pugi::xml_node& by, const YAML::Node& trigger, double first_check) {
   const bool level = by.child("SimulationTimeCondition") || by.child("ParameterCondition");
-  return level && trigger["time"] && trigger["time"].as<double>() <= 0.0;  // a condition's own trigger has no delay
+  // A parameter comparison that holds reads as time 0; a condition's own trigger has no delay.
+  return level && trigger["time"] && trigger["time"].as<double>() <= first_check;
 }
 
 /// Whether a language trigger can stop holding and hold again: no time or action end in it.
@@ -895,9 +897,14 @@ std::optional<YAML::Node> condition(Translation& translation, const Entity& acto
   auto result = std::string(by.name()) == "ByValueCondition" ? valueCondition(translation, by)
                                                              : entityCondition(translation, actor, by);
   if (result && edge == "rising") {
-    if (holdsAtFirstCheck(by, *result)) {
-      translation.findings.note(reader.where(node), "conditionEdge=\"rising\" on a condition that holds from t = 0: "
-                                                    "it never rises, so it never fires (as esmini reads it)");
+    if (holdsAtFirstCheck(by, *result, translation.firstCheck)) {
+      const std::string when = translation.firstCheck > 0.0
+                                   ? fmt::format("when its Act starts ({} s)", num(translation.firstCheck))
+                                   : std::string("from t = 0");
+      translation.findings.note(reader.where(node), fmt::format("conditionEdge=\"rising\" on a condition that holds "
+                                                                "{}: it never rises, so it never fires (as esmini "
+                                                                "reads it)",
+                                                                when));
       return std::nullopt;
     }
     markRising(reader, node, *result);
@@ -1094,16 +1101,35 @@ YAML::Node fromTime(const YAML::Node& start, const YAML::Node& own) {
   return result;
 }
 
+/// Translation::firstCheck for one scope, restored at its end.
+class FirstCheckAt {
+ public:
+  FirstCheckAt(Translation& translation, double time) : translation_(translation), outer_(translation.firstCheck) {
+    translation.firstCheck = time;
+  }
+  ~FirstCheckAt() { translation_.firstCheck = outer_; }
+  FirstCheckAt(const FirstCheckAt&) = delete;
+  FirstCheckAt& operator=(const FirstCheckAt&) = delete;
+
+ private:
+  Translation& translation_;
+  double outer_;
+};
+
 /// The trigger of an Event in the Act `act_name`: its own StartTrigger (startTrigger), checked
 /// once the Act has started; nullopt: it never starts.
 std::optional<YAML::Node> eventTrigger(Translation& translation, const Entity& actor, const pugi::xml_node& event,
                                        int act_index, bool note) {
-  const auto own = startTrigger(translation, actor, event, note);
-  if (!own) return std::nullopt;
   const auto act_start = actStart(translation, event, act_index);
-  if (!act_start) return std::nullopt;
+  const bool at_a_time = act_start && (*act_start)["time"] && act_start->size() == 1;
+  std::optional<YAML::Node> own;
+  {
+    // Its conditions are first checked when the Act starts (a rising one that holds then never fires).
+    const FirstCheckAt first_check(translation, at_a_time ? constantOf((*act_start)["time"]).value_or(0.0) : 0.0);
+    own = startTrigger(translation, actor, event, note);
+  }
+  if (!own || !act_start) return std::nullopt;
   const YAML::Node& start = *act_start;
-  const bool at_a_time = start["time"] && start.size() == 1;
   if (at_a_time && constantOf(start["time"]) == 0.0) return own;  // the Act runs from t = 0
   if (!event.child("StartTrigger").child("ConditionGroup")) return start;  // no condition of its own
   const Translation::ActRecord& act = translation.acts.at(static_cast<std::size_t>(act_index));

@@ -129,6 +129,9 @@ struct Translation {
   std::map<std::string, int> actByName;  ///< index into acts; -1: a name given twice (names no one Act)
   std::map<std::string, std::string> eventOfAction;  ///< the file's Action name -> its Event's name
   int eventStartsFollowed = 0;  ///< nesting of Event and Act starts being translated (a cycle is refused)
+  /// s: when the conditions being read are first checked: 0, or the start of the Act whose
+  /// Event they start (esmini checks an Event's conditions only while its Act runs).
+  double firstCheck = 0.0;
   std::set<std::string> usedIds = {"ego"};
   double duration = 0.0;  ///< s; 0: not known from the file
   /// s: the first ActivateControllerAction of the Ego in the Story (none: it drives from t = 0).

@@ -890,6 +890,13 @@ const std::string kLaterAct = R"(<Act name="Later"><ManeuverGroup maximumExecuti
                                            state="endTransition"/></ByValueCondition></Condition></ConditionGroup>
         </StartTrigger></Act>)";
 
+/// timeCondition with a rising edge.
+std::string risingTime(const std::string& time) {
+  std::string text = timeCondition(time);
+  const std::string none = R"(conditionEdge="none")";
+  return text.replace(text.find(none), none.size(), R"(conditionEdge="rising")");
+}
+
 // An Act that starts later checks its Events' conditions from its start on, as OpenSCENARIO
 // does: the Act starts at 3 s (time >= 2, delay 1); the lead's step down (at 20 + t m/s)
 // shows at the instant its Event starts (a time) or at the next (a condition checked at
@@ -913,6 +920,10 @@ TEST(OscRun, AnActThatStartsLaterChecksItsEventsFromThen) {
       {"later_time.xosc", with_act_start(conditionsWith(group(timeCondition("5"))), act_start), 5.0},
       {"speed.xosc", with_act_start(conditionsWith(group(speed_at_least_21)), act_start), 3.2},  // holds from 1 s
       {"no_trigger.xosc", with_act_start(no_trigger, act_start), 3.0},  // the Act's start
+      // A rising edge: checked first when the Act starts, a time of 5 s rises then; one of 1 s
+      // holds already at 3 s and never rises, so the step never comes (esmini's reading).
+      {"later_rising.xosc", with_act_start(conditionsWith(group(risingTime("5"))), act_start), 5.0},
+      {"earlier_rising.xosc", with_act_start(conditionsWith(group(risingTime("1"))), act_start), -1.0},
   };
   std::map<std::string, std::string> files;
   for (const auto& [name, text, seen] : cases) files[name] = text;
@@ -935,6 +946,9 @@ TEST(OscRun, AnActThatStartsLaterChecksItsEventsFromThen) {
   for (const auto& [name, text, seen] : cases) {
     EXPECT_NEAR(stepDownSeen(folder->path() / name), seen, 1e-9) << name;
   }
+  EXPECT_THAT(checkOpenScenario(folder->path() / "earlier_rising.xosc", {}).report(),
+              HasSubstr("conditionEdge=\"rising\" on a condition that holds when its Act starts (3 s): it never "
+                        "rises, so it never fires"));
   const auto logical = importTemplate(folder->path() / "two_acts.xosc", {});
   const auto& trigger = other(*logical, "Slow").actions.at(0).trigger;  // the Act's end: its one action's end, + 2 s
   EXPECT_EQ(trigger.kind, scenario::TriggerSpec::Kind::After);
