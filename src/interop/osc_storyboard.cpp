@@ -127,8 +127,9 @@ YAML::Node laneOffset(Translation& translation, const Entity& actor, const pugi:
   item["lateral_accel"] = num(*accel);
   const pugi::xml_node target = reader.choice(reader.only(action, "LaneOffsetTarget"),
                                               {"AbsoluteTargetLaneOffset", "RelativeTargetLaneOffset"});
+  const double value = reader.number(target, "value");
   // Along t (left of the reference line), as esmini reads it: turned on a reversed road.
-  double offset = translation.road.ownT(reader.number(target, "value"));
+  double offset = translation.road.ownT(value);
   if (std::string(target.name()) == "RelativeTargetLaneOffset") {
     const Entity& other = translation.entity(target, reader.text(target, "entityRef"));
     if (&other == &actor || other.placement->lane != actor.placement->lane || other.movesLaterally) {
@@ -136,9 +137,9 @@ YAML::Node laneOffset(Translation& translation, const Entity& actor, const pugi:
                           "actor's starting lane and its own offset");
     }
     const double other_offset = other.placement->t - translation.road.laneCentreT(other.placement->lane);
-    // esmini counts the value to the left of the reference entity as it faces.
-    if (other.drivesAgainstRoad()) offset = -offset;
-    offset += other_offset;
+    // esmini counts a relative value to the left of the reference entity as it faces (on a
+    // reversed road too: its own direction is the language road's).
+    offset = (other.drivesAgainstRoad() ? -value : value) + other_offset;
     if (&other == translation.ego) {
       translation.findings.note(reader.where(target), "relative to the Ego's starting offset (its controller keeps its lane)");
     }
@@ -865,13 +866,32 @@ void markRising(const xml::Reader& reader, const pugi::xml_node& node, YAML::Nod
   trigger["rising"] = "true";
 }
 
+/// Translation::firstCheck for one scope, restored at its end.
+class FirstCheckAt {
+ public:
+  FirstCheckAt(Translation& translation, double time) : translation_(translation), outer_(translation.firstCheck) {
+    translation.firstCheck = time;
+  }
+  ~FirstCheckAt() { translation_.firstCheck = outer_; }
+  FirstCheckAt(const FirstCheckAt&) = delete;
+  FirstCheckAt& operator=(const FirstCheckAt&) = delete;
+
+ private:
+  Translation& translation_;
+  double outer_;
+};
+
 /// Whether a rising SimulationTime or Parameter condition holds when first checked (at
 /// `first_check` s: a time reached by then, a parameter comparison that holds): it never rises,
 /// so esmini never fires it.
 bool holdsAtFirstCheck(const pugi::xml_node& by, const YAML::Node& trigger, double first_check) {
-  const bool level = by.child("SimulationTimeCondition") || by.child("ParameterCondition");
+  const pugi::xml_node time = by.child("SimulationTimeCondition");
+  if (!(time || by.child("ParameterCondition")) || !trigger["time"]) return false;
   // A parameter comparison that holds reads as time 0; a condition's own trigger has no delay.
-  return level && trigger["time"] && trigger["time"].as<double>() <= first_check;
+  const double from = trigger["time"].as<double>();
+  // greaterThan does not hold at its own value (esmini compares with a margin of 1e-6 s).
+  const bool strict = time && std::string(time.attribute("rule").value()) == "greaterThan";
+  return strict ? from < first_check : from <= first_check;
 }
 
 /// Whether a language trigger can stop holding and hold again: no time or action end in it.
@@ -1000,6 +1020,8 @@ bool startsAtZero(const Translation& translation, const pugi::xml_node& act) {
 std::optional<YAML::Node> actStart(Translation& translation, const pugi::xml_node& node, int index) {
   const Translation::ActRecord& act = translation.acts.at(static_cast<std::size_t>(index));
   // Read in the parameters of the Act's Story.
+  // An Act's conditions are checked from the Story's start (t = 0), whichever Event asks.
+  const FirstCheckAt first_check(translation, 0.0);
   const auto start = followingStarts(translation, node, act.scope, [&]() -> std::optional<YAML::Node> {
     if (startsAtOnce(translation, act.node, /*note_absent=*/false, /*note=*/false) ||
         startsAtZero(translation, act.node)) {
@@ -1100,21 +1122,6 @@ YAML::Node fromTime(const YAML::Node& start, const YAML::Node& own) {
   if (own["delay"]) result["delay"] = own["delay"];
   return result;
 }
-
-/// Translation::firstCheck for one scope, restored at its end.
-class FirstCheckAt {
- public:
-  FirstCheckAt(Translation& translation, double time) : translation_(translation), outer_(translation.firstCheck) {
-    translation.firstCheck = time;
-  }
-  ~FirstCheckAt() { translation_.firstCheck = outer_; }
-  FirstCheckAt(const FirstCheckAt&) = delete;
-  FirstCheckAt& operator=(const FirstCheckAt&) = delete;
-
- private:
-  Translation& translation_;
-  double outer_;
-};
 
 /// The trigger of an Event in the Act `act_name`: its own StartTrigger (startTrigger), checked
 /// once the Act has started; nullopt: it never starts.

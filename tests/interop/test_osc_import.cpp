@@ -897,6 +897,13 @@ std::string risingTime(const std::string& time) {
   return text.replace(text.find(none), none.size(), R"(conditionEdge="rising")");
 }
 
+/// risingTime with rule greaterThan.
+std::string risingAfter(const std::string& time) {
+  std::string text = risingTime(time);
+  const std::string rule = R"(rule="greaterOrEqual")";
+  return text.replace(text.find(rule), rule.size(), R"(rule="greaterThan")");
+}
+
 // An Act that starts later checks its Events' conditions from its start on, as OpenSCENARIO
 // does: the Act starts at 3 s (time >= 2, delay 1); the lead's step down (at 20 + t m/s)
 // shows at the instant its Event starts (a time) or at the next (a condition checked at
@@ -924,6 +931,9 @@ TEST(OscRun, AnActThatStartsLaterChecksItsEventsFromThen) {
       // holds already at 3 s and never rises, so the step never comes (esmini's reading).
       {"later_rising.xosc", with_act_start(conditionsWith(group(risingTime("5"))), act_start), 5.0},
       {"earlier_rising.xosc", with_act_start(conditionsWith(group(risingTime("1"))), act_start), -1.0},
+      // greaterThan 3 does not hold at 3 s: it rises right after the Act's start (esmini: one of
+      // its steps later; the language's time trigger: at 3 s).
+      {"strict_rising.xosc", with_act_start(conditionsWith(group(risingAfter("3"))), act_start), 3.0},
   };
   std::map<std::string, std::string> files;
   for (const auto& [name, text, seen] : cases) files[name] = text;
@@ -949,6 +959,26 @@ TEST(OscRun, AnActThatStartsLaterChecksItsEventsFromThen) {
   EXPECT_THAT(checkOpenScenario(folder->path() / "earlier_rising.xosc", {}).report(),
               HasSubstr("conditionEdge=\"rising\" on a condition that holds when its Act starts (3 s): it never "
                         "rises, so it never fires"));
+  // An Act's own StartTrigger is checked from the Story's start, also where an Event of a later
+  // Act asks for its end: Act "Act" starts at 1 s (a rising time), "Later" at 4 s, and its step
+  // waits for the end of "Act" (its one action) from then on.
+  std::string rising_act = with_act_start(two_acts, "<StartTrigger>" + group(risingTime("1")) + "</StartTrigger>");
+  const std::string after_act_begin = R"(<StartTrigger><ConditionGroup><Condition name="AfterAct")";
+  const auto after_act = rising_act.find(after_act_begin);
+  rising_act.replace(after_act, rising_act.find("</StartTrigger></Act>", after_act) + 15 - after_act,
+                     "<StartTrigger>" + group(timeCondition("4")) + "</StartTrigger>");
+  const std::string step_event_end = "</Action></Event>";
+  rising_act.insert(rising_act.find(step_event_end, rising_act.find(R"(<Event name="SlowDown2")")) + 9,
+                    R"(<StartTrigger><ConditionGroup><Condition name="ActDone" delay="0" conditionEdge="none">
+      <ByValueCondition><StoryboardElementStateCondition storyboardElementType="act" storyboardElementRef="Act"
+      state="endTransition"/></ByValueCondition></Condition></ConditionGroup></StartTrigger>)");
+  const auto rising_folder = folderWith({{"rising_act.xosc", rising_act}});
+  const auto step_trigger = other(*importTemplate(rising_folder->path() / "rising_act.xosc", {}), "Slow").actions.at(0).trigger;
+  ASSERT_EQ(step_trigger.kind, scenario::TriggerSpec::Kind::All);
+  ASSERT_EQ(step_trigger.members.size(), 2u);
+  EXPECT_EQ(step_trigger.members[0].kind, scenario::TriggerSpec::Kind::Time);
+  EXPECT_EQ(step_trigger.members[1].kind, scenario::TriggerSpec::Kind::After);
+  EXPECT_EQ(step_trigger.members[1].action, "StepDown");
   const auto logical = importTemplate(folder->path() / "two_acts.xosc", {});
   const auto& trigger = other(*logical, "Slow").actions.at(0).trigger;  // the Act's end: its one action's end, + 2 s
   EXPECT_EQ(trigger.kind, scenario::TriggerSpec::Kind::After);
