@@ -1019,9 +1019,9 @@ bool startsAtZero(const Translation& translation, const pugi::xml_node& act) {
 /// (a time, with its delay folded in, or actions' ends); nullopt: it never starts.
 std::optional<YAML::Node> actStart(Translation& translation, const pugi::xml_node& node, int index) {
   const Translation::ActRecord& act = translation.acts.at(static_cast<std::size_t>(index));
-  // Read in the parameters of the Act's Story.
   // An Act's conditions are checked from the Story's start (t = 0), whichever Event asks.
   const FirstCheckAt first_check(translation, 0.0);
+  // Read in the parameters of the Act's Story.
   const auto start = followingStarts(translation, node, act.scope, [&]() -> std::optional<YAML::Node> {
     if (startsAtOnce(translation, act.node, /*note_absent=*/false, /*note=*/false) ||
         startsAtZero(translation, act.node)) {

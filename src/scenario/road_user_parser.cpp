@@ -806,8 +806,8 @@ void parseRoadUsers(const YamlReader& reader, const YAML::Node& node, LogicalSce
     const auto item = others[i];
     const std::string field = fmt::format("vehicles.others[{}]", i);
     reader.checkKeys(item, field,
-                     {"id", "type", "x", "s", "ds", "gap", "from", "lane", "relative_lane", "offset", "heading_deg", "direction", "length",
-                      "width", "reference_point",
+                     {"id", "type", "x", "s", "ds", "gap", "from", "lane", "relative_lane", "offset", "heading_deg",
+                      "direction", "length", "width", "reference_point",
                       "speed_profile", "speed", "relative_speed", "speed_noise", "heading_noise_deg", "actions"});
     VehicleSpec other;
     other.id = item["id"] ? reader.scalar(item["id"], field + ".id") : fmt::format("other{}", i);

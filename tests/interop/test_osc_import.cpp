@@ -973,7 +973,8 @@ TEST(OscRun, AnActThatStartsLaterChecksItsEventsFromThen) {
       <ByValueCondition><StoryboardElementStateCondition storyboardElementType="act" storyboardElementRef="Act"
       state="endTransition"/></ByValueCondition></Condition></ConditionGroup></StartTrigger>)");
   const auto rising_folder = folderWith({{"rising_act.xosc", rising_act}});
-  const auto step_trigger = other(*importTemplate(rising_folder->path() / "rising_act.xosc", {}), "Slow").actions.at(0).trigger;
+  const auto rising_logical = importTemplate(rising_folder->path() / "rising_act.xosc", {});
+  const auto step_trigger = other(*rising_logical, "Slow").actions.at(0).trigger;
   ASSERT_EQ(step_trigger.kind, scenario::TriggerSpec::Kind::All);
   ASSERT_EQ(step_trigger.members.size(), 2u);
   EXPECT_EQ(step_trigger.members[0].kind, scenario::TriggerSpec::Kind::Time);
@@ -1540,7 +1541,8 @@ TEST(OscRun, LeftLanesDrivenAlongTheReferenceLineJoinTheRoad) {
   ASSERT_NE(text.find(swerve), std::string::npos);
   text.replace(text.find(swerve), swerve.size(), R"(<RelativeTargetLaneOffset entityRef="Other" value="0.5"/>)");
   text.replace(text.find(entities_end), entities_end.size(),
-               R"(<ScenarioObject name="Other"><CatalogReference catalogName="fleet" entryName="sedan"/></ScenarioObject>
+               R"(<ScenarioObject name="Other">
+    <CatalogReference catalogName="fleet" entryName="sedan"/></ScenarioObject>
   </Entities>)");
   text.replace(text.find(init), init.size(), R"(<Actions>
         <Private entityRef="Other">

@@ -217,7 +217,8 @@ TEST(RoadUsers, LateralActionsNeedTheExactModel) {
 }
 
 TEST(RoadUsers, AVehicleDrivesAgainstTheRoadFacingBack) {
-  const auto logical = parseLogicalScenario(yamlWith(R"(    - {id: a, gap: 50, relative_lane: 1, direction: against, speed: 5}
+  const auto logical = parseLogicalScenario(yamlWith(R"(
+    - {id: a, gap: 50, relative_lane: 1, direction: against, speed: 5}
     - {id: b, gap: 80, relative_lane: 1, direction: along, speed: 5}
     - {id: c, type: model, gap: 110, relative_lane: 0, direction: against, speed: 5})",
                                                      "{name: model, choices: [car, pedestrian]}"),
@@ -245,8 +246,9 @@ TEST(RoadUsers, AVehicleDrivesAgainstTheRoadFacingBack) {
   EXPECT_NE(bad.find("direction: got 'backwards', expected along or against"), std::string::npos) << bad;
   const auto walker = errorOf("    - {id: p, type: pedestrian, gap: 20, relative_lane: 1, direction: against}");
   EXPECT_NE(walker.find("a pedestrian does not drive in a lane"), std::string::npos) << walker;
-  const auto noisy =
-      errorOf("    - {id: a, gap: 20, relative_lane: 1, direction: against, speed: 5, heading_noise_deg: {min: -1, max: 1}}");
+  const auto noisy = errorOf(
+      "    - {id: a, gap: 20, relative_lane: 1, direction: against, speed: 5,\n"
+      "       heading_noise_deg: {min: -1, max: 1}}");
   EXPECT_NE(noisy.find("keeps its lane by pure pursuit along the road"), std::string::npos) << noisy;
 }
 
