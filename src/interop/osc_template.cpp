@@ -285,7 +285,7 @@ YAML::Node roadUserNode(Translation& translation, const Entity& entity, bool ego
     node["direction"] = "against";
     translation.findings.mapped(entity.where, fmt::format("'{}' faces back along the road ({} deg): it drives against "
                                                           "it, as oncoming traffic (direction: against)",
-                                                          entity.name, num(heading_deg)));
+                                                          entity.name, num(std::abs(heading_deg))));
   } else if (ego || entity.isVehicle()) {
     if (std::abs(heading_deg) > 0.01) {
       throw ConfigError(fmt::format("{}: '{}' starts {} deg off the road's direction: the language's {} along it{}",

@@ -2108,6 +2108,40 @@ TEST(OscRun, TheLeftSideDrivenAgainstTheReferenceLineIsTheLanguagesRoad) {
   EXPECT_NEAR(overtaker->states.at(44).y, 1.625, 1e-6) << "8.8 s: not yet 10 m ahead";
   EXPECT_LT(overtaker->states.at(48).y, 1.5) << "9.6 s: moving over";
   EXPECT_NEAR(overtaker->states.back().y, -1.75, 0.01);
+
+  // A swerve of 0.5 m relative to the Ego goes to the Ego's own left (esmini: to the left of
+  // the reference entity as it faces), on the reversed road too: a follower 50 m behind the
+  // Ego on its lane ends at y = -1.75 + 0.5.
+  const std::string swerve = R"(<ManeuverGroup maximumExecutionCount="1" name="Swerve">
+          <Actors selectTriggeringEntities="false"><EntityRef entityRef="Follower"/></Actors>
+          <Maneuver name="Swerve"><Event name="Swerve" priority="overwrite"><Action name="Swerve">
+            <PrivateAction><LateralAction><LaneOffsetAction continuous="false">
+              <LaneOffsetActionDynamics dynamicsShape="sinusoidal" maxLateralAcc="1.0"/>
+              <LaneOffsetTarget><RelativeTargetLaneOffset entityRef="Ego" value="0.5"/></LaneOffsetTarget>
+            </LaneOffsetAction></LateralAction></PrivateAction></Action>
+            <StartTrigger>)" + group(timeCondition("1")) + R"(</StartTrigger></Event></Maneuver></ManeuverGroup>
+      </Act>)";
+  const std::string follower_init = R"(<Private entityRef="Follower">
+          <PrivateAction><TeleportAction><Position><LanePosition roadId="3" laneId="3" s="950" offset="0"/></Position>
+          </TeleportAction></PrivateAction>
+          <PrivateAction><LongitudinalAction><SpeedAction>
+            <SpeedActionDynamics dynamicsShape="step" dynamicsDimension="time" value="0"/>
+            <SpeedActionTarget><AbsoluteTargetSpeed value="20"/></SpeedActionTarget>
+          </SpeedAction></LongitudinalAction></PrivateAction>
+        </Private>
+      </Actions>)";
+  const std::string follower_object = R"(<ScenarioObject name="Follower">
+      <CatalogReference catalogName="fleet" entryName="sedan"/></ScenarioObject>
+  </Entities>)";
+  text.replace(text.find("</Act>"), 6, swerve);
+  text.replace(text.find("</Actions>"), 10, follower_init);
+  text.replace(text.find("</Entities>"), 11, follower_object);
+  const auto with_follower =
+      folderWith({{"roads/two_carriageways.xodr", twoCarriageways("RHT")}, {"follower.xosc", text}});
+  const auto follower = simulatedTrack(with_follower->path() / "follower.xosc", "Follower");
+  ASSERT_TRUE(follower);
+  EXPECT_NEAR(follower->states.front().y, -1.75, 1e-6);
+  EXPECT_NEAR(follower->states.back().y, -1.25, 0.05);
 }
 
 // An Event that assigns the Ego a controller and activates it becomes a controller action of the
