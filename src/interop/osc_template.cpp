@@ -301,6 +301,13 @@ YAML::Node roadUserNode(Translation& translation, const Entity& entity, bool ego
   }
   if (!ego && place.offset != 0.0) node["offset"] = num(place.offset);
   const double speed = entity.speed.value_or(0.0);
+  if (entity.type == RoadUserType::StationaryObject && speed != 0.0) {
+    // A MiscObject given a speed in the Init: the language's objects stand (refused, not dropped).
+    const std::string where = entity.speedTarget ? translation.reader.where(entity.speedTarget) : entity.where;
+    throw ConfigError(fmt::format("{}: '{}' is a stationary object (a MiscObject) given a speed of {} m/s: stationary "
+                                  "objects never move (the language's rule)",
+                                  where, entity.name, num(speed)));
+  }
   if (entity.type != RoadUserType::StationaryObject && (ego || entity.isVehicle() || speed != 0.0)) {
     node["speed"] = num(speed);
   }

@@ -7,6 +7,7 @@
 
 #include <pugixml.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <map>
 #include <regex>
@@ -324,6 +325,19 @@ TEST(OscImport, MiscObjectsAndRoadPositions) {
   EXPECT_EQ(cone.type, RoadUserType::StationaryObject);
   EXPECT_DOUBLE_EQ(cone.alongValue.evaluate({}), 600.0);
   EXPECT_DOUBLE_EQ(cone.offset.evaluate({}), -3.25);  // t = -13, lane 0's centre at -9.75
+  // A speed in the Init would move it: refused where it is given, not dropped.
+  const std::string placed = "</TeleportAction></PrivateAction></Private>";
+  text.replace(text.find(placed), placed.size(),
+               "</TeleportAction></PrivateAction><PrivateAction><LongitudinalAction><SpeedAction>"
+               "<SpeedActionDynamics dynamicsShape=\"step\" dynamicsDimension=\"time\" value=\"0\"/>\n"
+               "<SpeedActionTarget><AbsoluteTargetSpeed value=\"3\"/></SpeedActionTarget></SpeedAction>"
+               "</LongitudinalAction></PrivateAction></Private>");
+  test::writeFile(dir->path() / "moving_cone.xosc", text);
+  const auto refused = test::configErrorOf([&] { importTemplate(dir->path() / "moving_cone.xosc", {}); });
+  const std::string line = text.substr(0, text.find("<SpeedActionTarget><AbsoluteTargetSpeed value=\"3\""));
+  const auto line_number = std::count(line.begin(), line.end(), '\n') + 1;
+  EXPECT_THAT(refused, HasSubstr(fmt::format("moving_cone.xosc:{}: <SpeedActionTarget>: 'Cone' is a stationary object "
+                                             "(a MiscObject) given a speed of 3 m/s", line_number)));
 }
 
 TEST(OscImport, InitDistanceActionPlacesAndRateZeroLeavesTheSpeed) {
