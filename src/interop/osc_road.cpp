@@ -247,17 +247,8 @@ void readAdjoiningLeftLanes(const xml::Reader& reader, const pugi::xml_node& lef
   }
 }
 
-void readLanes(const xml::Reader& reader, const pugi::xml_node& road, CarriagewayRoad& result) {
-  const pugi::xml_node lanes = reader.only(road, "lanes");
-  reader.requireSubset(lanes, {"laneSection", "laneOffset"});
-  for (const pugi::xml_node& offset : lanes.children("laneOffset")) {
-    for (const char* coefficient : {"a", "b", "c", "d"}) {
-      if (reader.optionalNumber(offset, coefficient).value_or(0.0) != 0.0) {
-        reader.fail(offset, "a lane offset: the scenario language's lanes lie symmetric about its centre line");
-      }
-    }
-  }
-  const pugi::xml_node section = reader.only(lanes, "laneSection");
+/// The lanes of one <laneSection> into `result`'s lane fields (readLanes).
+void readSection(const xml::Reader& reader, const pugi::xml_node& section, CarriagewayRoad& result) {
   reader.requireSubset(section, {"left", "center", "right", "userData"});
   if (result.leftHandTraffic) {
     // Left-hand traffic drives the left side along the reference line: that is the road.
@@ -276,6 +267,84 @@ void readLanes(const xml::Reader& reader, const pugi::xml_node& road, Carriagewa
     result.leftRun = readRun(reader, left, +1);
   } catch (const ConfigError& error) {
     result.leftRunProblem = error.what();
+  }
+}
+
+bool operator==(const DrivenRun& a, const DrivenRun& b) {
+  return a.innermostLaneId == b.innermostLaneId && a.laneWidths == b.laneWidths &&
+         a.innerShoulder == b.innerShoulder && a.outerShoulder == b.outerShoulder;
+}
+
+/// What a validation engineer compares between two lane sections: the driving lanes (ids,
+/// widths), the shoulders, the left side's lanes the road may take. Lanes beyond the
+/// shoulders are not part of the road and may differ.
+std::string sectionLayout(const CarriagewayRoad& lanes) {
+  std::vector<std::string> widths;
+  for (const double width : lanes.laneWidths) widths.push_back(xml::number(width));
+  std::string layout = fmt::format("driving lanes {} .. {} of {} m, shoulders {} m left and {} m right",
+                                   lanes.innermostLaneId,
+                                   lanes.innermostLaneId + (lanes.leftCarriageway ? 1 : -1) * (lanes.lanes - 1),
+                                   fmt::join(widths, ", "), xml::number(lanes.shoulderLeft),
+                                   xml::number(lanes.shoulderRight));
+  if (lanes.adjoiningLeftLanes > 0) layout += fmt::format(", {} adjoining left lane(s)", lanes.adjoiningLeftLanes);
+  return layout;
+}
+
+bool sameLanes(const CarriagewayRoad& a, const CarriagewayRoad& b) {
+  return sectionLayout(a) == sectionLayout(b) && a.innerT == b.innerT && a.laneWidths == b.laneWidths &&
+         a.adjoiningLeftWidths == b.adjoiningLeftWidths && a.adjoiningLeftShoulder == b.adjoiningLeftShoulder &&
+         a.leftRun.has_value() == b.leftRun.has_value() && (!a.leftRun || *a.leftRun == *b.leftRun) &&
+         a.otherSide.empty() == b.otherSide.empty();
+}
+
+/// A driving lane of a later section must continue the same lane of the section before:
+/// a <predecessor> link to another id would move traffic across lanes.
+void checkLaneLinks(const xml::Reader& reader, const pugi::xml_node& section) {
+  for (const pugi::xml_node& side : section.children()) {
+    for (const pugi::xml_node& lane : side.children("lane")) {
+      const pugi::xml_node predecessor = lane.child("link").child("predecessor");
+      if (!predecessor || std::string(lane.attribute("type").value()) != "driving") continue;
+      const long id = reader.integer(lane, "id", -100, 100);
+      if (reader.integer(predecessor, "id", -100, 100) != id) {
+        reader.fail(predecessor, fmt::format("id: lane {} continues lane {} of the section before: the scenario "
+                                             "language's lanes keep their place along the road",
+                                             id, reader.integer(predecessor, "id", -100, 100)));
+      }
+    }
+  }
+}
+
+/// Lane sections: the first (at s = 0) gives the road's lanes; later ones (in order of s,
+/// within the road) must repeat its driving lanes and shoulders, as the language's lanes run
+/// the whole road (a road split into sections where only lanes beyond the shoulders change).
+void readLanes(const xml::Reader& reader, const pugi::xml_node& road, CarriagewayRoad& result) {
+  const pugi::xml_node lanes = reader.only(road, "lanes");
+  reader.requireSubset(lanes, {"laneSection", "laneOffset"});
+  for (const pugi::xml_node& offset : lanes.children("laneOffset")) {
+    for (const char* coefficient : {"a", "b", "c", "d"}) {
+      if (reader.optionalNumber(offset, coefficient).value_or(0.0) != 0.0) {
+        reader.fail(offset, "a lane offset: the scenario language's lanes lie symmetric about its centre line");
+      }
+    }
+  }
+  const pugi::xml_node first = lanes.child("laneSection");
+  if (!first) reader.fail(lanes, "expected a <laneSection>");
+  if (reader.optionalNumber(first, "s").value_or(0.0) != 0.0) reader.fail(first, "s: expected 0 (the road's start)");
+  readSection(reader, first, result);
+  double previous_s = 0.0;
+  for (pugi::xml_node section = first.next_sibling("laneSection"); section;
+       section = section.next_sibling("laneSection")) {
+    const double s = reader.number(section, "s", NumberRange::aboveUpTo(previous_s, result.length));
+    previous_s = s;
+    CarriagewayRoad own;
+    own.leftHandTraffic = result.leftHandTraffic;
+    readSection(reader, section, own);
+    if (!sameLanes(own, result)) {
+      reader.fail(section, fmt::format("s = {} m: {}, where the road starts with {}: the scenario language's lanes run "
+                                       "the whole road",
+                                       xml::number(s), sectionLayout(own), sectionLayout(result)));
+    }
+    checkLaneLinks(reader, section);
   }
 }
 

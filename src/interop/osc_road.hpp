@@ -1,7 +1,8 @@
 #pragma once
 // An OpenDRIVE road as one of the scenario language's roads (private to the interop module).
 //
-// A file maps if it has one road with one lane section, no lane offset, constant widths,
+// A file maps if it has one road whose lane sections all have the same driving lanes and
+// shoulders (lanes beyond them may differ), no lane offset, constant widths,
 // and on the side driven along the reference line (towards +s) a contiguous run of
 // `driving` lanes (each of its own width): the right side (negative lane ids) in right-hand
 // traffic, the left side (positive ids) with rule="LHT". Lanes between the reference line

@@ -1410,6 +1410,56 @@ std::string geometry(double s, const Vec2& start, double heading, double length,
 
 }  // namespace
 
+// A road split into lane sections (as map tools write them where something beside the road
+// changes) is one road if every section repeats the driving lanes and shoulders: the
+// translation is the one of the unsplit road. A section that changes them, and a lane that
+// continues another lane of the section before, are refused at their element.
+TEST(OscImport, LaneSectionsThatRepeatTheDrivingLanesAreOneRoad) {
+  const std::string road = readTextFile(data("roads/three_lanes.xodr"));
+  const auto begin = road.find("<laneSection s=\"0\">");
+  const auto end = road.find("</laneSection>") + std::string("</laneSection>").size();
+  const std::string first = road.substr(begin, end - begin);
+  // From s = 400: the outer border is 2 m wide; the driving lanes say which lane they continue.
+  std::string second = std::regex_replace(first, std::regex("s=\"0\">"), "s=\"400\">");
+  second.replace(second.find("a=\"1.0\"", second.find("id=\"-6\"")), 7, "a=\"2.0\"");
+  for (const char* id : {"-2", "-3", "-4"}) {
+    const auto lane = second.find(fmt::format("<lane id=\"{}\" type=\"driving\" level=\"false\">", id));
+    second.replace(second.find('>', lane) + 1, 0, fmt::format("<link><predecessor id=\"{}\"/></link>", id));
+  }
+  const auto split = [&](const std::string& later) {
+    std::string text = road;
+    text.replace(end, 0, "\n      " + later);
+    return text;
+  };
+  std::string narrower = second, dropped = second, crossed = second;
+  narrower.replace(narrower.find("a=\"3.5\"", narrower.find("id=\"-3\"")), 7, "a=\"3.25\"");
+  dropped.replace(dropped.find("type=\"driving\"", dropped.find("id=\"-4\"")), 14, "type=\"shoulder\"");
+  crossed.replace(crossed.find("<predecessor id=\"-3\"/>"), 22, "<predecessor id=\"-4\"/>");
+  const auto dir = folderWith({{"roads/split.xodr", split(second)},
+                               {"roads/narrower.xodr", split(narrower)},
+                               {"roads/dropped.xodr", split(dropped)},
+                               {"roads/crossed.xodr", split(crossed)}});
+  for (const std::string name : {"split", "narrower", "dropped", "crossed"}) {
+    test::writeFile(dir->path() / (name + ".xosc"), cutInWith("./roads/three_lanes.xodr", "./roads/" + name + ".xodr"));
+  }
+  const ScenarioCheck whole = checkOpenScenario(data("cut_in.xosc"), {});
+  const ScenarioCheck sections = checkOpenScenario(dir->path() / "split.xosc", {});
+  ASSERT_TRUE(sections.runnable()) << sections.report();
+  // The same translation but for the scenario's name (the file's stem).
+  EXPECT_EQ(std::regex_replace(sections.yaml, std::regex("split"), "cut_in"), whole.yaml);
+  const auto refusal = [&](const std::string& name) {
+    return test::configErrorOf([&] { importTemplate(dir->path() / (name + ".xosc"), {}); });
+  };
+  const auto section_line = std::count(road.begin(), road.begin() + static_cast<long>(end), '\n') + 2;
+  EXPECT_THAT(refusal("narrower"),
+              HasSubstr(fmt::format("narrower.xodr:{}: <laneSection>: s = 400 m: driving lanes -2 .. -4 of 3.5, 3.25, "
+                                    "3.5 m, shoulders 1 m left and 2.5 m right, where the road starts with driving "
+                                    "lanes -2 .. -4 of 3.5, 3.5, 3.5 m",
+                                    section_line)));
+  EXPECT_THAT(refusal("dropped"), HasSubstr("<laneSection>: s = 400 m: driving lanes -2 .. -3 of 3.5, 3.5 m"));
+  EXPECT_THAT(refusal("crossed"), HasSubstr("<predecessor>: id: lane -3 continues lane -4 of the section before"));
+}
+
 // Roads as converters write them: a geometry of half a millimetre at the end, and a curve that
 // passes the language's 1.4 rad of turn just after a geometry ends - both import as polyline
 // roads the language accepts (before, the first became a segment under 1 mm, the second one
