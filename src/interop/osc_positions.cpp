@@ -44,26 +44,37 @@ Placement onRoad(const Translation& translation, const pugi::xml_node& position,
   return {s, t, orientation(translation, position, s, heading), road.nearestLane(t)};
 }
 
-void checkRoad(const Translation& translation, const pugi::xml_node& position) {
-  const std::string road_id = translation.reader.text(position, "roadId");
-  if (road_id != translation.road.id) {
-    translation.reader.fail(position, fmt::format("roadId=\"{}\": the road network has road \"{}\" only", road_id,
-                                                  translation.road.id));
+/// m along vsd-sumo's road (the chain's reference line, before any reversal) of the position's
+/// roadId and s; refuses a road that is not part of it and an s off that road.
+double chainS(const Translation& translation, const pugi::xml_node& position) {
+  const xml::Reader& reader = translation.reader;
+  const CarriagewayRoad& road = translation.road;
+  const std::string road_id = reader.text(position, "roadId");
+  const RoadPiece* piece = road.piece(road_id);
+  if (!piece) {
+    reader.fail(position, fmt::format("roadId=\"{}\": not part of vsd-sumo's road, which is {} (the scenario's "
+                                      "first road and the roads linked to it end to start; the language has one road)",
+                                      road_id, road.name()));
   }
+  const double s = reader.number(position, "s");
+  if (road.pieces.size() > 1 && !(s >= 0.0 && s <= piece->length)) {
+    reader.fail(position, fmt::format("s = {} m is off road '{}' (0 .. {} m)", xml::number(s), road_id,
+                                      xml::number(piece->length)));
+  }
+  return piece->start + s;
 }
 
 Placement lanePosition(const Translation& translation, const pugi::xml_node& position) {
   const xml::Reader& reader = translation.reader;
-  checkRoad(translation, position);
   const CarriagewayRoad& road = translation.road;
+  const double s = road.ownS(chainS(translation, position));
   const long lane_id = static_cast<long>(reader.integer(position, "laneId", -100, 100));
   const int lane = road.languageLane(lane_id, reader.where(position));
   // The offset counts along t (left of the reference line), as esmini reads it.
   const double offset = road.ownT(reader.optionalNumber(position, "offset").value_or(0.0));
   // A relative orientation counts from the lane's driving direction under the road's rule
   // (as esmini reads it): against the reference line on the left side in right-hand traffic.
-  Placement placement = onRoad(translation, position, road.ownS(reader.number(position, "s")),
-                               road.laneCentreT(lane) + offset, road.laneDirection(lane_id));
+  Placement placement = onRoad(translation, position, s, road.laneCentreT(lane) + offset, road.laneDirection(lane_id));
   placement.lane = lane;
   return placement;
 }
@@ -72,8 +83,7 @@ Placement lanePosition(const Translation& translation, const pugi::xml_node& pos
 Placement roadPosition(const Translation& translation, const pugi::xml_node& position) {
   const xml::Reader& reader = translation.reader;
   const CarriagewayRoad& road = translation.road;
-  checkRoad(translation, position);
-  return onRoad(translation, position, road.ownS(reader.number(position, "s")), road.ownT(reader.number(position, "t")),
+  return onRoad(translation, position, road.ownS(chainS(translation, position)), road.ownT(reader.number(position, "t")),
                 road.reversed ? kPi : 0.0);
 }
 
@@ -245,7 +255,7 @@ InitCarriageway initCarriageway(const Translation& translation) {
     if (!position) continue;
     try {  // a value that does not resolve counts as nothing; placing reports it
       const long lane_id = static_cast<long>(translation.reader.integer(position, "laneId", -100, 100));
-      const double s = translation.reader.number(position, "s");
+      const double s = chainS(translation, position);
       const bool along = std::cos(orientation(translation, position, s, road.laneDirection(lane_id))) > 0.0;
       if (lane_id < 0) right_along = right_along || along;
       if (lane_id > 0) (along ? left_along : left_against) = true;

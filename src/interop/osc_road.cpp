@@ -4,9 +4,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <deque>
 #include <map>
 #include <mutex>
 #include <numeric>
+#include <set>
 #include <stdexcept>
 
 #include "vsd/core/files.hpp"
@@ -38,9 +40,10 @@ Vec2 integrateTangent(const Heading& h, double a, double b) {
   return (b - a) / 6.0 * (tangent(a) + 4.0 * tangent(m) + tangent(b));
 }
 
-PlanGeometry readGeometry(const xml::Reader& reader, const pugi::xml_node& geometry) {
+/// `offset`: m of the chain's reference line where the geometry's road starts.
+PlanGeometry readGeometry(const xml::Reader& reader, const pugi::xml_node& geometry, double offset) {
   const pugi::xml_node shape = reader.choice(geometry, {"line", "arc", "spiral", "paramPoly3"});
-  const double s = reader.number(geometry, "s", NumberRange::atLeast(0.0));
+  const double s = offset + reader.number(geometry, "s", NumberRange::atLeast(0.0));
   const Vec2 start(reader.number(geometry, "x"), reader.number(geometry, "y"));
   const double heading = reader.number(geometry, "hdg");
   const double length = reader.number(geometry, "length", kLength);
@@ -66,12 +69,15 @@ PlanGeometry readGeometry(const xml::Reader& reader, const pugi::xml_node& geome
   return PlanGeometry::paramPoly3(s, start, heading, length, u, v, range == "normalized");
 }
 
-/// The plan view: geometries joined end to start (within kJoinTolerance), in order of s.
-void readPlanView(const xml::Reader& reader, const pugi::xml_node& road, CarriagewayRoad& result) {
+/// The plan view of a road that starts `offset` m along the chain (0: the first road):
+/// geometries joined end to start (within kJoinTolerance), in order of s, appended to `result`;
+/// a later road's first geometry must continue the road before it.
+void readPlanView(const xml::Reader& reader, const pugi::xml_node& road, CarriagewayRoad& result, double offset) {
   const pugi::xml_node plan = reader.only(road, "planView");
   reader.requireSubset(plan, {"geometry"});
+  const std::size_t first = result.geometries.size();
   for (const pugi::xml_node& node : plan.children("geometry")) {
-    PlanGeometry geometry = readGeometry(reader, node);
+    PlanGeometry geometry = readGeometry(reader, node, offset);
     if (result.geometries.empty()) {
       result.start = geometry.point(0.0);
       result.heading = geometry.heading(0.0);
@@ -80,18 +86,26 @@ void readPlanView(const xml::Reader& reader, const pugi::xml_node& road, Carriag
       const PlanGeometry& before = result.geometries.back();
       const double gap = (before.point(before.length()) - geometry.point(0.0)).norm();
       const double kink = std::remainder(before.heading(before.length()) - geometry.heading(0.0), 2.0 * kPi);
-      if (std::abs(geometry.s() - result.length) > kJoinTolerance || gap > kJoinTolerance ||
-          std::abs(kink) > kJoinTolerance) {
+      const bool joins = std::abs(geometry.s() - result.length) <= kJoinTolerance && gap <= kJoinTolerance &&
+                         std::abs(kink) <= kJoinTolerance;
+      if (!joins && result.geometries.size() == first) {
+        reader.fail(node, fmt::format("road '{}' does not start where road '{}' ends, which links to it (s {} m, a gap "
+                                      "of {:.3g} m, a kink of {:.3g} rad; expected s 0 and at most {})",
+                                      reader.text(road, "id"), result.pieces.back().id,
+                                      xml::number(geometry.s() - offset), gap, kink, kJoinTolerance));
+      }
+      if (!joins) {
         reader.fail(node, fmt::format("does not continue the geometry before it (s {} m after {} m of road, a gap of "
                                       "{:.3g} m, a kink of {:.3g} rad; expected at most {})",
-                                      xml::number(geometry.s()), xml::number(result.length), gap, kink, kJoinTolerance));
+                                      xml::number(geometry.s() - offset), xml::number(result.length - offset), gap,
+                                      kink, kJoinTolerance));
       }
       result.turnBefore.push_back(result.turnBefore.back() + before.turn(before.length()));
     }
     result.length = geometry.s() + geometry.length();
     result.geometries.push_back(std::move(geometry));
   }
-  if (result.geometries.empty()) reader.fail(plan, "expected at least one <geometry>");
+  if (result.geometries.size() == first) reader.fail(plan, "expected at least one <geometry>");
 }
 
 /// Lines only, or arcs of one curvature: the language's arc road, by closed formulas.
@@ -456,6 +470,20 @@ int CarriagewayRoad::languageLane(long lane_id, const std::string& where) const 
   return static_cast<int>(lane_id - outermost);
 }
 
+const RoadPiece* CarriagewayRoad::piece(const std::string& road_id) const {
+  for (const RoadPiece& piece : pieces) {
+    if (piece.id == road_id) return &piece;
+  }
+  return nullptr;
+}
+
+std::string CarriagewayRoad::name() const {
+  if (pieces.size() <= 1) return fmt::format("road '{}'", id);
+  std::vector<std::string> ids;
+  for (const RoadPiece& piece : pieces) ids.push_back("'" + piece.id + "'");
+  return fmt::format("roads {}", fmt::join(ids, " -> "));
+}
+
 double CarriagewayRoad::centreT() const { return innerT - scenario::halfRoadWidth(laneWidths); }
 
 double CarriagewayRoad::laneCentreT(int lane) const {
@@ -709,25 +737,120 @@ std::pair<double, double> CarriagewayRoad::coordinates(const Vec2& p) const {
 
 namespace {
 
-CarriagewayRoad readRoad(const std::filesystem::path& file, std::string text, Findings& findings) {
-  xml::Reader reader(file, std::move(text));
-  const pugi::xml_node root = reader.root();
-  if (std::string(root.name()) != "OpenDRIVE") reader.fail(root, "expected the root element <OpenDRIVE>");
-  reader.requireSubset(root, {"header", "road", "controller", "junction"});
-  if (root.child("junction")) reader.fail(root.child("junction"), "junctions: the scenario language has one road");
-  const pugi::xml_node road = reader.only(root, "road");
+/// The road a <successor> or <predecessor> link of `road` names, if it continues `road` in its
+/// direction (its start follows a successor, its end precedes a predecessor) outside junctions;
+/// an empty node otherwise.
+pugi::xml_node continuation(const pugi::xml_node& root, const pugi::xml_node& road, const std::string& kind) {
+  const pugi::xml_node link = road.child("link").child(kind.c_str());
+  if (!link || std::string(link.attribute("elementType").value()) != "road") return {};
+  const std::string contact = kind == "successor" ? "start" : "end";
+  if (link.attribute("contactPoint").value() != contact) return {};
+  const std::string id = link.attribute("elementId").value();
+  for (const pugi::xml_node& other : root.children("road")) {
+    const std::string junction = other.attribute("junction").value();
+    if (other.attribute("id").value() == id && (junction.empty() || junction == "-1")) return other;
+  }
+  return {};
+}
+
+/// vsd-sumo's road in a file of several roads: the road `scenario_road` (the scenario's first
+/// roadId; `asked_where` names it) and the roads linked to it end to start, in driving order.
+/// A file of one road is that road.
+std::vector<pugi::xml_node> roadChain(const xml::Reader& reader, const pugi::xml_node& root,
+                                      const std::string& scenario_road, const std::string& asked_where) {
+  const auto roads = root.children("road");
+  const auto count = static_cast<std::size_t>(std::distance(roads.begin(), roads.end()));
+  if (count == 0) reader.fail(root, "expected a <road>");
+  if (count == 1) return {*roads.begin()};
+  if (scenario_road.empty()) {
+    reader.fail(*std::next(roads.begin()), "several roads, and no position of the scenario names one (roadId)");
+  }
+  pugi::xml_node found;
+  for (const pugi::xml_node& road : roads) {
+    if (road.attribute("id").value() == scenario_road) found = road;
+  }
+  if (!found) reader.fail(root, fmt::format("no <road> with id \"{}\" ({})", scenario_road, asked_where));
+  std::deque<pugi::xml_node> chain = {found};
+  std::set<const void*> seen = {found.internal_object()};
+  for (pugi::xml_node next = continuation(root, found, "successor"); next && seen.insert(next.internal_object()).second;
+       next = continuation(root, next, "successor")) {
+    chain.push_back(next);
+  }
+  for (pugi::xml_node before = continuation(root, found, "predecessor");
+       before && seen.insert(before.internal_object()).second; before = continuation(root, before, "predecessor")) {
+    chain.push_front(before);
+  }
+  return {chain.begin(), chain.end()};
+}
+
+/// Notes (once) the roads and junctions of the file that are not part of vsd-sumo's road.
+void noteLeftOut(const xml::Reader& reader, const pugi::xml_node& root, const CarriagewayRoad& road, Findings& findings) {
+  std::vector<std::string> roads;
+  pugi::xml_node first;
+  for (const pugi::xml_node& node : root.children("road")) {
+    if (road.piece(node.attribute("id").value())) continue;
+    roads.push_back(node.attribute("id").value());
+    if (!first) first = node;
+  }
+  std::vector<std::string> junctions;
+  for (const pugi::xml_node& node : root.children("junction")) {
+    junctions.push_back(node.attribute("id").value());
+    if (!first) first = node;
+  }
+  if (!first) return;
+  // A city map has hundreds of roads: the first few name them, the count says the rest.
+  constexpr std::size_t kNamed = 12;
+  std::string left_out;
+  if (roads.size() > kNamed) {
+    left_out = fmt::format("{} roads ({}, ...)", roads.size(),
+                           fmt::join(roads.begin(), roads.begin() + static_cast<long>(kNamed), ", "));
+  } else if (!roads.empty()) {
+    left_out = fmt::format("road(s) {}", fmt::join(roads, ", "));
+  }
+  if (!junctions.empty()) {
+    left_out += fmt::format("{}junction(s) {}", roads.empty() ? "" : " and ", fmt::join(junctions, ", "));
+  }
+  findings.note(reader.where(first), fmt::format("{} not simulated: vsd-sumo's road is {} (the scenario's road and the "
+                                                 "roads linked to it end to start; the language has one road)",
+                                                 left_out, road.name()));
+}
+
+/// One road of the chain, appended to `result` (the first gives its lanes; later ones must
+/// repeat them and the traffic rule).
+void readRoadPiece(const xml::Reader& reader, const pugi::xml_node& road, CarriagewayRoad& result, Findings& findings) {
   reader.requireSubset(road, {"link", "type", "planView", "elevationProfile", "lateralProfile", "lanes", "objects",
                               "signals", "userData", "surface"});
-  CarriagewayRoad result;
-  result.file = file;
-  result.id = reader.text(road, "id");
-  result.leftHandTraffic = road.attribute("rule") && reader.oneOf(road, "rule", {"RHT", "LHT"}) == "LHT";
-  readPlanView(reader, road, result);
-  classifyCurvature(result);
-  if (std::abs(result.length - reader.number(road, "length", kLength)) > kJoinTolerance) {
+  const bool first = result.pieces.empty();
+  const std::string id = reader.text(road, "id");
+  const bool left_hand = road.attribute("rule") && reader.oneOf(road, "rule", {"RHT", "LHT"}) == "LHT";
+  if (first) result.leftHandTraffic = left_hand;
+  if (left_hand != result.leftHandTraffic) {
+    reader.fail(road, fmt::format("rule: road '{}' continues road '{}' under the other traffic rule", id,
+                                  result.pieces.back().id));
+  }
+  const double offset = result.length;
+  readPlanView(reader, road, result, offset);
+  const double length = result.length - offset;
+  if (std::abs(length - reader.number(road, "length", kLength)) > kJoinTolerance) {
     reader.fail(road, "length: differs from the sum of its geometries' lengths");
   }
-  readLanes(reader, road, result);
+  result.pieces.push_back({id, offset, length});
+  if (first) {
+    readLanes(reader, road, result);
+  } else {
+    CarriagewayRoad own;
+    own.leftHandTraffic = left_hand;
+    own.length = length;
+    readLanes(reader, road, own);
+    const pugi::xml_node section = road.child("lanes").child("laneSection");
+    if (!sameLanes(own, result)) {
+      reader.fail(section, fmt::format("road '{}' continues road '{}' with {}, where vsd-sumo's road has {}: the "
+                                       "scenario language's lanes run the whole road",
+                                       id, result.pieces[result.pieces.size() - 2].id, sectionLayout(own),
+                                       sectionLayout(result)));
+    }
+    checkLaneLinks(reader, section);
+  }
   for (const char* planar : {"elevationProfile", "lateralProfile"}) {
     const pugi::xml_node profile = road.child(planar);
     if (profile && profile.first_child()) {
@@ -738,6 +861,22 @@ CarriagewayRoad readRoad(const std::filesystem::path& file, std::string text, Fi
     const pugi::xml_node node = road.child(unused);
     if (node && node.first_child()) findings.note(reader.where(node), "not simulated (the scenario language has no road furniture)");
   }
+}
+
+CarriagewayRoad readRoad(const std::filesystem::path& file, std::string text, Findings& findings,
+                         const std::string& scenario_road, const std::string& asked_where) {
+  xml::Reader reader(file, std::move(text));
+  const pugi::xml_node root = reader.root();
+  if (std::string(root.name()) != "OpenDRIVE") reader.fail(root, "expected the root element <OpenDRIVE>");
+  reader.requireSubset(root, {"header", "road", "controller", "junction"});
+  CarriagewayRoad result;
+  result.file = file;
+  for (const pugi::xml_node& road : roadChain(reader, root, scenario_road, asked_where)) {
+    readRoadPiece(reader, road, result, findings);
+  }
+  result.id = result.pieces.front().id;
+  classifyCurvature(result);
+  noteLeftOut(reader, root, result, findings);
   return result;
 }
 
@@ -749,14 +888,16 @@ struct ReadRoad {
 
 }  // namespace
 
-CarriagewayRoad readCarriagewayRoad(const std::filesystem::path& file, Findings& findings) {
+CarriagewayRoad readCarriagewayRoad(const std::filesystem::path& file, Findings& findings,
+                                    const std::string& scenario_road, const std::string& asked_where) {
   // A sweep imports its template once per parameter set (twice: to check it, to run it);
   // the road is read once per process and file content. A file that changes is read again.
   static std::mutex mutex;
   static std::map<std::string, ReadRoad> roads;
   constexpr std::size_t kRoadsKept = 8;
   std::string text = readTextFile(file, read_limits::kRoadNetwork);  // read once: hashed, then parsed
-  const std::string key = std::filesystem::absolute(file).lexically_normal().string() + "\n" + sha256OfString(text);
+  const std::string key = std::filesystem::absolute(file).lexically_normal().string() + "\n" + sha256OfString(text) +
+                          "\n" + scenario_road;
   {
     const std::lock_guard<std::mutex> lock(mutex);
     if (const auto found = roads.find(key); found != roads.end()) {
@@ -767,7 +908,7 @@ CarriagewayRoad readCarriagewayRoad(const std::filesystem::path& file, Findings&
   Findings own(findings.collecting());
   CarriagewayRoad road;
   try {
-    road = readRoad(file, std::move(text), own);
+    road = readRoad(file, std::move(text), own, scenario_road, asked_where);
   } catch (const ConfigError&) {
     findings.replay(own.lines());  // the notes before the refusal, as without the cache
     throw;

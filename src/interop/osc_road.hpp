@@ -16,7 +16,8 @@
 // drives it so (useReversedLeftCarriageway: the road is read on the reversed reference line,
 // and the file's s, t, lane ids and offsets are turned with it: ownS, ownT, ownLaneId).
 // Elevation, superelevation, road marks, links, objects and signals do not change the planar
-// lanes: they are reported as not simulated.
+// lanes: they are reported as not simulated. A file of several roads gives the road the
+// scenario names and the roads linked to it end to start, when they repeat its lanes.
 //
 // The plan view is any chain of `line`, `arc`, `spiral` and `paramPoly3` geometries.
 // A road of one curvature (lines only, or arcs of one curvature) maps onto the language's
@@ -99,9 +100,19 @@ struct DrivenRun {
   double outerShoulder = 0.0;      ///< m of shoulder/stop lanes beyond it
 };
 
+/// One OpenDRIVE road of the chain vsd-sumo's road is made of.
+struct RoadPiece {
+  std::string id;
+  double start = 0.0;   ///< m of the chain's reference line where the road's s = 0 lies
+  double length = 0.0;  ///< m of reference line
+};
+
 struct CarriagewayRoad {
   std::filesystem::path file;
-  std::string id;
+  std::string id;  ///< the first road's
+  /// The file's roads that make vsd-sumo's road, in driving order, linked end to start
+  /// (successor and predecessor links outside junctions); one for a file of one road.
+  std::vector<RoadPiece> pieces;
   std::vector<PlanGeometry> geometries;
   std::vector<double> turnBefore;  ///< rad turned along the reference line before each geometry
   bool oneCurvature = true;  ///< lines only, or arcs of one curvature: the language's arc road
@@ -151,6 +162,10 @@ struct CarriagewayRoad {
   /// becomes its right side. Only in right-hand traffic with a leftRun, once; throws ConfigError
   /// for a paramPoly3 geometry (not reversed).
   void useReversedLeftCarriageway();
+  /// The road of the chain with this id; nullptr if it is not part of vsd-sumo's road.
+  const RoadPiece* piece(const std::string& road_id) const;
+  /// "road '7'", or "roads '1' -> '2'" for a chain, as messages name it.
+  std::string name() const;
   /// The file's s, t (or a lateral offset along t) and lane id on the road's own reference
   /// line: the same, or turned on a reversed road (length - s, -t, -id).
   double ownS(double file_s) const { return reversed ? length - file_s : file_s; }
@@ -195,7 +210,11 @@ struct CarriagewayRoad {
 };
 
 /// Reads the road; refuses (ConfigError "file:line: <element>: why") what does not map.
-/// Elements that do not change the planar lanes go to `findings` as notes.
-CarriagewayRoad readCarriagewayRoad(const std::filesystem::path& file, Findings& findings);
+/// Elements that do not change the planar lanes go to `findings` as notes. In a file of
+/// several roads, vsd-sumo's road is road `scenario_road` (the scenario's first roadId, which
+/// `asked_where` names) with the roads linked to it end to start; the others and the file's
+/// junctions are noted as not simulated.
+CarriagewayRoad readCarriagewayRoad(const std::filesystem::path& file, Findings& findings,
+                                    const std::string& scenario_road = "", const std::string& asked_where = "");
 
 }  // namespace vsd::interop::osc

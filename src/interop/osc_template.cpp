@@ -515,7 +515,12 @@ TranslationResult translate(const fs::path& xosc, const OscImportOptions& option
   // The road network must lie next to the scenario file or below it (or inside --data-root).
   const fs::path xodr = referencedFile(options, xosc, reader.text(logic, "filepath"), reader.where(logic), "filepath");
   if (!fs::exists(xodr)) reader.fail(logic, fmt::format("the road network {} does not exist", xodr.string()));
-  translation.road = readCarriagewayRoad(xodr, findings);
+  // In a network of several roads, the scenario's road is the first one a position names (the Init's first).
+  pugi::xml_node named = root.select_node("Storyboard/Init//*[@roadId]").node();
+  if (!named) named = root.select_node("//*[@roadId]").node();
+  const std::string scenario_road = named ? reader.text(named, "roadId") : std::string();
+  translation.road = readCarriagewayRoad(xodr, findings, scenario_road,
+                                         named ? "the roadId at " + reader.where(named) : std::string());
   readEntities(translation, root, catalogs);
   for (auto& entity : translation.entities) entity.id = identifier(entity.name, translation.usedIds);
   const pugi::xml_node storyboard = reader.only(root, "Storyboard");
@@ -540,7 +545,7 @@ TranslationResult translate(const fs::path& xosc, const OscImportOptions& option
                        "the file's s = {} m)",
                        -road.innermostLaneId, -road.innermostLaneId + road.lanes - 1, num(road.length));
   }
-  findings.mapped(reader.where(logic), fmt::format("road '{}': {}{}, {}", road.id, lanes, side, shape));
+  findings.mapped(reader.where(logic), fmt::format("{}: {}{}, {}", road.name(), lanes, side, shape));
   placeEntities(translation);
   findings.attempt([&] {
     translation.ego = &findEgo(translation, translation.controller);

@@ -1460,6 +1460,80 @@ TEST(OscImport, LaneSectionsThatRepeatTheDrivingLanesAreOneRoad) {
   EXPECT_THAT(refusal("crossed"), HasSubstr("<predecessor>: id: lane -3 continues lane -4 of the section before"));
 }
 
+namespace {
+
+/// three_lanes.xodr's road as road `id` with this link and plan view, its length `length`.
+std::string linkedRoad(const std::string& id, double length, const std::string& link, const std::string& plan_view) {
+  const std::string file = readTextFile(data("roads/three_lanes.xodr"));
+  const auto begin = file.find("<road ");
+  std::string road = file.substr(begin, file.find("</road>") + 7 - begin);
+  road = std::regex_replace(road, std::regex("length=\"1000\" id=\"7\""), fmt::format("length=\"{}\" id=\"{}\"", length, id));
+  road.replace(road.find("<link/>"), 7, link);
+  const auto from = road.find("<planView>");
+  road.replace(from, road.find("</planView>") - from, "<planView>" + plan_view);
+  return road;
+}
+
+/// An OpenDRIVE file of these roads (and a junction no road uses).
+std::string network(const std::vector<std::string>& roads) {
+  return "<?xml version=\"1.0\"?>\n<OpenDRIVE>\n  <header revMajor=\"1\" revMinor=\"6\"/>\n  " +
+         fmt::format("{}", fmt::join(roads, "\n  ")) + "\n  <junction id=\"5\" name=\"unused\"/>\n</OpenDRIVE>\n";
+}
+
+}  // namespace
+
+// A map that splits a road into roads linked end to start (successor / predecessor) gives one
+// road: a position on the second road lies its own s beyond the first road's end, and the
+// translation is the unsplit road's. Roads and junctions not linked so are noted as not
+// simulated; a position on one, an s beyond its road, a second road with other lanes or one
+// that does not start where the first ends are refused at their element.
+TEST(OscImport, RoadsLinkedEndToStartAreOneRoad) {
+  const std::string to_8 = R"(<link><successor elementType="road" elementId="8" contactPoint="start"/></link>)";
+  const std::string from_7 = R"(<link><predecessor elementType="road" elementId="7" contactPoint="end"/></link>)";
+  const std::string first = linkedRoad("7", 400, to_8, geometry(0, Vec2(0, 0), 0, 400, "<line/>"));
+  const std::string second = linkedRoad("8", 600, from_7, geometry(0, Vec2(400, 0), 0, 600, "<line/>"));
+  const std::string apart = linkedRoad("9", 1000, "<link/>", geometry(0, Vec2(0, 100), 0, 1000, "<line/>"));
+  std::string narrower = second;
+  narrower.replace(narrower.find("a=\"3.5\"", narrower.find("id=\"-3\"")), 7, "a=\"3.25\"");
+  const std::string ego = R"(<LanePosition roadId="7" laneId="-3" s="20" offset="0"/>)";
+  const auto on = [&](const std::string& road_file, const std::string& position) {
+    std::string text = cutInWith("./roads/three_lanes.xodr", "./roads/" + road_file);
+    text.replace(text.find(ego), ego.size(), position);
+    return text;
+  };
+  const auto dir = folderWith(
+      {{"roads/chain.xodr", network({first, second, apart})},
+       {"roads/narrower.xodr", network({first, narrower})},
+       {"roads/gap.xodr", network({first, linkedRoad("8", 600, from_7, geometry(0, Vec2(400, 1), 0, 600, "<line/>"))})},
+       {"whole.xosc", on("three_lanes.xodr", R"(<LanePosition roadId="7" laneId="-3" s="420" offset="0"/>)")},
+       {"chain.xosc", on("chain.xodr", R"(<LanePosition roadId="8" laneId="-3" s="20" offset="0"/>)")},
+       {"beyond.xosc", on("chain.xodr", R"(<LanePosition roadId="8" laneId="-3" s="620" offset="0"/>)")},
+       {"apart.xosc", std::regex_replace(on("chain.xodr", ego), std::regex("<WorldPosition x=\"300\"[^>]*>"),
+                                         R"(<LanePosition roadId="9" laneId="-3" s="300" offset="0"/>)")},
+       {"narrower.xosc", on("narrower.xodr", ego)},
+       {"gap.xosc", on("gap.xodr", ego)}});
+  const ScenarioCheck whole = checkOpenScenario(dir->path() / "whole.xosc", {});
+  const ScenarioCheck chain = checkOpenScenario(dir->path() / "chain.xosc", {});
+  ASSERT_TRUE(chain.runnable()) << chain.report();
+  EXPECT_EQ(std::regex_replace(chain.yaml, std::regex("chain"), "whole"), whole.yaml);
+  EXPECT_THAT(chain.report(), HasSubstr("<LogicFile>: roads '7' -> '8': 3 driving lanes of 3.5 m, curvature 0 1/m"));
+  const std::string file = network({first, second, apart});
+  const auto road_9 = std::count(file.begin(), file.begin() + static_cast<long>(file.find("id=\"9\"")), '\n') + 1;
+  EXPECT_THAT(chain.report(), HasSubstr(fmt::format("chain.xodr:{}: <road>: road(s) 9 and junction(s) 5 not simulated: "
+                                                    "vsd-sumo's road is roads '7' -> '8'",
+                                                    road_9)));
+  const auto refusal = [&](const std::string& name) {
+    return test::configErrorOf([&] { importTemplate(dir->path() / (name + ".xosc"), {}); });
+  };
+  EXPECT_THAT(refusal("beyond"), HasSubstr("beyond.xosc:69: <LanePosition>: s = 620 m is off road '8' (0 .. 600 m)"));
+  EXPECT_THAT(refusal("apart"), HasSubstr("<LanePosition>: roadId=\"9\": not part of vsd-sumo's road, which is roads "
+                                          "'7' -> '8'"));
+  EXPECT_THAT(refusal("narrower"), HasSubstr("<laneSection>: road '8' continues road '7' with driving lanes -2 .. -4 "
+                                             "of 3.5, 3.25, 3.5 m"));
+  EXPECT_THAT(refusal("gap"), HasSubstr("<geometry>: road '8' does not start where road '7' ends, which links to it "
+                                        "(s 0 m, a gap of 1 m"));
+}
+
 // Roads as converters write them: a geometry of half a millimetre at the end, and a curve that
 // passes the language's 1.4 rad of turn just after a geometry ends - both import as polyline
 // roads the language accepts (before, the first became a segment under 1 mm, the second one
