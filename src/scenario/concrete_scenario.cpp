@@ -176,6 +176,34 @@ void sampleSpeeds(const VehicleSpec& spec, const ConcreteScenario& concrete, Rng
   other.speed = other.scriptedSpeed.front();
 }
 
+/// The stepper moves road users along the road at their speed: one facing off it (heading_deg)
+/// must stand, or it would slide sideways to its heading and turn along the road at once. It
+/// may cross (a cross action walks it at its own speed); speed actions may only hold it at 0.
+void checkStandsWhileFacingOff(const ConcreteVehicle& other, const VehicleSpec& spec, const std::vector<double>& inputs,
+                               std::uint64_t sample) {
+  const double off_deg = std::remainder(other.heading, 2.0 * kPi) * 180.0 / kPi;
+  if (other.againstRoad || std::abs(off_deg) < 1e-6) return;
+  const auto moving = std::find_if(other.scriptedSpeed.begin(), other.scriptedSpeed.end(),
+                                   [](double speed) { return speed > 0.0; });
+  if (moving != other.scriptedSpeed.end()) {
+    throw ConfigError(fmt::format("{}.speed: got {} m/s in sample {} for a {} facing {} deg off the road: road users "
+                                  "move along the road, so one facing off it stands (speed 0; a cross action walks "
+                                  "it across)",
+                                  spec.where, formatValue(*moving), sample, roadUserKind(other.type).name,
+                                  formatValue(off_deg)));
+  }
+  for (const ActionSpec& action : spec.actions) {
+    if (action.kind != ActionSpec::Kind::Speed) continue;
+    const bool holds_still =
+        action.speedTarget == ActionSpec::SpeedTarget::Absolute && action.target.evaluate(inputs) == 0.0;
+    if (!holds_still) {
+      throw ConfigError(fmt::format("{}: a speed action for a {} facing {} deg off the road in sample {}: road users "
+                                    "move along the road, so one facing off it stands (a cross action walks it across)",
+                                    action.where, roadUserKind(other.type).name, formatValue(off_deg), sample));
+    }
+  }
+}
+
 /// Each lane's width: road.lane_width plus its noise (one draw for every lane), or road.lane_widths.
 std::vector<double> realisedLaneWidths(const LogicalScenario& spec, const std::vector<double>& inputs, Rng& road_rng) {
   const std::string where = spec.sourceFile.string() + ": road.lane_width";
@@ -443,6 +471,7 @@ ConcreteScenario sampleConcreteScenario(const std::shared_ptr<const LogicalScena
       if (spec.others[o].id == other_spec.alongFrom) other.alongFrom = static_cast<int>(o);
     }
     sampleSpeeds(other_spec, concrete, vehicle_rng, other);
+    checkStandsWhileFacingOff(other, other_spec, inputs, index);
     other.headingNoise.resize(static_cast<std::size_t>(steps));
     for (auto& noise : other.headingNoise) noise = sampleDistribution(other_spec.headingNoise, heading_rng, inputs);
     if (other.type == RoadUserType::Pedestrian) checkOnPavedGround(concrete, other, other.offset, other_spec.where, "offset");

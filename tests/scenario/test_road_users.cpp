@@ -1,7 +1,9 @@
+#include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
 #include <fmt/format.h>
 
+#include <regex>
 #include <tuple>
 
 #include "test_support.hpp"
@@ -11,6 +13,7 @@
 
 using namespace vsd;
 using namespace vsd::scenario;
+using ::testing::HasSubstr;
 
 namespace {
 
@@ -208,6 +211,28 @@ TEST(RoadUsers, APedestrianNeedsAPlaceToCross) {
             std::string::npos)
       << error;
   EXPECT_EQ(errorOf(walker, ", shoulders: {right: 1}"), "");
+}
+
+// Road users move along the road at their speed: one facing off it (a pedestrian facing
+// across) stands until it crosses. A speed, or a speed action other than holding 0, would slide
+// it along the road and turn it there at once; both are refused (the crossing of the test above
+// passes, and so does facing along the road).
+TEST(RoadUsers, ARoadUserFacingOffTheRoadStandsUntilItCrosses) {
+  const std::string walker = R"(    - {id: p, type: pedestrian, gap: 20, relative_lane: 0, offset: -1, heading_deg: HEADING,
+       speed: SPEED, actions: [{trigger: {time: 1}, ACTION}]})";
+  const auto with = [&](const std::string& heading, const std::string& speed, const std::string& action) {
+    std::string text = std::regex_replace(walker, std::regex("HEADING"), heading);
+    text = std::regex_replace(text, std::regex("SPEED"), speed);
+    return errorOf(std::regex_replace(text, std::regex("ACTION"), action));
+  };
+  const std::string cross = "cross: {speed: 1.4, to_offset: 1}";
+  EXPECT_EQ(with("90", "0", cross), "");
+  EXPECT_EQ(with("0", "1.5", "speed: {target: 2, duration: 1}"), "");
+  EXPECT_EQ(with("90", "0", "speed: {target: 0, duration: 1}"), "");
+  EXPECT_THAT(with("90", "1.5", cross), HasSubstr("speed: got 1.5 m/s in sample 0 for a pedestrian facing 90 deg off "
+                                                  "the road: road users move along the road"));
+  EXPECT_THAT(with("-45", "0", "speed: {target: 2, duration: 1}"),
+              HasSubstr("a speed action for a pedestrian facing -45 deg off the road in sample 0"));
 }
 
 TEST(RoadUsers, LateralActionsNeedTheExactModel) {
