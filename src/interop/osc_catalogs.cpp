@@ -132,7 +132,11 @@ CatalogEntry Catalogs::resolve(const xml::Reader& scenario, const pugi::xml_node
     scenario.fail(reference, fmt::format("entry '{}' is a <{}>, expected {}", entry_name, entry.node.name(),
                                          fmt::join(kinds, " or ")));
   }
-  readParameters(*entry.reader, entry.node, {}, assigned, scenario.where(reference));
+  const Parameters parameters = readParameters(*entry.reader, entry.node, {}, assigned, scenario.where(reference));
+  // A catalog entry's constraints hold for the values the reference gives it, as the scenario's own do.
+  if (const auto violated = violatedConstraint(*entry.reader, entry.node, parameters.values)) {
+    throw ConfigError(fmt::format("{} (as {} uses the entry)", *violated, scenario.where(reference)));
+  }
   return entry;
 }
 

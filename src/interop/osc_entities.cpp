@@ -181,12 +181,28 @@ void readScenarioObject(Translation& translation, Catalogs& catalogs, const pugi
   for (const auto& other : translation.entities) {
     if (other.name == entity.name) reader.fail(object, fmt::format("entity name '{}' is used twice", entity.name));
   }
-  if (const pugi::xml_node reference = object.child("CatalogReference")) {
-    const CatalogEntry entry = catalogs.resolve(translation.reader, reference, {"Vehicle", "Pedestrian", "MiscObject"});
+  // One definition (inline or from a catalog) and at most one controller (OpenSCENARIO 1.0-1.2).
+  pugi::xml_node definition;
+  for (const pugi::xml_node& child : object.children()) {
+    if (child.type() != pugi::node_element) continue;
+    const bool controller = std::string(child.name()) == "ObjectController";
+    if (controller && child != object.child("ObjectController")) {
+      reader.fail(child, "a second <ObjectController>: an entity has one controller (OpenSCENARIO 1.0-1.2)");
+    }
+    if (controller) continue;
+    if (definition) {
+      reader.fail(child, fmt::format("<{}> after <{}>: an entity is defined once (one of Vehicle, Pedestrian, "
+                                     "MiscObject, CatalogReference)",
+                                     child.name(), definition.name()));
+    }
+    definition = child;
+  }
+  if (!definition) reader.fail(object, "expected one of: Vehicle, Pedestrian, MiscObject, CatalogReference");
+  if (std::string(definition.name()) == "CatalogReference") {
+    const CatalogEntry entry = catalogs.resolve(translation.reader, definition, {"Vehicle", "Pedestrian", "MiscObject"});
     readObject(translation, catalogs, *entry.reader, entry.node, entity);
   } else {
-    readObject(translation, catalogs, reader,
-               reader.choice(object, {"Vehicle", "Pedestrian", "MiscObject", "ObjectController"}), entity);
+    readObject(translation, catalogs, reader, definition, entity);
   }
   if (const pugi::xml_node controller = object.child("ObjectController")) {
     entity.controller = controllerName(translation, catalogs, controller, entity.controllerWhere);
@@ -262,6 +278,14 @@ void readInitAction(Translation& translation, Entity& entity, const pugi::xml_no
                           reader.optionalNumber(dynamics, "value") == std::optional<double>(0.0));
     if (at_once) {
       entity.speedTarget = reader.only(speed, "SpeedActionTarget");
+      if (entity.gradualSpeed) {
+        // Init actions run in file order: the step ends the gradual change before it at once.
+        translation.findings.note(reader.where(entity.gradualSpeed),
+                                  fmt::format("replaced by the step to a speed at line {} (Init actions run in "
+                                              "their order): '{}' starts at that speed",
+                                              reader.line(action), entity.name));
+        entity.gradualSpeed = pugi::xml_node();
+      }
     } else {
       entity.gradualSpeed = speed;  // the language's speed action at t = 0, once the Ego is known
     }

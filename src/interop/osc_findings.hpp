@@ -37,9 +37,13 @@ class Findings {
     }
     lines_.push_back({Kind::Note, std::move(text)});
   }
-  /// A refusal: ConfigError now (run), or recorded (check).
+  /// A refusal: ConfigError now (run), or recorded (check) once (an element translated again
+  /// for another Event refuses the same way).
   void refuse(const std::string& message) {
     if (!collect_) throw ConfigError(message);
+    for (const Line& line : lines_) {
+      if (line.kind == Kind::Refused && line.text == message) return;
+    }
     lines_.push_back({Kind::Refused, message});
   }
   /// Runs `read`; a ConfigError it throws becomes a refusal. Returns false if it threw.

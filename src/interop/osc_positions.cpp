@@ -117,6 +117,11 @@ Placement planePosition(Translation& translation, const pugi::xml_node& position
   double heading = 0.0;  // absolute, of the reference (relative orientations count from it)
   if (kind == "WorldPosition") {
     point = Vec2(reader.number(position, "x"), reader.number(position, "y"));
+    for (const char* unsupported : {"p", "r"}) {
+      if (reader.optionalNumber(position, unsupported).value_or(0.0) != 0.0) {
+        reader.fail(position, fmt::format("{}: vsd-sumo is planar (pitch and roll 0)", unsupported));
+      }
+    }
   } else {
     const Placement base = placementOf(translation, translation.entity(position, reader.text(position, "entityRef")));
     const Vec2 offset(reader.number(position, "dx"), reader.number(position, "dy"));
@@ -189,6 +194,19 @@ void applyDistance(Translation& translation, Entity& entity, Placement& placemen
   if (!entity.speedTarget) entity.speed = speedOf(translation, other);
 }
 
+/// Marks an entity as being resolved while it is (the check for positions or speeds that refer
+/// back to themselves), also when resolving it fails: a later reference gets the real refusal.
+class Resolving {
+ public:
+  explicit Resolving(bool& flag) : flag_(flag) { flag_ = true; }
+  ~Resolving() { flag_ = false; }
+  Resolving(const Resolving&) = delete;
+  Resolving& operator=(const Resolving&) = delete;
+
+ private:
+  bool& flag_;
+};
+
 Placement placementOf(Translation& translation, Entity& entity) {
   if (entity.placement) return *entity.placement;
   if (!entity.position) {
@@ -198,11 +216,10 @@ Placement placementOf(Translation& translation, Entity& entity) {
   if (entity.placing) {
     translation.reader.fail(entity.position, fmt::format("the position of '{}' refers back to itself", entity.name));
   }
-  entity.placing = true;
+  const Resolving resolving(entity.placing);
   Placement placement = resolvePosition(translation, entity.position);
   if (entity.distanceAction) applyDistance(translation, entity, placement);
   entity.placement = placement;
-  entity.placing = false;
   return *entity.placement;
 }
 
@@ -211,7 +228,7 @@ double speedOf(Translation& translation, Entity& entity) {
   if (!entity.speedTarget) return 0.0;  // no speed in the Init: standing
   const xml::Reader& reader = translation.reader;
   if (entity.speeding) reader.fail(entity.speedTarget, fmt::format("the speed of '{}' refers back to itself", entity.name));
-  entity.speeding = true;
+  const Resolving resolving(entity.speeding);
   const pugi::xml_node target = reader.choice(entity.speedTarget, {"AbsoluteTargetSpeed", "RelativeTargetSpeed"});
   double speed = 0.0;
   if (std::string(target.name()) == "AbsoluteTargetSpeed") {
@@ -221,7 +238,6 @@ double speedOf(Translation& translation, Entity& entity) {
     const std::string type = reader.oneOf(target, "speedTargetValueType", {"delta", "factor"});
     speed = type == "delta" ? base + reader.number(target, "value") : base * reader.number(target, "value");
   }
-  entity.speeding = false;
   entity.speed = speed;
   return speed;
 }

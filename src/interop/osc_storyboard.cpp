@@ -183,6 +183,14 @@ YAML::Node crossing(Translation& translation, const Entity& actor, const pugi::x
   }
   const auto [start_time, from] = crossingVertex(translation, vertices[0]);
   const auto [end_time, to] = crossingVertex(translation, vertices[1]);
+  // The walk starts with its event: a later first vertex would make the pedestrian wait there
+  // first, an initial distance would start it part-way.
+  if (start_time != 0.0) {
+    reader.fail(vertices[0], fmt::format("time {} s: the crossing starts with its event (expected 0)", num(start_time)));
+  }
+  if (reader.optionalNumber(follow, "initialDistanceOffset").value_or(0.0) != 0.0) {
+    reader.fail(follow, "initialDistanceOffset: the crossing starts where the pedestrian stands (expected 0)");
+  }
   const pugi::xml_node timing = reader.only(reader.only(follow, "TimeReference"), "Timing");
   if (reader.oneOf(timing, "domainAbsoluteRelative", {"relative", "absolute"}) != "relative" ||
       reader.number(timing, "scale") != 1.0 || reader.number(timing, "offset") != 0.0) {
@@ -839,8 +847,19 @@ std::optional<YAML::Node> valueCondition(Translation& translation, const pugi::x
     const auto parameter = reader.parameters().find(reader.text(condition, "parameterRef"));
     if (parameter == reader.parameters().end()) reader.fail(condition, "parameterRef names no declared parameter");
     bool holds = false;
+    const auto number = [](const std::string& text) -> std::optional<double> {
+      try {
+        return parseReal(text, NumberRange::any(), "", "");
+      } catch (const ConfigError&) {
+        return std::nullopt;
+      }
+    };
     if (rule == "equalTo" || rule == "notEqualTo") {
-      holds = (parameter->second == value) == (rule == "equalTo");
+      // Numbers compare as numbers (72 equals 72.0), anything else as text.
+      const auto left = number(parameter->second);
+      const auto right = number(value);
+      const bool equal = left && right ? *left == *right : parameter->second == value;
+      holds = equal == (rule == "equalTo");
     } else {
       const double left = parseReal(parameter->second, NumberRange::any(), reader.where(condition), "parameter");
       const double right = parseReal(value, NumberRange::any(), reader.where(condition), "value");
@@ -1001,9 +1020,11 @@ std::optional<YAML::Node> startTrigger(Translation& translation, const Entity& a
   return trigger;
 }
 
-/// Whether an Act's StartTrigger is one simulation time of at most 0 s without a delay: it
-/// starts the Act at t = 0, whatever its edge (esmini's examples write `SimulationTime > 0`
-/// with a rising or risingOrFalling edge for Acts that run from the start).
+/// Whether an Act's StartTrigger is one simulation time of at most 0 s without a delay that
+/// holds from the start: it starts the Act at t = 0 (esmini's examples write `SimulationTime > 0`
+/// with a rising or risingOrFalling edge for Acts that run from the start). Other rules and
+/// edges are read as any other condition (a falling edge is refused, a time that never comes
+/// never starts the Act).
 bool startsAtZero(const Translation& translation, const pugi::xml_node& act) {
   const xml::Reader& reader = translation.reader;
   const pugi::xml_node start = act.child("StartTrigger");
@@ -1012,7 +1033,12 @@ bool startsAtZero(const Translation& translation, const pugi::xml_node& act) {
   const pugi::xml_node condition = group.child("Condition");
   if (!condition || condition.next_sibling("Condition")) return false;
   const pugi::xml_node time = condition.child("ByValueCondition").child("SimulationTimeCondition");
-  return time && reader.number(time, "value") <= 0 && reader.number(condition, "delay") <= 0;
+  if (!time || !(reader.number(time, "value") <= 0 && reader.number(condition, "delay") <= 0)) return false;
+  const std::string rule = time.attribute("rule").value();
+  const std::string edge = condition.attribute("conditionEdge").value();
+  // `> 0` rises just after the start; `>= 0` holds at once, so only without an edge.
+  if (rule == "greaterThan") return edge == "none" || edge == "rising" || edge == "risingOrFalling";
+  return rule == "greaterOrEqual" && edge == "none";
 }
 
 /// When the Act `name` starts: at once ({time: 0}), or at the moment its StartTrigger gives
@@ -1565,6 +1591,18 @@ void readStopTrigger(Translation& translation, const pugi::xml_node& storyboard)
   if (!time) {
     reader.fail(one ? condition : stop,
                 "a StopTrigger other than a simulation time: pass --duration (s) to say how long to simulate");
+  }
+  // A time reached ends the run: `>` or `>=` becoming true, or `<` or `<=` becoming false.
+  const std::string rule =
+      reader.oneOf(time, "rule", {"greaterThan", "greaterOrEqual", "lessThan", "lessOrEqual", "equalTo", "notEqualTo"});
+  const std::string edge = reader.oneOf(condition, "conditionEdge", {"none", "rising", "falling", "risingOrFalling"});
+  const bool reached = rule == "greaterThan" || rule == "greaterOrEqual";
+  const bool left = rule == "lessThan" || rule == "lessOrEqual";
+  if (!((reached && (edge == "none" || edge == "rising")) || (left && edge == "falling"))) {
+    reader.fail(condition, fmt::format("conditionEdge=\"{}\" on rule=\"{}\": the language ends a run when a time is "
+                                       "reached (greaterThan or greaterOrEqual, edge none or rising; lessThan or "
+                                       "lessOrEqual, edge falling): pass --duration (s)",
+                                       edge, rule));
   }
   const double end = reader.number(time, "value", NumberRange::atLeast(0.0)) +
                      reader.number(condition, "delay", NumberRange::atLeast(0.0));

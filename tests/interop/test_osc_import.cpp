@@ -308,6 +308,104 @@ TEST(OscImport, CheckListsEveryRefusalWithItsLine) {
   EXPECT_TRUE(checkOpenScenario(data("cut_in.xosc"), {}).runnable());
 }
 
+// Values a file states reach the translation or are refused; before, each of these was
+// accepted and lost: an Act start that never holds ran from t = 0, a StopTrigger's rule and
+// edge were not read, numbers in a ParameterCondition compared as text (72 vs 72.0).
+TEST(OscImport, ConditionsAreReadWithTheirRulesAndEdges) {
+  const std::string act_start = R"(<SimulationTimeCondition value="0" rule="greaterOrEqual"/>)";
+  const std::string stop = R"(<Condition name="End" delay="0" conditionEdge="rising">
+        <ByValueCondition><SimulationTimeCondition value="${4 + 4}" rule="greaterOrEqual"/>)";
+  const std::string swerve = R"(<StoryboardElementStateCondition storyboardElementType="action" storyboardElementRef="CutInChange" state="endTransition"/>)";
+  const auto dir = folderWith(
+      {{"never.xosc", cutInWith(act_start, R"(<SimulationTimeCondition value="0" rule="lessThan"/>)")},
+       {"stop_rule.xosc", cutInWith(stop, R"(<Condition name="End" delay="0" conditionEdge="none">
+        <ByValueCondition><SimulationTimeCondition value="8" rule="lessThan"/>)")},
+       {"stop_falling.xosc", cutInWith(stop, R"(<Condition name="End" delay="1" conditionEdge="falling">
+        <ByValueCondition><SimulationTimeCondition value="6" rule="lessThan"/>)")},
+       {"parameter.xosc", std::regex_replace(cutInWith(swerve, R"(<ParameterCondition parameterRef="Ego_Speed_kph" value="72.0" rule="equalTo"/>)"),
+                                             std::regex("name=\"AfterTheChange\" delay=\"1\" conditionEdge=\"rising\""),
+                                             "name=\"AfterTheChange\" delay=\"1\" conditionEdge=\"none\"")}});
+  const auto report = [&](const std::string& name) { return checkOpenScenario(dir->path() / name, {}); };
+  EXPECT_THAT(report("never.xosc").report(), HasSubstr("<SimulationTimeCondition>: rule=\"lessThan\": the language's "
+                                                       "time trigger fires once time reaches a value"));
+  EXPECT_THAT(report("stop_rule.xosc").report(), HasSubstr("<Condition>: conditionEdge=\"none\" on rule=\"lessThan\": "
+                                                           "the language ends a run when a time is reached"));
+  // t < 6 stops holding at 6 s; one second's delay: the run ends at 7 s.
+  const ScenarioCheck falling = report("stop_falling.xosc");
+  ASSERT_TRUE(falling.runnable()) << falling.report();
+  EXPECT_THAT(falling.yaml, HasSubstr("duration: 7\n"));
+  const ScenarioCheck parameter = report("parameter.xosc");
+  ASSERT_TRUE(parameter.runnable()) << parameter.report();
+  EXPECT_THAT(parameter.yaml, HasSubstr("id: SwerveOut\n          trigger:\n            time: 0\n            delay: 1\n"));
+}
+
+// An entity is defined once, has one controller, stands in the plane, and its catalog
+// entry's constraints hold for the values it is given; a refusal of one entity's position
+// does not make a later reference to it "refer back to itself".
+TEST(OscImport, EntitiesAreDefinedOnceAndTheirCatalogConstraintsHold) {
+  const std::string cutter = R"(<CatalogReference catalogName="fleet" entryName="$Vehicle_Model"/>)";
+  const std::string controller = R"(<ObjectController><CatalogReference catalogName="drivers" entryName="ALKSController"/></ObjectController>)";
+  const std::string ego_place = R"(<LanePosition roadId="7" laneId="-3" s="20" offset="0"/>)";
+  std::string constrained = readTextFile(data("catalogs/vehicles/fleet.xosc"));
+  constrained.replace(constrained.find("value=\"4.5\"/>"), 13,
+                      "value=\"4.5\"><ConstraintGroup><ValueConstraint rule=\"lessOrEqual\" value=\"4.8\"/>"
+                      "</ConstraintGroup></ParameterDeclaration>");
+  const auto dir = folderWith(
+      {{"twice.xosc", cutInWith(cutter, cutter + R"(<Vehicle name="bus" vehicleCategory="bus"/>)")},
+       {"controllers.xosc", cutInWith(controller, controller + controller)},
+       {"pitched.xosc", cutInWith(ego_place, R"(<LanePosition roadId="7" laneId="-3" s="20" offset="0"><Orientation p="0.5"/></LanePosition>)")},
+       {"world.xosc", cutInWith(R"(<WorldPosition x="300" y="-12.75")", R"(<WorldPosition x="300" y="-12.75" r="0.1")")}});
+  const auto constraining = folderWith({{"catalogs/vehicles/fleet.xosc", constrained}});
+  const auto report = [&](const std::string& name) { return checkOpenScenario(dir->path() / name, {}).report(); };
+  EXPECT_THAT(report("twice.xosc"), HasSubstr("<Vehicle>: <Vehicle> after <CatalogReference>: an entity is defined once"));
+  EXPECT_THAT(report("controllers.xosc"), HasSubstr("<ObjectController>: a second <ObjectController>"));
+  EXPECT_THAT(report("pitched.xosc"), HasSubstr("<Orientation>: p: vsd-sumo is planar (pitch and roll 0)"));
+  EXPECT_THAT(report("pitched.xosc"), Not(HasSubstr("refers back to itself")));
+  EXPECT_THAT(report("world.xosc"), HasSubstr("<WorldPosition>: r: vsd-sumo is planar (pitch and roll 0)"));
+  // The Ego's entry is given a length of 5 m, beyond the entry's 4.8 m.
+  EXPECT_THAT(checkOpenScenario(constraining->path() / "cut_in.xosc", {}).report(),
+              HasSubstr("fleet.xosc:7: <ParameterDeclaration>: parameter 'Length' = '5.0' "
+                                               "violates its constraints (lessOrEqual 4.8); OpenSCENARIO: not executed "
+                                               "(as "));
+}
+
+// The Init runs its actions in order: a step to a speed after a gradual change replaces it
+// (noted), as esmini does; a crossing starts with its event and where the pedestrian stands.
+TEST(OscImport, InitActionsInOrderAndCrossingsFromTheirStart) {
+  const std::string step = R"(<SpeedActionDynamics dynamicsShape="step" dynamicsDimension="time" value="0"/>
+              <SpeedActionTarget>
+                <RelativeTargetSpeed entityRef="Ego")";
+  const std::string gradual = R"(<LongitudinalAction><SpeedAction>
+              <SpeedActionDynamics dynamicsShape="linear" dynamicsDimension="rate" value="2"/>
+              <SpeedActionTarget><AbsoluteTargetSpeed value="30"/></SpeedActionTarget>
+            </SpeedAction></LongitudinalAction>
+          </PrivateAction>
+          <PrivateAction>
+            <LongitudinalAction><SpeedAction>
+              )";
+  const std::string crossing = readTextFile(data("crossing.xosc"));
+  const auto vertex = crossing.find("<Vertex time=\"0\"");
+  ASSERT_NE(vertex, std::string::npos);
+  std::string late = crossing;
+  late.replace(vertex, 16, "<Vertex time=\"2\"");
+  std::string partway = crossing;
+  partway.replace(partway.find("<FollowTrajectoryAction"), 23, "<FollowTrajectoryAction initialDistanceOffset=\"1\"");
+  const auto dir = folderWith({{"order.xosc", cutInWith("<LongitudinalAction><SpeedAction>\n              " + step,
+                                                        gradual + step)},
+                               {"late.xosc", late},
+                               {"partway.xosc", partway}});
+  const ScenarioCheck order = checkOpenScenario(dir->path() / "order.xosc", {});
+  ASSERT_TRUE(order.runnable()) << order.report();
+  EXPECT_THAT(order.report(), HasSubstr("<SpeedAction>: replaced by the step to a speed at line"));
+  EXPECT_THAT(order.yaml, Not(HasSubstr("target: 30")));
+  EXPECT_EQ(std::regex_replace(order.yaml, std::regex("order"), "cut_in"), checkOpenScenario(data("cut_in.xosc"), {}).yaml);
+  EXPECT_THAT(checkOpenScenario(dir->path() / "late.xosc", {}).report(),
+              HasSubstr("<Vertex>: time 2 s: the crossing starts with its event (expected 0)"));
+  EXPECT_THAT(checkOpenScenario(dir->path() / "partway.xosc", {}).report(),
+              HasSubstr("<FollowTrajectoryAction>: initialDistanceOffset: the crossing starts where the pedestrian "
+                        "stands (expected 0)"));
+}
+
 TEST(OscImport, MiscObjectsAndRoadPositions) {
   const auto dir = folderWith({{"cone.xosc", cutInWith("</Entities>",
                                                        "<ScenarioObject name=\"Cone\"><MiscObject miscObjectCategory=\"obstacle\" "
