@@ -815,6 +815,20 @@ void noteLeftOut(const xml::Reader& reader, const pugi::xml_node& root, const Ca
                                                  left_out, road.name()));
 }
 
+/// What a road says about how to drive on it and the simulation does not follow: its type and
+/// speed limit (scripted road users keep their own speeds, the Ego its controller's), lane
+/// speeds and road marks (lane changes cross any mark). One note each, at the first.
+void noteRules(const xml::Reader& reader, const pugi::xml_node& road, Findings& findings) {
+  if (const pugi::xml_node type = road.child("type")) {
+    findings.note(reader.where(type), "the road type and its speed limit are not simulated (scripted road users keep "
+                                      "their speeds, the Ego its controller's)");
+  }
+  const pugi::xml_node speed = road.select_node("lanes/laneSection/*/lane/speed").node();
+  if (speed) findings.note(reader.where(speed), "lane speed limits are not simulated");
+  const pugi::xml_node mark = road.select_node("lanes/laneSection/*/lane/roadMark").node();
+  if (mark) findings.note(reader.where(mark), "road marks are not simulated (lane changes cross any mark)");
+}
+
 /// One road of the chain, appended to `result` (the first gives its lanes; later ones must
 /// repeat them and the traffic rule).
 void readRoadPiece(const xml::Reader& reader, const pugi::xml_node& road, CarriagewayRoad& result, Findings& findings) {
@@ -861,6 +875,7 @@ void readRoadPiece(const xml::Reader& reader, const pugi::xml_node& road, Carria
     const pugi::xml_node node = road.child(unused);
     if (node && node.first_child()) findings.note(reader.where(node), "not simulated (the scenario language has no road furniture)");
   }
+  noteRules(reader, road, findings);
 }
 
 CarriagewayRoad readRoad(const std::filesystem::path& file, std::string text, Findings& findings,

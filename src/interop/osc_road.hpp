@@ -15,8 +15,8 @@
 // heading"), or the left side's run driven against the reference line where the scenario
 // drives it so (useReversedLeftCarriageway: the road is read on the reversed reference line,
 // and the file's s, t, lane ids and offsets are turned with it: ownS, ownT, ownLaneId).
-// Elevation, superelevation, road marks, links, objects and signals do not change the planar
-// lanes: they are reported as not simulated. A file of several roads gives the road the
+// Elevation, superelevation, road marks, road types and speeds, objects and signals do not
+// change the planar lanes: they are reported as not simulated. A file of several roads gives the road the
 // scenario names and the roads linked to it end to start, when they repeat its lanes.
 //
 // The plan view is any chain of `line`, `arc`, `spiral` and `paramPoly3` geometries.

@@ -1545,6 +1545,10 @@ TEST(OscImport, LaneSectionsThatRepeatTheDrivingLanesAreOneRoad) {
   ASSERT_TRUE(sections.runnable()) << sections.report();
   // The same translation but for the scenario's name (the file's stem).
   EXPECT_EQ(std::regex_replace(sections.yaml, std::regex("split"), "cut_in"), whole.yaml);
+  // What the road says about driving on it, and the simulation does not follow, is noted once.
+  EXPECT_THAT(sections.report(), HasSubstr("split.xodr:8: <type>: the road type and its speed limit are not simulated"));
+  EXPECT_THAT(sections.report(), HasSubstr("split.xodr:24: <roadMark>: road marks are not simulated (lane changes "
+                                           "cross any mark)"));
   const auto refusal = [&](const std::string& name) {
     return test::configErrorOf([&] { importTemplate(dir->path() / (name + ".xosc"), {}); });
   };
