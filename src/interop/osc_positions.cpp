@@ -209,6 +209,15 @@ class Resolving {
 
 Placement placementOf(Translation& translation, Entity& entity) {
   if (entity.placement) return *entity.placement;
+  if (!entity.position && entity.controller) {
+    // esmini's SumoController brings traffic that SUMO drives from a route file of its own: such an
+    // entity starts nowhere in the file.
+    translation.reader.fail(translation.reader.root(),
+                            fmt::format("entity '{}' has no TeleportAction in the Init, only a controller ('{}', at {}): "
+                                        "vsd-sumo's road users start where the Init places them (traffic a controller "
+                                        "brings from elsewhere, such as a SUMO route file, is not imported)",
+                                        entity.name, *entity.controller, entity.controllerWhere));
+  }
   if (!entity.position) {
     translation.reader.fail(translation.reader.root(),
                             fmt::format("entity '{}' has no TeleportAction in the Init (where does it start?)", entity.name));

@@ -354,7 +354,12 @@ TEST(OscImport, EntitiesAreDefinedOnceAndTheirCatalogConstraintsHold) {
       {{"twice.xosc", cutInWith(cutter, cutter + R"(<Vehicle name="bus" vehicleCategory="bus"/>)")},
        {"controllers.xosc", cutInWith(controller, controller + controller)},
        {"pitched.xosc", cutInWith(ego_place, R"(<LanePosition roadId="7" laneId="-3" s="20" offset="0"><Orientation p="0.5"/></LanePosition>)")},
-       {"world.xosc", cutInWith(R"(<WorldPosition x="300" y="-12.75")", R"(<WorldPosition x="300" y="-12.75" r="0.1")")}});
+       {"world.xosc", cutInWith(R"(<WorldPosition x="300" y="-12.75")", R"(<WorldPosition x="300" y="-12.75" r="0.1")")},
+       // A controller that brings its entity from elsewhere (esmini's SumoController) and no start.
+       {"brought.xosc", std::regex_replace(cutInWith(R"(<CatalogReference catalogName="people" entryName="walker"/>)",
+                                                     R"(<CatalogReference catalogName="people" entryName="walker"/>)" +
+                                                         controller),
+                                           std::regex("<Private entityRef=\"Walker\">[^]*?</Private>"), "")}});
   const auto constraining = folderWith({{"catalogs/vehicles/fleet.xosc", constrained}});
   const auto report = [&](const std::string& name) { return checkOpenScenario(dir->path() / name, {}).report(); };
   EXPECT_THAT(report("twice.xosc"), HasSubstr("<Vehicle>: <Vehicle> after <CatalogReference>: an entity is defined once"));
@@ -362,6 +367,8 @@ TEST(OscImport, EntitiesAreDefinedOnceAndTheirCatalogConstraintsHold) {
   EXPECT_THAT(report("pitched.xosc"), HasSubstr("<Orientation>: p: vsd-sumo is planar (pitch and roll 0)"));
   EXPECT_THAT(report("pitched.xosc"), Not(HasSubstr("refers back to itself")));
   EXPECT_THAT(report("world.xosc"), HasSubstr("<WorldPosition>: r: vsd-sumo is planar (pitch and roll 0)"));
+  EXPECT_THAT(report("brought.xosc"), HasSubstr("entity 'Walker' has no TeleportAction in the Init, only a controller "
+                                                "('ALKSController', at "));
   // The Ego's entry is given a length of 5 m, beyond the entry's 4.8 m.
   EXPECT_THAT(checkOpenScenario(constraining->path() / "cut_in.xosc", {}).report(),
               HasSubstr("fleet.xosc:7: <ParameterDeclaration>: parameter 'Length' = '5.0' "
