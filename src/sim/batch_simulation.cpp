@@ -266,7 +266,7 @@ class BatchRun {
     member.ego->knowRoad(member.edge, std::move(lane_offsets));
     member.ego->activateFrom(member.run->scenario->controllerActiveFrom);
     addSwitchedControllers(member);
-    member.ego->pushToSumo();
+    member.ego->enterSumo(member.result.lanes);
     owner_.emplace(member.egoId, m);
     expected_.insert(member.egoId);
     initTrack(member.result.trace.vehicles[0], ego_spec, VehicleRole::Ego, instants_);
@@ -281,8 +281,8 @@ class BatchRun {
       const auto& other = others[o];
       const std::string id = member.edge + "." + other.id;
       addSumoVehicle(id, member.route, other);
-      placeInSumo(id, member.traffic->states()[o], other.length, other.width, member.run->offset, member.placement,
-                  other.againstRoad);
+      enterSumo(id, member.traffic->states()[o], other.length, other.width, member.run->offset, member.placement,
+                member.result.lanes, other.againstRoad);
       member.otherIds.push_back(id);
       owner_.emplace(id, m);
       expected_.insert(id);

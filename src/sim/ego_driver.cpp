@@ -6,6 +6,8 @@
 #include <charconv>
 #include <cmath>
 #include <limits>
+#include <optional>
+#include <utility>
 
 #include "vsd/sim/activity.hpp"
 #include "vsd/sim/builtin_controllers.hpp"
@@ -96,14 +98,58 @@ bool sumoIgnoresLateralPositions() {
   }
 }
 
+namespace {
+
+/// The point SUMO positions a vehicle by (frame net - offset): its front bumper, against the road its rear one.
+Vec2 sumoFront(const VehicleState& state, double length, bool against_road) {
+  const double ahead = against_road ? -0.5 * length : 0.5 * length;
+  return state.position() + ahead * headingVector(state.heading);
+}
+
+/// The lane (of `lanes`) nearest to `front` and SUMO's position along it, if a vehicle `width` m wide there lies
+/// beyond every lane as SUMO counts it: |lateral offset| >= (lane width + vehicle width) / 2 (SUMO 1.15, sublane
+/// model or not). 1 cm sooner: a vehicle so near the edge is put on the lane first too, which changes nothing,
+/// while one SUMO finds beyond it by the rounding of the frame shift would crash its FCD output.
+std::optional<std::pair<std::string, double>> nearestLaneIfBeyond(const Vec2& front, double width,
+                                                                  const std::vector<LaneGeometry>& lanes) {
+  constexpr double kMargin = 0.01;
+  const LaneGeometry* nearest = nullptr;
+  PolylineProjection foot;
+  double shape_length = 0.0;
+  for (const auto& lane : lanes) {
+    const MeasuredPolyline centre(lane.centre);
+    const PolylineProjection projection = centre.project(front);
+    const double across = std::abs(projection.lateralOffset);
+    if (across < 0.5 * (lane.width + width) - kMargin) return std::nullopt;
+    if (nearest != nullptr && across >= std::abs(foot.lateralOffset)) continue;
+    nearest = &lane;
+    foot = projection;
+    shape_length = centre.length();
+  }
+  if (nearest == nullptr) return std::nullopt;
+  // SUMO measures along its lane's length, which netconvert may make differ from the shape's.
+  const double length = libsumo::Lane::getLength(nearest->id);
+  const double along = shape_length > 0.0 ? foot.arcLength * length / shape_length : 0.0;
+  return std::make_pair(nearest->id, std::clamp(along, 0.0, length));
+}
+
+}  // namespace
+
 void placeInSumo(const std::string& vehicle_id, const VehicleState& state, double length, double width,
                  const Vec2& offset, const SumoPlacement& placement, bool against_road) {
-  const double ahead = against_road ? -0.5 * length : 0.5 * length;
-  const Vec2 front = state.position() + ahead * headingVector(state.heading);
+  const Vec2 front = sumoFront(state, length, against_road);
   const Vec2 net_front = front + offset;
   libsumo::Vehicle::moveToXY(vehicle_id, "", -1, net_front.x(), net_front.y(), sumoAngleFromHeading(state.heading),
                              placement.keepRoute(front, width));
   libsumo::Vehicle::setSpeed(vehicle_id, state.speed);
+}
+
+void enterSumo(const std::string& vehicle_id, const VehicleState& state, double length, double width,
+               const Vec2& offset, const SumoPlacement& placement, const std::vector<LaneGeometry>& lanes,
+               bool against_road) {
+  const auto lane = nearestLaneIfBeyond(sumoFront(state, length, against_road), width, lanes);
+  if (lane) libsumo::Vehicle::moveTo(vehicle_id, lane->first, lane->second);
+  placeInSumo(vehicle_id, state, length, width, offset, placement, against_road);
 }
 
 Observation::Lane observeLane(const MeasuredPolyline& preview_line, const PolylineProjection& projection,
@@ -125,6 +171,10 @@ Observation::Lane observeLane(const MeasuredPolyline& preview_line, const Polyli
 }
 
 void EgoDriver::pushToSumo() const { placeInSumo(vehicleId_, state_, length_, width_, offset_, placement_, false); }
+
+void EgoDriver::enterSumo(const std::vector<LaneGeometry>& lanes) const {
+  sim::enterSumo(vehicleId_, state_, length_, width_, offset_, placement_, lanes, false);
+}
 
 void EgoDriver::knowAgainstRoad(std::vector<std::string> vehicle_ids) {
   againstRoad_ = std::move(vehicle_ids);

@@ -1,9 +1,13 @@
 #include <gtest/gtest.h>
 
 #include <fmt/format.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <functional>
 #include <limits>
 #include <random>
 #include <regex>
@@ -33,7 +37,7 @@ struct Batch {
 
   Batch(const std::shared_ptr<const scenario::LogicalScenario>& scenario, std::size_t count,
         const std::filesystem::path& dir, ControllerRegistry registry = ControllerRegistry::withBuiltins(),
-        std::filesystem::path fcd = {})
+        std::filesystem::path fcd = {}, double lateral_resolution = 0.0)
       : logical(scenario), layout(road::BatchLayout::cellSizeFor(scenario->road)) {
     road::NetworkBuilder builder;
     for (std::uint64_t i = 0; i < count; ++i) {
@@ -49,6 +53,7 @@ struct Batch {
     options.step = logical->step;
     options.steps = logical->steps();
     options.fcdOutput = fcd;
+    options.lateralResolution = lateral_resolution;
     results = simulateBatch(net, runs, registry, options);
   }
 };
@@ -274,6 +279,78 @@ vehicles:
   const auto& left = longer.results[0].trace.vehicles[1];
   EXPECT_TRUE(left.validAt(44));    // 8.8 s
   EXPECT_FALSE(left.validAt(45));   // 9.0 s
+}
+
+namespace {
+/// Runs `body` in a forked child, so that a crash in libsumo takes down only the child; returns its wait status.
+int inChild(const std::function<void()>& body) {
+  const pid_t pid = ::fork();
+  if (pid == 0) {
+    try {
+      body();
+    } catch (const std::exception& error) {
+      std::fprintf(stderr, "%s\n", error.what());
+      ::_exit(2);
+    }
+    ::_exit(0);
+  }
+  int status = 0;
+  ::waitpid(pid, &status, 0);
+  return status;
+}
+
+std::string describeStatus(int status) {
+  if (WIFSIGNALED(status)) return fmt::format("killed by signal {}", WTERMSIG(status));
+  return fmt::format("exit code {}", WEXITSTATUS(status));
+}
+}  // namespace
+
+// SUMO's network has only the lanes: a pedestrian standing on the shoulder is beyond all of them. Placed there
+// before SUMO had inserted it, SUMO 1.15 inserted it with no lane and crashed writing its FCD (which names every
+// vehicle's lane) in the first step, sublane model or not. It runs, and SUMO's FCD has it where it is at every
+// instant: standing on the shoulder, then walking across the road from t = 1 s (back onto the lanes).
+TEST(BatchSimulation, ARoadUserStartingBeyondTheLanesIsInSumosFcdWhereItIs) {
+  const auto logical = scenario::parseLogicalScenario(R"(
+name: shoulder
+time: {step: 0.2, duration: 4}
+road: {shape: arc, curvature: 0, length: 300, lanes: 2, lane_width: 3.5, shoulders: {right: 2.5}}
+vehicles:
+  ego: {s: 20, lane: 0, speed: 10, controller: {name: idm, params: {set_speed: 10}}}
+  others:
+    - {id: walker, type: pedestrian, length: 0.4, width: 0.6, s: 100, lane: 0, offset: -3, heading_deg: 90,
+       actions: [{trigger: {time: 1}, cross: {speed: 1.5, to_offset: 3.5}}]}
+)",
+                                                      "shoulder.yaml");
+  const auto concrete = scenario::sampleConcreteScenario(logical, 1, 0);
+  const auto walker = plannedPaths(concrete, road::buildRoadGeometry(concrete))[0];
+  const Vec2 offset = road::BatchLayout(road::BatchLayout::cellSizeFor(logical->road)).offsetFor(0);
+  const std::regex record(R"re(<timestep time="([0-9.]+)">|<vehicle id="s0\.walker" x="([-0-9.]+)" y="([-0-9.]+)")re");
+  for (const double lateral_resolution : {0.0, 1.75}) {
+    TemporaryDirectory dir;
+    const auto fcd = dir.path() / "fcd.xml";
+    const int status = inChild([&] {
+      const Batch batch(logical, 1, dir.path(), ControllerRegistry::withBuiltins(), fcd, lateral_resolution);
+      if (!batch.results[0].ok()) throw Error(batch.results[0].failure);
+    });
+    const bool completed = WIFEXITED(status) && WEXITSTATUS(status) == 0;
+    EXPECT_TRUE(completed) << "lateral resolution " << lateral_resolution << ": the simulation "
+                           << describeStatus(status);
+    if (!completed) continue;
+    const std::string xml = readTextFile(fcd);
+    std::size_t k = 0;
+    std::size_t seen = 0;
+    for (auto it = std::sregex_iterator(xml.begin(), xml.end(), record); it != std::sregex_iterator(); ++it) {
+      if ((*it)[1].matched) {
+        k = static_cast<std::size_t>(std::lround(std::stod((*it)[1]) / 0.2));  // FCD time T holds instant T / 0.2
+        continue;
+      }
+      const Vec2 front = walker[k].position() + 0.2 * headingVector(walker[k].heading) + offset;
+      EXPECT_NEAR(std::stod((*it)[2]), front.x(), 0.011) << "instant " << k << ", resolution " << lateral_resolution;
+      EXPECT_NEAR(std::stod((*it)[3]), front.y(), 0.011) << "instant " << k << ", resolution " << lateral_resolution;
+      ++seen;
+    }
+    EXPECT_EQ(seen, walker.size()) << "lateral resolution " << lateral_resolution;  // at every instant, from t = 0
+  }
 }
 
 namespace {

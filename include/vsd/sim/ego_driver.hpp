@@ -84,6 +84,15 @@ bool sumoIgnoresLateralPositions();
 void placeInSumo(const std::string& vehicle_id, const VehicleState& state, double length, double width,
                  const Vec2& offset, const SumoPlacement& placement, bool against_road);
 
+/// placeInSumo for a vehicle SUMO has not inserted yet, on the road whose lanes are `lanes` (frame net - offset).
+/// SUMO inserts a vehicle first placed beyond every lane (a pedestrian on the shoulder: the network has only the
+/// lanes) with no lane at all, and SUMO 1.15's FCD output, which names every vehicle's lane, then crashes. Such a
+/// vehicle is first put on the nearest lane (libsumo's moveTo inserts it at once), and placeInSumo then moves it
+/// to where it is, off the lane, as it moves a vehicle that leaves its lane later: SUMO has it there, on no lane.
+void enterSumo(const std::string& vehicle_id, const VehicleState& state, double length, double width,
+               const Vec2& offset, const SumoPlacement& placement, const std::vector<LaneGeometry>& lanes,
+               bool against_road);
+
 class EgoDriver {
  public:
   /// `offset`: net coordinates of the scenario frame's origin. The vehicle must
@@ -127,6 +136,8 @@ class EgoDriver {
   void useController(std::size_t slot, double time, ControlDomains domains = ControlDomains::Both);
   /// Places the vehicle in SUMO at the current state (moveToXY + speed).
   void pushToSumo() const;
+  /// pushToSumo for the first time, before SUMO has inserted the vehicle (enterSumo; `lanes`: its road's).
+  void enterSumo(const std::vector<LaneGeometry>& lanes) const;
   /// Builds the controller's observation from SUMO's current state; for a controller that
   /// observes objects, the object list of `road_users` (the other road users at `time`).
   Observation observe(double time, LaneCache& lanes, const std::vector<RoadUserState>& road_users = {}) const;
