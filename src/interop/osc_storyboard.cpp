@@ -271,6 +271,13 @@ YAML::Node speedAction(Translation& translation, const Entity& actor, const pugi
                                       "speed at once (step)",
                                       reader.text(dynamics, "dynamicsShape")));
   }
+  if (!continuous && item["shape"].as<std::string>() != "step" && reader.text(target, "entityRef") != actor.name) {
+    // The standard does not say whether the target moves with its reference during the change.
+    translation.findings.note(reader.where(target),
+                              fmt::format("the target is the reference's speed {} m/s when the change starts (esmini "
+                                          "follows the reference's speed until it is reached)",
+                                          value < 0 ? "less " + num(-value) : "plus " + num(value)));
+  }
   relativeSpeed(translation, actor, target, continuous, item);
   return item;
 }
@@ -484,11 +491,25 @@ YAML::Node relationLeaf(Translation& translation, const Entity& actor, const Ent
   }
   // freespace="false": between the entities' reference points (their places in the language).
   const bool freespace = reader.oneOf(condition, "freespace", {"true", "false"}) == "true";
-  for (const char* attribute : {"relativeDistanceType", "coordinateSystem"}) {
-    const auto value = reader.optionalText(condition, attribute);
-    if (value && *value != "longitudinal" && *value != "entity" && *value != "road" && *value != "lane") {
-      reader.fail(condition, fmt::format("{}=\"{}\": the language measures along the Ego's lane", attribute, *value));
-    }
+  // Without a relativeDistanceType the distance is the straight line between the two (OpenSCENARIO
+  // 1.1's default, esmini's reading also with 1.0's alongRoute); longitudinal is along the lane
+  // in any coordinate system the language has (entity, road, lane: one straight lane frame).
+  std::string distance_type = "euclidianDistance";
+  if (condition.attribute("relativeDistanceType")) {
+    distance_type = reader.oneOf(condition, "relativeDistanceType",
+                                 {"longitudinal", "lateral", "euclidianDistance", "cartesianDistance"});
+  }
+  if (distance_type == "lateral") {
+    reader.fail(condition, "relativeDistanceType=\"lateral\": the language measures along the Ego's lane or in a "
+                           "straight line");
+  }
+  const bool straight_line = distance_type != "longitudinal";
+  if (condition.attribute("alongRoute")) reader.oneOf(condition, "alongRoute", {"true", "false"});
+  const auto system = reader.optionalText(condition, "coordinateSystem");
+  if (system && *system != "entity" && *system != "road" && *system != "lane") {
+    reader.fail(condition, fmt::format("coordinateSystem=\"{}\": the language measures along the Ego's lane or in a "
+                                       "straight line",
+                                       *system));
   }
   const std::string quantity = kind == "RelativeDistanceCondition" ? "gap"
                                : kind == "TimeHeadwayCondition"    ? "headway"
@@ -512,6 +533,7 @@ YAML::Node relationLeaf(Translation& translation, const Entity& actor, const Ent
     trigger["between"] = "reference_points";
     translation.measuresReferencePoints = true;
   }
+  if (straight_line) trigger["measure"] = "straight_line";
   // OpenSCENARIO's headway is the triggering entity's, to the reference ahead of it (undefined
   // while the reference is not ahead): the language's `of`.
   if (quantity == "headway") trigger["of"] = triggering.id;
@@ -545,6 +567,11 @@ YAML::Node distanceLeaf(Translation& translation, const Entity& subject, const p
   reader.requireSubset(condition, {"Position"});
   YAML::Node trigger;
   if (std::string(condition.name()) == "ReachPositionCondition") {
+    const pugi::xml_node place = reader.only(condition, "Position").first_child();
+    if (const pugi::xml_node orientation = place.child("Orientation")) {
+      reader.fail(orientation, "a heading to reach (esmini also requires it within 0.05 rad): the language's "
+                               "condition is a place only");
+    }
     trigger["distance_at_most"] = num(reader.number(condition, "tolerance", NumberRange::atLeast(0.0)));
   } else {
     if (reader.text(condition, "freespace") == "true") {
@@ -585,12 +612,26 @@ YAML::Node motionLeaf(Translation& translation, const Entity& actor, const Entit
                                          "the region's end", num(regionLength(translation.road))));
     }
     trigger["end_of_road"] = num(reader.number(condition, "duration", NumberRange::atLeast(0.0)));
+    const double front = subject.centreAhead + 0.5 * subject.length;  // m ahead of its reference point
+    if (front > 0.0) {
+      translation.findings.note(translation.where(condition),
+                                fmt::format("measured at the front of '{}', {} m ahead of its reference point "
+                                            "(OpenSCENARIO's): it holds that much earlier",
+                                            subject.name, num(front)));
+    }
   } else if (kind == "TraveledDistanceCondition") {
     reader.requireSubset(condition, {});
     trigger["travelled"] = num(reader.number(condition, "value", NumberRange::atLeast(0.0)));
   } else {
     reader.requireSubset(condition, {});
     requireLongitudinal(reader, condition);
+    if (kind == "AccelerationCondition" && !condition.attribute("direction")) {
+      translation.findings.note(translation.where(condition),
+                                fmt::format("no direction: OpenSCENARIO compares the total acceleration (esmini: "
+                                            "lateral included); the language compares the change of speed of '{}', "
+                                            "the same while it neither turns nor changes lanes",
+                                            subject.name));
+    }
     const double value = reader.number(condition, "value");
     const std::string bound = boundOf(reader, condition, kind == "SpeedCondition", value);
     const std::string quantity = kind == "SpeedCondition" ? "speed" : kind == "RelativeSpeedCondition" ? "relative_speed" : "accel";

@@ -305,6 +305,7 @@ ConcreteTrigger evaluateTrigger(const TriggerSpec& spec, int owner, const Logica
   trigger.subject = spec.subject.empty() ? owner : roadUserIndex(logical, spec.subject);
   trigger.directed = spec.kind == TriggerSpec::Kind::Headway && !spec.subject.empty();
   trigger.betweenReferencePoints = spec.betweenReferencePoints;
+  trigger.straightLine = spec.straightLine;
   trigger.rising = spec.rising;
   if (spec.kind == TriggerSpec::Kind::After) trigger.action = actionIndex(logical, spec.action);
   if (spec.kind == TriggerSpec::Kind::Distance) evaluatePosition(spec, logical, concrete, trigger);

@@ -297,17 +297,20 @@ void parsePosition(const YamlReader& reader, const YAML::Node& node, const std::
   position.offset = optionalExpression(reader, node, "offset", field, inputs, 0.0);
 }
 
-/// `between`: which points of the two road users a gap, headway or ttc measures between.
-void parseBetween(const YamlReader& reader, const YAML::Node& node, const std::string& field, TriggerSpec& trigger) {
+/// The value of `between` or `measure`, which go with gap, headway and ttc only: `first` (the
+/// default) or `second`.
+bool secondOf(const YamlReader& reader, const YAML::Node& node, const std::string& field, const TriggerSpec& trigger,
+              const std::string& first, const std::string& second) {
   if (trigger.kind != TriggerSpec::Kind::Gap && trigger.kind != TriggerSpec::Kind::Headway &&
       trigger.kind != TriggerSpec::Kind::Ttc) {
-    reader.fail(node, field, "'between' goes with gap, headway and ttc (and their _at_least forms)");
+    reader.fail(node, field, fmt::format("'{}' goes with gap, headway and ttc (and their _at_least forms)",
+                                         field.substr(field.rfind('.') + 1)));
   }
   const std::string value = reader.scalar(node, field);
-  if (value != "bumpers" && value != "reference_points") {
-    throw ConfigError::field(reader.where(node, field), field, value, "bumpers or reference_points");
+  if (value != first && value != second) {
+    throw ConfigError::field(reader.where(node, field), field, value, first + " or " + second);
   }
-  trigger.betweenReferencePoints = value == "reference_points";
+  return value == second;
 }
 
 /// Whether a trigger's condition can stop holding and hold again (no time or action end in it).
@@ -331,7 +334,7 @@ void parseTrigger(const YamlReader& reader, const YAML::Node& node, const std::s
                   const std::vector<std::string>& inputs, bool delay_allowed, TriggerSpec& trigger) {
   trigger.where = reader.where(node, field);
   reader.requireMap(node, field);
-  std::set<std::string> allowed = {"to", "of", "between", "position", "delay", "rising"};
+  std::set<std::string> allowed = {"to", "of", "between", "measure", "position", "delay", "rising"};
   std::vector<std::string> keys;
   for (const auto& entry : kTriggerKeys) {
     allowed.insert(entry.key);
@@ -371,7 +374,14 @@ void parseTrigger(const YamlReader& reader, const YAML::Node& node, const std::s
     }
     trigger.subject = reader.scalar(node["of"], field + ".of");
   }
-  if (node["between"]) parseBetween(reader, node["between"], field + ".between", trigger);
+  // Which points of the two a gap, headway or ttc measures between, and how.
+  if (node["between"]) {
+    trigger.betweenReferencePoints =
+        secondOf(reader, node["between"], field + ".between", trigger, "bumpers", "reference_points");
+  }
+  if (node["measure"]) {
+    trigger.straightLine = secondOf(reader, node["measure"], field + ".measure", trigger, "along_lane", "straight_line");
+  }
   if ((trigger.kind == TriggerSpec::Kind::Distance) != static_cast<bool>(node["position"])) {
     reader.fail(node, field, "'position' goes with distance_at_most and distance_at_least (and only there)");
   }

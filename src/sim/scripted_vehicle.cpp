@@ -120,6 +120,11 @@ Footprint footprintOf(const VehicleState& state, double length, double width) {
   return {state.position(), state.heading, length, width};
 }
 
+/// A road user's reference point (VehicleSpec::referencePoint ahead of its centre), in the frame.
+Vec2 referencePoint(const VehicleState& state, const scenario::ConcreteVehicle& spec) {
+  return state.position() + spec.referencePoint * Vec2(std::cos(state.heading), std::sin(state.heading));
+}
+
 }  // namespace
 
 EgoStandIn::EgoStandIn(const scenario::ConcreteScenario& concrete, const road::RoadGeometry& road)
@@ -271,8 +276,7 @@ void ScriptedTraffic::Impl::checkOverlaps() const {
 /// m along the Ego's starting lane to a road user's reference point.
 double ScriptedTraffic::Impl::referenceArcLength(const VehicleState& state,
                                                  const scenario::ConcreteVehicle& spec) const {
-  const Vec2 point = state.position() + spec.referencePoint * Vec2(std::cos(state.heading), std::sin(state.heading));
-  return projectExtended(egoLane, point).arcLength;
+  return projectExtended(egoLane, referencePoint(state, spec)).arcLength;
 }
 
 /// The value a gap, headway or ttc trigger of road user `owner` (-1: the Ego) compares (inf: never).
@@ -288,14 +292,16 @@ double ScriptedTraffic::Impl::relationValue(const scenario::ConcreteTrigger& tri
     const double self_s = referenceArcLength(self, self_spec);
     const double other_s = referenceArcLength(other, other_spec);
     self_ahead = self_s > other_s;
-    signed_gap = std::abs(self_s - other_s);
+    signed_gap = trigger.straightLine ? (referencePoint(other, other_spec) - referencePoint(self, self_spec)).norm()
+                                      : std::abs(self_s - other_s);
   } else {
+    const Footprint other_body = footprintOf(other, other_spec.length, other_spec.width);
+    const Footprint self_body = footprintOf(self, self_spec.length, self_spec.width);
     const PathRelation relation =
-        relateToPath(egoLane, road->laneWidthOf(concrete->ego.lane),
-                     footprintOf(other, other_spec.length, other_spec.width),
-                     footprintOf(self, self_spec.length, self_spec.width));
+        relateToPath(egoLane, road->laneWidthOf(concrete->ego.lane), other_body, self_body);
     self_ahead = relation.longitudinalDistance > 0.0;
-    signed_gap = relation.longitudinalGap;
+    // Straight line: the shortest distance between the bodies (< 0 where they overlap).
+    signed_gap = trigger.straightLine ? footprintGap(self_body, other_body) : relation.longitudinalGap;
   }
   const double gap = std::max(signed_gap, 0.0);
   if (trigger.kind == TriggerSpec::Kind::Gap) return signed_gap;

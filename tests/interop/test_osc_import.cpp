@@ -43,6 +43,16 @@ std::unique_ptr<TemporaryDirectory> folderWith(const std::map<std::string, std::
   return dir;
 }
 
+/// `scenario check`'s report of FILE.xosc in `dir`.
+std::string checkReport(const TemporaryDirectory& dir, const std::string& file) {
+  return checkOpenScenario(dir.path() / file, {}).report();
+}
+
+/// The one line importing NAME.xosc in `dir` is refused with ("" if it imports).
+std::string importRefusal(const TemporaryDirectory& dir, const std::string& name) {
+  return test::configErrorOf([&] { importTemplate(dir.path() / (name + ".xosc"), {}); });
+}
+
 /// A test data file with one piece of text replaced (the test's variation of it).
 std::string dataWith(const std::string& name, const std::string& from, const std::string& to) {
   std::string text = readTextFile(data(name));
@@ -339,6 +349,30 @@ TEST(OscImport, ConditionsAreReadWithTheirRulesAndEdges) {
   EXPECT_THAT(parameter.yaml, HasSubstr("id: SwerveOut\n          trigger:\n            time: 0\n            delay: 1\n"));
 }
 
+// A relative distance, headway or time to collision without a relativeDistanceType is the
+// straight line between the two (OpenSCENARIO 1.1's default, as esmini reads it, also with
+// 1.0's alongRoute), as is an explicit euclidian or cartesian distance; longitudinal stays along
+// the Ego's lane; lateral is refused. Before, a missing type was read as longitudinal.
+TEST(OscImport, ADistanceWithoutItsTypeIsTheStraightLine) {
+  const std::string typed = R"(relativeDistanceType="longitudinal" value="30")";
+  const auto variant = [&](const std::string& attributes) { return cutInWith(typed, attributes + "value=\"30\""); };
+  const auto dir = folderWith({{"absent.xosc", variant("")},
+                               {"along_route.xosc", variant("alongRoute=\"true\" ")},
+                               {"euclidian.xosc", variant("relativeDistanceType=\"euclidianDistance\" ")},
+                               {"cartesian.xosc", variant("relativeDistanceType=\"cartesianDistance\" ")},
+                               {"lateral.xosc", variant("relativeDistanceType=\"lateral\" ")}});
+  const std::string straight = "trigger:\n            gap: 30\n            measure: straight_line\n            rising: true\n";
+  for (const std::string name : {"absent", "along_route", "euclidian", "cartesian"}) {
+    const ScenarioCheck check = checkOpenScenario(dir->path() / (name + ".xosc"), {});
+    ASSERT_TRUE(check.runnable()) << name << "\n" << check.report();
+    EXPECT_THAT(check.yaml, HasSubstr(straight)) << name;
+  }
+  EXPECT_THAT(checkOpenScenario(data("cut_in.xosc"), {}).yaml, Not(HasSubstr("measure:")));
+  EXPECT_THAT(checkOpenScenario(dir->path() / "lateral.xosc", {}).report(),
+              HasSubstr("relativeDistanceType=\"lateral\": the language measures along the Ego's lane or in a straight "
+                        "line"));
+}
+
 // An entity is defined once, has one controller, stands in the plane, and its catalog
 // entry's constraints hold for the values it is given; a refusal of one entity's position
 // does not make a later reference to it "refer back to itself".
@@ -361,7 +395,7 @@ TEST(OscImport, EntitiesAreDefinedOnceAndTheirCatalogConstraintsHold) {
                                                          controller),
                                            std::regex("<Private entityRef=\"Walker\">[^]*?</Private>"), "")}});
   const auto constraining = folderWith({{"catalogs/vehicles/fleet.xosc", constrained}});
-  const auto report = [&](const std::string& name) { return checkOpenScenario(dir->path() / name, {}).report(); };
+  const auto report = [&](const std::string& name) { return checkReport(*dir, name); };
   EXPECT_THAT(report("twice.xosc"), HasSubstr("<Vehicle>: <Vehicle> after <CatalogReference>: an entity is defined once"));
   EXPECT_THAT(report("controllers.xosc"), HasSubstr("<ObjectController>: a second <ObjectController>"));
   EXPECT_THAT(report("pitched.xosc"), HasSubstr("<Orientation>: p: vsd-sumo is planar (pitch and roll 0)"));
@@ -812,27 +846,67 @@ TEST(OscRun, EachConditionStartsItsEventWhereTheFileSays) {
   }
 }
 
+// Where esmini measures otherwise than the language, the check says so (found by comparing
+// with its source): the end of the road at the front, not the reference point; an acceleration
+// without a direction (the total one in OpenSCENARIO); a relative target speed taken when a
+// gradual change starts. A heading to reach in a ReachPosition is refused.
+TEST(OscImport, WhatEsminiMeasuresOtherwiseIsNotedOrRefused) {
+  const std::string step = R"(<SpeedActionDynamics dynamicsShape="step" dynamicsDimension="time" value="0"/>
+                  <SpeedActionTarget><AbsoluteTargetSpeed value="10"/></SpeedActionTarget>)";
+  const auto dir = folderWith(
+      {{"end.xosc", conditionsWith(group(entityCondition("Lead", R"(<EndOfRoadCondition duration="0"/>)")))},
+       {"accel.xosc", conditionsWith(group(entityCondition("Lead", R"(<AccelerationCondition value="-3" rule="lessThan"/>)")))},
+       {"orientation.xosc",
+        conditionsWith(group(entityCondition("Lead", R"(<ReachPositionCondition tolerance="1"><Position>
+            <LanePosition roadId="7" laneId="-2" s="200" offset="0"><Orientation type="relative" h="0"/></LanePosition>
+            </Position></ReachPositionCondition>)")))},
+       {"relative.xosc", dataWith("conditions.xosc", step,
+                                  R"(<SpeedActionDynamics dynamicsShape="linear" dynamicsDimension="rate" value="2"/>
+                  <SpeedActionTarget><RelativeTargetSpeed entityRef="Slow" value="-3" speedTargetValueType="delta"
+                      continuous="false"/></SpeedActionTarget>)")}});
+  const auto report = [&](const std::string& name) { return checkReport(*dir, name); };
+  // The lead, a 4.5 m sedan, has its reference point 1.25 m behind its box centre: its front is 3.5 m ahead.
+  EXPECT_THAT(report("end.xosc"), HasSubstr("<EndOfRoadCondition>: measured at the front of 'Lead', 3.5 m ahead of its "
+                                            "reference point"));
+  EXPECT_THAT(report("accel.xosc"), HasSubstr("<AccelerationCondition>: no direction: OpenSCENARIO compares the total "
+                                              "acceleration"));
+  EXPECT_THAT(report("orientation.xosc"), HasSubstr("<Orientation>: a heading to reach (esmini also requires it within "
+                                                    "0.05 rad)"));
+  EXPECT_THAT(report("relative.xosc"), HasSubstr("<RelativeTargetSpeed>: the target is the reference's speed less 3 m/s "
+                                                 "when the change starts"));
+}
+
 // freespace="false" measures between the entities' reference points (which a catalog's
 // BoundingBox places: the lorry's 5 m behind its box centre, a sedan's 1.25 m), "true" bumper
 // to bumper. Slow, here a 12 m lorry with its reference point at s = 60 (box 59 .. 71), at
-// 18 m/s behind the lead (reference point at s = 100, box 99 .. 103.5): its time headway
-// between reference points (40 + 2 t + t^2 / 2) / 18 > 2.5 after 1.74 s, between bumpers
-// (28 + 2 t + t^2 / 2) / 18 > 2.5 after 4.16 s.
+// 18 m/s two lanes (7 m) right of and behind the lead (reference point at s = 100, box
+// 99 .. 103.5): along the lane (longitudinal) its time headway between reference points
+// (40 + 2 t + t^2 / 2) / 18 > 2.5 after 1.74 s, between bumpers (28 + 2 t + t^2 / 2) / 18 > 2.5
+// after 4.16 s; in a straight line (no relativeDistanceType) between reference points
+// sqrt((40 + 2 t + t^2 / 2)^2 + 7^2) / 18 > 2.5 after 1.59 s, between the bodies (4.85 m apart
+// sideways) after 4.12 s.
 TEST(OscRun, AHeadwayBetweenReferencePointsCountsFromThem) {
   constexpr double kNext = 0.2;
   const std::string slow_sedan = R"(<ScenarioObject name="Slow">
       <CatalogReference catalogName="fleet" entryName="sedan"/>)";
   const std::string slow_lorry = R"(<ScenarioObject name="Slow">
       <CatalogReference catalogName="fleet" entryName="lorry"/>)";
-  for (const auto& [freespace, seen] : {std::pair{"false", 1.8 + kNext}, std::pair{"true", 4.2 + kNext}}) {
+  struct Case {
+    const char* freespace;
+    const char* type;
+    double seen;
+  };
+  for (const auto& [freespace, type, seen] :
+       {Case{"false", "relativeDistanceType=\"longitudinal\"", 1.8 + kNext}, Case{"true", "", 4.2 + kNext},
+        Case{"false", "", 1.6 + kNext}, Case{"true", "relativeDistanceType=\"longitudinal\"", 4.2 + kNext}}) {
     std::string text = conditionsWith(group(entityCondition(
-        "Slow", fmt::format(R"(<TimeHeadwayCondition entityRef="Lead" value="2.5" freespace="{}"
-            rule="greaterThan"/>)", freespace))));
+        "Slow", fmt::format(R"(<TimeHeadwayCondition entityRef="Lead" value="2.5" freespace="{}" {}
+            rule="greaterThan"/>)", freespace, type))));
     text.replace(text.find(slow_sedan), slow_sedan.size(), slow_lorry);
     const auto dir = folderWith({{"headway.xosc", text}});
     const auto logical = importTemplate(dir->path() / "headway.xosc", {});
     EXPECT_EQ(other(*logical, "Slow").referencePoint, std::string(freespace) == "false" ? -5.0 : 0.0);
-    EXPECT_NEAR(stepDownSeen(dir->path() / "headway.xosc"), seen, 1e-9) << freespace;
+    EXPECT_NEAR(stepDownSeen(dir->path() / "headway.xosc"), seen, 1e-9) << freespace << " " << type;
   }
 }
 
@@ -1556,9 +1630,7 @@ TEST(OscImport, LaneSectionsThatRepeatTheDrivingLanesAreOneRoad) {
   EXPECT_THAT(sections.report(), HasSubstr("split.xodr:8: <type>: the road type and its speed limit are not simulated"));
   EXPECT_THAT(sections.report(), HasSubstr("split.xodr:24: <roadMark>: road marks are not simulated (lane changes "
                                            "cross any mark)"));
-  const auto refusal = [&](const std::string& name) {
-    return test::configErrorOf([&] { importTemplate(dir->path() / (name + ".xosc"), {}); });
-  };
+  const auto refusal = [&](const std::string& name) { return importRefusal(*dir, name); };
   const auto section_line = std::count(road.begin(), road.begin() + static_cast<long>(end), '\n') + 2;
   EXPECT_THAT(refusal("narrower"),
               HasSubstr(fmt::format("narrower.xodr:{}: <laneSection>: s = 400 m: driving lanes -2 .. -4 of 3.5, 3.25, "
@@ -1631,9 +1703,7 @@ TEST(OscImport, RoadsLinkedEndToStartAreOneRoad) {
   EXPECT_THAT(chain.report(), HasSubstr(fmt::format("chain.xodr:{}: <road>: road(s) 9 and junction(s) 5 not simulated: "
                                                     "vsd-sumo's road is roads '7' -> '8'",
                                                     road_9)));
-  const auto refusal = [&](const std::string& name) {
-    return test::configErrorOf([&] { importTemplate(dir->path() / (name + ".xosc"), {}); });
-  };
+  const auto refusal = [&](const std::string& name) { return importRefusal(*dir, name); };
   EXPECT_THAT(refusal("beyond"), HasSubstr("beyond.xosc:69: <LanePosition>: s = 620 m is off road '8' (0 .. 600 m)"));
   EXPECT_THAT(refusal("apart"), HasSubstr("<LanePosition>: roadId=\"9\": not part of vsd-sumo's road, which is roads "
                                           "'7' -> '8'"));

@@ -352,6 +352,30 @@ TEST(ScriptedTraffic, RelationsBetweenReferencePointsCountFromThem) {
   EXPECT_NEAR(timings[3].start, 2.4, 1e-9);  // (31.3 - 5t) / 5 <= 4 from t = 2.26
 }
 
+// `measure: straight_line` (OpenSCENARIO's euclidianDistance) counts the lateral distance too:
+// the chaser drives one lane (3.5 m) left of the stand-in Ego, its reference point 31.3 - 5t
+// behind the Ego's along the lane, its body 25.3 - 5t behind and 3.5 - 1.8 = 1.7 m beside
+// it. Markers hold the chaser's lane offset at 0, so each trigger's time is its own.
+TEST(ScriptedTraffic, StraightLineRelationsCountTheLateralDistanceToo) {
+  const std::string marker = "lateral_offset: {offset: 0, duration: 1}";
+  const auto logical = scenarioWith(fmt::format(R"(
+    - {{id: chaser, ds: -30.3, relative_lane: 1, speed: 15, reference_point: -1,
+       actions: [{{trigger: {{gap: 5, between: reference_points, measure: straight_line}}, {0}}},
+                 {{trigger: {{gap: 5, between: reference_points}}, {0}}},
+                 {{trigger: {{gap: 2, measure: straight_line}}, {0}}},
+                 {{trigger: {{gap: 2, measure: along_lane}}, {0}}},
+                 {{trigger: {{headway: 0.5, of: chaser, between: reference_points, measure: straight_line}}, {0}}},
+                 {{trigger: {{ttc: 1, between: reference_points, measure: straight_line}}, {0}}}]}})",
+                                                marker));
+  const auto timings = timingsAfter(plan(logical), 35);
+  EXPECT_NEAR(timings[0].start, 5.6, 1e-9);  // sqrt((31.3 - 5t)^2 + 3.5^2) <= 5 from t = 5.55
+  EXPECT_NEAR(timings[1].start, 5.4, 1e-9);  // 31.3 - 5t <= 5 from t = 5.26
+  EXPECT_NEAR(timings[2].start, 5.0, 1e-9);  // sqrt((25.3 - 5t)^2 + 1.7^2) <= 2 from t = 4.85
+  EXPECT_NEAR(timings[3].start, 4.8, 1e-9);  // 25.3 - 5t <= 2 from t = 4.66
+  EXPECT_NEAR(timings[4].start, 5.0, 1e-9);  // sqrt((31.3 - 5t)^2 + 3.5^2) / 15 <= 0.5 from t = 4.93
+  EXPECT_NEAR(timings[5].start, 5.6, 1e-9);  // sqrt((31.3 - 5t)^2 + 3.5^2) / 5 <= 1 from t = 5.55
+}
+
 namespace {
 
 std::shared_ptr<const scenario::LogicalScenario> unequalLanes(const std::string& road_keys, const std::string& others) {

@@ -157,6 +157,9 @@ struct TriggerSpec {
   /// Gap, Headway, Ttc: measured between the two road users' reference points (VehicleSpec::
   /// referencePoint) along the Ego's lane, else bumper to bumper.
   bool betweenReferencePoints = false;
+  /// Gap, Headway, Ttc: the straight-line distance between those points (reference points) or
+  /// between the two bodies (bumpers), else the distance along the Ego's lane (`measure`).
+  bool straightLine = false;
   std::string action;         ///< After: id of the action whose end starts this one
   PositionSpec position;      ///< Distance
   std::vector<TriggerSpec> members;  ///< All, Any
