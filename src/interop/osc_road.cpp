@@ -173,12 +173,14 @@ DrivenRun readRun(const xml::Reader& reader, const pugi::xml_node& side, int sig
       if (reader.integer(candidate, "id", sign < 0 ? -100 : 1, sign < 0 ? -1 : 100) == id) lane = candidate;
     }
     if (!lane) break;
-    const double width = constantWidth(reader, lane);
+    // Lanes beyond the shoulders are not part of the road: their widths are not read.
+    const auto width_of = [&reader, &lane] { return constantWidth(reader, lane); };
     const std::string type = reader.text(lane, "type");
     if (type == "driving") {
       if (part == Part::Shoulder || part == Part::Outer) {
         reader.fail(lane, "a second run of driving lanes: the scenario language has one carriageway");
       }
+      const double width = width_of();
       if (!(width > 0.5)) {
         reader.fail(lane, fmt::format("width {} m: expected a driving lane wider than 0.5 m", xml::number(width)));
       }
@@ -187,10 +189,10 @@ DrivenRun readRun(const xml::Reader& reader, const pugi::xml_node& side, int sig
       // Outwards is rightwards on the right side (lane 0 is the last read), leftwards on the left.
       run.laneWidths.insert(sign < 0 ? run.laneWidths.begin() : run.laneWidths.end(), width);
     } else if (part == Part::Inner) {
-      run.innerShoulder += width;
+      run.innerShoulder += width_of();
     } else if (part != Part::Outer && (type == "shoulder" || type == "stop")) {
       part = Part::Shoulder;
-      run.outerShoulder += width;
+      run.outerShoulder += width_of();
     } else {
       part = Part::Outer;
     }
@@ -289,32 +291,33 @@ bool operator==(const DrivenRun& a, const DrivenRun& b) {
          a.innerShoulder == b.innerShoulder && a.outerShoulder == b.outerShoulder;
 }
 
-/// What a validation engineer compares between two lane sections: the driving lanes (ids,
-/// widths), the shoulders, the left side's lanes the road may take. Lanes beyond the
-/// shoulders are not part of the road and may differ.
+/// A section's driving lanes (ids, widths) and shoulders, as messages name them: what must stay
+/// the same along vsd-sumo's road. Lanes beyond the shoulders are not part of it and may differ.
 std::string sectionLayout(const CarriagewayRoad& lanes) {
   std::vector<std::string> widths;
   for (const double width : lanes.laneWidths) widths.push_back(xml::number(width));
-  std::string layout = fmt::format("driving lanes {} .. {} of {} m, shoulders {} m left and {} m right",
-                                   lanes.innermostLaneId,
-                                   lanes.innermostLaneId + (lanes.leftCarriageway ? 1 : -1) * (lanes.lanes - 1),
-                                   fmt::join(widths, ", "), xml::number(lanes.shoulderLeft),
-                                   xml::number(lanes.shoulderRight));
-  if (lanes.adjoiningLeftLanes > 0) layout += fmt::format(", {} adjoining left lane(s)", lanes.adjoiningLeftLanes);
-  return layout;
+  return fmt::format("driving lanes {} .. {} of {} m, shoulders {} m left and {} m right", lanes.innermostLaneId,
+                     lanes.innermostLaneId + (lanes.leftCarriageway ? 1 : -1) * (lanes.lanes - 1),
+                     fmt::join(widths, ", "), xml::number(lanes.shoulderLeft), xml::number(lanes.shoulderRight));
 }
 
 bool sameLanes(const CarriagewayRoad& a, const CarriagewayRoad& b) {
-  return sectionLayout(a) == sectionLayout(b) && a.innerT == b.innerT && a.laneWidths == b.laneWidths &&
-         a.adjoiningLeftWidths == b.adjoiningLeftWidths && a.adjoiningLeftShoulder == b.adjoiningLeftShoulder &&
-         a.leftRun.has_value() == b.leftRun.has_value() && (!a.leftRun || *a.leftRun == *b.leftRun) &&
-         a.otherSide.empty() == b.otherSide.empty();
+  return sectionLayout(a) == sectionLayout(b) && a.innerT == b.innerT && a.laneWidths == b.laneWidths;
+}
+
+/// The other side's lanes the scenario may drive (joined lanes, or the left side's run): they
+/// matter only if it does (CarriagewayRoad::leftSideChanges).
+bool sameLeftSide(const CarriagewayRoad& a, const CarriagewayRoad& b) {
+  return a.adjoiningLeftLanes == b.adjoiningLeftLanes && a.adjoiningLeftWidths == b.adjoiningLeftWidths &&
+         a.adjoiningLeftShoulder == b.adjoiningLeftShoulder && a.leftRun.has_value() == b.leftRun.has_value() &&
+         (!a.leftRun || *a.leftRun == *b.leftRun);
 }
 
 /// A driving lane of a later section must continue the same lane of the section before:
-/// a <predecessor> link to another id would move traffic across lanes.
-void checkLaneLinks(const xml::Reader& reader, const pugi::xml_node& section) {
-  for (const pugi::xml_node& side : section.children()) {
+/// a <predecessor> link to another id would move traffic across lanes. `sign`: the side that is
+/// the road (-1: right, +1: left).
+void checkLaneLinks(const xml::Reader& reader, const pugi::xml_node& section, int sign) {
+  for (const pugi::xml_node& side : section.children(sign < 0 ? "right" : "left")) {
     for (const pugi::xml_node& lane : side.children("lane")) {
       const pugi::xml_node predecessor = lane.child("link").child("predecessor");
       if (!predecessor || std::string(lane.attribute("type").value()) != "driving") continue;
@@ -358,14 +361,23 @@ void readLanes(const xml::Reader& reader, const pugi::xml_node& road, Carriagewa
                                        "the whole road",
                                        xml::number(s), sectionLayout(own), sectionLayout(result)));
     }
-    checkLaneLinks(reader, section);
+    if (!sameLeftSide(own, result) && result.leftSideChanges.empty()) result.leftSideChanges = reader.where(section);
+    checkLaneLinks(reader, section, result.leftHandTraffic ? +1 : -1);
   }
 }
 
 }  // namespace
 
+void CarriagewayRoad::requireSteadyLeftSide() const {
+  if (leftSideChanges.empty()) return;
+  throw ConfigError(fmt::format("{}: the lanes left of the reference line change here, and the scenario drives them: "
+                                "the scenario language's lanes run the whole road",
+                                leftSideChanges));
+}
+
 void CarriagewayRoad::useLeftCarriageway() {
   if (!leftRun || leftCarriageway || leftLanesJoined) throw std::logic_error("useLeftCarriageway: no left run to use");
+  requireSteadyLeftSide();
   takeRun(*this, *leftRun, +1);
 }
 
@@ -399,6 +411,7 @@ void CarriagewayRoad::useReversedLeftCarriageway() {
   if (!leftRun || leftCarriageway || leftLanesJoined || reversed || leftHandTraffic) {
     throw std::logic_error("useReversedLeftCarriageway: no left run to use");
   }
+  requireSteadyLeftSide();
   std::vector<PlanGeometry> backwards;
   for (auto it = geometries.rbegin(); it != geometries.rend(); ++it) {
     backwards.push_back(reversedGeometry(*it, length - (it->s() + it->length()), file));
@@ -425,6 +438,7 @@ void CarriagewayRoad::useReversedLeftCarriageway() {
 
 void CarriagewayRoad::joinLeftLanes() {
   if (adjoiningLeftLanes == 0 || leftLanesJoined) throw std::logic_error("joinLeftLanes: no left lanes to join");
+  requireSteadyLeftSide();
   leftLanesJoined = true;
   lanes += adjoiningLeftLanes;
   laneWidths.insert(laneWidths.end(), adjoiningLeftWidths.begin(), adjoiningLeftWidths.end());
@@ -770,6 +784,12 @@ std::vector<pugi::xml_node> roadChain(const xml::Reader& reader, const pugi::xml
     if (road.attribute("id").value() == scenario_road) found = road;
   }
   if (!found) reader.fail(root, fmt::format("no <road> with id \"{}\" ({})", scenario_road, asked_where));
+  const std::string junction = found.attribute("junction").value();
+  if (!junction.empty() && junction != "-1") {
+    reader.fail(found, fmt::format("road '{}' lies in junction {} ({}): vsd-sumo's road is a chain of roads outside "
+                                   "junctions",
+                                   scenario_road, junction, asked_where));
+  }
   std::deque<pugi::xml_node> chain = {found};
   std::set<const void*> seen = {found.internal_object()};
   for (pugi::xml_node next = continuation(root, found, "successor"); next && seen.insert(next.internal_object()).second;
@@ -863,7 +883,10 @@ void readRoadPiece(const xml::Reader& reader, const pugi::xml_node& road, Carria
                                        id, result.pieces[result.pieces.size() - 2].id, sectionLayout(own),
                                        sectionLayout(result)));
     }
-    checkLaneLinks(reader, section);
+    if (result.leftSideChanges.empty()) {
+      result.leftSideChanges = sameLeftSide(own, result) ? own.leftSideChanges : reader.where(section);
+    }
+    checkLaneLinks(reader, section, left_hand ? +1 : -1);
   }
   for (const char* planar : {"elevationProfile", "lateralProfile"}) {
     const pugi::xml_node profile = road.child(planar);

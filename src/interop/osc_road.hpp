@@ -149,6 +149,11 @@ struct CarriagewayRoad {
   std::vector<double> adjoiningLeftWidths;  ///< m, of the adjoining left lanes, id 1 first
   double adjoiningLeftShoulder = 0.0;  ///< m of shoulder/stop lanes left of them
   bool leftLanesJoined = false;        ///< joinLeftLanes() was called
+  /// "file:line: <laneSection>" of the first later section (or road of the chain) whose lanes
+  /// left of the reference line differ from the first's; empty: they do not. Those lanes are not
+  /// part of the road unless the scenario drives them (joinLeftLanes, useLeftCarriageway,
+  /// useReversedLeftCarriageway refuse then).
+  std::string leftSideChanges;
 
   /// Makes the adjoining left lanes the language's lanes `lanes` .. (leftmost last), driven
   /// along the reference line, and their shoulder/stop lanes its left shoulder. Only for a
@@ -166,6 +171,8 @@ struct CarriagewayRoad {
   const RoadPiece* piece(const std::string& road_id) const;
   /// "road '7'", or "roads '1' -> '2'" for a chain, as messages name it.
   std::string name() const;
+  /// Throws ConfigError naming leftSideChanges if the left side's lanes change along the road.
+  void requireSteadyLeftSide() const;
   /// The file's s, t (or a lateral offset along t) and lane id on the road's own reference
   /// line: the same, or turned on a reversed road (length - s, -t, -id).
   double ownS(double file_s) const { return reversed ? length - file_s : file_s; }

@@ -253,6 +253,14 @@ YAML::Node speedAction(Translation& translation, const Entity& actor, const pugi
   const xml::Reader& reader = translation.reader;
   reader.requireSubset(action, {"SpeedActionDynamics", "SpeedActionTarget"});
   if (actor.type == RoadUserType::StationaryObject) reader.fail(action, "stationary objects never move (the language's rule)");
+  const double facing = actor.placement ? std::abs(actor.placement->heading) : 0.0;
+  const pugi::xml_node absolute = action.child("SpeedActionTarget").child("AbsoluteTargetSpeed");
+  if (!actor.isVehicle() && facing > 1e-9 && !(absolute && reader.number(absolute, "value") == 0.0)) {
+    // The language moves road users along the road: one facing off it stands until it crosses.
+    reader.fail(action, fmt::format("a speed for '{}', which faces {} deg off the road: the language's road users move "
+                                    "along the road, so one facing off it stands (a crossing: a FollowTrajectoryAction)",
+                                    actor.name, num(facing * 180.0 / kPi)));
+  }
   YAML::Node item;
   const pugi::xml_node dynamics = reader.only(action, "SpeedActionDynamics");
   reader.requireSubset(dynamics, {});
@@ -1074,12 +1082,14 @@ bool startsAtZero(const Translation& translation, const pugi::xml_node& act) {
   const pugi::xml_node condition = group.child("Condition");
   if (!condition || condition.next_sibling("Condition")) return false;
   const pugi::xml_node time = condition.child("ByValueCondition").child("SimulationTimeCondition");
-  if (!time || !(reader.number(time, "value") <= 0 && reader.number(condition, "delay") <= 0)) return false;
-  const std::string rule = time.attribute("rule").value();
-  const std::string edge = condition.attribute("conditionEdge").value();
-  // `> 0` rises just after the start; `>= 0` holds at once, so only without an edge.
-  if (rule == "greaterThan") return edge == "none" || edge == "rising" || edge == "risingOrFalling";
-  return rule == "greaterOrEqual" && edge == "none";
+  if (!time) return false;
+  const double value = reader.number(time, "value");
+  if (!(value <= 0 && reader.number(condition, "delay") <= 0)) return false;
+  const std::string rule = reader.optionalText(time, "rule").value_or("");
+  const std::string edge = reader.optionalText(condition, "conditionEdge").value_or("");
+  if (edge == "none") return rule == "greaterThan" || rule == "greaterOrEqual";
+  // `> 0` rises just after the start; a time already reached when first checked never rises.
+  return rule == "greaterThan" && value == 0 && (edge == "rising" || edge == "risingOrFalling");
 }
 
 /// When the Act `name` starts: at once ({time: 0}), or at the moment its StartTrigger gives

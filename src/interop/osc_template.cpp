@@ -308,6 +308,14 @@ YAML::Node roadUserNode(Translation& translation, const Entity& entity, bool ego
                                   "objects never move (the language's rule)",
                                   where, entity.name, num(speed)));
   }
+  if (!ego && !entity.isVehicle() && std::abs(std::remainder(heading_deg, 360.0)) > 1e-6 && speed != 0.0) {
+    // The language moves road users along the road: one facing off it stands until it crosses.
+    const std::string where = entity.speedTarget ? translation.reader.where(entity.speedTarget) : entity.where;
+    throw ConfigError(fmt::format("{}: '{}' faces {} deg off the road and is given a speed of {} m/s: the language's "
+                                  "road users move along the road, so one facing off it stands (a crossing: a "
+                                  "FollowTrajectoryAction)",
+                                  where, entity.name, num(heading_deg), num(speed)));
+  }
   if (entity.type != RoadUserType::StationaryObject && (ego || entity.isVehicle() || speed != 0.0)) {
     node["speed"] = num(speed);
   }

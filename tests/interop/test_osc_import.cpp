@@ -300,7 +300,10 @@ TEST(OscImport, TrailerPointsImportAndAnAttachedTrailerIsRefused) {
 }
 
 TEST(OscImport, CheckListsEveryRefusalWithItsLine) {
-  std::string text = cutInWith("<Private entityRef=\"Walker\">",
+  // The Walker faces along the road: it takes the Ego's speed with its place.
+  std::string text = dataWith("cut_in.xosc", "h=\"1.5707963267948966\"", "h=\"0\"");
+  const std::string walker = "<Private entityRef=\"Walker\">";
+  text.replace(text.find(walker), walker.size(),
                                "<Private entityRef=\"Walker\"><PrivateAction><RoutingAction><AssignRouteAction/>"
                                "</RoutingAction></PrivateAction></Private>\n        <Private entityRef=\"Walker\">");
   const std::string speed_condition =
@@ -328,6 +331,9 @@ TEST(OscImport, ConditionsAreReadWithTheirRulesAndEdges) {
   const std::string swerve = R"(<StoryboardElementStateCondition storyboardElementType="action" storyboardElementRef="CutInChange" state="endTransition"/>)";
   const auto dir = folderWith(
       {{"never.xosc", cutInWith(act_start, R"(<SimulationTimeCondition value="0" rule="lessThan"/>)")},
+       {"reached.xosc", std::regex_replace(cutInWith(act_start, R"(<SimulationTimeCondition value="-1" rule="greaterThan"/>)"),
+                                           std::regex("name=\"ActStart\" delay=\"0\" conditionEdge=\"none\""),
+                                           "name=\"ActStart\" delay=\"0\" conditionEdge=\"rising\"")},
        {"stop_rule.xosc", cutInWith(stop, R"(<Condition name="End" delay="0" conditionEdge="none">
         <ByValueCondition><SimulationTimeCondition value="8" rule="lessThan"/>)")},
        {"stop_falling.xosc", cutInWith(stop, R"(<Condition name="End" delay="1" conditionEdge="falling">
@@ -338,6 +344,10 @@ TEST(OscImport, ConditionsAreReadWithTheirRulesAndEdges) {
   const auto report = [&](const std::string& name) { return checkOpenScenario(dir->path() / name, {}); };
   EXPECT_THAT(report("never.xosc").report(), HasSubstr("<SimulationTimeCondition>: rule=\"lessThan\": the language's "
                                                        "time trigger fires once time reaches a value"));
+  // t > -1 rising: read as any other condition (a time before the start is refused); before, the
+  // Act started at t = 0, though the condition holds when first checked and so never rises.
+  EXPECT_THAT(report("reached.xosc").report(), HasSubstr("<SimulationTimeCondition>: value: got '-1', expected a "
+                                                         "finite number >= 0"));
   EXPECT_THAT(report("stop_rule.xosc").report(), HasSubstr("<Condition>: conditionEdge=\"none\" on rule=\"lessThan\": "
                                                            "the language ends a run when a time is reached"));
   // t < 6 stops holding at 6 s; one second's delay: the run ends at 7 s.
@@ -408,6 +418,38 @@ TEST(OscImport, EntitiesAreDefinedOnceAndTheirCatalogConstraintsHold) {
               HasSubstr("fleet.xosc:7: <ParameterDeclaration>: parameter 'Length' = '5.0' "
                                                "violates its constraints (lessOrEqual 4.8); OpenSCENARIO: not executed "
                                                "(as "));
+}
+
+// The Walker faces across the road (h = pi/2): given a speed in the Init or a speed action in
+// the Story, it is refused where the file gives it (the language moves road users along the
+// road); holding it at 0 is fine.
+TEST(OscImport, APedestrianFacingOffTheRoadStands) {
+  const std::string place = R"(<WorldPosition x="300" y="-12.75" h="1.5707963267948966"/></Position></TeleportAction>
+          </PrivateAction>)";
+  const auto speed = [](const std::string& value) {
+    return fmt::format(R"(<PrivateAction><LongitudinalAction><SpeedAction>
+            <SpeedActionDynamics dynamicsShape="step" dynamicsDimension="time" value="0"/>
+            <SpeedActionTarget><AbsoluteTargetSpeed value="{}"/></SpeedActionTarget></SpeedAction></LongitudinalAction>
+          </PrivateAction>)",
+                       value);
+  };
+  const std::string ego_group = R"(<ManeuverGroup maximumExecutionCount="1" name="EgoGroup">)";
+  const std::string walk = R"(<ManeuverGroup maximumExecutionCount="1" name="WalkerGroup">
+          <Actors selectTriggeringEntities="false"><EntityRef entityRef="Walker"/></Actors>
+          <Maneuver name="WalkerManeuver"><Event name="Walk" priority="overwrite"><Action name="WalkOn">)" +
+                           speed("2") + R"(</Action><StartTrigger><ConditionGroup>
+            <Condition name="W" delay="0" conditionEdge="none"><ByValueCondition>
+              <SimulationTimeCondition value="2" rule="greaterOrEqual"/></ByValueCondition></Condition>
+          </ConditionGroup></StartTrigger></Event></Maneuver></ManeuverGroup>
+        )" + ego_group;
+  const auto dir = folderWith({{"init.xosc", cutInWith(place, place + speed("1"))},
+                               {"still.xosc", cutInWith(place, place + speed("0"))},
+                               {"story.xosc", cutInWith(ego_group, walk)}});
+  EXPECT_THAT(checkReport(*dir, "init.xosc"),
+              HasSubstr("<SpeedActionTarget>: 'Walker' faces 90 deg off the road and is given a speed of 1 m/s"));
+  EXPECT_TRUE(checkOpenScenario(dir->path() / "still.xosc", {}).runnable()) << checkReport(*dir, "still.xosc");
+  EXPECT_THAT(checkReport(*dir, "story.xosc"), HasSubstr("<SpeedAction>: a speed for 'Walker', which faces 90 deg off "
+                                                         "the road"));
 }
 
 // The Init runs its actions in order: a step to a speed after a gradual change replaces it
@@ -482,11 +524,14 @@ TEST(OscImport, MiscObjectsAndRoadPositions) {
 TEST(OscImport, InitDistanceActionPlacesAndRateZeroLeavesTheSpeed) {
   // The Walker's place is replaced by a 2 s freespace time gap ahead of the Ego (20 m/s: 40 m
   // bumper to bumper); the Cutter's slow-down at rate 0 never changes its speed.
-  std::string text = cutInWith("<Private entityRef=\"Walker\">",
-                               "<Private entityRef=\"Walker\"><PrivateAction><LongitudinalAction><LongitudinalDistanceAction "
-                               "entityRef=\"Ego\" timeGap=\"2\" freespace=\"true\" continuous=\"false\" "
-                               "displacement=\"leadingReferencedEntity\"/></LongitudinalAction></PrivateAction></Private>\n"
-                               "        <Private entityRef=\"Walker\">");
+  // The Walker faces along the road: it takes the Ego's speed with its place.
+  std::string text = dataWith("cut_in.xosc", "h=\"1.5707963267948966\"", "h=\"0\"");
+  const std::string walker = "<Private entityRef=\"Walker\">";
+  text.replace(text.find(walker), walker.size(),
+               "<Private entityRef=\"Walker\"><PrivateAction><LongitudinalAction><LongitudinalDistanceAction "
+               "entityRef=\"Ego\" timeGap=\"2\" freespace=\"true\" continuous=\"false\" "
+               "displacement=\"leadingReferencedEntity\"/></LongitudinalAction></PrivateAction></Private>\n"
+               "        <Private entityRef=\"Walker\">");
   text.replace(text.find("value=\"-2\""), 10, "value=\"0\"");
   const auto dir = folderWith({{"distance.xosc", text}});
   const auto logical = importTemplate(dir->path() / "distance.xosc", {});
@@ -1598,9 +1643,12 @@ TEST(OscImport, LaneSectionsThatRepeatTheDrivingLanesAreOneRoad) {
   const auto begin = road.find("<laneSection s=\"0\">");
   const auto end = road.find("</laneSection>") + std::string("</laneSection>").size();
   const std::string first = road.substr(begin, end - begin);
-  // From s = 400: the outer border is 2 m wide; the driving lanes say which lane they continue.
+  // From s = 400: the outer border widens (beyond the shoulder: not part of the road), the lane
+  // the other way is 3.25 m wide (not part of it either unless the scenario drives it), and the
+  // driving lanes say which lane they continue.
   std::string second = std::regex_replace(first, std::regex("s=\"0\">"), "s=\"400\">");
-  second.replace(second.find("a=\"1.0\"", second.find("id=\"-6\"")), 7, "a=\"2.0\"");
+  second.replace(second.find("a=\"1.0\" b=\"0\"", second.find("id=\"-6\"")), 13, "a=\"1.0\" b=\"0.01\"");
+  second.replace(second.find("a=\"3.5\"", second.find("id=\"1\"")), 7, "a=\"3.25\"");
   for (const char* id : {"-2", "-3", "-4"}) {
     const auto lane = second.find(fmt::format("<lane id=\"{}\" type=\"driving\" level=\"false\">", id));
     second.replace(second.find('>', lane) + 1, 0, fmt::format("<link><predecessor id=\"{}\"/></link>", id));
@@ -1639,6 +1687,14 @@ TEST(OscImport, LaneSectionsThatRepeatTheDrivingLanesAreOneRoad) {
                                     section_line)));
   EXPECT_THAT(refusal("dropped"), HasSubstr("<laneSection>: s = 400 m: driving lanes -2 .. -3 of 3.5, 3.5 m"));
   EXPECT_THAT(refusal("crossed"), HasSubstr("<predecessor>: id: lane -3 continues lane -4 of the section before"));
+  // A scenario that drives the lanes left of the reference line is refused where they change.
+  osc::Findings findings(true);
+  const auto split_road = osc::readCarriagewayRoad(dir->path() / "roads" / "split.xodr", findings);
+  EXPECT_THAT(split_road.leftSideChanges, HasSubstr(fmt::format("split.xodr:{}: <laneSection>", section_line)));
+  osc::CarriagewayRoad reversed = split_road;
+  EXPECT_THAT(test::configErrorOf([&] { reversed.useReversedLeftCarriageway(); }),
+              HasSubstr("<laneSection>: the lanes left of the reference line change here, and the scenario drives "
+                        "them"));
 }
 
 namespace {
@@ -1692,7 +1748,10 @@ TEST(OscImport, RoadsLinkedEndToStartAreOneRoad) {
        {"apart.xosc", std::regex_replace(on("chain.xodr", ego), std::regex("<WorldPosition x=\"300\"[^>]*>"),
                                          R"(<LanePosition roadId="9" laneId="-3" s="300" offset="0"/>)")},
        {"narrower.xosc", on("narrower.xodr", ego)},
-       {"gap.xosc", on("gap.xodr", ego)}});
+       {"gap.xosc", on("gap.xodr", ego)},
+       {"roads/in_junction.xodr", network({std::regex_replace(first, std::regex("junction=\"-1\""), "junction=\"5\""),
+                                           second})},
+       {"in_junction.xosc", on("in_junction.xodr", ego)}});
   const ScenarioCheck whole = checkOpenScenario(dir->path() / "whole.xosc", {});
   const ScenarioCheck chain = checkOpenScenario(dir->path() / "chain.xosc", {});
   ASSERT_TRUE(chain.runnable()) << chain.report();
@@ -1711,6 +1770,7 @@ TEST(OscImport, RoadsLinkedEndToStartAreOneRoad) {
                                              "of 3.5, 3.25, 3.5 m"));
   EXPECT_THAT(refusal("gap"), HasSubstr("<geometry>: road '8' does not start where road '7' ends, which links to it "
                                         "(s 0 m, a gap of 1 m"));
+  EXPECT_THAT(refusal("in_junction"), HasSubstr("<road>: road '7' lies in junction 5 (the roadId at "));
 }
 
 // Roads as converters write them: a geometry of half a millimetre at the end, and a curve that
