@@ -286,9 +286,17 @@ void readSection(const xml::Reader& reader, const pugi::xml_node& section, Carri
   }
 }
 
-bool operator==(const DrivenRun& a, const DrivenRun& b) {
-  return a.innermostLaneId == b.innermostLaneId && a.laneWidths == b.laneWidths &&
-         a.innerShoulder == b.innerShoulder && a.outerShoulder == b.outerShoulder;
+/// Widths and offsets of lanes in two sections are the same within kJoinTolerance (map tools
+/// write 3.4999999 for 3.5).
+bool near(double a, double b) { return std::abs(a - b) <= kJoinTolerance; }
+
+bool nearWidths(const std::vector<double>& a, const std::vector<double>& b) {
+  return a.size() == b.size() && std::equal(a.begin(), a.end(), b.begin(), near);
+}
+
+bool sameRun(const DrivenRun& a, const DrivenRun& b) {
+  return a.innermostLaneId == b.innermostLaneId && nearWidths(a.laneWidths, b.laneWidths) &&
+         near(a.innerShoulder, b.innerShoulder) && near(a.outerShoulder, b.outerShoulder);
 }
 
 /// A section's driving lanes (ids, widths) and shoulders, as messages name them: what must stay
@@ -302,33 +310,45 @@ std::string sectionLayout(const CarriagewayRoad& lanes) {
 }
 
 bool sameLanes(const CarriagewayRoad& a, const CarriagewayRoad& b) {
-  return sectionLayout(a) == sectionLayout(b) && a.innerT == b.innerT && a.laneWidths == b.laneWidths;
+  return a.lanes == b.lanes && a.innermostLaneId == b.innermostLaneId && a.leftCarriageway == b.leftCarriageway &&
+         nearWidths(a.laneWidths, b.laneWidths) && near(a.innerT, b.innerT) && near(a.shoulderLeft, b.shoulderLeft) &&
+         near(a.shoulderRight, b.shoulderRight);
 }
 
 /// The other side's lanes the scenario may drive (joined lanes, or the left side's run): they
 /// matter only if it does (CarriagewayRoad::leftSideChanges).
 bool sameLeftSide(const CarriagewayRoad& a, const CarriagewayRoad& b) {
-  return a.adjoiningLeftLanes == b.adjoiningLeftLanes && a.adjoiningLeftWidths == b.adjoiningLeftWidths &&
-         a.adjoiningLeftShoulder == b.adjoiningLeftShoulder && a.leftRun.has_value() == b.leftRun.has_value() &&
-         (!a.leftRun || *a.leftRun == *b.leftRun);
+  return a.adjoiningLeftLanes == b.adjoiningLeftLanes && nearWidths(a.adjoiningLeftWidths, b.adjoiningLeftWidths) &&
+         near(a.adjoiningLeftShoulder, b.adjoiningLeftShoulder) && a.leftRun.has_value() == b.leftRun.has_value() &&
+         (!a.leftRun || sameRun(*a.leftRun, *b.leftRun));
 }
 
-/// A driving lane of a later section must continue the same lane of the section before:
-/// a <predecessor> link to another id would move traffic across lanes. `sign`: the side that is
-/// the road (-1: right, +1: left).
-void checkLaneLinks(const xml::Reader& reader, const pugi::xml_node& section, int sign) {
+/// A driving lane must go on as the same lane from one section to the next: a <predecessor>
+/// link of a later section's lane, or a <successor> link of an earlier one's, naming another id
+/// would move traffic across lanes. `sign`: the side that is the road (-1: right, +1: left).
+void checkLaneLinks(const xml::Reader& reader, const pugi::xml_node& section, int sign, const char* kind) {
+  const std::string other = std::string(kind) == "predecessor" ? "continues lane {} of the section before"
+                                                               : "goes on as lane {} of the section after";
   for (const pugi::xml_node& side : section.children(sign < 0 ? "right" : "left")) {
     for (const pugi::xml_node& lane : side.children("lane")) {
-      const pugi::xml_node predecessor = lane.child("link").child("predecessor");
-      if (!predecessor || std::string(lane.attribute("type").value()) != "driving") continue;
+      const pugi::xml_node link = lane.child("link").child(kind);
+      if (!link || std::string(lane.attribute("type").value()) != "driving") continue;
       const long id = reader.integer(lane, "id", -100, 100);
-      if (reader.integer(predecessor, "id", -100, 100) != id) {
-        reader.fail(predecessor, fmt::format("id: lane {} continues lane {} of the section before: the scenario "
-                                             "language's lanes keep their place along the road",
-                                             id, reader.integer(predecessor, "id", -100, 100)));
+      const long linked = reader.integer(link, "id", -100, 100);
+      if (linked != id) {
+        reader.fail(link, fmt::format("id: lane {} {}: the scenario language's lanes keep their place along the road",
+                                      id, fmt::format(other, linked)));
       }
     }
   }
+}
+
+/// The links between two consecutive sections (of one road, or the last of a road and the first
+/// of the road linked to it).
+void checkSectionJoin(const xml::Reader& reader, const pugi::xml_node& before, const pugi::xml_node& after,
+                      int sign) {
+  checkLaneLinks(reader, before, sign, "successor");
+  checkLaneLinks(reader, after, sign, "predecessor");
 }
 
 /// Lane sections: the first (at s = 0) gives the road's lanes; later ones (in order of s,
@@ -362,7 +382,7 @@ void readLanes(const xml::Reader& reader, const pugi::xml_node& road, Carriagewa
                                        xml::number(s), sectionLayout(own), sectionLayout(result)));
     }
     if (!sameLeftSide(own, result) && result.leftSideChanges.empty()) result.leftSideChanges = reader.where(section);
-    checkLaneLinks(reader, section, result.leftHandTraffic ? +1 : -1);
+    checkSectionJoin(reader, section.previous_sibling("laneSection"), section, result.leftHandTraffic ? +1 : -1);
   }
 }
 
@@ -850,8 +870,9 @@ void noteRules(const xml::Reader& reader, const pugi::xml_node& road, Findings& 
 }
 
 /// One road of the chain, appended to `result` (the first gives its lanes; later ones must
-/// repeat them and the traffic rule).
-void readRoadPiece(const xml::Reader& reader, const pugi::xml_node& road, CarriagewayRoad& result, Findings& findings) {
+/// repeat them and the traffic rule; `before`: the road before it, whose lanes it continues).
+void readRoadPiece(const xml::Reader& reader, const pugi::xml_node& road, const pugi::xml_node& before,
+                   CarriagewayRoad& result, Findings& findings) {
   reader.requireSubset(road, {"link", "type", "planView", "elevationProfile", "lateralProfile", "lanes", "objects",
                               "signals", "userData", "surface"});
   const bool first = result.pieces.empty();
@@ -886,7 +907,9 @@ void readRoadPiece(const xml::Reader& reader, const pugi::xml_node& road, Carria
     if (result.leftSideChanges.empty()) {
       result.leftSideChanges = sameLeftSide(own, result) ? own.leftSideChanges : reader.where(section);
     }
-    checkLaneLinks(reader, section, left_hand ? +1 : -1);
+    pugi::xml_node last_before;
+    for (const pugi::xml_node& candidate : before.child("lanes").children("laneSection")) last_before = candidate;
+    checkSectionJoin(reader, last_before, section, left_hand ? +1 : -1);
   }
   for (const char* planar : {"elevationProfile", "lateralProfile"}) {
     const pugi::xml_node profile = road.child(planar);
@@ -909,8 +932,10 @@ CarriagewayRoad readRoad(const std::filesystem::path& file, std::string text, Fi
   reader.requireSubset(root, {"header", "road", "controller", "junction"});
   CarriagewayRoad result;
   result.file = file;
+  pugi::xml_node before;  // the road before in the chain
   for (const pugi::xml_node& road : roadChain(reader, root, scenario_road, asked_where)) {
-    readRoadPiece(reader, road, result, findings);
+    readRoadPiece(reader, road, before, result, findings);
+    before = road;
   }
   result.id = result.pieces.front().id;
   classifyCurvature(result);

@@ -1658,15 +1658,22 @@ TEST(OscImport, LaneSectionsThatRepeatTheDrivingLanesAreOneRoad) {
     text.replace(end, 0, "\n      " + later);
     return text;
   };
-  std::string narrower = second, dropped = second, crossed = second;
+  std::string narrower = second, dropped = second, crossed = second, nearly = second;
   narrower.replace(narrower.find("a=\"3.5\"", narrower.find("id=\"-3\"")), 7, "a=\"3.25\"");
+  nearly.replace(nearly.find("a=\"3.5\"", nearly.find("id=\"-3\"")), 7, "a=\"3.4999999\"");
+  // The first section's lane -3 says it goes on as lane -4.
+  std::string crossed_after = split(second);
+  const auto lane_3 = crossed_after.find("<lane id=\"-3\" type=\"driving\" level=\"false\">");
+  crossed_after.replace(crossed_after.find('>', lane_3) + 1, 0, "<link><successor id=\"-4\"/></link>");
   dropped.replace(dropped.find("type=\"driving\"", dropped.find("id=\"-4\"")), 14, "type=\"shoulder\"");
   crossed.replace(crossed.find("<predecessor id=\"-3\"/>"), 22, "<predecessor id=\"-4\"/>");
   const auto dir = folderWith({{"roads/split.xodr", split(second)},
                                {"roads/narrower.xodr", split(narrower)},
                                {"roads/dropped.xodr", split(dropped)},
-                               {"roads/crossed.xodr", split(crossed)}});
-  for (const std::string name : {"split", "narrower", "dropped", "crossed"}) {
+                               {"roads/crossed.xodr", split(crossed)},
+                               {"roads/nearly.xodr", split(nearly)},
+                               {"roads/crossed_after.xodr", crossed_after}});
+  for (const std::string name : {"split", "narrower", "dropped", "crossed", "nearly", "crossed_after"}) {
     test::writeFile(dir->path() / (name + ".xosc"), cutInWith("./roads/three_lanes.xodr", "./roads/" + name + ".xodr"));
   }
   const ScenarioCheck whole = checkOpenScenario(data("cut_in.xosc"), {});
@@ -1687,6 +1694,9 @@ TEST(OscImport, LaneSectionsThatRepeatTheDrivingLanesAreOneRoad) {
                                     section_line)));
   EXPECT_THAT(refusal("dropped"), HasSubstr("<laneSection>: s = 400 m: driving lanes -2 .. -3 of 3.5, 3.5 m"));
   EXPECT_THAT(refusal("crossed"), HasSubstr("<predecessor>: id: lane -3 continues lane -4 of the section before"));
+  EXPECT_THAT(refusal("crossed_after"), HasSubstr("<successor>: id: lane -3 goes on as lane -4 of the section after"));
+  // Widths within a millimetre are the same lane (map tools write 3.4999999 for 3.5).
+  EXPECT_EQ(refusal("nearly"), "(no ConfigError)");
   // A scenario that drives the lanes left of the reference line is refused where they change.
   osc::Findings findings(true);
   const auto split_road = osc::readCarriagewayRoad(dir->path() / "roads" / "split.xodr", findings);
