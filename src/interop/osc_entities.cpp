@@ -199,7 +199,8 @@ void readScenarioObject(Translation& translation, Catalogs& catalogs, const pugi
   }
   if (!definition) reader.fail(object, "expected one of: Vehicle, Pedestrian, MiscObject, CatalogReference");
   if (std::string(definition.name()) == "CatalogReference") {
-    const CatalogEntry entry = catalogs.resolve(translation.reader, definition, {"Vehicle", "Pedestrian", "MiscObject"});
+    const CatalogEntry entry =
+        catalogs.resolve(translation.reader, definition, {"Vehicle", "Pedestrian", "MiscObject"});
     readObject(translation, catalogs, *entry.reader, entry.node, entity);
   } else {
     readObject(translation, catalogs, reader, definition, entity);

@@ -83,8 +83,8 @@ Placement lanePosition(const Translation& translation, const pugi::xml_node& pos
 Placement roadPosition(const Translation& translation, const pugi::xml_node& position) {
   const xml::Reader& reader = translation.reader;
   const CarriagewayRoad& road = translation.road;
-  return onRoad(translation, position, road.ownS(chainS(translation, position)), road.ownT(reader.number(position, "t")),
-                road.reversed ? kPi : 0.0);
+  return onRoad(translation, position, road.ownS(chainS(translation, position)),
+                road.ownT(reader.number(position, "t")), road.reversed ? kPi : 0.0);
 }
 
 Placement relativeLanePosition(Translation& translation, const pugi::xml_node& position) {
@@ -212,11 +212,12 @@ Placement placementOf(Translation& translation, Entity& entity) {
   if (!entity.position && entity.controller) {
     // esmini's SumoController brings traffic that SUMO drives from a route file of its own: such an
     // entity starts nowhere in the file.
-    translation.reader.fail(translation.reader.root(),
-                            fmt::format("entity '{}' has no TeleportAction in the Init, only a controller ('{}', at {}): "
-                                        "vsd-sumo's road users start where the Init places them (traffic a controller "
-                                        "brings from elsewhere, such as a SUMO route file, is not imported)",
-                                        entity.name, *entity.controller, entity.controllerWhere));
+    translation.reader.fail(
+        translation.reader.root(),
+        fmt::format("entity '{}' has no TeleportAction in the Init, only a controller ('{}', at {}): "
+                    "vsd-sumo's road users start where the Init places them (traffic a controller "
+                    "brings from elsewhere, such as a SUMO route file, is not imported)",
+                    entity.name, *entity.controller, entity.controllerWhere));
   }
   if (!entity.position) {
     translation.reader.fail(translation.reader.root(),

@@ -824,7 +824,8 @@ std::vector<pugi::xml_node> roadChain(const xml::Reader& reader, const pugi::xml
 }
 
 /// Notes (once) the roads and junctions of the file that are not part of vsd-sumo's road.
-void noteLeftOut(const xml::Reader& reader, const pugi::xml_node& root, const CarriagewayRoad& road, Findings& findings) {
+void noteLeftOut(const xml::Reader& reader, const pugi::xml_node& root, const CarriagewayRoad& road,
+                 Findings& findings) {
   std::vector<std::string> roads;
   pugi::xml_node first;
   for (const pugi::xml_node& node : root.children("road")) {

@@ -186,7 +186,8 @@ YAML::Node crossing(Translation& translation, const Entity& actor, const pugi::x
   // The walk starts with its event: a later first vertex would make the pedestrian wait there
   // first, an initial distance would start it part-way.
   if (start_time != 0.0) {
-    reader.fail(vertices[0], fmt::format("time {} s: the crossing starts with its event (expected 0)", num(start_time)));
+    reader.fail(vertices[0],
+                fmt::format("time {} s: the crossing starts with its event (expected 0)", num(start_time)));
   }
   if (reader.optionalNumber(follow, "initialDistanceOffset").value_or(0.0) != 0.0) {
     reader.fail(follow, "initialDistanceOffset: the crossing starts where the pedestrian stands (expected 0)");
@@ -257,9 +258,10 @@ YAML::Node speedAction(Translation& translation, const Entity& actor, const pugi
   const pugi::xml_node absolute = action.child("SpeedActionTarget").child("AbsoluteTargetSpeed");
   if (!actor.isVehicle() && facing > 1e-9 && !(absolute && reader.number(absolute, "value") == 0.0)) {
     // The language moves road users along the road: one facing off it stands until it crosses.
-    reader.fail(action, fmt::format("a speed for '{}', which faces {} deg off the road: the language's road users move "
-                                    "along the road, so one facing off it stands (a crossing: a FollowTrajectoryAction)",
-                                    actor.name, num(facing * 180.0 / kPi)));
+    reader.fail(action,
+                fmt::format("a speed for '{}', which faces {} deg off the road: the language's road users move "
+                            "along the road, so one facing off it stands (a crossing: a FollowTrajectoryAction)",
+                            actor.name, num(facing * 180.0 / kPi)));
   }
   YAML::Node item;
   const pugi::xml_node dynamics = reader.only(action, "SpeedActionDynamics");

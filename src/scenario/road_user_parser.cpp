@@ -380,7 +380,8 @@ void parseTrigger(const YamlReader& reader, const YAML::Node& node, const std::s
         secondOf(reader, node["between"], field + ".between", trigger, "bumpers", "reference_points");
   }
   if (node["measure"]) {
-    trigger.straightLine = secondOf(reader, node["measure"], field + ".measure", trigger, "along_lane", "straight_line");
+    trigger.straightLine =
+        secondOf(reader, node["measure"], field + ".measure", trigger, "along_lane", "straight_line");
   }
   if ((trigger.kind == TriggerSpec::Kind::Distance) != static_cast<bool>(node["position"])) {
     reader.fail(node, field, "'position' goes with distance_at_most and distance_at_least (and only there)");

@@ -328,19 +328,24 @@ TEST(OscImport, ConditionsAreReadWithTheirRulesAndEdges) {
   const std::string act_start = R"(<SimulationTimeCondition value="0" rule="greaterOrEqual"/>)";
   const std::string stop = R"(<Condition name="End" delay="0" conditionEdge="rising">
         <ByValueCondition><SimulationTimeCondition value="${4 + 4}" rule="greaterOrEqual"/>)";
-  const std::string swerve = R"(<StoryboardElementStateCondition storyboardElementType="action" storyboardElementRef="CutInChange" state="endTransition"/>)";
+  const std::string swerve =
+      R"(<StoryboardElementStateCondition storyboardElementType="action" )"
+      R"(storyboardElementRef="CutInChange" state="endTransition"/>)";
   const auto dir = folderWith(
       {{"never.xosc", cutInWith(act_start, R"(<SimulationTimeCondition value="0" rule="lessThan"/>)")},
-       {"reached.xosc", std::regex_replace(cutInWith(act_start, R"(<SimulationTimeCondition value="-1" rule="greaterThan"/>)"),
-                                           std::regex("name=\"ActStart\" delay=\"0\" conditionEdge=\"none\""),
-                                           "name=\"ActStart\" delay=\"0\" conditionEdge=\"rising\"")},
+       {"reached.xosc",
+        std::regex_replace(cutInWith(act_start, R"(<SimulationTimeCondition value="-1" rule="greaterThan"/>)"),
+                           std::regex("name=\"ActStart\" delay=\"0\" conditionEdge=\"none\""),
+                           "name=\"ActStart\" delay=\"0\" conditionEdge=\"rising\"")},
        {"stop_rule.xosc", cutInWith(stop, R"(<Condition name="End" delay="0" conditionEdge="none">
         <ByValueCondition><SimulationTimeCondition value="8" rule="lessThan"/>)")},
        {"stop_falling.xosc", cutInWith(stop, R"(<Condition name="End" delay="1" conditionEdge="falling">
         <ByValueCondition><SimulationTimeCondition value="6" rule="lessThan"/>)")},
-       {"parameter.xosc", std::regex_replace(cutInWith(swerve, R"(<ParameterCondition parameterRef="Ego_Speed_kph" value="72.0" rule="equalTo"/>)"),
-                                             std::regex("name=\"AfterTheChange\" delay=\"1\" conditionEdge=\"rising\""),
-                                             "name=\"AfterTheChange\" delay=\"1\" conditionEdge=\"none\"")}});
+       {"parameter.xosc",
+        std::regex_replace(
+            cutInWith(swerve, R"(<ParameterCondition parameterRef="Ego_Speed_kph" value="72.0" rule="equalTo"/>)"),
+            std::regex("name=\"AfterTheChange\" delay=\"1\" conditionEdge=\"rising\""),
+            "name=\"AfterTheChange\" delay=\"1\" conditionEdge=\"none\"")}});
   const auto report = [&](const std::string& name) { return checkOpenScenario(dir->path() / name, {}); };
   EXPECT_THAT(report("never.xosc").report(), HasSubstr("<SimulationTimeCondition>: rule=\"lessThan\": the language's "
                                                        "time trigger fires once time reaches a value"));
@@ -356,7 +361,8 @@ TEST(OscImport, ConditionsAreReadWithTheirRulesAndEdges) {
   EXPECT_THAT(falling.yaml, HasSubstr("duration: 7\n"));
   const ScenarioCheck parameter = report("parameter.xosc");
   ASSERT_TRUE(parameter.runnable()) << parameter.report();
-  EXPECT_THAT(parameter.yaml, HasSubstr("id: SwerveOut\n          trigger:\n            time: 0\n            delay: 1\n"));
+  EXPECT_THAT(parameter.yaml,
+              HasSubstr("id: SwerveOut\n          trigger:\n            time: 0\n            delay: 1\n"));
 }
 
 // A relative distance, headway or time to collision without a relativeDistanceType is the
@@ -371,7 +377,8 @@ TEST(OscImport, ADistanceWithoutItsTypeIsTheStraightLine) {
                                {"euclidian.xosc", variant("relativeDistanceType=\"euclidianDistance\" ")},
                                {"cartesian.xosc", variant("relativeDistanceType=\"cartesianDistance\" ")},
                                {"lateral.xosc", variant("relativeDistanceType=\"lateral\" ")}});
-  const std::string straight = "trigger:\n            gap: 30\n            measure: straight_line\n            rising: true\n";
+  const std::string straight =
+      "trigger:\n            gap: 30\n            measure: straight_line\n            rising: true\n";
   for (const std::string name : {"absent", "along_route", "euclidian", "cartesian"}) {
     const ScenarioCheck check = checkOpenScenario(dir->path() / (name + ".xosc"), {});
     ASSERT_TRUE(check.runnable()) << name << "\n" << check.report();
@@ -388,7 +395,8 @@ TEST(OscImport, ADistanceWithoutItsTypeIsTheStraightLine) {
 // does not make a later reference to it "refer back to itself".
 TEST(OscImport, EntitiesAreDefinedOnceAndTheirCatalogConstraintsHold) {
   const std::string cutter = R"(<CatalogReference catalogName="fleet" entryName="$Vehicle_Model"/>)";
-  const std::string controller = R"(<ObjectController><CatalogReference catalogName="drivers" entryName="ALKSController"/></ObjectController>)";
+  const std::string controller =
+      R"(<ObjectController><CatalogReference catalogName="drivers" entryName="ALKSController"/></ObjectController>)";
   const std::string ego_place = R"(<LanePosition roadId="7" laneId="-3" s="20" offset="0"/>)";
   std::string constrained = readTextFile(data("catalogs/vehicles/fleet.xosc"));
   constrained.replace(constrained.find("value=\"4.5\"/>"), 13,
@@ -397,16 +405,20 @@ TEST(OscImport, EntitiesAreDefinedOnceAndTheirCatalogConstraintsHold) {
   const auto dir = folderWith(
       {{"twice.xosc", cutInWith(cutter, cutter + R"(<Vehicle name="bus" vehicleCategory="bus"/>)")},
        {"controllers.xosc", cutInWith(controller, controller + controller)},
-       {"pitched.xosc", cutInWith(ego_place, R"(<LanePosition roadId="7" laneId="-3" s="20" offset="0"><Orientation p="0.5"/></LanePosition>)")},
-       {"world.xosc", cutInWith(R"(<WorldPosition x="300" y="-12.75")", R"(<WorldPosition x="300" y="-12.75" r="0.1")")},
+       {"pitched.xosc",
+        cutInWith(ego_place,
+                  R"(<LanePosition roadId="7" laneId="-3" s="20" offset="0"><Orientation p="0.5"/></LanePosition>)")},
+       {"world.xosc",
+        cutInWith(R"(<WorldPosition x="300" y="-12.75")", R"(<WorldPosition x="300" y="-12.75" r="0.1")")},
        // A controller that brings its entity from elsewhere (esmini's SumoController) and no start.
-       {"brought.xosc", std::regex_replace(cutInWith(R"(<CatalogReference catalogName="people" entryName="walker"/>)",
-                                                     R"(<CatalogReference catalogName="people" entryName="walker"/>)" +
-                                                         controller),
-                                           std::regex("<Private entityRef=\"Walker\">[^]*?</Private>"), "")}});
+       {"brought.xosc",
+        std::regex_replace(cutInWith(R"(<CatalogReference catalogName="people" entryName="walker"/>)",
+                                     R"(<CatalogReference catalogName="people" entryName="walker"/>)" + controller),
+                           std::regex("<Private entityRef=\"Walker\">[^]*?</Private>"), "")}});
   const auto constraining = folderWith({{"catalogs/vehicles/fleet.xosc", constrained}});
   const auto report = [&](const std::string& name) { return checkReport(*dir, name); };
-  EXPECT_THAT(report("twice.xosc"), HasSubstr("<Vehicle>: <Vehicle> after <CatalogReference>: an entity is defined once"));
+  EXPECT_THAT(report("twice.xosc"),
+              HasSubstr("<Vehicle>: <Vehicle> after <CatalogReference>: an entity is defined once"));
   EXPECT_THAT(report("controllers.xosc"), HasSubstr("<ObjectController>: a second <ObjectController>"));
   EXPECT_THAT(report("pitched.xosc"), HasSubstr("<Orientation>: p: vsd-sumo is planar (pitch and roll 0)"));
   EXPECT_THAT(report("pitched.xosc"), Not(HasSubstr("refers back to itself")));
@@ -481,7 +493,8 @@ TEST(OscImport, InitActionsInOrderAndCrossingsFromTheirStart) {
   ASSERT_TRUE(order.runnable()) << order.report();
   EXPECT_THAT(order.report(), HasSubstr("<SpeedAction>: replaced by the step to a speed at line"));
   EXPECT_THAT(order.yaml, Not(HasSubstr("target: 30")));
-  EXPECT_EQ(std::regex_replace(order.yaml, std::regex("order"), "cut_in"), checkOpenScenario(data("cut_in.xosc"), {}).yaml);
+  EXPECT_EQ(std::regex_replace(order.yaml, std::regex("order"), "cut_in"),
+            checkOpenScenario(data("cut_in.xosc"), {}).yaml);
   EXPECT_THAT(checkOpenScenario(dir->path() / "late.xosc", {}).report(),
               HasSubstr("<Vertex>: time 2 s: the crossing starts with its event (expected 0)"));
   EXPECT_THAT(checkOpenScenario(dir->path() / "partway.xosc", {}).report(),
@@ -900,7 +913,8 @@ TEST(OscImport, WhatEsminiMeasuresOtherwiseIsNotedOrRefused) {
                   <SpeedActionTarget><AbsoluteTargetSpeed value="10"/></SpeedActionTarget>)";
   const auto dir = folderWith(
       {{"end.xosc", conditionsWith(group(entityCondition("Lead", R"(<EndOfRoadCondition duration="0"/>)")))},
-       {"accel.xosc", conditionsWith(group(entityCondition("Lead", R"(<AccelerationCondition value="-3" rule="lessThan"/>)")))},
+       {"accel.xosc",
+        conditionsWith(group(entityCondition("Lead", R"(<AccelerationCondition value="-3" rule="lessThan"/>)")))},
        {"orientation.xosc",
         conditionsWith(group(entityCondition("Lead", R"(<ReachPositionCondition tolerance="1"><Position>
             <LanePosition roadId="7" laneId="-2" s="200" offset="0"><Orientation type="relative" h="0"/></LanePosition>
@@ -917,8 +931,9 @@ TEST(OscImport, WhatEsminiMeasuresOtherwiseIsNotedOrRefused) {
                                               "acceleration"));
   EXPECT_THAT(report("orientation.xosc"), HasSubstr("<Orientation>: a heading to reach (esmini also requires it within "
                                                     "0.05 rad)"));
-  EXPECT_THAT(report("relative.xosc"), HasSubstr("<RelativeTargetSpeed>: the target is the reference's speed less 3 m/s "
-                                                 "when the change starts"));
+  EXPECT_THAT(report("relative.xosc"),
+              HasSubstr("<RelativeTargetSpeed>: the target is the reference's speed less 3 m/s "
+                        "when the change starts"));
 }
 
 // freespace="false" measures between the entities' reference points (which a catalog's
@@ -1682,7 +1697,8 @@ TEST(OscImport, LaneSectionsThatRepeatTheDrivingLanesAreOneRoad) {
   // The same translation but for the scenario's name (the file's stem).
   EXPECT_EQ(std::regex_replace(sections.yaml, std::regex("split"), "cut_in"), whole.yaml);
   // What the road says about driving on it, and the simulation does not follow, is noted once.
-  EXPECT_THAT(sections.report(), HasSubstr("split.xodr:8: <type>: the road type and its speed limit are not simulated"));
+  EXPECT_THAT(sections.report(),
+              HasSubstr("split.xodr:8: <type>: the road type and its speed limit are not simulated"));
   EXPECT_THAT(sections.report(), HasSubstr("split.xodr:24: <roadMark>: road marks are not simulated (lane changes "
                                            "cross any mark)"));
   const auto refusal = [&](const std::string& name) { return importRefusal(*dir, name); };
@@ -1714,7 +1730,8 @@ std::string linkedRoad(const std::string& id, double length, const std::string& 
   const std::string file = readTextFile(data("roads/three_lanes.xodr"));
   const auto begin = file.find("<road ");
   std::string road = file.substr(begin, file.find("</road>") + 7 - begin);
-  road = std::regex_replace(road, std::regex("length=\"1000\" id=\"7\""), fmt::format("length=\"{}\" id=\"{}\"", length, id));
+  road = std::regex_replace(road, std::regex("length=\"1000\" id=\"7\""),
+                            fmt::format("length=\"{}\" id=\"{}\"", length, id));
   road.replace(road.find("<link/>"), 7, link);
   const auto from = road.find("<planView>");
   road.replace(from, road.find("</planView>") - from, "<planView>" + plan_view);

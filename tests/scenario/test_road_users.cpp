@@ -218,7 +218,8 @@ TEST(RoadUsers, APedestrianNeedsAPlaceToCross) {
 // it along the road and turn it there at once; both are refused (the crossing of the test above
 // passes, and so does facing along the road).
 TEST(RoadUsers, ARoadUserFacingOffTheRoadStandsUntilItCrosses) {
-  const std::string walker = R"(    - {id: p, type: pedestrian, gap: 20, relative_lane: 0, offset: -1, heading_deg: HEADING,
+  const std::string walker =
+      R"(    - {id: p, type: pedestrian, gap: 20, relative_lane: 0, offset: -1, heading_deg: HEADING,
        speed: SPEED, actions: [{trigger: {time: 1}, ACTION}]})";
   const auto with = [&](const std::string& heading, const std::string& speed, const std::string& action) {
     std::string text = std::regex_replace(walker, std::regex("HEADING"), heading);
