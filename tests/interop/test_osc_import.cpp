@@ -53,6 +53,15 @@ std::string importRefusal(const TemporaryDirectory& dir, const std::string& name
   return test::configErrorOf([&] { importTemplate(dir.path() / (name + ".xosc"), {}); });
 }
 
+/// An Init or Story <PrivateAction> that steps to `value` m/s.
+std::string stepSpeedAction(const std::string& value) {
+  return fmt::format(R"(<PrivateAction><LongitudinalAction><SpeedAction>
+            <SpeedActionDynamics dynamicsShape="step" dynamicsDimension="time" value="0"/>
+            <SpeedActionTarget><AbsoluteTargetSpeed value="{}"/></SpeedActionTarget></SpeedAction></LongitudinalAction>
+          </PrivateAction>)",
+                     value);
+}
+
 /// A test data file with one piece of text replaced (the test's variation of it).
 std::string dataWith(const std::string& name, const std::string& from, const std::string& to) {
   std::string text = readTextFile(data(name));
@@ -438,24 +447,17 @@ TEST(OscImport, EntitiesAreDefinedOnceAndTheirCatalogConstraintsHold) {
 TEST(OscImport, APedestrianFacingOffTheRoadStands) {
   const std::string place = R"(<WorldPosition x="300" y="-12.75" h="1.5707963267948966"/></Position></TeleportAction>
           </PrivateAction>)";
-  const auto speed = [](const std::string& value) {
-    return fmt::format(R"(<PrivateAction><LongitudinalAction><SpeedAction>
-            <SpeedActionDynamics dynamicsShape="step" dynamicsDimension="time" value="0"/>
-            <SpeedActionTarget><AbsoluteTargetSpeed value="{}"/></SpeedActionTarget></SpeedAction></LongitudinalAction>
-          </PrivateAction>)",
-                       value);
-  };
   const std::string ego_group = R"(<ManeuverGroup maximumExecutionCount="1" name="EgoGroup">)";
   const std::string walk = R"(<ManeuverGroup maximumExecutionCount="1" name="WalkerGroup">
           <Actors selectTriggeringEntities="false"><EntityRef entityRef="Walker"/></Actors>
           <Maneuver name="WalkerManeuver"><Event name="Walk" priority="overwrite"><Action name="WalkOn">)" +
-                           speed("2") + R"(</Action><StartTrigger><ConditionGroup>
+                           stepSpeedAction("2") + R"(</Action><StartTrigger><ConditionGroup>
             <Condition name="W" delay="0" conditionEdge="none"><ByValueCondition>
               <SimulationTimeCondition value="2" rule="greaterOrEqual"/></ByValueCondition></Condition>
           </ConditionGroup></StartTrigger></Event></Maneuver></ManeuverGroup>
         )" + ego_group;
-  const auto dir = folderWith({{"init.xosc", cutInWith(place, place + speed("1"))},
-                               {"still.xosc", cutInWith(place, place + speed("0"))},
+  const auto dir = folderWith({{"init.xosc", cutInWith(place, place + stepSpeedAction("1"))},
+                               {"still.xosc", cutInWith(place, place + stepSpeedAction("0"))},
                                {"story.xosc", cutInWith(ego_group, walk)}});
   EXPECT_THAT(checkReport(*dir, "init.xosc"),
               HasSubstr("<SpeedActionTarget>: 'Walker' faces 90 deg off the road and is given a speed of 1 m/s"));
@@ -522,10 +524,7 @@ TEST(OscImport, MiscObjectsAndRoadPositions) {
   // A speed in the Init would move it: refused where it is given, not dropped.
   const std::string placed = "</TeleportAction></PrivateAction></Private>";
   text.replace(text.find(placed), placed.size(),
-               "</TeleportAction></PrivateAction><PrivateAction><LongitudinalAction><SpeedAction>"
-               "<SpeedActionDynamics dynamicsShape=\"step\" dynamicsDimension=\"time\" value=\"0\"/>\n"
-               "<SpeedActionTarget><AbsoluteTargetSpeed value=\"3\"/></SpeedActionTarget></SpeedAction>"
-               "</LongitudinalAction></PrivateAction></Private>");
+               "</TeleportAction></PrivateAction>" + stepSpeedAction("3") + "</Private>");
   test::writeFile(dir->path() / "moving_cone.xosc", text);
   const auto refused = test::configErrorOf([&] { importTemplate(dir->path() / "moving_cone.xosc", {}); });
   const std::string line = text.substr(0, text.find("<SpeedActionTarget><AbsoluteTargetSpeed value=\"3\""));
