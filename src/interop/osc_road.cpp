@@ -211,7 +211,7 @@ void takeRun(CarriagewayRoad& result, const DrivenRun& run, int sign) {
   result.innermostLaneId = run.innermostLaneId;
   const double driving = std::accumulate(run.laneWidths.begin(), run.laneWidths.end(), 0.0);
   // The driving lanes' left edge; the inner lanes lie left of a right-side run, right of a left-side one.
-  result.innerT = sign < 0 ? -run.innerShoulder : run.innerShoulder + driving;
+  result.innerT = result.laneOffset + (sign < 0 ? -run.innerShoulder : run.innerShoulder + driving);
   result.shoulderLeft = sign < 0 ? run.innerShoulder : run.outerShoulder;
   result.shoulderRight = sign < 0 ? run.outerShoulder : run.innerShoulder;
   result.leftCarriageway = sign > 0;
@@ -351,19 +351,43 @@ void checkSectionJoin(const xml::Reader& reader, const pugi::xml_node& before, c
   checkLaneLinks(reader, after, sign, "predecessor");
 }
 
+/// The lanes' offset from the reference line (m, > 0 left): OpenDRIVE's <laneOffset> records,
+/// which must give one constant along the road — none (0), or records from s = 0 that all have
+/// the same `a` and no b, c, d (map tools write one per section). An offset that varies moves
+/// the lanes across the road, which the language's lanes, parallel to its centre line, cannot.
+double constantLaneOffset(const xml::Reader& reader, const pugi::xml_node& lanes) {
+  std::optional<double> constant;
+  for (const pugi::xml_node& offset : lanes.children("laneOffset")) {
+    for (const char* coefficient : {"b", "c", "d"}) {
+      if (reader.optionalNumber(offset, coefficient).value_or(0.0) != 0.0) {
+        reader.fail(offset, "a lane offset that varies along the road: the scenario language's lanes run parallel "
+                            "to its centre line");
+      }
+    }
+    const double a = reader.number(offset, "a");
+    const double s = reader.number(offset, "s", NumberRange::atLeast(0.0));
+    if (!constant && s != 0.0 && a != 0.0) {
+      reader.fail(offset, fmt::format("s = {} m: a lane offset of {} m from there, none before: the scenario "
+                                      "language's lanes run parallel to its centre line",
+                                      xml::number(s), xml::number(a)));
+    }
+    if (constant && !near(a, *constant)) {
+      reader.fail(offset, fmt::format("a = {} m from s = {} m, after {} m: a lane offset that changes along the road "
+                                      "(the scenario language's lanes run parallel to its centre line)",
+                                      xml::number(a), xml::number(s), xml::number(*constant)));
+    }
+    if (!constant) constant = a;
+  }
+  return constant.value_or(0.0);
+}
+
 /// Lane sections: the first (at s = 0) gives the road's lanes; later ones (in order of s,
 /// within the road) must repeat its driving lanes and shoulders, as the language's lanes run
 /// the whole road (a road split into sections where only lanes beyond the shoulders change).
 void readLanes(const xml::Reader& reader, const pugi::xml_node& road, CarriagewayRoad& result) {
   const pugi::xml_node lanes = reader.only(road, "lanes");
   reader.requireSubset(lanes, {"laneSection", "laneOffset"});
-  for (const pugi::xml_node& offset : lanes.children("laneOffset")) {
-    for (const char* coefficient : {"a", "b", "c", "d"}) {
-      if (reader.optionalNumber(offset, coefficient).value_or(0.0) != 0.0) {
-        reader.fail(offset, "a lane offset: the scenario language's lanes lie symmetric about its centre line");
-      }
-    }
-  }
+  result.laneOffset = constantLaneOffset(reader, lanes);
   const pugi::xml_node first = lanes.child("laneSection");
   if (!first) reader.fail(lanes, "expected a <laneSection>");
   if (reader.optionalNumber(first, "s").value_or(0.0) != 0.0) reader.fail(first, "s: expected 0 (the road's start)");
@@ -375,6 +399,7 @@ void readLanes(const xml::Reader& reader, const pugi::xml_node& road, Carriagewa
     previous_s = s;
     CarriagewayRoad own;
     own.leftHandTraffic = result.leftHandTraffic;
+    own.laneOffset = result.laneOffset;
     readSection(reader, section, own);
     if (!sameLanes(own, result)) {
       reader.fail(section, fmt::format("s = {} m: {}, where the road starts with {}: the scenario language's lanes run "
@@ -450,6 +475,7 @@ void CarriagewayRoad::useReversedLeftCarriageway() {
   DrivenRun run = *leftRun;
   run.innermostLaneId = -run.innermostLaneId;
   std::reverse(run.laneWidths.begin(), run.laneWidths.end());
+  laneOffset = -laneOffset;
   takeRun(*this, run, -1);
   adjoiningLeftLanes = 0;
   adjoiningLeftWidths.clear();
@@ -462,7 +488,7 @@ void CarriagewayRoad::joinLeftLanes() {
   leftLanesJoined = true;
   lanes += adjoiningLeftLanes;
   laneWidths.insert(laneWidths.end(), adjoiningLeftWidths.begin(), adjoiningLeftWidths.end());
-  innerT = std::accumulate(adjoiningLeftWidths.begin(), adjoiningLeftWidths.end(), 0.0);
+  innerT = laneOffset + std::accumulate(adjoiningLeftWidths.begin(), adjoiningLeftWidths.end(), 0.0);
   shoulderLeft = adjoiningLeftShoulder;
 }
 
@@ -899,6 +925,15 @@ void readRoadPiece(const xml::Reader& reader, const pugi::xml_node& road, const 
     own.length = length;
     readLanes(reader, road, own);
     const pugi::xml_node section = road.child("lanes").child("laneSection");
+    if (!near(own.laneOffset, result.laneOffset)) {
+      const pugi::xml_node record = road.child("lanes").child("laneOffset");
+      reader.fail(record ? record : section,
+                  fmt::format("road '{}' continues road '{}' with its lanes {} m left of the reference line, where "
+                              "vsd-sumo's road has them {} m left (<laneOffset>): the scenario language's lanes run "
+                              "parallel to its centre line",
+                              id, result.pieces[result.pieces.size() - 2].id, xml::number(own.laneOffset),
+                              xml::number(result.laneOffset)));
+    }
     if (!sameLanes(own, result)) {
       reader.fail(section, fmt::format("road '{}' continues road '{}' with {}, where vsd-sumo's road has {}: the "
                                        "scenario language's lanes run the whole road",

@@ -129,7 +129,11 @@ struct CarriagewayRoad {
   int lanes = 0;            ///< the language's driving lanes: the run's (and the joined left ones)
   int innermostLaneId = -1; ///< OpenDRIVE id of the run's driving lane next to the reference line
   std::vector<double> laneWidths;  ///< m, each driving lane's, the language's lane 0 (rightmost) first
-  double innerT = 0.0;      ///< m, t of the driving lanes' left edge (<= 0; > 0 with joined left lanes)
+  /// m the lanes lie left of the reference line (OpenDRIVE's <laneOffset>, one constant along the
+  /// road; > 0 left), in the road's own frame: negated on the reversed line. Part of innerT.
+  double laneOffset = 0.0;
+  /// m, t of the driving lanes' left edge (<= laneOffset; > laneOffset with joined left lanes)
+  double innerT = 0.0;
   /// m left of the driving lanes (towards the reference line, or beyond joined left lanes)
   double shoulderLeft = 0.0;
   double shoulderRight = 0.0;  ///< m of shoulder/stop lanes right of the driving lanes

@@ -1722,6 +1722,51 @@ TEST(OscImport, LaneSectionsThatRepeatTheDrivingLanesAreOneRoad) {
                         "them"));
 }
 
+// OpenDRIVE's <laneOffset> moves all lanes off the reference line; one constant along the road
+// (map tools write one record per section) shifts the language's lanes with it, so positions
+// named by lanes stay and world positions land where the shifted lanes are.
+TEST(OscImport, AConstantLaneOffsetShiftsTheLanes) {
+  // Two sections, as map tools write a road whose outer lanes change (one offset record each).
+  std::string road = readTextFile(data("roads/three_lanes.xodr"));
+  const auto begin = road.find("<laneSection s=\"0\">");
+  const auto end = road.find("</laneSection>") + std::string("</laneSection>").size();
+  road.replace(end, 0, "\n      " + std::regex_replace(road.substr(begin, end - begin), std::regex("s=\"0\">"),
+                                                        "s=\"400\">"));
+  const auto with_offsets = [&road](const std::string& records) {
+    std::string text = road;
+    return text.replace(text.find("<laneSection s=\"0\">"), 0, records + "\n      ");
+  };
+  const std::string right = R"(<laneOffset s="0" a="-0.5" b="0" c="0" d="0"/>)";
+  const auto dir = folderWith(
+      {{"roads/offset.xodr", with_offsets(right + R"(<laneOffset s="400" a="-0.5" b="0" c="0" d="0"/>)")},
+       {"roads/varying.xodr", with_offsets(R"(<laneOffset s="0" a="0" b="0" c="0.0042" d="-5.6e-05"/>)")},
+       {"roads/changing.xodr", with_offsets(right + R"(<laneOffset s="400" a="-0.25" b="0" c="0" d="0"/>)")},
+       {"roads/later.xodr", with_offsets(R"(<laneOffset s="125" a="3.5" b="0" c="0" d="0"/>)")}});
+  for (const std::string name : {"offset", "varying", "changing", "later"}) {
+    test::writeFile(dir->path() / (name + ".xosc"), cutInWith("./roads/three_lanes.xodr", "./roads/" + name + ".xodr"));
+  }
+  const auto logical = importTemplate(dir->path() / "offset.xosc", {});
+  const auto plain = importTemplate(data("cut_in.xosc"), {});
+  // The Walker's WorldPosition (t = -12.75) is 3 m right of lane 0's centre (t = -9.75) without
+  // the offset, 2.5 m right of it (t = -10.25) with the lanes 0.5 m further right.
+  EXPECT_DOUBLE_EQ(other(*plain, "Walker").offset.evaluate({}), -3.0);
+  EXPECT_NEAR(other(*logical, "Walker").offset.evaluate({}), -2.5, 1e-9);
+  // Road users placed by lane keep their lanes and offsets.
+  EXPECT_EQ(logical->ego.lane, plain->ego.lane);
+  EXPECT_EQ(logical->ego.offset.evaluate({}), plain->ego.offset.evaluate({}));
+  EXPECT_EQ(other(*logical, "Cutter").offset.evaluate({}), other(*plain, "Cutter").offset.evaluate({}));
+  osc::Findings findings(true);
+  const auto offset_road = osc::readCarriagewayRoad(dir->path() / "roads" / "offset.xodr", findings);
+  EXPECT_DOUBLE_EQ(offset_road.laneCentreT(0), -10.25);
+  EXPECT_THAT(importRefusal(*dir, "varying"),
+              HasSubstr("varying.xodr:16: <laneOffset>: a lane offset that varies along the road"));
+  EXPECT_THAT(importRefusal(*dir, "changing"),
+              HasSubstr("changing.xodr:16: <laneOffset>: a = -0.25 m from s = 400 m, after -0.5 m: a lane offset "
+                        "that changes along the road"));
+  EXPECT_THAT(importRefusal(*dir, "later"),
+              HasSubstr("later.xodr:16: <laneOffset>: s = 125 m: a lane offset of 3.5 m from there, none before"));
+}
+
 namespace {
 
 /// three_lanes.xodr's road as road `id` with this link and plan view, its length `length`.
@@ -1758,6 +1803,8 @@ TEST(OscImport, RoadsLinkedEndToStartAreOneRoad) {
   const std::string apart = linkedRoad("9", 1000, "<link/>", geometry(0, Vec2(0, 100), 0, 1000, "<line/>"));
   std::string narrower = second;
   narrower.replace(narrower.find("a=\"3.5\"", narrower.find("id=\"-3\"")), 7, "a=\"3.25\"");
+  std::string shifted = second;
+  shifted.replace(shifted.find("<laneSection"), 0, R"(<laneOffset s="0" a="0.5" b="0" c="0" d="0"/>)");
   const std::string ego = R"(<LanePosition roadId="7" laneId="-3" s="20" offset="0"/>)";
   const auto on = [&](const std::string& road_file, const std::string& position) {
     std::string text = cutInWith("./roads/three_lanes.xodr", "./roads/" + road_file);
@@ -1774,6 +1821,8 @@ TEST(OscImport, RoadsLinkedEndToStartAreOneRoad) {
        {"apart.xosc", std::regex_replace(on("chain.xodr", ego), std::regex("<WorldPosition x=\"300\"[^>]*>"),
                                          R"(<LanePosition roadId="9" laneId="-3" s="300" offset="0"/>)")},
        {"narrower.xosc", on("narrower.xodr", ego)},
+       {"roads/shifted.xodr", network({first, shifted})},
+       {"shifted.xosc", on("shifted.xodr", ego)},
        {"gap.xosc", on("gap.xodr", ego)},
        {"roads/in_junction.xodr", network({std::regex_replace(first, std::regex("junction=\"-1\""), "junction=\"5\""),
                                            second})},
@@ -1794,6 +1843,8 @@ TEST(OscImport, RoadsLinkedEndToStartAreOneRoad) {
                                           "'7' -> '8'"));
   EXPECT_THAT(refusal("narrower"), HasSubstr("<laneSection>: road '8' continues road '7' with driving lanes -2 .. -4 "
                                              "of 3.5, 3.25, 3.5 m"));
+  EXPECT_THAT(refusal("shifted"), HasSubstr("<laneOffset>: road '8' continues road '7' with its lanes 0.5 m left of "
+                                            "the reference line, where vsd-sumo's road has them 0 m left"));
   EXPECT_THAT(refusal("gap"), HasSubstr("<geometry>: road '8' does not start where road '7' ends, which links to it "
                                         "(s 0 m, a gap of 1 m"));
   EXPECT_THAT(refusal("in_junction"), HasSubstr("<road>: road '7' lies in junction 5 (the roadId at "));
@@ -2473,6 +2524,27 @@ TEST(OscRoad, TheLeftSideDrivenAgainstTheReferenceLineIsTheRoadRunBackwards) {
   EXPECT_THAT(test::configErrorOf([&] { backward.languageLane(-2, "here"); }),
               HasSubstr("here: laneId -2: expected a driving lane of the road's left side, 1 .. 1, driven against the "
                         "reference line (as the file's Init drives it) (the right side's lanes are not part of"));
+}
+
+// A constant <laneOffset> moves the lanes of both sides: read on the reversed reference line it
+// is turned with the road, and left lanes joined to the road lie beyond it too. By hand: lane
+// 1 (3.5 m) has its centre at t = 0.5 + 1.75 of the file's reference line.
+TEST(OscRoad, ALaneOffsetMovesTheLanesOfEitherSide) {
+  std::string text = readTextFile(data("roads/s_curve.xodr"));
+  text.replace(text.find("<laneSection s=\"0\">"), 0, R"(<laneOffset s="0" a="0.5" b="0" c="0" d="0"/>)");
+  std::string adjoining = text;  // lane -1 driving: lane 1 continues the right side's lanes
+  adjoining.replace(adjoining.find("type=\"border\"", adjoining.find("<lane id=\"-1\"")), 13, "type=\"driving\"");
+  const auto folder = folderWith({{"roads/offset.xodr", text}, {"roads/adjoining.xodr", adjoining}});
+  osc::Findings findings(false);
+  const osc::CarriagewayRoad forward = osc::readCarriagewayRoad(folder->path() / "roads" / "offset.xodr", findings);
+  EXPECT_DOUBLE_EQ(forward.laneCentreT(2), 0.5 - 1.0 - 1.75);  // lane -2, beyond the 1 m border
+  osc::CarriagewayRoad backward = forward;
+  backward.useReversedLeftCarriageway();
+  EXPECT_DOUBLE_EQ(backward.laneCentreT(0), backward.ownT(0.5 + 1.75));
+  osc::CarriagewayRoad joined = osc::readCarriagewayRoad(folder->path() / "roads" / "adjoining.xodr", findings);
+  joined.joinLeftLanes();
+  EXPECT_DOUBLE_EQ(joined.laneCentreT(joined.languageLane(1, "here")), 0.5 + 1.75);
+  EXPECT_DOUBLE_EQ(joined.laneCentreT(joined.languageLane(-1, "here")), 0.5 - 0.5);
 }
 
 // A right-hand road whose Init drives the left side against the reference line (its own
