@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <deque>
+#include <limits>
 #include <map>
 #include <mutex>
 #include <numeric>
@@ -797,6 +798,11 @@ std::pair<double, double> CarriagewayRoad::coordinates(const Vec2& p) const {
 
 namespace {
 
+bool inJunction(const pugi::xml_node& road) {
+  const std::string junction = road.attribute("junction").value();
+  return !junction.empty() && junction != "-1";
+}
+
 /// The road a <successor> or <predecessor> link of `road` names, if it continues `road` in its
 /// direction (its start follows a successor, its end precedes a predecessor) outside junctions;
 /// an empty node otherwise.
@@ -807,34 +813,96 @@ pugi::xml_node continuation(const pugi::xml_node& root, const pugi::xml_node& ro
   if (link.attribute("contactPoint").value() != contact) return {};
   const std::string id = link.attribute("elementId").value();
   for (const pugi::xml_node& other : root.children("road")) {
-    const std::string junction = other.attribute("junction").value();
-    if (other.attribute("id").value() == id && (junction.empty() || junction == "-1")) return other;
+    if (other.attribute("id").value() == id && !inJunction(other)) return other;
   }
   return {};
 }
 
+/// m a point may lie right and left of `road`'s reference line and be on it: the widest its lanes
+/// get on each side in any section (each lane's largest `a`) beyond its largest lane offset. A
+/// bound for finding the road under a point, not a reading of the road (readLanes checks it).
+std::pair<double, double> lateralExtent(const pugi::xml_node& road) {
+  double offset = 0.0;
+  for (const pugi::xml_node& record : road.child("lanes").children("laneOffset")) {
+    offset = std::max(offset, std::abs(record.attribute("a").as_double()));
+  }
+  const auto side_width = [](const pugi::xml_node& side) {
+    double sum = 0.0;
+    for (const pugi::xml_node& lane : side.children("lane")) {
+      double widest = 0.0;
+      for (const pugi::xml_node& width : lane.children("width")) {
+        widest = std::max(widest, width.attribute("a").as_double());
+      }
+      sum += widest;
+    }
+    return sum;
+  };
+  double right = 0.0;
+  double left = 0.0;
+  for (const pugi::xml_node& section : road.child("lanes").children("laneSection")) {
+    right = std::max(right, side_width(section.child("right")));
+    left = std::max(left, side_width(section.child("left")));
+  }
+  return {right + offset, left + offset};
+}
+
+/// The road outside junctions whose lanes hold `point` (the one whose reference line is nearest if
+/// several do): a file that names no roadId places its scenario on a map by world positions.
+/// Roads whose plan view vsd-sumo cannot read are not candidates.
+pugi::xml_node roadUnder(const xml::Reader& reader, const pugi::xml_node& root, const Vec2& point,
+                         const std::string& asked_where) {
+  pugi::xml_node found;
+  double found_t = std::numeric_limits<double>::infinity();
+  for (const pugi::xml_node& road : root.children("road")) {
+    if (inJunction(road)) continue;
+    CarriagewayRoad plan;
+    try {
+      readPlanView(reader, road, plan, 0.0);
+      classifyCurvature(plan);
+    } catch (const ConfigError&) {
+      continue;
+    }
+    const auto [s, t] = plan.coordinates(point);
+    const auto [right, left] = lateralExtent(road);
+    const bool on_road = s >= -kJoinTolerance && s <= plan.length + kJoinTolerance && t >= -right && t <= left;
+    if (on_road && std::abs(t) < found_t) {
+      found = road;
+      found_t = std::abs(t);
+    }
+  }
+  if (!found) {
+    reader.fail(root, fmt::format("several roads, no position of the scenario names one (roadId), and its first "
+                                  "world position (x {} m, y {} m; {}) lies on the lanes of none outside junctions",
+                                  xml::number(point.x()), xml::number(point.y()), asked_where));
+  }
+  return found;
+}
+
 /// vsd-sumo's road in a file of several roads: the road `scenario_road` (the scenario's first
-/// roadId; `asked_where` names it) and the roads linked to it end to start, in driving order.
-/// A file of one road is that road.
+/// roadId; `asked_where` names it), or without one the road under `point` (the scenario's first
+/// world position), and the roads linked to it end to start, in driving order. A file of one
+/// road is that road.
 std::vector<pugi::xml_node> roadChain(const xml::Reader& reader, const pugi::xml_node& root,
-                                      const std::string& scenario_road, const std::string& asked_where) {
+                                      const std::string& scenario_road, const std::optional<Vec2>& point,
+                                      const std::string& asked_where) {
   const auto roads = root.children("road");
   const auto count = static_cast<std::size_t>(std::distance(roads.begin(), roads.end()));
   if (count == 0) reader.fail(root, "expected a <road>");
   if (count == 1) return {*roads.begin()};
-  if (scenario_road.empty()) {
-    reader.fail(*std::next(roads.begin()), "several roads, and no position of the scenario names one (roadId)");
+  if (scenario_road.empty() && !point) {
+    reader.fail(*std::next(roads.begin()), "several roads, and no position of the scenario names one (roadId) or "
+                                           "lies on one (WorldPosition)");
   }
   pugi::xml_node found;
+  if (scenario_road.empty()) found = roadUnder(reader, root, *point, asked_where);
   for (const pugi::xml_node& road : roads) {
-    if (road.attribute("id").value() == scenario_road) found = road;
+    if (!scenario_road.empty() && road.attribute("id").value() == scenario_road) found = road;
   }
   if (!found) reader.fail(root, fmt::format("no <road> with id \"{}\" ({})", scenario_road, asked_where));
-  const std::string junction = found.attribute("junction").value();
-  if (!junction.empty() && junction != "-1") {
+  if (inJunction(found)) {
     reader.fail(found, fmt::format("road '{}' lies in junction {} ({}): vsd-sumo's road is a chain of roads outside "
                                    "junctions",
-                                   scenario_road, junction, asked_where));
+                                   scenario_road, found.attribute("junction").value(), asked_where));
   }
   std::deque<pugi::xml_node> chain = {found};
   std::set<const void*> seen = {found.internal_object()};
@@ -961,7 +1029,8 @@ void readRoadPiece(const xml::Reader& reader, const pugi::xml_node& road, const 
 }
 
 CarriagewayRoad readRoad(const std::filesystem::path& file, std::string text, Findings& findings,
-                         const std::string& scenario_road, const std::string& asked_where) {
+                         const std::string& scenario_road, const std::optional<Vec2>& point,
+                         const std::string& asked_where) {
   xml::Reader reader(file, std::move(text));
   const pugi::xml_node root = reader.root();
   if (std::string(root.name()) != "OpenDRIVE") reader.fail(root, "expected the root element <OpenDRIVE>");
@@ -969,7 +1038,15 @@ CarriagewayRoad readRoad(const std::filesystem::path& file, std::string text, Fi
   CarriagewayRoad result;
   result.file = file;
   pugi::xml_node before;  // the road before in the chain
-  for (const pugi::xml_node& road : roadChain(reader, root, scenario_road, asked_where)) {
+  const std::vector<pugi::xml_node> chain = roadChain(reader, root, scenario_road, point, asked_where);
+  const auto roads = root.children("road");
+  if (scenario_road.empty() && point && std::distance(roads.begin(), roads.end()) > 1) {
+    // A WorldPosition, not a roadId, chose the road among several: say which and why.
+    findings.mapped(asked_where, fmt::format("lies on road '{}' of {}: the scenario's road (no position names a "
+                                             "roadId)",
+                                             chain.front().attribute("id").value(), file.filename().string()));
+  }
+  for (const pugi::xml_node& road : chain) {
     readRoadPiece(reader, road, before, result, findings);
     before = road;
   }
@@ -988,7 +1065,8 @@ struct ReadRoad {
 }  // namespace
 
 CarriagewayRoad readCarriagewayRoad(const std::filesystem::path& file, Findings& findings,
-                                    const std::string& scenario_road, const std::string& asked_where) {
+                                    const std::string& scenario_road, const std::string& asked_where,
+                                    const std::optional<Vec2>& point) {
   // A sweep imports its template once per parameter set (twice: to check it, to run it);
   // the road is read once per process and file content. A file that changes is read again.
   static std::mutex mutex;
@@ -996,7 +1074,8 @@ CarriagewayRoad readCarriagewayRoad(const std::filesystem::path& file, Findings&
   constexpr std::size_t kRoadsKept = 8;
   std::string text = readTextFile(file, read_limits::kRoadNetwork);  // read once: hashed, then parsed
   const std::string key = std::filesystem::absolute(file).lexically_normal().string() + "\n" + sha256OfString(text) +
-                          "\n" + scenario_road;
+                          "\n" + scenario_road + "\n" +
+                          (point ? fmt::format("{} {} {}", point->x(), point->y(), asked_where) : std::string());
   {
     const std::lock_guard<std::mutex> lock(mutex);
     if (const auto found = roads.find(key); found != roads.end()) {
@@ -1007,7 +1086,7 @@ CarriagewayRoad readCarriagewayRoad(const std::filesystem::path& file, Findings&
   Findings own(findings.collecting());
   CarriagewayRoad road;
   try {
-    road = readRoad(file, std::move(text), own, scenario_road, asked_where);
+    road = readRoad(file, std::move(text), own, scenario_road, point, asked_where);
   } catch (const ConfigError&) {
     findings.replay(own.lines());  // the notes before the refusal, as without the cache
     throw;

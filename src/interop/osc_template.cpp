@@ -523,12 +523,21 @@ TranslationResult translate(const fs::path& xosc, const OscImportOptions& option
   // The road network must lie next to the scenario file or below it (or inside --data-root).
   const fs::path xodr = referencedFile(options, xosc, reader.text(logic, "filepath"), reader.where(logic), "filepath");
   if (!fs::exists(xodr)) reader.fail(logic, fmt::format("the road network {} does not exist", xodr.string()));
-  // In a network of several roads, the scenario's road is the first one a position names (the Init's first).
+  // In a network of several roads, the scenario's road is the first one a position names (the
+  // Init's first), else the one under its first world position.
   pugi::xml_node named = root.select_node("Storyboard/Init//*[@roadId]").node();
   if (!named) named = root.select_node("//*[@roadId]").node();
-  const std::string scenario_road = named ? reader.text(named, "roadId") : std::string();
-  translation.road = readCarriagewayRoad(xodr, findings, scenario_road,
-                                         named ? "the roadId at " + reader.where(named) : std::string());
+  pugi::xml_node world = root.select_node("Storyboard/Init//WorldPosition").node();
+  if (!world) world = root.select_node("//WorldPosition").node();
+  if (named) {
+    const std::string road_id = reader.text(named, "roadId");
+    translation.road = readCarriagewayRoad(xodr, findings, road_id, "the roadId at " + reader.where(named));
+  } else if (world) {
+    translation.road = readCarriagewayRoad(xodr, findings, "", reader.where(world),
+                                           Vec2(reader.number(world, "x"), reader.number(world, "y")));
+  } else {
+    translation.road = readCarriagewayRoad(xodr, findings);
+  }
   readEntities(translation, root, catalogs);
   for (auto& entity : translation.entities) entity.id = identifier(entity.name, translation.usedIds);
   const pugi::xml_node storyboard = reader.only(root, "Storyboard");

@@ -1850,6 +1850,46 @@ TEST(OscImport, RoadsLinkedEndToStartAreOneRoad) {
   EXPECT_THAT(refusal("in_junction"), HasSubstr("<road>: road '7' lies in junction 5 (the roadId at "));
 }
 
+// A file that places its road users by world positions only names no road: on a map of several
+// roads, the road whose lanes hold its first WorldPosition is the scenario's (with the roads
+// linked to it), as the road of the first roadId is otherwise. By hand on three_lanes.xodr's
+// lanes: lane -3's centre lies 6.25 m right of the reference line (1 m border, 3.5 m lane -2,
+// half of lane -3); road 9 lies 100 m left of roads 7 and 8.
+TEST(OscImport, AWorldPositionChoosesTheRoadOfAMapWithoutRoadIds) {
+  const std::string to_8 = R"(<link><successor elementType="road" elementId="8" contactPoint="start"/></link>)";
+  const std::string from_7 = R"(<link><predecessor elementType="road" elementId="7" contactPoint="end"/></link>)";
+  const std::string roads = network({linkedRoad("7", 400, to_8, geometry(0, Vec2(0, 0), 0, 400, "<line/>")),
+                                     linkedRoad("8", 600, from_7, geometry(0, Vec2(400, 0), 0, 600, "<line/>")),
+                                     linkedRoad("9", 1000, "<link/>", geometry(0, Vec2(0, 100), 0, 1000, "<line/>"))});
+  const std::string ego = R"(<LanePosition roadId="7" laneId="-3" s="20" offset="0"/>)";
+  const auto placed = [&](const std::string& road_file, const std::string& ego_at, const std::string& walker_y) {
+    std::string text = cutInWith("./roads/three_lanes.xodr", "./roads/" + road_file);
+    text.replace(text.find(ego), ego.size(), ego_at);
+    return std::regex_replace(text, std::regex("y=\"-12.75\""), "y=\"" + walker_y + "\"");
+  };
+  const std::string on_7 = R"(<WorldPosition x="20" y="-6.25" h="0"/>)";
+  const std::string on_9 = R"(<WorldPosition x="20" y="93.75" h="0"/>)";
+  const auto dir = folderWith({{"roads/map.xodr", roads},
+                               {"single.xosc", placed("three_lanes.xodr", on_7, "-12.75")},
+                               {"map.xosc", placed("map.xodr", on_7, "-12.75")},
+                               {"apart.xosc", placed("map.xodr", on_9, "87.25")},
+                               {"between.xosc", placed("map.xodr", R"(<WorldPosition x="20" y="50" h="0"/>)", "50")}});
+  const ScenarioCheck single = checkOpenScenario(dir->path() / "single.xosc", {});
+  const ScenarioCheck map = checkOpenScenario(dir->path() / "map.xosc", {});
+  ASSERT_TRUE(map.runnable()) << map.report();
+  EXPECT_EQ(std::regex_replace(map.yaml, std::regex("map"), "single"), single.yaml);
+  EXPECT_THAT(map.report(), HasSubstr("map.xosc:69: <WorldPosition>: lies on road '7' of map.xodr: the scenario's road "
+                                      "(no position names a roadId)"));
+  EXPECT_THAT(map.report(), HasSubstr("<LogicFile>: roads '7' -> '8': 3 driving lanes of 3.5 m"));
+  const ScenarioCheck apart = checkOpenScenario(dir->path() / "apart.xosc", {});
+  ASSERT_TRUE(apart.runnable()) << apart.report();
+  EXPECT_EQ(std::regex_replace(apart.yaml, std::regex("apart"), "single"), single.yaml);
+  EXPECT_THAT(apart.report(), HasSubstr("<LogicFile>: road '9': 3 driving lanes of 3.5 m"));
+  EXPECT_THAT(importRefusal(*dir, "between"),
+              HasSubstr("map.xodr:2: <OpenDRIVE>: several roads, no position of the scenario names one (roadId), and "
+                        "its first world position (x 20 m, y 50 m; "));
+}
+
 // Roads as converters write them: a geometry of half a millimetre at the end, and a curve that
 // passes the language's 1.4 rad of turn just after a geometry ends - both import as polyline
 // roads the language accepts (before, the first became a segment under 1 mm, the second one
