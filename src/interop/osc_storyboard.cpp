@@ -700,15 +700,20 @@ int actNamed(Translation& translation, const pugi::xml_node& node, const std::st
   return found->second;
 }
 
+/// `text` as a number within `range`; nullopt if it is none (an expression, a word, out of range).
+std::optional<double> realOrNothing(const std::string& text, const NumberRange& range) {
+  try {
+    return parseReal(text, range, "", "");
+  } catch (const ConfigError&) {
+    return std::nullopt;
+  }
+}
+
 /// A number of a language trigger written by the import (a time, a delay); nullopt if it is an
 /// expression (of a distribution's inputs) or no number >= 0.
 std::optional<double> constantOf(const YAML::Node& node) {
   if (!node || !node.IsScalar()) return std::nullopt;
-  try {
-    return parseReal(node.as<std::string>(), NumberRange::atLeast(0.0), "", "");
-  } catch (const ConfigError&) {
-    return std::nullopt;
-  }
+  return realOrNothing(node.as<std::string>(), NumberRange::atLeast(0.0));
 }
 
 /// Runs `body` with `scope` as the reader's parameters, one level deeper into Event and Act
@@ -898,17 +903,10 @@ std::optional<YAML::Node> valueCondition(Translation& translation, const pugi::x
     const auto parameter = reader.parameters().find(reader.text(condition, "parameterRef"));
     if (parameter == reader.parameters().end()) reader.fail(condition, "parameterRef names no declared parameter");
     bool holds = false;
-    const auto number = [](const std::string& text) -> std::optional<double> {
-      try {
-        return parseReal(text, NumberRange::any(), "", "");
-      } catch (const ConfigError&) {
-        return std::nullopt;
-      }
-    };
     if (rule == "equalTo" || rule == "notEqualTo") {
       // Numbers compare as numbers (72 equals 72.0), anything else as text.
-      const auto left = number(parameter->second);
-      const auto right = number(value);
+      const auto left = realOrNothing(parameter->second, NumberRange::any());
+      const auto right = realOrNothing(value, NumberRange::any());
       const bool equal = left && right ? *left == *right : parameter->second == value;
       holds = equal == (rule == "equalTo");
     } else {
