@@ -41,12 +41,18 @@ std::string shapeOf(Translation& translation, const pugi::xml_node& dynamics, bo
   return shape == "linear" ? "linear" : "smooth";
 }
 
-/// A pace (rate or time) of a TransitionDynamics: the key and value of the language.
-void pace(Translation& translation, const pugi::xml_node& dynamics, const char* rate_key, YAML::Node& action) {
+/// A pace (rate, time or distance) of a TransitionDynamics: the key and value of the language.
+/// `distance_key`: the language's key for a change over a distance (nullptr: none, refused).
+void pace(Translation& translation, const pugi::xml_node& dynamics, const char* rate_key, const char* distance_key,
+          YAML::Node& action) {
   const xml::Reader& reader = translation.reader;
   const std::string dimension = reader.oneOf(dynamics, "dynamicsDimension", {"time", "rate", "distance"});
+  if (dimension == "distance" && distance_key == nullptr) {
+    reader.fail(dynamics, "dynamicsDimension=\"distance\": the language paces a lateral change by time or rate");
+  }
   if (dimension == "distance") {
-    reader.fail(dynamics, "dynamicsDimension=\"distance\": the language paces a change by time or rate");
+    action[distance_key] = num(reader.number(dynamics, "value", NumberRange::aboveUpTo(0.0, 1e6)));
+    return;
   }
   double value = reader.number(dynamics, "value");
   if (dimension == "rate" && value < 0) {
@@ -99,7 +105,7 @@ YAML::Node laneChange(Translation& translation, const Entity& actor, const pugi:
   if (item["shape"].as<std::string>() == "step") {  // the Ego's: its lane moves at once
     translation.findings.note(reader.where(dynamics), "a step moves the lane at once: its value is not used");
   } else {
-    pace(translation, dynamics, "lateral_speed", item);
+    pace(translation, dynamics, "lateral_speed", nullptr, item);
   }
   const pugi::xml_node target = reader.choice(reader.only(action, "LaneChangeTarget"),
                                               {"RelativeTargetLane", "AbsoluteTargetLane"});
@@ -267,7 +273,7 @@ YAML::Node speedAction(Translation& translation, const Entity& actor, const pugi
   const pugi::xml_node dynamics = reader.only(action, "SpeedActionDynamics");
   reader.requireSubset(dynamics, {});
   item["shape"] = shapeOf(translation, dynamics, true);
-  if (item["shape"].as<std::string>() != "step") pace(translation, dynamics, "rate", item);
+  if (item["shape"].as<std::string>() != "step") pace(translation, dynamics, "rate", "distance", item);
   const pugi::xml_node target = reader.choice(reader.only(action, "SpeedActionTarget"),
                                               {"AbsoluteTargetSpeed", "RelativeTargetSpeed"});
   const double value = reader.number(target, "value");

@@ -333,10 +333,12 @@ ConcreteAction evaluateAction(const ActionSpec& spec, int owner, const LogicalSc
   action.repeat = spec.repeat;
   action.where = spec.where;
   const bool duration = spec.pace == ActionSpec::Pace::Duration;
+  const bool distance = spec.pace == ActionSpec::Pace::Distance;
   if (duration ? action.paceValue < 0.0 : !(action.paceValue > 0.0)) {
     throw ConfigError(fmt::format("{}: got a {} of {} in sample {}, expected {}", spec.where,
-                                  duration ? "duration" : "rate", formatValue(action.paceValue), concrete.index,
-                                  duration ? "a duration >= 0 s" : "a rate > 0"));
+                                  duration ? "duration" : distance ? "distance" : "rate",
+                                  formatValue(action.paceValue), concrete.index,
+                                  duration ? "a duration >= 0 s" : distance ? "a distance > 0 m" : "a rate > 0"));
   }
   if (spec.kind == ActionSpec::Kind::Speed && spec.speedTarget == ActionSpec::SpeedTarget::Absolute) {
     checkSpeed(action.target, spec.where, "speed.target", spec.target.text(), concrete.index);

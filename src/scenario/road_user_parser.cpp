@@ -424,7 +424,7 @@ void parsePace(const YamlReader& reader, const YAML::Node& node, const std::stri
   }
   action.paceValue = reader.expression(node[key], field + "." + key, inputs);
   requireNonNegative(reader, node[key], field + "." + key, action.paceValue, action.pace != ActionSpec::Pace::Duration,
-                     key == "duration" ? "s" : "");
+                     key == "duration" ? "s" : key == "distance" ? "m" : "");
 }
 
 /// `to` and `continuous` of a speed action relative to another road user's speed.
@@ -444,13 +444,16 @@ void parseSpeedAction(const YamlReader& reader, const YAML::Node& node, const st
                       const std::vector<std::string>& inputs, ActionSpec& action) {
   action.kind = ActionSpec::Kind::Speed;
   if (stop) {
-    reader.checkKeys(node, field, {"decel", "duration", "shape"});
+    reader.checkKeys(node, field, {"decel", "duration", "distance", "shape"});
     action.target = Expression::constant(0.0);
-    parsePace(reader, node, field, {{"decel", ActionSpec::Pace::Rate}, {"duration", ActionSpec::Pace::Duration}},
+    parsePace(reader, node, field,
+              {{"decel", ActionSpec::Pace::Rate},
+               {"duration", ActionSpec::Pace::Duration},
+               {"distance", ActionSpec::Pace::Distance}},
               inputs, action);
   } else {
     reader.checkKeys(node, field, {"target", "relative_target", "relative_factor", "to", "continuous", "delta", "shape",
-                                   "rate", "duration"});
+                                   "rate", "duration", "distance"});
     const std::string target =
         oneOf(reader, node, field, {"target", "relative_target", "relative_factor", "delta"}, true);
     action.speedTarget = target == "target"            ? ActionSpec::SpeedTarget::Absolute
@@ -469,13 +472,18 @@ void parseSpeedAction(const YamlReader& reader, const YAML::Node& node, const st
     reader.fail(node, field + ".continuous", "a continuous target follows the other's speed at once: shape step");
   }
   if (action.shape == TransitionShape::Step) {
-    for (const char* key : {"rate", "decel", "duration"}) {
-      if (node[key]) reader.fail(node[key], field + "." + key, "a step changes the speed at once: no rate or duration");
+    for (const char* key : {"rate", "decel", "duration", "distance"}) {
+      if (node[key]) {
+        reader.fail(node[key], field + "." + key, "a step changes the speed at once: no rate, duration or distance");
+      }
     }
     action.pace = ActionSpec::Pace::Duration;
     action.paceValue = Expression::constant(0.0);
   } else if (!stop) {
-    parsePace(reader, node, field, {{"rate", ActionSpec::Pace::Rate}, {"duration", ActionSpec::Pace::Duration}},
+    parsePace(reader, node, field,
+              {{"rate", ActionSpec::Pace::Rate},
+               {"duration", ActionSpec::Pace::Duration},
+               {"distance", ActionSpec::Pace::Distance}},
               inputs, action);
   }
 }

@@ -50,9 +50,9 @@ struct Transition {
   }
 };
 
-/// The duration of a transition over `change` (m/s or m) at an action's pace.
-double durationOf(const ConcreteAction& action, double change) {
-  const double magnitude = std::abs(change);
+/// The duration of a transition from `from` to `to` (m/s or m) at an action's pace.
+double durationOf(const ConcreteAction& action, double from, double to) {
+  const double magnitude = std::abs(to - from);
   // A smooth (half-cosine) profile peaks at pi/2 times its mean rate.
   const double peak_factor = action.shape == TransitionShape::Smooth ? 0.5 * kPi : 1.0;
   switch (action.pace) {
@@ -60,6 +60,9 @@ double durationOf(const ConcreteAction& action, double change) {
     case ActionSpec::Pace::Rate:
     case ActionSpec::Pace::LateralSpeed: return peak_factor * magnitude / action.paceValue;
     case ActionSpec::Pace::LateralAccel: return kPi * std::sqrt(magnitude / (2.0 * action.paceValue));
+    // A speed change over a distance: linear and smooth profiles both average (from + to) / 2,
+    // so they cover the distance in 2 d / (from + to) (as esmini converts it); speeds are >= 0.
+    case ActionSpec::Pace::Distance: return from + to > 0.0 ? 2.0 * action.paceValue / (from + to) : 0.0;
   }
   return 0.0;
 }
@@ -458,7 +461,7 @@ void ScriptedTraffic::Impl::startSpeedAction(std::size_t a, Mover& mover, Transi
   const auto& action = concrete->actions[a];
   transition.from = mover.nominalSpeed(transition.start, step);
   transition.to = speedTargetOf(action, transition.from, ego);
-  transition.duration = durationOf(action, transition.to - transition.from);
+  transition.duration = durationOf(action, transition.from, transition.to);
   if (mover.tracking) {  // replaced: it ends here
     timings[*mover.tracking].end = transition.start;
     scheduleWaiters(*mover.tracking, ego);
@@ -535,7 +538,7 @@ void ScriptedTraffic::Impl::activate(std::size_t a, const VehicleState& ego) {
     // Lateral offsets count from the current lane's centre, crossings from the starting lane's.
     transition.to = road->laneOffset(mover.laneIndex) + action.target;
   }
-  transition.duration = durationOf(action, transition.to - transition.from);
+  transition.duration = durationOf(action, transition.from, transition.to);
   mover.lateral = transition;
   timings[a] = {t0, transition.end()};
   scheduleWaiters(a, ego);
@@ -578,7 +581,7 @@ void ScriptedTraffic::Impl::activateEgoLateral(std::size_t a, const VehicleState
     transition.to = road->laneOffset(egoLateralLane) + action.target;
   }
   transition.duration =
-      action.shape == TransitionShape::Step ? 0.0 : durationOf(action, transition.to - transition.from);
+      action.shape == TransitionShape::Step ? 0.0 : durationOf(action, transition.from, transition.to);
   egoLaterals.emplace_back(transition.start, transition);
   timings[a] = {transition.start, transition.end()};
   scheduleWaiters(a, ego);

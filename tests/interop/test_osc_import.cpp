@@ -621,6 +621,42 @@ TEST(OscRun, ScriptedRoadUsersEndWhereTheFileSays) {
   EXPECT_NEAR(end.y, 0.5, 0.2);
 }
 
+// dynamicsDimension="distance": the speed changes over that many metres, in 2 d / (v0 + v1)
+// (esmini's conversion). By hand from cut_in.xosc: the cutter slows from 15 to 10 m/s; over
+// 25 m that takes 2 s and its x advances 25 m meanwhile (the road is straight along x). A lane
+// change over a distance is refused: the language paces lateral moves by time or rate.
+TEST(OscRun, ASpeedChangeOverADistanceCoversItAtTheMeanOfBothSpeeds) {
+  const std::string rate = R"(dynamicsShape="linear" value="-2" dynamicsDimension="rate")";
+  const std::string lane_change = R"(value="$LaneChange_Vy" dynamicsDimension="rate")";
+  const auto dir = folderWith(
+      {{"distance.xosc", cutInWith(rate, R"(dynamicsShape="linear" value="25" dynamicsDimension="distance")")},
+       {"lateral.xosc", cutInWith(lane_change, R"(value="40" dynamicsDimension="distance")")}});
+  const auto logical = importTemplate(dir->path() / "distance.xosc", {});
+  const auto& slow_down = other(*logical, "Cutter").actions[1];
+  EXPECT_EQ(slow_down.pace, scenario::ActionSpec::Pace::Distance);
+  EXPECT_DOUBLE_EQ(slow_down.paceValue.evaluate({}), 25.0);
+  const auto cutter = simulatedTrack(dir->path() / "distance.xosc", "Cutter");
+  ASSERT_TRUE(cutter);
+  // Along x between instants (its speed also counts the lane change's lateral speed): the steps
+  // while it slows, and how far it goes meanwhile.
+  const auto& states = cutter->states;
+  double slowing = 0.0;
+  double covered = 0.0;
+  for (std::size_t k = 0; k + 1 < states.size(); ++k) {
+    const double along = (states[k + 1].x - states[k].x) / logical->step;
+    if (along > 10.0 + 1e-6 && along < 15.0 - 1e-6) {
+      slowing += logical->step;
+      covered += states[k + 1].x - states[k].x;
+    }
+  }
+  EXPECT_NEAR(states.back().speed, 10.0, 1e-6);
+  EXPECT_NEAR(slowing, 2.0, logical->step + 1e-9);
+  EXPECT_NEAR(covered, 25.0, 15.0 * logical->step);
+  EXPECT_THAT(importRefusal(*dir, "lateral"),
+              HasSubstr("<LaneChangeActionDynamics>: dynamicsDimension=\"distance\": the language paces a lateral "
+                        "change by time or rate"));
+}
+
 // ASAM's 4.2.3 walks its pedestrian across the road by a two-vertex trajectory. By hand from
 // crossing.xosc: 3 m right of lane -4's centre to lane -2's centre is 10 m across in 5 s
 // (2 m/s), from t = 1 s to 6 s; the language's road centre is the middle lane's (-3) centre,

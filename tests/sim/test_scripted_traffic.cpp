@@ -497,6 +497,47 @@ TEST(ScriptedTraffic, ARisingTriggerWaitsForItsConditionToBecomeTrue) {
   }
 }
 
+// A speed change over a distance (OpenSCENARIO's dynamicsDimension="distance") lasts 2 d / (v0 + v1):
+// linear and smooth profiles both average the two speeds. By hand: from 20 to 10 m/s over 60 m
+// takes 4 s, from t = 1 s to 5 s, and covers 60 m; a stop from 20 m/s within 30 m takes 3 s.
+TEST(ScriptedTraffic, ASpeedChangeOverADistanceCoversThatDistance) {
+  for (const std::string shape : {"linear", "smooth"}) {
+    const auto logical = scenarioWith(fmt::format(R"(
+    - {{id: mover, s: 60, lane: 2, speed: 20,
+       actions: [{{trigger: {{time: 1}}, speed: {{target: 10, distance: 60, shape: {0}}}}}]}}
+    - {{id: stopper, s: 60, lane: 0, speed: 20,
+       actions: [{{trigger: {{time: 1}}, stop: {{distance: 30, shape: {0}}}}}]}})",
+                                                  shape),
+                                      0.0, 8.0);
+    const Planned run = plan(logical);
+    ScriptedTraffic traffic(run.concrete, run.road);
+    const EgoStandIn ego(run.concrete, run.road);
+    const road::LaneFrame frame(run.road.centre);
+    const auto s_of = [&](std::size_t user) { return frame.coordinates(traffic.states()[user].position()).first; };
+    std::map<int, std::vector<double>> s_at;  // instant (0.2 s) -> s of each road user
+    for (int k = 0; k < 30; ++k) {
+      s_at[k] = {s_of(0), s_of(1)};
+      traffic.step(ego.at(0.2 * k));
+    }
+    EXPECT_NEAR(traffic.timings()[0].start, 1.0, 1e-9) << shape;
+    EXPECT_NEAR(traffic.timings()[0].end, 5.0, 1e-9) << shape;
+    EXPECT_NEAR(traffic.timings()[1].end, 4.0, 1e-9) << shape;
+    EXPECT_NEAR(s_at[25][0] - s_at[5][0], 60.0, 0.05) << shape;
+    EXPECT_NEAR(s_at[25][1] - s_at[5][1], 30.0, 0.05) << shape;
+    EXPECT_NEAR(traffic.states()[0].speed, 10.0, 1e-9) << shape;
+    EXPECT_NEAR(traffic.states()[1].speed, 0.0, 1e-9) << shape;
+  }
+  const auto refused = [](const std::string& speed) {
+    return test::configErrorOf([&] {
+      scenarioWith("    - {id: mover, s: 60, lane: 2, speed: 20,\n"
+                   "       actions: [{trigger: {time: 1}, speed: " + speed + "}]}");
+    });
+  };
+  EXPECT_NE(refused("{target: 10, distance: 0}").find("speed.distance"), std::string::npos);
+  EXPECT_NE(refused("{target: 10, distance: 5, shape: step}").find("a step changes the speed at once"),
+            std::string::npos);
+}
+
 // OpenSCENARIO's maximumExecutionCount: an action starts again once it has ended and its
 // trigger fires again, up to `repeat` times. The stand-in Ego (10 m/s) closes on a standing
 // mover; within 20 m the mover speeds off to 20 m/s, beyond 30 m it stops again, and so on.

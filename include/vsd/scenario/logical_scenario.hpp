@@ -211,11 +211,11 @@ struct ActionSpec {
   bool relativeToEgoLane = false;
   /// LaneChange: target is a lane of the road (0: rightmost), not a number of lanes (`lane`).
   bool toRoadLane = false;
-  // How fast: exactly one of these (Speed: rate or duration; lateral: lateral speed,
-  // lateral acceleration (smooth only) or duration; Cross: speed).
-  enum class Pace { Rate, Duration, LateralSpeed, LateralAccel };
+  // How fast: exactly one of these (Speed: rate, duration or distance travelled while the speed
+  // changes; lateral: lateral speed, lateral acceleration (smooth only) or duration; Cross: speed).
+  enum class Pace { Rate, Duration, LateralSpeed, LateralAccel, Distance };
   Pace pace = Pace::Duration;
-  Expression paceValue;  ///< m/s^2 | s | m/s | m/s^2
+  Expression paceValue;  ///< m/s^2 | s | m/s | m/s^2 | m
   /// How many times it may start (>= 1): after it ends, its trigger is checked again from the
   /// next instant on (OpenSCENARIO's maximumExecutionCount). > 1 only with a trigger that can
   /// hold again (no time or after in it).
