@@ -927,17 +927,19 @@ std::optional<YAML::Node> valueCondition(Translation& translation, const pugi::x
   return trigger;
 }
 
-/// A rising edge on a condition's language trigger. esmini takes the edge of the condition as
-/// a whole, so one over several triggering entities (an `all`/`any` of one condition per
-/// entity, whose members would each rise on their own) is refused. Times and storyboard
-/// states are moments, not levels: an edge changes nothing for them.
-void markRising(const xml::Reader& reader, const pugi::xml_node& node, YAML::Node trigger) {
+/// A condition's edge (`edge`: rising, falling or risingOrFalling) on its language trigger.
+/// esmini takes the edge of the condition as a whole, so one over several triggering entities
+/// (an `all`/`any` of one condition per entity, whose members would each change on their own)
+/// is refused.
+void markEdge(const xml::Reader& reader, const pugi::xml_node& node, const std::string& edge, YAML::Node trigger) {
   if (std::as_const(trigger)["all"] || std::as_const(trigger)["any"]) {
-    reader.fail(node, "conditionEdge=\"rising\" over several triggering entities: the language takes the edge of "
-                      "each entity's condition, esmini of their combination");
+    reader.fail(node, fmt::format("conditionEdge=\"{}\" over several triggering entities: the language takes the "
+                                  "edge of each entity's condition, esmini of their combination",
+                                  edge));
   }
-  if (std::as_const(trigger)["time"] || std::as_const(trigger)["after"]) return;
-  trigger["rising"] = "true";
+  if (isMoment(std::as_const(trigger))) return;
+  if (edge != "falling") trigger["rising"] = "true";
+  if (edge != "rising") trigger["falling"] = "true";
 }
 
 /// Translation::firstCheck for one scope, restored at its end.
@@ -983,26 +985,28 @@ bool canHoldAgain(const YAML::Node& trigger) {
 std::optional<YAML::Node> condition(Translation& translation, const Entity& actor, const pugi::xml_node& node) {
   const xml::Reader& reader = translation.reader;
   const std::string edge = reader.oneOf(node, "conditionEdge", {"none", "rising", "falling", "risingOrFalling"});
-  if (edge != "none" && edge != "rising") {
-    reader.fail(node, fmt::format("conditionEdge=\"{}\": the language fires when a condition becomes true", edge));
-  }
   reader.requireSubset(node, {"ByValueCondition", "ByEntityCondition"});
   const pugi::xml_node by = reader.choice(node, {"ByValueCondition", "ByEntityCondition"});
   auto result = std::string(by.name()) == "ByValueCondition" ? valueCondition(translation, by)
                                                              : entityCondition(translation, actor, by);
-  if (result && edge == "rising") {
-    if (holdsAtFirstCheck(by, *result, translation.firstCheck)) {
-      const std::string when = translation.firstCheck > 0.0
-                                   ? fmt::format("when its Act starts ({} s)", num(translation.firstCheck))
-                                   : std::string("from t = 0");
-      translation.findings.note(reader.where(node), fmt::format("conditionEdge=\"rising\" on a condition that holds "
-                                                                "{}: it never rises, so it never fires (as esmini "
-                                                                "reads it)",
-                                                                when));
-      return std::nullopt;
-    }
-    markRising(reader, node, *result);
+  if (!result || edge == "none") return result;
+  if (edge == "falling" && isMoment(*result)) {
+    translation.findings.note(reader.where(node), fmt::format("conditionEdge=\"falling\" on a condition that holds "
+                                                              "from a moment on ({}): it never falls, so it never "
+                                                              "fires",
+                                                              flowText(*result)));
+    return std::nullopt;
   }
+  if (edge != "falling" && holdsAtFirstCheck(by, *result, translation.firstCheck)) {
+    const std::string when = translation.firstCheck > 0.0
+                                 ? fmt::format("when its Act starts ({} s)", num(translation.firstCheck))
+                                 : std::string("from t = 0");
+    translation.findings.note(reader.where(node), fmt::format("conditionEdge=\"{}\" on a condition that holds {}: it "
+                                                              "never rises{}, so it never fires (as esmini reads it)",
+                                                              edge, when, edge == "rising" ? "" : " or falls"));
+    return std::nullopt;
+  }
+  markEdge(reader, node, edge, *result);
   return result;
 }
 
@@ -1078,8 +1082,8 @@ std::optional<YAML::Node> startTrigger(Translation& translation, const Entity& a
 /// Whether an Act's StartTrigger is one simulation time of at most 0 s without a delay that
 /// holds from the start: it starts the Act at t = 0 (esmini's examples write `SimulationTime > 0`
 /// with a rising or risingOrFalling edge for Acts that run from the start). Other rules and
-/// edges are read as any other condition (a falling edge is refused, a time that never comes
-/// never starts the Act).
+/// edges are read as any other condition (a falling edge on a time never fires, a time that
+/// never comes never starts the Act).
 bool startsAtZero(const Translation& translation, const pugi::xml_node& act) {
   const xml::Reader& reader = translation.reader;
   const pugi::xml_node start = act.child("StartTrigger");

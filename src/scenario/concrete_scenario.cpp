@@ -307,6 +307,7 @@ ConcreteTrigger evaluateTrigger(const TriggerSpec& spec, int owner, const Logica
   trigger.betweenReferencePoints = spec.betweenReferencePoints;
   trigger.straightLine = spec.straightLine;
   trigger.rising = spec.rising;
+  trigger.falling = spec.falling;
   if (spec.kind == TriggerSpec::Kind::After) trigger.action = actionIndex(logical, spec.action);
   if (spec.kind == TriggerSpec::Kind::Distance) evaluatePosition(spec, logical, concrete, trigger);
   for (const auto& member : spec.members) trigger.members.push_back(evaluateTrigger(member, owner, logical, concrete));

@@ -334,7 +334,7 @@ void parseTrigger(const YamlReader& reader, const YAML::Node& node, const std::s
                   const std::vector<std::string>& inputs, bool delay_allowed, TriggerSpec& trigger) {
   trigger.where = reader.where(node, field);
   reader.requireMap(node, field);
-  std::set<std::string> allowed = {"to", "of", "between", "measure", "position", "delay", "rising"};
+  std::set<std::string> allowed = {"to", "of", "between", "measure", "position", "delay", "rising", "falling"};
   std::vector<std::string> keys;
   for (const auto& entry : kTriggerKeys) {
     allowed.insert(entry.key);
@@ -392,11 +392,13 @@ void parseTrigger(const YamlReader& reader, const YAML::Node& node, const std::s
   }
   trigger.delay = optionalExpression(reader, node, "delay", field, inputs, 0.0);
   if (node["delay"]) requireNonNegative(reader, node["delay"], field + ".delay", trigger.delay, false, "s");
-  if (node["rising"]) {
-    trigger.rising = flag(reader, node["rising"], field + ".rising");
+  for (const char* edge : {"rising", "falling"}) {
+    if (!node[edge]) continue;
+    (std::string(edge) == "rising" ? trigger.rising : trigger.falling) = flag(reader, node[edge], field + "." + edge);
     if (!canHoldAgain(trigger) || trigger.kind == TriggerSpec::Kind::All || trigger.kind == TriggerSpec::Kind::Any) {
-      reader.fail(node["rising"], field + ".rising",
-                  "'rising' goes with a condition (not time, after, all or any; put it on their members)");
+      reader.fail(node[edge], field + "." + edge,
+                  fmt::format("'{}' goes with a condition (not time, after, all or any; put it on their members)",
+                              edge));
     }
   }
 }

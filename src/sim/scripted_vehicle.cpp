@@ -156,7 +156,7 @@ struct ScriptedTraffic::Impl {
   std::vector<ActionTiming> timings;
   std::vector<double> scheduled;  ///< per action: start time once its trigger fired (NaN before)
   std::vector<int> starts;        ///< per action: how many times it started (up to its repeat)
-  /// A rising condition's memory: whether it held when last checked, and its answer at instant `instant`.
+  /// An edge condition's memory: whether it held when last checked, and its answer at instant `instant`.
   struct Edge {
     std::size_t instant = std::numeric_limits<std::size_t>::max();
     bool checked = false;
@@ -197,7 +197,7 @@ struct ScriptedTraffic::Impl {
   bool holds(const scenario::ConcreteTrigger& trigger, int owner, const VehicleState& ego) const;
   bool conditionHolds(const scenario::ConcreteTrigger& trigger, int owner, const VehicleState& ego) const;
   void rearmEnded();
-  /// Its rising conditions (and its members') as if never checked.
+  /// Its edge conditions (rising, falling; and its members') as if never checked.
   void forgetEdges(const scenario::ConcreteTrigger& trigger) const;
   double fireTime(const scenario::ConcreteTrigger& trigger, int owner, const VehicleState& ego) const;
   void offer(std::size_t a, const VehicleState& ego);
@@ -350,15 +350,16 @@ void ScriptedTraffic::Impl::trackProgress(const VehicleState& ego) {
 }
 
 /// Whether a trigger holds at the current instant (members of `all` and `any` alike): a rising
-/// one only where its condition holds after a check at which it did not. Asked again within
-/// the instant, it answers the same.
+/// one only where its condition holds after a check at which it did not, a falling one where it
+/// does not after a check at which it did. Asked again within the instant, it answers the same.
 bool ScriptedTraffic::Impl::holds(const scenario::ConcreteTrigger& trigger, int owner,
                                   const VehicleState& ego) const {
-  if (!trigger.rising) return conditionHolds(trigger, owner, ego);
+  if (!trigger.rising && !trigger.falling) return conditionHolds(trigger, owner, ego);
   Edge& edge = edges[&trigger];
   if (edge.instant == k) return edge.fired;
   const bool held = conditionHolds(trigger, owner, ego);
-  edge.fired = held && edge.checked && !edge.held;
+  const bool changed = edge.checked && held != edge.held;
+  edge.fired = changed && (held ? trigger.rising : trigger.falling);
   edge.checked = true;
   edge.held = held;
   edge.instant = k;
@@ -486,7 +487,7 @@ void ScriptedTraffic::Impl::track(const VehicleState& ego) {
 }
 
 /// Actions that may start again and have ended: their triggers are checked again from now on,
-/// their rising conditions afresh (as esmini resets a trigger's conditions when it fires: the
+/// their edge conditions afresh (as esmini resets a trigger's conditions when it fires: the
 /// first check after it never fires). Their start is cleared; their latest end stays in `timings`.
 void ScriptedTraffic::Impl::rearmEnded() {
   const double now = static_cast<double>(k) * step;
@@ -501,7 +502,7 @@ void ScriptedTraffic::Impl::rearmEnded() {
 }
 
 void ScriptedTraffic::Impl::forgetEdges(const scenario::ConcreteTrigger& trigger) const {
-  if (trigger.rising) edges[&trigger].checked = false;
+  if (trigger.rising || trigger.falling) edges[&trigger].checked = false;
   for (const auto& member : trigger.members) forgetEdges(member);
 }
 

@@ -879,7 +879,22 @@ double stepDownSeen(const fs::path& file) {
 // the first instant it holds and shows at the next; a delay after it starts it at that time.
 TEST(OscRun, EachConditionStartsItsEventWhereTheFileSays) {
   constexpr double kNext = 0.2;
+  const auto with_edge = [](const std::string& edge, const std::string& condition) {
+    return std::regex_replace(condition, std::regex("conditionEdge=\"rising\""), "conditionEdge=\"" + edge + "\"");
+  };
+  const std::string below = entityCondition("Lead", R"(<SpeedCondition value="22.1" rule="lessThan"/>)");
   const std::vector<std::pair<std::string, double>> cases = {
+      // Falling: 20 + t <= 22.1 holds until 2.1 s; at the instant 2.2 it does not
+      {group(with_edge("falling", below)), 2.2 + kNext},
+      // Either edge: the same holds when first checked (no rise) and falls at 2.2 s
+      {group(with_edge("risingOrFalling", below)), 2.2 + kNext},
+      // Either edge, rising first: 30 m after 1.45 s
+      {group(with_edge("risingOrFalling", entityCondition("Lead", R"(<TraveledDistanceCondition value="30"/>)"))),
+       1.6 + kNext},
+      // A falling edge on a time: reached, it holds from then on, so it never falls
+      {group(R"(<Condition name="f" delay="0" conditionEdge="falling"><ByValueCondition>
+          <SimulationTimeCondition value="1" rule="greaterOrEqual"/></ByValueCondition></Condition>)"),
+       -1.0},
       // 20 + t >= 25
       {group(entityCondition("Lead", R"(<SpeedCondition value="25" rule="greaterOrEqual"/>)")), 5.0 + kNext},
       // (20 + t) - 18 > 5
@@ -1345,9 +1360,11 @@ TEST(OscImport, ConditionsTheLanguageCannotExpressAreOneLineEach) {
           <TimeToCollisionConditionTarget><EntityRef entityRef="Slow"/></TimeToCollisionConditionTarget>
           </TimeToCollisionCondition>)")),
        "rule=\"greaterThan\": a lower bound on a time to collision"},
-      {group(R"(<Condition name="f" delay="0" conditionEdge="falling"><ByValueCondition>
-          <SimulationTimeCondition value="1" rule="greaterOrEqual"/></ByValueCondition></Condition>)"),
-       "conditionEdge=\"falling\""},
+      {group(R"(<Condition name="f" delay="0" conditionEdge="falling"><ByEntityCondition>
+          <TriggeringEntities triggeringEntitiesRule="any"><EntityRef entityRef="Lead"/><EntityRef entityRef="Slow"/>
+          </TriggeringEntities><EntityCondition><SpeedCondition value="20" rule="lessThan"/></EntityCondition>
+          </ByEntityCondition></Condition>)"),
+       "conditionEdge=\"falling\" over several triggering entities"},
       // esmini takes the edge of the combined condition; the language's would be each entity's.
       {group(R"(<Condition name="r" delay="0" conditionEdge="rising"><ByEntityCondition>
           <TriggeringEntities triggeringEntitiesRule="all"><EntityRef entityRef="Lead"/><EntityRef entityRef="Slow"/>

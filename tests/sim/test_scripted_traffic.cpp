@@ -497,6 +497,30 @@ TEST(ScriptedTraffic, ARisingTriggerWaitsForItsConditionToBecomeTrue) {
   }
 }
 
+// A falling trigger fires when its condition stops holding (OpenSCENARIO's falling edge), and
+// one both rising and falling at either change. The stand-in Ego (10 m/s) closes on a standing
+// mover 35 m ahead: the gap is at least 20 m until 1.5 s, so the falling edge is seen at the
+// instant 1.6 s (instants every 0.2 s); the either-edge on the gap within 10.5 m rises at the
+// instant 2.6 s (gap 9 m). A time or an action's end holds from a moment on: an edge on it is
+// refused.
+TEST(ScriptedTraffic, AFallingTriggerFiresWhenItsConditionStopsHolding) {
+  const auto logical = scenarioWith(R"(
+    - {id: mover, gap: 35, relative_lane: 0, speed: 0,
+       actions: [{trigger: {gap_at_least: 20, falling: true}, stop: {decel: 1}},
+                 {trigger: {gap: 10.5, rising: true, falling: true}, speed: {target: 1, rate: 1}}]})",
+                                    0.0, 10.0);
+  const auto timings = timingsAfter(plan(logical), 20);
+  EXPECT_NEAR(timings[0].start, 1.6, 1e-9);
+  EXPECT_NEAR(timings[1].start, 2.6, 1e-9);
+  const std::string error = test::configErrorOf([] {
+    scenarioWith("    - {id: mover, gap: 35, relative_lane: 0, speed: 0,\n"
+                 "       actions: [{trigger: {time: 1, falling: true}, stop: {decel: 1}}]}");
+  });
+  EXPECT_NE(error.find("trigger.falling: 'falling' goes with a condition (not time, after, all or any"),
+            std::string::npos)
+      << error;
+}
+
 // A speed change over a distance (OpenSCENARIO's dynamicsDimension="distance") lasts 2 d / (v0 + v1):
 // linear and smooth profiles both average the two speeds. By hand: from 20 to 10 m/s over 60 m
 // takes 4 s, from t = 1 s to 5 s, and covers 60 m; a stop from 20 m/s within 30 m takes 3 s.

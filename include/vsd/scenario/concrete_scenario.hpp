@@ -34,7 +34,8 @@ struct ConcreteTrigger {
   double x = 0.0;
   double y = 0.0;
   std::vector<ConcreteTrigger> members;  ///< All, Any
-  bool rising = false;  ///< TriggerSpec::rising
+  bool rising = false;   ///< TriggerSpec::rising
+  bool falling = false;  ///< TriggerSpec::falling
 };
 
 /// An action with its numbers evaluated (see ActionSpec).

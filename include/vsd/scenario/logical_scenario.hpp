@@ -167,6 +167,10 @@ struct TriggerSpec {
   /// instant it holds after an instant it was checked and did not (OpenSCENARIO's rising edge);
   /// one that holds from its first check waits until it has not held. Else: when it holds.
   bool rising = false;
+  /// Conditions as `rising`: fires when the condition stops holding, at an instant it does not
+  /// hold after an instant it was checked and did (OpenSCENARIO's falling edge). With `rising`
+  /// too: at either (risingOrFalling).
+  bool falling = false;
   std::string where;
 
   /// True for the kinds whose value may be negative.
