@@ -509,22 +509,25 @@ YAML::Node relationLeaf(Translation& translation, const Entity& actor, const Ent
   const bool freespace = reader.oneOf(condition, "freespace", {"true", "false"}) == "true";
   // Without a relativeDistanceType the distance is the straight line between the two (OpenSCENARIO
   // 1.1's default, esmini's reading also with 1.0's alongRoute); longitudinal is along the lane
-  // in any coordinate system the language has (entity, road, lane: one straight lane frame).
+  // and lateral across it in any coordinate system the language has (entity, road, lane: one
+  // lane frame, the entity's while it drives along the road).
   std::string distance_type = "euclidianDistance";
   if (condition.attribute("relativeDistanceType")) {
     distance_type = reader.oneOf(condition, "relativeDistanceType",
                                  {"longitudinal", "lateral", "euclidianDistance", "cartesianDistance"});
   }
-  if (distance_type == "lateral") {
-    reader.fail(condition, "relativeDistanceType=\"lateral\": the language measures along the Ego's lane or in a "
-                           "straight line");
+  if (distance_type == "lateral" && kind != "RelativeDistanceCondition") {
+    reader.fail(condition, "relativeDistanceType=\"lateral\": a headway or time to collision across the lane (the "
+                           "language measures them along the Ego's lane or in a straight line)");
   }
-  const bool straight_line = distance_type != "longitudinal";
+  const std::string measure = distance_type == "longitudinal" ? "along_lane"
+                              : distance_type == "lateral"    ? "lateral"
+                                                              : "straight_line";
   if (condition.attribute("alongRoute")) reader.oneOf(condition, "alongRoute", {"true", "false"});
   const auto system = reader.optionalText(condition, "coordinateSystem");
   if (system && *system != "entity" && *system != "road" && *system != "lane") {
-    reader.fail(condition, fmt::format("coordinateSystem=\"{}\": the language measures along the Ego's lane or in a "
-                                       "straight line",
+    reader.fail(condition, fmt::format("coordinateSystem=\"{}\": the language measures along or across the Ego's "
+                                       "lane or in a straight line",
                                        *system));
   }
   const std::string quantity = kind == "RelativeDistanceCondition" ? "gap"
@@ -549,7 +552,7 @@ YAML::Node relationLeaf(Translation& translation, const Entity& actor, const Ent
     trigger["between"] = "reference_points";
     translation.measuresReferencePoints = true;
   }
-  if (straight_line) trigger["measure"] = "straight_line";
+  if (measure != "along_lane") trigger["measure"] = measure;
   // OpenSCENARIO's headway is the triggering entity's, to the reference ahead of it (undefined
   // while the reference is not ahead): the language's `of`.
   if (quantity == "headway") trigger["of"] = triggering.id;

@@ -305,7 +305,7 @@ ConcreteTrigger evaluateTrigger(const TriggerSpec& spec, int owner, const Logica
   trigger.subject = spec.subject.empty() ? owner : roadUserIndex(logical, spec.subject);
   trigger.directed = spec.kind == TriggerSpec::Kind::Headway && !spec.subject.empty();
   trigger.betweenReferencePoints = spec.betweenReferencePoints;
-  trigger.straightLine = spec.straightLine;
+  trigger.measure = spec.measure;
   trigger.rising = spec.rising;
   trigger.falling = spec.falling;
   if (spec.kind == TriggerSpec::Kind::After) trigger.action = actionIndex(logical, spec.action);

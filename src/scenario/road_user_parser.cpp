@@ -313,6 +313,21 @@ bool secondOf(const YamlReader& reader, const YAML::Node& node, const std::strin
   return value == second;
 }
 
+/// `measure` of a gap, headway or ttc: along_lane, straight_line, or (gaps only) lateral.
+void parseMeasure(const YamlReader& reader, const YAML::Node& node, const std::string& field, TriggerSpec& trigger) {
+  const std::string value = reader.scalar(node, field);
+  if (value == "lateral") {
+    if (trigger.kind != TriggerSpec::Kind::Gap) {
+      reader.fail(node, field, "'measure: lateral' goes with gap and gap_at_least (a distance across the lane)");
+    }
+    trigger.measure = TriggerSpec::Measure::Lateral;
+    return;
+  }
+  if (secondOf(reader, node, field, trigger, "along_lane", "straight_line")) {
+    trigger.measure = TriggerSpec::Measure::StraightLine;
+  }
+}
+
 /// Whether a trigger's condition can stop holding and hold again (no time or action end in it).
 bool canHoldAgain(const TriggerSpec& trigger) {
   if (trigger.kind == TriggerSpec::Kind::Time || trigger.kind == TriggerSpec::Kind::After) return false;
@@ -379,10 +394,7 @@ void parseTrigger(const YamlReader& reader, const YAML::Node& node, const std::s
     trigger.betweenReferencePoints =
         secondOf(reader, node["between"], field + ".between", trigger, "bumpers", "reference_points");
   }
-  if (node["measure"]) {
-    trigger.straightLine =
-        secondOf(reader, node["measure"], field + ".measure", trigger, "along_lane", "straight_line");
-  }
+  if (node["measure"]) parseMeasure(reader, node["measure"], field + ".measure", trigger);
   if ((trigger.kind == TriggerSpec::Kind::Distance) != static_cast<bool>(node["position"])) {
     reader.fail(node, field, "'position' goes with distance_at_most and distance_at_least (and only there)");
   }

@@ -184,7 +184,6 @@ struct ScriptedTraffic::Impl {
 
   void init();
   void checkOverlaps() const;
-  double referenceArcLength(const VehicleState& state, const scenario::ConcreteVehicle& spec) const;
   double relationValue(const scenario::ConcreteTrigger& trigger, int owner, const VehicleState& ego) const;
   /// Road user `user`'s state and description: -1 the Ego, else others[user].
   const VehicleState& stateOf(int user, const VehicleState& ego) const {
@@ -276,12 +275,6 @@ void ScriptedTraffic::Impl::checkOverlaps() const {
   }
 }
 
-/// m along the Ego's starting lane to a road user's reference point.
-double ScriptedTraffic::Impl::referenceArcLength(const VehicleState& state,
-                                                 const scenario::ConcreteVehicle& spec) const {
-  return projectExtended(egoLane, referencePoint(state, spec)).arcLength;
-}
-
 /// The value a gap, headway or ttc trigger of road user `owner` (-1: the Ego) compares (inf: never).
 double ScriptedTraffic::Impl::relationValue(const scenario::ConcreteTrigger& trigger, int owner,
                                             const VehicleState& ego) const {
@@ -289,22 +282,33 @@ double ScriptedTraffic::Impl::relationValue(const scenario::ConcreteTrigger& tri
   const auto& other_spec = specOf(trigger.reference);
   const VehicleState& self = stateOf(owner, ego);
   const auto& self_spec = specOf(owner);
+  using Measure = scenario::TriggerSpec::Measure;
   double signed_gap = 0.0;  // m, what a gap trigger compares (bumpers: < 0 side by side)
   bool self_ahead = false;
   if (trigger.betweenReferencePoints) {
-    const double self_s = referenceArcLength(self, self_spec);
-    const double other_s = referenceArcLength(other, other_spec);
-    self_ahead = self_s > other_s;
-    signed_gap = trigger.straightLine ? (referencePoint(other, other_spec) - referencePoint(self, self_spec)).norm()
-                                      : std::abs(self_s - other_s);
+    const PolylineProjection self_foot = projectExtended(egoLane, referencePoint(self, self_spec));
+    const PolylineProjection other_foot = projectExtended(egoLane, referencePoint(other, other_spec));
+    self_ahead = self_foot.arcLength > other_foot.arcLength;
+    switch (trigger.measure) {
+      case Measure::AlongLane: signed_gap = std::abs(self_foot.arcLength - other_foot.arcLength); break;
+      case Measure::StraightLine:
+        signed_gap = (referencePoint(other, other_spec) - referencePoint(self, self_spec)).norm();
+        break;
+      case Measure::Lateral: signed_gap = std::abs(self_foot.lateralOffset - other_foot.lateralOffset); break;
+    }
   } else {
     const Footprint other_body = footprintOf(other, other_spec.length, other_spec.width);
     const Footprint self_body = footprintOf(self, self_spec.length, self_spec.width);
     const PathRelation relation =
         relateToPath(egoLane, road->laneWidthOf(concrete->ego.lane), other_body, self_body);
     self_ahead = relation.longitudinalDistance > 0.0;
-    // Straight line: the shortest distance between the bodies (< 0 where they overlap).
-    signed_gap = trigger.straightLine ? footprintGap(self_body, other_body) : relation.longitudinalGap;
+    switch (trigger.measure) {
+      case Measure::AlongLane: signed_gap = relation.longitudinalGap; break;
+      // The shortest distance between the bodies (< 0 where they overlap).
+      case Measure::StraightLine: signed_gap = footprintGap(self_body, other_body); break;
+      // Between their sides across the Ego's lane (< 0 where they overlap sideways).
+      case Measure::Lateral: signed_gap = relation.lateralGap; break;
+    }
   }
   const double gap = std::max(signed_gap, 0.0);
   if (trigger.kind == TriggerSpec::Kind::Gap) return signed_gap;

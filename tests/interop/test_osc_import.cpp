@@ -377,7 +377,7 @@ TEST(OscImport, ConditionsAreReadWithTheirRulesAndEdges) {
 // A relative distance, headway or time to collision without a relativeDistanceType is the
 // straight line between the two (OpenSCENARIO 1.1's default, as esmini reads it, also with
 // 1.0's alongRoute), as is an explicit euclidian or cartesian distance; longitudinal stays along
-// the Ego's lane; lateral is refused. Before, a missing type was read as longitudinal.
+// the Ego's lane, lateral goes across it. Before, a missing type was read as longitudinal.
 TEST(OscImport, ADistanceWithoutItsTypeIsTheStraightLine) {
   const std::string typed = R"(relativeDistanceType="longitudinal" value="30")";
   const auto variant = [&](const std::string& attributes) { return cutInWith(typed, attributes + "value=\"30\""); };
@@ -394,9 +394,8 @@ TEST(OscImport, ADistanceWithoutItsTypeIsTheStraightLine) {
     EXPECT_THAT(check.yaml, HasSubstr(straight)) << name;
   }
   EXPECT_THAT(checkOpenScenario(data("cut_in.xosc"), {}).yaml, Not(HasSubstr("measure:")));
-  EXPECT_THAT(checkOpenScenario(dir->path() / "lateral.xosc", {}).report(),
-              HasSubstr("relativeDistanceType=\"lateral\": the language measures along the Ego's lane or in a straight "
-                        "line"));
+  EXPECT_THAT(checkOpenScenario(dir->path() / "lateral.xosc", {}).yaml,
+              HasSubstr("trigger:\n            gap: 30\n            measure: lateral\n"));
 }
 
 // An entity is defined once, has one controller, stands in the plane, and its catalog
@@ -891,6 +890,20 @@ TEST(OscRun, EachConditionStartsItsEventWhereTheFileSays) {
       // Either edge, rising first: 30 m after 1.45 s
       {group(with_edge("risingOrFalling", entityCondition("Lead", R"(<TraveledDistanceCondition value="30"/>)"))),
        1.6 + kNext},
+      // Across the lane: Lead (lane -2) and Slow (lane -4) are 7 m apart between their reference
+      // points, 7 - 1.8 = 5.2 m between their sides (both 1.8 m wide): from the first check on, or never
+      {group(with_edge("none", entityCondition("Lead", R"(<RelativeDistanceCondition entityRef="Slow" value="7.1"
+          freespace="false" relativeDistanceType="lateral" rule="lessThan"/>)"))),
+       0.0 + kNext},
+      {group(with_edge("none", entityCondition("Lead", R"(<RelativeDistanceCondition entityRef="Slow" value="6.9"
+          freespace="false" relativeDistanceType="lateral" rule="lessThan"/>)"))),
+       -1.0},
+      {group(with_edge("none", entityCondition("Lead", R"(<RelativeDistanceCondition entityRef="Slow" value="5.3"
+          freespace="true" relativeDistanceType="lateral" rule="lessThan"/>)"))),
+       0.0 + kNext},
+      {group(with_edge("none", entityCondition("Lead", R"(<RelativeDistanceCondition entityRef="Slow" value="5.1"
+          freespace="true" relativeDistanceType="lateral" rule="lessThan"/>)"))),
+       -1.0},
       // A falling edge on a time: reached, it holds from then on, so it never falls
       {group(R"(<Condition name="f" delay="0" conditionEdge="falling"><ByValueCondition>
           <SimulationTimeCondition value="1" rule="greaterOrEqual"/></ByValueCondition></Condition>)"),
@@ -1365,6 +1378,9 @@ TEST(OscImport, ConditionsTheLanguageCannotExpressAreOneLineEach) {
           </TriggeringEntities><EntityCondition><SpeedCondition value="20" rule="lessThan"/></EntityCondition>
           </ByEntityCondition></Condition>)"),
        "conditionEdge=\"falling\" over several triggering entities"},
+      {group(entityCondition("Lead", R"(<TimeHeadwayCondition entityRef="Slow" value="1" freespace="true"
+          relativeDistanceType="lateral" rule="lessThan"/>)")),
+       "relativeDistanceType=\"lateral\": a headway or time to collision across the lane"},
       // esmini takes the edge of the combined condition; the language's would be each entity's.
       {group(R"(<Condition name="r" delay="0" conditionEdge="rising"><ByEntityCondition>
           <TriggeringEntities triggeringEntitiesRule="all"><EntityRef entityRef="Lead"/><EntityRef entityRef="Slow"/>

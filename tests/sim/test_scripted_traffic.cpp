@@ -376,6 +376,33 @@ TEST(ScriptedTraffic, StraightLineRelationsCountTheLateralDistanceToo) {
   EXPECT_NEAR(timings[5].start, 5.6, 1e-9);  // sqrt((31.3 - 5t)^2 + 3.5^2) / 5 <= 1 from t = 5.55
 }
 
+// `measure: lateral` (OpenSCENARIO's lateral relative distance) counts across the Ego's lane.
+// The mover, a car (5 x 1.8 m) beside the stand-in Ego one lane (3.5 m) to its left, both at
+// 10 m/s, changes into the Ego's lane from 1 s over 4 s at 0.875 m/s: its reference point is
+// 3.5 - 0.875 (t - 1) m from the Ego's across the lane. Meanwhile it heads atan(0.875 / 10) =
+// 0.0872 rad off the lane, so its half extent across is (5 sin + 1.8 cos) / 2 = 1.114 m and
+// the gap between the sides 3.5 - 0.875 (t - 1) - 1.114 - 0.9. Markers are speed actions that
+// keep its speed, so each trigger's time is its own.
+TEST(ScriptedTraffic, LateralRelationsMeasureAcrossTheEgosLane) {
+  const std::string marker = "speed: {target: 10, rate: 1}";
+  const auto logical = scenarioWith(fmt::format(R"(
+    - {{id: mover, ds: 0, relative_lane: 1, speed: 10,
+       actions: [{{trigger: {{time: 1}}, lane_change: {{ego_lane: 0, duration: 4, shape: linear}}}},
+                 {{trigger: {{gap: 2, between: reference_points, measure: lateral}}, {0}}},
+                 {{trigger: {{gap: 0.5, measure: lateral}}, {0}}},
+                 {{trigger: {{gap_at_least: 3, between: reference_points, measure: lateral, falling: true}}, {0}}}]}})",
+                                                marker));
+  const auto timings = timingsAfter(plan(logical), 30);
+  EXPECT_NEAR(timings[1].start, 2.8, 1e-9);  // 3.5 - 0.875 (t - 1) <= 2 from t = 2.71
+  EXPECT_NEAR(timings[2].start, 2.2, 1e-9);  // 1.486 - 0.875 (t - 1) <= 0.5 from t = 2.13
+  EXPECT_NEAR(timings[3].start, 1.6, 1e-9);  // 3.5 - 0.875 (t - 1) >= 3 until t = 1.57
+  const std::string error = test::configErrorOf([] {
+    scenarioWith("    - {id: mover, ds: 0, relative_lane: 1, speed: 10,\n"
+                 "       actions: [{trigger: {ttc: 1, measure: lateral}, stop: {decel: 1}}]}");
+  });
+  EXPECT_NE(error.find("'measure: lateral' goes with gap and gap_at_least"), std::string::npos) << error;
+}
+
 namespace {
 
 std::shared_ptr<const scenario::LogicalScenario> unequalLanes(const std::string& road_keys, const std::string& others) {

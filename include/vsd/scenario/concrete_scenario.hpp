@@ -24,7 +24,7 @@ struct ConcreteTrigger {
   int subject = -1;
   bool directed = false;  ///< Headway: `subject`'s to the other (undefined unless it is ahead), else the rear one's
   bool betweenReferencePoints = false;  ///< Gap, Headway, Ttc: between reference points, else bumper to bumper
-  bool straightLine = false;  ///< Gap, Headway, Ttc: the straight-line distance, else along the Ego's lane
+  TriggerSpec::Measure measure = TriggerSpec::Measure::AlongLane;  ///< Gap, Headway, Ttc: TriggerSpec::measure
   int action = -1;      ///< After: index into ConcreteScenario::actions
   // Distance: the place, along the road (s from the region's start, lane, offset) or in the frame (x, y).
   bool inFrame = false;

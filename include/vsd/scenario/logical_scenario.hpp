@@ -157,9 +157,12 @@ struct TriggerSpec {
   /// Gap, Headway, Ttc: measured between the two road users' reference points (VehicleSpec::
   /// referencePoint) along the Ego's lane, else bumper to bumper.
   bool betweenReferencePoints = false;
-  /// Gap, Headway, Ttc: the straight-line distance between those points (reference points) or
-  /// between the two bodies (bumpers), else the distance along the Ego's lane (`measure`).
-  bool straightLine = false;
+  /// Gap, Headway, Ttc (`measure`): the distance along the Ego's lane (AlongLane), the
+  /// straight-line distance between those points (reference points) or between the two bodies
+  /// (bumpers) (StraightLine); Gap only: across the Ego's lane, between the points or between
+  /// the bodies' sides (< 0 where they overlap sideways) (Lateral).
+  enum class Measure { AlongLane, StraightLine, Lateral };
+  Measure measure = Measure::AlongLane;
   std::string action;         ///< After: id of the action whose end starts this one
   PositionSpec position;      ///< Distance
   std::vector<TriggerSpec> members;  ///< All, Any
