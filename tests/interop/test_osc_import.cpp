@@ -882,6 +882,11 @@ TEST(OscRun, EachConditionStartsItsEventWhereTheFileSays) {
     return std::regex_replace(condition, std::regex("conditionEdge=\"rising\""), "conditionEdge=\"" + edge + "\"");
   };
   const std::string below = entityCondition("Lead", R"(<SpeedCondition value="22.1" rule="lessThan"/>)");
+  const auto lateral_below = [&](const std::string& value, const std::string& freespace) {
+    return group(with_edge("none", entityCondition("Lead", fmt::format(R"(<RelativeDistanceCondition entityRef="Slow"
+        value="{}" freespace="{}" relativeDistanceType="lateral" rule="lessThan"/>)",
+                                                                       value, freespace))));
+  };
   const std::vector<std::pair<std::string, double>> cases = {
       // Falling: 20 + t <= 22.1 holds until 2.1 s; at the instant 2.2 it does not
       {group(with_edge("falling", below)), 2.2 + kNext},
@@ -892,18 +897,10 @@ TEST(OscRun, EachConditionStartsItsEventWhereTheFileSays) {
        1.6 + kNext},
       // Across the lane: Lead (lane -2) and Slow (lane -4) are 7 m apart between their reference
       // points, 7 - 1.8 = 5.2 m between their sides (both 1.8 m wide): from the first check on, or never
-      {group(with_edge("none", entityCondition("Lead", R"(<RelativeDistanceCondition entityRef="Slow" value="7.1"
-          freespace="false" relativeDistanceType="lateral" rule="lessThan"/>)"))),
-       0.0 + kNext},
-      {group(with_edge("none", entityCondition("Lead", R"(<RelativeDistanceCondition entityRef="Slow" value="6.9"
-          freespace="false" relativeDistanceType="lateral" rule="lessThan"/>)"))),
-       -1.0},
-      {group(with_edge("none", entityCondition("Lead", R"(<RelativeDistanceCondition entityRef="Slow" value="5.3"
-          freespace="true" relativeDistanceType="lateral" rule="lessThan"/>)"))),
-       0.0 + kNext},
-      {group(with_edge("none", entityCondition("Lead", R"(<RelativeDistanceCondition entityRef="Slow" value="5.1"
-          freespace="true" relativeDistanceType="lateral" rule="lessThan"/>)"))),
-       -1.0},
+      {lateral_below("7.1", "false"), 0.0 + kNext},
+      {lateral_below("6.9", "false"), -1.0},
+      {lateral_below("5.3", "true"), 0.0 + kNext},
+      {lateral_below("5.1", "true"), -1.0},
       // A falling edge on a time: reached, it holds from then on, so it never falls
       {group(R"(<Condition name="f" delay="0" conditionEdge="falling"><ByValueCondition>
           <SimulationTimeCondition value="1" rule="greaterOrEqual"/></ByValueCondition></Condition>)"),
