@@ -353,12 +353,22 @@ void checkSectionJoin(const xml::Reader& reader, const pugi::xml_node& before, c
 }
 
 /// The lanes' offset from the reference line (m, > 0 left): OpenDRIVE's <laneOffset> records,
-/// which must give one constant along the road — none (0), or records from s = 0 that all have
-/// the same `a` and no b, c, d (map tools write one per section). An offset that varies moves
-/// the lanes across the road, which the language's lanes, parallel to its centre line, cannot.
-double constantLaneOffset(const xml::Reader& reader, const pugi::xml_node& lanes) {
-  std::optional<double> constant;
+/// which must give one constant along the road (`length` m) — none (0), or records from s = 0
+/// that all have the same `a` and no b, c, d (map tools write one per section). An offset that
+/// varies moves the lanes across the road, which the language's lanes, parallel to its centre
+/// line, cannot.
+double constantLaneOffset(const xml::Reader& reader, const pugi::xml_node& lanes, double length) {
+  // In order of s (the standard asks for it; a file may not keep it); a record from the road's
+  // end on applies to none of it.
+  std::vector<std::pair<double, pugi::xml_node>> records;
   for (const pugi::xml_node& offset : lanes.children("laneOffset")) {
+    const double s = reader.number(offset, "s", NumberRange::atLeast(0.0));
+    if (s < length) records.emplace_back(s, offset);
+  }
+  std::stable_sort(records.begin(), records.end(),
+                   [](const auto& a, const auto& b) { return a.first < b.first; });
+  std::optional<double> constant;
+  for (const auto& [s, offset] : records) {
     for (const char* coefficient : {"b", "c", "d"}) {
       if (reader.optionalNumber(offset, coefficient).value_or(0.0) != 0.0) {
         reader.fail(offset, "a lane offset that varies along the road: the scenario language's lanes run parallel "
@@ -366,7 +376,6 @@ double constantLaneOffset(const xml::Reader& reader, const pugi::xml_node& lanes
       }
     }
     const double a = reader.number(offset, "a");
-    const double s = reader.number(offset, "s", NumberRange::atLeast(0.0));
     if (!constant && s != 0.0 && a != 0.0) {
       reader.fail(offset, fmt::format("s = {} m: a lane offset of {} m from there, none before: the scenario "
                                       "language's lanes run parallel to its centre line",
@@ -388,7 +397,7 @@ double constantLaneOffset(const xml::Reader& reader, const pugi::xml_node& lanes
 void readLanes(const xml::Reader& reader, const pugi::xml_node& road, CarriagewayRoad& result) {
   const pugi::xml_node lanes = reader.only(road, "lanes");
   reader.requireSubset(lanes, {"laneSection", "laneOffset"});
-  result.laneOffset = constantLaneOffset(reader, lanes);
+  result.laneOffset = constantLaneOffset(reader, lanes, result.length);
   const pugi::xml_node first = lanes.child("laneSection");
   if (!first) reader.fail(lanes, "expected a <laneSection>");
   if (reader.optionalNumber(first, "s").value_or(0.0) != 0.0) reader.fail(first, "s: expected 0 (the road's start)");
@@ -879,24 +888,21 @@ pugi::xml_node roadUnder(const xml::Reader& reader, const pugi::xml_node& root, 
 }
 
 /// vsd-sumo's road in a file of several roads: the road `scenario_road` (the scenario's first
-/// roadId; `asked_where` names it), or without one the road under `point` (the scenario's first
-/// world position), and the roads linked to it end to start, in driving order. A file of one
-/// road is that road.
+/// roadId, or the road under its first world position; `asked_where` names it) and the roads
+/// linked to it end to start, in driving order. A file of one road is that road.
 std::vector<pugi::xml_node> roadChain(const xml::Reader& reader, const pugi::xml_node& root,
-                                      const std::string& scenario_road, const std::optional<Vec2>& point,
-                                      const std::string& asked_where) {
+                                      const std::string& scenario_road, const std::string& asked_where) {
   const auto roads = root.children("road");
   const auto count = static_cast<std::size_t>(std::distance(roads.begin(), roads.end()));
   if (count == 0) reader.fail(root, "expected a <road>");
   if (count == 1) return {*roads.begin()};
-  if (scenario_road.empty() && !point) {
+  if (scenario_road.empty()) {
     reader.fail(*std::next(roads.begin()), "several roads, and no position of the scenario names one (roadId) or "
                                            "lies on one (WorldPosition)");
   }
   pugi::xml_node found;
-  if (scenario_road.empty()) found = roadUnder(reader, root, *point, asked_where);
   for (const pugi::xml_node& road : roads) {
-    if (!scenario_road.empty() && road.attribute("id").value() == scenario_road) found = road;
+    if (road.attribute("id").value() == scenario_road) found = road;
   }
   if (!found) reader.fail(root, fmt::format("no <road> with id \"{}\" ({})", scenario_road, asked_where));
   if (inJunction(found)) {
@@ -1038,15 +1044,16 @@ CarriagewayRoad readRoad(const std::filesystem::path& file, std::string text, Fi
   CarriagewayRoad result;
   result.file = file;
   pugi::xml_node before;  // the road before in the chain
-  const std::vector<pugi::xml_node> chain = roadChain(reader, root, scenario_road, point, asked_where);
+  std::string chosen = scenario_road;
   const auto roads = root.children("road");
   if (scenario_road.empty() && point && std::distance(roads.begin(), roads.end()) > 1) {
-    // A WorldPosition, not a roadId, chose the road among several: say which and why.
+    // A WorldPosition, not a roadId, chooses the road among several: say which and why.
+    chosen = roadUnder(reader, root, *point, asked_where).attribute("id").value();
     findings.mapped(asked_where, fmt::format("lies on road '{}' of {}: the scenario's road (no position names a "
                                              "roadId)",
-                                             chain.front().attribute("id").value(), file.filename().string()));
+                                             chosen, file.filename().string()));
   }
-  for (const pugi::xml_node& road : chain) {
+  for (const pugi::xml_node& road : roadChain(reader, root, chosen, asked_where)) {
     readRoadPiece(reader, road, before, result, findings);
     before = road;
   }

@@ -984,12 +984,27 @@ bool canHoldAgain(const YAML::Node& trigger) {
   return true;
 }
 
+/// esmini holds a storyboard element's startTransition and endTransition for one step and its
+/// runningState while it runs: they fall (a step later, at its end), where the language's
+/// states are moments that hold from then on. A falling edge on them (or either edge, which
+/// a repeated Event would see twice) is refused; a completeState never falls.
+void refuseEdgeOnPassingState(const xml::Reader& reader, const pugi::xml_node& state, const std::string& edge) {
+  if (!state || edge == "rising" || std::string(state.attribute("state").value()) == "completeState") return;
+  reader.fail(state, fmt::format("state=\"{}\" with conditionEdge=\"{}\": esmini's {} falls {}, the language's "
+                                 "states hold from their moment on (use rising, or completeState)",
+                                 state.attribute("state").value(), edge, state.attribute("state").value(),
+                                 std::string(state.attribute("state").value()) == "runningState"
+                                     ? "when the element ends"
+                                     : "one step after it"));
+}
+
 /// One <Condition> without its delay; nullopt: it never holds.
 std::optional<YAML::Node> condition(Translation& translation, const Entity& actor, const pugi::xml_node& node) {
   const xml::Reader& reader = translation.reader;
   const std::string edge = reader.oneOf(node, "conditionEdge", {"none", "rising", "falling", "risingOrFalling"});
   reader.requireSubset(node, {"ByValueCondition", "ByEntityCondition"});
   const pugi::xml_node by = reader.choice(node, {"ByValueCondition", "ByEntityCondition"});
+  if (edge != "none") refuseEdgeOnPassingState(reader, by.child("StoryboardElementStateCondition"), edge);
   auto result = std::string(by.name()) == "ByValueCondition" ? valueCondition(translation, by)
                                                              : entityCondition(translation, actor, by);
   if (!result || edge == "none") return result;

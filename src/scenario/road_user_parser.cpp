@@ -323,6 +323,9 @@ void parseMeasure(const YamlReader& reader, const YAML::Node& node, const std::s
     trigger.measure = TriggerSpec::Measure::Lateral;
     return;
   }
+  if (value != "along_lane" && value != "straight_line") {
+    throw ConfigError::field(reader.where(node, field), field, value, "along_lane, straight_line or lateral");
+  }
   if (secondOf(reader, node, field, trigger, "along_lane", "straight_line")) {
     trigger.measure = TriggerSpec::Measure::StraightLine;
   }

@@ -61,8 +61,10 @@ double durationOf(const ConcreteAction& action, double from, double to) {
     case ActionSpec::Pace::LateralSpeed: return peak_factor * magnitude / action.paceValue;
     case ActionSpec::Pace::LateralAccel: return kPi * std::sqrt(magnitude / (2.0 * action.paceValue));
     // A speed change over a distance: linear and smooth profiles both average (from + to) / 2,
-    // so they cover the distance in 2 d / (from + to) (as esmini converts it); speeds are >= 0.
-    case ActionSpec::Pace::Distance: return from + to > 0.0 ? 2.0 * action.paceValue / (from + to) : 0.0;
+    // so they cover the distance in 2 d / (from + to) (as esmini converts it; speeds are >= 0).
+    // No change ends at once, as in esmini.
+    case ActionSpec::Pace::Distance:
+      return magnitude > 1e-9 && from + to > 0.0 ? 2.0 * action.paceValue / (from + to) : 0.0;
   }
   return 0.0;
 }

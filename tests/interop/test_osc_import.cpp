@@ -1375,6 +1375,12 @@ TEST(OscImport, ConditionsTheLanguageCannotExpressAreOneLineEach) {
           </TriggeringEntities><EntityCondition><SpeedCondition value="20" rule="lessThan"/></EntityCondition>
           </ByEntityCondition></Condition>)"),
        "conditionEdge=\"falling\" over several triggering entities"},
+      // esmini's transitions pass after a step, a running state at the element's end.
+      {group(R"(<Condition name="s" delay="0" conditionEdge="falling"><ByValueCondition>
+          <StoryboardElementStateCondition storyboardElementType="event" storyboardElementRef="SlowDown"
+          state="runningState"/></ByValueCondition></Condition>)"),
+       "<StoryboardElementStateCondition>: state=\"runningState\" with conditionEdge=\"falling\": esmini's "
+       "runningState falls when the element ends"},
       {group(entityCondition("Lead", R"(<TimeHeadwayCondition entityRef="Slow" value="1" freespace="true"
           relativeDistanceType="lateral" rule="lessThan"/>)")),
        "relativeDistanceType=\"lateral\": a headway or time to collision across the lane"},
@@ -1807,8 +1813,11 @@ TEST(OscImport, AConstantLaneOffsetShiftsTheLanes) {
       {{"roads/offset.xodr", with_offsets(right + R"(<laneOffset s="400" a="-0.5" b="0" c="0" d="0"/>)")},
        {"roads/varying.xodr", with_offsets(R"(<laneOffset s="0" a="0" b="0" c="0.0042" d="-5.6e-05"/>)")},
        {"roads/changing.xodr", with_offsets(right + R"(<laneOffset s="400" a="-0.25" b="0" c="0" d="0"/>)")},
-       {"roads/later.xodr", with_offsets(R"(<laneOffset s="125" a="3.5" b="0" c="0" d="0"/>)")}});
-  for (const std::string name : {"offset", "varying", "changing", "later"}) {
+       {"roads/later.xodr", with_offsets(R"(<laneOffset s="125" a="3.5" b="0" c="0" d="0"/>)")},
+       // Records out of order, and one from beyond the road's end (1000 m), which applies to none of it.
+       {"roads/unordered.xodr", with_offsets(R"(<laneOffset s="400" a="-0.5" b="0" c="0" d="0"/>)" + right)},
+       {"roads/beyond.xodr", with_offsets(right + R"(<laneOffset s="5000" a="0" b="0" c="0" d="0"/>)")}});
+  for (const std::string name : {"offset", "varying", "changing", "later", "unordered", "beyond"}) {
     test::writeFile(dir->path() / (name + ".xosc"), cutInWith("./roads/three_lanes.xodr", "./roads/" + name + ".xodr"));
   }
   const auto logical = importTemplate(dir->path() / "offset.xosc", {});
@@ -1817,6 +1826,10 @@ TEST(OscImport, AConstantLaneOffsetShiftsTheLanes) {
   // the offset, 2.5 m right of it (t = -10.25) with the lanes 0.5 m further right.
   EXPECT_DOUBLE_EQ(other(*plain, "Walker").offset.evaluate({}), -3.0);
   EXPECT_NEAR(other(*logical, "Walker").offset.evaluate({}), -2.5, 1e-9);
+  for (const std::string name : {"unordered", "beyond"}) {
+    const auto same = importTemplate(dir->path() / (name + ".xosc"), {});
+    EXPECT_NEAR(other(*same, "Walker").offset.evaluate({}), -2.5, 1e-9) << name;
+  }
   // Road users placed by lane keep their lanes and offsets.
   EXPECT_EQ(logical->ego.lane, plain->ego.lane);
   EXPECT_EQ(logical->ego.offset.evaluate({}), plain->ego.offset.evaluate({}));
@@ -1935,10 +1948,12 @@ TEST(OscImport, AWorldPositionChoosesTheRoadOfAMapWithoutRoadIds) {
   };
   const std::string on_7 = R"(<WorldPosition x="20" y="-6.25" h="0"/>)";
   const std::string on_9 = R"(<WorldPosition x="20" y="93.75" h="0"/>)";
+  const std::string on_8 = R"(<WorldPosition x="450" y="-6.25" h="0"/>)";
   const auto dir = folderWith({{"roads/map.xodr", roads},
                                {"single.xosc", placed("three_lanes.xodr", on_7, "-12.75")},
                                {"map.xosc", placed("map.xodr", on_7, "-12.75")},
                                {"apart.xosc", placed("map.xodr", on_9, "87.25")},
+                               {"second.xosc", placed("map.xodr", on_8, "-12.75")},
                                {"between.xosc", placed("map.xodr", R"(<WorldPosition x="20" y="50" h="0"/>)", "50")}});
   const ScenarioCheck single = checkOpenScenario(dir->path() / "single.xosc", {});
   const ScenarioCheck map = checkOpenScenario(dir->path() / "map.xosc", {});
@@ -1947,6 +1962,11 @@ TEST(OscImport, AWorldPositionChoosesTheRoadOfAMapWithoutRoadIds) {
   EXPECT_THAT(map.report(), HasSubstr("map.xosc:69: <WorldPosition>: lies on road '7' of map.xodr: the scenario's road "
                                       "(no position names a roadId)"));
   EXPECT_THAT(map.report(), HasSubstr("<LogicFile>: roads '7' -> '8': 3 driving lanes of 3.5 m"));
+  // On the chain's second road: that road is named, the chain is the same.
+  const ScenarioCheck second = checkOpenScenario(dir->path() / "second.xosc", {});
+  ASSERT_TRUE(second.runnable()) << second.report();
+  EXPECT_THAT(second.report(), HasSubstr("<WorldPosition>: lies on road '8' of map.xodr"));
+  EXPECT_THAT(second.report(), HasSubstr("<LogicFile>: roads '7' -> '8'"));
   const ScenarioCheck apart = checkOpenScenario(dir->path() / "apart.xosc", {});
   ASSERT_TRUE(apart.runnable()) << apart.report();
   EXPECT_EQ(std::regex_replace(apart.yaml, std::regex("apart"), "single"), single.yaml);

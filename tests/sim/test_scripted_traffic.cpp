@@ -401,6 +401,12 @@ TEST(ScriptedTraffic, LateralRelationsMeasureAcrossTheEgosLane) {
                  "       actions: [{trigger: {ttc: 1, measure: lateral}, stop: {decel: 1}}]}");
   });
   EXPECT_NE(error.find("'measure: lateral' goes with gap and gap_at_least"), std::string::npos) << error;
+  const std::string unknown = test::configErrorOf([] {
+    scenarioWith("    - {id: mover, ds: 0, relative_lane: 1, speed: 10,\n"
+                 "       actions: [{trigger: {gap: 1, measure: sideways}, stop: {decel: 1}}]}");
+  });
+  EXPECT_NE(unknown.find("got 'sideways', expected along_lane, straight_line or lateral"), std::string::npos)
+      << unknown;
 }
 
 namespace {
@@ -557,7 +563,9 @@ TEST(ScriptedTraffic, ASpeedChangeOverADistanceCoversThatDistance) {
     - {{id: mover, s: 60, lane: 2, speed: 20,
        actions: [{{trigger: {{time: 1}}, speed: {{target: 10, distance: 60, shape: {0}}}}}]}}
     - {{id: stopper, s: 60, lane: 0, speed: 20,
-       actions: [{{trigger: {{time: 1}}, stop: {{distance: 30, shape: {0}}}}}]}})",
+       actions: [{{trigger: {{time: 1}}, stop: {{distance: 30, shape: {0}}}}}]}}
+    - {{id: keeper, s: 90, lane: 0, speed: 20,
+       actions: [{{trigger: {{time: 1}}, speed: {{target: 20, distance: 60, shape: {0}}}}}]}})",
                                                   shape),
                                       0.0, 8.0);
     const Planned run = plan(logical);
@@ -573,6 +581,7 @@ TEST(ScriptedTraffic, ASpeedChangeOverADistanceCoversThatDistance) {
     EXPECT_NEAR(traffic.timings()[0].start, 1.0, 1e-9) << shape;
     EXPECT_NEAR(traffic.timings()[0].end, 5.0, 1e-9) << shape;
     EXPECT_NEAR(traffic.timings()[1].end, 4.0, 1e-9) << shape;
+    EXPECT_NEAR(traffic.timings()[2].end, 1.0, 1e-9) << shape;  // no change: it ends at once (as esmini)
     EXPECT_NEAR(s_at[25][0] - s_at[5][0], 60.0, 0.05) << shape;
     EXPECT_NEAR(s_at[25][1] - s_at[5][1], 30.0, 0.05) << shape;
     EXPECT_NEAR(traffic.states()[0].speed, 10.0, 1e-9) << shape;
