@@ -855,13 +855,17 @@ std::pair<double, double> lateralExtent(const pugi::xml_node& road) {
   return {right + offset, left + offset};
 }
 
-/// The road outside junctions whose lanes hold `point` (the one whose reference line is nearest if
-/// several do): a file that names no roadId places its scenario on a map by world positions.
-/// Roads whose plan view vsd-sumo cannot read are not candidates.
-pugi::xml_node roadUnder(const xml::Reader& reader, const pugi::xml_node& root, const Vec2& point,
+/// The road outside junctions whose lanes hold `place`'s point: a file that names no roadId places
+/// its scenario on a map by world positions. Where several do (a crossing outside a junction),
+/// the nearest reference line among the roads that run along the place's heading (either way,
+/// within 45 degrees) wins, or among all if none does or it gives no heading. Roads whose plan
+/// view vsd-sumo cannot read are not candidates.
+pugi::xml_node roadUnder(const xml::Reader& reader, const pugi::xml_node& root, const WorldPlace& place,
                          const std::string& asked_where) {
+  const Vec2& point = place.point;
   pugi::xml_node found;
   double found_t = std::numeric_limits<double>::infinity();
+  bool found_aligned = false;
   for (const pugi::xml_node& road : root.children("road")) {
     if (inJunction(road)) continue;
     CarriagewayRoad plan;
@@ -874,9 +878,12 @@ pugi::xml_node roadUnder(const xml::Reader& reader, const pugi::xml_node& root, 
     const auto [s, t] = plan.coordinates(point);
     const auto [right, left] = lateralExtent(road);
     const bool on_road = s >= -kJoinTolerance && s <= plan.length + kJoinTolerance && t >= -right && t <= left;
-    if (on_road && std::abs(t) < found_t) {
+    if (!on_road) continue;
+    const bool aligned = place.heading && std::abs(std::sin(*place.heading - plan.headingAt(s))) < std::sqrt(0.5);
+    if ((aligned && !found_aligned) || (aligned == found_aligned && std::abs(t) < found_t)) {
       found = road;
       found_t = std::abs(t);
+      found_aligned = aligned;
     }
   }
   if (!found) {
@@ -1035,7 +1042,7 @@ void readRoadPiece(const xml::Reader& reader, const pugi::xml_node& road, const 
 }
 
 CarriagewayRoad readRoad(const std::filesystem::path& file, std::string text, Findings& findings,
-                         const std::string& scenario_road, const std::optional<Vec2>& point,
+                         const std::string& scenario_road, const std::optional<WorldPlace>& place,
                          const std::string& asked_where) {
   xml::Reader reader(file, std::move(text));
   const pugi::xml_node root = reader.root();
@@ -1046,9 +1053,9 @@ CarriagewayRoad readRoad(const std::filesystem::path& file, std::string text, Fi
   pugi::xml_node before;  // the road before in the chain
   std::string chosen = scenario_road;
   const auto roads = root.children("road");
-  if (scenario_road.empty() && point && std::distance(roads.begin(), roads.end()) > 1) {
+  if (scenario_road.empty() && place && std::distance(roads.begin(), roads.end()) > 1) {
     // A WorldPosition, not a roadId, chooses the road among several: say which and why.
-    chosen = roadUnder(reader, root, *point, asked_where).attribute("id").value();
+    chosen = roadUnder(reader, root, *place, asked_where).attribute("id").value();
     findings.mapped(asked_where, fmt::format("lies on road '{}' of {}: the scenario's road (no position names a "
                                              "roadId)",
                                              chosen, file.filename().string()));
@@ -1073,7 +1080,7 @@ struct ReadRoad {
 
 CarriagewayRoad readCarriagewayRoad(const std::filesystem::path& file, Findings& findings,
                                     const std::string& scenario_road, const std::string& asked_where,
-                                    const std::optional<Vec2>& point) {
+                                    const std::optional<WorldPlace>& place) {
   // A sweep imports its template once per parameter set (twice: to check it, to run it);
   // the road is read once per process and file content. A file that changes is read again.
   static std::mutex mutex;
@@ -1082,7 +1089,9 @@ CarriagewayRoad readCarriagewayRoad(const std::filesystem::path& file, Findings&
   std::string text = readTextFile(file, read_limits::kRoadNetwork);  // read once: hashed, then parsed
   const std::string key = std::filesystem::absolute(file).lexically_normal().string() + "\n" + sha256OfString(text) +
                           "\n" + scenario_road + "\n" +
-                          (point ? fmt::format("{} {} {}", point->x(), point->y(), asked_where) : std::string());
+                          (place ? fmt::format("{} {} {} {}", place->point.x(), place->point.y(),
+                                               place->heading ? fmt::format("{}", *place->heading) : "-", asked_where)
+                                 : std::string());
   {
     const std::lock_guard<std::mutex> lock(mutex);
     if (const auto found = roads.find(key); found != roads.end()) {
@@ -1093,7 +1102,7 @@ CarriagewayRoad readCarriagewayRoad(const std::filesystem::path& file, Findings&
   Findings own(findings.collecting());
   CarriagewayRoad road;
   try {
-    road = readRoad(file, std::move(text), own, scenario_road, point, asked_where);
+    road = readRoad(file, std::move(text), own, scenario_road, place, asked_where);
   } catch (const ConfigError&) {
     findings.replay(own.lines());  // the notes before the refusal, as without the cache
     throw;

@@ -220,15 +220,21 @@ struct CarriagewayRoad {
   const PlanGeometry& geometryAt(double s) const;
 };
 
+/// A scenario's first WorldPosition: `point` (m) and its heading `h` (rad) if it gives one.
+struct WorldPlace {
+  Vec2 point;
+  std::optional<double> heading;
+};
+
 /// Reads the road; refuses (ConfigError "file:line: <element>: why") what does not map.
 /// Elements that do not change the planar lanes go to `findings` as notes. In a file of
 /// several roads, vsd-sumo's road is road `scenario_road` (the scenario's first roadId, which
 /// `asked_where` names) — or, if the scenario names none, the road outside junctions whose lanes
-/// hold `point` (m, the scenario's first WorldPosition, which `asked_where` names then) — with
+/// hold `place` (the scenario's first WorldPosition, which `asked_where` names then) — with
 /// the roads linked to it end to start; the others and the file's junctions are noted as not
 /// simulated.
 CarriagewayRoad readCarriagewayRoad(const std::filesystem::path& file, Findings& findings,
                                     const std::string& scenario_road = "", const std::string& asked_where = "",
-                                    const std::optional<Vec2>& point = std::nullopt);
+                                    const std::optional<WorldPlace>& place = std::nullopt);
 
 }  // namespace vsd::interop::osc

@@ -533,8 +533,9 @@ TranslationResult translate(const fs::path& xosc, const OscImportOptions& option
     const std::string road_id = reader.text(named, "roadId");
     translation.road = readCarriagewayRoad(xodr, findings, road_id, "the roadId at " + reader.where(named));
   } else if (world) {
-    translation.road = readCarriagewayRoad(xodr, findings, "", reader.where(world),
-                                           Vec2(reader.number(world, "x"), reader.number(world, "y")));
+    const WorldPlace place{Vec2(reader.number(world, "x"), reader.number(world, "y")),
+                           reader.optionalNumber(world, "h")};
+    translation.road = readCarriagewayRoad(xodr, findings, "", reader.where(world), place);
   } else {
     translation.road = readCarriagewayRoad(xodr, findings);
   }

@@ -1949,11 +1949,21 @@ TEST(OscImport, AWorldPositionChoosesTheRoadOfAMapWithoutRoadIds) {
   const std::string on_7 = R"(<WorldPosition x="20" y="-6.25" h="0"/>)";
   const std::string on_9 = R"(<WorldPosition x="20" y="93.75" h="0"/>)";
   const std::string on_8 = R"(<WorldPosition x="450" y="-6.25" h="0"/>)";
+  const std::string crossing =
+      network({linkedRoad("7", 400, "<link/>", geometry(0, Vec2(0, 0), 0, 400, "<line/>")),
+               linkedRoad("10", 200, "<link/>", geometry(0, Vec2(200, -100), 1.5707963267948966, 200, "<line/>"))});
   const auto dir = folderWith({{"roads/map.xodr", roads},
                                {"single.xosc", placed("three_lanes.xodr", on_7, "-12.75")},
                                {"map.xosc", placed("map.xodr", on_7, "-12.75")},
                                {"apart.xosc", placed("map.xodr", on_9, "87.25")},
                                {"second.xosc", placed("map.xodr", on_8, "-12.75")},
+                               // Road 10 crosses road 7 at x = 200 (no junction): the point (200, -6.25)
+                               // lies on both, on road 10's reference line; heading along x, it is road 7's.
+                               {"roads/crossing.xodr", crossing},
+                               {"along.xosc", placed("crossing.xodr", R"(<WorldPosition x="200" y="-6.25" h="0"/>)",
+                                                     "-12.75")},
+                               {"unheaded.xosc", placed("crossing.xodr", R"(<WorldPosition x="200" y="-6.25"/>)",
+                                                        "-12.75")},
                                {"between.xosc", placed("map.xodr", R"(<WorldPosition x="20" y="50" h="0"/>)", "50")}});
   const ScenarioCheck single = checkOpenScenario(dir->path() / "single.xosc", {});
   const ScenarioCheck map = checkOpenScenario(dir->path() / "map.xosc", {});
@@ -1967,6 +1977,8 @@ TEST(OscImport, AWorldPositionChoosesTheRoadOfAMapWithoutRoadIds) {
   ASSERT_TRUE(second.runnable()) << second.report();
   EXPECT_THAT(second.report(), HasSubstr("<WorldPosition>: lies on road '8' of map.xodr"));
   EXPECT_THAT(second.report(), HasSubstr("<LogicFile>: roads '7' -> '8'"));
+  EXPECT_THAT(checkReport(*dir, "along.xosc"), HasSubstr("<WorldPosition>: lies on road '7' of crossing.xodr"));
+  EXPECT_THAT(checkReport(*dir, "unheaded.xosc"), HasSubstr("<WorldPosition>: lies on road '10' of crossing.xodr"));
   const ScenarioCheck apart = checkOpenScenario(dir->path() / "apart.xosc", {});
   ASSERT_TRUE(apart.runnable()) << apart.report();
   EXPECT_EQ(std::regex_replace(apart.yaml, std::regex("apart"), "single"), single.yaml);
