@@ -375,7 +375,8 @@ double constantLaneOffset(const xml::Reader& reader, const pugi::xml_node& lanes
                             "to its centre line");
       }
     }
-    const double a = reader.number(offset, "a");
+    // Lanes a kilometre off their reference line are a broken file, not a road.
+    const double a = reader.number(offset, "a", NumberRange::closed(-1000.0, 1000.0));
     if (!constant && s != 0.0 && a != 0.0) {
       reader.fail(offset, fmt::format("s = {} m: a lane offset of {} m from there, none before: the scenario "
                                       "language's lanes run parallel to its centre line",

@@ -1816,8 +1816,9 @@ TEST(OscImport, AConstantLaneOffsetShiftsTheLanes) {
        {"roads/later.xodr", with_offsets(R"(<laneOffset s="125" a="3.5" b="0" c="0" d="0"/>)")},
        // Records out of order, and one from beyond the road's end (1000 m), which applies to none of it.
        {"roads/unordered.xodr", with_offsets(R"(<laneOffset s="400" a="-0.5" b="0" c="0" d="0"/>)" + right)},
-       {"roads/beyond.xodr", with_offsets(right + R"(<laneOffset s="5000" a="0" b="0" c="0" d="0"/>)")}});
-  for (const std::string name : {"offset", "varying", "changing", "later", "unordered", "beyond"}) {
+       {"roads/beyond.xodr", with_offsets(right + R"(<laneOffset s="5000" a="0" b="0" c="0" d="0"/>)")},
+       {"roads/far.xodr", with_offsets(R"(<laneOffset s="0" a="1e300" b="0" c="0" d="0"/>)")}});
+  for (const std::string name : {"offset", "varying", "changing", "later", "unordered", "beyond", "far"}) {
     test::writeFile(dir->path() / (name + ".xosc"), cutInWith("./roads/three_lanes.xodr", "./roads/" + name + ".xodr"));
   }
   const auto logical = importTemplate(dir->path() / "offset.xosc", {});
@@ -1842,6 +1843,7 @@ TEST(OscImport, AConstantLaneOffsetShiftsTheLanes) {
   EXPECT_THAT(importRefusal(*dir, "changing"),
               HasSubstr("changing.xodr:16: <laneOffset>: a = -0.25 m from s = 400 m, after -0.5 m: a lane offset "
                         "that changes along the road"));
+  EXPECT_THAT(importRefusal(*dir, "far"), HasSubstr("far.xodr:16: <laneOffset>: a: got '1e300', expected"));
   EXPECT_THAT(importRefusal(*dir, "later"),
               HasSubstr("later.xodr:16: <laneOffset>: s = 125 m: a lane offset of 3.5 m from there, none before"));
 }
