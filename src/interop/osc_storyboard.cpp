@@ -41,17 +41,13 @@ std::string shapeOf(Translation& translation, const pugi::xml_node& dynamics, bo
   return shape == "linear" ? "linear" : "smooth";
 }
 
-/// A pace (rate, time or distance) of a TransitionDynamics: the key and value of the language.
-/// `distance_key`: the language's key for a change over a distance (nullptr: none, refused).
-void pace(Translation& translation, const pugi::xml_node& dynamics, const char* rate_key, const char* distance_key,
-          YAML::Node& action) {
+/// A pace (rate, time or distance) of a TransitionDynamics: the key and value of the language
+/// (`rate_key` for a rate, `distance` for a distance).
+void pace(Translation& translation, const pugi::xml_node& dynamics, const char* rate_key, YAML::Node& action) {
   const xml::Reader& reader = translation.reader;
   const std::string dimension = reader.oneOf(dynamics, "dynamicsDimension", {"time", "rate", "distance"});
-  if (dimension == "distance" && distance_key == nullptr) {
-    reader.fail(dynamics, "dynamicsDimension=\"distance\": the language paces a lateral change by time or rate");
-  }
   if (dimension == "distance") {
-    action[distance_key] = num(reader.number(dynamics, "value", NumberRange::aboveUpTo(0.0, 1e6)));
+    action["distance"] = num(reader.number(dynamics, "value", NumberRange::aboveUpTo(0.0, 1e6)));
     return;
   }
   double value = reader.number(dynamics, "value");
@@ -94,18 +90,24 @@ YAML::Node laneTarget(Translation& translation, const Entity& actor, const pugi:
 YAML::Node laneChange(Translation& translation, const Entity& actor, const pugi::xml_node& action) {
   const xml::Reader& reader = translation.reader;
   reader.requireSubset(action, {"LaneChangeActionDynamics", "LaneChangeTarget"});
-  if (reader.optionalNumber(action, "targetLaneOffset").value_or(0.0) != 0.0) {
-    reader.fail(action, "targetLaneOffset: the language's lane changes end on the lane's centre");
-  }
   if (!actor.isVehicle()) reader.fail(action, "lane changes are for vehicles (the language's rule)");
   const bool of_ego = &actor == translation.ego;
   YAML::Node item;
+  // Along t (left of the reference line), as esmini reads it: turned on a reversed road.
+  const double target_offset =
+      reader.optionalNumber(action, "targetLaneOffset", NumberRange::closed(-100.0, 100.0)).value_or(0.0);
+  if (target_offset != 0.0) item["offset"] = num(translation.road.ownT(target_offset));
   const pugi::xml_node dynamics = reader.only(action, "LaneChangeActionDynamics");
   item["shape"] = shapeOf(translation, dynamics, /*step_allowed=*/of_ego);
   if (item["shape"].as<std::string>() == "step") {  // the Ego's: its lane moves at once
     translation.findings.note(reader.where(dynamics), "a step moves the lane at once: its value is not used");
   } else {
-    pace(translation, dynamics, "lateral_speed", nullptr, item);
+    pace(translation, dynamics, "lateral_speed", item);
+    if (item["distance"]) {
+      translation.findings.note(reader.where(dynamics),
+                                "over a distance: it lasts the distance over its speed when it starts (esmini "
+                                "follows the distance it travels: the same while its speed holds)");
+    }
   }
   const pugi::xml_node target = reader.choice(reader.only(action, "LaneChangeTarget"),
                                               {"RelativeTargetLane", "AbsoluteTargetLane"});
@@ -273,7 +275,7 @@ YAML::Node speedAction(Translation& translation, const Entity& actor, const pugi
   const pugi::xml_node dynamics = reader.only(action, "SpeedActionDynamics");
   reader.requireSubset(dynamics, {});
   item["shape"] = shapeOf(translation, dynamics, true);
-  if (item["shape"].as<std::string>() != "step") pace(translation, dynamics, "rate", "distance", item);
+  if (item["shape"].as<std::string>() != "step") pace(translation, dynamics, "rate", item);
   const pugi::xml_node target = reader.choice(reader.only(action, "SpeedActionTarget"),
                                               {"AbsoluteTargetSpeed", "RelativeTargetSpeed"});
   const double value = reader.number(target, "value");
@@ -492,6 +494,16 @@ void requireLongitudinal(const xml::Reader& reader, const pugi::xml_node& condit
 }
 
 /// gap / headway / ttc of `triggering` (one of the condition's TriggeringEntities).
+/// The language's `measure` of a condition's relativeDistanceType: along_lane (longitudinal),
+/// lateral, or straight_line (euclidian or cartesian; also without one: OpenSCENARIO 1.1's
+/// default, esmini's reading also with 1.0's alongRoute).
+std::string measureOf(const xml::Reader& reader, const pugi::xml_node& condition) {
+  if (!condition.attribute("relativeDistanceType")) return "straight_line";
+  const std::string type = reader.oneOf(condition, "relativeDistanceType",
+                                        {"longitudinal", "lateral", "euclidianDistance", "cartesianDistance"});
+  return type == "longitudinal" ? "along_lane" : type == "lateral" ? "lateral" : "straight_line";
+}
+
 YAML::Node relationLeaf(Translation& translation, const Entity& actor, const Entity& triggering,
                         const pugi::xml_node& condition) {
   const xml::Reader& reader = translation.reader;
@@ -507,22 +519,13 @@ YAML::Node relationLeaf(Translation& translation, const Entity& actor, const Ent
   }
   // freespace="false": between the entities' reference points (their places in the language).
   const bool freespace = reader.oneOf(condition, "freespace", {"true", "false"}) == "true";
-  // Without a relativeDistanceType the distance is the straight line between the two (OpenSCENARIO
-  // 1.1's default, esmini's reading also with 1.0's alongRoute); longitudinal is along the lane
-  // and lateral across it in any coordinate system the language has (entity, road, lane: one
-  // lane frame, the entity's while it drives along the road).
-  std::string distance_type = "euclidianDistance";
-  if (condition.attribute("relativeDistanceType")) {
-    distance_type = reader.oneOf(condition, "relativeDistanceType",
-                                 {"longitudinal", "lateral", "euclidianDistance", "cartesianDistance"});
-  }
-  if (distance_type == "lateral" && kind != "RelativeDistanceCondition") {
+  // Longitudinal is along the lane and lateral across it in any coordinate system the language
+  // has (entity, road, lane: one lane frame, the entity's while it drives along the road).
+  const std::string measure = measureOf(reader, condition);
+  if (measure == "lateral" && kind != "RelativeDistanceCondition") {
     reader.fail(condition, "relativeDistanceType=\"lateral\": a headway or time to collision across the lane (the "
                            "language measures them along the Ego's lane or in a straight line)");
   }
-  const std::string measure = distance_type == "longitudinal" ? "along_lane"
-                              : distance_type == "lateral"    ? "lateral"
-                                                              : "straight_line";
   if (condition.attribute("alongRoute")) reader.oneOf(condition, "alongRoute", {"true", "false"});
   const auto system = reader.optionalText(condition, "coordinateSystem");
   if (system && *system != "entity" && *system != "road" && *system != "lane") {
@@ -559,25 +562,51 @@ YAML::Node relationLeaf(Translation& translation, const Entity& actor, const Ent
   return trigger;
 }
 
-/// The language's place of a condition's <Position>, where `subject`'s centre is when its
-/// reference point (what the file measures from) is there, driving along the road.
-YAML::Node placeOf(Translation& translation, const Entity& subject, const pugi::xml_node& condition) {
+/// The language's place of a condition's <Position>: where `subject`'s centre is when its
+/// reference point (what the file measures from) is there, driving along the road; the place
+/// itself where the file measures from the subject's body (`from_body`, freespace="true").
+YAML::Node placeOf(Translation& translation, const Entity& subject, const pugi::xml_node& condition, bool from_body) {
   const CarriagewayRoad& road = translation.road;
   const Placement p = fixedPlace(translation, translation.reader.only(condition, "Position"));
   const double stretch = 1.0 - road.curvatureAt(p.s) * p.t;
   const int lane = road.nearestLane(p.t);
+  const double centre_ahead = from_body ? 0.0 : subject.centreAhead;
   YAML::Node place;
-  place["s"] = num(road.languageS(p.s + subject.centreAhead / stretch));
+  place["s"] = num(road.languageS(p.s + centre_ahead / stretch));
   place["lane"] = std::to_string(lane);
   const double offset = p.t - road.laneCentreT(lane);
   if (offset != 0.0) place["offset"] = num(offset);
-  if (subject.centreAhead != 0.0) {
+  if (centre_ahead != 0.0) {
     translation.findings.note(translation.where(condition),
                               fmt::format("measured at the centre of '{}': the position moves {} m along the road, where "
                                           "its centre is when its reference point is there",
-                                          subject.name, num(subject.centreAhead)));
+                                          subject.name, num(centre_ahead)));
   }
   return place;
+}
+
+/// A DistanceCondition's measure and start: freespace="true" from the body's nearest point;
+/// longitudinal along the Ego's lane, lateral across it (in the entity, road or lane frame: one
+/// lane frame, the entity's while it drives along the road); euclidian in a straight line.
+/// True if it measures from the body.
+bool distanceMeasure(Translation& translation, const pugi::xml_node& condition, YAML::Node& trigger) {
+  const xml::Reader& reader = translation.reader;
+  const bool from_body = reader.oneOf(condition, "freespace", {"true", "false"}) == "true";
+  if (from_body) trigger["from"] = "body";
+  if (reader.optionalText(condition, "alongRoute").value_or("false") != "false") {
+    reader.fail(condition, "alongRoute=\"true\": the language measures a distance to a position in a straight line, "
+                           "or along or across the Ego's lane (relativeDistanceType)");
+  }
+  const std::string measure = measureOf(reader, condition);
+  const bool straight = measure == "straight_line";
+  const auto system = reader.optionalText(condition, "coordinateSystem").value_or("entity");
+  if (system != "entity" && (straight || (system != "road" && system != "lane"))) {
+    reader.fail(condition, fmt::format("coordinateSystem=\"{}\": the language measures a straight distance in the "
+                                       "plane, and longitudinal or lateral ones along or across the Ego's lane",
+                                       system));
+  }
+  if (!straight) trigger["measure"] = measure;
+  return from_body;
 }
 
 /// The distance conditions: ReachPosition (within a tolerance) and Distance to a position.
@@ -585,6 +614,7 @@ YAML::Node distanceLeaf(Translation& translation, const Entity& subject, const p
   const xml::Reader& reader = translation.reader;
   reader.requireSubset(condition, {"Position"});
   YAML::Node trigger;
+  bool from_body = false;
   if (std::string(condition.name()) == "ReachPositionCondition") {
     const pugi::xml_node place = reader.only(condition, "Position").first_child();
     if (const pugi::xml_node orientation = place.child("Orientation")) {
@@ -593,26 +623,11 @@ YAML::Node distanceLeaf(Translation& translation, const Entity& subject, const p
     }
     trigger["distance_at_most"] = num(reader.number(condition, "tolerance", NumberRange::atLeast(0.0)));
   } else {
-    if (reader.text(condition, "freespace") == "true") {
-      reader.fail(condition, "freespace=\"true\": the language measures a distance to a position from the road user's centre");
-    }
-    if (reader.optionalText(condition, "alongRoute").value_or("false") != "false") {
-      reader.fail(condition, "alongRoute=\"true\": the language measures a straight distance");
-    }
-    const auto type = reader.optionalText(condition, "relativeDistanceType").value_or("euclidianDistance");
-    if (type != "euclidianDistance" && type != "cartesianDistance") {
-      reader.fail(condition, fmt::format("relativeDistanceType=\"{}\": the language measures a straight (euclidian) "
-                                         "distance to a position", type));
-    }
-    const auto system = reader.optionalText(condition, "coordinateSystem").value_or("entity");
-    if (system != "entity") {
-      reader.fail(condition, fmt::format("coordinateSystem=\"{}\": the language measures a straight distance in the plane",
-                                         system));
-    }
+    from_body = distanceMeasure(translation, condition, trigger);
     const double value = reader.number(condition, "value", NumberRange::atLeast(0.0));
     trigger["distance_" + boundOf(reader, condition, true, value)] = num(value);
   }
-  trigger["position"] = placeOf(translation, subject, condition);
+  trigger["position"] = placeOf(translation, subject, condition, from_body);
   return trigger;
 }
 

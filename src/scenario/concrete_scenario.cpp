@@ -306,6 +306,7 @@ ConcreteTrigger evaluateTrigger(const TriggerSpec& spec, int owner, const Logica
   trigger.directed = spec.kind == TriggerSpec::Kind::Headway && !spec.subject.empty();
   trigger.betweenReferencePoints = spec.betweenReferencePoints;
   trigger.measure = spec.measure;
+  trigger.fromBody = spec.fromBody;
   trigger.rising = spec.rising;
   trigger.falling = spec.falling;
   if (spec.kind == TriggerSpec::Kind::After) trigger.action = actionIndex(logical, spec.action);
@@ -326,6 +327,7 @@ ConcreteAction evaluateAction(const ActionSpec& spec, int owner, const LogicalSc
   action.speedReference = roadUserIndex(logical, spec.speedReference);
   action.continuous = spec.continuous;
   action.target = evaluateFinite(spec.target, concrete.inputs, spec.where, "target");
+  action.targetLaneOffset = evaluateFinite(spec.targetLaneOffset, concrete.inputs, spec.where, "lane_change.offset");
   action.relativeToEgoLane = spec.relativeToEgoLane;
   action.toRoadLane = spec.toRoadLane;
   action.domains = spec.domains;

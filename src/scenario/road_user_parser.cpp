@@ -313,12 +313,15 @@ bool secondOf(const YamlReader& reader, const YAML::Node& node, const std::strin
   return value == second;
 }
 
-/// `measure` of a gap, headway or ttc: along_lane, straight_line, or (gaps only) lateral.
+/// `measure` of a gap, headway, ttc or distance: along_lane, straight_line, or (gaps and
+/// distances only) lateral.
 void parseMeasure(const YamlReader& reader, const YAML::Node& node, const std::string& field, TriggerSpec& trigger) {
   const std::string value = reader.scalar(node, field);
+  const bool distance = trigger.kind == TriggerSpec::Kind::Distance;
   if (value == "lateral") {
-    if (trigger.kind != TriggerSpec::Kind::Gap) {
-      reader.fail(node, field, "'measure: lateral' goes with gap and gap_at_least (a distance across the lane)");
+    if (trigger.kind != TriggerSpec::Kind::Gap && !distance) {
+      reader.fail(node, field,
+                  "'measure: lateral' goes with gap, gap_at_least and the distance triggers (across the lane)");
     }
     trigger.measure = TriggerSpec::Measure::Lateral;
     return;
@@ -326,9 +329,24 @@ void parseMeasure(const YamlReader& reader, const YAML::Node& node, const std::s
   if (value != "along_lane" && value != "straight_line") {
     throw ConfigError::field(reader.where(node, field), field, value, "along_lane, straight_line or lateral");
   }
-  if (secondOf(reader, node, field, trigger, "along_lane", "straight_line")) {
+  if (distance) {
+    trigger.measure = value == "along_lane" ? TriggerSpec::Measure::AlongLane : TriggerSpec::Measure::StraightLine;
+  } else if (secondOf(reader, node, field, trigger, "along_lane", "straight_line")) {
     trigger.measure = TriggerSpec::Measure::StraightLine;
   }
+}
+
+/// `from` of a distance trigger: centre (the default) or body (its nearest point).
+void parseDistanceFrom(const YamlReader& reader, const YAML::Node& node, const std::string& field,
+                       TriggerSpec& trigger) {
+  if (trigger.kind != TriggerSpec::Kind::Distance) {
+    reader.fail(node, field, "'from' goes with distance_at_most and distance_at_least (and only there)");
+  }
+  const std::string value = reader.scalar(node, field);
+  if (value != "centre" && value != "body") {
+    throw ConfigError::field(reader.where(node, field), field, value, "centre or body");
+  }
+  trigger.fromBody = value == "body";
 }
 
 /// Whether a trigger's condition can stop holding and hold again (no time or action end in it).
@@ -352,7 +370,7 @@ void parseTrigger(const YamlReader& reader, const YAML::Node& node, const std::s
                   const std::vector<std::string>& inputs, bool delay_allowed, TriggerSpec& trigger) {
   trigger.where = reader.where(node, field);
   reader.requireMap(node, field);
-  std::set<std::string> allowed = {"to", "of", "between", "measure", "position", "delay", "rising", "falling"};
+  std::set<std::string> allowed = {"to", "of", "between", "measure", "from", "position", "delay", "rising", "falling"};
   std::vector<std::string> keys;
   for (const auto& entry : kTriggerKeys) {
     allowed.insert(entry.key);
@@ -397,7 +415,10 @@ void parseTrigger(const YamlReader& reader, const YAML::Node& node, const std::s
     trigger.betweenReferencePoints =
         secondOf(reader, node["between"], field + ".between", trigger, "bumpers", "reference_points");
   }
+  // A distance to a place is a straight one unless the trigger says otherwise.
+  if (trigger.kind == TriggerSpec::Kind::Distance) trigger.measure = TriggerSpec::Measure::StraightLine;
   if (node["measure"]) parseMeasure(reader, node["measure"], field + ".measure", trigger);
+  if (node["from"]) parseDistanceFrom(reader, node["from"], field + ".from", trigger);
   if ((trigger.kind == TriggerSpec::Kind::Distance) != static_cast<bool>(node["position"])) {
     reader.fail(node, field, "'position' goes with distance_at_most and distance_at_least (and only there)");
   }
@@ -522,8 +543,11 @@ void parseLateralAction(const YamlReader& reader, const YAML::Node& node, const 
   std::vector<std::pair<std::string, ActionSpec::Pace>> paces = {{"lateral_speed", ActionSpec::Pace::LateralSpeed},
                                                                  {"duration", ActionSpec::Pace::Duration}};
   if (kind == "lane_change") {
-    reader.checkKeys(node, field, {"lanes", "ego_lane", "lane", "lateral_speed", "duration", "shape"});
+    reader.checkKeys(node, field,
+                     {"lanes", "ego_lane", "lane", "offset", "lateral_speed", "duration", "distance", "shape"});
     action.kind = ActionSpec::Kind::LaneChange;
+    action.targetLaneOffset = optionalExpression(reader, node, "offset", field, inputs, 0.0);
+    paces.emplace_back("distance", ActionSpec::Pace::Distance);
     const std::string target = oneOf(reader, node, field, {"lanes", "ego_lane", "lane"}, true);
     if (of_ego && target == "ego_lane") {
       reader.fail(node[target], field + ".ego_lane",

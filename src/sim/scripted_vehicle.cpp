@@ -7,6 +7,7 @@
 #include <limits>
 #include <map>
 #include <optional>
+#include <string>
 
 #include "vsd/core/error.hpp"
 #include "vsd/core/path_relation.hpp"
@@ -67,6 +68,20 @@ double durationOf(const ConcreteAction& action, double from, double to) {
       return magnitude > 1e-9 && from + to > 0.0 ? 2.0 * action.paceValue / (from + to) : 0.0;
   }
   return 0.0;
+}
+
+/// The duration of a lateral transition at an action's pace; a lane change over a distance
+/// covers it at `speed` (m/s along the road, the road user's when it starts), so it lasts
+/// distance / speed (esmini follows the distance travelled: the same while the speed holds).
+double lateralDuration(const ConcreteAction& action, const Transition& transition, double speed,
+                       const std::string& sample) {
+  if (action.pace != ActionSpec::Pace::Distance) return durationOf(action, transition.from, transition.to);
+  if (!(speed > 1e-9)) {
+    throw ConfigError(fmt::format("{}: {}.lane_change.distance: at t = {:.1f} s it stands and covers no distance "
+                                  "(expected a road user that moves when its lane change over a distance starts)",
+                                  sample, action.where, transition.start));
+  }
+  return action.paceValue / speed;
 }
 
 /// One scripted road user as the stepper moves it.
@@ -187,6 +202,7 @@ struct ScriptedTraffic::Impl {
   void init();
   void checkOverlaps() const;
   double relationValue(const scenario::ConcreteTrigger& trigger, int owner, const VehicleState& ego) const;
+  double distanceToPlace(const scenario::ConcreteTrigger& trigger, const VehicleState& ego) const;
   /// Road user `user`'s state and description: -1 the Ego, else others[user].
   const VehicleState& stateOf(int user, const VehicleState& ego) const {
     return user < 0 ? ego : states[static_cast<std::size_t>(user)];
@@ -340,6 +356,25 @@ double ScriptedTraffic::Impl::relationValue(const scenario::ConcreteTrigger& tri
   return closing > 1e-9 ? gap / closing : kInf;  // Ttc
 }
 
+/// A distance trigger's distance (m) from its subject's centre, or the nearest point of its body,
+/// to its place: in a straight line, along the Ego's starting lane (arc lengths) or across it.
+double ScriptedTraffic::Impl::distanceToPlace(const scenario::ConcreteTrigger& trigger, const VehicleState& ego) const {
+  using Measure = scenario::TriggerSpec::Measure;
+  const Vec2 place =
+      trigger.inFrame ? Vec2(trigger.x, trigger.y)
+                      : frame.point(regionStartS + trigger.s, road->laneOffset(trigger.lane) + trigger.offset);
+  const VehicleState& subject = stateOf(trigger.subject, ego);
+  if (!trigger.fromBody && trigger.measure == Measure::StraightLine) return (subject.position() - place).norm();
+  const auto& spec = specOf(trigger.subject);
+  // The place (and a centre) as a footprint of no extent: the gaps to it are those from its point.
+  const Footprint point{place, 0.0, 0.0, 0.0};
+  const Footprint body = trigger.fromBody ? footprintOf(subject, spec.length, spec.width)
+                                          : Footprint{subject.position(), subject.heading, 0.0, 0.0};
+  if (trigger.measure == Measure::StraightLine) return std::max(footprintGap(body, point), 0.0);
+  const PathRelation relation = relateToPath(egoLane, road->laneWidthOf(concrete->ego.lane), point, body);
+  return std::max(trigger.measure == Measure::AlongLane ? relation.longitudinalGap : relation.lateralGap, 0.0);
+}
+
 void ScriptedTraffic::Impl::trackProgress(const VehicleState& ego) {
   const double now = static_cast<double>(k) * step;
   travelled[0] += (ego.position() - lastEgo.position()).norm();
@@ -403,11 +438,7 @@ bool ScriptedTraffic::Impl::conditionHolds(const scenario::ConcreteTrigger& trig
     case TriggerSpec::Kind::Travelled: return withinBound(travelled[user], trigger);
     case TriggerSpec::Kind::EndOfRoad:
       return !std::isnan(atRoadEndSince[user]) && withinBound(now - atRoadEndSince[user], trigger);
-    case TriggerSpec::Kind::Distance: {
-      const Vec2 place = trigger.inFrame ? Vec2(trigger.x, trigger.y)
-                                         : frame.point(regionStartS + trigger.s, road->laneOffset(trigger.lane) + trigger.offset);
-      return withinBound((stateOf(trigger.subject, ego).position() - place).norm(), trigger);
-    }
+    case TriggerSpec::Kind::Distance: return withinBound(distanceToPlace(trigger, ego), trigger);
   }
   return false;
 }
@@ -540,12 +571,12 @@ void ScriptedTraffic::Impl::activate(std::size_t a, const VehicleState& ego) {
   if (action.kind == ActionSpec::Kind::LaneChange) {
     const int target = laneChangeTarget(action, mover.laneIndex, ego, t0);
     mover.laneIndex = target;
-    transition.to = road->laneOffset(target);
+    transition.to = road->laneOffset(target) + action.targetLaneOffset;
   } else {
     // Lateral offsets count from the current lane's centre, crossings from the starting lane's.
     transition.to = road->laneOffset(mover.laneIndex) + action.target;
   }
-  transition.duration = durationOf(action, transition.from, transition.to);
+  transition.duration = lateralDuration(action, transition, mover.speedAlong, concrete->where());
   mover.lateral = transition;
   timings[a] = {t0, transition.end()};
   scheduleWaiters(a, ego);
@@ -583,12 +614,12 @@ void ScriptedTraffic::Impl::activateEgoLateral(std::size_t a, const VehicleState
   }
   if (action.kind == ActionSpec::Kind::LaneChange) {
     egoLateralLane = laneChangeTarget(action, egoLateralLane, ego, transition.start);
-    transition.to = road->laneOffset(egoLateralLane);
+    transition.to = road->laneOffset(egoLateralLane) + action.targetLaneOffset;
   } else {
     transition.to = road->laneOffset(egoLateralLane) + action.target;
   }
   transition.duration =
-      action.shape == TransitionShape::Step ? 0.0 : durationOf(action, transition.from, transition.to);
+      action.shape == TransitionShape::Step ? 0.0 : lateralDuration(action, transition, ego.speed, concrete->where());
   egoLaterals.emplace_back(transition.start, transition);
   timings[a] = {transition.start, transition.end()};
   scheduleWaiters(a, ego);

@@ -622,14 +622,11 @@ TEST(OscRun, ScriptedRoadUsersEndWhereTheFileSays) {
 
 // dynamicsDimension="distance": the speed changes over that many metres, in 2 d / (v0 + v1)
 // (esmini's conversion). By hand from cut_in.xosc: the cutter slows from 15 to 10 m/s; over
-// 25 m that takes 2 s and its x advances 25 m meanwhile (the road is straight along x). A lane
-// change over a distance is refused: the language paces lateral moves by time or rate.
+// 25 m that takes 2 s and its x advances 25 m meanwhile (the road is straight along x).
 TEST(OscRun, ASpeedChangeOverADistanceCoversItAtTheMeanOfBothSpeeds) {
   const std::string rate = R"(dynamicsShape="linear" value="-2" dynamicsDimension="rate")";
-  const std::string lane_change = R"(value="$LaneChange_Vy" dynamicsDimension="rate")";
   const auto dir = folderWith(
-      {{"distance.xosc", cutInWith(rate, R"(dynamicsShape="linear" value="25" dynamicsDimension="distance")")},
-       {"lateral.xosc", cutInWith(lane_change, R"(value="40" dynamicsDimension="distance")")}});
+      {{"distance.xosc", cutInWith(rate, R"(dynamicsShape="linear" value="25" dynamicsDimension="distance")")}});
   const auto logical = importTemplate(dir->path() / "distance.xosc", {});
   const auto& slow_down = other(*logical, "Cutter").actions[1];
   EXPECT_EQ(slow_down.pace, scenario::ActionSpec::Pace::Distance);
@@ -651,9 +648,37 @@ TEST(OscRun, ASpeedChangeOverADistanceCoversItAtTheMeanOfBothSpeeds) {
   EXPECT_NEAR(states.back().speed, 10.0, 1e-6);
   EXPECT_NEAR(slowing, 2.0, logical->step + 1e-9);
   EXPECT_NEAR(covered, 25.0, 15.0 * logical->step);
-  EXPECT_THAT(importRefusal(*dir, "lateral"),
-              HasSubstr("<LaneChangeActionDynamics>: dynamicsDimension=\"distance\": the language paces a lateral "
-                        "change by time or rate"));
+}
+
+// A lane change over a distance lasts it over the speed the road user has when it starts, and
+// targetLaneOffset (along t, as esmini reads it) ends it beside the target lane's centre. By
+// hand from cut_in.xosc: the cutter starts its change at 15 m/s, so 40 m take 2.67 s; it ends
+// 0.3 m left of the Ego's lane's centre (y = 0), where it stays until its swerve 1 s later.
+TEST(OscRun, ALaneChangeOverADistanceEndsBesideItsLaneWhereTheFileSays) {
+  std::string text = cutInWith(R"(value="$LaneChange_Vy" dynamicsDimension="rate")",
+                               R"(value="40" dynamicsDimension="distance")");
+  text.replace(text.find("<LaneChangeAction>"), 18, R"(<LaneChangeAction targetLaneOffset="0.3">)");
+  const auto dir = folderWith({{"offset.xosc", text}});
+  const auto logical = importTemplate(dir->path() / "offset.xosc", {});
+  const auto& change = other(*logical, "Cutter").actions[0];
+  EXPECT_EQ(change.pace, scenario::ActionSpec::Pace::Distance);
+  EXPECT_DOUBLE_EQ(change.paceValue.evaluate({}), 40.0);
+  EXPECT_DOUBLE_EQ(change.targetLaneOffset.evaluate({}), 0.3);
+  EXPECT_THAT(checkReport(*dir, "offset.xosc"),
+              HasSubstr("<LaneChangeActionDynamics>: over a distance: it lasts the distance over its speed when it "
+                        "starts"));
+  const auto cutter = simulatedTrack(dir->path() / "offset.xosc", "Cutter");
+  ASSERT_TRUE(cutter);
+  const auto& states = cutter->states;
+  const auto moves = [&](std::size_t k) { return std::abs(states[k + 1].y - states[k].y) > 1e-9; };
+  std::size_t first = 0;
+  while (first + 1 < states.size() && !moves(first)) ++first;
+  std::size_t last = first;
+  while (last + 1 < states.size() && moves(last)) ++last;
+  ASSERT_LT(last + 5, states.size());
+  EXPECT_NEAR(static_cast<double>(last - first) * logical->step, 40.0 / 15.0, logical->step);
+  EXPECT_NEAR(states[last].y, 0.3, 1e-6);
+  EXPECT_NEAR(states[last + 4].y, 0.3, 1e-6);  // 0.8 s later, before the swerve
 }
 
 // ASAM's 4.2.3 walks its pedestrian across the road by a two-vertex trajectory. By hand from
@@ -887,7 +912,28 @@ TEST(OscRun, EachConditionStartsItsEventWhereTheFileSays) {
         value="{}" freespace="{}" relativeDistanceType="lateral" rule="lessThan"/>)",
                                                                        value, freespace))));
   };
+  // To s = 200 on lane -4, 7 m right of the lead's lane: from its reference point at s = 100 + 20 t + t^2 / 2,
+  // or from its body (4.5 m long from 1.25 m behind that point, 1.8 m wide).
+  const auto to_lane_four = [&](const std::string& attributes) {
+    return group(with_edge("none", entityCondition("Lead", fmt::format(R"(<DistanceCondition {} rule="lessThan">
+        <Position><LanePosition roadId="7" laneId="-4" s="200" offset="0"/></Position></DistanceCondition>)",
+                                                                       attributes))));
+  };
   const std::vector<std::pair<std::string, double>> cases = {
+      // Along the lane: 100 - 20 t - t^2 / 2 < 10 after 4.08 s; from its front (103.5 m), 96.5 - 20 t - t^2 / 2 < 9
+      // after 3.98 s
+      {to_lane_four(R"(value="10" freespace="false" relativeDistanceType="longitudinal" coordinateSystem="road")"),
+       4.2 + kNext},
+      {to_lane_four(R"(value="9" freespace="true" relativeDistanceType="longitudinal")"), 4.0 + kNext},
+      // Straight from the body: sqrt((96.5 - 20 t - t^2 / 2)^2 + 6.1^2) < 8 after 4.14 s (from its centre,
+      // sqrt((98.75 - 20 t - t^2 / 2)^2 + 7^2) < 8 after 4.29 s)
+      {to_lane_four(R"(value="8" freespace="true")"), 4.2 + kNext},
+      // Across the lane: 7 m from its reference point, 7 - 0.9 = 6.1 m from its side; at once or never
+      {to_lane_four(R"(value="7.1" freespace="false" relativeDistanceType="lateral" coordinateSystem="lane")"),
+       0.0 + kNext},
+      {to_lane_four(R"(value="6.9" freespace="false" relativeDistanceType="lateral")"), -1.0},
+      {to_lane_four(R"(value="6.2" freespace="true" relativeDistanceType="lateral")"), 0.0 + kNext},
+      {to_lane_four(R"(value="6" freespace="true" relativeDistanceType="lateral")"), -1.0},
       // Falling: 20 + t <= 22.1 holds until 2.1 s; at the instant 2.2 it does not
       {group(with_edge("falling", below)), 2.2 + kNext},
       // Either edge: the same holds when first checked (no rise) and falls at 2.2 s
@@ -1356,9 +1402,11 @@ TEST(OscImport, ConditionsTheLanguageCannotExpressAreOneLineEach) {
        "<SpeedCondition>: rule=\"equalTo\": compared at recorded instants a value equals another only by chance"},
       {group(entityCondition("Lead", R"(<SpeedCondition value="25" rule="greaterThan" direction="lateral"/>)")),
        "direction=\"lateral\""},
-      {group(entityCondition("Lead", R"(<DistanceCondition value="10" freespace="true" rule="lessThan"><Position>
-          <WorldPosition x="200" y="-2.75"/></Position></DistanceCondition>)")),
-       "<DistanceCondition>: freespace=\"true\""},
+      // esmini measures a straight distance in road coordinates along the road's curves.
+      {group(entityCondition("Lead", R"(<DistanceCondition value="10" freespace="true" rule="lessThan"
+          coordinateSystem="road"><Position><WorldPosition x="200" y="-2.75"/></Position></DistanceCondition>)")),
+       "<DistanceCondition>: coordinateSystem=\"road\": the language measures a straight distance in the plane, "
+       "and longitudinal or lateral ones along or across the Ego's lane"},
       {group(entityCondition("Lead", R"(<ReachPositionCondition tolerance="1"><Position>
           <RelativeLanePosition entityRef="Ego" dLane="0" ds="10"/></Position></ReachPositionCondition>)")),
        "element <RelativeLanePosition> is outside the supported subset"},
@@ -2723,6 +2771,15 @@ TEST(OscRun, TheLeftSideDrivenAgainstTheReferenceLineIsTheLanguagesRoad) {
   EXPECT_NEAR(overtaker->states.at(44).y, 1.625, 1e-6) << "8.8 s: not yet 10 m ahead";
   EXPECT_LT(overtaker->states.at(48).y, 1.5) << "9.6 s: moving over";
   EXPECT_NEAR(overtaker->states.back().y, -1.75, 0.01);
+  // targetLaneOffset 0.4 m along t (as esmini reads it) lies right of the lane's centre as the
+  // overtaker faces, on the reversed road: it ends at y = -1.75 - 0.4.
+  std::string beside = text;
+  beside.replace(beside.find("<LaneChangeAction>"), 18, R"(<LaneChangeAction targetLaneOffset="0.4">)");
+  const auto beside_folder =
+      folderWith({{"roads/two_carriageways.xodr", twoCarriageways("RHT")}, {"beside.xosc", beside}});
+  const auto beside_track = simulatedTrack(beside_folder->path() / "beside.xosc", "Overtaker");
+  ASSERT_TRUE(beside_track);
+  EXPECT_NEAR(beside_track->states.back().y, -2.15, 0.01);
 
   // A swerve of 0.5 m relative to the Ego goes to the Ego's own left (esmini: to the left of
   // the reference entity as it faces), on the reversed road too: a follower 50 m behind the

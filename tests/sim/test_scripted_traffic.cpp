@@ -400,13 +400,83 @@ TEST(ScriptedTraffic, LateralRelationsMeasureAcrossTheEgosLane) {
     scenarioWith("    - {id: mover, ds: 0, relative_lane: 1, speed: 10,\n"
                  "       actions: [{trigger: {ttc: 1, measure: lateral}, stop: {decel: 1}}]}");
   });
-  EXPECT_NE(error.find("'measure: lateral' goes with gap and gap_at_least"), std::string::npos) << error;
+  EXPECT_NE(error.find("'measure: lateral' goes with gap, gap_at_least and the distance triggers"), std::string::npos)
+      << error;
   const std::string unknown = test::configErrorOf([] {
     scenarioWith("    - {id: mover, ds: 0, relative_lane: 1, speed: 10,\n"
                  "       actions: [{trigger: {gap: 1, measure: sideways}, stop: {decel: 1}}]}");
   });
   EXPECT_NE(unknown.find("got 'sideways', expected along_lane, straight_line or lateral"), std::string::npos)
       << unknown;
+}
+
+// A distance to a place measured along the Ego's lane or across it, from the centre or from the
+// body (OpenSCENARIO's DistanceCondition with relativeDistanceType and freespace). The mover's
+// centre starts 20 m before the place along the road and 7 m left of it (lane 2 against lane 0),
+// at 5 m/s; its body is 5 m long and 2 m wide.
+TEST(ScriptedTraffic, DistancesToAPlaceMeasureAlongOrAcrossTheLaneFromTheCentreOrTheBody) {
+  const std::string marker = "lateral_offset: {offset: 0, duration: 0.2}";
+  const std::string place = "position: {s: 220, lane: 0}";
+  const auto logical = scenarioWith(fmt::format(R"(
+    - {{id: mover, s: 200, lane: 2, length: 5, width: 2, speed: 5,
+       actions: [{{trigger: {{distance_at_most: 9.5, {1}, measure: along_lane}}, {0}}},
+                 {{trigger: {{distance_at_most: 9.4, {1}, measure: along_lane, from: body}}, {0}}},
+                 {{trigger: {{distance_at_most: 8, {1}, from: body}}, {0}}},
+                 {{trigger: {{distance_at_least: 6.5, {1}, measure: lateral}}, {0}}},
+                 {{trigger: {{distance_at_least: 6.5, {1}, measure: lateral, from: body}}, {0}}},
+                 {{trigger: {{distance_at_most: 6.5, {1}, measure: lateral, from: body}}, {0}}}]}})",
+                                                marker, place));
+  const auto timings = timingsAfter(plan(logical), 30);
+  EXPECT_NEAR(timings[0].start, 2.2, 1e-9);  // 20 - 5 t <= 9.5 from t = 2.1
+  EXPECT_NEAR(timings[1].start, 1.8, 1e-9);  // 20 - 5 t - 2.5 <= 9.4 from t = 1.62
+  EXPECT_NEAR(timings[2].start, 2.6, 1e-9);  // sqrt((17.5 - 5 t)^2 + 6^2) <= 8 from t = 2.44
+  EXPECT_NEAR(timings[3].start, 0.0, 1e-9);  // 7 m across from its centre
+  EXPECT_TRUE(std::isnan(timings[4].start));  // 7 - 1 = 6 m across from its side
+  EXPECT_NEAR(timings[5].start, 0.0, 1e-9);
+  const auto refused = [](const std::string& trigger) {
+    return test::configErrorOf([&] {
+      scenarioWith("    - {id: mover, ds: 0, relative_lane: 1, speed: 10,\n"
+                   "       actions: [{trigger: " + trigger + ", stop: {decel: 1}}]}");
+    });
+  };
+  EXPECT_NE(refused("{gap: 1, from: body}").find("'from' goes with distance_at_most and distance_at_least"),
+            std::string::npos);
+  EXPECT_NE(refused("{distance_at_most: 1, position: {s: 20, lane: 0}, from: front}")
+                .find("got 'front', expected centre or body"),
+            std::string::npos);
+}
+
+// A lane change may end beside its lane's centre (`offset`, OpenSCENARIO's targetLaneOffset) and
+// may be paced by a distance along the road, covered at the speed it has when it starts: from
+// lane 0 (3.5 m right of the centre line) to 0.5 m left of lane 1's centre (on the centre line)
+// over 40 m at 10 m/s, in 4 s.
+TEST(ScriptedTraffic, ALaneChangeOverADistanceEndsWhereItsOffsetSays) {
+  for (const std::string shape : {"linear", "smooth"}) {
+    const auto logical = scenarioWith(fmt::format(R"(
+    - {{id: mover, s: 60, lane: 0, speed: 10,
+       actions: [{{trigger: {{time: 1}}, lane_change: {{lane: 1, offset: 0.5, distance: 40, shape: {}}}}}]}})",
+                                                  shape));
+    const Planned run = plan(logical);
+    ScriptedTraffic traffic(run.concrete, run.road);
+    const EgoStandIn ego(run.concrete, run.road);
+    const road::LaneFrame frame(run.road.centre);
+    std::map<int, std::pair<double, double>> place;  // instant (0.2 s) -> (s, offset)
+    for (int k = 0; k < 35; ++k) {
+      place[k] = frame.coordinates(traffic.states()[0].position());
+      traffic.step(ego.at(0.2 * k));
+    }
+    EXPECT_NEAR(traffic.timings()[0].end, 5.0, 1e-9) << shape;
+    EXPECT_NEAR(place[25].first - place[5].first, 40.0, 0.05) << shape;
+    EXPECT_NEAR(place[5].second, -3.5, 1e-9) << shape;
+    EXPECT_NEAR(place[25].second, 0.5, 1e-9) << shape;
+    EXPECT_NEAR(place[34].second, 0.5, 1e-9) << shape;
+  }
+  const std::string standing = test::configErrorOf([] {
+    plan(scenarioWith("    - {id: mover, s: 60, lane: 0, speed: 0,\n"
+                      "       actions: [{trigger: {time: 1}, lane_change: {lane: 1, distance: 40}}]}"));
+  });
+  EXPECT_NE(standing.find("lane_change.distance: at t = 1.0 s it stands and covers no distance"), std::string::npos)
+      << standing;
 }
 
 namespace {

@@ -43,7 +43,7 @@ struct PathRelation {
 PolylineProjection projectExtended(const MeasuredPolyline& line, const Vec2& point);
 
 /// Where `object` is relative to the Ego's lane (centre line `reference_line`, lanes
-/// `lane_width` wide, > 0) and the Ego's path along it. Footprints need length, width > 0.
+/// `lane_width` wide, > 0) and the Ego's path along it. A footprint of length and width 0 is a point.
 PathRelation relateToPath(const MeasuredPolyline& reference_line, double lane_width, const Footprint& ego,
                           const Footprint& object);
 

@@ -24,7 +24,8 @@ struct ConcreteTrigger {
   int subject = -1;
   bool directed = false;  ///< Headway: `subject`'s to the other (undefined unless it is ahead), else the rear one's
   bool betweenReferencePoints = false;  ///< Gap, Headway, Ttc: between reference points, else bumper to bumper
-  TriggerSpec::Measure measure = TriggerSpec::Measure::AlongLane;  ///< Gap, Headway, Ttc: TriggerSpec::measure
+  TriggerSpec::Measure measure = TriggerSpec::Measure::AlongLane;  ///< Gap, Headway, Ttc, Distance: as TriggerSpec's
+  bool fromBody = false;  ///< Distance: TriggerSpec::fromBody
   int action = -1;      ///< After: index into ConcreteScenario::actions
   // Distance: the place, along the road (s from the region's start, lane, offset) or in the frame (x, y).
   bool inFrame = false;
@@ -49,6 +50,7 @@ struct ConcreteAction {
   int speedReference = -1;  ///< Relative, Factor: -1 = the Ego, else index into ConcreteScenario::others
   bool continuous = false;  ///< Relative, Factor: tracks the reference's speed until replaced
   double target = 0.0;  ///< m/s (a factor for SpeedTarget::Factor) | lanes | m
+  double targetLaneOffset = 0.0;  ///< m, LaneChange: ActionSpec::targetLaneOffset
   bool relativeToEgoLane = false;
   bool toRoadLane = false;  ///< ActionSpec::toRoadLane
   ActionSpec::Pace pace = ActionSpec::Pace::Duration;

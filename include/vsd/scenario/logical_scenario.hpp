@@ -162,7 +162,12 @@ struct TriggerSpec {
   /// (bumpers) (StraightLine); Gap only: across the Ego's lane, between the points or between
   /// the bodies' sides (< 0 where they overlap sideways) (Lateral).
   enum class Measure { AlongLane, StraightLine, Lateral };
+  /// Gap, Headway, Ttc: along the Ego's lane by default. Distance: along or across the Ego's
+  /// lane, or in a straight line (what the parser sets where a distance trigger names none).
   Measure measure = Measure::AlongLane;
+  /// Distance: from the nearest point of the road user's body (OpenSCENARIO's freespace), else
+  /// from its centre.
+  bool fromBody = false;
   std::string action;         ///< After: id of the action whose end starts this one
   PositionSpec position;      ///< Distance
   std::vector<TriggerSpec> members;  ///< All, Any
@@ -214,12 +219,16 @@ struct ActionSpec {
   /// action replaces this one; else the target is fixed when the action starts.
   bool continuous = false;
   Expression target;     ///< m/s (Speed, SetSpeed); lanes (LaneChange); m (LateralOffset, Cross)
+  /// LaneChange: m from the target lane's centre where it ends, > 0 left (OpenSCENARIO's
+  /// targetLaneOffset); 0: on the centre.
+  Expression targetLaneOffset;
   /// LaneChange: target is relative to the road user's own lane (false) or the Ego's (true).
   bool relativeToEgoLane = false;
   /// LaneChange: target is a lane of the road (0: rightmost), not a number of lanes (`lane`).
   bool toRoadLane = false;
   // How fast: exactly one of these (Speed: rate, duration or distance travelled while the speed
-  // changes; lateral: lateral speed, lateral acceleration (smooth only) or duration; Cross: speed).
+  // changes; lateral: lateral speed, lateral acceleration (smooth only) or duration; lane changes
+  // also a distance along the road, covered at the speed it has when it starts; Cross: speed).
   enum class Pace { Rate, Duration, LateralSpeed, LateralAccel, Distance };
   Pace pace = Pace::Duration;
   Expression paceValue;  ///< m/s^2 | s | m/s | m/s^2 | m
