@@ -10,6 +10,7 @@
 
 #include "osc_parameters.hpp"
 #include "osc_template.hpp"
+#include "vsd/core/geometry.hpp"
 #include "vsd/core/numbers.hpp"
 #include "vsd/core/trace.hpp"
 
@@ -256,12 +257,19 @@ void relativeSpeed(Translation& translation, const Entity& actor, const pugi::xm
   }
 }
 
+/// A moving action of a stationary object is refused.
+void refuseStationary(const xml::Reader& reader, const Entity& actor, const pugi::xml_node& action) {
+  if (actor.type == RoadUserType::StationaryObject) {
+    reader.fail(action, "stationary objects never move (the language's rule)");
+  }
+}
+
 }  // namespace
 
 YAML::Node speedAction(Translation& translation, const Entity& actor, const pugi::xml_node& action) {
   const xml::Reader& reader = translation.reader;
   reader.requireSubset(action, {"SpeedActionDynamics", "SpeedActionTarget"});
-  if (actor.type == RoadUserType::StationaryObject) reader.fail(action, "stationary objects never move (the language's rule)");
+  refuseStationary(reader, actor, action);
   const double facing = actor.placement ? std::abs(actor.placement->heading) : 0.0;
   const pugi::xml_node absolute = action.child("SpeedActionTarget").child("AbsoluteTargetSpeed");
   if (!actor.isVehicle() && facing > 1e-9 && !(absolute && reader.number(absolute, "value") == 0.0)) {
@@ -375,12 +383,35 @@ YAML::Node assignedController(Translation& translation, const pugi::xml_node& as
   return controller;
 }
 
+/// A Story <TeleportAction> of a scripted road user: its reference point lands on a place that
+/// does not move (its centre that far ahead along its heading), which must keep its heading.
+YAML::Node teleport(Translation& translation, const Entity& actor, const pugi::xml_node& action) {
+  const xml::Reader& reader = translation.reader;
+  reader.requireSubset(action, {"Position"});
+  refuseStationary(reader, actor, action);
+  const pugi::xml_node position = reader.only(action, "Position");
+  const Placement p = fixedPlace(translation, position);
+  const double turn = wrapAngle(p.heading - actor.placement->heading);
+  if (std::abs(turn) > 1e-3) {
+    reader.fail(position.first_child(),
+                fmt::format("a heading {} rad from the one '{}' has: a teleported road user keeps its heading in "
+                            "the language (it drives on along its lane)",
+                            num(turn), actor.name));
+  }
+  const LanguagePlace place = languagePlace(translation.road, p, actor.centreAhead, /*keep_lane=*/true);
+  YAML::Node item;
+  item["s"] = num(place.s);
+  item["lane"] = std::to_string(place.lane);
+  if (place.offset != 0.0) item["offset"] = num(place.offset);
+  return item;
+}
+
 /// The language's action (without trigger) for one <PrivateAction> of `actor`.
 std::optional<YAML::Node> privateAction(Translation& translation, Entity& actor, const pugi::xml_node& node) {
   const xml::Reader& reader = translation.reader;
   const pugi::xml_node action =
       reader.choice(node, {"LongitudinalAction", "LateralAction", "ControllerAction", "ActivateControllerAction",
-                           "RoutingAction"});
+                           "RoutingAction", "TeleportAction"});
   const std::string kind = action.name();
   // OpenSCENARIO 1.0 puts ActivateControllerAction in PrivateAction, 1.1 and 1.2 in ControllerAction.
   const pugi::xml_node activate =
@@ -424,7 +455,10 @@ std::optional<YAML::Node> privateAction(Translation& translation, Entity& actor,
                         "SpeedAction, and the lane it keeps, a LaneChangeAction or LaneOffsetAction)");
   }
   YAML::Node item;
-  if (kind == "LongitudinalAction") {
+  if (kind == "TeleportAction") {
+    item["teleport"] = teleport(translation, actor, action);
+    actor.movesLaterally = true;
+  } else if (kind == "LongitudinalAction") {
     const pugi::xml_node speed = reader.choice(action, {"SpeedAction"});
     const pugi::xml_node dynamics = speed.child("SpeedActionDynamics");
     if (dynamics && reader.optionalText(dynamics, "dynamicsDimension") == std::optional<std::string>("rate") &&

@@ -113,23 +113,15 @@ Entity& findEgo(Translation& translation, ControllerChoice& controller) {
   return *ego;
 }
 
-/// The language's along/lane/offset of an entity's bounding-box centre.
-struct LanguagePlace {
-  double s = 0.0;
-  int lane = 0;
-  double offset = 0.0;
-};
+}  // namespace
 
-LanguagePlace languagePlace(const CarriagewayRoad& road, const Entity& entity, bool keep_lane) {
-  const Placement& p = *entity.placement;
+LanguagePlace languagePlace(const CarriagewayRoad& road, const Placement& p, double centre_ahead, bool keep_lane) {
   const double stretch = 1.0 - road.curvatureAt(p.s) * p.t;  // reference-line s per m along the entity's line
-  const double s = p.s + entity.centreAhead * std::cos(p.heading) / stretch;
-  const double t = p.t + entity.centreAhead * std::sin(p.heading);
+  const double s = p.s + centre_ahead * std::cos(p.heading) / stretch;
+  const double t = p.t + centre_ahead * std::sin(p.heading);
   const int lane = keep_lane ? p.lane : road.nearestLane(t);
   return {road.languageS(s), lane, t - road.laneCentreT(lane)};
 }
-
-}  // namespace
 
 namespace {
 
@@ -222,7 +214,7 @@ double extensionBefore(Translation& translation, double duration) {
   std::optional<double> needed;
   for (const Entity& entity : translation.entities) {
     if (&entity == translation.ego || !entity.drivesAgainstRoad()) continue;
-    const double s = languagePlace(translation.road, entity, true).s;
+    const double s = languagePlace(translation.road, *entity.placement, entity.centreAhead, true).s;
     const double reach = 1.1 * entity.speed.value_or(0.0) * duration + 0.5 * entity.length - s;
     needed = std::max(needed.value_or(reach), reach);
   }
@@ -269,7 +261,7 @@ YAML::Node roadNode(Translation& translation, double duration) {
 
 YAML::Node roadUserNode(Translation& translation, const Entity& entity, bool ego) {
   const CarriagewayRoad& road = translation.road;
-  const LanguagePlace place = languagePlace(road, entity, true);
+  const LanguagePlace place = languagePlace(road, *entity.placement, entity.centreAhead, true);
   YAML::Node node;
   if (!ego) node["id"] = entity.id;
   node["type"] = roadUserKind(entity.type).name;

@@ -169,7 +169,8 @@ void placeEntities(Translation& translation);
 /// road or world position: Right.
 enum class InitCarriageway { Right, LeftAlong, LeftAgainst };
 InitCarriageway initCarriageway(const Translation& translation);
-/// A place that does not move (WorldPosition, LanePosition, RoadPosition), for conditions:
+/// A place that does not move (WorldPosition, LanePosition, RoadPosition), for conditions and
+/// teleports:
 /// a position relative to a road user would move with it, which the language's places do not.
 Placement fixedPlace(Translation& translation, const pugi::xml_node& position);
 
@@ -177,6 +178,18 @@ Placement fixedPlace(Translation& translation, const pugi::xml_node& position);
 /// m of the road's length (along the language's centre line) that is vsd-sumo's scenario
 /// region; the road goes on straight beyond it.
 double regionLength(const CarriagewayRoad& road);
+
+/// The language's along/lane/offset of an entity's bounding-box centre.
+struct LanguagePlace {
+  double s = 0.0;       ///< m along the language's road
+  int lane = 0;         ///< language lane
+  double offset = 0.0;  ///< m from the lane's centre, > 0 left
+};
+
+/// Where the bounding-box centre of an entity lies whose reference point is at `p` (the
+/// centre `centre_ahead` m ahead of it along its heading); `keep_lane`: on `p`'s lane, else
+/// on the lane nearest the centre.
+LanguagePlace languagePlace(const CarriagewayRoad& road, const Placement& p, double centre_ahead, bool keep_lane);
 
 // osc_storyboard.cpp
 void readStories(Translation& translation, const pugi::xml_node& storyboard);

@@ -267,23 +267,25 @@ int roadUserIndex(const LogicalScenario& logical, const std::string& id) {
 }
 
 /// The place of a distance condition, lanes checked against the road.
-void evaluatePosition(const TriggerSpec& spec, const LogicalScenario& logical, const ConcreteScenario& concrete,
-                      ConcreteTrigger& trigger) {
-  const PositionSpec& position = spec.position;
-  trigger.inFrame = position.inFrame;
+/// A place of `field` (e.g. "position" of a trigger, "teleport" of an action) at `where`.
+ConcretePlace evaluatePlace(const PositionSpec& position, const std::string& where, const std::string& field,
+                            const LogicalScenario& logical, const ConcreteScenario& concrete) {
+  ConcretePlace place;
+  place.inFrame = position.inFrame;
   if (position.inFrame) {
-    trigger.x = evaluateFinite(position.x, concrete.inputs, spec.where, "position.x");
-    trigger.y = evaluateFinite(position.y, concrete.inputs, spec.where, "position.y");
-    return;
+    place.x = evaluateFinite(position.x, concrete.inputs, where, field + ".x");
+    place.y = evaluateFinite(position.y, concrete.inputs, where, field + ".y");
+    return place;
   }
-  trigger.s = evaluateFinite(position.s, concrete.inputs, spec.where, "position.s");
-  trigger.offset = evaluateFinite(position.offset, concrete.inputs, spec.where, "position.offset");
-  const double lane = evaluateFinite(position.lane, concrete.inputs, spec.where, "position.lane");
-  trigger.lane = static_cast<int>(std::lround(lane));
-  if (std::abs(lane - trigger.lane) > 1e-9 || trigger.lane < 0 || trigger.lane >= logical.road.lanes) {
-    throw ConfigError(fmt::format("{}.position.lane: got {} in sample {}, expected a lane the road has (0 .. {})",
-                                  spec.where, formatValue(lane), concrete.index, logical.road.lanes - 1));
+  place.s = evaluateFinite(position.s, concrete.inputs, where, field + ".s");
+  place.offset = evaluateFinite(position.offset, concrete.inputs, where, field + ".offset");
+  const double lane = evaluateFinite(position.lane, concrete.inputs, where, field + ".lane");
+  place.lane = static_cast<int>(std::lround(lane));
+  if (std::abs(lane - place.lane) > 1e-9 || place.lane < 0 || place.lane >= logical.road.lanes) {
+    throw ConfigError(fmt::format("{}.{}.lane: got {} in sample {}, expected a lane the road has (0 .. {})", where,
+                                  field, formatValue(lane), concrete.index, logical.road.lanes - 1));
   }
+  return place;
 }
 
 /// `owner`: the acting road user (index into `others`), whose quantities a condition without `of` measures.
@@ -310,7 +312,9 @@ ConcreteTrigger evaluateTrigger(const TriggerSpec& spec, int owner, const Logica
   trigger.rising = spec.rising;
   trigger.falling = spec.falling;
   if (spec.kind == TriggerSpec::Kind::After) trigger.action = actionIndex(logical, spec.action);
-  if (spec.kind == TriggerSpec::Kind::Distance) evaluatePosition(spec, logical, concrete, trigger);
+  if (spec.kind == TriggerSpec::Kind::Distance) {
+    trigger.place = evaluatePlace(spec.position, spec.where, "position", logical, concrete);
+  }
   for (const auto& member : spec.members) trigger.members.push_back(evaluateTrigger(member, owner, logical, concrete));
   return trigger;
 }
@@ -328,6 +332,9 @@ ConcreteAction evaluateAction(const ActionSpec& spec, int owner, const LogicalSc
   action.continuous = spec.continuous;
   action.target = evaluateFinite(spec.target, concrete.inputs, spec.where, "target");
   action.targetLaneOffset = evaluateFinite(spec.targetLaneOffset, concrete.inputs, spec.where, "lane_change.offset");
+  if (spec.kind == ActionSpec::Kind::Teleport) {
+    action.place = evaluatePlace(spec.place, spec.where, "teleport", logical, concrete);
+  }
   action.relativeToEgoLane = spec.relativeToEgoLane;
   action.toRoadLane = spec.toRoadLane;
   action.domains = spec.domains;
@@ -368,6 +375,7 @@ void checkLateralTargets(const ConcreteScenario& concrete, std::size_t first_act
   for (std::size_t a = first_action; a < concrete.actions.size(); ++a) {
     const auto& action = concrete.actions[a];
     if (action.kind == ActionSpec::Kind::Cross) checkOnPavedGround(concrete, user, action.target, action.where, "cross.to_offset");
+    if (action.kind == ActionSpec::Kind::Teleport) lane = action.place.lane;
     if (action.kind != ActionSpec::Kind::LaneChange) continue;
     const int from = action.relativeToEgoLane ? concrete.ego.lane : lane;
     const double target = laneChangeTarget(action, lane, concrete.ego.lane);

@@ -578,6 +578,19 @@ void parseLateralAction(const YamlReader& reader, const YAML::Node& node, const 
   }
 }
 
+/// `teleport: {s, lane, offset}`: it moves there at once (a lane of the road: it drives on from
+/// there in its direction, at its speed).
+void parseTeleportAction(const YamlReader& reader, const YAML::Node& node, const std::string& field,
+                         const std::vector<std::string>& inputs, ActionSpec& action) {
+  reader.requireMap(node, field);
+  reader.checkKeys(node, field, {"s", "lane", "offset"});
+  action.kind = ActionSpec::Kind::Teleport;
+  parsePosition(reader, node, field, inputs, action.place);
+  action.shape = TransitionShape::Step;
+  action.pace = ActionSpec::Pace::Duration;
+  action.paceValue = Expression::constant(0.0);
+}
+
 /// The Ego's `set_speed: {target}`: its controller aims at `target` m/s from then on.
 void parseSetSpeedAction(const YamlReader& reader, const YAML::Node& node, const std::string& field,
                          const std::vector<std::string>& inputs, ActionSpec& action) {
@@ -621,8 +634,8 @@ void parseAction(const YamlReader& reader, const YAML::Node& node, const std::st
                  std::size_t index, ActionSpec& action) {
   action.where = reader.where(node, field);
   reader.checkKeys(node, field,
-                   {"id", "trigger", "repeat", "speed", "stop", "lane_change", "lateral_offset", "cross", "set_speed",
-                    "controller"});
+                   {"id", "trigger", "repeat", "speed", "stop", "lane_change", "lateral_offset", "cross", "teleport",
+                    "set_speed", "controller"});
   action.id = node["id"] ? reader.scalar(node["id"], field + ".id") : fmt::format("{}_{}", owner.id, index);
   if (!isIdentifier(action.id)) {
     throw ConfigError::field(reader.where(node["id"], field + ".id"), field + ".id", action.id,
@@ -640,9 +653,9 @@ void parseAction(const YamlReader& reader, const YAML::Node& node, const std::st
                 "a repeated action needs a trigger that can hold again (no time or after in it): it would restart at "
                 "once");
   }
-  const std::string kind = oneOf(
-      reader, node, field, {"speed", "stop", "lane_change", "lateral_offset", "cross", "set_speed", "controller"},
-      true);
+  const std::string kind =
+      oneOf(reader, node, field,
+            {"speed", "stop", "lane_change", "lateral_offset", "cross", "teleport", "set_speed", "controller"}, true);
   const bool of_ego = &owner == &scenario.ego;
   const bool controls = kind == "set_speed" || kind == "controller";
   if (of_ego ? !(controls || kind == "lane_change" || kind == "lateral_offset") : controls) {
@@ -674,10 +687,11 @@ void parseAction(const YamlReader& reader, const YAML::Node& node, const std::st
   }
   if (kind != "speed" && kind != "stop" && owner.keepsLaneByPurePursuit()) {
     reader.fail(node[kind], field + "." + kind,
-                "a road user with heading_noise_deg keeps its lane by pure pursuit: lateral actions need one "
-                "without (they move it exactly in the lane frame)");
+                "a road user with heading_noise_deg keeps its lane by pure pursuit: lateral actions and teleports "
+                "need one without (they move it exactly in the lane frame)");
   }
   if (kind == "speed" || kind == "stop") parseSpeedAction(reader, node[kind], field + "." + kind, kind == "stop", inputs, action);
+  else if (kind == "teleport") parseTeleportAction(reader, node[kind], field + ".teleport", inputs, action);
   else parseLateralAction(reader, node[kind], field + "." + kind, kind, inputs, /*of_ego=*/false, action);
 }
 

@@ -224,6 +224,7 @@ struct ScriptedTraffic::Impl {
   void track(const VehicleState& ego);
   void activate(std::size_t a, const VehicleState& ego);
   void activateEgoLateral(std::size_t a, const VehicleState& ego);
+  void teleport(std::size_t a, const VehicleState& ego);
   /// The road lane the Ego at `ego` is in.
   int egoLaneOf(const VehicleState& ego) const;
   /// The road lane a lane change of `owner` (-1: the Ego), now in lane `own_lane`, goes to.
@@ -360,9 +361,9 @@ double ScriptedTraffic::Impl::relationValue(const scenario::ConcreteTrigger& tri
 /// to its place: in a straight line, along the Ego's starting lane (arc lengths) or across it.
 double ScriptedTraffic::Impl::distanceToPlace(const scenario::ConcreteTrigger& trigger, const VehicleState& ego) const {
   using Measure = scenario::TriggerSpec::Measure;
-  const Vec2 place =
-      trigger.inFrame ? Vec2(trigger.x, trigger.y)
-                      : frame.point(regionStartS + trigger.s, road->laneOffset(trigger.lane) + trigger.offset);
+  const auto& spot = trigger.place;
+  const Vec2 place = spot.inFrame ? Vec2(spot.x, spot.y)
+                                  : frame.point(regionStartS + spot.s, road->laneOffset(spot.lane) + spot.offset);
   const VehicleState& subject = stateOf(trigger.subject, ego);
   if (!trigger.fromBody && trigger.measure == Measure::StraightLine) return (subject.position() - place).norm();
   const auto& spec = specOf(trigger.subject);
@@ -559,6 +560,10 @@ void ScriptedTraffic::Impl::activate(std::size_t a, const VehicleState& ego) {
     activateEgoLateral(a, ego);
     return;
   }
+  if (action.kind == ActionSpec::Kind::Teleport) {
+    teleport(a, ego);
+    return;
+  }
   Mover& mover = movers[static_cast<std::size_t>(action.owner)];
   Transition transition;
   transition.start = t0;
@@ -579,6 +584,42 @@ void ScriptedTraffic::Impl::activate(std::size_t a, const VehicleState& ego) {
   transition.duration = lateralDuration(action, transition, mover.speedAlong, concrete->where());
   mover.lateral = transition;
   timings[a] = {t0, transition.end()};
+  scheduleWaiters(a, ego);
+}
+
+/// A teleport: the road user lands on its place at the action's start t0 and drives on from
+/// there at its speed, in its direction (facing along its lane); a lateral move under way ends.
+/// Its state at the instant before t0 is put where the step from there (the mean of its speeds
+/// at both instants) ends where it gets from its landing place by the next instant; the
+/// distance it travels counts from there, not the jump.
+void ScriptedTraffic::Impl::teleport(std::size_t a, const VehicleState& ego) {
+  const auto& action = concrete->actions[a];
+  const double t0 = scheduled[a];
+  const auto o = static_cast<std::size_t>(action.owner);
+  Mover& mover = movers[o];
+  const double direction = mover.spec->againstRoad ? -1.0 : 1.0;
+  const double landing_s = regionStartS + action.place.s;
+  mover.d = road->laneOffset(action.place.lane) + action.place.offset;
+  const double now = static_cast<double>(k) * step;
+  const double speed_now = mover.speedAlong;
+  const double speed_next = mover.speedAt(k + 1, step);
+  const double speed_landing = speed_now + (speed_next - speed_now) * (t0 - now) / step;
+  const double after_landing = 0.5 * (speed_landing + speed_next) * (now + step - t0);  // m
+  const double whole_step = 0.5 * (speed_now + speed_next) * step;                      // m
+  // sRate is linear in its speed: metres along its offset line to metres of s.
+  mover.s = landing_s + direction * frame.sRate(landing_s, mover.d, after_landing - whole_step);
+  mover.laneIndex = action.place.lane;
+  mover.lateral.reset();
+  const Vec2 position = frame.point(mover.s, mover.d);
+  mover.state.x = position.x();
+  mover.state.y = position.y();
+  // Standing, it keeps its heading (a pedestrian facing across still does).
+  if (mover.speedAlong > 1e-9) {
+    mover.state.heading = wrapAngle(frame.heading(mover.s, mover.d) + (direction < 0 ? kPi : 0.0));
+  }
+  states[o] = mover.state;
+  atRoadEndSince[o + 1] = kNaN;  // it may have left the road's end behind
+  timings[a] = {t0, t0};
   scheduleWaiters(a, ego);
 }
 

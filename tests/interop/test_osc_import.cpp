@@ -1010,6 +1010,56 @@ TEST(OscRun, EachConditionStartsItsEventWhereTheFileSays) {
   }
 }
 
+namespace {
+
+/// conditions.xosc with an Event of `actor` at t = 1 s whose action teleports it to `position`.
+std::string teleportAtOne(const std::string& actor, const std::string& position) {
+  std::string text = readTextFile(data("conditions.xosc"));
+  const std::string group_of_actor = fmt::format(R"(<ManeuverGroup maximumExecutionCount="1" name="Teleport">
+          <Actors selectTriggeringEntities="false"><EntityRef entityRef="{}"/></Actors>
+          <Maneuver name="Jump"><Event name="Jump" priority="overwrite"><Action name="JumpAhead">
+            <PrivateAction><TeleportAction><Position>{}</Position></TeleportAction></PrivateAction></Action>
+            <StartTrigger>)",
+                                                 actor, position) +
+                                     group(timeCondition("1")) + "</StartTrigger></Event></Maneuver></ManeuverGroup>";
+  return text.insert(text.find("</Act>"), group_of_actor);
+}
+
+}  // namespace
+
+// A TeleportAction in the Story moves a scripted road user at once: its reference point lands on
+// the position and it drives on at its speed. By hand from conditions.xosc: the lead (a sedan,
+// its box centre 1.25 m ahead of its reference point, at 20 + t m/s) lands at s = 300 on lane
+// -3 (the language's centre line, y = 0) 0.2 m left of its centre at 1 s, from s = 100 on lane
+// -2: it is there at 1 s, and at 1.2 s 200 + 0.2 (21 + 21.2) / 2 = 204.22 m further along x than
+// at the start.
+TEST(OscRun, AStoryTeleportMovesAScriptedRoadUserAtOnce) {
+  const std::string landing = R"(<LanePosition roadId="7" laneId="-3" s="300" offset="0.2"/>)";
+  const auto dir = folderWith(
+      {{"jump.xosc", teleportAtOne("Lead", landing)},
+       {"ego.xosc", teleportAtOne("Ego", landing)},
+       {"relative.xosc", teleportAtOne("Lead", R"(<RelativeLanePosition entityRef="Slow" dLane="0" ds="10"/>)")},
+       {"turned.xosc",
+        teleportAtOne("Lead", R"(<LanePosition roadId="7" laneId="-3" s="300" offset="0"><Orientation type="relative"
+            h="3.141592653589793"/></LanePosition>)")}});
+  const auto lead = simulatedTrack(dir->path() / "jump.xosc", "Lead");
+  ASSERT_TRUE(lead);
+  const auto& states = lead->states;
+  EXPECT_NEAR(states.at(4).x - states.front().x, 0.8 * (20.0 + 20.8) / 2.0, 1e-6);  // before it lands
+  EXPECT_NEAR(states.at(5).x - states.front().x, 200.0, 1e-6);                     // it lands at 1 s
+  EXPECT_NEAR(states.at(6).x - states.front().x, 204.22, 1e-6);
+  EXPECT_NEAR(states.at(6).y, 0.2, 1e-6);
+  EXPECT_NEAR(states.at(6).speed, 21.2, 1e-6);
+  EXPECT_NEAR(states.back().y, 0.2, 1e-6);
+  EXPECT_THAT(importRefusal(*dir, "ego"),
+              HasSubstr("<TeleportAction>: an action of the Ego: its controller drives it"));
+  EXPECT_THAT(importRefusal(*dir, "relative"),
+              HasSubstr("element <RelativeLanePosition> is outside the supported subset"));
+  EXPECT_THAT(importRefusal(*dir, "turned"),
+              HasSubstr("<LanePosition>: a heading 3.141592653589793 rad from the one 'Lead' has: a teleported "
+                        "road user keeps its heading in the language"));
+}
+
 // Where esmini measures otherwise than the language, the check says so (found by comparing
 // with its source): the end of the road at the front, not the reference point; an acceleration
 // without a direction (the total one in OpenSCENARIO); a relative target speed taken when a

@@ -57,6 +57,25 @@ std::vector<ScriptedTraffic::ActionTiming> timingsAfter(const Planned& run, int 
   return traffic.timings();
 }
 
+/// A run stepped with the stand-in Ego: the traffic after `instants` instants (0.2 s), and
+/// `places[k][u]`: road user u's (s, offset) in the road's lane frame at instant k.
+struct SteppedRun {
+  ScriptedTraffic traffic;
+  std::vector<std::vector<std::pair<double, double>>> places;
+};
+
+SteppedRun stepped(const Planned& run, int instants) {
+  SteppedRun out{ScriptedTraffic(run.concrete, run.road), {}};
+  const EgoStandIn ego(run.concrete, run.road);
+  const road::LaneFrame frame(run.road.centre);
+  for (int k = 0; k < instants; ++k) {
+    auto& at = out.places.emplace_back();
+    for (const auto& state : out.traffic.states()) at.push_back(frame.coordinates(state.position()));
+    out.traffic.step(ego.at(0.2 * k));
+  }
+  return out;
+}
+
 /// Offset (m, > 0 left) of a state from the road centre line.
 double offsetOf(const road::RoadGeometry& road, const VehicleState& state) {
   return road::LaneFrame(road.centre).coordinates(state.position()).second;
@@ -456,20 +475,12 @@ TEST(ScriptedTraffic, ALaneChangeOverADistanceEndsWhereItsOffsetSays) {
     - {{id: mover, s: 60, lane: 0, speed: 10,
        actions: [{{trigger: {{time: 1}}, lane_change: {{lane: 1, offset: 0.5, distance: 40, shape: {}}}}}]}})",
                                                   shape));
-    const Planned run = plan(logical);
-    ScriptedTraffic traffic(run.concrete, run.road);
-    const EgoStandIn ego(run.concrete, run.road);
-    const road::LaneFrame frame(run.road.centre);
-    std::map<int, std::pair<double, double>> place;  // instant (0.2 s) -> (s, offset)
-    for (int k = 0; k < 35; ++k) {
-      place[k] = frame.coordinates(traffic.states()[0].position());
-      traffic.step(ego.at(0.2 * k));
-    }
+    const auto [traffic, place] = stepped(plan(logical), 35);
     EXPECT_NEAR(traffic.timings()[0].end, 5.0, 1e-9) << shape;
-    EXPECT_NEAR(place[25].first - place[5].first, 40.0, 0.05) << shape;
-    EXPECT_NEAR(place[5].second, -3.5, 1e-9) << shape;
-    EXPECT_NEAR(place[25].second, 0.5, 1e-9) << shape;
-    EXPECT_NEAR(place[34].second, 0.5, 1e-9) << shape;
+    EXPECT_NEAR(place[25][0].first - place[5][0].first, 40.0, 0.05) << shape;
+    EXPECT_NEAR(place[5][0].second, -3.5, 1e-9) << shape;
+    EXPECT_NEAR(place[25][0].second, 0.5, 1e-9) << shape;
+    EXPECT_NEAR(place[34][0].second, 0.5, 1e-9) << shape;
   }
   const std::string standing = test::configErrorOf([] {
     plan(scenarioWith("    - {id: mover, s: 60, lane: 0, speed: 0,\n"
@@ -477,6 +488,57 @@ TEST(ScriptedTraffic, ALaneChangeOverADistanceEndsWhereItsOffsetSays) {
   });
   EXPECT_NE(standing.find("lane_change.distance: at t = 1.0 s it stands and covers no distance"), std::string::npos)
       << standing;
+}
+
+// A teleport moves a road user at once; it drives on from its landing place at its speed, a lane
+// change under way ends, and neither the distance it has travelled nor its road's end counts the
+// jump. `jumper` (10 m/s) lands on lane 2's centre + 0.2 m (3.7 m left of the centre line) at
+// s = 50 at 1.1 s: 51 m at 1.2 s; travelled counts 11 m by then and 25 m at 2.5 s (instant 2.6).
+// `ender`'s front passes the region's end (300 m) at 0.375 s; back at s = 100 it never reaches it.
+TEST(ScriptedTraffic, ATeleportMovesARoadUserAtOnceAndItDrivesOnFromThere) {
+  const std::string marker = "speed: {target: 10, rate: 1}";
+  const auto logical = scenarioWith(fmt::format(R"(
+    - {{id: jumper, s: 100, lane: 0, speed: 10,
+       actions: [{{id: jump, trigger: {{time: 1.1}}, teleport: {{s: 50, lane: 2, offset: 0.2}}}},
+                 {{trigger: {{time: 0.5}}, lane_change: {{lane: 1, duration: 4}}}},
+                 {{trigger: {{after: jump}}, {0}}},
+                 {{trigger: {{travelled: 25}}, {0}}}]}}
+    - {{id: ender, s: 290, lane: 1, speed: 20,
+       actions: [{{trigger: {{time: 1}}, teleport: {{s: 100, lane: 1}}}},
+                 {{trigger: {{end_of_road: 2}}, {0}}}]}})",
+                                                marker),
+                                    0.0, 5.0);
+  const auto [traffic, place] = stepped(plan(logical), 25);
+  // s from the region's start: the jumper starts at 100 m.
+  const auto s_at = [&, &place = place](int k) { return place[k][0].first - place[0][0].first + 100.0; };
+  EXPECT_NEAR(s_at(5), 110.0, 1e-6);
+  EXPECT_NEAR(s_at(6), 51.0, 1e-6);
+  EXPECT_NEAR(place[6][0].second, 3.7, 1e-9);
+  EXPECT_NEAR(place[24][0].second, 3.7, 1e-9);  // the lane change under way ended
+  EXPECT_NEAR(s_at(24), 51.0 + 18 * 2.0, 1e-6);
+  EXPECT_NEAR(traffic.states()[0].heading, 0.0, 1e-9);
+  const auto& timings = traffic.timings();
+  EXPECT_NEAR(timings[0].start, 1.1, 1e-9);
+  EXPECT_NEAR(timings[0].end, 1.1, 1e-9);
+  EXPECT_NEAR(timings[2].start, 1.1, 1e-9);
+  EXPECT_NEAR(timings[3].start, 2.6, 1e-9);
+  EXPECT_TRUE(std::isnan(timings[5].start));
+  const auto refused = [](const std::string& user, const std::string& teleport) {
+    return test::configErrorOf([&] {
+      scenarioWith("    - {id: mover, " + user + ",\n       actions: [{trigger: {time: 1}, teleport: " + teleport +
+                   "}]}");
+    });
+  };
+  EXPECT_NE(refused("s: 60, lane: 0, speed: 5", "{x: 10, y: 0}").find("teleport"), std::string::npos);
+  EXPECT_NE(refused("s: 60, lane: 0, type: stationary_object", "{s: 10, lane: 0}")
+                .find("a stationary object does not move"),
+            std::string::npos);
+  const std::string lane = test::configErrorOf([] {
+    plan(scenarioWith("    - {id: mover, s: 60, lane: 0, speed: 5,\n"
+                      "       actions: [{trigger: {time: 1}, teleport: {s: 10, lane: 3}}]}"));
+  });
+  EXPECT_NE(lane.find("teleport.lane: got 3 in sample 0, expected a lane the road has (0 .. 2)"), std::string::npos)
+      << lane;
 }
 
 namespace {
@@ -638,22 +700,13 @@ TEST(ScriptedTraffic, ASpeedChangeOverADistanceCoversThatDistance) {
        actions: [{{trigger: {{time: 1}}, speed: {{target: 20, distance: 60, shape: {0}}}}}]}})",
                                                   shape),
                                       0.0, 8.0);
-    const Planned run = plan(logical);
-    ScriptedTraffic traffic(run.concrete, run.road);
-    const EgoStandIn ego(run.concrete, run.road);
-    const road::LaneFrame frame(run.road.centre);
-    const auto s_of = [&](std::size_t user) { return frame.coordinates(traffic.states()[user].position()).first; };
-    std::map<int, std::vector<double>> s_at;  // instant (0.2 s) -> s of each road user
-    for (int k = 0; k < 30; ++k) {
-      s_at[k] = {s_of(0), s_of(1)};
-      traffic.step(ego.at(0.2 * k));
-    }
+    const auto [traffic, place] = stepped(plan(logical), 30);
     EXPECT_NEAR(traffic.timings()[0].start, 1.0, 1e-9) << shape;
     EXPECT_NEAR(traffic.timings()[0].end, 5.0, 1e-9) << shape;
     EXPECT_NEAR(traffic.timings()[1].end, 4.0, 1e-9) << shape;
     EXPECT_NEAR(traffic.timings()[2].end, 1.0, 1e-9) << shape;  // no change: it ends at once (as esmini)
-    EXPECT_NEAR(s_at[25][0] - s_at[5][0], 60.0, 0.05) << shape;
-    EXPECT_NEAR(s_at[25][1] - s_at[5][1], 30.0, 0.05) << shape;
+    EXPECT_NEAR(place[25][0].first - place[5][0].first, 60.0, 0.05) << shape;
+    EXPECT_NEAR(place[25][1].first - place[5][1].first, 30.0, 0.05) << shape;
     EXPECT_NEAR(traffic.states()[0].speed, 10.0, 1e-9) << shape;
     EXPECT_NEAR(traffic.states()[1].speed, 0.0, 1e-9) << shape;
   }

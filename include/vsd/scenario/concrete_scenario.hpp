@@ -13,6 +13,17 @@
 
 namespace vsd::scenario {
 
+/// A place (PositionSpec evaluated): along the road (s from the region's start, lane, offset)
+/// or in the scenario frame (x, y).
+struct ConcretePlace {
+  bool inFrame = false;
+  double s = 0.0;       ///< m
+  int lane = 0;         ///< 0 = rightmost
+  double offset = 0.0;  ///< m from the lane's centre, > 0 left
+  double x = 0.0;       ///< m
+  double y = 0.0;       ///< m
+};
+
 /// A trigger with its numbers evaluated and its references resolved.
 struct ConcreteTrigger {
   TriggerSpec::Kind kind = TriggerSpec::Kind::Time;
@@ -27,13 +38,7 @@ struct ConcreteTrigger {
   TriggerSpec::Measure measure = TriggerSpec::Measure::AlongLane;  ///< Gap, Headway, Ttc, Distance: as TriggerSpec's
   bool fromBody = false;  ///< Distance: TriggerSpec::fromBody
   int action = -1;      ///< After: index into ConcreteScenario::actions
-  // Distance: the place, along the road (s from the region's start, lane, offset) or in the frame (x, y).
-  bool inFrame = false;
-  double s = 0.0;
-  int lane = 0;
-  double offset = 0.0;
-  double x = 0.0;
-  double y = 0.0;
+  ConcretePlace place;  ///< Distance: the place
   std::vector<ConcreteTrigger> members;  ///< All, Any
   bool rising = false;   ///< TriggerSpec::rising
   bool falling = false;  ///< TriggerSpec::falling
@@ -51,6 +56,7 @@ struct ConcreteAction {
   bool continuous = false;  ///< Relative, Factor: tracks the reference's speed until replaced
   double target = 0.0;  ///< m/s (a factor for SpeedTarget::Factor) | lanes | m
   double targetLaneOffset = 0.0;  ///< m, LaneChange: ActionSpec::targetLaneOffset
+  ConcretePlace place;            ///< Teleport: where its centre lands (along the road)
   bool relativeToEgoLane = false;
   bool toRoadLane = false;  ///< ActionSpec::toRoadLane
   ActionSpec::Pace pace = ActionSpec::Pace::Duration;

@@ -205,6 +205,9 @@ struct ActionSpec {
     /// the Ego only: from the action's start `controller` drives it (OpenSCENARIO's
     /// AssignControllerAction with ActivateControllerAction)
     Controller,
+    /// moves at once to `place` (a lane), keeping its speed and direction (OpenSCENARIO's
+    /// TeleportAction in a Story)
+    Teleport,
   };
   std::string id;
   Kind kind = Kind::Speed;
@@ -222,6 +225,8 @@ struct ActionSpec {
   /// LaneChange: m from the target lane's centre where it ends, > 0 left (OpenSCENARIO's
   /// targetLaneOffset); 0: on the centre.
   Expression targetLaneOffset;
+  /// Teleport: where its centre lands, along the road (s from the region's start, lane, offset).
+  PositionSpec place;
   /// LaneChange: target is relative to the road user's own lane (false) or the Ego's (true).
   bool relativeToEgoLane = false;
   /// LaneChange: target is a lane of the road (0: rightmost), not a number of lanes (`lane`).
