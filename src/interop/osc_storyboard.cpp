@@ -620,9 +620,9 @@ YAML::Node placeOf(Translation& translation, const Entity& subject, const pugi::
 }
 
 /// A DistanceCondition's measure and start: freespace="true" from the body's nearest point;
-/// longitudinal along the Ego's lane, lateral across it (in the entity, road or lane frame: one
-/// lane frame, the entity's while it drives along the road); euclidian in a straight line.
-/// True if it measures from the body.
+/// euclidian in a straight line (in any coordinate system, as esmini measures it); longitudinal
+/// along the Ego's lane and lateral across it (in the entity, road or lane system: noted, as
+/// esmini's differ from it on bends). True if it measures from the body.
 bool distanceMeasure(Translation& translation, const pugi::xml_node& condition, YAML::Node& trigger) {
   const xml::Reader& reader = translation.reader;
   const bool from_body = reader.oneOf(condition, "freespace", {"true", "false"}) == "true";
@@ -632,14 +632,22 @@ bool distanceMeasure(Translation& translation, const pugi::xml_node& condition, 
                            "or along or across the Ego's lane (relativeDistanceType)");
   }
   const std::string measure = measureOf(reader, condition);
-  const bool straight = measure == "straight_line";
   const auto system = reader.optionalText(condition, "coordinateSystem").value_or("entity");
-  if (system != "entity" && (straight || (system != "road" && system != "lane"))) {
+  if (system != "entity" && system != "road" && system != "lane") {
     reader.fail(condition, fmt::format("coordinateSystem=\"{}\": the language measures a straight distance in the "
                                        "plane, and longitudinal or lateral ones along or across the Ego's lane",
                                        system));
   }
-  if (!straight) trigger["measure"] = measure;
+  if (measure != "straight_line") {
+    trigger["measure"] = measure;
+    const char* way = measure == "along_lane" ? "along" : "across";
+    translation.findings.note(reader.where(condition),
+                              fmt::format("measured {} the Ego's starting lane (esmini measures {} {}; the same on a "
+                                          "straight road while the road user drives along its lane)",
+                                          way, way,
+                                          system == "entity" ? "its heading, in straight lines"
+                                                             : "the road's reference line"));
+  }
   return from_body;
 }
 

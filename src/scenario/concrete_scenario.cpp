@@ -227,20 +227,25 @@ std::vector<double> realisedLaneWidths(const LogicalScenario& spec, const std::v
 }
 
 /// A pedestrian stands, and crosses to, places on the road's lanes or shoulders.
-void checkOnPavedGround(const ConcreteScenario& concrete, const ConcreteVehicle& user, double offset,
-                        const std::string& where, const std::string& field) {
+/// `offset` m from lane `lane`'s centre lies on the lanes or shoulders; `what` says what lies
+/// beyond them otherwise.
+void checkOnPavedGround(const ConcreteScenario& concrete, int lane, double offset, const std::string& where,
+                        const std::string& field, const std::string& what) {
   const auto& road = concrete.logical->road;
   const double half = halfRoadWidth(concrete.laneWidths);
-  const double d = laneCentreOffset(user.lane, concrete.laneWidths) + offset;
+  const double d = laneCentreOffset(lane, concrete.laneWidths) + offset;
   if (d < -(half + road.shoulderRight) - 1e-9 || d > half + road.shoulderLeft + 1e-9) {
     const bool right = d < 0.0;
     throw ConfigError(fmt::format(
         "{}.{}: got {} m from lane {}'s centre in sample {}, {:.2f} m beyond the road's {} edge where road.shoulders.{} "
-        "is {} m: a pedestrian on a road without a place to cross (expected a place on the lanes or shoulders)",
-        where, field, formatValue(offset), user.lane, concrete.index, std::abs(d) - half, right ? "right" : "left",
-        right ? "right" : "left", formatValue(right ? road.shoulderRight : road.shoulderLeft)));
+        "is {} m: {} (expected a place on the lanes or shoulders)",
+        where, field, formatValue(offset), lane, concrete.index, std::abs(d) - half, right ? "right" : "left",
+        right ? "right" : "left", formatValue(right ? road.shoulderRight : road.shoulderLeft), what));
   }
 }
+
+constexpr const char* kNoPlaceToCross = "a pedestrian on a road without a place to cross";
+constexpr const char* kOffTheRoad = "a road user off the road";
 
 /// Index of action `id` in ConcreteScenario::actions (road user by road user, in file order).
 int actionIndex(const LogicalScenario& logical, const std::string& id) {
@@ -374,8 +379,14 @@ void checkLateralTargets(const ConcreteScenario& concrete, std::size_t first_act
   int lane = user.lane;
   for (std::size_t a = first_action; a < concrete.actions.size(); ++a) {
     const auto& action = concrete.actions[a];
-    if (action.kind == ActionSpec::Kind::Cross) checkOnPavedGround(concrete, user, action.target, action.where, "cross.to_offset");
-    if (action.kind == ActionSpec::Kind::Teleport) lane = action.place.lane;
+    if (action.kind == ActionSpec::Kind::Cross) {
+      checkOnPavedGround(concrete, user.lane, action.target, action.where, "cross.to_offset", kNoPlaceToCross);
+    }
+    if (action.kind == ActionSpec::Kind::Teleport) {
+      checkOnPavedGround(concrete, action.place.lane, action.place.offset, action.where, "teleport.offset",
+                         kOffTheRoad);
+      lane = action.place.lane;
+    }
     if (action.kind != ActionSpec::Kind::LaneChange) continue;
     const int from = action.relativeToEgoLane ? concrete.ego.lane : lane;
     const double target = laneChangeTarget(action, lane, concrete.ego.lane);
@@ -388,6 +399,7 @@ void checkLateralTargets(const ConcreteScenario& concrete, std::size_t first_act
                                     action.where, what, concrete.index, formatValue(target), lanes - 1));
     }
     lane = static_cast<int>(target);
+    checkOnPavedGround(concrete, lane, action.targetLaneOffset, action.where, "lane_change.offset", kOffTheRoad);
   }
 }
 
@@ -488,7 +500,9 @@ ConcreteScenario sampleConcreteScenario(const std::shared_ptr<const LogicalScena
     checkStandsWhileFacingOff(other, other_spec, inputs, index);
     other.headingNoise.resize(static_cast<std::size_t>(steps));
     for (auto& noise : other.headingNoise) noise = sampleDistribution(other_spec.headingNoise, heading_rng, inputs);
-    if (other.type == RoadUserType::Pedestrian) checkOnPavedGround(concrete, other, other.offset, other_spec.where, "offset");
+    if (other.type == RoadUserType::Pedestrian) {
+      checkOnPavedGround(concrete, other.lane, other.offset, other_spec.where, "offset", kNoPlaceToCross);
+    }
     concrete.others.push_back(std::move(other));
   }
   for (std::size_t o = 0; o < spec.others.size(); ++o) {

@@ -584,6 +584,9 @@ void parseTeleportAction(const YamlReader& reader, const YAML::Node& node, const
                          const std::vector<std::string>& inputs, ActionSpec& action) {
   reader.requireMap(node, field);
   reader.checkKeys(node, field, {"s", "lane", "offset"});
+  if (!node["s"] || !node["lane"]) {
+    reader.fail(node, field, "expected {s, lane[, offset]}: where along the road it lands");
+  }
   action.kind = ActionSpec::Kind::Teleport;
   parsePosition(reader, node, field, inputs, action.place);
   action.shape = TransitionShape::Step;

@@ -588,35 +588,46 @@ void ScriptedTraffic::Impl::activate(std::size_t a, const VehicleState& ego) {
 }
 
 /// A teleport: the road user lands on its place at the action's start t0 and drives on from
-/// there at its speed, in its direction (facing along its lane); a lateral move under way ends.
-/// Its state at the instant before t0 is put where the step from there (the mean of its speeds
-/// at both instants) ends where it gets from its landing place by the next instant; the
-/// distance it travels counts from there, not the jump.
+/// there in its direction (moving, it faces along its lane; standing, it keeps its heading to the
+/// road). A speed or lateral action under way ends there: it keeps the speed it has, and stays
+/// on its landing place across the road (as esmini ends the actions a teleport overrides). Its
+/// state at the instant before t0 is put where the step from there (the mean of its speeds at
+/// both instants) ends where it gets from its landing place by the next instant; the distance
+/// it travels counts from there, not the jump.
 void ScriptedTraffic::Impl::teleport(std::size_t a, const VehicleState& ego) {
   const auto& action = concrete->actions[a];
   const double t0 = scheduled[a];
   const auto o = static_cast<std::size_t>(action.owner);
   Mover& mover = movers[o];
-  const double direction = mover.spec->againstRoad ? -1.0 : 1.0;
   const double landing_s = regionStartS + action.place.s;
-  mover.d = road->laneOffset(action.place.lane) + action.place.offset;
+  if (landing_s < 0.0 || landing_s > frame.length()) {
+    throw ConfigError(fmt::format("{}: {}.teleport.s: {} m along a road of {:.1f} m (lead-in and lead-out "
+                                  "included): expected a place on its road",
+                                  concrete->where(), action.where, action.place.s, frame.length()));
+  }
+  const double heading_to_road = wrapAngle(mover.state.heading - frame.heading(mover.s, mover.d));
   const double now = static_cast<double>(k) * step;
   const double speed_now = mover.speedAlong;
+  const double speed_landing = speed_now + (mover.speedAt(k + 1, step) - speed_now) * (t0 - now) / step;
+  if (mover.speed || mover.tracking) {
+    const double held = mover.nominalSpeed(t0, step);  // noise-free, as the action's speeds are
+    mover.speed = Transition{t0, 0.0, held, held, TransitionShape::Step};
+    mover.tracking.reset();
+  }
+  mover.lateral.reset();
   const double speed_next = mover.speedAt(k + 1, step);
-  const double speed_landing = speed_now + (speed_next - speed_now) * (t0 - now) / step;
   const double after_landing = 0.5 * (speed_landing + speed_next) * (now + step - t0);  // m
   const double whole_step = 0.5 * (speed_now + speed_next) * step;                      // m
+  const double direction = mover.spec->againstRoad ? -1.0 : 1.0;
+  mover.d = road->laneOffset(action.place.lane) + action.place.offset;
   // sRate is linear in its speed: metres along its offset line to metres of s.
   mover.s = landing_s + direction * frame.sRate(landing_s, mover.d, after_landing - whole_step);
   mover.laneIndex = action.place.lane;
-  mover.lateral.reset();
   const Vec2 position = frame.point(mover.s, mover.d);
   mover.state.x = position.x();
   mover.state.y = position.y();
-  // Standing, it keeps its heading (a pedestrian facing across still does).
-  if (mover.speedAlong > 1e-9) {
-    mover.state.heading = wrapAngle(frame.heading(mover.s, mover.d) + (direction < 0 ? kPi : 0.0));
-  }
+  const double facing = mover.speedAlong > 1e-9 ? (direction < 0 ? kPi : 0.0) : heading_to_road;
+  mover.state.heading = wrapAngle(frame.heading(mover.s, mover.d) + facing);
   states[o] = mover.state;
   atRoadEndSince[o + 1] = kNaN;  // it may have left the road's end behind
   timings[a] = {t0, t0};

@@ -998,6 +998,12 @@ TEST(OscRun, EachConditionStartsItsEventWhereTheFileSays) {
       {group(entityCondition("Lead", R"(<RelativeDistanceCondition entityRef="Slow" value="45.5" freespace="true"
           relativeDistanceType="longitudinal" rule="greaterThan"/>)")), 3.0 + kNext},
   };
+  // esmini measures longitudinal and lateral distances to a position in the road user's own
+  // frame or along the road's reference line: the same as the language's on this straight road.
+  EXPECT_THAT(checkReport(*folderWith({{"along.xosc", conditionsWith(cases[0].first)}}), "along.xosc"),
+              HasSubstr("<DistanceCondition>: measured along the Ego's starting lane (esmini measures along the "
+                        "road's reference line; the same on a straight road while the road user drives along its "
+                        "lane)"));
   int n = 0;
   for (const auto& [groups, seen] : cases) {
     const std::string name = fmt::format("case{}.xosc", n++);
@@ -1028,11 +1034,11 @@ std::string teleportAtOne(const std::string& actor, const std::string& position)
 }  // namespace
 
 // A TeleportAction in the Story moves a scripted road user at once: its reference point lands on
-// the position and it drives on at its speed. By hand from conditions.xosc: the lead (a sedan,
-// its box centre 1.25 m ahead of its reference point, at 20 + t m/s) lands at s = 300 on lane
-// -3 (the language's centre line, y = 0) 0.2 m left of its centre at 1 s, from s = 100 on lane
-// -2: it is there at 1 s, and at 1.2 s 200 + 0.2 (21 + 21.2) / 2 = 204.22 m further along x than
-// at the start.
+// the position and it drives on at the speed it has (esmini ends the speed change under way). By
+// hand from conditions.xosc: the lead (a sedan, its box centre 1.25 m ahead of its reference
+// point, at 20 + t m/s) lands at s = 300 on lane -3 (the language's centre line, y = 0) 0.2 m
+// left of its centre at 1 s, from s = 100 on lane -2: it is there at 1 s, and at 1.2 s
+// 200 + 0.2 * 21 = 204.2 m further along x than at the start, still at 21 m/s.
 TEST(OscRun, AStoryTeleportMovesAScriptedRoadUserAtOnce) {
   const std::string landing = R"(<LanePosition roadId="7" laneId="-3" s="300" offset="0.2"/>)";
   const auto dir = folderWith(
@@ -1047,9 +1053,10 @@ TEST(OscRun, AStoryTeleportMovesAScriptedRoadUserAtOnce) {
   const auto& states = lead->states;
   EXPECT_NEAR(states.at(4).x - states.front().x, 0.8 * (20.0 + 20.8) / 2.0, 1e-6);  // before it lands
   EXPECT_NEAR(states.at(5).x - states.front().x, 200.0, 1e-6);                     // it lands at 1 s
-  EXPECT_NEAR(states.at(6).x - states.front().x, 204.22, 1e-6);
+  EXPECT_NEAR(states.at(6).x - states.front().x, 204.2, 1e-6);
   EXPECT_NEAR(states.at(6).y, 0.2, 1e-6);
-  EXPECT_NEAR(states.at(6).speed, 21.2, 1e-6);
+  EXPECT_NEAR(states.at(6).speed, 21.0, 1e-6);
+  EXPECT_NEAR(states.at(14).speed, 21.0, 1e-6);  // 2.8 s, before its step down at 3 s
   EXPECT_NEAR(states.back().y, 0.2, 1e-6);
   EXPECT_THAT(importRefusal(*dir, "ego"),
               HasSubstr("<TeleportAction>: an action of the Ego: its controller drives it"));
@@ -1452,11 +1459,10 @@ TEST(OscImport, ConditionsTheLanguageCannotExpressAreOneLineEach) {
        "<SpeedCondition>: rule=\"equalTo\": compared at recorded instants a value equals another only by chance"},
       {group(entityCondition("Lead", R"(<SpeedCondition value="25" rule="greaterThan" direction="lateral"/>)")),
        "direction=\"lateral\""},
-      // esmini measures a straight distance in road coordinates along the road's curves.
       {group(entityCondition("Lead", R"(<DistanceCondition value="10" freespace="true" rule="lessThan"
-          coordinateSystem="road"><Position><WorldPosition x="200" y="-2.75"/></Position></DistanceCondition>)")),
-       "<DistanceCondition>: coordinateSystem=\"road\": the language measures a straight distance in the plane, "
-       "and longitudinal or lateral ones along or across the Ego's lane"},
+          coordinateSystem="trajectory"><Position><WorldPosition x="200" y="-2.75"/></Position></DistanceCondition>)")),
+       "<DistanceCondition>: coordinateSystem=\"trajectory\": the language measures a straight distance in the "
+       "plane, and longitudinal or lateral ones along or across the Ego's lane"},
       {group(entityCondition("Lead", R"(<ReachPositionCondition tolerance="1"><Position>
           <RelativeLanePosition entityRef="Ego" dLane="0" ds="10"/></Position></ReachPositionCondition>)")),
        "element <RelativeLanePosition> is outside the supported subset"},

@@ -490,11 +490,14 @@ TEST(ScriptedTraffic, ALaneChangeOverADistanceEndsWhereItsOffsetSays) {
       << standing;
 }
 
-// A teleport moves a road user at once; it drives on from its landing place at its speed, a lane
-// change under way ends, and neither the distance it has travelled nor its road's end counts the
-// jump. `jumper` (10 m/s) lands on lane 2's centre + 0.2 m (3.7 m left of the centre line) at
-// s = 50 at 1.1 s: 51 m at 1.2 s; travelled counts 11 m by then and 25 m at 2.5 s (instant 2.6).
+// A teleport moves a road user at once; it drives on from its landing place in its direction,
+// a speed or lateral action under way ends (it keeps its speed and its landing place across the
+// road), and neither the distance it has travelled nor its road's end counts the jump.
+// `jumper` (10 m/s) lands on lane 2's centre + 0.2 m (3.7 m left of the centre line) at s = 50
+// at 1.1 s: 51 m at 1.2 s; travelled counts 11 m by then and 25 m at 2.5 s (instant 2.6).
 // `ender`'s front passes the region's end (300 m) at 0.375 s; back at s = 100 it never reaches it.
+// `speeder` speeds up from 10 m/s at 1 m/s^2 and keeps the 12 m/s it has at 2 s. `oncoming`
+// (against the road at 10 m/s) lands at s = 230 at 1 s and is at 228 m at 1.2 s.
 TEST(ScriptedTraffic, ATeleportMovesARoadUserAtOnceAndItDrivesOnFromThere) {
   const std::string marker = "speed: {target: 10, rate: 1}";
   const auto logical = scenarioWith(fmt::format(R"(
@@ -505,40 +508,74 @@ TEST(ScriptedTraffic, ATeleportMovesARoadUserAtOnceAndItDrivesOnFromThere) {
                  {{trigger: {{travelled: 25}}, {0}}}]}}
     - {{id: ender, s: 290, lane: 1, speed: 20,
        actions: [{{trigger: {{time: 1}}, teleport: {{s: 100, lane: 1}}}},
-                 {{trigger: {{end_of_road: 2}}, {0}}}]}})",
+                 {{trigger: {{end_of_road: 2}}, {0}}}]}}
+    - {{id: speeder, s: 200, lane: 2, speed: 10,
+       actions: [{{trigger: {{time: 0}}, speed: {{target: 20, rate: 1, shape: linear}}}},
+                 {{trigger: {{time: 2}}, teleport: {{s: 260, lane: 2}}}}]}}
+    - {{id: oncoming, s: 250, lane: 0, speed: 10, direction: against,
+       actions: [{{trigger: {{time: 1}}, teleport: {{s: 230, lane: 0}}}}]}})",
                                                 marker),
                                     0.0, 5.0);
   const auto [traffic, place] = stepped(plan(logical), 25);
   // s from the region's start: the jumper starts at 100 m.
-  const auto s_at = [&, &place = place](int k) { return place[k][0].first - place[0][0].first + 100.0; };
-  EXPECT_NEAR(s_at(5), 110.0, 1e-6);
-  EXPECT_NEAR(s_at(6), 51.0, 1e-6);
+  const auto s_at = [&, &place = place](int k, std::size_t user) {
+    return place[k][user].first - place[0][0].first + 100.0;
+  };
+  EXPECT_NEAR(s_at(5, 0), 110.0, 1e-6);
+  EXPECT_NEAR(s_at(6, 0), 51.0, 1e-6);
   EXPECT_NEAR(place[6][0].second, 3.7, 1e-9);
   EXPECT_NEAR(place[24][0].second, 3.7, 1e-9);  // the lane change under way ended
-  EXPECT_NEAR(s_at(24), 51.0 + 18 * 2.0, 1e-6);
+  EXPECT_NEAR(s_at(24, 0), 51.0 + 18 * 2.0, 1e-6);
   EXPECT_NEAR(traffic.states()[0].heading, 0.0, 1e-9);
+  EXPECT_NEAR(s_at(10, 2), 260.0, 1e-6);
+  EXPECT_NEAR(traffic.states()[2].speed, 12.0, 1e-9);
+  EXPECT_NEAR(s_at(6, 3), 228.0, 1e-6);
+  EXPECT_NEAR(std::abs(traffic.states()[3].heading), kPi, 1e-9);
   const auto& timings = traffic.timings();
   EXPECT_NEAR(timings[0].start, 1.1, 1e-9);
   EXPECT_NEAR(timings[0].end, 1.1, 1e-9);
   EXPECT_NEAR(timings[2].start, 1.1, 1e-9);
   EXPECT_NEAR(timings[3].start, 2.6, 1e-9);
   EXPECT_TRUE(std::isnan(timings[5].start));
-  const auto refused = [](const std::string& user, const std::string& teleport) {
+  // Standing on a bend, it keeps its heading to the road: along the road where it lands.
+  const auto bend = scenarioWith(R"(
+    - {id: stand, s: 100, lane: 0, speed: 0, actions: [{trigger: {time: 1}, teleport: {s: 150, lane: 0}}]})",
+                                 0.004, 2.0);
+  const Planned on_bend = plan(bend);
+  const road::LaneFrame bend_frame(on_bend.road.centre);
+  const VehicleState& landed = on_bend.paths[0].back();
+  const double s_landed = bend_frame.coordinates(landed.position()).first;
+  EXPECT_NEAR(landed.heading, bend_frame.heading(s_landed, on_bend.road.laneOffset(0)), 1e-9);
+  EXPECT_GT(std::abs(landed.heading - on_bend.paths[0].front().heading), 0.19);  // 50 m of 0.004 / m
+}
+
+// Bad teleports and lane-change offsets are one line each, before or when they start.
+TEST(ScriptedTraffic, TeleportsAndLaneChangeOffsetsStayOnTheRoad) {
+  const auto refused = [](const std::string& user, const std::string& action) {
     return test::configErrorOf([&] {
-      scenarioWith("    - {id: mover, " + user + ",\n       actions: [{trigger: {time: 1}, teleport: " + teleport +
-                   "}]}");
+      plan(scenarioWith("    - {id: mover, " + user + ",\n       actions: [{trigger: {time: 1}, " + action + "}]}"));
     });
   };
-  EXPECT_NE(refused("s: 60, lane: 0, speed: 5", "{x: 10, y: 0}").find("teleport"), std::string::npos);
-  EXPECT_NE(refused("s: 60, lane: 0, type: stationary_object", "{s: 10, lane: 0}")
+  const std::string moving = "s: 60, lane: 0, speed: 5";
+  EXPECT_NE(refused(moving, "teleport: {s: 10}").find("expected {s, lane[, offset]}: where along the road it lands"),
+            std::string::npos);
+  EXPECT_NE(refused(moving, "teleport: {x: 10, y: 0}").find("teleport"), std::string::npos);
+  EXPECT_NE(refused("s: 60, lane: 0, type: stationary_object", "teleport: {s: 10, lane: 0}")
                 .find("a stationary object does not move"),
             std::string::npos);
-  const std::string lane = test::configErrorOf([] {
-    plan(scenarioWith("    - {id: mover, s: 60, lane: 0, speed: 5,\n"
-                      "       actions: [{trigger: {time: 1}, teleport: {s: 10, lane: 3}}]}"));
-  });
-  EXPECT_NE(lane.find("teleport.lane: got 3 in sample 0, expected a lane the road has (0 .. 2)"), std::string::npos)
-      << lane;
+  EXPECT_NE(refused(moving, "teleport: {s: 10, lane: 3}")
+                .find("teleport.lane: got 3 in sample 0, expected a lane the road has (0 .. 2)"),
+            std::string::npos);
+  EXPECT_NE(refused(moving, "teleport: {s: -500, lane: 0}").find("teleport.s: -500 m along a road of"),
+            std::string::npos);
+  // The road: three lanes of 3.5 m and a 3 m right shoulder.
+  EXPECT_NE(refused(moving, "teleport: {s: 10, lane: 0, offset: -5}")
+                .find("teleport.offset: got -5 m from lane 0's centre in sample 0, 3.25 m beyond the road's right "
+                      "edge where road.shoulders.right is 3 m: a road user off the road"),
+            std::string::npos);
+  EXPECT_NE(refused(moving, "lane_change: {lane: 2, offset: 40, duration: 2}")
+                .find("lane_change.offset: got 40 m from lane 2's centre"),
+            std::string::npos);
 }
 
 namespace {
