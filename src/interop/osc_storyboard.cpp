@@ -383,13 +383,51 @@ YAML::Node assignedController(Translation& translation, const pugi::xml_node& as
   return controller;
 }
 
+/// A Story teleport to a RelativeLanePosition or RelativeRoadPosition: the language's place
+/// relative to that road user where it is when the teleport starts, centre to centre (the
+/// file's ds runs between reference points).
+YAML::Node relativeTeleport(Translation& translation, const Entity& actor, const pugi::xml_node& position) {
+  const xml::Reader& reader = translation.reader;
+  reader.requireSubset(position, {});
+  if (actor.drivesAgainstRoad()) {
+    reader.fail(position, fmt::format("'{}' drives against the road: esmini turns it along the lane at a relative "
+                                      "place, the language keeps its heading",
+                                      actor.name));
+  }
+  const CarriagewayRoad& road = translation.road;
+  const Entity& reference = translation.entity(position, reader.text(position, "entityRef"));
+  // m its centre lies ahead of its reference point along the road's direction
+  const auto ahead = [](const Entity& entity) {
+    return entity.drivesAgainstRoad() ? -entity.centreAhead : entity.centreAhead;
+  };
+  YAML::Node item;
+  item["from"] = reference.id;
+  if (std::string(position.name()) == "RelativeRoadPosition") {
+    item["ds"] = num(road.ownDs(reader.number(position, "ds")) + ahead(actor) - ahead(reference));
+    item["dd"] = num(road.ownT(reader.number(position, "dt")));
+    return item;
+  }
+  if (position.attribute("dsLane")) reader.fail(position, "dsLane: use ds (along the road's reference line)");
+  const double ds = road.ownDs(reader.optionalNumber(position, "ds").value_or(0.0));
+  item["ds"] = num(ds + ahead(actor) - ahead(reference));
+  // dLane counts lane ids (as the Init reads it): on a reversed road, the other way.
+  item["lanes"] = std::to_string(road.ownLaneId(reader.integer(position, "dLane", -100, 100)));
+  const double offset = road.ownT(reader.optionalNumber(position, "offset").value_or(0.0));
+  if (offset != 0.0) item["offset"] = num(offset);
+  return item;
+}
+
 /// A Story <TeleportAction> of a scripted road user: its reference point lands on a place that
-/// does not move (its centre that far ahead along its heading), which must keep its heading.
+/// does not move (its centre that far ahead along its heading), which must keep its heading,
+/// or relative to a road user (relativeTeleport).
 YAML::Node teleport(Translation& translation, const Entity& actor, const pugi::xml_node& action) {
   const xml::Reader& reader = translation.reader;
   reader.requireSubset(action, {"Position"});
   refuseStationary(reader, actor, action);
   const pugi::xml_node position = reader.only(action, "Position");
+  const pugi::xml_node kind = reader.choice(
+      position, {"WorldPosition", "LanePosition", "RoadPosition", "RelativeLanePosition", "RelativeRoadPosition"});
+  if (std::string(kind.name()).rfind("Relative", 0) == 0) return relativeTeleport(translation, actor, kind);
   const Placement p = fixedPlace(translation, position);
   const double turn = wrapAngle(p.heading - actor.placement->heading);
   if (std::abs(turn) > 1e-3) {

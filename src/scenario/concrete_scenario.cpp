@@ -271,10 +271,31 @@ int roadUserIndex(const LogicalScenario& logical, const std::string& id) {
   return -1;
 }
 
-/// The place of a distance condition, lanes checked against the road.
-/// A place of `field` (e.g. "position" of a trigger, "teleport" of an action) at `where`.
+/// A place relative to a road user (PositionSpec::from): ds, and lanes + offset or dd.
+ConcretePlace evaluateRelativePlace(const PositionSpec& position, const std::string& where, const std::string& field,
+                                    const LogicalScenario& logical, const ConcreteScenario& concrete) {
+  ConcretePlace place;
+  place.relative = true;
+  place.from = roadUserIndex(logical, position.from);
+  place.acrossFromCentre = position.acrossFromCentre;
+  place.s = evaluateFinite(position.s, concrete.inputs, where, field + ".ds");
+  place.offset = evaluateFinite(position.offset, concrete.inputs, where,
+                                field + (position.acrossFromCentre ? ".dd" : ".offset"));
+  if (position.acrossFromCentre) return place;
+  const double lanes = evaluateFinite(position.lane, concrete.inputs, where, field + ".lanes");
+  place.lane = static_cast<int>(std::lround(lanes));
+  if (std::abs(lanes - place.lane) > 1e-9) {
+    throw ConfigError(fmt::format("{}.{}.lanes: got {} in sample {}, expected a whole number of lanes", where, field,
+                                  formatValue(lanes), concrete.index));
+  }
+  return place;
+}
+
+/// A place of `field` (e.g. "position" of a trigger, "teleport" of an action) at `where`, a
+/// fixed one's lane checked against the road.
 ConcretePlace evaluatePlace(const PositionSpec& position, const std::string& where, const std::string& field,
                             const LogicalScenario& logical, const ConcreteScenario& concrete) {
+  if (!position.from.empty()) return evaluateRelativePlace(position, where, field, logical, concrete);
   ConcretePlace place;
   place.inFrame = position.inFrame;
   if (position.inFrame) {
@@ -382,6 +403,8 @@ void checkLateralTargets(const ConcreteScenario& concrete, std::size_t first_act
     if (action.kind == ActionSpec::Kind::Cross) {
       checkOnPavedGround(concrete, user.lane, action.target, action.where, "cross.to_offset", kNoPlaceToCross);
     }
+    // A teleport relative to a road user lands where that one is then: checked when it starts.
+    if (action.kind == ActionSpec::Kind::Teleport && action.place.relative) return;
     if (action.kind == ActionSpec::Kind::Teleport) {
       checkOnPavedGround(concrete, action.place.lane, action.place.offset, action.where, "teleport.offset",
                          kOffTheRoad);

@@ -578,17 +578,41 @@ void parseLateralAction(const YamlReader& reader, const YAML::Node& node, const 
   }
 }
 
-/// `teleport: {s, lane, offset}`: it moves there at once (a lane of the road: it drives on from
-/// there in its direction, at its speed).
+/// A teleport's place relative to a road user: `{from, ds, lanes[, offset]}` or `{from, ds, dd}`.
+void parseRelativePlace(const YamlReader& reader, const YAML::Node& node, const std::string& field,
+                        const std::vector<std::string>& inputs, PositionSpec& place) {
+  if (!node["ds"] || static_cast<bool>(node["lanes"]) == static_cast<bool>(node["dd"]) ||
+      (node["dd"] && node["offset"])) {
+    reader.fail(node, field,
+                "expected {from, ds, lanes[, offset]} or {from, ds, dd}: where it lands from that road user");
+  }
+  place.from = reader.scalar(node["from"], field + ".from");
+  place.s = reader.expression(node["ds"], field + ".ds", inputs);
+  place.acrossFromCentre = static_cast<bool>(node["dd"]);
+  if (place.acrossFromCentre) {
+    place.offset = reader.expression(node["dd"], field + ".dd", inputs);
+  } else {
+    place.lane = reader.expression(node["lanes"], field + ".lanes", inputs);
+    place.offset = optionalExpression(reader, node, "offset", field, inputs, 0.0);
+  }
+}
+
+/// `teleport: {s, lane, offset}` or a place relative to a road user (parseRelativePlace): it
+/// moves there at once and drives on from there in its direction, at its speed.
 void parseTeleportAction(const YamlReader& reader, const YAML::Node& node, const std::string& field,
                          const std::vector<std::string>& inputs, ActionSpec& action) {
   reader.requireMap(node, field);
-  reader.checkKeys(node, field, {"s", "lane", "offset"});
-  if (!node["s"] || !node["lane"]) {
-    reader.fail(node, field, "expected {s, lane[, offset]}: where along the road it lands");
-  }
   action.kind = ActionSpec::Kind::Teleport;
-  parsePosition(reader, node, field, inputs, action.place);
+  if (node["from"]) {
+    reader.checkKeys(node, field, {"from", "ds", "lanes", "offset", "dd"});
+    parseRelativePlace(reader, node, field, inputs, action.place);
+  } else {
+    reader.checkKeys(node, field, {"s", "lane", "offset"});
+    if (!node["s"] || !node["lane"]) {
+      reader.fail(node, field, "expected {s, lane[, offset]}: where along the road it lands (or {from, ds, ...})");
+    }
+    parsePosition(reader, node, field, inputs, action.place);
+  }
   action.shape = TransitionShape::Step;
   action.pace = ActionSpec::Pace::Duration;
   action.paceValue = Expression::constant(0.0);
@@ -803,6 +827,15 @@ void checkSpeedReference(const ActionSpec& action, const std::string& owner, con
   }
 }
 
+/// A teleport relative to a road user names one of the file (itself included).
+void checkTeleportReference(const ActionSpec& action, const std::vector<std::string>& users) {
+  if (action.kind != ActionSpec::Kind::Teleport || action.place.from.empty()) return;
+  if (std::find(users.begin(), users.end(), action.place.from) == users.end()) {
+    throw ConfigError(fmt::format("{}.teleport.from: got '{}', expected a road user of the file: {}", action.where,
+                                  action.place.from, fmt::join(users, ", ")));
+  }
+}
+
 /// The `after` conditions a trigger cannot fire without (itself, or members of an `all`),
 /// each with the trigger that names it.
 void necessaryAfters(const TriggerSpec& trigger, std::vector<const TriggerSpec*>& found) {
@@ -857,6 +890,7 @@ void resolveReferences(const LogicalScenario& scenario) {
     for (const auto& action : user->actions) {
       checkTriggerReferences(action.trigger, user->id, users, actions, action_ids);
       checkSpeedReference(action, user->id, users);
+      checkTeleportReference(action, users);
     }
   }
   std::map<std::string, int> visited;

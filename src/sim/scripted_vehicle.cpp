@@ -224,6 +224,13 @@ struct ScriptedTraffic::Impl {
   void track(const VehicleState& ego);
   void activate(std::size_t a, const VehicleState& ego);
   void activateEgoLateral(std::size_t a, const VehicleState& ego);
+  /// Where a teleport lands: m along the frame, m left of the centre line, road lane.
+  struct Landing {
+    double s = 0.0;
+    double d = 0.0;
+    int lane = 0;
+  };
+  Landing landingOf(std::size_t a, const VehicleState& ego) const;
   void teleport(std::size_t a, const VehicleState& ego);
   /// The road lane the Ego at `ego` is in.
   int egoLaneOf(const VehicleState& ego) const;
@@ -587,6 +594,43 @@ void ScriptedTraffic::Impl::activate(std::size_t a, const VehicleState& ego) {
   scheduleWaiters(a, ego);
 }
 
+/// Where teleport action `a` lands its road user when it starts: its place on the road, or relative
+/// to a road user where that one is now (ds along the road from its centre; lanes from the lane
+/// its centre is in, or dd across from its centre). On the road, or a ConfigError.
+ScriptedTraffic::Impl::Landing ScriptedTraffic::Impl::landingOf(std::size_t a, const VehicleState& ego) const {
+  const ConcreteAction& action = concrete->actions[a];
+  const scenario::ConcretePlace& place = action.place;
+  Landing landing{regionStartS + place.s, road->laneOffset(place.lane) + place.offset, place.lane};
+  if (place.relative) {
+    // Where that one is at the action's start: at the current instant, moved on along the road
+    // at its speed to then (the next instant's state is not known yet).
+    const VehicleState& reference = stateOf(place.from, ego);
+    const auto [s, d] = frame.coordinates(reference.position());
+    const double speed_along = reference.speed * std::cos(reference.heading - frame.heading(s, d));
+    const double since = scheduled[a] - static_cast<double>(k) * step;
+    landing.s = s + frame.sRate(s, d, speed_along) * since + place.s;
+    landing.lane = place.acrossFromCentre ? road->laneAt(d + place.offset) : road->laneAt(d) + place.lane;
+    if (landing.lane < 0 || landing.lane >= road->lanes) {
+      throw ConfigError(fmt::format("{}: {}.teleport.lanes: lane {} from the lane of '{}', expected a lane the road "
+                                    "has (0 .. {})",
+                                    concrete->where(), action.where, landing.lane,
+                                    place.from < 0 ? "ego" : concrete->others[static_cast<std::size_t>(place.from)].id,
+                                    road->lanes - 1));
+    }
+    landing.d = place.acrossFromCentre ? d + place.offset : road->laneOffset(landing.lane) + place.offset;
+  }
+  const auto& shape = concrete->logical->road;
+  const bool off_road = landing.d < -(road->halfWidth() + shape.shoulderRight) - 1e-9 ||
+                        landing.d > road->halfWidth() + shape.shoulderLeft + 1e-9;
+  if (landing.s < 0.0 || landing.s > frame.length() || off_road) {
+    throw ConfigError(fmt::format("{}: {}.teleport: it lands {:.1f} m along a road of {:.1f} m (lead-in and lead-out "
+                                  "included), {:.2f} m left of its centre: expected a place on its lanes or shoulders",
+                                  concrete->where(), action.where, landing.s - regionStartS, frame.length(),
+                                  landing.d));
+  }
+  return landing;
+}
+
 /// A teleport: the road user lands on its place at the action's start t0 and drives on from
 /// there in its direction (moving, it faces along its lane; standing, it keeps its heading to the
 /// road). A speed or lateral action under way ends there: it keeps the speed it has, and stays
@@ -599,12 +643,8 @@ void ScriptedTraffic::Impl::teleport(std::size_t a, const VehicleState& ego) {
   const double t0 = scheduled[a];
   const auto o = static_cast<std::size_t>(action.owner);
   Mover& mover = movers[o];
-  const double landing_s = regionStartS + action.place.s;
-  if (landing_s < 0.0 || landing_s > frame.length()) {
-    throw ConfigError(fmt::format("{}: {}.teleport.s: {} m along a road of {:.1f} m (lead-in and lead-out "
-                                  "included): expected a place on its road",
-                                  concrete->where(), action.where, action.place.s, frame.length()));
-  }
+  const Landing landing = landingOf(a, ego);
+  const double landing_s = landing.s;
   const double heading_to_road = wrapAngle(mover.state.heading - frame.heading(mover.s, mover.d));
   const double now = static_cast<double>(k) * step;
   const double speed_now = mover.speedAlong;
@@ -619,10 +659,10 @@ void ScriptedTraffic::Impl::teleport(std::size_t a, const VehicleState& ego) {
   const double after_landing = 0.5 * (speed_landing + speed_next) * (now + step - t0);  // m
   const double whole_step = 0.5 * (speed_now + speed_next) * step;                      // m
   const double direction = mover.spec->againstRoad ? -1.0 : 1.0;
-  mover.d = road->laneOffset(action.place.lane) + action.place.offset;
+  mover.d = landing.d;
   // sRate is linear in its speed: metres along its offset line to metres of s.
   mover.s = landing_s + direction * frame.sRate(landing_s, mover.d, after_landing - whole_step);
-  mover.laneIndex = action.place.lane;
+  mover.laneIndex = landing.lane;
   const Vec2 position = frame.point(mover.s, mover.d);
   mover.state.x = position.x();
   mover.state.y = position.y();

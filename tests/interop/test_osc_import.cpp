@@ -1018,6 +1018,16 @@ TEST(OscRun, EachConditionStartsItsEventWhereTheFileSays) {
 
 namespace {
 
+/// conditions.xosc text with Slow a lorry instead of a sedan.
+std::string lorrySlow(std::string text) {
+  const std::string sedan = R"(<ScenarioObject name="Slow">
+      <CatalogReference catalogName="fleet" entryName="sedan"/>)";
+  const auto at = text.find(sedan);
+  EXPECT_NE(at, std::string::npos);
+  return text.replace(at, sedan.size(), R"(<ScenarioObject name="Slow">
+      <CatalogReference catalogName="fleet" entryName="lorry"/>)");
+}
+
 /// conditions.xosc with an Event of `actor` at t = 1 s whose action teleports it to `position`.
 std::string teleportAtOne(const std::string& actor, const std::string& position) {
   std::string text = readTextFile(data("conditions.xosc"));
@@ -1044,7 +1054,10 @@ TEST(OscRun, AStoryTeleportMovesAScriptedRoadUserAtOnce) {
   const auto dir = folderWith(
       {{"jump.xosc", teleportAtOne("Lead", landing)},
        {"ego.xosc", teleportAtOne("Ego", landing)},
-       {"relative.xosc", teleportAtOne("Lead", R"(<RelativeLanePosition entityRef="Slow" dLane="0" ds="10"/>)")},
+       {"by_lane.xosc", lorrySlow(teleportAtOne("Lead", R"(<RelativeLanePosition entityRef="Slow" dLane="1" ds="30"
+           offset="0.2"/>)"))},
+       {"by_road.xosc", teleportAtOne("Lead", R"(<RelativeRoadPosition entityRef="Slow" ds="30" dt="2.5"/>)")},
+       {"object.xosc", teleportAtOne("Lead", R"(<RelativeObjectPosition entityRef="Slow" dx="30" dy="0"/>)")},
        {"turned.xosc",
         teleportAtOne("Lead", R"(<LanePosition roadId="7" laneId="-3" s="300" offset="0"><Orientation type="relative"
             h="3.141592653589793"/></LanePosition>)")}});
@@ -1060,8 +1073,18 @@ TEST(OscRun, AStoryTeleportMovesAScriptedRoadUserAtOnce) {
   EXPECT_NEAR(states.back().y, 0.2, 1e-6);
   EXPECT_THAT(importRefusal(*dir, "ego"),
               HasSubstr("<TeleportAction>: an action of the Ego: its controller drives it"));
-  EXPECT_THAT(importRefusal(*dir, "relative"),
-              HasSubstr("element <RelativeLanePosition> is outside the supported subset"));
+  // Relative to Slow (at 18 m/s on lane -4, y = -3.5, its reference point at s = 60): at 1 s at
+  // s = 78, so the lead's reference point lands at 108, 8 m beyond its start, whether Slow is a
+  // sedan or a lorry (its box centre 5 m ahead of its reference point, not 1.25 m); dLane 1 is
+  // lane -3 (y = 0), 0.2 m left of its centre; dt 2.5 is 1 m right of the centre line.
+  for (const auto& [name, y] : {std::pair<std::string, double>{"by_lane", 0.2}, {"by_road", -1.0}}) {
+    const auto landed = simulatedTrack(dir->path() / (name + ".xosc"), "Lead");
+    ASSERT_TRUE(landed) << name;
+    EXPECT_NEAR(landed->states.at(5).x - landed->states.front().x, 8.0, 1e-6) << name;
+    EXPECT_NEAR(landed->states.at(5).y, y, 1e-6) << name;
+  }
+  EXPECT_THAT(importRefusal(*dir, "object"),
+              HasSubstr("element <RelativeObjectPosition> is outside the supported subset"));
   EXPECT_THAT(importRefusal(*dir, "turned"),
               HasSubstr("<LanePosition>: a heading 3.141592653589793 rad from the one 'Lead' has: a teleported "
                         "road user keeps its heading in the language"));

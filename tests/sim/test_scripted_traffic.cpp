@@ -497,7 +497,10 @@ TEST(ScriptedTraffic, ALaneChangeOverADistanceEndsWhereItsOffsetSays) {
 // at 1.1 s: 51 m at 1.2 s; travelled counts 11 m by then and 25 m at 2.5 s (instant 2.6).
 // `ender`'s front passes the region's end (300 m) at 0.375 s; back at s = 100 it never reaches it.
 // `speeder` speeds up from 10 m/s at 1 m/s^2 and keeps the 12 m/s it has at 2 s. `oncoming`
-// (against the road at 10 m/s) lands at s = 230 at 1 s and is at 228 m at 1.2 s.
+// (against the road at 10 m/s) lands at s = 230 at 1 s and is at 228 m at 1.2 s. Relative to
+// road users where they are: `follower` lands 20 m ahead of the stand-in Ego (at s = 50 at 2 s),
+// a lane right of it, 0.3 m left of that lane's centre (3.2 m right of the centre line);
+// `shadow` lands 10 m behind `speeder` (at 272 m at 3 s) and 1 m right of it (2.5 m left).
 TEST(ScriptedTraffic, ATeleportMovesARoadUserAtOnceAndItDrivesOnFromThere) {
   const std::string marker = "speed: {target: 10, rate: 1}";
   const auto logical = scenarioWith(fmt::format(R"(
@@ -513,7 +516,11 @@ TEST(ScriptedTraffic, ATeleportMovesARoadUserAtOnceAndItDrivesOnFromThere) {
        actions: [{{trigger: {{time: 0}}, speed: {{target: 20, rate: 1, shape: linear}}}},
                  {{trigger: {{time: 2}}, teleport: {{s: 260, lane: 2}}}}]}}
     - {{id: oncoming, s: 250, lane: 0, speed: 10, direction: against,
-       actions: [{{trigger: {{time: 1}}, teleport: {{s: 230, lane: 0}}}}]}})",
+       actions: [{{trigger: {{time: 1}}, teleport: {{s: 230, lane: 0}}}}]}}
+    - {{id: follower, s: 150, lane: 2, speed: 10,
+       actions: [{{trigger: {{time: 2}}, teleport: {{from: ego, ds: 20, lanes: -1, offset: 0.3}}}}]}}
+    - {{id: shadow, s: 20, lane: 2, speed: 10,
+       actions: [{{trigger: {{time: 3}}, teleport: {{from: speeder, ds: -10, dd: -1}}}}]}})",
                                                 marker),
                                     0.0, 5.0);
   const auto [traffic, place] = stepped(plan(logical), 25);
@@ -531,6 +538,10 @@ TEST(ScriptedTraffic, ATeleportMovesARoadUserAtOnceAndItDrivesOnFromThere) {
   EXPECT_NEAR(traffic.states()[2].speed, 12.0, 1e-9);
   EXPECT_NEAR(s_at(6, 3), 228.0, 1e-6);
   EXPECT_NEAR(std::abs(traffic.states()[3].heading), kPi, 1e-9);
+  EXPECT_NEAR(s_at(10, 4), 70.0, 1e-6);
+  EXPECT_NEAR(place[10][4].second, -3.2, 1e-9);
+  EXPECT_NEAR(s_at(15, 5), 262.0, 1e-6);
+  EXPECT_NEAR(place[15][5].second, 2.5, 1e-9);
   const auto& timings = traffic.timings();
   EXPECT_NEAR(timings[0].start, 1.1, 1e-9);
   EXPECT_NEAR(timings[0].end, 1.1, 1e-9);
@@ -566,7 +577,18 @@ TEST(ScriptedTraffic, TeleportsAndLaneChangeOffsetsStayOnTheRoad) {
   EXPECT_NE(refused(moving, "teleport: {s: 10, lane: 3}")
                 .find("teleport.lane: got 3 in sample 0, expected a lane the road has (0 .. 2)"),
             std::string::npos);
-  EXPECT_NE(refused(moving, "teleport: {s: -500, lane: 0}").find("teleport.s: -500 m along a road of"),
+  EXPECT_NE(refused(moving, "teleport: {s: -500, lane: 0}").find("teleport: it lands -500.0 m along a road of"),
+            std::string::npos);
+  EXPECT_NE(refused(moving, "teleport: {from: nobody, ds: 1, lanes: 0}")
+                .find("teleport.from: got 'nobody', expected a road user of the file: ego, mover"),
+            std::string::npos);
+  EXPECT_NE(
+      refused(moving, "teleport: {from: ego, ds: 1}").find("expected {from, ds, lanes[, offset]} or {from, ds, dd}"),
+      std::string::npos);
+  EXPECT_NE(refused(moving, "teleport: {from: ego, ds: 10, lanes: 5}")
+                .find("teleport.lanes: lane 6 from the lane of 'ego', expected a lane the road has (0 .. 2)"),
+            std::string::npos);
+  EXPECT_NE(refused(moving, "teleport: {from: ego, ds: 10, dd: 20}").find("m left of its centre: expected a place on"),
             std::string::npos);
   // The road: three lanes of 3.5 m and a 3 m right shoulder.
   EXPECT_NE(refused(moving, "teleport: {s: 10, lane: 0, offset: -5}")

@@ -13,8 +13,9 @@
 
 namespace vsd::scenario {
 
-/// A place (PositionSpec evaluated): along the road (s from the region's start, lane, offset)
-/// or in the scenario frame (x, y).
+/// A place (PositionSpec evaluated): along the road (s from the region's start, lane, offset),
+/// in the scenario frame (x, y), or relative to a road user where it is when asked (s: ds from
+/// its centre; lane: lanes left of its lane, or with acrossFromCentre offset from its centre).
 struct ConcretePlace {
   bool inFrame = false;
   double s = 0.0;       ///< m
@@ -22,6 +23,9 @@ struct ConcretePlace {
   double offset = 0.0;  ///< m from the lane's centre, > 0 left
   double x = 0.0;       ///< m
   double y = 0.0;       ///< m
+  bool relative = false;
+  int from = -1;        ///< relative: -1 = the Ego, else index into ConcreteScenario::others
+  bool acrossFromCentre = false;
 };
 
 /// A trigger with its numbers evaluated and its references resolved.

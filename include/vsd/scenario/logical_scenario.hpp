@@ -115,11 +115,15 @@ struct ControllerSpec {
 /// on `lane`'s centre plus `offset`) or in the scenario frame (`x`, `y`).
 struct PositionSpec {
   bool inFrame = false;  ///< x/y (true) or s/lane/offset (false)
-  Expression s;          ///< m
-  Expression lane;       ///< lane index (0 = rightmost)
-  Expression offset;     ///< m from the lane's centre, > 0 left
+  Expression s;          ///< m (relative: ds from the road user's centre along the road)
+  Expression lane;       ///< lane index (0 = rightmost; relative: lanes left of the road user's lane)
+  Expression offset;     ///< m from the lane's centre, > 0 left (relative, acrossFromCentre: from its centre)
   Expression x;          ///< m
   Expression y;          ///< m
+  /// Teleports: relative to road user `from` ("ego" or an id; empty: a fixed place) where it is
+  /// when the place is asked for.
+  std::string from;
+  bool acrossFromCentre = false;  ///< relative: `offset` m left of its centre, on the lane there
 };
 
 /// When an action starts (docs/scenario-language.md "Actions and triggers"). Conditions are
