@@ -383,18 +383,32 @@ YAML::Node assignedController(Translation& translation, const pugi::xml_node& as
   return controller;
 }
 
+/// A teleport that lands `actor` facing `heading` (rad, relative to the road's direction) is
+/// refused unless that is the heading it has: the language keeps it.
+void refuseTurn(const Translation& translation, const Entity& actor, const pugi::xml_node& position, double heading) {
+  const double turn = wrapAngle(heading - actor.placement->heading);
+  if (std::abs(turn) > 1e-3) {
+    translation.reader.fail(position, fmt::format("a heading {} rad from the one '{}' has: a teleported road user "
+                                                  "keeps its heading in the language (it drives on along its lane)",
+                                                  num(turn), actor.name));
+  }
+}
+
 /// A Story teleport to a RelativeLanePosition or RelativeRoadPosition: the language's place
 /// relative to that road user where it is when the teleport starts, centre to centre (the
 /// file's ds runs between reference points).
 YAML::Node relativeTeleport(Translation& translation, const Entity& actor, const pugi::xml_node& position) {
   const xml::Reader& reader = translation.reader;
   reader.requireSubset(position, {});
-  if (actor.drivesAgainstRoad()) {
-    reader.fail(position, fmt::format("'{}' drives against the road: esmini turns it along the lane at a relative "
-                                      "place, the language keeps its heading",
-                                      actor.name));
-  }
   const CarriagewayRoad& road = translation.road;
+  // Without an Orientation esmini faces it along the file's reference line.
+  refuseTurn(translation, actor, position, road.reversed ? kPi : 0.0);
+  if (!road.oneCurvature) {
+    reader.fail(position, "a place relative to a road user on a road of several curvatures: esmini's ds runs "
+                          "along the reference line, the language's along the lanes' centre line");
+  }
+  // m along the lanes' centre line per m of reference line (an arc's are parallel).
+  const double stretch = 1.0 - road.curvature * road.centreT();
   const Entity& reference = translation.entity(position, reader.text(position, "entityRef"));
   // m its centre lies ahead of its reference point along the road's direction
   const auto ahead = [](const Entity& entity) {
@@ -403,12 +417,12 @@ YAML::Node relativeTeleport(Translation& translation, const Entity& actor, const
   YAML::Node item;
   item["from"] = reference.id;
   if (std::string(position.name()) == "RelativeRoadPosition") {
-    item["ds"] = num(road.ownDs(reader.number(position, "ds")) + ahead(actor) - ahead(reference));
+    item["ds"] = num(road.ownDs(reader.number(position, "ds")) * stretch + ahead(actor) - ahead(reference));
     item["dd"] = num(road.ownT(reader.number(position, "dt")));
     return item;
   }
   if (position.attribute("dsLane")) reader.fail(position, "dsLane: use ds (along the road's reference line)");
-  const double ds = road.ownDs(reader.optionalNumber(position, "ds").value_or(0.0));
+  const double ds = road.ownDs(reader.optionalNumber(position, "ds").value_or(0.0)) * stretch;
   item["ds"] = num(ds + ahead(actor) - ahead(reference));
   // dLane counts lane ids (as the Init reads it): on a reversed road, the other way.
   item["lanes"] = std::to_string(road.ownLaneId(reader.integer(position, "dLane", -100, 100)));
@@ -429,13 +443,7 @@ YAML::Node teleport(Translation& translation, const Entity& actor, const pugi::x
       position, {"WorldPosition", "LanePosition", "RoadPosition", "RelativeLanePosition", "RelativeRoadPosition"});
   if (std::string(kind.name()).rfind("Relative", 0) == 0) return relativeTeleport(translation, actor, kind);
   const Placement p = fixedPlace(translation, position);
-  const double turn = wrapAngle(p.heading - actor.placement->heading);
-  if (std::abs(turn) > 1e-3) {
-    reader.fail(position.first_child(),
-                fmt::format("a heading {} rad from the one '{}' has: a teleported road user keeps its heading in "
-                            "the language (it drives on along its lane)",
-                            num(turn), actor.name));
-  }
+  refuseTurn(translation, actor, position.first_child(), p.heading);
   const LanguagePlace place = languagePlace(translation.road, p, actor.centreAhead, /*keep_lane=*/true);
   YAML::Node item;
   item["s"] = num(place.s);

@@ -394,23 +394,37 @@ ConcreteAction evaluateAction(const ActionSpec& spec, int owner, const LogicalSc
   return action;
 }
 
-/// Lane changes and crossings of one road user, followed in file order, stay on the road.
+/// Lane changes, crossings and teleports of one road user, followed in file order, stay on the
+/// road. After a teleport relative to a road user its lane is known only when it lands (the
+/// simulation checks what depends on it then).
 void checkLateralTargets(const ConcreteScenario& concrete, std::size_t first_action, const ConcreteVehicle& user) {
   const int lanes = concrete.logical->road.lanes;
   int lane = user.lane;
+  bool lane_known = true;
   for (std::size_t a = first_action; a < concrete.actions.size(); ++a) {
     const auto& action = concrete.actions[a];
-    if (action.kind == ActionSpec::Kind::Cross) {
-      checkOnPavedGround(concrete, user.lane, action.target, action.where, "cross.to_offset", kNoPlaceToCross);
+    if (action.kind == ActionSpec::Kind::Cross && lane_known) {
+      checkOnPavedGround(concrete, lane, action.target, action.where, "cross.to_offset", kNoPlaceToCross);
     }
-    // A teleport relative to a road user lands where that one is then: checked when it starts.
-    if (action.kind == ActionSpec::Kind::Teleport && action.place.relative) return;
     if (action.kind == ActionSpec::Kind::Teleport) {
+      if (action.place.relative) {
+        lane_known = false;
+        continue;
+      }
       checkOnPavedGround(concrete, action.place.lane, action.place.offset, action.where, "teleport.offset",
                          kOffTheRoad);
       lane = action.place.lane;
+      lane_known = true;
     }
     if (action.kind != ActionSpec::Kind::LaneChange) continue;
+    const bool known = lane_known || action.toRoadLane || action.relativeToEgoLane;
+    if (!known) {  // a number of lanes from where it landed: a whole one (the rest when it starts)
+      if (action.target != std::round(action.target)) {
+        throw ConfigError(fmt::format("{}.lane_change: got {} lanes in sample {}, expected a whole number",
+                                      action.where, formatValue(action.target), concrete.index));
+      }
+      continue;
+    }
     const int from = action.relativeToEgoLane ? concrete.ego.lane : lane;
     const double target = laneChangeTarget(action, lane, concrete.ego.lane);
     if (action.target != std::round(action.target) || target < 0 || target >= lanes) {
@@ -422,6 +436,7 @@ void checkLateralTargets(const ConcreteScenario& concrete, std::size_t first_act
                                     action.where, what, concrete.index, formatValue(target), lanes - 1));
     }
     lane = static_cast<int>(target);
+    lane_known = true;
     checkOnPavedGround(concrete, lane, action.targetLaneOffset, action.where, "lane_change.offset", kOffTheRoad);
   }
 }

@@ -587,6 +587,7 @@ void parseRelativePlace(const YamlReader& reader, const YAML::Node& node, const 
                 "expected {from, ds, lanes[, offset]} or {from, ds, dd}: where it lands from that road user");
   }
   place.from = reader.scalar(node["from"], field + ".from");
+  if (place.from.empty()) reader.fail(node["from"], field + ".from", "expected a road user's id (ego or another's)");
   place.s = reader.expression(node["ds"], field + ".ds", inputs);
   place.acrossFromCentre = static_cast<bool>(node["dd"]);
   if (place.acrossFromCentre) {

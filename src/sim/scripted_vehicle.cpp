@@ -224,6 +224,8 @@ struct ScriptedTraffic::Impl {
   void track(const VehicleState& ego);
   void activate(std::size_t a, const VehicleState& ego);
   void activateEgoLateral(std::size_t a, const VehicleState& ego);
+  /// Whether `d` (m left of the centre line) lies on the road's lanes or shoulders.
+  bool onPavedGround(double d) const;
   /// Where a teleport lands: m along the frame, m left of the centre line, road lane.
   struct Landing {
     double s = 0.0;
@@ -588,10 +590,22 @@ void ScriptedTraffic::Impl::activate(std::size_t a, const VehicleState& ego) {
     // Lateral offsets count from the current lane's centre, crossings from the starting lane's.
     transition.to = road->laneOffset(mover.laneIndex) + action.target;
   }
+  // Checked before the run where its lane is known; after a relative teleport, here.
+  if (action.kind != ActionSpec::Kind::LateralOffset && !onPavedGround(transition.to)) {
+    const char* field = action.kind == ActionSpec::Kind::LaneChange ? "lane_change.offset" : "cross.to_offset";
+    throw ConfigError(fmt::format("{}: {}.{}: at t = {:.1f} s it would end {:.2f} m left of the road's centre: "
+                                  "expected a place on its lanes or shoulders",
+                                  concrete->where(), action.where, field, t0, transition.to));
+  }
   transition.duration = lateralDuration(action, transition, mover.speedAlong, concrete->where());
   mover.lateral = transition;
   timings[a] = {t0, transition.end()};
   scheduleWaiters(a, ego);
+}
+
+bool ScriptedTraffic::Impl::onPavedGround(double d) const {
+  const auto& shape = concrete->logical->road;
+  return d >= -(road->halfWidth() + shape.shoulderRight) - 1e-9 && d <= road->halfWidth() + shape.shoulderLeft + 1e-9;
 }
 
 /// Where teleport action `a` lands its road user when it starts: its place on the road, or relative
@@ -619,10 +633,7 @@ ScriptedTraffic::Impl::Landing ScriptedTraffic::Impl::landingOf(std::size_t a, c
     }
     landing.d = place.acrossFromCentre ? d + place.offset : road->laneOffset(landing.lane) + place.offset;
   }
-  const auto& shape = concrete->logical->road;
-  const bool off_road = landing.d < -(road->halfWidth() + shape.shoulderRight) - 1e-9 ||
-                        landing.d > road->halfWidth() + shape.shoulderLeft + 1e-9;
-  if (landing.s < 0.0 || landing.s > frame.length() || off_road) {
+  if (landing.s < 0.0 || landing.s > frame.length() || !onPavedGround(landing.d)) {
     throw ConfigError(fmt::format("{}: {}.teleport: it lands {:.1f} m along a road of {:.1f} m (lead-in and lead-out "
                                   "included), {:.2f} m left of its centre: expected a place on its lanes or shoulders",
                                   concrete->where(), action.where, landing.s - regionStartS, frame.length(),

@@ -1085,6 +1085,34 @@ TEST(OscRun, AStoryTeleportMovesAScriptedRoadUserAtOnce) {
   }
   EXPECT_THAT(importRefusal(*dir, "object"),
               HasSubstr("element <RelativeObjectPosition> is outside the supported subset"));
+  // esmini faces a road user at a relative place along the reference line: a lead driving
+  // against the road would turn. On the S-curve its ds and the language's differ.
+  const std::string relative = R"(<RelativeRoadPosition entityRef="Slow" ds="30" dt="2.5"/>)";
+  std::string against = teleportAtOne("Lead", relative);
+  const std::string lead_place = R"(<LanePosition roadId="7" laneId="-2" s="100" offset="0"/>)";
+  against.replace(against.find(lead_place), lead_place.size(), R"(<LanePosition roadId="7" laneId="-2" s="100"
+      offset="0"><Orientation type="relative" h="3.141592653589793"/></LanePosition>)");
+  std::string curved = teleportAtOne("Lead", relative);
+  curved.replace(curved.find("roads/three_lanes.xodr"), 22, "roads/s_curve.xodr");
+  curved.replace(curved.find(R"(laneId="-4" s="960")"), 19, R"(laneId="-4" s="600")");  // the runner, on the road
+  // On an arc (1/1000 m) the language's ds runs along the lanes' centre line, 6.25 m right of
+  // the reference line: 30 m of it are 30 (1 + 0.001 * 6.25) = 30.1875 m there.
+  std::string arc_road = readTextFile(data("roads/three_lanes.xodr"));
+  const std::string lines = R"(<geometry s="0" x="0" y="0" hdg="0" length="400"><line/></geometry>
+      <geometry s="400" x="400" y="0" hdg="0" length="600"><line/></geometry>)";
+  arc_road.replace(arc_road.find(lines), lines.size(),
+                   R"(<geometry s="0" x="0" y="0" hdg="0" length="1000"><arc curvature="0.001"/></geometry>)");
+  std::string on_arc = teleportAtOne("Lead", relative);
+  on_arc.replace(on_arc.find("roads/three_lanes.xodr"), 22, "roads/arc.xodr");
+  const auto arc_folder = folderWith({{"roads/arc.xodr", arc_road}, {"arc.xosc", on_arc}});
+  const ScenarioCheck arc_check = checkOpenScenario(arc_folder->path() / "arc.xosc", {});
+  ASSERT_TRUE(arc_check.runnable()) << arc_check.report();
+  EXPECT_THAT(arc_check.yaml, HasSubstr("ds: 30.1875"));
+  const auto refusals = folderWith({{"against.xosc", against}, {"curved.xosc", curved}});
+  EXPECT_THAT(importRefusal(*refusals, "against"),
+              HasSubstr("<RelativeRoadPosition>: a heading 3.141592653589793 rad from the one 'Lead' has"));
+  EXPECT_THAT(importRefusal(*refusals, "curved"),
+              HasSubstr("<RelativeRoadPosition>: a place relative to a road user on a road of several curvatures"));
   EXPECT_THAT(importRefusal(*dir, "turned"),
               HasSubstr("<LanePosition>: a heading 3.141592653589793 rad from the one 'Lead' has: a teleported "
                         "road user keeps its heading in the language"));

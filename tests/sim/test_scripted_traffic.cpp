@@ -590,6 +590,20 @@ TEST(ScriptedTraffic, TeleportsAndLaneChangeOffsetsStayOnTheRoad) {
             std::string::npos);
   EXPECT_NE(refused(moving, "teleport: {from: ego, ds: 10, dd: 20}").find("m left of its centre: expected a place on"),
             std::string::npos);
+  EXPECT_NE(refused(moving, "teleport: {from: '', ds: 10, dd: 0}").find("teleport.from: expected a road user's id"),
+            std::string::npos);
+  // After a relative teleport its lane is known when it lands: what depends on it is checked then.
+  const auto after_jump = [&](const std::string& action) {
+    return test::configErrorOf([&] {
+      plan(scenarioWith("    - {id: mover, " + moving + ",\n       actions: [{trigger: {time: 1}, teleport: "
+                        "{from: ego, ds: 40, lanes: 0}}, {trigger: {time: 2}, " + action + "}]}"));
+    });
+  };
+  EXPECT_NE(after_jump("lane_change: {lanes: 0.5, duration: 1}").find("got 0.5 lanes in sample 0, expected a whole"),
+            std::string::npos);
+  EXPECT_NE(after_jump("lane_change: {lanes: 0, offset: 40, duration: 1}")
+                .find("lane_change.offset: at t = 2.0 s it would end 40.00 m left of the road's centre"),
+            std::string::npos);
   // The road: three lanes of 3.5 m and a 3 m right shoulder.
   EXPECT_NE(refused(moving, "teleport: {s: 10, lane: 0, offset: -5}")
                 .find("teleport.offset: got -5 m from lane 0's centre in sample 0, 3.25 m beyond the road's right "
