@@ -394,15 +394,15 @@ void refuseTurn(const Translation& translation, const Entity& actor, const pugi:
   }
 }
 
-/// A Story teleport to a RelativeLanePosition or RelativeRoadPosition: the language's place
-/// relative to that road user where it is when the teleport starts, centre to centre (the
-/// file's ds runs between reference points).
-YAML::Node relativeTeleport(Translation& translation, const Entity& actor, const pugi::xml_node& position) {
+/// The language's place (`{from, ds, lanes[, offset]}` or `{from, ds, dd}`) of a
+/// RelativeLanePosition or RelativeRoadPosition: relative to that road user where it is when
+/// the place is asked for, from its centre to the centre of what is placed there, which lies
+/// `centre_ahead` m ahead of the place along the road (the file's ds runs between reference
+/// points; dLane counts lane ids as the Init reads them).
+YAML::Node relativePlace(Translation& translation, const pugi::xml_node& position, double centre_ahead) {
   const xml::Reader& reader = translation.reader;
   reader.requireSubset(position, {});
   const CarriagewayRoad& road = translation.road;
-  // Without an Orientation esmini faces it along the file's reference line.
-  refuseTurn(translation, actor, position, road.reversed ? kPi : 0.0);
   if (!road.oneCurvature) {
     reader.fail(position, "a place relative to a road user on a road of several curvatures: esmini's ds runs "
                           "along the reference line, the language's along the lanes' centre line");
@@ -411,37 +411,46 @@ YAML::Node relativeTeleport(Translation& translation, const Entity& actor, const
   const double stretch = 1.0 - road.curvature * road.centreT();
   const Entity& reference = translation.entity(position, reader.text(position, "entityRef"));
   // m its centre lies ahead of its reference point along the road's direction
-  const auto ahead = [](const Entity& entity) {
-    return entity.drivesAgainstRoad() ? -entity.centreAhead : entity.centreAhead;
-  };
+  const double reference_ahead = reference.drivesAgainstRoad() ? -reference.centreAhead : reference.centreAhead;
   YAML::Node item;
   item["from"] = reference.id;
   if (std::string(position.name()) == "RelativeRoadPosition") {
-    item["ds"] = num(road.ownDs(reader.number(position, "ds")) * stretch + ahead(actor) - ahead(reference));
+    item["ds"] = num(road.ownDs(reader.number(position, "ds")) * stretch + centre_ahead - reference_ahead);
     item["dd"] = num(road.ownT(reader.number(position, "dt")));
     return item;
   }
   if (position.attribute("dsLane")) reader.fail(position, "dsLane: use ds (along the road's reference line)");
   const double ds = road.ownDs(reader.optionalNumber(position, "ds").value_or(0.0)) * stretch;
-  item["ds"] = num(ds + ahead(actor) - ahead(reference));
-  // dLane counts lane ids (as the Init reads it): on a reversed road, the other way.
+  item["ds"] = num(ds + centre_ahead - reference_ahead);
   item["lanes"] = std::to_string(road.ownLaneId(reader.integer(position, "dLane", -100, 100)));
   const double offset = road.ownT(reader.optionalNumber(position, "offset").value_or(0.0));
   if (offset != 0.0) item["offset"] = num(offset);
   return item;
 }
 
+/// The positions a teleport or a distance condition reads: fixed places, and places relative
+/// to a road user; the chosen one.
+pugi::xml_node placeKind(const xml::Reader& reader, const pugi::xml_node& position) {
+  return reader.choice(
+      position, {"WorldPosition", "LanePosition", "RoadPosition", "RelativeLanePosition", "RelativeRoadPosition"});
+}
+
+bool isRelative(const pugi::xml_node& kind) { return std::string(kind.name()).rfind("Relative", 0) == 0; }
+
 /// A Story <TeleportAction> of a scripted road user: its reference point lands on a place that
 /// does not move (its centre that far ahead along its heading), which must keep its heading,
-/// or relative to a road user (relativeTeleport).
+/// or relative to a road user (relativePlace).
 YAML::Node teleport(Translation& translation, const Entity& actor, const pugi::xml_node& action) {
   const xml::Reader& reader = translation.reader;
   reader.requireSubset(action, {"Position"});
   refuseStationary(reader, actor, action);
   const pugi::xml_node position = reader.only(action, "Position");
-  const pugi::xml_node kind = reader.choice(
-      position, {"WorldPosition", "LanePosition", "RoadPosition", "RelativeLanePosition", "RelativeRoadPosition"});
-  if (std::string(kind.name()).rfind("Relative", 0) == 0) return relativeTeleport(translation, actor, kind);
+  const pugi::xml_node kind = placeKind(reader, position);
+  if (isRelative(kind)) {
+    // Without an Orientation esmini faces it along the file's reference line.
+    refuseTurn(translation, actor, kind, translation.road.reversed ? kPi : 0.0);
+    return relativePlace(translation, kind, actor.drivesAgainstRoad() ? -actor.centreAhead : actor.centreAhead);
+  }
   const Placement p = fixedPlace(translation, position);
   refuseTurn(translation, actor, position.first_child(), p.heading);
   const LanguagePlace place = languagePlace(translation.road, p, actor.centreAhead, /*keep_lane=*/true);
@@ -644,24 +653,28 @@ YAML::Node relationLeaf(Translation& translation, const Entity& actor, const Ent
 
 /// The language's place of a condition's <Position>: where `subject`'s centre is when its
 /// reference point (what the file measures from) is there, driving along the road; the place
-/// itself where the file measures from the subject's body (`from_body`, freespace="true").
+/// itself where the file measures from the subject's body (`from_body`, freespace="true"). A
+/// place relative to a road user moves with it.
 YAML::Node placeOf(Translation& translation, const Entity& subject, const pugi::xml_node& condition, bool from_body) {
   const CarriagewayRoad& road = translation.road;
-  const Placement p = fixedPlace(translation, translation.reader.only(condition, "Position"));
-  const double stretch = 1.0 - road.curvatureAt(p.s) * p.t;
-  const int lane = road.nearestLane(p.t);
+  const pugi::xml_node position = translation.reader.only(condition, "Position");
   const double centre_ahead = from_body ? 0.0 : subject.centreAhead;
-  YAML::Node place;
-  place["s"] = num(road.languageS(p.s + centre_ahead / stretch));
-  place["lane"] = std::to_string(lane);
-  const double offset = p.t - road.laneCentreT(lane);
-  if (offset != 0.0) place["offset"] = num(offset);
   if (centre_ahead != 0.0) {
     translation.findings.note(translation.where(condition),
                               fmt::format("measured at the centre of '{}': the position moves {} m along the road, where "
                                           "its centre is when its reference point is there",
                                           subject.name, num(centre_ahead)));
   }
+  const pugi::xml_node kind = placeKind(translation.reader, position);
+  if (isRelative(kind)) return relativePlace(translation, kind, centre_ahead);
+  const Placement p = fixedPlace(translation, position);
+  const double stretch = 1.0 - road.curvatureAt(p.s) * p.t;
+  const int lane = road.nearestLane(p.t);
+  YAML::Node place;
+  place["s"] = num(road.languageS(p.s + centre_ahead / stretch));
+  place["lane"] = std::to_string(lane);
+  const double offset = p.t - road.laneCentreT(lane);
+  if (offset != 0.0) place["offset"] = num(offset);
   return place;
 }
 

@@ -274,9 +274,19 @@ bool hasSubject(TriggerSpec::Kind kind) {
 }
 
 /// `position: {s, lane[, offset]}` or `{x, y}`.
+void parseRelativePlace(const YamlReader& reader, const YAML::Node& node, const std::string& field,
+                        const std::vector<std::string>& inputs, PositionSpec& place);
+
+/// A distance trigger's place: `{s, lane[, offset]}`, `{x, y}`, or relative to a road user
+/// (`{from, ds, lanes[, offset]}` or `{from, ds, dd}`: it moves with that road user).
 void parsePosition(const YamlReader& reader, const YAML::Node& node, const std::string& field,
                    const std::vector<std::string>& inputs, PositionSpec& position) {
   reader.requireMap(node, field);
+  if (node["from"]) {
+    reader.checkKeys(node, field, {"from", "ds", "lanes", "offset", "dd"});
+    parseRelativePlace(reader, node, field, inputs, position);
+    return;
+  }
   reader.checkKeys(node, field, {"s", "lane", "offset", "x", "y"});
   position.inFrame = static_cast<bool>(node["x"]) || static_cast<bool>(node["y"]);
   const std::vector<std::string> keys = position.inFrame ? std::vector<std::string>{"x", "y"}
@@ -583,8 +593,7 @@ void parseRelativePlace(const YamlReader& reader, const YAML::Node& node, const 
                         const std::vector<std::string>& inputs, PositionSpec& place) {
   if (!node["ds"] || static_cast<bool>(node["lanes"]) == static_cast<bool>(node["dd"]) ||
       (node["dd"] && node["offset"])) {
-    reader.fail(node, field,
-                "expected {from, ds, lanes[, offset]} or {from, ds, dd}: where it lands from that road user");
+    reader.fail(node, field, "expected {from, ds, lanes[, offset]} or {from, ds, dd}: where from that road user");
   }
   place.from = reader.scalar(node["from"], field + ".from");
   if (place.from.empty()) reader.fail(node["from"], field + ".from", "expected a road user's id (ego or another's)");
@@ -809,6 +818,11 @@ void checkTriggerReferences(const TriggerSpec& trigger, const std::string& owner
   if (headway && !trigger.subject.empty() && trigger.subject != owner && trigger.subject != trigger.reference) {
     throw ConfigError(fmt::format("{}.of: got '{}', expected one of the headway's two road users: '{}' or '{}'",
                                   trigger.where, trigger.subject, owner, trigger.reference));
+  }
+  if (!trigger.position.from.empty() &&
+      std::find(users.begin(), users.end(), trigger.position.from) == users.end()) {
+    throw ConfigError(fmt::format("{}.position.from: got '{}', expected a road user of the file: {}", trigger.where,
+                                  trigger.position.from, fmt::join(users, ", ")));
   }
   if (trigger.kind == TriggerSpec::Kind::After && !actions.count(trigger.action)) {
     throw ConfigError(fmt::format("{}.after: got '{}', expected the id of an action of the file: {}", trigger.where,

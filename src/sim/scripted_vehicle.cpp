@@ -233,6 +233,8 @@ struct ScriptedTraffic::Impl {
     int lane = 0;
   };
   Landing landingOf(std::size_t a, const VehicleState& ego) const;
+  Landing placeNow(const scenario::ConcretePlace& place, const VehicleState& ego, double since,
+                   const std::string& field) const;
   void teleport(std::size_t a, const VehicleState& ego);
   /// The road lane the Ego at `ego` is in.
   int egoLaneOf(const VehicleState& ego) const;
@@ -371,8 +373,11 @@ double ScriptedTraffic::Impl::relationValue(const scenario::ConcreteTrigger& tri
 double ScriptedTraffic::Impl::distanceToPlace(const scenario::ConcreteTrigger& trigger, const VehicleState& ego) const {
   using Measure = scenario::TriggerSpec::Measure;
   const auto& spot = trigger.place;
-  const Vec2 place = spot.inFrame ? Vec2(spot.x, spot.y)
-                                  : frame.point(regionStartS + spot.s, road->laneOffset(spot.lane) + spot.offset);
+  Vec2 place(spot.x, spot.y);
+  if (!spot.inFrame) {
+    const Landing now = placeNow(spot, ego, 0.0, "a distance trigger's position");
+    place = frame.point(now.s, now.d);
+  }
   const VehicleState& subject = stateOf(trigger.subject, ego);
   if (!trigger.fromBody && trigger.measure == Measure::StraightLine) return (subject.position() - place).norm();
   const auto& spec = specOf(trigger.subject);
@@ -613,32 +618,37 @@ bool ScriptedTraffic::Impl::onPavedGround(double d) const {
 /// its centre is in, or dd across from its centre). On the road, or a ConfigError.
 ScriptedTraffic::Impl::Landing ScriptedTraffic::Impl::landingOf(std::size_t a, const VehicleState& ego) const {
   const ConcreteAction& action = concrete->actions[a];
-  const scenario::ConcretePlace& place = action.place;
-  Landing landing{regionStartS + place.s, road->laneOffset(place.lane) + place.offset, place.lane};
-  if (place.relative) {
-    // Where that one is at the action's start: at the current instant, moved on along the road
-    // at its speed to then (the next instant's state is not known yet).
-    const VehicleState& reference = stateOf(place.from, ego);
-    const auto [s, d] = frame.coordinates(reference.position());
-    const double speed_along = reference.speed * std::cos(reference.heading - frame.heading(s, d));
-    const double since = scheduled[a] - static_cast<double>(k) * step;
-    landing.s = s + frame.sRate(s, d, speed_along) * since + place.s;
-    landing.lane = place.acrossFromCentre ? road->laneAt(d + place.offset) : road->laneAt(d) + place.lane;
-    if (landing.lane < 0 || landing.lane >= road->lanes) {
-      throw ConfigError(fmt::format("{}: {}.teleport.lanes: lane {} from the lane of '{}', expected a lane the road "
-                                    "has (0 .. {})",
-                                    concrete->where(), action.where, landing.lane,
-                                    place.from < 0 ? "ego" : concrete->others[static_cast<std::size_t>(place.from)].id,
-                                    road->lanes - 1));
-    }
-    landing.d = place.acrossFromCentre ? d + place.offset : road->laneOffset(landing.lane) + place.offset;
-  }
+  const Landing landing = placeNow(action.place, ego, scheduled[a] - static_cast<double>(k) * step,
+                                   action.where + ".teleport");
   if (landing.s < 0.0 || landing.s > frame.length() || !onPavedGround(landing.d)) {
     throw ConfigError(fmt::format("{}: {}.teleport: it lands {:.1f} m along a road of {:.1f} m (lead-in and lead-out "
                                   "included), {:.2f} m left of its centre: expected a place on its lanes or shoulders",
                                   concrete->where(), action.where, landing.s - regionStartS, frame.length(),
                                   landing.d));
   }
+  return landing;
+}
+
+/// Where a place on the road lies: a fixed one, or one relative to a road user where that one
+/// is `since` s after the current instant (moved on along the road at its speed: the next
+/// instant's state is not known yet). `field` names the place in a lane that is off the road.
+ScriptedTraffic::Impl::Landing ScriptedTraffic::Impl::placeNow(const scenario::ConcretePlace& place,
+                                                               const VehicleState& ego, double since,
+                                                               const std::string& field) const {
+  if (!place.relative) return {regionStartS + place.s, road->laneOffset(place.lane) + place.offset, place.lane};
+  const VehicleState& reference = stateOf(place.from, ego);
+  const auto [s, d] = frame.coordinates(reference.position());
+  const double speed_along = reference.speed * std::cos(reference.heading - frame.heading(s, d));
+  Landing landing;
+  landing.s = s + frame.sRate(s, d, speed_along) * since + place.s;
+  landing.lane = place.acrossFromCentre ? road->laneAt(d + place.offset) : road->laneAt(d) + place.lane;
+  if (landing.lane < 0 || landing.lane >= road->lanes) {
+    throw ConfigError(fmt::format("{}: {}.lanes: lane {} from the lane of '{}', expected a lane the road has (0 .. {})",
+                                  concrete->where(), field, landing.lane,
+                                  place.from < 0 ? "ego" : concrete->others[static_cast<std::size_t>(place.from)].id,
+                                  road->lanes - 1));
+  }
+  landing.d = place.acrossFromCentre ? d + place.offset : road->laneOffset(landing.lane) + place.offset;
   return landing;
 }
 

@@ -963,6 +963,11 @@ TEST(OscRun, EachConditionStartsItsEventWhereTheFileSays) {
           <LanePosition roadId="7" laneId="-2" s="150" offset="0"/></Position></ReachPositionCondition>)")), 2.4 + kNext},
       // 30 m after 1.45 s
       {group(entityCondition("Lead", R"(<TraveledDistanceCondition value="30"/>)")), 1.6 + kNext},
+      // within 1 m of a place moving with Slow, 50 m ahead of its reference point on the lead's lane:
+      // 100 + 20 t + t^2 / 2 - (60 + 18 t + 50) >= -1 after 2.69 s
+      {group(entityCondition("Lead", R"(<ReachPositionCondition tolerance="1"><Position>
+          <RelativeLanePosition entityRef="Slow" dLane="2" ds="50"/></Position></ReachPositionCondition>)")),
+       2.8 + kNext},
       // closer than 10 m to x = 200 on its lane's centre (t = -2.75): 90 m after 4.08 s
       {group(entityCondition("Lead", R"(<DistanceCondition value="10" freespace="false" rule="lessThan"
           relativeDistanceType="euclidianDistance"><Position><WorldPosition x="200" y="-2.75"/></Position>
@@ -1515,8 +1520,8 @@ TEST(OscImport, ConditionsTheLanguageCannotExpressAreOneLineEach) {
        "<DistanceCondition>: coordinateSystem=\"trajectory\": the language measures a straight distance in the "
        "plane, and longitudinal or lateral ones along or across the Ego's lane"},
       {group(entityCondition("Lead", R"(<ReachPositionCondition tolerance="1"><Position>
-          <RelativeLanePosition entityRef="Ego" dLane="0" ds="10"/></Position></ReachPositionCondition>)")),
-       "element <RelativeLanePosition> is outside the supported subset"},
+          <RelativeObjectPosition entityRef="Ego" dx="10" dy="0"/></Position></ReachPositionCondition>)")),
+       "element <RelativeObjectPosition> is outside the supported subset"},
       {group(timeCondition("1") + entityCondition("Lead", R"(<TraveledDistanceCondition value="30"/>)", "2")),
        "delay 2 s, another condition of its group 0 s: the language delays a group as a whole"},
       // OpenSCENARIO measures it from the triggering entity to the reference ahead of it (false

@@ -443,9 +443,14 @@ TEST(ScriptedTraffic, DistancesToAPlaceMeasureAlongOrAcrossTheLaneFromTheCentreO
                  {{trigger: {{distance_at_most: 8, {1}, from: body}}, {0}}},
                  {{trigger: {{distance_at_least: 6.5, {1}, measure: lateral}}, {0}}},
                  {{trigger: {{distance_at_least: 6.5, {1}, measure: lateral, from: body}}, {0}}},
-                 {{trigger: {{distance_at_most: 6.5, {1}, measure: lateral, from: body}}, {0}}}]}})",
+                 {{trigger: {{distance_at_most: 6.5, {1}, measure: lateral, from: body}}, {0}}}]}}
+    - {{id: chaser, s: 10, lane: 0, speed: 20,
+       actions: [{{trigger: {{distance_at_most: 1, position: {{from: ego, ds: 0, lanes: -1}}, measure: along_lane}},
+                   {0}}}]}})",
                                                 marker, place));
   const auto timings = timingsAfter(plan(logical), 30);
+  // A place beside the stand-in Ego moves with it: 30 + 10 t - (10 + 20 t) <= 1 from t = 1.9.
+  EXPECT_NEAR(timings[6].start, 2.0, 1e-9);
   EXPECT_NEAR(timings[0].start, 2.2, 1e-9);  // 20 - 5 t <= 9.5 from t = 2.1
   EXPECT_NEAR(timings[1].start, 1.8, 1e-9);  // 20 - 5 t - 2.5 <= 9.4 from t = 1.62
   EXPECT_NEAR(timings[2].start, 2.6, 1e-9);  // sqrt((17.5 - 5 t)^2 + 6^2) <= 8 from t = 2.44
@@ -462,6 +467,9 @@ TEST(ScriptedTraffic, DistancesToAPlaceMeasureAlongOrAcrossTheLaneFromTheCentreO
             std::string::npos);
   EXPECT_NE(refused("{distance_at_most: 1, position: {s: 20, lane: 0}, from: front}")
                 .find("got 'front', expected centre or body"),
+            std::string::npos);
+  EXPECT_NE(refused("{distance_at_most: 1, position: {from: nobody, ds: 0, dd: 0}}")
+                .find("position.from: got 'nobody', expected a road user of the file"),
             std::string::npos);
 }
 

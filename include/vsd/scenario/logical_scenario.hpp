@@ -120,8 +120,8 @@ struct PositionSpec {
   Expression offset;     ///< m from the lane's centre, > 0 left (relative, acrossFromCentre: from its centre)
   Expression x;          ///< m
   Expression y;          ///< m
-  /// Teleports: relative to road user `from` ("ego" or an id; empty: a fixed place) where it is
-  /// when the place is asked for.
+  /// Relative to road user `from` ("ego" or an id; empty: a fixed place) where it is when the
+  /// place is asked for (a teleport's start; a distance trigger's every check: it moves with it).
   std::string from;
   bool acrossFromCentre = false;  ///< relative: `offset` m left of its centre, on the lane there
 };
