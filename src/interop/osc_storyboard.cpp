@@ -652,13 +652,16 @@ YAML::Node relationLeaf(Translation& translation, const Entity& actor, const Ent
 }
 
 /// The language's place of a condition's <Position>: where `subject`'s centre is when its
-/// reference point (what the file measures from) is there, driving along the road; the place
+/// reference point (what the file measures from) is there, in its direction along the road; the place
 /// itself where the file measures from the subject's body (`from_body`, freespace="true"). A
 /// place relative to a road user moves with it.
 YAML::Node placeOf(Translation& translation, const Entity& subject, const pugi::xml_node& condition, bool from_body) {
   const CarriagewayRoad& road = translation.road;
   const pugi::xml_node position = translation.reader.only(condition, "Position");
-  const double centre_ahead = from_body ? 0.0 : subject.centreAhead;
+  // m along the road's direction (against it for a road user driving that way)
+  const double centre_ahead = from_body                   ? 0.0
+                              : subject.drivesAgainstRoad() ? -subject.centreAhead
+                                                            : subject.centreAhead;
   if (centre_ahead != 0.0) {
     translation.findings.note(translation.where(condition),
                               fmt::format("measured at the centre of '{}': the position moves {} m along the road, where "

@@ -203,6 +203,10 @@ struct ScriptedTraffic::Impl {
   void checkOverlaps() const;
   double relationValue(const scenario::ConcreteTrigger& trigger, int owner, const VehicleState& ego) const;
   double distanceToPlace(const scenario::ConcreteTrigger& trigger, const VehicleState& ego) const;
+  /// Road user `user`'s id: -1 the Ego, else others[user].
+  std::string idOf(int user) const {
+    return user < 0 ? std::string("ego") : concrete->others[static_cast<std::size_t>(user)].id;
+  }
   /// Road user `user`'s state and description: -1 the Ego, else others[user].
   const VehicleState& stateOf(int user, const VehicleState& ego) const {
     return user < 0 ? ego : states[static_cast<std::size_t>(user)];
@@ -375,7 +379,8 @@ double ScriptedTraffic::Impl::distanceToPlace(const scenario::ConcreteTrigger& t
   const auto& spot = trigger.place;
   Vec2 place(spot.x, spot.y);
   if (!spot.inFrame) {
-    const Landing now = placeNow(spot, ego, 0.0, "a distance trigger's position");
+    const Landing now =
+        placeNow(spot, ego, 0.0, fmt::format("the distance trigger of '{}': its position", idOf(trigger.subject)));
     place = frame.point(now.s, now.d);
   }
   const VehicleState& subject = stateOf(trigger.subject, ego);
@@ -641,12 +646,13 @@ ScriptedTraffic::Impl::Landing ScriptedTraffic::Impl::placeNow(const scenario::C
   const double speed_along = reference.speed * std::cos(reference.heading - frame.heading(s, d));
   Landing landing;
   landing.s = s + frame.sRate(s, d, speed_along) * since + place.s;
-  landing.lane = place.acrossFromCentre ? road->laneAt(d + place.offset) : road->laneAt(d) + place.lane;
+  // Lanes count from the lane its centre is in; beside the lanes (a shoulder), from the lane
+  // that shoulder would be (esmini counts from the shoulder's lane id).
+  const int own_lane = d < -road->halfWidth() ? -1 : d > road->halfWidth() ? road->lanes : road->laneAt(d);
+  landing.lane = place.acrossFromCentre ? road->laneAt(d + place.offset) : own_lane + place.lane;
   if (landing.lane < 0 || landing.lane >= road->lanes) {
     throw ConfigError(fmt::format("{}: {}.lanes: lane {} from the lane of '{}', expected a lane the road has (0 .. {})",
-                                  concrete->where(), field, landing.lane,
-                                  place.from < 0 ? "ego" : concrete->others[static_cast<std::size_t>(place.from)].id,
-                                  road->lanes - 1));
+                                  concrete->where(), field, landing.lane, idOf(place.from), road->lanes - 1));
   }
   landing.d = place.acrossFromCentre ? d + place.offset : road->laneOffset(landing.lane) + place.offset;
   return landing;

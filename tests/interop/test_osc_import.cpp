@@ -1113,6 +1113,28 @@ TEST(OscRun, AStoryTeleportMovesAScriptedRoadUserAtOnce) {
   const ScenarioCheck arc_check = checkOpenScenario(arc_folder->path() / "arc.xosc", {});
   ASSERT_TRUE(arc_check.runnable()) << arc_check.report();
   EXPECT_THAT(arc_check.yaml, HasSubstr("ds: 30.1875"));
+  // In a ReachPositionCondition the place moves with Slow; the language measures from the lead's
+  // centre: with Slow a lorry, 50 + 1.25 - 5 = 46.25 m from Slow's centre; with the lead driving
+  // against the road (its centre 1.25 m behind its reference point along the road), 50 - 1.25 -
+  // 1.25 = 47.5 m, and a fixed place at s = 200 is where its centre is, s = 198.75.
+  const auto reach = [](const std::string& place) {
+    return group(entityCondition("Lead", R"(<ReachPositionCondition tolerance="1"><Position>)" + place +
+                                             "</Position></ReachPositionCondition>"));
+  };
+  const std::string near_slow = R"(<RelativeLanePosition entityRef="Slow" dLane="2" ds="50"/>)";
+  std::string lead_against = conditionsWith(reach(near_slow));
+  lead_against.replace(lead_against.find(lead_place), lead_place.size(), R"(<LanePosition roadId="7" laneId="-2"
+      s="100" offset="0"><Orientation type="relative" h="3.141592653589793"/></LanePosition>)");
+  std::string fixed_against = lead_against;
+  fixed_against.replace(fixed_against.find(near_slow), near_slow.size(),
+                        R"(<LanePosition roadId="7" laneId="-2" s="200" offset="0"/>)");
+  const auto reaches = folderWith({{"lorry.xosc", lorrySlow(conditionsWith(reach(near_slow)))},
+                                   {"against.xosc", lead_against},
+                                   {"fixed.xosc", fixed_against}});
+  const auto yaml_of = [&](const std::string& name) { return checkOpenScenario(reaches->path() / name, {}).yaml; };
+  EXPECT_THAT(yaml_of("lorry.xosc"), HasSubstr("from: Slow\n              ds: 46.25\n"));
+  EXPECT_THAT(yaml_of("against.xosc"), HasSubstr("from: Slow\n              ds: 47.5\n"));
+  EXPECT_THAT(yaml_of("fixed.xosc"), HasSubstr("s: 198.75\n"));
   const auto refusals = folderWith({{"against.xosc", against}, {"curved.xosc", curved}});
   EXPECT_THAT(importRefusal(*refusals, "against"),
               HasSubstr("<RelativeRoadPosition>: a heading 3.141592653589793 rad from the one 'Lead' has"));

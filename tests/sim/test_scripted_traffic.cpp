@@ -556,6 +556,15 @@ TEST(ScriptedTraffic, ATeleportMovesARoadUserAtOnceAndItDrivesOnFromThere) {
   EXPECT_NEAR(timings[2].start, 1.1, 1e-9);
   EXPECT_NEAR(timings[3].start, 2.6, 1e-9);
   EXPECT_TRUE(std::isnan(timings[5].start));
+  // Lanes count from a shoulder as from a lane beyond the outer one (esmini counts lane ids):
+  // one lane left of a pedestrian on the right shoulder is lane 0 (3.5 m right of the centre).
+  const Planned beside = plan(scenarioWith(R"(
+    - {id: walker, type: pedestrian, s: 100, lane: 0, offset: -3}
+    - {id: mover, s: 60, lane: 2, speed: 10,
+       actions: [{trigger: {time: 1}, teleport: {from: walker, ds: 10, lanes: 1}}]})",
+                                           0.0, 2.0));
+  const road::LaneFrame beside_frame(beside.road.centre);
+  EXPECT_NEAR(beside_frame.coordinates(beside.paths[1].back().position()).second, -3.5, 1e-9);
   // Standing on a bend, it keeps its heading to the road: along the road where it lands.
   const auto bend = scenarioWith(R"(
     - {id: stand, s: 100, lane: 0, speed: 0, actions: [{trigger: {time: 1}, teleport: {s: 150, lane: 0}}]})",
