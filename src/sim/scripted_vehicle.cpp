@@ -237,8 +237,10 @@ struct ScriptedTraffic::Impl {
     int lane = 0;
   };
   Landing landingOf(std::size_t a, const VehicleState& ego) const;
-  Landing placeNow(const scenario::ConcretePlace& place, const VehicleState& ego, double since,
-                   const std::string& field) const;
+  Landing placeNow(const scenario::ConcretePlace& place, const VehicleState& ego, double since) const;
+  /// Refuses a relative place on a lane the road does not have; `field` names the place.
+  [[noreturn]] void refuseLane(const Landing& landing, const scenario::ConcretePlace& place,
+                               const std::string& field) const;
   void teleport(std::size_t a, const VehicleState& ego);
   /// The road lane the Ego at `ego` is in.
   int egoLaneOf(const VehicleState& ego) const;
@@ -379,8 +381,10 @@ double ScriptedTraffic::Impl::distanceToPlace(const scenario::ConcreteTrigger& t
   const auto& spot = trigger.place;
   Vec2 place(spot.x, spot.y);
   if (!spot.inFrame) {
-    const Landing now =
-        placeNow(spot, ego, 0.0, fmt::format("the distance trigger of '{}': its position", idOf(trigger.subject)));
+    const Landing now = placeNow(spot, ego, 0.0);
+    if (std::isnan(now.d)) {
+      refuseLane(now, spot, fmt::format("the distance trigger of '{}': its position", idOf(trigger.subject)));
+    }
     place = frame.point(now.s, now.d);
   }
   const VehicleState& subject = stateOf(trigger.subject, ego);
@@ -623,8 +627,8 @@ bool ScriptedTraffic::Impl::onPavedGround(double d) const {
 /// its centre is in, or dd across from its centre). On the road, or a ConfigError.
 ScriptedTraffic::Impl::Landing ScriptedTraffic::Impl::landingOf(std::size_t a, const VehicleState& ego) const {
   const ConcreteAction& action = concrete->actions[a];
-  const Landing landing = placeNow(action.place, ego, scheduled[a] - static_cast<double>(k) * step,
-                                   action.where + ".teleport");
+  const Landing landing = placeNow(action.place, ego, scheduled[a] - static_cast<double>(k) * step);
+  if (std::isnan(landing.d)) refuseLane(landing, action.place, action.where + ".teleport");
   if (landing.s < 0.0 || landing.s > frame.length() || !onPavedGround(landing.d)) {
     throw ConfigError(fmt::format("{}: {}.teleport: it lands {:.1f} m along a road of {:.1f} m (lead-in and lead-out "
                                   "included), {:.2f} m left of its centre: expected a place on its lanes or shoulders",
@@ -636,10 +640,10 @@ ScriptedTraffic::Impl::Landing ScriptedTraffic::Impl::landingOf(std::size_t a, c
 
 /// Where a place on the road lies: a fixed one, or one relative to a road user where that one
 /// is `since` s after the current instant (moved on along the road at its speed: the next
-/// instant's state is not known yet). `field` names the place in a lane that is off the road.
+/// instant's state is not known yet). A relative one on a lane the road does not have has that
+/// lane and d NaN (the caller refuses it, refuseLane).
 ScriptedTraffic::Impl::Landing ScriptedTraffic::Impl::placeNow(const scenario::ConcretePlace& place,
-                                                               const VehicleState& ego, double since,
-                                                               const std::string& field) const {
+                                                               const VehicleState& ego, double since) const {
   if (!place.relative) return {regionStartS + place.s, road->laneOffset(place.lane) + place.offset, place.lane};
   const VehicleState& reference = stateOf(place.from, ego);
   const auto [s, d] = frame.coordinates(reference.position());
@@ -651,11 +655,17 @@ ScriptedTraffic::Impl::Landing ScriptedTraffic::Impl::placeNow(const scenario::C
   const int own_lane = d < -road->halfWidth() ? -1 : d > road->halfWidth() ? road->lanes : road->laneAt(d);
   landing.lane = place.acrossFromCentre ? road->laneAt(d + place.offset) : own_lane + place.lane;
   if (landing.lane < 0 || landing.lane >= road->lanes) {
-    throw ConfigError(fmt::format("{}: {}.lanes: lane {} from the lane of '{}', expected a lane the road has (0 .. {})",
-                                  concrete->where(), field, landing.lane, idOf(place.from), road->lanes - 1));
+    landing.d = kNaN;
+  } else {
+    landing.d = place.acrossFromCentre ? d + place.offset : road->laneOffset(landing.lane) + place.offset;
   }
-  landing.d = place.acrossFromCentre ? d + place.offset : road->laneOffset(landing.lane) + place.offset;
   return landing;
+}
+
+void ScriptedTraffic::Impl::refuseLane(const Landing& landing, const scenario::ConcretePlace& place,
+                                       const std::string& field) const {
+  throw ConfigError(fmt::format("{}: {}.lanes: lane {} from the lane of '{}', expected a lane the road has (0 .. {})",
+                                concrete->where(), field, landing.lane, idOf(place.from), road->lanes - 1));
 }
 
 /// A teleport: the road user lands on its place at the action's start t0 and drives on from
@@ -671,7 +681,6 @@ void ScriptedTraffic::Impl::teleport(std::size_t a, const VehicleState& ego) {
   const auto o = static_cast<std::size_t>(action.owner);
   Mover& mover = movers[o];
   const Landing landing = landingOf(a, ego);
-  const double landing_s = landing.s;
   const double heading_to_road = wrapAngle(mover.state.heading - frame.heading(mover.s, mover.d));
   const double now = static_cast<double>(k) * step;
   const double speed_now = mover.speedAlong;
@@ -688,7 +697,7 @@ void ScriptedTraffic::Impl::teleport(std::size_t a, const VehicleState& ego) {
   const double direction = mover.spec->againstRoad ? -1.0 : 1.0;
   mover.d = landing.d;
   // sRate is linear in its speed: metres along its offset line to metres of s.
-  mover.s = landing_s + direction * frame.sRate(landing_s, mover.d, after_landing - whole_step);
+  mover.s = landing.s + direction * frame.sRate(landing.s, mover.d, after_landing - whole_step);
   mover.laneIndex = landing.lane;
   const Vec2 position = frame.point(mover.s, mover.d);
   mover.state.x = position.x();

@@ -587,7 +587,8 @@ TEST(ScriptedTraffic, TeleportsAndLaneChangeOffsetsStayOnTheRoad) {
   const std::string moving = "s: 60, lane: 0, speed: 5";
   EXPECT_NE(refused(moving, "teleport: {s: 10}").find("expected {s, lane[, offset]}: where along the road it lands"),
             std::string::npos);
-  EXPECT_NE(refused(moving, "teleport: {x: 10, y: 0}").find("teleport"), std::string::npos);
+  EXPECT_NE(refused(moving, "teleport: {x: 10, y: 0}").find("teleport.x: unknown key 'x' (allowed: lane, offset, s)"),
+            std::string::npos);
   EXPECT_NE(refused("s: 60, lane: 0, type: stationary_object", "teleport: {s: 10, lane: 0}")
                 .find("a stationary object does not move"),
             std::string::npos);
