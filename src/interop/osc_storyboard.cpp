@@ -506,8 +506,15 @@ std::optional<YAML::Node> privateAction(Translation& translation, Entity& actor,
                                                        "its own way");
       return item;
     }
+    if (kind == "TeleportAction") {
+      // It lands there and its controller drives on from there.
+      YAML::Node item;
+      item["teleport"] = teleport(translation, actor, action);
+      return item;
+    }
     reader.fail(action, "an action of the Ego: its controller drives it (the language scripts its set speed, a "
-                        "SpeedAction, and the lane it keeps, a LaneChangeAction or LaneOffsetAction)");
+                        "SpeedAction, the lane it keeps, a LaneChangeAction or LaneOffsetAction, and moves it at "
+                        "once, a TeleportAction)");
   }
   YAML::Node item;
   if (kind == "TeleportAction") {

@@ -695,15 +695,20 @@ void parseAction(const YamlReader& reader, const YAML::Node& node, const std::st
             {"speed", "stop", "lane_change", "lateral_offset", "cross", "teleport", "set_speed", "controller"}, true);
   const bool of_ego = &owner == &scenario.ego;
   const bool controls = kind == "set_speed" || kind == "controller";
-  if (of_ego ? !(controls || kind == "lane_change" || kind == "lateral_offset") : controls) {
+  const bool moves_kept_lane = kind == "lane_change" || kind == "lateral_offset";
+  if (of_ego ? !(controls || moves_kept_lane || kind == "teleport") : controls) {
     reader.fail(node[kind], field + "." + kind,
                 of_ego ? "the Ego's controller drives it: the Ego's actions set its controller's set speed "
-                         "(set_speed), change its controller (controller) or move the lane it keeps (lane_change, "
-                         "lateral_offset)"
+                         "(set_speed), change its controller (controller), move the lane it keeps (lane_change, "
+                         "lateral_offset) or move it at once (teleport)"
                        : "only the Ego has a controller (set_speed and controller are actions of the Ego)");
   }
-  if (of_ego && !controls) {
+  if (of_ego && moves_kept_lane) {
     parseLateralAction(reader, node[kind], field + "." + kind, kind, inputs, /*of_ego=*/true, action);
+    return;
+  }
+  if (of_ego && kind == "teleport") {
+    parseTeleportAction(reader, node[kind], field + ".teleport", inputs, action);
     return;
   }
   if (of_ego && kind == "controller") {

@@ -322,6 +322,7 @@ class BatchRun {
     const std::vector<RoadUserState> road_users = roadUsersOf(member);
     // The others move on from instant k with the Ego where it is at k (triggers see it there).
     member.traffic->step(member.ego->state());
+    if (const auto& placed = member.traffic->egoTeleported()) member.ego->teleport(*placed, member.result.lanes);
     member.ego->commandSetSpeed(member.traffic->egoSetSpeedAt(time));
     member.ego->commandLaneOffset(member.traffic->egoLaneOffsetAt(time));
     if (!member.controllerSlots.empty()) {

@@ -106,12 +106,14 @@ Vec2 sumoFront(const VehicleState& state, double length, bool against_road) {
   return state.position() + ahead * headingVector(state.heading);
 }
 
-/// The lane (of `lanes`) nearest to `front` and SUMO's position along it, if a vehicle `width` m wide there lies
-/// beyond every lane as SUMO counts it: |lateral offset| >= (lane width + vehicle width) / 2 (SUMO 1.15, sublane
-/// model or not). 1 cm sooner: a vehicle so near the edge is put on the lane first too, which changes nothing,
-/// while one SUMO finds beyond it by the rounding of the frame shift would crash its FCD output.
-std::optional<std::pair<std::string, double>> nearestLaneIfBeyond(const Vec2& front, double width,
-                                                                  const std::vector<LaneGeometry>& lanes) {
+/// The lane (of `lanes`) nearest to `front` and SUMO's position along it; with `only_if_beyond`, only if a vehicle
+/// `width` m wide there lies beyond every lane as SUMO counts it: |lateral offset| >= (lane width + vehicle width)
+/// / 2 (SUMO 1.15, sublane model or not). 1 cm sooner: a vehicle so near the edge is put on the lane first too,
+/// which changes nothing, while one SUMO finds beyond it by the rounding of the frame shift would crash its FCD
+/// output.
+std::optional<std::pair<std::string, double>> nearestLane(const Vec2& front, double width,
+                                                          const std::vector<LaneGeometry>& lanes,
+                                                          bool only_if_beyond) {
   constexpr double kMargin = 0.01;
   const LaneGeometry* nearest = nullptr;
   PolylineProjection foot;
@@ -120,7 +122,7 @@ std::optional<std::pair<std::string, double>> nearestLaneIfBeyond(const Vec2& fr
     const MeasuredPolyline centre(lane.centre);
     const PolylineProjection projection = centre.project(front);
     const double across = std::abs(projection.lateralOffset);
-    if (across < 0.5 * (lane.width + width) - kMargin) return std::nullopt;
+    if (only_if_beyond && across < 0.5 * (lane.width + width) - kMargin) return std::nullopt;
     if (nearest != nullptr && across >= std::abs(foot.lateralOffset)) continue;
     nearest = &lane;
     foot = projection;
@@ -147,7 +149,7 @@ void placeInSumo(const std::string& vehicle_id, const VehicleState& state, doubl
 void enterSumo(const std::string& vehicle_id, const VehicleState& state, double length, double width,
                const Vec2& offset, const SumoPlacement& placement, const std::vector<LaneGeometry>& lanes,
                bool against_road) {
-  const auto lane = nearestLaneIfBeyond(sumoFront(state, length, against_road), width, lanes);
+  const auto lane = nearestLane(sumoFront(state, length, against_road), width, lanes, /*only_if_beyond=*/true);
   if (lane) libsumo::Vehicle::moveTo(vehicle_id, lane->first, lane->second);
   placeInSumo(vehicle_id, state, length, width, offset, placement, against_road);
 }
@@ -174,6 +176,17 @@ void EgoDriver::pushToSumo() const { placeInSumo(vehicleId_, state_, length_, wi
 
 void EgoDriver::enterSumo(const std::vector<LaneGeometry>& lanes) const {
   sim::enterSumo(vehicleId_, state_, length_, width_, offset_, placement_, lanes, false);
+}
+
+void EgoDriver::teleport(const VehicleState& placed, const std::vector<LaneGeometry>& lanes) {
+  state_.x = placed.x;
+  state_.y = placed.y;
+  state_.heading = placed.heading;
+  // moveToXY takes effect with SUMO's next step, moveTo at once: the lane the observation reads
+  // (getLaneID) is already the one it landed on.
+  const auto lane = nearestLane(sumoFront(state_, length_, false), width_, lanes, /*only_if_beyond=*/false);
+  if (lane) libsumo::Vehicle::moveTo(vehicleId_, lane->first, lane->second);
+  pushToSumo();
 }
 
 void EgoDriver::knowAgainstRoad(std::vector<std::string> vehicle_ids) {

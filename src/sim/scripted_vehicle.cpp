@@ -189,6 +189,9 @@ struct ScriptedTraffic::Impl {
   /// the lane its controller keeps, as offsets across the road in m), in start order.
   std::vector<std::pair<double, Transition>> egoLaterals;
   int egoLateralLane = 0;  ///< the road lane the latest of them moves to (valid once one started)
+  /// Where a teleport of the Ego that starts over the step ahead puts it at the current instant
+  /// (none: no such teleport); its controller drives it on from there.
+  std::optional<VehicleState> egoPlaced;
   PurePursuitLateral laneKeeping;  // the Ego's defaults: lookahead max(4 m, 0.4 s * v)
   // What travelled and end_of_road conditions measure, per road user (0: the Ego, 1 + o: others[o]);
   // tracked only if a trigger asks.
@@ -242,6 +245,7 @@ struct ScriptedTraffic::Impl {
   [[noreturn]] void refuseLane(const Landing& landing, const scenario::ConcretePlace& place,
                                const std::string& field) const;
   void teleport(std::size_t a, const VehicleState& ego);
+  void teleportEgo(std::size_t a, const VehicleState& ego);
   /// The road lane the Ego at `ego` is in.
   int egoLaneOf(const VehicleState& ego) const;
   /// The road lane a lane change of `owner` (-1: the Ego), now in lane `own_lane`, goes to.
@@ -579,12 +583,13 @@ void ScriptedTraffic::Impl::activate(std::size_t a, const VehicleState& ego) {
     scheduleWaiters(a, ego);
     return;
   }
-  if (action.owner < 0) {
-    activateEgoLateral(a, ego);
+  if (action.kind == ActionSpec::Kind::Teleport) {
+    if (action.owner < 0) teleportEgo(a, ego);
+    else teleport(a, ego);
     return;
   }
-  if (action.kind == ActionSpec::Kind::Teleport) {
-    teleport(a, ego);
+  if (action.owner < 0) {
+    activateEgoLateral(a, ego);
     return;
   }
   Mover& mover = movers[static_cast<std::size_t>(action.owner)];
@@ -706,6 +711,34 @@ void ScriptedTraffic::Impl::teleport(std::size_t a, const VehicleState& ego) {
   mover.state.heading = wrapAngle(frame.heading(mover.s, mover.d) + facing);
   states[o] = mover.state;
   atRoadEndSince[o + 1] = kNaN;  // it may have left the road's end behind
+  timings[a] = {t0, t0};
+  scheduleWaiters(a, ego);
+}
+
+/// A teleport of the Ego: at the current instant it is put where it reaches its landing place at
+/// the action's start t0 at its speed, facing along its lane (standing: keeping its heading to the
+/// road), and its controller drives it on from there. The lane it keeps becomes the landing place
+/// across the road (a lane change under way ends); the distance it travels counts from there.
+void ScriptedTraffic::Impl::teleportEgo(std::size_t a, const VehicleState& ego) {
+  const double t0 = scheduled[a];
+  const Landing landing = landingOf(a, ego);
+  const auto [ego_s, ego_d] = frame.coordinates(ego.position());
+  const double heading_to_road = wrapAngle(ego.heading - frame.heading(ego_s, ego_d));
+  // m it drives from the current instant to t0, as m of s (sRate is linear in its speed)
+  const double before = frame.sRate(landing.s, landing.d, ego.speed * (t0 - static_cast<double>(k) * step));
+  const double s = landing.s - before;
+  VehicleState placed = ego;
+  const Vec2 position = frame.point(s, landing.d);
+  placed.x = position.x();
+  placed.y = position.y();
+  placed.heading = wrapAngle(frame.heading(s, landing.d) + (ego.speed > 1e-9 ? 0.0 : heading_to_road));
+  egoPlaced = placed;
+  // Its controller keeps the landing place from the current instant, where it is put.
+  const double now = static_cast<double>(k) * step;
+  egoLaterals.emplace_back(now, Transition{now, 0.0, landing.d, landing.d, TransitionShape::Step});
+  egoLateralLane = landing.lane;
+  lastEgo = placed;
+  atRoadEndSince[0] = kNaN;  // it may have left the road's end behind
   timings[a] = {t0, t0};
   scheduleWaiters(a, ego);
 }
@@ -865,6 +898,8 @@ std::optional<double> ScriptedTraffic::egoSetSpeedAt(double time) const {
   return lastStartedBy(impl_->egoSetSpeeds, time);
 }
 
+const std::optional<VehicleState>& ScriptedTraffic::egoTeleported() const { return impl_->egoPlaced; }
+
 std::optional<double> ScriptedTraffic::egoLaneOffsetAt(double time) const {
   const auto move = lastStartedBy(impl_->egoLaterals, time);
   if (!move) return std::nullopt;
@@ -873,6 +908,7 @@ std::optional<double> ScriptedTraffic::egoLaneOffsetAt(double time) const {
 
 void ScriptedTraffic::step(const VehicleState& ego) {
   Impl& impl = *impl_;
+  impl.egoPlaced.reset();
   if (impl.tracksProgress) impl.trackProgress(ego);
   impl.rearmEnded();
   impl.fireTriggers(ego);

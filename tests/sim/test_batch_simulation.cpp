@@ -556,22 +556,34 @@ vehicles:
   }
 }
 
+namespace {
+
+/// The Ego (idm at its set speed, 20 m/s, from s = 30 m on lane 0) on a straight road of 3
+/// lanes of 3.5 m (lane centres at y = -3.5, 0, 3.5) with `actions` (and `others`), simulated.
+Batch egoOnThreeLanes(const TemporaryDirectory& dir, const std::string& name, double duration,
+                      const std::string& actions, const std::string& others = "") {
+  const std::string yaml = fmt::format(R"(
+name: {}
+time: {{step: 0.2, duration: {}}}
+road: {{shape: arc, curvature: 0, length: 500, lanes: 3, lane_width: 3.5}}
+vehicles:
+  ego: {{s: 30, lane: 0, speed: 20, controller: {{name: idm, params: {{set_speed: 20}}}}, actions: {}}}
+{})",
+                                       name, duration, actions, others.empty() ? "" : "  others:\n" + others);
+  return Batch(scenario::parseLogicalScenario(yaml, name + ".yaml"), 1, dir.path());
+}
+
+}  // namespace
+
 // The Ego's lane_change and lateral_offset actions move the lane its controller keeps (idm:
 // pure pursuit on the observed lane): it follows each move with its own lag and settles on the
-// target. Road of 3 lanes of 3.5 m: lane centres at y = -3.5, 0, 3.5.
+// target (egoOnThreeLanes: lane centres at y = -3.5, 0, 3.5).
 TEST(BatchSimulation, TheEgosLateralActionsMoveTheLaneItsControllerKeeps) {
   TemporaryDirectory dir;
-  const std::string yaml = R"(
-name: ego_lateral
-time: {step: 0.2, duration: 18}
-road: {shape: arc, curvature: 0, length: 500, lanes: 3, lane_width: 3.5}
-vehicles:
-  ego: {s: 30, lane: 0, speed: 20, controller: {name: idm, params: {set_speed: 20}},
-        actions: [{id: left, trigger: {time: 1}, lane_change: {lanes: 1, duration: 3}},
-                  {id: over, trigger: {time: 8}, lane_change: {lane: 2, shape: step}},
-                  {trigger: {time: 13}, lateral_offset: {offset: -0.5, duration: 1}}]}
-)";
-  const Batch batch(scenario::parseLogicalScenario(yaml, "ego_lateral.yaml"), 1, dir.path());
+  const Batch batch = egoOnThreeLanes(dir, "ego_lateral", 18, R"([
+      {id: left, trigger: {time: 1}, lane_change: {lanes: 1, duration: 3}},
+      {id: over, trigger: {time: 8}, lane_change: {lane: 2, shape: step}},
+      {trigger: {time: 13}, lateral_offset: {offset: -0.5, duration: 1}}])");
   ASSERT_TRUE(batch.results[0].ok()) << batch.results[0].failure;
   const auto& ego = batch.results[0].trace.vehicles[0].states;
   const auto y_at = [&](double t) { return ego.at(static_cast<std::size_t>(std::lround(t / 0.2))).y; };
@@ -587,6 +599,44 @@ vehicles:
     if (k > 40 && k <= 52) continue;  // the step's answer, 8 .. 10.4 s
     EXPECT_LT(std::abs(ego[k].y - ego[k - 1].y), 0.2 * 2.5) << "instant " << k;  // < 2.5 m/s sideways
   }
+}
+
+// A teleport of the Ego moves it at once; its controller drives on from there (idm at its set
+// speed: 20 m/s throughout). By hand, on a straight road of 3 lanes of 3.5 m (centres at y =
+// -3.5, 0, 3.5): it starts at s = 30 m; at 2.1 s (42 m on) it lands at s = 10 m, 0.5 m left of
+// lane 1's centre, so at 2.2 s it is 2 m further; the lane change under way ends and it keeps
+// its landing place across the road. Travelled: 42 m before, 18 m after the jump: 60 m at 3.0 s,
+// when its set speed drops to 10 m/s (it brakes from then on, not before).
+TEST(BatchSimulation, AnEgoTeleportMovesItAtOnceAndItsControllerDrivesOnFromThere) {
+  TemporaryDirectory dir;
+  const Batch batch = egoOnThreeLanes(dir, "ego_teleport", 6, R"([
+      {trigger: {time: 0.5}, lane_change: {lane: 2, duration: 4}},
+      {id: back, trigger: {time: 2.1}, teleport: {s: 10, lane: 1, offset: 0.5}},
+      {trigger: {travelled: 60}, set_speed: {target: 10}}])");
+  ASSERT_TRUE(batch.results[0].ok()) << batch.results[0].failure;
+  const auto& ego = batch.results[0].trace.vehicles[0].states;
+  const double x0 = ego.at(0).x;
+  EXPECT_GT(ego.at(10).x - x0, 39.9);  // 40 m, less what the lane change turned it
+  EXPECT_NEAR(ego.at(11).x - x0, -18.0, 1e-6);
+  for (std::size_t k = 11; k <= 15; ++k) {
+    EXPECT_NEAR(ego.at(k).y, 0.5, 1e-6) << "instant " << k;
+    EXPECT_NEAR(ego.at(k).heading, 0.0, 1e-9) << "instant " << k;
+    EXPECT_NEAR(ego.at(k).speed, 20.0, 1e-9) << "instant " << k;
+  }
+  EXPECT_NEAR(ego.at(20).y, 0.5, 1e-3);  // the lane change under way ended at the teleport
+  EXPECT_LT(ego.at(17).speed, 20.0 - 1e-3);  // braking once it has travelled 60 m (3.0 s)
+  // Relative to a slower car two lanes left (10 m/s, at s = 130 m at 1 s): at 1 s it lands 25 m
+  // behind it in its lane, and its controller sees it as its leader from the step that lands it
+  // (it brakes in that step already: SUMO has it in that lane at once).
+  const Batch relative = egoOnThreeLanes(dir, "ego_teleport_behind", 2,
+                                         "[{trigger: {time: 1}, teleport: {from: slow, ds: -25, lanes: 0}}]",
+                                         "    - {id: slow, s: 120, lane: 2, speed: 10}\n");
+  ASSERT_TRUE(relative.results[0].ok()) << relative.results[0].failure;
+  const auto& follower = relative.results[0].trace.vehicles[0].states;
+  EXPECT_NEAR(follower.at(4).speed, 20.0, 1e-9);
+  EXPECT_LT(follower.at(5).speed, 20.0 - 1e-3);
+  EXPECT_NEAR(follower.at(5).y, 3.5, 1e-6);
+  EXPECT_NEAR(follower.at(5).x - follower.at(0).x, 75.0, 0.5);  // less what it braked in the last step
 }
 
 // A controller action may hand over one domain: the other stays with its controller. By hand,

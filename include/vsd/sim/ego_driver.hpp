@@ -138,6 +138,9 @@ class EgoDriver {
   void pushToSumo() const;
   /// pushToSumo for the first time, before SUMO has inserted the vehicle (enterSumo; `lanes`: its road's).
   void enterSumo(const std::vector<LaneGeometry>& lanes) const;
+  /// Moves the vehicle at once to `placed`'s position and heading (a scenario's teleport; it keeps
+  /// its speed and its controller), in SUMO on the nearest of `lanes` (its road's).
+  void teleport(const VehicleState& placed, const std::vector<LaneGeometry>& lanes);
   /// Builds the controller's observation from SUMO's current state; for a controller that
   /// observes objects, the object list of `road_users` (the other road users at `time`).
   Observation observe(double time, LaneCache& lanes, const std::vector<RoadUserState>& road_users = {}) const;

@@ -86,6 +86,10 @@ class ScriptedTraffic {
   /// the lane its controller keeps: m across the road (the road's lane offsets, > 0 left) at
   /// `time`; none before the first (it keeps its own lane). Asked as egoSetSpeedAt.
   std::optional<double> egoLaneOffsetAt(double time) const;
+  /// Where a teleport of the Ego that started over the last step() puts it at the instant that
+  /// step started from (its controller drives on from there: the next instant lands it where the
+  /// action says at its start); none if no teleport of the Ego started then.
+  const std::optional<VehicleState>& egoTeleported() const;
 
  private:
   struct Impl;
