@@ -96,6 +96,10 @@ struct Mover {
   int laneIndex = 0;
   std::optional<Transition> speed;    ///< the latest speed action (none: the scripted speed)
   std::optional<Transition> lateral;  ///< the latest lateral action (none: stays at d)
+  /// The latest speed and lateral actions that started (index into ConcreteScenario::actions): a
+  /// later one, or a teleport, ends them where it starts.
+  std::optional<std::size_t> speedAction;
+  std::optional<std::size_t> lateralAction;
   double speedAlong = 0.0;            ///< m/s, longitudinal speed at the current instant
   /// The latest speed action if it is continuous (it tracks another road user's speed): its index.
   std::optional<std::size_t> tracking;
@@ -189,6 +193,7 @@ struct ScriptedTraffic::Impl {
   /// the lane its controller keeps, as offsets across the road in m), in start order.
   std::vector<std::pair<double, Transition>> egoLaterals;
   int egoLateralLane = 0;  ///< the road lane the latest of them moves to (valid once one started)
+  std::optional<std::size_t> egoLateralAction;  ///< the latest of them (index into ConcreteScenario::actions)
   /// Where a teleport of the Ego that starts over the step ahead puts it at the current instant
   /// (none: no such teleport); its controller drives it on from there.
   std::optional<VehicleState> egoPlaced;
@@ -251,6 +256,8 @@ struct ScriptedTraffic::Impl {
   /// The road lane a lane change of `owner` (-1: the Ego), now in lane `own_lane`, goes to.
   int laneChangeTarget(const ConcreteAction& action, int own_lane, const VehicleState& ego, double t0) const;
   void scheduleWaiters(std::size_t a, const VehicleState& ego);
+  /// Ends action `a` (if any) at `t` if it is under way then: a later action replaced it.
+  void endIfUnderWay(const std::optional<std::size_t>& a, double t, const VehicleState& ego);
   void activateDue(const VehicleState& ego);
   VehicleState advancePurePursuit(Mover& mover);
   VehicleState advanceExact(Mover& mover);
@@ -528,11 +535,9 @@ void ScriptedTraffic::Impl::startSpeedAction(std::size_t a, Mover& mover, Transi
   transition.from = mover.nominalSpeed(transition.start, step);
   transition.to = speedTargetOf(action, transition.from, ego);
   transition.duration = durationOf(action, transition.from, transition.to);
-  if (mover.tracking) {  // replaced: it ends here
-    timings[*mover.tracking].end = transition.start;
-    scheduleWaiters(*mover.tracking, ego);
-  }
+  endIfUnderWay(mover.speedAction, transition.start, ego);  // replaced: it ends here
   mover.speed = transition;
+  mover.speedAction = a;
   mover.tracking.reset();
   if (action.continuous) {
     mover.tracking = a;
@@ -617,7 +622,9 @@ void ScriptedTraffic::Impl::activate(std::size_t a, const VehicleState& ego) {
                                   concrete->where(), action.where, field, t0, transition.to));
   }
   transition.duration = lateralDuration(action, transition, mover.speedAlong, concrete->where());
+  endIfUnderWay(mover.lateralAction, t0, ego);
   mover.lateral = transition;
+  mover.lateralAction = a;
   timings[a] = {t0, transition.end()};
   scheduleWaiters(a, ego);
 }
@@ -695,6 +702,8 @@ void ScriptedTraffic::Impl::teleport(std::size_t a, const VehicleState& ego) {
     mover.speed = Transition{t0, 0.0, held, held, TransitionShape::Step};
     mover.tracking.reset();
   }
+  endIfUnderWay(mover.speedAction, t0, ego);
+  endIfUnderWay(mover.lateralAction, t0, ego);
   mover.lateral.reset();
   const double speed_next = mover.speedAt(k + 1, step);
   const double after_landing = 0.5 * (speed_landing + speed_next) * (now + step - t0);  // m
@@ -737,6 +746,8 @@ void ScriptedTraffic::Impl::teleportEgo(std::size_t a, const VehicleState& ego) 
   const double now = static_cast<double>(k) * step;
   egoLaterals.emplace_back(now, Transition{now, 0.0, landing.d, landing.d, TransitionShape::Step});
   egoLateralLane = landing.lane;
+  endIfUnderWay(egoLateralAction, t0, ego);
+  egoLateralAction.reset();
   lastEgo = placed;
   atRoadEndSince[0] = kNaN;  // it may have left the road's end behind
   timings[a] = {t0, t0};
@@ -782,21 +793,31 @@ void ScriptedTraffic::Impl::activateEgoLateral(std::size_t a, const VehicleState
   transition.duration =
       action.shape == TransitionShape::Step ? 0.0 : lateralDuration(action, transition, ego.speed, concrete->where());
   egoLaterals.emplace_back(transition.start, transition);
+  endIfUnderWay(egoLateralAction, transition.start, ego);
+  egoLateralAction = a;
   timings[a] = {transition.start, transition.end()};
   scheduleWaiters(a, ego);
 }
 
-/// Once action `a` has started and its end is known: the actions waiting for that end.
+/// Once action `a` has started and its end is known (or has moved earlier: it was replaced): the
+/// actions waiting for that end that have not started.
 void ScriptedTraffic::Impl::scheduleWaiters(std::size_t a, const VehicleState& ego) {
   const double end = timings[a].end;
   for (std::size_t b = 0; b < concrete->actions.size(); ++b) {
     const auto& trigger = concrete->actions[b].trigger;
-    if (trigger.kind == TriggerSpec::Kind::After && trigger.action == static_cast<int>(a) && std::isnan(scheduled[b])) {
-      if (std::isfinite(end)) scheduled[b] = end + trigger.delay;
+    if (trigger.kind == TriggerSpec::Kind::After && trigger.action == static_cast<int>(a) &&
+        std::isnan(timings[b].start)) {
+      if (std::isfinite(end) && !(end + trigger.delay >= scheduled[b])) scheduled[b] = end + trigger.delay;
     } else if (trigger.kind == TriggerSpec::Kind::Any && std::isnan(timings[b].start)) {
       offer(b, ego);  // a member waiting for this action's end
     }
   }
+}
+
+void ScriptedTraffic::Impl::endIfUnderWay(const std::optional<std::size_t>& a, double t, const VehicleState& ego) {
+  if (!a || !(timings[*a].start <= t + 1e-9) || !(timings[*a].end > t)) return;
+  timings[*a].end = t;
+  scheduleWaiters(*a, ego);
 }
 
 void ScriptedTraffic::Impl::activateDue(const VehicleState& ego) {

@@ -49,6 +49,22 @@ Planned plan(const std::shared_ptr<const scenario::LogicalScenario>& logical, st
   return run;
 }
 
+/// The Ego (alks, 10 m/s, at s = 30 m on lane 1 of a straight road of 3 lanes of 3.5 m, lane 1's
+/// centre on the road's centre line) with `ego_actions` and the road users of `others`, planned.
+Planned egoWith(const std::string& name, double duration, const std::string& ego_actions, const std::string& others) {
+  return plan(scenario::parseLogicalScenario(fmt::format(R"(
+name: {}
+time: {{step: 0.2, duration: {}}}
+road: {{shape: arc, length: 300, lanes: 3, lane_width: 3.5}}
+vehicles:
+  ego: {{s: 30, lane: 1, speed: 10, controller: {{name: alks}}, actions: {}}}
+  others:
+{}
+)",
+                                                         name, duration, ego_actions, others),
+                                             name + ".yaml"));
+}
+
 /// The actions' timings after `instants` instants (0.2 s) of the stand-in Ego.
 std::vector<ScriptedTraffic::ActionTiming> timingsAfter(const Planned& run, int instants) {
   ScriptedTraffic traffic(run.concrete, run.road);
@@ -325,7 +341,8 @@ TEST(ScriptedTraffic, AContinuousTargetFollowsTheOthersSpeedUntilReplaced) {
     - {id: follower, s: 100, lane: 0, speed: 3,
        actions: [{id: track, speed: {relative_factor: 1.5, to: lead, continuous: true, shape: step}},
                  {id: brake, trigger: {time: 4}, stop: {decel: 5, shape: linear}},
-                 {id: fixed, trigger: {time: 7}, speed: {relative_target: -2, to: lead, shape: step}}]})",
+                 {id: fixed, trigger: {time: 7}, speed: {relative_target: -2, to: lead, shape: step}},
+                 {id: after_brake, trigger: {after: brake}, lateral_offset: {offset: 0.5, duration: 1}}]})",
                                         0.0, 9.0));
   const auto& lead = run.paths[0];
   const auto& follower = run.paths[1];
@@ -338,10 +355,15 @@ TEST(ScriptedTraffic, AContinuousTargetFollowsTheOthersSpeedUntilReplaced) {
   // Not continuous: the lead's speed as the step to t = 7 s starts (16.8 m/s) less 2, fixed from then on.
   EXPECT_NEAR(follower[35].speed, 14.8, 1e-9);
   EXPECT_NEAR(follower[45].speed, 14.8, 1e-9);
-  const auto timings = timingsAfter(run, 45);  // in file order: after_track, track, brake, fixed
+  // In file order: after_track, track, brake, fixed, after_brake.
+  const auto timings = timingsAfter(run, 45);
   EXPECT_NEAR(timings[1].start, 0.0, 1e-9);
   EXPECT_NEAR(timings[1].end, 4.0, 1e-9);  // replaced by the stop
   EXPECT_NEAR(timings[0].start, 4.0, 1e-9);
+  // The stop (from 20.7 m/s at 5 m/s^2: 4.14 s) ends where the fixed target replaces it, at 7 s
+  // (as esmini ends an action a later one overrides), and an `after` on it fires then.
+  EXPECT_NEAR(timings[2].end, 7.0, 1e-9);
+  EXPECT_NEAR(timings[4].start, 7.0, 1e-9);
   // Tracking that is never replaced never ends.
   const auto open = timingsAfter(plan(scenarioWith(R"(
     - {id: follower, s: 100, lane: 0, speed: 3,
@@ -553,6 +575,8 @@ TEST(ScriptedTraffic, ATeleportMovesARoadUserAtOnceAndItDrivesOnFromThere) {
   const auto& timings = traffic.timings();
   EXPECT_NEAR(timings[0].start, 1.1, 1e-9);
   EXPECT_NEAR(timings[0].end, 1.1, 1e-9);
+  EXPECT_NEAR(timings[1].end, 1.1, 1e-9);  // the lane change under way ended there
+  EXPECT_NEAR(timings[6].end, 2.0, 1e-9);  // so did the speeder's speed change (10 s planned)
   EXPECT_NEAR(timings[2].start, 1.1, 1e-9);
   EXPECT_NEAR(timings[3].start, 2.6, 1e-9);
   EXPECT_TRUE(std::isnan(timings[5].start));
@@ -692,23 +716,14 @@ TEST(ScriptedTraffic, LanesOfTheirOwnWidthsLieSideBySide) {
 // from their start on: one at t = 2.1 s (between instants), one when the gap to 'a' (40 m
 // at t = 0, closing at 10 - 5 = 5 m/s) is at most 20.5 m, i.e. at the instant t = 4.0 s.
 TEST(ScriptedTraffic, TheEgosSetSpeedActionsCommandItsSetSpeedFromTheirStart) {
-  const auto logical = scenario::parseLogicalScenario(R"(
-name: set_speeds
-time: {step: 0.2, duration: 10}
-road: {shape: arc, length: 300, lanes: 3, lane_width: 3.5}
-vehicles:
-  ego: {s: 30, lane: 1, speed: 10, controller: {name: alks},
-        actions: [{id: slower, trigger: {time: 2.1}, set_speed: {target: 7}},
-                  {trigger: {gap: 20.5, to: a}, set_speed: {target: 4}}]}
-  others:
-    - {id: a, gap: 40, relative_lane: 0, speed: 5,
+  const Planned run = egoWith("set_speeds", 10, R"([
+      {id: slower, trigger: {time: 2.1}, set_speed: {target: 7}},
+      {trigger: {gap: 20.5, to: a}, set_speed: {target: 4}}])",
+                               R"(    - {id: a, gap: 40, relative_lane: 0, speed: 5,
        actions: [{trigger: {after: slower}, lateral_offset: {offset: 0.5, duration: 1}}]}
-)",
-                                                      "set_speeds.yaml");
-  const auto concrete = scenario::sampleConcreteScenario(logical, 1, 0);
-  const auto road = road::buildRoadGeometry(concrete);
-  ScriptedTraffic traffic(concrete, road);
-  const EgoStandIn ego(concrete, road);
+)");
+  ScriptedTraffic traffic(run.concrete, run.road);
+  const EgoStandIn ego(run.concrete, run.road);
   EXPECT_FALSE(traffic.egoSetSpeedAt(0.0));
   std::vector<std::optional<double>> commanded;  // what the Ego's controller sees at instant k
   for (int k = 0; k < 30; ++k) {
@@ -727,6 +742,44 @@ vehicles:
   EXPECT_NEAR(timings[1].end, 2.1, 1e-9);
   EXPECT_NEAR(timings[0].start, 2.1, 1e-9);  // `after` a set speed: at once
   EXPECT_NEAR(timings[2].start, 4.0, 1e-9);
+}
+
+// The Ego's lateral actions end where a later one, or a teleport of it, replaces them; the lane
+// its controller keeps is the latest one's. By hand, 3 lanes of 3.5 m (lane 1's centre on the
+// road's centre line, lane 2's 3.5 m left): the lane change from 1 s (3 s) is replaced at 2 s
+// by the offset (4 s), which the teleport at 5.1 s replaces: the Ego lands on lane 0's centre,
+// put at the instant 5.0 s 1 m before it (10 m/s), and keeps that lane from then on.
+TEST(ScriptedTraffic, TheEgosLateralActionsEndWhereALaterOneOrATeleportReplacesThem) {
+  const Planned run = egoWith("ego_moves", 8, R"([
+      {id: left, trigger: {time: 1}, lane_change: {lanes: 1, duration: 3}},
+      {id: nudge, trigger: {time: 2}, lateral_offset: {offset: 0.5, duration: 4}},
+      {id: back, trigger: {time: 5.1}, teleport: {s: 20, lane: 0}}])",
+                               R"(    - {id: a, s: 100, lane: 0, speed: 5,
+       actions: [{id: after_left, trigger: {after: left}, lateral_offset: {offset: 0.5, duration: 1}}]}
+)");
+  ScriptedTraffic traffic(run.concrete, run.road);
+  const EgoStandIn ego(run.concrete, run.road);
+  std::map<std::string, ScriptedTraffic::ActionTiming> timing_of;
+  for (int k = 0; k < 40; ++k) {
+    traffic.step(ego.at(0.2 * k));
+    EXPECT_EQ(traffic.egoTeleported().has_value(), k == 25) << "instant " << k;
+    if (k == 25) {
+      const road::LaneFrame frame(run.road.centre);
+      const auto [s, d] = frame.coordinates(traffic.egoTeleported()->position());
+      EXPECT_NEAR(s - frame.coordinates(ego.at(0.0).position()).first, 20.0 - 30.0 - 1.0, 1e-6);
+      EXPECT_NEAR(d, -3.5, 1e-9);
+    }
+  }
+  for (std::size_t a = 0; a < run.concrete.actions.size(); ++a) {
+    timing_of[run.concrete.actions[a].id] = traffic.timings()[a];
+  }
+  EXPECT_NEAR(timing_of["left"].end, 2.0, 1e-9);
+  EXPECT_NEAR(timing_of["after_left"].start, 2.0, 1e-9);
+  EXPECT_NEAR(timing_of["nudge"].end, 5.1, 1e-9);
+  EXPECT_NEAR(timing_of["back"].start, 5.1, 1e-9);
+  EXPECT_NEAR(*traffic.egoLaneOffsetAt(1.9), 3.5 * 0.5 * (1.0 - std::cos(kPi * 0.9 / 3.0)), 1e-9);
+  EXPECT_NEAR(*traffic.egoLaneOffsetAt(5.0), -3.5, 1e-9);  // from the instant it is put there
+  EXPECT_NEAR(*traffic.egoLaneOffsetAt(7.8), -3.5, 1e-9);
 }
 
 // OpenSCENARIO's rising edge: a condition that holds when first checked waits until it has
