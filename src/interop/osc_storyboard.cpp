@@ -6,6 +6,8 @@
 #include <algorithm>
 #include <cmath>
 #include <iterator>
+#include <set>
+#include <string>
 #include <utility>
 
 #include "osc_parameters.hpp"
@@ -1613,6 +1615,36 @@ void activateAlone(Translation& translation, const PendingEvent& event, const st
   translation.ego->actions.push_back(egoControllerAction(translation, event, trigger, keepLane(), "true", ""));
 }
 
+/// Event priority overwrite (override in 1.2): esmini ends the running Events of its Maneuver when
+/// it starts, whatever their actions' domains; each of its actions `ends` the actions of the
+/// Maneuver's other Events (events[first..]), which end there if under way.
+void endOverwrittenEvents(Translation& translation, std::vector<PendingEvent>& events, std::size_t first) {
+  for (std::size_t e = first; e < events.size(); ++e) {
+    const std::string priority = events[e].node.attribute("priority").value();
+    if (priority != "overwrite" && priority != "override") continue;
+    YAML::Node ends;
+    for (std::size_t other = first; other < events.size(); ++other) {
+      if (other == e) continue;
+      for (const PendingAction& action : events[other].actions) {
+        if (action.item["id"]) ends.push_back(action.item["id"].as<std::string>());
+      }
+    }
+    if (ends.size() == 0) continue;
+    bool ending = false;
+    for (PendingAction& action : events[e].actions) {
+      if (!action.item["id"]) continue;  // the Ego's controller: done at once
+      action.item["ends"] = ends;
+      ending = true;
+    }
+    if (ending) {
+      translation.findings.mapped(translation.reader.where(events[e].node),
+                                  fmt::format("priority=\"{}\": its actions end those of its Maneuver's other Events "
+                                              "under way where it starts (esmini ends those Events)",
+                                              priority));
+    }
+  }
+}
+
 void readManeuverGroup(Translation& translation, const pugi::xml_node& group, std::vector<PendingEvent>& events) {
   const xml::Reader& reader = translation.reader;
   reader.requireSubset(group, {"Actors", "Maneuver"});
@@ -1630,9 +1662,11 @@ void readManeuverGroup(Translation& translation, const pugi::xml_node& group, st
   }
   for (const pugi::xml_node& maneuver : group.children("Maneuver")) {
     reader.requireSubset(maneuver, {"Event"});
+    const std::size_t first = events.size();
     for (const pugi::xml_node& event : maneuver.children("Event")) {
       translation.findings.attempt([&] { readEvent(translation, actors, event, events); });
     }
+    endOverwrittenEvents(translation, events, first);
   }
 }
 
@@ -1705,6 +1739,27 @@ static void keepInitiallyOffDomain(Translation& translation) {
   translation.egoHandedOver = true;
 }
 
+/// An action's `ends` name only actions of the translation (an Event that never starts is left out).
+void keepEndsThatStart(Translation& translation) {
+  std::set<std::string> ids;
+  for (const Entity& entity : translation.entities) {
+    for (const auto& action : entity.actions) {
+      if (action["id"]) ids.insert(action["id"].as<std::string>());
+    }
+  }
+  for (Entity& entity : translation.entities) {
+    for (auto action : entity.actions) {
+      if (!static_cast<const YAML::Node&>(action)["ends"]) continue;
+      YAML::Node kept;
+      for (const auto& id : action["ends"]) {
+        if (ids.count(id.as<std::string>())) kept.push_back(id);
+      }
+      if (kept.size() == 0) action.remove("ends");
+      else action["ends"] = kept;
+    }
+  }
+}
+
 void readStories(Translation& translation, const pugi::xml_node& storyboard) {
   xml::Reader& reader = translation.reader;
   markLateralMotion(translation, storyboard);
@@ -1768,6 +1823,7 @@ void readStories(Translation& translation, const pugi::xml_node& storyboard) {
       }
     });
   }
+  keepEndsThatStart(translation);
   reader.setParameters(global);
 }
 

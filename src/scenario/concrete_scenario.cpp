@@ -361,6 +361,7 @@ ConcreteAction evaluateAction(const ActionSpec& spec, int owner, const LogicalSc
   if (spec.kind == ActionSpec::Kind::Teleport) {
     action.place = evaluatePlace(spec.place, spec.where, "teleport", logical, concrete);
   }
+  for (const auto& id : spec.ends) action.ends.push_back(actionIndex(logical, id));
   action.relativeToEgoLane = spec.relativeToEgoLane;
   action.toRoadLane = spec.toRoadLane;
   action.domains = spec.domains;

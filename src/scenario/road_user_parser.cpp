@@ -671,8 +671,8 @@ void parseAction(const YamlReader& reader, const YAML::Node& node, const std::st
                  std::size_t index, ActionSpec& action) {
   action.where = reader.where(node, field);
   reader.checkKeys(node, field,
-                   {"id", "trigger", "repeat", "speed", "stop", "lane_change", "lateral_offset", "cross", "teleport",
-                    "set_speed", "controller"});
+                   {"id", "trigger", "repeat", "ends", "speed", "stop", "lane_change", "lateral_offset", "cross",
+                    "teleport", "set_speed", "controller"});
   action.id = node["id"] ? reader.scalar(node["id"], field + ".id") : fmt::format("{}_{}", owner.id, index);
   if (!isIdentifier(action.id)) {
     throw ConfigError::field(reader.where(node["id"], field + ".id"), field + ".id", action.id,
@@ -685,6 +685,12 @@ void parseAction(const YamlReader& reader, const YAML::Node& node, const std::st
     action.trigger.value = Expression::constant(0.0);
   }
   action.repeat = reader.integer(node, "repeat", field + ".repeat", 1, 1);
+  if (const auto ends = node["ends"]) {
+    if (!ends.IsSequence()) reader.fail(ends, field + ".ends", "expected a list of action ids");
+    for (std::size_t i = 0; i < ends.size(); ++i) {
+      action.ends.push_back(reader.scalar(ends[i], fmt::format("{}.ends[{}]", field, i)));
+    }
+  }
   if (action.repeat > 1 && !canHoldAgain(action.trigger)) {
     reader.fail(node["repeat"], field + ".repeat",
                 "a repeated action needs a trigger that can hold again (no time or after in it): it would restart at "
@@ -889,6 +895,16 @@ void checkNoCycle(const std::string& id, const std::map<std::string, const Actio
   visited[id] = 2;  // done
 }
 
+/// The actions an action ends are others of the file.
+void checkEndedActions(const ActionSpec& action, const std::vector<std::string>& action_ids) {
+  for (const auto& id : action.ends) {
+    if (id == action.id || !std::binary_search(action_ids.begin(), action_ids.end(), id)) {
+      throw ConfigError(fmt::format("{}.ends: got '{}', expected the id of another action of the file: {}",
+                                    action.where, id, fmt::join(action_ids, ", ")));
+    }
+  }
+}
+
 /// Trigger references name existing road users and actions; `after` chains have no cycle.
 void resolveReferences(const LogicalScenario& scenario) {
   std::vector<std::string> users = {"ego"};
@@ -911,6 +927,7 @@ void resolveReferences(const LogicalScenario& scenario) {
       checkTriggerReferences(action.trigger, user->id, users, actions, action_ids);
       checkSpeedReference(action, user->id, users);
       checkTeleportReference(action, users);
+      checkEndedActions(action, action_ids);
     }
   }
   std::map<std::string, int> visited;

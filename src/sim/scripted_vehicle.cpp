@@ -258,6 +258,11 @@ struct ScriptedTraffic::Impl {
   void scheduleWaiters(std::size_t a, const VehicleState& ego);
   /// Ends action `a` (if any) at `t` if it is under way then: a later action replaced it.
   void endIfUnderWay(const std::optional<std::size_t>& a, double t, const VehicleState& ego);
+  /// Ends `mover`'s speed action at `t`: it keeps the (noise-free) speed it has then.
+  void holdSpeed(Mover& mover, double t, const VehicleState& ego);
+  /// Ends action `a`'s ends (ActionSpec::ends) under way at its start: their road users keep the
+  /// speed and the place across the road they have reached.
+  void endListed(std::size_t a, const VehicleState& ego);
   void activateDue(const VehicleState& ego);
   VehicleState advancePurePursuit(Mover& mover);
   VehicleState advanceExact(Mover& mover);
@@ -580,6 +585,7 @@ void ScriptedTraffic::Impl::activate(std::size_t a, const VehicleState& ego) {
   const auto& action = concrete->actions[a];
   const double t0 = scheduled[a];
   ++starts[a];
+  endListed(a, ego);
   if (action.kind == ActionSpec::Kind::SetSpeed || action.kind == ActionSpec::Kind::Controller) {
     // The Ego's controller takes it (or the new controller drives) from t0 on; done at once.
     if (action.kind == ActionSpec::Kind::SetSpeed) egoSetSpeeds.emplace_back(t0, action.target);
@@ -697,12 +703,7 @@ void ScriptedTraffic::Impl::teleport(std::size_t a, const VehicleState& ego) {
   const double now = static_cast<double>(k) * step;
   const double speed_now = mover.speedAlong;
   const double speed_landing = speed_now + (mover.speedAt(k + 1, step) - speed_now) * (t0 - now) / step;
-  if (mover.speed || mover.tracking) {
-    const double held = mover.nominalSpeed(t0, step);  // noise-free, as the action's speeds are
-    mover.speed = Transition{t0, 0.0, held, held, TransitionShape::Step};
-    mover.tracking.reset();
-  }
-  endIfUnderWay(mover.speedAction, t0, ego);
+  holdSpeed(mover, t0, ego);
   endIfUnderWay(mover.lateralAction, t0, ego);
   mover.lateral.reset();
   const double speed_next = mover.speedAt(k + 1, step);
@@ -818,6 +819,39 @@ void ScriptedTraffic::Impl::endIfUnderWay(const std::optional<std::size_t>& a, d
   if (!a || !(timings[*a].start <= t + 1e-9) || !(timings[*a].end > t)) return;
   timings[*a].end = t;
   scheduleWaiters(*a, ego);
+}
+
+void ScriptedTraffic::Impl::holdSpeed(Mover& mover, double t, const VehicleState& ego) {
+  if (!mover.speed && !mover.tracking) return;  // its scripted speed: no action to end
+  const double held = mover.nominalSpeed(t, step);  // noise-free, as the action's speeds are
+  mover.speed = Transition{t, 0.0, held, held, TransitionShape::Step};
+  mover.tracking.reset();
+  endIfUnderWay(mover.speedAction, t, ego);
+}
+
+void ScriptedTraffic::Impl::endListed(std::size_t a, const VehicleState& ego) {
+  const double t = scheduled[a];
+  for (const int listed : concrete->actions[a].ends) {
+    const auto e = static_cast<std::size_t>(listed);
+    if (!(timings[e].start <= t + 1e-9) || !(timings[e].end > t)) continue;  // not under way
+    const int owner = concrete->actions[e].owner;
+    if (owner < 0) {
+      if (egoLateralAction != e) continue;  // the Ego's other actions end at once
+      const double kept = egoLaterals.back().second.at(t);  // the lane its controller keeps stays there
+      egoLaterals.emplace_back(t, Transition{t, 0.0, kept, kept, TransitionShape::Step});
+      egoLateralLane = road->laneAt(kept);
+      endIfUnderWay(egoLateralAction, t, ego);
+      continue;
+    }
+    Mover& mover = movers[static_cast<std::size_t>(owner)];
+    if (mover.speedAction == e) holdSpeed(mover, t, ego);
+    if (mover.lateralAction == e && mover.lateral) {
+      const double d = mover.lateral->at(t);
+      mover.lateral = Transition{t, 0.0, d, d, TransitionShape::Step};
+      mover.laneIndex = road->laneAt(d);
+      endIfUnderWay(mover.lateralAction, t, ego);
+    }
+  }
 }
 
 void ScriptedTraffic::Impl::activateDue(const VehicleState& ego) {

@@ -371,7 +371,8 @@ TEST(OscImport, ConditionsAreReadWithTheirRulesAndEdges) {
   const ScenarioCheck parameter = report("parameter.xosc");
   ASSERT_TRUE(parameter.runnable()) << parameter.report();
   EXPECT_THAT(parameter.yaml,
-              HasSubstr("id: SwerveOut\n          trigger:\n            time: 0\n            delay: 1\n"));
+              HasSubstr("id: SwerveOut\n          ends:\n            - CutInChange\n            - CutInSlow\n"
+                        "          trigger:\n            time: 0\n            delay: 1\n"));
 }
 
 // A relative distance, headway or time to collision without a relativeDistanceType is the
@@ -618,6 +619,32 @@ TEST(OscRun, ScriptedRoadUsersEndWhereTheFileSays) {
   const VehicleState& end = cutter->states.back();
   EXPECT_NEAR(end.speed, 10.0, 0.2);
   EXPECT_NEAR(end.y, 0.5, 0.2);
+}
+
+// Event priority="overwrite" ends the running Events of its Maneuver (esmini ends them whatever
+// their actions' domains): the cutter's slow-down, here to 0 m/s at 2 m/s^2 from 15 m/s with its
+// lane change (3.5 m at a peak 1.5 m/s: 3.67 s), is under way when the swerve starts 1 s after the
+// change ends, and stops there: it keeps 15 - 2 * 4.67 m/s to the end. With priority="parallel"
+// the slow-down goes on (to 1.4 m/s at 8 s, 6.8 s after it started at the instant 1.2 s).
+TEST(OscRun, AnOverwritingEventEndsTheOtherEventsOfItsManeuver) {
+  const std::string to_ten = R"(<AbsoluteTargetSpeed value="10"/>)";
+  const std::string to_stop = R"(<AbsoluteTargetSpeed value="0"/>)";
+  std::string parallel = dataWith("cut_in.xosc", to_ten, to_stop);
+  const std::string swerve_event = R"(<Event name="SwerveEvent" priority="overwrite">)";
+  parallel.replace(parallel.find(swerve_event), swerve_event.size(),
+                   R"(<Event name="SwerveEvent" priority="parallel">)");
+  const auto dir = folderWith({{"overwrite.xosc", dataWith("cut_in.xosc", to_ten, to_stop)},
+                               {"parallel.xosc", parallel}});
+  const auto overwritten = simulatedTrack(dir->path() / "overwrite.xosc", "Cutter");
+  ASSERT_TRUE(overwritten);
+  EXPECT_NEAR(overwritten->states.back().speed, 15.0 - 2.0 * (kPi * 3.5 / (2.0 * 1.5) + 1.0), 1e-6);
+  EXPECT_NEAR(overwritten->states.back().y, 0.5, 0.2);  // the swerve itself ran
+  const auto running = simulatedTrack(dir->path() / "parallel.xosc", "Cutter");
+  ASSERT_TRUE(running);
+  EXPECT_NEAR(running->states.back().speed, 15.0 - 2.0 * 6.8, 1e-6);
+  EXPECT_THAT(checkOpenScenario(dir->path() / "overwrite.xosc", {}).report(),
+              HasSubstr("<Event>: priority=\"overwrite\": its actions end those of its Maneuver's other Events "
+                        "under way where it starts (esmini ends those Events)"));
 }
 
 // dynamicsDimension="distance": the speed changes over that many metres, in 2 d / (v0 + v1)

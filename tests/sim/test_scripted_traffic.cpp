@@ -712,6 +712,49 @@ TEST(ScriptedTraffic, LanesOfTheirOwnWidthsLieSideBySide) {
       << loadErrorOf("lane_widths: [3.9, 0.4, 3.65]");
 }
 
+// An action's `ends` end the listed actions under way where it starts (OpenSCENARIO's Event
+// priority overwrite): their road user keeps the speed and the place across the road they have
+// reached. By hand: the tracker follows 1.5 times the lead's speed one step behind (10 + t m/s),
+// until the swerve at 2.2 s ends that: 1.5 * 12 = 18 m/s from then on. The drifter's smooth
+// lane change to lane 1 (3.5 m left) over 4 s from 1 s stops at 2 s, 3.5 * 0.5 * (1 - cos(pi / 4))
+// m left of lane 0's centre (y = -3.5), still in lane 0: its offset at 5 s, not under way at 2 s,
+// counts from lane 0's centre.
+TEST(ScriptedTraffic, AnActionEndsTheListedActionsUnderWayWhereItStarts) {
+  const Planned run = plan(scenarioWith(R"(
+    - {id: lead, s: 150, lane: 1, speed_profile: {initial: 10, phases: [{duration: 10, accel: 1}]}}
+    - {id: tracker, s: 100, lane: 2, speed: 3,
+       actions: [{id: track, speed: {relative_factor: 1.5, to: lead, continuous: true, shape: step}},
+                 {id: swerve, trigger: {time: 2.2}, lateral_offset: {offset: 0.5, duration: 1}, ends: [track]}]}
+    - {id: drifter, s: 60, lane: 0, speed: 10,
+       actions: [{id: drift, trigger: {time: 1}, lane_change: {lane: 1, duration: 4}},
+                 {id: slow, trigger: {time: 2}, speed: {target: 5, rate: 1}, ends: [drift, later, swerve]},
+                 {id: later, trigger: {time: 5}, lateral_offset: {offset: 0.5, duration: 1}}]})",
+                                        0.0, 8.0));
+  const auto& tracker = run.paths[1];
+  EXPECT_NEAR(tracker[11].speed, 18.0, 1e-9);
+  EXPECT_NEAR(tracker[20].speed, 18.0, 1e-9);
+  EXPECT_NEAR(tracker[40].speed, 18.0, 1e-9);
+  const auto& drifter = run.paths[2];
+  const double stopped = -3.5 + 3.5 * 0.5 * (1.0 - std::cos(kPi / 4.0));
+  EXPECT_NEAR(offsetOf(run.road, drifter[15]), stopped, 1e-9);
+  EXPECT_NEAR(offsetOf(run.road, drifter[24]), stopped, 1e-9);
+  EXPECT_NEAR(offsetOf(run.road, drifter[30]), -3.0, 1e-9);
+  EXPECT_NEAR(drifter[20].speed, 10.0 - 1.0 * 2.0, 1e-9);
+  const auto timings = timingsAfter(run, 40);  // track, swerve, drift, slow, later
+  EXPECT_NEAR(timings[0].end, 2.2, 1e-9);
+  EXPECT_NEAR(timings[1].end, 3.2, 1e-9);  // the swerve, listed by slow, was not under way at 2 s
+  EXPECT_NEAR(timings[2].end, 2.0, 1e-9);
+  EXPECT_NEAR(timings[4].start, 5.0, 1e-9);
+  // An id the file does not have is one line.
+  const std::string refused = test::configErrorOf([] {
+    scenarioWith("    - {id: a, s: 60, lane: 0, speed: 10,\n"
+                 "       actions: [{id: go, speed: {target: 5, rate: 1}, ends: [gone]}]}");
+  });
+  EXPECT_NE(refused.find("actions[0].ends: got 'gone', expected the id of another action of the file: go"),
+            std::string::npos)
+      << refused;
+}
+
 // The Ego's set_speed actions start like any action and hand their target to its controller
 // from their start on: one at t = 2.1 s (between instants), one when the gap to 'a' (40 m
 // at t = 0, closing at 10 - 5 = 5 m/s) is at most 20.5 m, i.e. at the instant t = 4.0 s.
@@ -780,6 +823,19 @@ TEST(ScriptedTraffic, TheEgosLateralActionsEndWhereALaterOneOrATeleportReplacesT
   EXPECT_NEAR(*traffic.egoLaneOffsetAt(1.9), 3.5 * 0.5 * (1.0 - std::cos(kPi * 0.9 / 3.0)), 1e-9);
   EXPECT_NEAR(*traffic.egoLaneOffsetAt(5.0), -3.5, 1e-9);  // from the instant it is put there
   EXPECT_NEAR(*traffic.egoLaneOffsetAt(7.8), -3.5, 1e-9);
+  // An action that ends the offset at 3 s (`ends`) leaves the kept lane where the move has got
+  // to: from 0.875 m (where the lane change was at 2 s) towards 4 m, a quarter of its 4 s.
+  const Planned halted = egoWith("ego_halted", 8, R"([
+      {id: left, trigger: {time: 1}, lane_change: {lanes: 1, duration: 3}},
+      {id: nudge, trigger: {time: 2}, lateral_offset: {offset: 0.5, duration: 4}}])",
+                                 "    - {id: a, s: 100, lane: 0, speed: 5, actions: [{id: halt, trigger: {time: 3}, "
+                                 "speed: {target: 0, rate: 5}, ends: [nudge]}]}\n");
+  ScriptedTraffic halting(halted.concrete, halted.road);
+  const EgoStandIn stand_in(halted.concrete, halted.road);
+  for (int k = 0; k < 25; ++k) halting.step(stand_in.at(0.2 * k));
+  const double at_two = 3.5 * 0.5 * (1.0 - std::cos(kPi / 3.0));
+  EXPECT_NEAR(*halting.egoLaneOffsetAt(4.6), at_two + (4.0 - at_two) * 0.5 * (1.0 - std::cos(kPi / 4.0)), 1e-9);
+  EXPECT_NEAR(halting.timings()[2].end, 3.0, 1e-9);  // a's halt, then the Ego's: left, nudge
 }
 
 // OpenSCENARIO's rising edge: a condition that holds when first checked waits until it has

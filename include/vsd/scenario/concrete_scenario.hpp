@@ -61,6 +61,7 @@ struct ConcreteAction {
   double target = 0.0;  ///< m/s (a factor for SpeedTarget::Factor) | lanes | m
   double targetLaneOffset = 0.0;  ///< m, LaneChange: ActionSpec::targetLaneOffset
   ConcretePlace place;            ///< Teleport: where its centre lands (along the road)
+  std::vector<int> ends;          ///< ActionSpec::ends: indices into ConcreteScenario::actions
   bool relativeToEgoLane = false;
   bool toRoadLane = false;  ///< ActionSpec::toRoadLane
   ActionSpec::Pace pace = ActionSpec::Pace::Duration;

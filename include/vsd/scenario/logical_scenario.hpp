@@ -231,6 +231,10 @@ struct ActionSpec {
   Expression targetLaneOffset;
   /// Teleport: where its centre lands, along the road (s from the region's start, lane, offset).
   PositionSpec place;
+  /// Ids of actions (any road user's) that end where this one starts if they are under way then:
+  /// their road user keeps the speed and the place across the road they have reached
+  /// (OpenSCENARIO's Event priority overwrite, which ends the running Events of its Maneuver).
+  std::vector<std::string> ends;
   /// LaneChange: target is relative to the road user's own lane (false) or the Ego's (true).
   bool relativeToEgoLane = false;
   /// LaneChange: target is a lane of the road (0: rightmost), not a number of lanes (`lane`).
