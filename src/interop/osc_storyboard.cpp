@@ -29,19 +29,14 @@ std::string flowText(const YAML::Node& node) {
   return flow.c_str();
 }
 
-/// The language's shape of a transition ("shape"); cubic becomes smooth (said once per use).
+/// The language's shape of a transition ("shape"): sinusoidal is its smooth (half-cosine) one.
 std::string shapeOf(Translation& translation, const pugi::xml_node& dynamics, bool step_allowed) {
   const xml::Reader& reader = translation.reader;
   const std::string shape = reader.oneOf(dynamics, "dynamicsShape", {"step", "linear", "cubic", "sinusoidal"});
-  if (shape == "step") {
-    if (!step_allowed) reader.fail(dynamics, "dynamicsShape=\"step\": a lateral jump; use linear or sinusoidal");
-    return "step";
+  if (shape == "step" && !step_allowed) {
+    reader.fail(dynamics, "dynamicsShape=\"step\": a lateral jump; use linear, cubic or sinusoidal");
   }
-  if (shape == "cubic") {
-    translation.findings.note(reader.where(dynamics), "cubic becomes the language's smooth (half-cosine) shape: "
-                                                      "same duration (or peak rate), slightly different profile");
-  }
-  return shape == "linear" ? "linear" : "smooth";
+  return shape == "sinusoidal" ? "smooth" : shape;
 }
 
 /// A pace (rate, time or distance) of a TransitionDynamics: the key and value of the language
@@ -134,7 +129,9 @@ YAML::Node laneOffset(Translation& translation, const Entity& actor, const pugi:
   item["shape"] = shapeOf(translation, dynamics, false);
   const auto accel = reader.optionalNumber(dynamics, "maxLateralAcc", NumberRange::above(0.0));
   if (!accel) reader.fail(dynamics, "no maxLateralAcc: the language needs a pace for a lateral offset");
-  if (item["shape"].as<std::string>() != "smooth") reader.fail(dynamics, "maxLateralAcc paces sinusoidal offsets only");
+  if (item["shape"].as<std::string>() == "linear") {
+    reader.fail(dynamics, "maxLateralAcc paces sinusoidal and cubic offsets only (a linear one jumps in speed)");
+  }
   item["lateral_accel"] = num(*accel);
   const pugi::xml_node target = reader.choice(reader.only(action, "LaneOffsetTarget"),
                                               {"AbsoluteTargetLaneOffset", "RelativeTargetLaneOffset"});

@@ -455,9 +455,10 @@ TransitionShape parseShape(const YamlReader& reader, const YAML::Node& node, con
   const std::string name = reader.scalar(node["shape"], field + ".shape");
   if (name == "linear") return TransitionShape::Linear;
   if (name == "smooth") return TransitionShape::Smooth;
+  if (name == "cubic") return TransitionShape::Cubic;
   if (name == "step" && step_allowed) return TransitionShape::Step;
   throw ConfigError::field(reader.where(node["shape"], field + ".shape"), field + ".shape", name,
-                           step_allowed ? "one of step, linear, smooth" : "one of linear, smooth");
+                           step_allowed ? "one of step, linear, smooth, cubic" : "one of linear, smooth, cubic");
 }
 
 /// The pace keys of `node` (exactly one of `keys`, each mapped to a Pace).
@@ -583,8 +584,9 @@ void parseLateralAction(const YamlReader& reader, const YAML::Node& node, const 
     return;
   }
   parsePace(reader, node, field, paces, inputs, action);
-  if (action.pace == ActionSpec::Pace::LateralAccel && action.shape != TransitionShape::Smooth) {
-    reader.fail(node["lateral_accel"], field + ".lateral_accel", "a lateral acceleration paces a smooth shape only");
+  if (action.pace == ActionSpec::Pace::LateralAccel && action.shape == TransitionShape::Linear) {
+    reader.fail(node["lateral_accel"], field + ".lateral_accel",
+                "a lateral acceleration paces a smooth or cubic shape only (a linear one jumps in speed)");
   }
 }
 

@@ -40,28 +40,36 @@ struct Transition {
     if (t >= end()) return to;
     if (t <= start) return from;
     const double tau = (t - start) / duration;
-    const double share = shape == TransitionShape::Smooth ? 0.5 * (1.0 - std::cos(kPi * tau)) : tau;
+    const double share = shape == TransitionShape::Smooth  ? 0.5 * (1.0 - std::cos(kPi * tau))
+                         : shape == TransitionShape::Cubic ? tau * tau * (3.0 - 2.0 * tau)
+                                                           : tau;
     return from + (to - from) * share;
   }
   double rate(double t) const {
     if (t < start || t >= end() || duration <= 0.0) return 0.0;
     const double tau = (t - start) / duration;
     const double mean = (to - from) / duration;
-    return shape == TransitionShape::Smooth ? mean * 0.5 * kPi * std::sin(kPi * tau) : mean;
+    if (shape == TransitionShape::Smooth) return mean * 0.5 * kPi * std::sin(kPi * tau);
+    return shape == TransitionShape::Cubic ? mean * 6.0 * tau * (1.0 - tau) : mean;
   }
 };
 
 /// The duration of a transition from `from` to `to` (m/s or m) at an action's pace.
 double durationOf(const ConcreteAction& action, double from, double to) {
   const double magnitude = std::abs(to - from);
-  // A smooth (half-cosine) profile peaks at pi/2 times its mean rate.
-  const double peak_factor = action.shape == TransitionShape::Smooth ? 0.5 * kPi : 1.0;
+  // A smooth (half-cosine) profile peaks at pi/2 times its mean rate, a cubic one at 1.5 times.
+  const double peak_factor = action.shape == TransitionShape::Smooth  ? 0.5 * kPi
+                             : action.shape == TransitionShape::Cubic ? 1.5
+                                                                      : 1.0;
   switch (action.pace) {
     case ActionSpec::Pace::Duration: return action.shape == TransitionShape::Step ? 0.0 : action.paceValue;
     case ActionSpec::Pace::Rate:
     case ActionSpec::Pace::LateralSpeed: return peak_factor * magnitude / action.paceValue;
-    case ActionSpec::Pace::LateralAccel: return kPi * std::sqrt(magnitude / (2.0 * action.paceValue));
-    // A speed change over a distance: linear and smooth profiles both average (from + to) / 2,
+    // Peak accelerations: pi^2 / 2 and 6 times the change over the duration squared.
+    case ActionSpec::Pace::LateralAccel:
+      return action.shape == TransitionShape::Cubic ? std::sqrt(6.0 * magnitude / action.paceValue)
+                                                    : kPi * std::sqrt(magnitude / (2.0 * action.paceValue));
+    // A speed change over a distance: linear, smooth and cubic profiles average (from + to) / 2,
     // so they cover the distance in 2 d / (from + to) (as esmini converts it; speeds are >= 0).
     // No change ends at once, as in esmini.
     case ActionSpec::Pace::Distance:

@@ -647,6 +647,28 @@ TEST(OscRun, AnOverwritingEventEndsTheOtherEventsOfItsManeuver) {
                         "under way where it starts (esmini ends those Events)"));
 }
 
+// dynamicsShape="cubic" is the language's cubic (esmini's 3 tau^2 - 2 tau^3, paced as esmini
+// paces it): the cutter's slow-down and its swerve (maxLateralAcc); a linear swerve paced by a
+// lateral acceleration is refused (its speed would jump).
+TEST(OscImport, CubicDynamicsAreTheLanguagesCubicShape) {
+  const auto dir = folderWith(
+      {{"cubic.xosc",
+        dataWith("cut_in.xosc", R"(dynamicsShape="linear" value="-2")", R"(dynamicsShape="cubic" value="-2")")},
+       {"swerve.xosc",
+        dataWith("cut_in.xosc", R"(<LaneOffsetActionDynamics dynamicsShape="sinusoidal")",
+                 R"(<LaneOffsetActionDynamics dynamicsShape="cubic")")},
+       {"linear.xosc",
+        dataWith("cut_in.xosc", R"(<LaneOffsetActionDynamics dynamicsShape="sinusoidal")",
+                 R"(<LaneOffsetActionDynamics dynamicsShape="linear")")}});
+  EXPECT_EQ(other(*importTemplate(dir->path() / "cubic.xosc", {}), "Cutter").actions[1].shape,
+            scenario::TransitionShape::Cubic);
+  const auto& swerve = other(*importTemplate(dir->path() / "swerve.xosc", {}), "Cutter").actions[2];
+  EXPECT_EQ(swerve.shape, scenario::TransitionShape::Cubic);
+  EXPECT_EQ(swerve.pace, scenario::ActionSpec::Pace::LateralAccel);
+  EXPECT_THAT(importRefusal(*dir, "linear"),
+              HasSubstr("maxLateralAcc paces sinusoidal and cubic offsets only (a linear one jumps in speed)"));
+}
+
 // dynamicsDimension="distance": the speed changes over that many metres, in 2 d / (v0 + v1)
 // (esmini's conversion). By hand from cut_in.xosc: the cutter slows from 15 to 10 m/s; over
 // 25 m that takes 2 s and its x advances 25 m meanwhile (the road is straight along x).

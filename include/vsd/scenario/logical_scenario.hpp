@@ -194,6 +194,7 @@ enum class TransitionShape {
   Step,    ///< at once (speed only)
   Linear,  ///< constant rate
   Smooth,  ///< half a cosine: zero rate at both ends, peak rate pi/2 times the mean rate
+  Cubic,   ///< 3 tau^2 - 2 tau^3 (OpenSCENARIO's cubic): zero rate at both ends, peak rate 1.5 times the mean rate
 };
 
 /// One scripted manoeuvre of a road user. Numbers are expressions over the inputs.
