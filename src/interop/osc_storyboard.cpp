@@ -507,6 +507,10 @@ std::optional<YAML::Node> privateAction(Translation& translation, Entity& actor,
     }
     if (kind == "TeleportAction") {
       // It lands there and its controller drives on from there.
+      translation.findings.note(reader.where(action),
+                                "the Ego lands there and its controller drives on (esmini leaves an Ego in place "
+                                "whose controller overrides its motion, as most do by default; the teleport then "
+                                "only ends its running actions)");
       YAML::Node item;
       item["teleport"] = teleport(translation, actor, action);
       return item;
@@ -1617,7 +1621,7 @@ void activateAlone(Translation& translation, const PendingEvent& event, const st
 /// Maneuver's other Events (events[first..]), which end there if under way.
 void endOverwrittenEvents(Translation& translation, std::vector<PendingEvent>& events, std::size_t first) {
   for (std::size_t e = first; e < events.size(); ++e) {
-    const std::string priority = events[e].node.attribute("priority").value();
+    const std::string priority = translation.reader.text(events[e].node, "priority");
     if (priority != "overwrite" && priority != "override") continue;
     YAML::Node ends;
     for (std::size_t other = first; other < events.size(); ++other) {

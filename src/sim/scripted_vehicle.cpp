@@ -266,6 +266,12 @@ struct ScriptedTraffic::Impl {
   void scheduleWaiters(std::size_t a, const VehicleState& ego);
   /// Ends action `a` (if any) at `t` if it is under way then: a later action replaced it.
   void endIfUnderWay(const std::optional<std::size_t>& a, double t, const VehicleState& ego);
+  /// Whether action `a` (if any) is a lane change under way at `t`: ended there, its road user is
+  /// in the lane it has got to (as esmini finds a road user's lane from where it is).
+  bool laneChangeUnderWay(const std::optional<std::size_t>& a, double t) const {
+    return a && concrete->actions[*a].kind == ActionSpec::Kind::LaneChange && timings[*a].start <= t + 1e-9 &&
+           timings[*a].end > t;
+  }
   /// Ends `mover`'s speed action at `t`: it keeps the (noise-free) speed it has then.
   void holdSpeed(Mover& mover, double t, const VehicleState& ego);
   /// Ends action `a`'s ends (ActionSpec::ends) under way at its start: their road users keep the
@@ -620,6 +626,7 @@ void ScriptedTraffic::Impl::activate(std::size_t a, const VehicleState& ego) {
     return;
   }
   transition.from = mover.lateral ? mover.lateral->at(t0) : mover.d;
+  if (laneChangeUnderWay(mover.lateralAction, t0)) mover.laneIndex = road->laneAt(transition.from);
   if (action.kind == ActionSpec::Kind::LaneChange) {
     const int target = laneChangeTarget(action, mover.laneIndex, ego, t0);
     mover.laneIndex = target;
@@ -793,6 +800,7 @@ void ScriptedTraffic::Impl::activateEgoLateral(std::size_t a, const VehicleState
   } else {
     transition.from = egoLaterals.back().second.at(transition.start);
   }
+  if (laneChangeUnderWay(egoLateralAction, transition.start)) egoLateralLane = road->laneAt(transition.from);
   if (action.kind == ActionSpec::Kind::LaneChange) {
     egoLateralLane = laneChangeTarget(action, egoLateralLane, ego, transition.start);
     transition.to = road->laneOffset(egoLateralLane) + action.targetLaneOffset;
@@ -847,7 +855,7 @@ void ScriptedTraffic::Impl::endListed(std::size_t a, const VehicleState& ego) {
       if (egoLateralAction != e) continue;  // the Ego's other actions end at once
       const double kept = egoLaterals.back().second.at(t);  // the lane its controller keeps stays there
       egoLaterals.emplace_back(t, Transition{t, 0.0, kept, kept, TransitionShape::Step});
-      egoLateralLane = road->laneAt(kept);
+      if (laneChangeUnderWay(egoLateralAction, t)) egoLateralLane = road->laneAt(kept);
       endIfUnderWay(egoLateralAction, t, ego);
       continue;
     }
@@ -855,8 +863,8 @@ void ScriptedTraffic::Impl::endListed(std::size_t a, const VehicleState& ego) {
     if (mover.speedAction == e) holdSpeed(mover, t, ego);
     if (mover.lateralAction == e && mover.lateral) {
       const double d = mover.lateral->at(t);
+      if (laneChangeUnderWay(mover.lateralAction, t)) mover.laneIndex = road->laneAt(d);
       mover.lateral = Transition{t, 0.0, d, d, TransitionShape::Step};
-      mover.laneIndex = road->laneAt(d);
       endIfUnderWay(mover.lateralAction, t, ego);
     }
   }
@@ -874,7 +882,8 @@ void ScriptedTraffic::Impl::activateDue(const VehicleState& ego) {
       }
     }
     if (first == scheduled.size()) return;
-    activate(first, ego);
+    // After a teleport of the Ego, the actions that start later in the step see it where it was put.
+    activate(first, egoPlaced ? *egoPlaced : ego);
   }
 }
 

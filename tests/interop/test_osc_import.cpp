@@ -633,11 +633,23 @@ TEST(OscRun, AnOverwritingEventEndsTheOtherEventsOfItsManeuver) {
   const std::string swerve_event = R"(<Event name="SwerveEvent" priority="overwrite">)";
   parallel.replace(parallel.find(swerve_event), swerve_event.size(),
                    R"(<Event name="SwerveEvent" priority="parallel">)");
+  // The priority may be a parameter's value.
+  std::string by_parameter = dataWith("cut_in.xosc", to_ten, to_stop);
+  by_parameter.replace(by_parameter.find(swerve_event), swerve_event.size(),
+                       R"(<Event name="SwerveEvent" priority="$Priority">)");
+  by_parameter.replace(by_parameter.find("<ParameterDeclarations>"), std::string("<ParameterDeclarations>").size(),
+                       R"(<ParameterDeclarations>
+    <ParameterDeclaration name="Priority" parameterType="string" value="overwrite"/>)");
   const auto dir = folderWith({{"overwrite.xosc", dataWith("cut_in.xosc", to_ten, to_stop)},
-                               {"parallel.xosc", parallel}});
+                               {"parallel.xosc", parallel},
+                               {"by_parameter.xosc", by_parameter}});
+  for (const char* name : {"overwrite.xosc", "by_parameter.xosc"}) {
+    const auto overwritten = simulatedTrack(dir->path() / name, "Cutter");
+    ASSERT_TRUE(overwritten) << name;
+    EXPECT_NEAR(overwritten->states.back().speed, 15.0 - 2.0 * (kPi * 3.5 / (2.0 * 1.5) + 1.0), 1e-6) << name;
+  }
   const auto overwritten = simulatedTrack(dir->path() / "overwrite.xosc", "Cutter");
   ASSERT_TRUE(overwritten);
-  EXPECT_NEAR(overwritten->states.back().speed, 15.0 - 2.0 * (kPi * 3.5 / (2.0 * 1.5) + 1.0), 1e-6);
   EXPECT_NEAR(overwritten->states.back().y, 0.5, 0.2);  // the swerve itself ran
   const auto running = simulatedTrack(dir->path() / "parallel.xosc", "Cutter");
   ASSERT_TRUE(running);

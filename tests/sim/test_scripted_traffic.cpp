@@ -719,7 +719,10 @@ TEST(ScriptedTraffic, LanesOfTheirOwnWidthsLieSideBySide) {
 // until the swerve at 2.2 s ends that: 1.5 * 12 = 18 m/s from then on. The drifter's smooth
 // lane change to lane 1 (3.5 m left) over 4 s from 1 s stops at 2 s, 3.5 * 0.5 * (1 - cos(pi / 4))
 // m left of lane 0's centre (y = -3.5), still in lane 0: its offset at 5 s, not under way at 2 s,
-// counts from lane 0's centre.
+// counts from lane 0's centre (so does an offset that replaces such a lane change: 'replaced').
+// An offset ended half-way leaves its road user in its lane, though beside it, as esmini keeps
+// its lane id: the nudger's 3 m swerve right from lane 2 (y = 3.5), stopped at 2.6 s, and the
+// offset 0 after it bring it back to lane 2's centre.
 TEST(ScriptedTraffic, AnActionEndsTheListedActionsUnderWayWhereItStarts) {
   const Planned run = plan(scenarioWith(R"(
     - {id: lead, s: 150, lane: 1, speed_profile: {initial: 10, phases: [{duration: 10, accel: 1}]}}
@@ -729,7 +732,14 @@ TEST(ScriptedTraffic, AnActionEndsTheListedActionsUnderWayWhereItStarts) {
     - {id: drifter, s: 60, lane: 0, speed: 10,
        actions: [{id: drift, trigger: {time: 1}, lane_change: {lane: 1, duration: 4}},
                  {id: slow, trigger: {time: 2}, speed: {target: 5, rate: 1}, ends: [drift, later, swerve]},
-                 {id: later, trigger: {time: 5}, lateral_offset: {offset: 0.5, duration: 1}}]})",
+                 {id: later, trigger: {time: 5}, lateral_offset: {offset: 0.5, duration: 1}}]}
+    - {id: replaced, s: 250, lane: 0, speed: 10,
+       actions: [{trigger: {time: 1}, lane_change: {lane: 1, duration: 4}},
+                 {trigger: {time: 2}, lateral_offset: {offset: 0.3, duration: 1}}]}
+    - {id: nudger, s: 20, lane: 2, speed: 10,
+       actions: [{id: wide, trigger: {time: 1}, lateral_offset: {offset: -3, duration: 2}},
+                 {trigger: {time: 2.6}, speed: {target: 8, rate: 1}, ends: [wide]},
+                 {trigger: {time: 4}, lateral_offset: {offset: 0, duration: 1}}]})",
                                         0.0, 8.0));
   const auto& tracker = run.paths[1];
   EXPECT_NEAR(tracker[11].speed, 18.0, 1e-9);
@@ -741,6 +751,9 @@ TEST(ScriptedTraffic, AnActionEndsTheListedActionsUnderWayWhereItStarts) {
   EXPECT_NEAR(offsetOf(run.road, drifter[24]), stopped, 1e-9);
   EXPECT_NEAR(offsetOf(run.road, drifter[30]), -3.0, 1e-9);
   EXPECT_NEAR(drifter[20].speed, 10.0 - 1.0 * 2.0, 1e-9);
+  EXPECT_NEAR(offsetOf(run.road, run.paths[3][20]), -3.2, 1e-9);
+  EXPECT_NEAR(offsetOf(run.road, run.paths[4][15]), 3.5 - 3.0 * 0.5 * (1.0 - std::cos(0.8 * kPi)), 1e-9);
+  EXPECT_NEAR(offsetOf(run.road, run.paths[4][30]), 3.5, 1e-9);
   const auto timings = timingsAfter(run, 40);  // track, swerve, drift, slow, later
   EXPECT_NEAR(timings[0].end, 2.2, 1e-9);
   EXPECT_NEAR(timings[1].end, 3.2, 1e-9);  // the swerve, listed by slow, was not under way at 2 s
@@ -817,14 +830,17 @@ TEST(ScriptedTraffic, TheEgosSetSpeedActionsCommandItsSetSpeedFromTheirStart) {
 // its controller keeps is the latest one's. By hand, 3 lanes of 3.5 m (lane 1's centre on the
 // road's centre line, lane 2's 3.5 m left): the lane change from 1 s (3 s) is replaced at 2 s
 // by the offset (4 s), which the teleport at 5.1 s replaces: the Ego lands on lane 0's centre,
-// put at the instant 5.0 s 1 m before it (10 m/s), and keeps that lane from then on.
+// put at the instant 5.0 s 1 m before it (10 m/s), and keeps that lane from then on. 'a' hops at
+// 5.15 s to 10 m ahead of the Ego, one lane left, where the Ego is then (20.5 m): later in the
+// same step, it sees the Ego where it was put; at 5 m/s it is at 30.5 + 5 * 2.85 m at 8 s.
 TEST(ScriptedTraffic, TheEgosLateralActionsEndWhereALaterOneOrATeleportReplacesThem) {
   const Planned run = egoWith("ego_moves", 8, R"([
       {id: left, trigger: {time: 1}, lane_change: {lanes: 1, duration: 3}},
       {id: nudge, trigger: {time: 2}, lateral_offset: {offset: 0.5, duration: 4}},
       {id: back, trigger: {time: 5.1}, teleport: {s: 20, lane: 0}}])",
                                R"(    - {id: a, s: 100, lane: 0, speed: 5,
-       actions: [{id: after_left, trigger: {after: left}, lateral_offset: {offset: 0.5, duration: 1}}]}
+       actions: [{id: after_left, trigger: {after: left}, lateral_offset: {offset: 0.5, duration: 1}},
+                 {id: hop, trigger: {time: 5.15}, teleport: {from: ego, ds: 10, lanes: 1}}]}
 )");
   ScriptedTraffic traffic(run.concrete, run.road);
   const EgoStandIn ego(run.concrete, run.road);
@@ -839,6 +855,10 @@ TEST(ScriptedTraffic, TheEgosLateralActionsEndWhereALaterOneOrATeleportReplacesT
       EXPECT_NEAR(d, -3.5, 1e-9);
     }
   }
+  const road::LaneFrame frame(run.road.centre);
+  const auto [a_s, a_d] = frame.coordinates(traffic.states()[0].position());
+  EXPECT_NEAR(a_s - frame.coordinates(ego.at(0.0).position()).first + 30.0, 30.5 + 5.0 * 2.85, 1e-6);
+  EXPECT_NEAR(a_d, 0.0, 1e-9);
   for (std::size_t a = 0; a < run.concrete.actions.size(); ++a) {
     timing_of[run.concrete.actions[a].id] = traffic.timings()[a];
   }
@@ -850,7 +870,8 @@ TEST(ScriptedTraffic, TheEgosLateralActionsEndWhereALaterOneOrATeleportReplacesT
   EXPECT_NEAR(*traffic.egoLaneOffsetAt(5.0), -3.5, 1e-9);  // from the instant it is put there
   EXPECT_NEAR(*traffic.egoLaneOffsetAt(7.8), -3.5, 1e-9);
   // An action that ends the offset at 3 s (`ends`) leaves the kept lane where the move has got
-  // to: from 0.875 m (where the lane change was at 2 s) towards 4 m, a quarter of its 4 s.
+  // to: from 0.875 m (where the lane change was at 2 s, still in lane 1, whose centre the offset
+  // counts from, as esmini finds the lane from where it is) towards 0.5 m, a quarter of its 4 s.
   const Planned halted = egoWith("ego_halted", 8, R"([
       {id: left, trigger: {time: 1}, lane_change: {lanes: 1, duration: 3}},
       {id: nudge, trigger: {time: 2}, lateral_offset: {offset: 0.5, duration: 4}}])",
@@ -860,7 +881,7 @@ TEST(ScriptedTraffic, TheEgosLateralActionsEndWhereALaterOneOrATeleportReplacesT
   const EgoStandIn stand_in(halted.concrete, halted.road);
   for (int k = 0; k < 25; ++k) halting.step(stand_in.at(0.2 * k));
   const double at_two = 3.5 * 0.5 * (1.0 - std::cos(kPi / 3.0));
-  EXPECT_NEAR(*halting.egoLaneOffsetAt(4.6), at_two + (4.0 - at_two) * 0.5 * (1.0 - std::cos(kPi / 4.0)), 1e-9);
+  EXPECT_NEAR(*halting.egoLaneOffsetAt(4.6), at_two + (0.5 - at_two) * 0.5 * (1.0 - std::cos(kPi / 4.0)), 1e-9);
   EXPECT_NEAR(halting.timings()[2].end, 3.0, 1e-9);  // a's halt, then the Ego's: left, nudge
 }
 
