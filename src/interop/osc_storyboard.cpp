@@ -119,11 +119,13 @@ YAML::Node laneOffset(Translation& translation, const Entity& actor, const pugi:
   // targets below (fixed offsets) the road user moves the same, but the action never ends.
   const auto endless = reader.optionalBoolean(action, "continuous");
   if (!endless) reader.fail(action, "continuous: expected true or false (the attribute is required)");
-  if (*endless) {
-    translation.findings.note(reader.where(action), "continuous=\"true\": the offset is held, the action never ends "
-                                                    "(a condition on its end never holds)");
-  }
   YAML::Node item;
+  if (*endless) {
+    translation.findings.mapped(reader.where(action), "continuous=\"true\": the offset is held and the action ends "
+                                                      "only where a later lateral action, a teleport or an overwrite "
+                                                      "Event ends it (as esmini ends it)");
+    item["continuous"] = true;
+  }
   const pugi::xml_node dynamics = reader.only(action, "LaneOffsetActionDynamics");
   reader.requireSubset(dynamics, {});
   item["shape"] = shapeOf(translation, dynamics, false);
@@ -1003,15 +1005,6 @@ std::optional<YAML::Node> storyboardElementState(Translation& translation, const
     reader.fail(condition, fmt::format("storyboardElementRef=\"{}\": expected {} with one action of a scripted road "
                                        "user", name, type == "action" ? "an action" : "an Event"));
   }
-  if (translation.endlessActions.count(ids->front())) {
-    if (state == "completeState") {
-      reader.fail(condition, fmt::format("state=\"completeState\" of '{}', an action that never ends: it completes "
-                                         "only when another stops it, which the language does not follow", name));
-    }
-    translation.findings.note(reader.where(condition), fmt::format("the end of '{}', an action that never ends: the "
-                                                                   "condition never holds", name));
-    return std::nullopt;
-  }
   YAML::Node trigger;
   trigger["after"] = ids->front();
   return trigger;
@@ -1299,7 +1292,6 @@ std::optional<YAML::Node> actEnd(Translation& translation, const pugi::xml_node&
     });
     if (!starts) return std::nullopt;
     for (const std::string& id : event.actionIds) {
-      if (translation.endlessActions.count(id)) return std::nullopt;
       YAML::Node end;
       end["after"] = id;
       ends.push_back(end);
@@ -1411,13 +1403,6 @@ struct PendingEvent {
   int act = -1;           ///< the Act it is in (index into Translation::acts)
 };
 
-/// Whether a <PrivateAction> never ends on its own: a LaneOffsetAction with continuous="true"
-/// (laneOffset reads and notes the attribute).
-bool neverEnds(const xml::Reader& reader, const pugi::xml_node& private_action) {
-  const pugi::xml_node offset = private_action.child("LateralAction").child("LaneOffsetAction");
-  return offset && reader.optionalBoolean(offset, "continuous").value_or(false);
-}
-
 void readEvent(Translation& translation, const std::vector<Entity*>& actors, const pugi::xml_node& event,
                std::vector<PendingEvent>& events) {
   const xml::Reader& reader = translation.reader;
@@ -1454,9 +1439,6 @@ void readEvent(Translation& translation, const std::vector<Entity*>& actors, con
         YAML::Node copy = *item;
         copy["id"] = identifier(actors.size() == 1 ? name : name + "_" + actor->name, translation.usedIds);
         translation.actionIds[name].push_back(copy["id"].as<std::string>());
-        if (neverEnds(reader, action.child("PrivateAction"))) {
-          translation.endlessActions.insert(copy["id"].as<std::string>());
-        }
         if (first) record.actionIds.push_back(copy["id"].as<std::string>());
         pending.actions.push_back({actor, copy});
         translation.findings.mapped(reader.where(action), fmt::format("action '{}' of '{}'", copy["id"].as<std::string>(),

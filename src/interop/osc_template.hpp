@@ -106,8 +106,6 @@ struct Translation {
   Catalogs* catalogs = nullptr;  ///< the file's catalogs (set while it is translated)
   /// Language action ids by the file's Action name (an Action with several actors has several).
   std::map<std::string, std::vector<std::string>> actionIds;
-  /// Language ids of the actions that never end on their own (continuous lane offsets).
-  std::set<std::string> endlessActions;
   /// The file's Events by name, for conditions on their state. A name given twice is kept
   /// without an actor (ambiguous).
   struct EventRecord {

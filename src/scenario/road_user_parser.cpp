@@ -568,8 +568,9 @@ void parseLateralAction(const YamlReader& reader, const YAML::Node& node, const 
     action.toRoadLane = target == "lane";
     action.target = reader.expression(node[target], field + "." + target, inputs);
   } else {
-    reader.checkKeys(node, field, {"offset", "lateral_speed", "lateral_accel", "duration", "shape"});
+    reader.checkKeys(node, field, {"offset", "lateral_speed", "lateral_accel", "duration", "shape", "continuous"});
     action.kind = ActionSpec::Kind::LateralOffset;
+    if (node["continuous"]) action.continuous = flag(reader, node["continuous"], field + ".continuous");
     if (!node["offset"]) reader.fail(node, field, "missing 'offset' (m from the lane's centre, > 0 left; 0: back)");
     action.target = reader.expression(node["offset"], field + ".offset", inputs);
     paces.emplace_back("lateral_accel", ActionSpec::Pace::LateralAccel);

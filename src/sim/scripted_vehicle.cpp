@@ -646,7 +646,7 @@ void ScriptedTraffic::Impl::activate(std::size_t a, const VehicleState& ego) {
   endIfUnderWay(mover.lateralAction, t0, ego);
   mover.lateral = transition;
   mover.lateralAction = a;
-  timings[a] = {t0, transition.end()};
+  timings[a] = {t0, action.continuous ? kInf : transition.end()};  // a held offset ends where it is replaced
   scheduleWaiters(a, ego);
 }
 
@@ -812,7 +812,7 @@ void ScriptedTraffic::Impl::activateEgoLateral(std::size_t a, const VehicleState
   egoLaterals.emplace_back(transition.start, transition);
   endIfUnderWay(egoLateralAction, transition.start, ego);
   egoLateralAction = a;
-  timings[a] = {transition.start, transition.end()};
+  timings[a] = {transition.start, action.continuous ? kInf : transition.end()};
   scheduleWaiters(a, ego);
 }
 

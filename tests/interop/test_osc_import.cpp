@@ -2691,15 +2691,28 @@ TEST(OscImport, AControllerMappedToScriptLeavesItsEntityScripted) {
               HasSubstr("'Slow' follows its script: its controller 'wobbly' is mapped to 'script'"));
 }
 
-// continuous="true" holds a fixed lane offset until another action replaces it (esmini's
-// cut-in_cr): the road user moves as with "false", but the action never ends, so a condition on
-// its end never holds; its completeState (reached only when another stops it) is refused.
-TEST(OscImport, AContinuousLaneOffsetIsHeldAndNeverEnds) {
+// continuous="true" holds a fixed lane offset until something ends it (esmini's cut-in_cr): the
+// road user moves as with "false" and holds the offset, and a condition on its end (endTransition
+// or completeState) holds once a later lateral action, a teleport or an overwrite Event ends it,
+// as in esmini. By hand from cut_in.xosc: the swerve (0.5 m left) never ends on its own, so the
+// brake after it never starts (the cutter keeps 10 m/s); an offset back to 0 at 7 s ends it, and
+// the brake steps to 5 m/s then.
+TEST(OscImport, AContinuousLaneOffsetIsHeldUntilSomethingEndsIt) {
   const std::string swerve = "<LaneOffsetAction continuous=\"false\">";
   const std::string held = "<LaneOffsetAction continuous=\"true\">";
   const std::string group_end = "</Event>\n          </Maneuver>\n        </ManeuverGroup>\n        <ManeuverGroup "
                                 "maximumExecutionCount=\"1\" name=\"EgoGroup\">";
-  const auto after_swerve = [&](const std::string& state) {
+  const std::string back_at_seven = R"(
+            <Event name="BackAtSeven" priority="parallel">
+              <Action name="Back"><PrivateAction><LateralAction><LaneOffsetAction continuous="false">
+                <LaneOffsetActionDynamics dynamicsShape="sinusoidal" maxLateralAcc="1.0"/>
+                <LaneOffsetTarget><AbsoluteTargetLaneOffset value="0"/></LaneOffsetTarget>
+              </LaneOffsetAction></LateralAction></PrivateAction></Action>
+              <StartTrigger><ConditionGroup><Condition name="AtSeven" delay="0" conditionEdge="none">
+                <ByValueCondition><SimulationTimeCondition value="7" rule="greaterOrEqual"/></ByValueCondition>
+              </Condition></ConditionGroup></StartTrigger>
+            </Event>)";
+  const auto after_swerve = [&](const std::string& state, const std::string& more) {
     std::string text = cutInWith(swerve, held);
     text.replace(text.find(group_end), std::string("</Event>").size(), R"(</Event>
             <Event name="BrakeAfterSwerve" priority="parallel">
@@ -2711,25 +2724,34 @@ TEST(OscImport, AContinuousLaneOffsetIsHeldAndNeverEnds) {
                 <ByValueCondition><StoryboardElementStateCondition storyboardElementType="action"
                   storyboardElementRef="SwerveOut" state=")" + state + R"("/></ByValueCondition>
               </Condition></ConditionGroup></StartTrigger>
-            </Event>)");
+            </Event>)" + more);
     return text;
   };
-  const auto folder = folderWith({{"ended.xosc", cutInWith(swerve, swerve)},
-                                  {"held.xosc", after_swerve("endTransition")},
-                                  {"completed.xosc", after_swerve("completeState")}});
-  const auto ended_logical = importTemplate(folder->path() / "ended.xosc", {});
-  const auto& ended = other(*ended_logical, "Cutter");
+  const auto folder = folderWith({{"held.xosc", after_swerve("endTransition", "")},
+                                  {"completed.xosc", after_swerve("completeState", "")},
+                                  {"replaced.xosc", after_swerve("endTransition", back_at_seven)}});
   const auto logical = importTemplate(folder->path() / "held.xosc", {});
   const auto& cutter = other(*logical, "Cutter");
-  ASSERT_EQ(cutter.actions.size(), 3u);  // the brake after the swerve's end never starts: left out
+  ASSERT_EQ(cutter.actions.size(), 4u);
   ASSERT_EQ(cutter.actions[2].kind, scenario::ActionSpec::Kind::LateralOffset);
-  EXPECT_DOUBLE_EQ(cutter.actions[2].target.evaluate({}), ended.actions[2].target.evaluate({}));
+  EXPECT_TRUE(cutter.actions[2].continuous);
   EXPECT_DOUBLE_EQ(cutter.actions[2].target.evaluate({}), 0.5);
-  const std::string report = checkOpenScenario(folder->path() / "held.xosc", {}).report();
-  EXPECT_THAT(report, HasSubstr("continuous=\"true\": the offset is held, the action never ends"));
-  EXPECT_THAT(report, HasSubstr("the end of 'SwerveOut', an action that never ends: the condition never holds"));
-  EXPECT_THAT(test::configErrorOf([&] { importTemplate(folder->path() / "completed.xosc", {}); }),
-              HasSubstr("state=\"completeState\" of 'SwerveOut', an action that never ends"));
+  EXPECT_EQ(cutter.actions[3].trigger.kind, scenario::TriggerSpec::Kind::After);
+  EXPECT_THAT(checkOpenScenario(folder->path() / "held.xosc", {}).report(),
+              HasSubstr("continuous=\"true\": the offset is held and the action ends only where a later lateral "
+                        "action, a teleport or an overwrite Event ends it (as esmini ends it)"));
+  for (const char* name : {"held.xosc", "completed.xosc"}) {
+    const auto track = simulatedTrack(folder->path() / name, "Cutter");
+    ASSERT_TRUE(track) << name;
+    EXPECT_NEAR(track->states.back().speed, 10.0, 0.2) << name;  // the brake never starts
+    EXPECT_NEAR(track->states.back().y, 0.5, 1e-6) << name;
+  }
+  const auto replaced = simulatedTrack(folder->path() / "replaced.xosc", "Cutter");
+  ASSERT_TRUE(replaced);
+  // Its speed along the road (the offset back, under way to the end, adds a little sideways).
+  EXPECT_NEAR(replaced->states.at(34).speed, 10.0, 0.2);  // 6.8 s
+  EXPECT_NEAR(replaced->states.at(35).speed, 5.0, 0.05);  // 7 s
+  EXPECT_NEAR(replaced->states.back().speed, 5.0, 0.05);
 }
 
 // The Ego's LaneChangeAction and LaneOffsetAction move the lane its controller keeps: an

@@ -713,6 +713,28 @@ TEST(ScriptedTraffic, LanesOfTheirOwnWidthsLieSideBySide) {
       << loadErrorOf("lane_widths: [3.9, 0.4, 3.65]");
 }
 
+// lateral_offset with continuous: true holds its offset and never ends on its own (OpenSCENARIO's
+// continuous LaneOffsetAction): its end, and an `after` on it, come where a later lateral action
+// replaces it (4 s), not where it has got there (2 s); never replaced, it never ends.
+TEST(ScriptedTraffic, AContinuousOffsetEndsOnlyWhereSomethingEndsIt) {
+  const auto holder = [](const std::string& more) {
+    return R"(
+    - {id: holder, s: 100, lane: 0, speed: 10,
+       actions: [{id: hold, trigger: {time: 1}, lateral_offset: {offset: 0.5, duration: 1, continuous: true}},
+                 {id: after_hold, trigger: {after: hold}, speed: {target: 5, rate: 5}})" +
+           more + "]}";
+  };
+  const auto replaced =
+      timingsAfter(plan(scenarioWith(holder(", {trigger: {time: 4}, lateral_offset: {offset: 0, duration: 1}}"))), 40);
+  EXPECT_NEAR(replaced[0].end, 4.0, 1e-9);
+  EXPECT_NEAR(replaced[1].start, 4.0, 1e-9);
+  const Planned never = plan(scenarioWith(holder("")));
+  const auto held = timingsAfter(never, 40);
+  EXPECT_TRUE(std::isinf(held[0].end));
+  EXPECT_TRUE(std::isnan(held[1].start));
+  EXPECT_NEAR(offsetOf(never.road, never.paths[0].back()), -3.0, 1e-9);
+}
+
 // An action's `ends` end the listed actions under way where it starts (OpenSCENARIO's Event
 // priority overwrite): their road user keeps the speed and the place across the road they have
 // reached. By hand: the tracker follows 1.5 times the lead's speed one step behind (10 + t m/s),

@@ -57,7 +57,7 @@ struct ConcreteAction {
   TransitionShape shape = TransitionShape::Smooth;
   ActionSpec::SpeedTarget speedTarget = ActionSpec::SpeedTarget::Absolute;
   int speedReference = -1;  ///< Relative, Factor: -1 = the Ego, else index into ConcreteScenario::others
-  bool continuous = false;  ///< Relative, Factor: tracks the reference's speed until replaced
+  bool continuous = false;  ///< ActionSpec::continuous: it ends only where it is replaced or ended
   double target = 0.0;  ///< m/s (a factor for SpeedTarget::Factor) | lanes | m
   double targetLaneOffset = 0.0;  ///< m, LaneChange: ActionSpec::targetLaneOffset
   ConcretePlace place;            ///< Teleport: where its centre lands (along the road)

@@ -224,7 +224,8 @@ struct ActionSpec {
   SpeedTarget speedTarget = SpeedTarget::Absolute;
   std::string speedReference = "ego";  ///< Relative, Factor: whose speed ("ego" or a road user's id)
   /// Relative, Factor: keep tracking the reference's speed (shape step) until another speed
-  /// action replaces this one; else the target is fixed when the action starts.
+  /// action replaces this one; else the target is fixed when the action starts. LateralOffset:
+  /// hold the offset, never ending on its own (a later lateral action, a teleport or `ends` ends it).
   bool continuous = false;
   Expression target;     ///< m/s (Speed, SetSpeed); lanes (LaneChange); m (LateralOffset, Cross)
   /// LaneChange: m from the target lane's centre where it ends, > 0 left (OpenSCENARIO's
