@@ -94,10 +94,15 @@ Placement relativeLanePosition(Translation& translation, const pugi::xml_node& p
   // dLane counts lane ids (esmini's reading with ds): on a reversed road, the other way.
   const CarriagewayRoad& road = translation.road;
   const long d_lane = reader.integer(position, "dLane", -100, 100);
-  const long lane = base.lane + road.ownLaneId(d_lane);
+  // From a road user beside the driving lanes (a shoulder), lane ids count from the lane that
+  // shoulder is, one beyond the outer driving lane (as esmini counts them).
+  const double right_edge = road.laneCentreT(0) - 0.5 * road.laneWidths.front();
+  const double left_edge = road.laneCentreT(road.lanes - 1) + 0.5 * road.laneWidths.back();
+  const int base_lane = base.t < right_edge ? -1 : base.t > left_edge ? road.lanes : base.lane;
+  const long lane = base_lane + road.ownLaneId(d_lane);
   if (lane < 0 || lane >= translation.road.lanes) {
     reader.fail(position, fmt::format("dLane={} from lane {} leaves the road's {} driving lanes",
-                                      reader.text(position, "dLane"), base.lane, translation.road.lanes));
+                                      reader.text(position, "dLane"), base_lane, translation.road.lanes));
   }
   const double offset = road.ownT(reader.optionalNumber(position, "offset").value_or(0.0));
   const double s = base.s + road.ownDs(reader.optionalNumber(position, "ds").value_or(0.0));

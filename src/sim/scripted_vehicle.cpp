@@ -664,7 +664,8 @@ ScriptedTraffic::Impl::Landing ScriptedTraffic::Impl::landingOf(std::size_t a, c
   if (std::isnan(landing.d)) refuseLane(landing, action.place, action.where + ".teleport");
   if (landing.s < 0.0 || landing.s > frame.length() || !onPavedGround(landing.d)) {
     throw ConfigError(fmt::format("{}: {}.teleport: it lands {:.1f} m along a road of {:.1f} m (lead-in and lead-out "
-                                  "included), {:.2f} m left of its centre: expected a place on its lanes or shoulders",
+                                  "included), {:.2f} m left of its centre line: expected a place on its lanes or "
+                                  "shoulders",
                                   concrete->where(), action.where, landing.s - regionStartS, frame.length(),
                                   landing.d));
   }

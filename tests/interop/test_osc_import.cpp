@@ -621,6 +621,21 @@ TEST(OscRun, ScriptedRoadUsersEndWhereTheFileSays) {
   EXPECT_NEAR(end.y, 0.5, 0.2);
 }
 
+// dLane counts lane ids: from the Walker on the right shoulder (three_lanes.xodr's lane -5), dLane
+// 1 is lane -4, the language's lane 0, and dLane 2 its lane 1 (as esmini counts; the Story's
+// relative places count so too).
+TEST(OscImport, RelativeLanesFromAShoulderCountFromItsLaneId) {
+  const std::string cutter_place =
+      R"(<RelativeLanePosition entityRef="Ego" dLane="$Cutter_Side" ds="${$Cutter_Ahead_m}" offset="0"/>)";
+  const auto from_walker = [&](const std::string& d_lane) {
+    return dataWith("cut_in.xosc", cutter_place,
+                    R"(<RelativeLanePosition entityRef="Walker" dLane=")" + d_lane + R"(" ds="-200" offset="0"/>)");
+  };
+  const auto dir = folderWith({{"one.xosc", from_walker("1")}, {"two.xosc", from_walker("2")}});
+  EXPECT_EQ(other(*importTemplate(dir->path() / "one.xosc", {}), "Cutter").lane, 0);
+  EXPECT_EQ(other(*importTemplate(dir->path() / "two.xosc", {}), "Cutter").lane, 1);
+}
+
 // Event priority="overwrite" ends the running Events of its Maneuver (esmini ends them whatever
 // their actions' domains): the cutter's slow-down, here to 0 m/s at 2 m/s^2 from 15 m/s with its
 // lane change (3.5 m at a peak 1.5 m/s: 3.67 s), is under way when the swerve starts 1 s after the

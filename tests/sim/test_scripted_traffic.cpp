@@ -631,7 +631,8 @@ TEST(ScriptedTraffic, TeleportsAndLaneChangeOffsetsStayOnTheRoad) {
   EXPECT_NE(refused(moving, "teleport: {from: ego, ds: 10, lanes: 5}")
                 .find("teleport.lanes: lane 6 from the lane of 'ego', expected a lane the road has (0 .. 2)"),
             std::string::npos);
-  EXPECT_NE(refused(moving, "teleport: {from: ego, ds: 10, dd: 20}").find("m left of its centre: expected a place on"),
+  EXPECT_NE(refused(moving, "teleport: {from: ego, ds: 10, dd: 20}")
+                .find("m left of its centre line: expected a place on"),
             std::string::npos);
   EXPECT_NE(refused(moving, "teleport: {from: '', ds: 10, dd: 0}").find("teleport.from: expected a road user's id"),
             std::string::npos);
