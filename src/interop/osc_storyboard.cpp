@@ -115,25 +115,23 @@ YAML::Node laneChange(Translation& translation, const Entity& actor, const pugi:
 YAML::Node laneOffset(Translation& translation, const Entity& actor, const pugi::xml_node& action) {
   const xml::Reader& reader = translation.reader;
   reader.requireSubset(action, {"LaneOffsetActionDynamics", "LaneOffsetTarget"});
-  // continuous="true" keeps the target offset until another action replaces it: for the
-  // targets below (fixed offsets) the road user moves the same, but the action never ends.
+  // continuous="true": the standard keeps the action running until something ends it; esmini
+  // does not read the attribute and ends it where the offset is reached, as with "false" (the
+  // road user holds the offset either way). The reference player's reading is followed.
   const auto endless = reader.optionalBoolean(action, "continuous");
   if (!endless) reader.fail(action, "continuous: expected true or false (the attribute is required)");
   YAML::Node item;
   if (*endless) {
-    translation.findings.mapped(reader.where(action), "continuous=\"true\": the offset is held and the action ends "
-                                                      "only where a later lateral action, a teleport or an overwrite "
-                                                      "Event ends it (as esmini ends it)");
-    item["continuous"] = true;
+    translation.findings.note(reader.where(action), "continuous=\"true\": read as esmini reads it, as \"false\": the "
+                                                    "offset is held and the action ends where it is reached (the "
+                                                    "standard runs it on until something ends it)");
   }
   const pugi::xml_node dynamics = reader.only(action, "LaneOffsetActionDynamics");
   reader.requireSubset(dynamics, {});
   item["shape"] = shapeOf(translation, dynamics, false);
   const auto accel = reader.optionalNumber(dynamics, "maxLateralAcc", NumberRange::above(0.0));
   if (!accel) reader.fail(dynamics, "no maxLateralAcc: the language needs a pace for a lateral offset");
-  if (item["shape"].as<std::string>() == "linear") {
-    reader.fail(dynamics, "maxLateralAcc paces sinusoidal and cubic offsets only (a linear one jumps in speed)");
-  }
+
   item["lateral_accel"] = num(*accel);
   const pugi::xml_node target = reader.choice(reader.only(action, "LaneOffsetTarget"),
                                               {"AbsoluteTargetLaneOffset", "RelativeTargetLaneOffset"});

@@ -585,10 +585,6 @@ void parseLateralAction(const YamlReader& reader, const YAML::Node& node, const 
     return;
   }
   parsePace(reader, node, field, paces, inputs, action);
-  if (action.pace == ActionSpec::Pace::LateralAccel && action.shape == TransitionShape::Linear) {
-    reader.fail(node["lateral_accel"], field + ".lateral_accel",
-                "a lateral acceleration paces a smooth or cubic shape only (a linear one jumps in speed)");
-  }
 }
 
 /// A teleport's place relative to a road user: `{from, ds, lanes[, offset]}` or `{from, ds, dd}`.

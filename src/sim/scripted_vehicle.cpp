@@ -65,10 +65,11 @@ double durationOf(const ConcreteAction& action, double from, double to) {
     case ActionSpec::Pace::Duration: return action.shape == TransitionShape::Step ? 0.0 : action.paceValue;
     case ActionSpec::Pace::Rate:
     case ActionSpec::Pace::LateralSpeed: return peak_factor * magnitude / action.paceValue;
-    // Peak accelerations: pi^2 / 2 and 6 times the change over the duration squared.
+    // Peak accelerations: pi^2 / 2 (smooth) and 6 (cubic) times the change over the duration
+    // squared; a linear change has none (its speed jumps) and is paced as a cubic one, as esmini does.
     case ActionSpec::Pace::LateralAccel:
-      return action.shape == TransitionShape::Cubic ? std::sqrt(6.0 * magnitude / action.paceValue)
-                                                    : kPi * std::sqrt(magnitude / (2.0 * action.paceValue));
+      return action.shape == TransitionShape::Smooth ? kPi * std::sqrt(magnitude / (2.0 * action.paceValue))
+                                                     : std::sqrt(6.0 * magnitude / action.paceValue);
     // A speed change over a distance: linear, smooth and cubic profiles average (from + to) / 2,
     // so they cover the distance in 2 d / (from + to) (as esmini converts it; speeds are >= 0).
     // No change ends at once, as in esmini.

@@ -795,7 +795,8 @@ TEST(ScriptedTraffic, AnActionEndsTheListedActionsUnderWayWhereItStarts) {
 // shape: cubic follows 3 tau^2 - 2 tau^3 (OpenSCENARIO's cubic, as esmini evaluates it), paced as
 // esmini paces it. By hand: 10 -> 16 m/s at a peak 3 m/s^2 lasts 1.5 * 6 / 3 = 3 s from 1 s; a
 // lane change of 3.5 m at a peak 1.75 m/s lasts 1.5 * 3.5 / 1.75 = 3 s from 1 s; an offset of
-// 0.6 m at a peak 1.2 m/s^2 lasts sqrt(6 * 0.6 / 1.2) = sqrt(3) s from 1 s.
+// 0.6 m at a peak 1.2 m/s^2 lasts sqrt(6 * 0.6 / 1.2) = sqrt(3) s from 1 s. A linear offset paced
+// by a lateral acceleration (it has no peak: its speed jumps) lasts as long, as esmini paces it.
 TEST(ScriptedTraffic, ACubicChangeFollowsItsPolynomialAtItsPace) {
   const Planned run = plan(scenarioWith(R"(
     - {id: speeder, s: 100, lane: 2, speed: 10,
@@ -803,7 +804,9 @@ TEST(ScriptedTraffic, ACubicChangeFollowsItsPolynomialAtItsPace) {
     - {id: changer, s: 150, lane: 0, speed: 10,
        actions: [{trigger: {time: 1}, lane_change: {lanes: 1, lateral_speed: 1.75, shape: cubic}}]}
     - {id: swerver, s: 200, lane: 2, speed: 10,
-       actions: [{trigger: {time: 1}, lateral_offset: {offset: 0.6, lateral_accel: 1.2, shape: cubic}}]})",
+       actions: [{trigger: {time: 1}, lateral_offset: {offset: 0.6, lateral_accel: 1.2, shape: cubic}}]}
+    - {id: linear, s: 250, lane: 2, speed: 10,
+       actions: [{trigger: {time: 1}, lateral_offset: {offset: 0.6, lateral_accel: 1.2, shape: linear}}]})",
                                         0.0, 6.0));
   const auto cubic = [](double tau) { return tau * tau * (3.0 - 2.0 * tau); };
   for (const int k : {5, 8, 10, 13, 20}) {
@@ -813,6 +816,8 @@ TEST(ScriptedTraffic, ACubicChangeFollowsItsPolynomialAtItsPace) {
         << "instant " << k;
     const double share = std::clamp((0.2 * k - 1.0) / std::sqrt(3.0), 0.0, 1.0);
     EXPECT_NEAR(offsetOf(run.road, run.paths[2][static_cast<std::size_t>(k)]), 3.5 + 0.6 * cubic(share), 1e-9)
+        << "instant " << k;
+    EXPECT_NEAR(offsetOf(run.road, run.paths[3][static_cast<std::size_t>(k)]), 3.5 + 0.6 * share, 1e-9)
         << "instant " << k;
   }
 }
