@@ -393,6 +393,21 @@ void refuseTurn(const Translation& translation, const Entity& actor, const pugi:
   }
 }
 
+/// The language's place `{from, dx, dy}` of a RelativeObjectPosition: in the road user's own
+/// axes from its reference point, where the file measures from (the language's plane places do).
+YAML::Node objectPlace(Translation& translation, const pugi::xml_node& position) {
+  const xml::Reader& reader = translation.reader;
+  reader.requireSubset(position, {});
+  if (reader.optionalNumber(position, "dz").value_or(0.0) != 0.0) {
+    reader.fail(position, "dz: vsd-sumo is planar (expected 0)");
+  }
+  YAML::Node item;
+  item["from"] = translation.entity(position, reader.text(position, "entityRef")).id;
+  item["dx"] = num(reader.number(position, "dx"));
+  item["dy"] = num(reader.number(position, "dy"));
+  return item;
+}
+
 /// The language's place (`{from, ds, lanes[, offset]}` or `{from, ds, dd}`) of a
 /// RelativeLanePosition or RelativeRoadPosition: relative to that road user where it is when
 /// the place is asked for, from its centre to the centre of what is placed there, which lies
@@ -401,6 +416,7 @@ void refuseTurn(const Translation& translation, const Entity& actor, const pugi:
 YAML::Node relativePlace(Translation& translation, const pugi::xml_node& position, double centre_ahead) {
   const xml::Reader& reader = translation.reader;
   reader.requireSubset(position, {});
+  if (std::string(position.name()) == "RelativeObjectPosition") return objectPlace(translation, position);
   const CarriagewayRoad& road = translation.road;
   if (!road.oneCurvature) {
     reader.fail(position, "a place relative to a road user on a road of several curvatures: esmini's ds runs "
@@ -430,8 +446,8 @@ YAML::Node relativePlace(Translation& translation, const pugi::xml_node& positio
 /// The positions a teleport or a distance condition reads: fixed places, and places relative
 /// to a road user; the chosen one.
 pugi::xml_node placeKind(const xml::Reader& reader, const pugi::xml_node& position) {
-  return reader.choice(
-      position, {"WorldPosition", "LanePosition", "RoadPosition", "RelativeLanePosition", "RelativeRoadPosition"});
+  return reader.choice(position, {"WorldPosition", "LanePosition", "RoadPosition", "RelativeLanePosition",
+                                   "RelativeRoadPosition", "RelativeObjectPosition"});
 }
 
 bool isRelative(const pugi::xml_node& kind) { return std::string(kind.name()).rfind("Relative", 0) == 0; }
@@ -446,8 +462,17 @@ YAML::Node teleport(Translation& translation, const Entity& actor, const pugi::x
   const pugi::xml_node position = reader.only(action, "Position");
   const pugi::xml_node kind = placeKind(reader, position);
   if (isRelative(kind)) {
-    // Without an Orientation esmini faces it along the file's reference line.
-    refuseTurn(translation, actor, kind, translation.road.reversed ? kPi : 0.0);
+    // Without an Orientation esmini faces it along the file's reference line, at an object's
+    // position as that object faces (the same while it drives along its lane: noted).
+    const bool object = std::string(kind.name()) == "RelativeObjectPosition";
+    const Entity* reference = object ? &translation.entity(kind, reader.text(kind, "entityRef")) : nullptr;
+    refuseTurn(translation, actor, kind,
+               object && reference->placement ? reference->placement->heading : translation.road.reversed ? kPi : 0.0);
+    if (object) {
+      translation.findings.note(reader.where(kind), fmt::format("'{}' lands facing along its lane (esmini: as '{}' "
+                                                                "faces, the same while it drives along its lane)",
+                                                                actor.name, reference->name));
+    }
     return relativePlace(translation, kind, actor.drivesAgainstRoad() ? -actor.centreAhead : actor.centreAhead);
   }
   const Placement p = fixedPlace(translation, position);
@@ -740,6 +765,14 @@ YAML::Node distanceLeaf(Translation& translation, const Entity& subject, const p
     from_body = distanceMeasure(translation, condition, trigger);
     const double value = reader.number(condition, "value", NumberRange::atLeast(0.0));
     trigger["distance_" + boundOf(reader, condition, true, value)] = num(value);
+  }
+  // At a place relative to a road user in the plane the language measures from the reference
+  // point too, where the file measures from.
+  const pugi::xml_node kind = placeKind(reader, reader.only(condition, "Position"));
+  if (std::string(kind.name()) == "RelativeObjectPosition") {
+    if (!from_body) trigger["from"] = "reference_point";
+    trigger["position"] = objectPlace(translation, kind);
+    return trigger;
   }
   trigger["position"] = placeOf(translation, subject, condition, from_body);
   return trigger;

@@ -278,6 +278,12 @@ ConcretePlace evaluateRelativePlace(const PositionSpec& position, const std::str
   place.relative = true;
   place.from = roadUserIndex(logical, position.from);
   place.acrossFromCentre = position.acrossFromCentre;
+  place.inPlane = position.inPlane;
+  if (position.inPlane) {
+    place.x = evaluateFinite(position.x, concrete.inputs, where, field + ".dx");
+    place.y = evaluateFinite(position.y, concrete.inputs, where, field + ".dy");
+    return place;
+  }
   place.s = evaluateFinite(position.s, concrete.inputs, where, field + ".ds");
   place.offset = evaluateFinite(position.offset, concrete.inputs, where,
                                 field + (position.acrossFromCentre ? ".dd" : ".offset"));
@@ -335,6 +341,7 @@ ConcreteTrigger evaluateTrigger(const TriggerSpec& spec, int owner, const Logica
   trigger.betweenReferencePoints = spec.betweenReferencePoints;
   trigger.measure = spec.measure;
   trigger.fromBody = spec.fromBody;
+  trigger.fromReferencePoint = spec.fromReferencePoint;
   trigger.rising = spec.rising;
   trigger.falling = spec.falling;
   if (spec.kind == TriggerSpec::Kind::After) trigger.action = actionIndex(logical, spec.action);

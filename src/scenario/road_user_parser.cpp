@@ -283,7 +283,7 @@ void parsePosition(const YamlReader& reader, const YAML::Node& node, const std::
                    const std::vector<std::string>& inputs, PositionSpec& position) {
   reader.requireMap(node, field);
   if (node["from"]) {
-    reader.checkKeys(node, field, {"from", "ds", "lanes", "offset", "dd"});
+    reader.checkKeys(node, field, {"from", "ds", "lanes", "offset", "dd", "dx", "dy"});
     parseRelativePlace(reader, node, field, inputs, position);
     return;
   }
@@ -353,10 +353,11 @@ void parseDistanceFrom(const YamlReader& reader, const YAML::Node& node, const s
     reader.fail(node, field, "'from' goes with distance_at_most and distance_at_least (and only there)");
   }
   const std::string value = reader.scalar(node, field);
-  if (value != "centre" && value != "body") {
-    throw ConfigError::field(reader.where(node, field), field, value, "centre or body");
+  if (value != "centre" && value != "body" && value != "reference_point") {
+    throw ConfigError::field(reader.where(node, field), field, value, "centre, body or reference_point");
   }
   trigger.fromBody = value == "body";
+  trigger.fromReferencePoint = value == "reference_point";
 }
 
 /// Whether a trigger's condition can stop holding and hold again (no time or action end in it).
@@ -587,15 +588,25 @@ void parseLateralAction(const YamlReader& reader, const YAML::Node& node, const 
   parsePace(reader, node, field, paces, inputs, action);
 }
 
-/// A teleport's place relative to a road user: `{from, ds, lanes[, offset]}` or `{from, ds, dd}`.
+/// A place relative to a road user: `{from, ds, lanes[, offset]}`, `{from, ds, dd}` or `{from, dx, dy}`.
 void parseRelativePlace(const YamlReader& reader, const YAML::Node& node, const std::string& field,
                         const std::vector<std::string>& inputs, PositionSpec& place) {
-  if (!node["ds"] || static_cast<bool>(node["lanes"]) == static_cast<bool>(node["dd"]) ||
-      (node["dd"] && node["offset"])) {
-    reader.fail(node, field, "expected {from, ds, lanes[, offset]} or {from, ds, dd}: where from that road user");
+  const bool along_road = node["ds"] || node["lanes"] || node["dd"] || node["offset"];
+  const bool in_plane = node["dx"] || node["dy"];
+  if (in_plane ? (along_road || !node["dx"] || !node["dy"])
+               : (!node["ds"] || static_cast<bool>(node["lanes"]) == static_cast<bool>(node["dd"]) ||
+                  (node["dd"] && node["offset"]))) {
+    reader.fail(node, field, "expected {from, ds, lanes[, offset]}, {from, ds, dd} or {from, dx, dy}: where from "
+                             "that road user");
   }
   place.from = reader.scalar(node["from"], field + ".from");
   if (place.from.empty()) reader.fail(node["from"], field + ".from", "expected a road user's id (ego or another's)");
+  place.inPlane = in_plane;
+  if (in_plane) {
+    place.x = reader.expression(node["dx"], field + ".dx", inputs);
+    place.y = reader.expression(node["dy"], field + ".dy", inputs);
+    return;
+  }
   place.s = reader.expression(node["ds"], field + ".ds", inputs);
   place.acrossFromCentre = static_cast<bool>(node["dd"]);
   if (place.acrossFromCentre) {
@@ -613,7 +624,7 @@ void parseTeleportAction(const YamlReader& reader, const YAML::Node& node, const
   reader.requireMap(node, field);
   action.kind = ActionSpec::Kind::Teleport;
   if (node["from"]) {
-    reader.checkKeys(node, field, {"from", "ds", "lanes", "offset", "dd"});
+    reader.checkKeys(node, field, {"from", "ds", "lanes", "offset", "dd", "dx", "dy"});
     parseRelativePlace(reader, node, field, inputs, action.place);
   } else {
     reader.checkKeys(node, field, {"s", "lane", "offset"});

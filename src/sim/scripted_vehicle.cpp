@@ -255,6 +255,9 @@ struct ScriptedTraffic::Impl {
   };
   Landing landingOf(std::size_t a, const VehicleState& ego) const;
   Landing placeNow(const scenario::ConcretePlace& place, const VehicleState& ego, double since) const;
+  /// Where a place relative to a road user in the plane lies in the frame, that one where it is
+  /// `since` s after the current instant (moved on along its heading at its speed).
+  Vec2 planePoint(const scenario::ConcretePlace& place, const VehicleState& ego, double since) const;
   /// Refuses a relative place on a lane the road does not have; `field` names the place.
   [[noreturn]] void refuseLane(const Landing& landing, const scenario::ConcretePlace& place,
                                const std::string& field) const;
@@ -411,7 +414,9 @@ double ScriptedTraffic::Impl::distanceToPlace(const scenario::ConcreteTrigger& t
   using Measure = scenario::TriggerSpec::Measure;
   const auto& spot = trigger.place;
   Vec2 place(spot.x, spot.y);
-  if (!spot.inFrame) {
+  if (spot.inPlane) {
+    place = planePoint(spot, ego, 0.0);
+  } else if (!spot.inFrame) {
     const Landing now = placeNow(spot, ego, 0.0);
     if (std::isnan(now.d)) {
       refuseLane(now, spot, fmt::format("the distance trigger of '{}': its position", idOf(trigger.subject)));
@@ -419,12 +424,14 @@ double ScriptedTraffic::Impl::distanceToPlace(const scenario::ConcreteTrigger& t
     place = frame.point(now.s, now.d);
   }
   const VehicleState& subject = stateOf(trigger.subject, ego);
-  if (!trigger.fromBody && trigger.measure == Measure::StraightLine) return (subject.position() - place).norm();
   const auto& spec = specOf(trigger.subject);
-  // The place (and a centre) as a footprint of no extent: the gaps to it are those from its point.
+  const Vec2 origin = trigger.fromReferencePoint ? referencePoint(subject, spec) : subject.position();
+  if (!trigger.fromBody && trigger.measure == Measure::StraightLine) return (origin - place).norm();
+  // The place (and a centre or reference point) as a footprint of no extent: the gaps to it are
+  // those from its point.
   const Footprint point{place, 0.0, 0.0, 0.0};
   const Footprint body = trigger.fromBody ? footprintOf(subject, spec.length, spec.width)
-                                          : Footprint{subject.position(), subject.heading, 0.0, 0.0};
+                                          : Footprint{origin, subject.heading, 0.0, 0.0};
   if (trigger.measure == Measure::StraightLine) return std::max(footprintGap(body, point), 0.0);
   const PathRelation relation = relateToPath(egoLane, road->laneWidthOf(concrete->ego.lane), point, body);
   return std::max(trigger.measure == Measure::AlongLane ? relation.longitudinalGap : relation.lateralGap, 0.0);
@@ -661,8 +668,13 @@ bool ScriptedTraffic::Impl::onPavedGround(double d) const {
 /// its centre is in, or dd across from its centre). On the road, or a ConfigError.
 ScriptedTraffic::Impl::Landing ScriptedTraffic::Impl::landingOf(std::size_t a, const VehicleState& ego) const {
   const ConcreteAction& action = concrete->actions[a];
-  const Landing landing = placeNow(action.place, ego, scheduled[a] - static_cast<double>(k) * step);
+  Landing landing = placeNow(action.place, ego, scheduled[a] - static_cast<double>(k) * step);
   if (std::isnan(landing.d)) refuseLane(landing, action.place, action.where + ".teleport");
+  if (action.place.inPlane) {
+    // Its reference point lands there: its centre lies behind it along the road, the way it faces.
+    const auto& spec = specOf(action.owner);
+    landing.s -= (spec.againstRoad ? -1.0 : 1.0) * frame.sRate(landing.s, landing.d, spec.referencePoint);
+  }
   if (landing.s < 0.0 || landing.s > frame.length() || !onPavedGround(landing.d)) {
     throw ConfigError(fmt::format("{}: {}.teleport: it lands {:.1f} m along a road of {:.1f} m (lead-in and lead-out "
                                   "included), {:.2f} m left of its centre line: expected a place on its lanes or "
@@ -680,6 +692,10 @@ ScriptedTraffic::Impl::Landing ScriptedTraffic::Impl::landingOf(std::size_t a, c
 ScriptedTraffic::Impl::Landing ScriptedTraffic::Impl::placeNow(const scenario::ConcretePlace& place,
                                                                const VehicleState& ego, double since) const {
   if (!place.relative) return {regionStartS + place.s, road->laneOffset(place.lane) + place.offset, place.lane};
+  if (place.inPlane) {
+    const auto [s, d] = frame.coordinates(planePoint(place, ego, since));
+    return {s, d, road->laneAt(d)};
+  }
   const VehicleState& reference = stateOf(place.from, ego);
   const auto [s, d] = frame.coordinates(reference.position());
   const double speed_along = reference.speed * std::cos(reference.heading - frame.heading(s, d));
@@ -695,6 +711,15 @@ ScriptedTraffic::Impl::Landing ScriptedTraffic::Impl::placeNow(const scenario::C
     landing.d = place.acrossFromCentre ? d + place.offset : road->laneOffset(landing.lane) + place.offset;
   }
   return landing;
+}
+
+Vec2 ScriptedTraffic::Impl::planePoint(const scenario::ConcretePlace& place, const VehicleState& ego,
+                                       double since) const {
+  const VehicleState& reference = stateOf(place.from, ego);
+  const Vec2 along = headingVector(reference.heading);
+  const Vec2 left(-along.y(), along.x());
+  const double ahead = reference.speed * since + specOf(place.from).referencePoint;  // of its centre, m
+  return reference.position() + (ahead + place.x) * along + place.y * left;
 }
 
 void ScriptedTraffic::Impl::refuseLane(const Landing& landing, const scenario::ConcretePlace& place,

@@ -1045,6 +1045,11 @@ TEST(OscRun, EachConditionStartsItsEventWhereTheFileSays) {
       {group(entityCondition("Lead", R"(<ReachPositionCondition tolerance="1"><Position>
           <RelativeLanePosition entityRef="Slow" dLane="2" ds="50"/></Position></ReachPositionCondition>)")),
        2.8 + kNext},
+      // the same place in Slow's own axes, 50 m ahead of its reference point and 7 m to its left,
+      // measured from the lead's reference point
+      {group(entityCondition("Lead", R"(<ReachPositionCondition tolerance="1"><Position>
+          <RelativeObjectPosition entityRef="Slow" dx="50" dy="7"/></Position></ReachPositionCondition>)")),
+       2.8 + kNext},
       // closer than 10 m to x = 200 on its lane's centre (t = -2.75): 90 m after 4.08 s
       {group(entityCondition("Lead", R"(<DistanceCondition value="10" freespace="false" rule="lessThan"
           relativeDistanceType="euclidianDistance"><Position><WorldPosition x="200" y="-2.75"/></Position>
@@ -1140,6 +1145,7 @@ TEST(OscRun, AStoryTeleportMovesAScriptedRoadUserAtOnce) {
            offset="0.2"/>)"))},
        {"by_road.xosc", teleportAtOne("Lead", R"(<RelativeRoadPosition entityRef="Slow" ds="30" dt="2.5"/>)")},
        {"object.xosc", teleportAtOne("Lead", R"(<RelativeObjectPosition entityRef="Slow" dx="30" dy="0"/>)")},
+       {"world.xosc", teleportAtOne("Lead", R"(<RelativeWorldPosition entityRef="Slow" dx="30" dy="0"/>)")},
        {"turned.xosc",
         teleportAtOne("Lead", R"(<LanePosition roadId="7" laneId="-3" s="300" offset="0"><Orientation type="relative"
             h="3.141592653589793"/></LanePosition>)")}});
@@ -1170,8 +1176,17 @@ TEST(OscRun, AStoryTeleportMovesAScriptedRoadUserAtOnce) {
     EXPECT_NEAR(landed->states.at(5).x - landed->states.front().x, 8.0, 1e-6) << name;
     EXPECT_NEAR(landed->states.at(5).y, y, 1e-6) << name;
   }
-  EXPECT_THAT(importRefusal(*dir, "object"),
-              HasSubstr("element <RelativeObjectPosition> is outside the supported subset"));
+  // In Slow's own axes, 30 m ahead of its reference point: the lead's reference point lands on
+  // Slow's lane (y = -3.5) at s = 108 too.
+  const auto by_object = simulatedTrack(dir->path() / "object.xosc", "Lead");
+  ASSERT_TRUE(by_object);
+  EXPECT_NEAR(by_object->states.at(5).x - by_object->states.front().x, 8.0, 1e-6);
+  EXPECT_NEAR(by_object->states.at(5).y, -3.5, 1e-6);
+  EXPECT_THAT(checkOpenScenario(dir->path() / "object.xosc", {}).report(),
+              HasSubstr("'Lead' lands facing along its lane (esmini: as 'Slow' faces, the same while it drives "
+                        "along its lane)"));
+  EXPECT_THAT(importRefusal(*dir, "world"),
+              HasSubstr("element <RelativeWorldPosition> is outside the supported subset"));
   // esmini faces a road user at a relative place along the reference line: a lead driving
   // against the road would turn. On the S-curve its ds and the language's differ.
   const std::string relative = R"(<RelativeRoadPosition entityRef="Slow" ds="30" dt="2.5"/>)";
@@ -1624,8 +1639,8 @@ TEST(OscImport, ConditionsTheLanguageCannotExpressAreOneLineEach) {
        "<DistanceCondition>: coordinateSystem=\"trajectory\": the language measures a straight distance in the "
        "plane, and longitudinal or lateral ones along or across the Ego's lane"},
       {group(entityCondition("Lead", R"(<ReachPositionCondition tolerance="1"><Position>
-          <RelativeObjectPosition entityRef="Ego" dx="10" dy="0"/></Position></ReachPositionCondition>)")),
-       "element <RelativeObjectPosition> is outside the supported subset"},
+          <RelativeWorldPosition entityRef="Ego" dx="10" dy="0"/></Position></ReachPositionCondition>)")),
+       "element <RelativeWorldPosition> is outside the supported subset"},
       {group(timeCondition("1") + entityCondition("Lead", R"(<TraveledDistanceCondition value="30"/>)", "2")),
        "delay 2 s, another condition of its group 0 s: the language delays a group as a whole"},
       // OpenSCENARIO measures it from the triggering entity to the reference ahead of it (false

@@ -455,7 +455,9 @@ TEST(ScriptedTraffic, LateralRelationsMeasureAcrossTheEgosLane) {
 // A distance to a place measured along the Ego's lane or across it, from the centre or from the
 // body (OpenSCENARIO's DistanceCondition with relativeDistanceType and freespace). The mover's
 // centre starts 20 m before the place along the road and 7 m left of it (lane 2 against lane 0),
-// at 5 m/s; its body is 5 m long and 2 m wide.
+// at 5 m/s; its body is 5 m long and 2 m wide. The rear's reference point lies 1.5 m behind its
+// centre: 21.5 m before its place at 5 m/s. The sider's place is 5 m ahead of the stand-in Ego
+// and 3.5 m to its left (lane 2, where the sider drives): 25 - 10 t m from the sider's centre.
 TEST(ScriptedTraffic, DistancesToAPlaceMeasureAlongOrAcrossTheLaneFromTheCentreOrTheBody) {
   const std::string marker = "lateral_offset: {offset: 0, duration: 0.2}";
   const std::string place = "position: {s: 220, lane: 0}";
@@ -469,7 +471,12 @@ TEST(ScriptedTraffic, DistancesToAPlaceMeasureAlongOrAcrossTheLaneFromTheCentreO
                  {{trigger: {{distance_at_most: 6.5, {1}, measure: lateral, from: body}}, {0}}}]}}
     - {{id: chaser, s: 10, lane: 0, speed: 20,
        actions: [{{trigger: {{distance_at_most: 1, position: {{from: ego, ds: 0, lanes: -1}}, measure: along_lane}},
-                   {0}}}]}})",
+                   {0}}}]}}
+    - {{id: sider, s: 10, lane: 2, speed: 20,
+       actions: [{{trigger: {{distance_at_most: 1, position: {{from: ego, dx: 5, dy: 3.5}}}}, {0}}}]}}
+    - {{id: rear, s: 200, lane: 1, length: 5, width: 2, reference_point: -1.5, speed: 5,
+       actions: [{{trigger: {{distance_at_most: 9.5, position: {{s: 220, lane: 1}}, measure: along_lane,
+                             from: reference_point}}, {0}}}]}})",
                                                 marker, place));
   const auto timings = timingsAfter(plan(logical), 30);
   // A place beside the stand-in Ego moves with it: 30 + 10 t - (10 + 20 t) <= 1 from t = 1.9.
@@ -480,6 +487,8 @@ TEST(ScriptedTraffic, DistancesToAPlaceMeasureAlongOrAcrossTheLaneFromTheCentreO
   EXPECT_NEAR(timings[3].start, 0.0, 1e-9);  // 7 m across from its centre
   EXPECT_TRUE(std::isnan(timings[4].start));  // 7 - 1 = 6 m across from its side
   EXPECT_NEAR(timings[5].start, 0.0, 1e-9);
+  EXPECT_NEAR(timings[7].start, 2.4, 1e-9);  // |25 - 10 t| <= 1 from t = 2.4
+  EXPECT_NEAR(timings[8].start, 2.4, 1e-9);  // 21.5 - 5 t <= 9.5 from t = 2.4
   const auto refused = [](const std::string& trigger) {
     return test::configErrorOf([&] {
       scenarioWith("    - {id: mover, ds: 0, relative_lane: 1, speed: 10,\n"
@@ -489,7 +498,7 @@ TEST(ScriptedTraffic, DistancesToAPlaceMeasureAlongOrAcrossTheLaneFromTheCentreO
   EXPECT_NE(refused("{gap: 1, from: body}").find("'from' goes with distance_at_most and distance_at_least"),
             std::string::npos);
   EXPECT_NE(refused("{distance_at_most: 1, position: {s: 20, lane: 0}, from: front}")
-                .find("got 'front', expected centre or body"),
+                .find("got 'front', expected centre, body or reference_point"),
             std::string::npos);
   EXPECT_NE(refused("{distance_at_most: 1, position: {from: nobody, ds: 0, dd: 0}}")
                 .find("position.from: got 'nobody', expected a road user of the file"),
@@ -551,7 +560,9 @@ TEST(ScriptedTraffic, ATeleportMovesARoadUserAtOnceAndItDrivesOnFromThere) {
     - {{id: follower, s: 150, lane: 2, speed: 10,
        actions: [{{trigger: {{time: 2}}, teleport: {{from: ego, ds: 20, lanes: -1, offset: 0.3}}}}]}}
     - {{id: shadow, s: 20, lane: 2, speed: 10,
-       actions: [{{trigger: {{time: 3}}, teleport: {{from: speeder, ds: -10, dd: -1}}}}]}})",
+       actions: [{{trigger: {{time: 3}}, teleport: {{from: speeder, ds: -10, dd: -1}}}}]}}
+    - {{id: hopper, s: 150, lane: 0, speed: 10, reference_point: -1,
+       actions: [{{trigger: {{time: 1}}, teleport: {{from: ego, dx: 20, dy: 3.5}}}}]}})",
                                                 marker),
                                     0.0, 5.0);
   const auto [traffic, place] = stepped(plan(logical), 25);
@@ -573,6 +584,10 @@ TEST(ScriptedTraffic, ATeleportMovesARoadUserAtOnceAndItDrivesOnFromThere) {
   EXPECT_NEAR(place[10][4].second, -3.2, 1e-9);
   EXPECT_NEAR(s_at(15, 5), 262.0, 1e-6);
   EXPECT_NEAR(place[15][5].second, 2.5, 1e-9);
+  // 20 m ahead of the stand-in Ego (s = 30 + 10 t) and 3.5 m to its left at 1 s: its reference
+  // point (1 m behind its centre) lands at s = 60 on lane 2's centre; its centre is at 61 m.
+  EXPECT_NEAR(s_at(6, 6), 61.0 + 2.0, 1e-6);
+  EXPECT_NEAR(place[6][6].second, 3.5, 1e-9);
   const auto& timings = traffic.timings();
   EXPECT_NEAR(timings[0].start, 1.1, 1e-9);
   EXPECT_NEAR(timings[0].end, 1.1, 1e-9);
@@ -625,9 +640,12 @@ TEST(ScriptedTraffic, TeleportsAndLaneChangeOffsetsStayOnTheRoad) {
   EXPECT_NE(refused(moving, "teleport: {from: nobody, ds: 1, lanes: 0}")
                 .find("teleport.from: got 'nobody', expected a road user of the file: ego, mover"),
             std::string::npos);
-  EXPECT_NE(
-      refused(moving, "teleport: {from: ego, ds: 1}").find("expected {from, ds, lanes[, offset]} or {from, ds, dd}"),
-      std::string::npos);
+  EXPECT_NE(refused(moving, "teleport: {from: ego, ds: 1}")
+                .find("expected {from, ds, lanes[, offset]}, {from, ds, dd} or {from, dx, dy}"),
+            std::string::npos);
+  EXPECT_NE(refused(moving, "teleport: {from: ego, dx: 1, ds: 2}")
+                .find("expected {from, ds, lanes[, offset]}, {from, ds, dd} or {from, dx, dy}"),
+            std::string::npos);
   EXPECT_NE(refused(moving, "teleport: {from: ego, ds: 10, lanes: 5}")
                 .find("teleport.lanes: lane 6 from the lane of 'ego', expected a lane the road has (0 .. 2)"),
             std::string::npos);

@@ -26,6 +26,7 @@ struct ConcretePlace {
   bool relative = false;
   int from = -1;        ///< relative: -1 = the Ego, else index into ConcreteScenario::others
   bool acrossFromCentre = false;
+  bool inPlane = false;  ///< relative: x ahead along its heading, y to its left of its reference point
 };
 
 /// A trigger with its numbers evaluated and its references resolved.
@@ -41,6 +42,7 @@ struct ConcreteTrigger {
   bool betweenReferencePoints = false;  ///< Gap, Headway, Ttc: between reference points, else bumper to bumper
   TriggerSpec::Measure measure = TriggerSpec::Measure::AlongLane;  ///< Gap, Headway, Ttc, Distance: as TriggerSpec's
   bool fromBody = false;  ///< Distance: TriggerSpec::fromBody
+  bool fromReferencePoint = false;  ///< Distance: TriggerSpec::fromReferencePoint
   int action = -1;      ///< After: index into ConcreteScenario::actions
   ConcretePlace place;  ///< Distance: the place
   std::vector<ConcreteTrigger> members;  ///< All, Any

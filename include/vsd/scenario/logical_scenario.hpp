@@ -124,6 +124,9 @@ struct PositionSpec {
   /// place is asked for (a teleport's start; a distance trigger's every check: it moves with it).
   std::string from;
   bool acrossFromCentre = false;  ///< relative: `offset` m left of its centre, on the lane there
+  /// Relative in the plane (`{from, dx, dy}`): `x` m ahead along its heading and `y` m to its left
+  /// of its reference point (OpenSCENARIO's RelativeObjectPosition).
+  bool inPlane = false;
 };
 
 /// When an action starts (docs/scenario-language.md "Actions and triggers"). Conditions are
@@ -169,9 +172,10 @@ struct TriggerSpec {
   /// Gap, Headway, Ttc: along the Ego's lane by default. Distance: along or across the Ego's
   /// lane, or in a straight line (what the parser sets where a distance trigger names none).
   Measure measure = Measure::AlongLane;
-  /// Distance: from the nearest point of the road user's body (OpenSCENARIO's freespace), else
-  /// from its centre.
+  /// Distance: from the nearest point of the road user's body (OpenSCENARIO's freespace), from
+  /// its reference point (`reference_point`: OpenSCENARIO's freespace="false"), else from its centre.
   bool fromBody = false;
+  bool fromReferencePoint = false;
   std::string action;         ///< After: id of the action whose end starts this one
   PositionSpec position;      ///< Distance
   std::vector<TriggerSpec> members;  ///< All, Any
