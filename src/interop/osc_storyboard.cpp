@@ -393,8 +393,17 @@ void refuseTurn(const Translation& translation, const Entity& actor, const pugi:
   }
 }
 
+/// Whether a position lies in the plane relative to a road user (RelativeObjectPosition,
+/// RelativeWorldPosition).
+bool inPlane(const pugi::xml_node& kind) {
+  const std::string name = kind.name();
+  return name == "RelativeObjectPosition" || name == "RelativeWorldPosition";
+}
+
 /// The language's place `{from, dx, dy}` of a RelativeObjectPosition: in the road user's own
-/// axes from its reference point, where the file measures from (the language's plane places do).
+/// axes from its reference point, where the file measures from (the language's plane places
+/// do); of a RelativeWorldPosition, `axes: frame`: the world's axes turned into the scenario
+/// frame's, whose x runs along the road where it starts.
 YAML::Node objectPlace(Translation& translation, const pugi::xml_node& position) {
   const xml::Reader& reader = translation.reader;
   reader.requireSubset(position, {});
@@ -403,8 +412,18 @@ YAML::Node objectPlace(Translation& translation, const pugi::xml_node& position)
   }
   YAML::Node item;
   item["from"] = translation.entity(position, reader.text(position, "entityRef")).id;
-  item["dx"] = num(reader.number(position, "dx"));
-  item["dy"] = num(reader.number(position, "dy"));
+  const double dx = reader.number(position, "dx");
+  const double dy = reader.number(position, "dy");
+  if (std::string(position.name()) == "RelativeObjectPosition") {
+    item["dx"] = num(dx);
+    item["dy"] = num(dy);
+    return item;
+  }
+  const double cos_h = std::cos(translation.road.heading);
+  const double sin_h = std::sin(translation.road.heading);
+  item["dx"] = num(cos_h * dx + sin_h * dy);
+  item["dy"] = num(-sin_h * dx + cos_h * dy);
+  item["axes"] = "frame";
   return item;
 }
 
@@ -416,7 +435,7 @@ YAML::Node objectPlace(Translation& translation, const pugi::xml_node& position)
 YAML::Node relativePlace(Translation& translation, const pugi::xml_node& position, double centre_ahead) {
   const xml::Reader& reader = translation.reader;
   reader.requireSubset(position, {});
-  if (std::string(position.name()) == "RelativeObjectPosition") return objectPlace(translation, position);
+  if (inPlane(position)) return objectPlace(translation, position);
   const CarriagewayRoad& road = translation.road;
   if (!road.oneCurvature) {
     reader.fail(position, "a place relative to a road user on a road of several curvatures: esmini's ds runs "
@@ -447,7 +466,7 @@ YAML::Node relativePlace(Translation& translation, const pugi::xml_node& positio
 /// to a road user; the chosen one.
 pugi::xml_node placeKind(const xml::Reader& reader, const pugi::xml_node& position) {
   return reader.choice(position, {"WorldPosition", "LanePosition", "RoadPosition", "RelativeLanePosition",
-                                   "RelativeRoadPosition", "RelativeObjectPosition"});
+                                   "RelativeRoadPosition", "RelativeObjectPosition", "RelativeWorldPosition"});
 }
 
 bool isRelative(const pugi::xml_node& kind) { return std::string(kind.name()).rfind("Relative", 0) == 0; }
@@ -462,9 +481,9 @@ YAML::Node teleport(Translation& translation, const Entity& actor, const pugi::x
   const pugi::xml_node position = reader.only(action, "Position");
   const pugi::xml_node kind = placeKind(reader, position);
   if (isRelative(kind)) {
-    // Without an Orientation esmini faces it along the file's reference line, at an object's
-    // position as that object faces (the same while it drives along its lane: noted).
-    const bool object = std::string(kind.name()) == "RelativeObjectPosition";
+    // Without an Orientation esmini faces it along the file's reference line, at a place in the
+    // plane as its road user faces (the same while it drives along its lane: noted).
+    const bool object = inPlane(kind);
     const Entity* reference = object ? &translation.entity(kind, reader.text(kind, "entityRef")) : nullptr;
     refuseTurn(translation, actor, kind,
                object && reference->placement ? reference->placement->heading : translation.road.reversed ? kPi : 0.0);
@@ -769,7 +788,7 @@ YAML::Node distanceLeaf(Translation& translation, const Entity& subject, const p
   // At a place relative to a road user in the plane the language measures from the reference
   // point too, where the file measures from.
   const pugi::xml_node kind = placeKind(reader, reader.only(condition, "Position"));
-  if (std::string(kind.name()) == "RelativeObjectPosition") {
+  if (inPlane(kind)) {
     if (!from_body) trigger["from"] = "reference_point";
     trigger["position"] = objectPlace(translation, kind);
     return trigger;

@@ -279,6 +279,7 @@ ConcretePlace evaluateRelativePlace(const PositionSpec& position, const std::str
   place.from = roadUserIndex(logical, position.from);
   place.acrossFromCentre = position.acrossFromCentre;
   place.inPlane = position.inPlane;
+  place.frameAxes = position.frameAxes;
   if (position.inPlane) {
     place.x = evaluateFinite(position.x, concrete.inputs, where, field + ".dx");
     place.y = evaluateFinite(position.y, concrete.inputs, where, field + ".dy");

@@ -283,7 +283,7 @@ void parsePosition(const YamlReader& reader, const YAML::Node& node, const std::
                    const std::vector<std::string>& inputs, PositionSpec& position) {
   reader.requireMap(node, field);
   if (node["from"]) {
-    reader.checkKeys(node, field, {"from", "ds", "lanes", "offset", "dd", "dx", "dy"});
+    reader.checkKeys(node, field, {"from", "ds", "lanes", "offset", "dd", "dx", "dy", "axes"});
     parseRelativePlace(reader, node, field, inputs, position);
     return;
   }
@@ -592,7 +592,7 @@ void parseLateralAction(const YamlReader& reader, const YAML::Node& node, const 
 void parseRelativePlace(const YamlReader& reader, const YAML::Node& node, const std::string& field,
                         const std::vector<std::string>& inputs, PositionSpec& place) {
   const bool along_road = node["ds"] || node["lanes"] || node["dd"] || node["offset"];
-  const bool in_plane = node["dx"] || node["dy"];
+  const bool in_plane = node["dx"] || node["dy"] || node["axes"];
   if (in_plane ? (along_road || !node["dx"] || !node["dy"])
                : (!node["ds"] || static_cast<bool>(node["lanes"]) == static_cast<bool>(node["dd"]) ||
                   (node["dd"] && node["offset"]))) {
@@ -605,6 +605,12 @@ void parseRelativePlace(const YamlReader& reader, const YAML::Node& node, const 
   if (in_plane) {
     place.x = reader.expression(node["dx"], field + ".dx", inputs);
     place.y = reader.expression(node["dy"], field + ".dy", inputs);
+    const std::string axes = node["axes"] ? reader.scalar(node["axes"], field + ".axes") : "heading";
+    if (axes != "heading" && axes != "frame") {
+      throw ConfigError::field(reader.where(node["axes"], field + ".axes"), field + ".axes", axes,
+                               "heading (its own) or frame (the scenario frame's)");
+    }
+    place.frameAxes = axes == "frame";
     return;
   }
   place.s = reader.expression(node["ds"], field + ".ds", inputs);
@@ -624,7 +630,7 @@ void parseTeleportAction(const YamlReader& reader, const YAML::Node& node, const
   reader.requireMap(node, field);
   action.kind = ActionSpec::Kind::Teleport;
   if (node["from"]) {
-    reader.checkKeys(node, field, {"from", "ds", "lanes", "offset", "dd", "dx", "dy"});
+    reader.checkKeys(node, field, {"from", "ds", "lanes", "offset", "dd", "dx", "dy", "axes"});
     parseRelativePlace(reader, node, field, inputs, action.place);
   } else {
     reader.checkKeys(node, field, {"s", "lane", "offset"});

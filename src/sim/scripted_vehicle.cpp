@@ -719,7 +719,8 @@ Vec2 ScriptedTraffic::Impl::planePoint(const scenario::ConcretePlace& place, con
   const Vec2 along = headingVector(reference.heading);
   const Vec2 left(-along.y(), along.x());
   const double ahead = reference.speed * since + specOf(place.from).referencePoint;  // of its centre, m
-  return reference.position() + (ahead + place.x) * along + place.y * left;
+  const Vec2 offset = place.frameAxes ? Vec2(place.x, place.y) : Vec2(place.x * along + place.y * left);
+  return reference.position() + ahead * along + offset;
 }
 
 void ScriptedTraffic::Impl::refuseLane(const Landing& landing, const scenario::ConcretePlace& place,

@@ -1050,6 +1050,10 @@ TEST(OscRun, EachConditionStartsItsEventWhereTheFileSays) {
       {group(entityCondition("Lead", R"(<ReachPositionCondition tolerance="1"><Position>
           <RelativeObjectPosition entityRef="Slow" dx="50" dy="7"/></Position></ReachPositionCondition>)")),
        2.8 + kNext},
+      // and in the world's axes (the road runs along x)
+      {group(entityCondition("Lead", R"(<ReachPositionCondition tolerance="1"><Position>
+          <RelativeWorldPosition entityRef="Slow" dx="50" dy="7"/></Position></ReachPositionCondition>)")),
+       2.8 + kNext},
       // closer than 10 m to x = 200 on its lane's centre (t = -2.75): 90 m after 4.08 s
       {group(entityCondition("Lead", R"(<DistanceCondition value="10" freespace="false" rule="lessThan"
           relativeDistanceType="euclidianDistance"><Position><WorldPosition x="200" y="-2.75"/></Position>
@@ -1115,6 +1119,15 @@ std::string lorrySlow(std::string text) {
       <CatalogReference catalogName="fleet" entryName="lorry"/>)");
 }
 
+/// A road file of data/ with its two straight geometries (s = 0 and 400) turned by 1 rad about the origin.
+std::string turnedByOneRadian(const std::string& name) {
+  std::string text = dataWith(name, R"(s="0" x="0" y="0" hdg="0")", R"(s="0" x="0" y="0" hdg="1")");
+  const std::string second = R"(s="400" x="400" y="0" hdg="0")";
+  return text.replace(text.find(second), second.size(),
+                      fmt::format(R"(s="400" x="{:.15g}" y="{:.15g}" hdg="1")", 400.0 * std::cos(1.0),
+                                  400.0 * std::sin(1.0)));
+}
+
 /// conditions.xosc with an Event of `actor` at t = 1 s whose action teleports it to `position`.
 std::string teleportAtOne(const std::string& actor, const std::string& position) {
   std::string text = readTextFile(data("conditions.xosc"));
@@ -1145,7 +1158,10 @@ TEST(OscRun, AStoryTeleportMovesAScriptedRoadUserAtOnce) {
            offset="0.2"/>)"))},
        {"by_road.xosc", teleportAtOne("Lead", R"(<RelativeRoadPosition entityRef="Slow" ds="30" dt="2.5"/>)")},
        {"object.xosc", teleportAtOne("Lead", R"(<RelativeObjectPosition entityRef="Slow" dx="30" dy="0"/>)")},
-       {"world.xosc", teleportAtOne("Lead", R"(<RelativeWorldPosition entityRef="Slow" dx="30" dy="0"/>)")},
+       // The road turned by 1 rad: 30 m along it in the world's axes.
+       {"roads/turned.xodr", turnedByOneRadian("roads/three_lanes.xodr")},
+       {"world.xosc", teleportAtOne("Lead", fmt::format(R"(<RelativeWorldPosition entityRef="Slow" dx="{:.15g}"
+           dy="{:.15g}"/>)", 30.0 * std::cos(1.0), 30.0 * std::sin(1.0)))},
        {"turned.xosc",
         teleportAtOne("Lead", R"(<LanePosition roadId="7" laneId="-3" s="300" offset="0"><Orientation type="relative"
             h="3.141592653589793"/></LanePosition>)")}});
@@ -1185,8 +1201,15 @@ TEST(OscRun, AStoryTeleportMovesAScriptedRoadUserAtOnce) {
   EXPECT_THAT(checkOpenScenario(dir->path() / "object.xosc", {}).report(),
               HasSubstr("'Lead' lands facing along its lane (esmini: as 'Slow' faces, the same while it drives "
                         "along its lane)"));
-  EXPECT_THAT(importRefusal(*dir, "world"),
-              HasSubstr("element <RelativeWorldPosition> is outside the supported subset"));
+  // In the world's axes, on the road turned by 1 rad: the same place along it.
+  std::string world_text = readTextFile(dir->path() / "world.xosc");
+  world_text.replace(world_text.find("./roads/three_lanes.xodr"), std::string("./roads/three_lanes.xodr").size(),
+                     "./roads/turned.xodr");
+  test::writeFile(dir->path() / "world.xosc", world_text);
+  const auto by_world = simulatedTrack(dir->path() / "world.xosc", "Lead");
+  ASSERT_TRUE(by_world);
+  EXPECT_NEAR(by_world->states.at(5).x - by_world->states.front().x, 8.0, 1e-6);
+  EXPECT_NEAR(by_world->states.at(5).y, -3.5, 1e-6);
   // esmini faces a road user at a relative place along the reference line: a lead driving
   // against the road would turn. On the S-curve its ds and the language's differ.
   const std::string relative = R"(<RelativeRoadPosition entityRef="Slow" ds="30" dt="2.5"/>)";
@@ -1639,8 +1662,8 @@ TEST(OscImport, ConditionsTheLanguageCannotExpressAreOneLineEach) {
        "<DistanceCondition>: coordinateSystem=\"trajectory\": the language measures a straight distance in the "
        "plane, and longitudinal or lateral ones along or across the Ego's lane"},
       {group(entityCondition("Lead", R"(<ReachPositionCondition tolerance="1"><Position>
-          <RelativeWorldPosition entityRef="Ego" dx="10" dy="0"/></Position></ReachPositionCondition>)")),
-       "element <RelativeWorldPosition> is outside the supported subset"},
+          <GeoPosition latitude="0" longitude="0"/></Position></ReachPositionCondition>)")),
+       "element <GeoPosition> is outside the supported subset"},
       {group(timeCondition("1") + entityCondition("Lead", R"(<TraveledDistanceCondition value="30"/>)", "2")),
        "delay 2 s, another condition of its group 0 s: the language delays a group as a whole"},
       // OpenSCENARIO measures it from the triggering entity to the reference ahead of it (false

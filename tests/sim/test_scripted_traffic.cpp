@@ -605,6 +605,21 @@ TEST(ScriptedTraffic, ATeleportMovesARoadUserAtOnceAndItDrivesOnFromThere) {
                                            0.0, 2.0));
   const road::LaneFrame beside_frame(beside.road.centre);
   EXPECT_NEAR(beside_frame.coordinates(beside.paths[1].back().position()).second, -3.5, 1e-9);
+  // In the walker's own axes (it faces across the road, to the left) or in the frame's: 6.5 m
+  // ahead of it and 10 m to its right is 10 m along the road and 6.5 m left, on lane 1's centre.
+  const Planned axes = plan(scenarioWith(R"(
+    - {id: walker, type: pedestrian, s: 100, lane: 0, offset: -3, heading_deg: 90}
+    - {id: own, s: 60, lane: 2, speed: 0, actions: [{trigger: {time: 1}, teleport: {from: walker, dx: 6.5, dy: -10}}]}
+    - {id: framed, s: 20, lane: 2, speed: 0,
+       actions: [{trigger: {time: 1}, teleport: {from: walker, dx: 10, dy: 6.5, axes: frame}}]})",
+                                         0.0, 2.0));
+  const road::LaneFrame axes_frame(axes.road.centre);
+  const auto walker_at = axes_frame.coordinates(axes.paths[0].back().position());
+  for (const std::size_t user : {std::size_t{1}, std::size_t{2}}) {
+    const auto landed = axes_frame.coordinates(axes.paths[user].back().position());
+    EXPECT_NEAR(landed.first - walker_at.first, 10.0, 1e-9) << user;
+    EXPECT_NEAR(landed.second, 0.0, 1e-9) << user;
+  }
   // Standing on a bend, it keeps its heading to the road: along the road where it lands.
   const auto bend = scenarioWith(R"(
     - {id: stand, s: 100, lane: 0, speed: 0, actions: [{trigger: {time: 1}, teleport: {s: 150, lane: 0}}]})",

@@ -27,6 +27,7 @@ struct ConcretePlace {
   int from = -1;        ///< relative: -1 = the Ego, else index into ConcreteScenario::others
   bool acrossFromCentre = false;
   bool inPlane = false;  ///< relative: x ahead along its heading, y to its left of its reference point
+  bool frameAxes = false;  ///< inPlane: x, y along the scenario frame's axes instead
 };
 
 /// A trigger with its numbers evaluated and its references resolved.

@@ -125,8 +125,10 @@ struct PositionSpec {
   std::string from;
   bool acrossFromCentre = false;  ///< relative: `offset` m left of its centre, on the lane there
   /// Relative in the plane (`{from, dx, dy}`): `x` m ahead along its heading and `y` m to its left
-  /// of its reference point (OpenSCENARIO's RelativeObjectPosition).
+  /// of its reference point (OpenSCENARIO's RelativeObjectPosition); with `axes: frame`, along the
+  /// scenario frame's x and y instead (RelativeWorldPosition).
   bool inPlane = false;
+  bool frameAxes = false;
 };
 
 /// When an action starts (docs/scenario-language.md "Actions and triggers"). Conditions are
