@@ -410,6 +410,8 @@ YAML::Node objectPlace(Translation& translation, const pugi::xml_node& position)
   if (reader.optionalNumber(position, "dz").value_or(0.0) != 0.0) {
     reader.fail(position, "dz: vsd-sumo is planar (expected 0)");
   }
+  // Measured from reference points: every road user carries its own.
+  translation.measuresReferencePoints = true;
   YAML::Node item;
   item["from"] = translation.entity(position, reader.text(position, "entityRef")).id;
   const double dx = reader.number(position, "dx");
@@ -489,7 +491,8 @@ YAML::Node teleport(Translation& translation, const Entity& actor, const pugi::x
                object && reference->placement ? reference->placement->heading : translation.road.reversed ? kPi : 0.0);
     if (object) {
       translation.findings.note(reader.where(kind), fmt::format("'{}' lands facing along its lane (esmini: as '{}' "
-                                                                "faces, the same while it drives along its lane)",
+                                                                "faces, the same while it drives along its lane on a "
+                                                                "straight road; on a bend the road turns between them)",
                                                                 actor.name, reference->name));
     }
     return relativePlace(translation, kind, actor.drivesAgainstRoad() ? -actor.centreAhead : actor.centreAhead);

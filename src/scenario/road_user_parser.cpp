@@ -596,8 +596,8 @@ void parseRelativePlace(const YamlReader& reader, const YAML::Node& node, const 
   if (in_plane ? (along_road || !node["dx"] || !node["dy"])
                : (!node["ds"] || static_cast<bool>(node["lanes"]) == static_cast<bool>(node["dd"]) ||
                   (node["dd"] && node["offset"]))) {
-    reader.fail(node, field, "expected {from, ds, lanes[, offset]}, {from, ds, dd} or {from, dx, dy}: where from "
-                             "that road user");
+    reader.fail(node, field, "expected {from, ds, lanes[, offset]}, {from, ds, dd} or {from, dx, dy[, axes]}: where "
+                             "from that road user");
   }
   place.from = reader.scalar(node["from"], field + ".from");
   if (place.from.empty()) reader.fail(node["from"], field + ".from", "expected a road user's id (ego or another's)");

@@ -935,6 +935,16 @@ TEST(OscCli, ScenarioCheckExitStatusSaysWhetherItWouldRun) {
 
 namespace {
 
+/// conditions.xosc text with Slow a lorry instead of a sedan.
+std::string lorrySlow(std::string text) {
+  const std::string sedan = R"(<ScenarioObject name="Slow">
+      <CatalogReference catalogName="fleet" entryName="sedan"/>)";
+  const auto at = text.find(sedan);
+  EXPECT_NE(at, std::string::npos);
+  return text.replace(at, sedan.size(), R"(<ScenarioObject name="Slow">
+      <CatalogReference catalogName="fleet" entryName="lorry"/>)");
+}
+
 /// conditions.xosc with its one StartTrigger's groups replaced by `groups`.
 std::string conditionsWith(const std::string& groups) {
   std::string text = readTextFile(data("conditions.xosc"));
@@ -1105,19 +1115,17 @@ TEST(OscRun, EachConditionStartsItsEventWhereTheFileSays) {
         << name;
     EXPECT_NEAR(stepDownSeen(dir->path() / name), seen, 1e-9) << name;
   }
+  // Places in the plane count from reference points: the same with Slow a lorry, whose box
+  // centre lies 5 m ahead of its reference point (a sedan's 1.25 m, as the lead's).
+  for (const char* kind : {"RelativeObjectPosition", "RelativeWorldPosition"}) {
+    const std::string reach = fmt::format(R"(<ReachPositionCondition tolerance="1"><Position>
+        <{} entityRef="Slow" dx="50" dy="7"/></Position></ReachPositionCondition>)", kind);
+    const auto dir = folderWith({{"lorry.xosc", lorrySlow(conditionsWith(group(entityCondition("Lead", reach))))}});
+    EXPECT_NEAR(stepDownSeen(dir->path() / "lorry.xosc"), 2.8 + kNext, 1e-9) << kind;
+  }
 }
 
 namespace {
-
-/// conditions.xosc text with Slow a lorry instead of a sedan.
-std::string lorrySlow(std::string text) {
-  const std::string sedan = R"(<ScenarioObject name="Slow">
-      <CatalogReference catalogName="fleet" entryName="sedan"/>)";
-  const auto at = text.find(sedan);
-  EXPECT_NE(at, std::string::npos);
-  return text.replace(at, sedan.size(), R"(<ScenarioObject name="Slow">
-      <CatalogReference catalogName="fleet" entryName="lorry"/>)");
-}
 
 /// A road file of data/ with its two straight geometries (s = 0 and 400) turned by 1 rad about the origin.
 std::string turnedByOneRadian(const std::string& name) {
@@ -1157,11 +1165,12 @@ TEST(OscRun, AStoryTeleportMovesAScriptedRoadUserAtOnce) {
        {"by_lane.xosc", lorrySlow(teleportAtOne("Lead", R"(<RelativeLanePosition entityRef="Slow" dLane="1" ds="30"
            offset="0.2"/>)"))},
        {"by_road.xosc", teleportAtOne("Lead", R"(<RelativeRoadPosition entityRef="Slow" ds="30" dt="2.5"/>)")},
-       {"object.xosc", teleportAtOne("Lead", R"(<RelativeObjectPosition entityRef="Slow" dx="30" dy="0"/>)")},
+       {"object.xosc",
+        lorrySlow(teleportAtOne("Lead", R"(<RelativeObjectPosition entityRef="Slow" dx="30" dy="0"/>)"))},
        // The road turned by 1 rad: 30 m along it in the world's axes.
        {"roads/turned.xodr", turnedByOneRadian("roads/three_lanes.xodr")},
-       {"world.xosc", teleportAtOne("Lead", fmt::format(R"(<RelativeWorldPosition entityRef="Slow" dx="{:.15g}"
-           dy="{:.15g}"/>)", 30.0 * std::cos(1.0), 30.0 * std::sin(1.0)))},
+       {"world.xosc", lorrySlow(teleportAtOne("Lead", fmt::format(R"(<RelativeWorldPosition entityRef="Slow"
+           dx="{:.15g}" dy="{:.15g}"/>)", 30.0 * std::cos(1.0), 30.0 * std::sin(1.0))))},
        {"turned.xosc",
         teleportAtOne("Lead", R"(<LanePosition roadId="7" laneId="-3" s="300" offset="0"><Orientation type="relative"
             h="3.141592653589793"/></LanePosition>)")}});
@@ -1192,15 +1201,15 @@ TEST(OscRun, AStoryTeleportMovesAScriptedRoadUserAtOnce) {
     EXPECT_NEAR(landed->states.at(5).x - landed->states.front().x, 8.0, 1e-6) << name;
     EXPECT_NEAR(landed->states.at(5).y, y, 1e-6) << name;
   }
-  // In Slow's own axes, 30 m ahead of its reference point: the lead's reference point lands on
-  // Slow's lane (y = -3.5) at s = 108 too.
+  // In Slow's own axes, 30 m ahead of its reference point (Slow a lorry): the lead's reference
+  // point lands on Slow's lane (y = -3.5) at s = 108 too.
   const auto by_object = simulatedTrack(dir->path() / "object.xosc", "Lead");
   ASSERT_TRUE(by_object);
   EXPECT_NEAR(by_object->states.at(5).x - by_object->states.front().x, 8.0, 1e-6);
   EXPECT_NEAR(by_object->states.at(5).y, -3.5, 1e-6);
   EXPECT_THAT(checkOpenScenario(dir->path() / "object.xosc", {}).report(),
               HasSubstr("'Lead' lands facing along its lane (esmini: as 'Slow' faces, the same while it drives "
-                        "along its lane)"));
+                        "along its lane on a straight road; on a bend the road turns between them)"));
   // In the world's axes, on the road turned by 1 rad: the same place along it.
   std::string world_text = readTextFile(dir->path() / "world.xosc");
   world_text.replace(world_text.find("./roads/three_lanes.xodr"), std::string("./roads/three_lanes.xodr").size(),

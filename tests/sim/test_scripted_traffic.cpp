@@ -656,10 +656,10 @@ TEST(ScriptedTraffic, TeleportsAndLaneChangeOffsetsStayOnTheRoad) {
                 .find("teleport.from: got 'nobody', expected a road user of the file: ego, mover"),
             std::string::npos);
   EXPECT_NE(refused(moving, "teleport: {from: ego, ds: 1}")
-                .find("expected {from, ds, lanes[, offset]}, {from, ds, dd} or {from, dx, dy}"),
+                .find("expected {from, ds, lanes[, offset]}, {from, ds, dd} or {from, dx, dy[, axes]}"),
             std::string::npos);
   EXPECT_NE(refused(moving, "teleport: {from: ego, dx: 1, ds: 2}")
-                .find("expected {from, ds, lanes[, offset]}, {from, ds, dd} or {from, dx, dy}"),
+                .find("expected {from, ds, lanes[, offset]}, {from, ds, dd} or {from, dx, dy[, axes]}"),
             std::string::npos);
   EXPECT_NE(refused(moving, "teleport: {from: ego, ds: 10, lanes: 5}")
                 .find("teleport.lanes: lane 6 from the lane of 'ego', expected a lane the road has (0 .. 2)"),
