@@ -254,6 +254,9 @@ struct ScriptedTraffic::Impl {
     int lane = 0;
   };
   Landing landingOf(std::size_t a, const VehicleState& ego) const;
+  /// The heading (rad, relative to the road's direction) road user `owner` (-1: the Ego) lands
+  /// with if teleported now: moving, along its lane in its direction; standing, the one it has.
+  double landingFacing(int owner, const VehicleState& ego) const;
   Landing placeNow(const scenario::ConcretePlace& place, const VehicleState& ego, double since) const;
   /// Where a place relative to a road user in the plane lies in the frame, that one where it is
   /// `since` s after the current instant (moved on along its heading at its speed).
@@ -671,9 +674,12 @@ ScriptedTraffic::Impl::Landing ScriptedTraffic::Impl::landingOf(std::size_t a, c
   Landing landing = placeNow(action.place, ego, scheduled[a] - static_cast<double>(k) * step);
   if (std::isnan(landing.d)) refuseLane(landing, action.place, action.where + ".teleport");
   if (action.place.inPlane) {
-    // Its reference point lands there: its centre lies behind it along the road, the way it faces.
-    const auto& spec = specOf(action.owner);
-    landing.s -= (spec.againstRoad ? -1.0 : 1.0) * frame.sRate(landing.s, landing.d, spec.referencePoint);
+    // Its reference point lands there: its centre lies `reference_point` m behind it, along the
+    // heading it lands with.
+    const double facing = landingFacing(action.owner, ego);
+    const double reference_point = specOf(action.owner).referencePoint;
+    landing.s -= frame.sRate(landing.s, landing.d, reference_point * std::cos(facing));
+    landing.d -= reference_point * std::sin(facing);
   }
   if (landing.s < 0.0 || landing.s > frame.length() || !onPavedGround(landing.d)) {
     throw ConfigError(fmt::format("{}: {}.teleport: it lands {:.1f} m along a road of {:.1f} m (lead-in and lead-out "
@@ -742,7 +748,7 @@ void ScriptedTraffic::Impl::teleport(std::size_t a, const VehicleState& ego) {
   const auto o = static_cast<std::size_t>(action.owner);
   Mover& mover = movers[o];
   const Landing landing = landingOf(a, ego);
-  const double heading_to_road = wrapAngle(mover.state.heading - frame.heading(mover.s, mover.d));
+  const double facing = landingFacing(action.owner, ego);
   const double now = static_cast<double>(k) * step;
   const double speed_now = mover.speedAlong;
   const double speed_landing = speed_now + (mover.speedAt(k + 1, step) - speed_now) * (t0 - now) / step;
@@ -760,7 +766,6 @@ void ScriptedTraffic::Impl::teleport(std::size_t a, const VehicleState& ego) {
   const Vec2 position = frame.point(mover.s, mover.d);
   mover.state.x = position.x();
   mover.state.y = position.y();
-  const double facing = mover.speedAlong > 1e-9 ? (direction < 0 ? kPi : 0.0) : heading_to_road;
   mover.state.heading = wrapAngle(frame.heading(mover.s, mover.d) + facing);
   states[o] = mover.state;
   atRoadEndSince[o + 1] = kNaN;  // it may have left the road's end behind
@@ -775,8 +780,7 @@ void ScriptedTraffic::Impl::teleport(std::size_t a, const VehicleState& ego) {
 void ScriptedTraffic::Impl::teleportEgo(std::size_t a, const VehicleState& ego) {
   const double t0 = scheduled[a];
   const Landing landing = landingOf(a, ego);
-  const auto [ego_s, ego_d] = frame.coordinates(ego.position());
-  const double heading_to_road = wrapAngle(ego.heading - frame.heading(ego_s, ego_d));
+  const double facing = landingFacing(-1, ego);
   // m it drives from the current instant to t0, as m of s (sRate is linear in its speed)
   const double before = frame.sRate(landing.s, landing.d, ego.speed * (t0 - static_cast<double>(k) * step));
   const double s = landing.s - before;
@@ -784,7 +788,7 @@ void ScriptedTraffic::Impl::teleportEgo(std::size_t a, const VehicleState& ego) 
   const Vec2 position = frame.point(s, landing.d);
   placed.x = position.x();
   placed.y = position.y();
-  placed.heading = wrapAngle(frame.heading(s, landing.d) + (ego.speed > 1e-9 ? 0.0 : heading_to_road));
+  placed.heading = wrapAngle(frame.heading(s, landing.d) + facing);
   egoPlaced = placed;
   // Its controller keeps the landing place from the current instant, where it is put.
   const double now = static_cast<double>(k) * step;
@@ -796,6 +800,17 @@ void ScriptedTraffic::Impl::teleportEgo(std::size_t a, const VehicleState& ego) 
   atRoadEndSince[0] = kNaN;  // it may have left the road's end behind
   timings[a] = {t0, t0};
   scheduleWaiters(a, ego);
+}
+
+double ScriptedTraffic::Impl::landingFacing(int owner, const VehicleState& ego) const {
+  if (owner < 0) {
+    if (ego.speed > 1e-9) return 0.0;
+    const auto [s, d] = frame.coordinates(ego.position());
+    return wrapAngle(ego.heading - frame.heading(s, d));
+  }
+  const Mover& mover = movers[static_cast<std::size_t>(owner)];
+  if (mover.speedAlong > 1e-9) return mover.spec->againstRoad ? kPi : 0.0;
+  return wrapAngle(mover.state.heading - frame.heading(mover.s, mover.d));  // its place in the lane frame
 }
 
 int ScriptedTraffic::Impl::egoLaneOf(const VehicleState& ego) const {

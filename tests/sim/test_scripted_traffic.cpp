@@ -611,7 +611,9 @@ TEST(ScriptedTraffic, ATeleportMovesARoadUserAtOnceAndItDrivesOnFromThere) {
     - {id: walker, type: pedestrian, s: 100, lane: 0, offset: -3, heading_deg: 90}
     - {id: own, s: 60, lane: 2, speed: 0, actions: [{trigger: {time: 1}, teleport: {from: walker, dx: 6.5, dy: -10}}]}
     - {id: framed, s: 20, lane: 2, speed: 0,
-       actions: [{trigger: {time: 1}, teleport: {from: walker, dx: 10, dy: 6.5, axes: frame}}]})",
+       actions: [{trigger: {time: 1}, teleport: {from: walker, dx: 10, dy: 6.5, axes: frame}}]}
+    - {id: crosser, type: pedestrian, s: 140, lane: 0, offset: -3, heading_deg: 90, reference_point: 0.2,
+       actions: [{trigger: {time: 1}, teleport: {from: walker, dx: 0, dy: -10}}]})",
                                          0.0, 2.0));
   const road::LaneFrame axes_frame(axes.road.centre);
   const auto walker_at = axes_frame.coordinates(axes.paths[0].back().position());
@@ -620,6 +622,11 @@ TEST(ScriptedTraffic, ATeleportMovesARoadUserAtOnceAndItDrivesOnFromThere) {
     EXPECT_NEAR(landed.first - walker_at.first, 10.0, 1e-9) << user;
     EXPECT_NEAR(landed.second, 0.0, 1e-9) << user;
   }
+  // A standing pedestrian facing across keeps facing so: its reference point (0.2 m ahead of its
+  // centre, across the road) lands 10 m along from the walker, its centre 0.2 m right of that.
+  const auto crossed = axes_frame.coordinates(axes.paths[3].back().position());
+  EXPECT_NEAR(crossed.first - walker_at.first, 10.0, 1e-9);
+  EXPECT_NEAR(crossed.second, -6.5 - 0.2, 1e-9);
   // Standing on a bend, it keeps its heading to the road: along the road where it lands.
   const auto bend = scenarioWith(R"(
     - {id: stand, s: 100, lane: 0, speed: 0, actions: [{trigger: {time: 1}, teleport: {s: 150, lane: 0}}]})",
