@@ -66,6 +66,12 @@ vehicles:
                                              name + ".yaml"));
 }
 
+/// The one line loading and planning a scenario with the road users of `others` is refused with
+/// ("" if it is not).
+std::string refusalOf(const std::string& others) {
+  return test::configErrorOf([&] { plan(scenarioWith(others)); });
+}
+
 /// The actions' timings after `instants` instants (0.2 s) of the stand-in Ego.
 std::vector<ScriptedTraffic::ActionTiming> timingsAfter(const Planned& run, int instants) {
   ScriptedTraffic traffic(run.concrete, run.road);
@@ -438,16 +444,12 @@ TEST(ScriptedTraffic, LateralRelationsMeasureAcrossTheEgosLane) {
   EXPECT_NEAR(timings[1].start, 2.8, 1e-9);  // 3.5 - 0.875 (t - 1) <= 2 from t = 2.71
   EXPECT_NEAR(timings[2].start, 2.2, 1e-9);  // 1.486 - 0.875 (t - 1) <= 0.5 from t = 2.13
   EXPECT_NEAR(timings[3].start, 1.6, 1e-9);  // 3.5 - 0.875 (t - 1) >= 3 until t = 1.57
-  const std::string error = test::configErrorOf([] {
-    scenarioWith("    - {id: mover, ds: 0, relative_lane: 1, speed: 10,\n"
-                 "       actions: [{trigger: {ttc: 1, measure: lateral}, stop: {decel: 1}}]}");
-  });
+  const std::string error = refusalOf("    - {id: mover, ds: 0, relative_lane: 1, speed: 10,\n"
+                                      "       actions: [{trigger: {ttc: 1, measure: lateral}, stop: {decel: 1}}]}");
   EXPECT_NE(error.find("'measure: lateral' goes with gap, gap_at_least and the distance triggers"), std::string::npos)
       << error;
-  const std::string unknown = test::configErrorOf([] {
-    scenarioWith("    - {id: mover, ds: 0, relative_lane: 1, speed: 10,\n"
-                 "       actions: [{trigger: {gap: 1, measure: sideways}, stop: {decel: 1}}]}");
-  });
+  const std::string unknown = refusalOf("    - {id: mover, ds: 0, relative_lane: 1, speed: 10,\n"
+                                        "       actions: [{trigger: {gap: 1, measure: sideways}, stop: {decel: 1}}]}");
   EXPECT_NE(unknown.find("got 'sideways', expected along_lane, straight_line or lateral"), std::string::npos)
       << unknown;
 }
@@ -522,10 +524,9 @@ TEST(ScriptedTraffic, ALaneChangeOverADistanceEndsWhereItsOffsetSays) {
     EXPECT_NEAR(place[25][0].second, 0.5, 1e-9) << shape;
     EXPECT_NEAR(place[34][0].second, 0.5, 1e-9) << shape;
   }
-  const std::string standing = test::configErrorOf([] {
-    plan(scenarioWith("    - {id: mover, s: 60, lane: 0, speed: 0,\n"
-                      "       actions: [{trigger: {time: 1}, lane_change: {lane: 1, distance: 40}}]}"));
-  });
+  const std::string standing =
+      refusalOf("    - {id: mover, s: 60, lane: 0, speed: 0,\n"
+                "       actions: [{trigger: {time: 1}, lane_change: {lane: 1, distance: 40}}]}");
   EXPECT_NE(standing.find("lane_change.distance: at t = 1.0 s it stands and covers no distance"), std::string::npos)
       << standing;
 }
@@ -823,10 +824,8 @@ TEST(ScriptedTraffic, AnActionEndsTheListedActionsUnderWayWhereItStarts) {
   EXPECT_NEAR(timings[2].end, 2.0, 1e-9);
   EXPECT_NEAR(timings[4].start, 5.0, 1e-9);
   // An id the file does not have is one line.
-  const std::string refused = test::configErrorOf([] {
-    scenarioWith("    - {id: a, s: 60, lane: 0, speed: 10,\n"
-                 "       actions: [{id: go, speed: {target: 5, rate: 1}, ends: [gone]}]}");
-  });
+  const std::string refused = refusalOf("    - {id: a, s: 60, lane: 0, speed: 10,\n"
+                                        "       actions: [{id: go, speed: {target: 5, rate: 1}, ends: [gone]}]}");
   EXPECT_NE(refused.find("actions[0].ends: got 'gone', expected the id of another action of the file: go"),
             std::string::npos)
       << refused;
@@ -992,10 +991,8 @@ TEST(ScriptedTraffic, AFallingTriggerFiresWhenItsConditionStopsHolding) {
   const auto timings = timingsAfter(plan(logical), 20);
   EXPECT_NEAR(timings[0].start, 1.6, 1e-9);
   EXPECT_NEAR(timings[1].start, 2.6, 1e-9);
-  const std::string error = test::configErrorOf([] {
-    scenarioWith("    - {id: mover, gap: 35, relative_lane: 0, speed: 0,\n"
-                 "       actions: [{trigger: {time: 1, falling: true}, stop: {decel: 1}}]}");
-  });
+  const std::string error = refusalOf("    - {id: mover, gap: 35, relative_lane: 0, speed: 0,\n"
+                                      "       actions: [{trigger: {time: 1, falling: true}, stop: {decel: 1}}]}");
   EXPECT_NE(error.find("trigger.falling: 'falling' goes with a condition (not time, after, all or any"),
             std::string::npos)
       << error;
