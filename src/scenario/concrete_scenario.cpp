@@ -346,6 +346,7 @@ ConcreteTrigger evaluateTrigger(const TriggerSpec& spec, int owner, const Logica
   trigger.rising = spec.rising;
   trigger.falling = spec.falling;
   if (spec.kind == TriggerSpec::Kind::After) trigger.action = actionIndex(logical, spec.action);
+  trigger.lastRun = spec.lastRun;
   if (spec.kind == TriggerSpec::Kind::Distance) {
     trigger.place = evaluatePlace(spec.position, spec.where, "position", logical, concrete);
   }

@@ -360,10 +360,20 @@ void parseDistanceFrom(const YamlReader& reader, const YAML::Node& node, const s
   trigger.fromReferencePoint = value == "reference_point";
 }
 
+bool isMoment(TriggerSpec::Kind kind) { return kind == TriggerSpec::Kind::Time || kind == TriggerSpec::Kind::After; }
+
 /// Whether a trigger's condition can stop holding and hold again (no time or action end in it).
 bool canHoldAgain(const TriggerSpec& trigger) {
-  if (trigger.kind == TriggerSpec::Kind::Time || trigger.kind == TriggerSpec::Kind::After) return false;
+  if (isMoment(trigger.kind)) return false;
   return std::all_of(trigger.members.begin(), trigger.members.end(), canHoldAgain);
+}
+
+/// Whether a repeated action can start again on this trigger: a moment at its top or inside
+/// `all` still holds when a run ends (it starts again then); inside `any` it would give a start
+/// that has passed.
+bool restartsOn(const TriggerSpec& trigger) {
+  if (trigger.kind == TriggerSpec::Kind::Any) return canHoldAgain(trigger);
+  return std::all_of(trigger.members.begin(), trigger.members.end(), restartsOn);
 }
 
 /// true or false.
@@ -381,7 +391,8 @@ void parseTrigger(const YamlReader& reader, const YAML::Node& node, const std::s
                   const std::vector<std::string>& inputs, bool delay_allowed, TriggerSpec& trigger) {
   trigger.where = reader.where(node, field);
   reader.requireMap(node, field);
-  std::set<std::string> allowed = {"to", "of", "between", "measure", "from", "position", "delay", "rising", "falling"};
+  std::set<std::string> allowed = {"to",    "of",     "between", "measure", "from",
+                                   "position", "delay", "rising",  "falling", "last"};
   std::vector<std::string> keys;
   for (const auto& entry : kTriggerKeys) {
     allowed.insert(entry.key);
@@ -404,9 +415,13 @@ void parseTrigger(const YamlReader& reader, const YAML::Node& node, const std::s
     }
   } else if (trigger.kind == TriggerSpec::Kind::After) {
     trigger.action = reader.scalar(node["after"], field + ".after");
+    if (node["last"]) trigger.lastRun = flag(reader, node["last"], field + ".last");
   } else {
     trigger.value = reader.expression(node[key], field + "." + key, inputs);
     if (*entry.unit) requireNonNegative(reader, node[key], field + "." + key, trigger.value, false, entry.unit);
+  }
+  if (node["last"] && trigger.kind != TriggerSpec::Kind::After) {
+    reader.fail(node["last"], field + ".last", "'last' goes with 'after' (the end of that action's last run)");
   }
   if (node["to"]) {
     if (!isRelation(trigger.kind)) {
@@ -434,8 +449,10 @@ void parseTrigger(const YamlReader& reader, const YAML::Node& node, const std::s
     reader.fail(node, field, "'position' goes with distance_at_most and distance_at_least (and only there)");
   }
   if (node["position"]) parsePosition(reader, node["position"], field + ".position", inputs, trigger.position);
-  if (node["delay"] && !delay_allowed) {
-    reader.fail(node["delay"], field + ".delay", "a delay inside 'all' (its members hold at one instant): put it on the 'all'");
+  if (node["delay"] && !delay_allowed && !isMoment(trigger.kind)) {
+    reader.fail(node["delay"], field + ".delay",
+                "a delay on a condition inside 'all' (its members hold at one instant; a time or after may have one, "
+                "a later moment): put it on the 'all'");
   }
   trigger.delay = optionalExpression(reader, node, "delay", field, inputs, 0.0);
   if (node["delay"]) requireNonNegative(reader, node["delay"], field + ".delay", trigger.delay, false, "s");
@@ -707,10 +724,10 @@ void parseAction(const YamlReader& reader, const YAML::Node& node, const std::st
       action.ends.push_back(reader.scalar(ends[i], fmt::format("{}.ends[{}]", field, i)));
     }
   }
-  if (action.repeat > 1 && !canHoldAgain(action.trigger)) {
+  if (action.repeat > 1 && !restartsOn(action.trigger)) {
     reader.fail(node["repeat"], field + ".repeat",
-                "a repeated action needs a trigger that can hold again (no time or after in it): it would restart at "
-                "once");
+                "a repeated action's trigger with a time or after inside 'any': it would start again at a moment "
+                "that has passed (put them at the top or inside 'all')");
   }
   const std::string kind =
       oneOf(reader, node, field,

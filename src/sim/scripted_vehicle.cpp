@@ -235,6 +235,7 @@ struct ScriptedTraffic::Impl {
   bool holds(const scenario::ConcreteTrigger& trigger, int owner, const VehicleState& ego) const;
   bool conditionHolds(const scenario::ConcreteTrigger& trigger, int owner, const VehicleState& ego) const;
   void rearmEnded();
+  double awaitedEnd(const scenario::ConcreteTrigger& trigger) const;
   /// Its edge conditions (rising, falling; and its members') as if never checked.
   void forgetEdges(const scenario::ConcreteTrigger& trigger) const;
   double fireTime(const scenario::ConcreteTrigger& trigger, int owner, const VehicleState& ego) const;
@@ -479,10 +480,11 @@ bool ScriptedTraffic::Impl::conditionHolds(const scenario::ConcreteTrigger& trig
   const auto user = static_cast<std::size_t>(trigger.subject + 1);
   const auto member_holds = [&](const scenario::ConcreteTrigger& member) { return holds(member, owner, ego); };
   switch (trigger.kind) {
-    case TriggerSpec::Kind::Time: return now + 1e-9 >= trigger.value;
+    // A moment's delay counts here for members of `all` (a later moment); at the top, fireTime adds it.
+    case TriggerSpec::Kind::Time: return now + 1e-9 >= trigger.value + trigger.delay;
     case TriggerSpec::Kind::After: {
-      const double end = timings[static_cast<std::size_t>(trigger.action)].end;
-      return !std::isnan(end) && end <= now + 1e-9;
+      const double end = awaitedEnd(trigger);
+      return !std::isnan(end) && end + trigger.delay <= now + 1e-9;
     }
     case TriggerSpec::Kind::All: return std::all_of(trigger.members.begin(), trigger.members.end(), member_holds);
     case TriggerSpec::Kind::Any: return std::any_of(trigger.members.begin(), trigger.members.end(), member_holds);
@@ -513,9 +515,7 @@ bool ScriptedTraffic::Impl::conditionHolds(const scenario::ConcreteTrigger& trig
 double ScriptedTraffic::Impl::fireTime(const scenario::ConcreteTrigger& trigger, int owner,
                                        const VehicleState& ego) const {
   if (trigger.kind == TriggerSpec::Kind::Time) return trigger.value + trigger.delay;
-  if (trigger.kind == TriggerSpec::Kind::After) {
-    return timings[static_cast<std::size_t>(trigger.action)].end + trigger.delay;  // NaN until it started
-  }
+  if (trigger.kind == TriggerSpec::Kind::After) return awaitedEnd(trigger) + trigger.delay;
   if (trigger.kind == TriggerSpec::Kind::Any) {
     double earliest = kNaN;
     for (const auto& member : trigger.members) {
@@ -589,14 +589,21 @@ void ScriptedTraffic::Impl::track(const VehicleState& ego) {
 /// Actions that may start again and have ended: their triggers are checked again from now on,
 /// their edge conditions afresh (as esmini resets a trigger's conditions when it fires: the
 /// first check after it never fires). Their start is cleared; their latest end stays in `timings`.
+/// One started by a moment (a time, an action's end) that has come starts again now, as its
+/// trigger still holds (as esmini restarts an Event whose start holds); its delay is not waited again.
 void ScriptedTraffic::Impl::rearmEnded() {
   const double now = static_cast<double>(k) * step;
   for (std::size_t a = 0; a < timings.size(); ++a) {
     const bool ended = !std::isnan(timings[a].start) && timings[a].end <= now + 1e-9;
-    if (ended && starts[a] < concrete->actions[a].repeat) {
-      timings[a].start = kNaN;
-      scheduled[a] = kNaN;
-      forgetEdges(concrete->actions[a].trigger);
+    if (!ended || starts[a] >= concrete->actions[a].repeat) continue;
+    const auto& trigger = concrete->actions[a].trigger;
+    timings[a].start = kNaN;
+    scheduled[a] = kNaN;
+    forgetEdges(trigger);
+    if (trigger.kind == TriggerSpec::Kind::Time || trigger.kind == TriggerSpec::Kind::After) {
+      const bool at_time = trigger.kind == TriggerSpec::Kind::Time;
+      const double moment = (at_time ? trigger.value : awaitedEnd(trigger)) + trigger.delay;
+      if (!std::isnan(moment)) scheduled[a] = std::max(now, moment);
     }
   }
 }
@@ -859,15 +866,23 @@ void ScriptedTraffic::Impl::activateEgoLateral(std::size_t a, const VehicleState
   scheduleWaiters(a, ego);
 }
 
+/// The end an `after` waits for (s): its action's latest end; with `last`, only once that is the
+/// end of its last run. NaN before.
+double ScriptedTraffic::Impl::awaitedEnd(const scenario::ConcreteTrigger& trigger) const {
+  const auto a = static_cast<std::size_t>(trigger.action);
+  if (trigger.lastRun && starts[a] < concrete->actions[a].repeat) return kNaN;
+  return timings[a].end;
+}
+
 /// Once action `a` has started and its end is known (or has moved earlier: it was replaced): the
 /// actions waiting for that end that have not started.
 void ScriptedTraffic::Impl::scheduleWaiters(std::size_t a, const VehicleState& ego) {
-  const double end = timings[a].end;
   for (std::size_t b = 0; b < concrete->actions.size(); ++b) {
     const auto& trigger = concrete->actions[b].trigger;
     if (trigger.kind == TriggerSpec::Kind::After && trigger.action == static_cast<int>(a) &&
         std::isnan(timings[b].start)) {
-      if (std::isfinite(end) && !(end + trigger.delay >= scheduled[b])) scheduled[b] = end + trigger.delay;
+      const double awaited = awaitedEnd(trigger);
+      if (std::isfinite(awaited) && !(awaited + trigger.delay >= scheduled[b])) scheduled[b] = awaited + trigger.delay;
     } else if (trigger.kind == TriggerSpec::Kind::Any && std::isnan(timings[b].start)) {
       offer(b, ego);  // a member waiting for this action's end
     }

@@ -118,7 +118,8 @@ TEST(RoadUsers, BadMotionTriggersAreRefused) {
       {"{travelled: -3}", "trigger.travelled"},
       {"{all: []}", "trigger.all: expected a non-empty list of triggers"},
       {"{any: [{time: 1}, {all: [{gap: 5, delay: 1}]}]}",
-       "trigger.any[1].all[0].delay: a delay inside 'all' (its members hold at one instant): put it on the 'all'"},
+       "trigger.any[1].all[0].delay: a delay on a condition inside 'all' (its members hold at one instant; a time or "
+       "after may have one, a later moment): put it on the 'all'"},
       {"{speed_at_least: 5, position: {s: 1, lane: 0}}", "'position' goes with distance_at_most and distance_at_least"},
       {"{distance_at_least: 5}", "'position' goes with distance_at_most and distance_at_least"},
       {"{distance_at_most: 1, position: {s: 10}}", "trigger.position: expected {s, lane[, offset]} along the road or {x, y}"},
@@ -407,9 +408,14 @@ vehicles:
   const std::vector<std::pair<std::string, std::string>> cases = {
       {"[{repeat: 0, trigger: {gap: 8}, stop: {decel: 2}}]", "vehicles.others[0].actions[0].repeat"},
       {"[{repeat: 1.5, trigger: {gap: 8}, stop: {decel: 2}}]", "vehicles.others[0].actions[0].repeat"},
-      {"[{repeat: 2, trigger: {time: 1}, stop: {decel: 2}}]", "a repeated action needs a trigger that can hold again"},
       {"[{repeat: 2, trigger: {any: [{gap: 8}, {after: x}]}, stop: {decel: 2}}, {id: x, speed: {target: 3, rate: 1}}]",
-       "a repeated action needs a trigger that can hold again"},
+       "a repeated action's trigger with a time or after inside 'any': it would start again at a moment that has "
+       "passed"},
+      {"[{repeat: 2, trigger: {all: [{any: [{time: 1}, {gap: 8}]}, {gap: 3}]}, stop: {decel: 2}}]",
+       "a repeated action's trigger with a time or after inside 'any'"},
+      {"[{trigger: {gap: 8, last: true}, stop: {decel: 2}}]", "trigger.last: 'last' goes with 'after'"},
+      {"[{trigger: {after: x, last: maybe}, stop: {decel: 2}}, {id: x, speed: {target: 3, rate: 1}}]",
+       "trigger.last: got 'maybe', expected true or false"},
       {"[{trigger: {time: 1, rising: true}, stop: {decel: 2}}]", "'rising' goes with a condition"},
       {"[{trigger: {all: [{gap: 8}], rising: true}, stop: {decel: 2}}]", "'rising' goes with a condition"},
       {"[{trigger: {gap: 8, rising: yes}, stop: {decel: 2}}]", "true or false"},

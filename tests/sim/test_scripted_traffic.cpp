@@ -1033,6 +1033,26 @@ TEST(ScriptedTraffic, ASpeedChangeOverADistanceCoversThatDistance) {
             std::string::npos);
 }
 
+namespace {
+
+/// The start times (s) each of the first `actions` actions of `traffic` has had, one per run,
+/// over `steps` steps of 0.2 s beside the stand-in Ego of `run`.
+std::vector<std::vector<double>> runStarts(const Planned& run, ScriptedTraffic& traffic, int steps,
+                                           std::size_t actions) {
+  const EgoStandIn ego(run.concrete, run.road);
+  std::vector<std::vector<double>> starts(actions);
+  for (int k = 0; k < steps; ++k) {
+    traffic.step(ego.at(0.2 * k));
+    for (std::size_t a = 0; a < actions; ++a) {
+      const double start = traffic.timings()[a].start;
+      if (!std::isnan(start) && (starts[a].empty() || starts[a].back() != start)) starts[a].push_back(start);
+    }
+  }
+  return starts;
+}
+
+}  // namespace
+
 // OpenSCENARIO's maximumExecutionCount: an action starts again once it has ended and its
 // trigger fires again, up to `repeat` times. The stand-in Ego (10 m/s) closes on a standing
 // mover; within 20 m the mover speeds off to 20 m/s, beyond 30 m it stops again, and so on.
@@ -1048,15 +1068,7 @@ TEST(ScriptedTraffic, ARepeatedActionStartsAgainUpToItsRepeatCount) {
                                       0.0, 40.0);
     const Planned run = plan(logical);
     ScriptedTraffic traffic(run.concrete, run.road);
-    const EgoStandIn ego(run.concrete, run.road);
-    std::vector<std::vector<double>> starts(2);
-    for (int k = 0; k < 200; ++k) {
-      traffic.step(ego.at(0.2 * k));
-      for (std::size_t a = 0; a < 2; ++a) {
-        const double start = traffic.timings()[a].start;
-        if (!std::isnan(start) && (starts[a].empty() || starts[a].back() != start)) starts[a].push_back(start);
-      }
-    }
+    const auto starts = runStarts(run, traffic, 200, 2);
     ASSERT_EQ(starts[0].size(), static_cast<std::size_t>(repeat)) << "go";
     ASSERT_EQ(starts[1].size(), static_cast<std::size_t>(repeat)) << "halt";
     for (int n = 0; n < repeat; ++n) {
@@ -1067,6 +1079,35 @@ TEST(ScriptedTraffic, ARepeatedActionStartsAgainUpToItsRepeatCount) {
     }
     EXPECT_DOUBLE_EQ(traffic.states()[0].speed, 0.0);  // halted for good after its last start
   }
+}
+
+// A repeated action whose trigger is a moment that has come (a time, an action's end) starts
+// again where its run ends, as esmini restarts an Event whose start still holds (an empty
+// StartTrigger). `after` fires at the first end of a repeated action, `after` with `last: true`
+// at the end of its last run (OpenSCENARIO's completeState); a delay on an `after` inside `all`
+// is a later moment. By hand: +2 m/s over 1 s from t = 1, three times: runs [1, 2], [2, 3],
+// [3, 4], 10 -> 16 m/s; `first` starts at 2, `done` at 4, `later` at 4 + 1.6 = 5.6 s.
+TEST(ScriptedTraffic, ARepeatedActionOnAMomentStartsAgainAtItsEndAndLastWaitsForItsLastRun) {
+  const auto logical = scenarioWith(R"(
+    - {id: mover, s: 60, lane: 0, speed: 10,
+       actions: [{id: speed_up, repeat: 3, trigger: {time: 1}, speed: {delta: 2, duration: 1, shape: linear}}]}
+    - {id: watcher, s: 60, lane: 2, speed: 10,
+       actions: [{id: first, trigger: {after: speed_up}, speed: {delta: 1, duration: 0.4}},
+                 {id: done, trigger: {after: speed_up, last: true}, speed: {delta: 1, duration: 0.4}},
+                 {id: later, speed: {delta: 1, duration: 0.4},
+                  trigger: {all: [{after: speed_up, last: true, delay: 1.6}, {speed_at_least: 15.9, of: mover}]}}]})",
+                                    0.0, 10.0);
+  const Planned run = plan(logical);
+  ScriptedTraffic traffic(run.concrete, run.road);
+  const auto runs = runStarts(run, traffic, 40, 1).front();
+  ASSERT_EQ(runs.size(), 3u);
+  for (std::size_t n = 0; n < 3; ++n) EXPECT_NEAR(runs[n], 1.0 + static_cast<double>(n), 1e-9) << n;
+  EXPECT_NEAR(traffic.timings()[0].end, 4.0, 1e-9);
+  EXPECT_NEAR(traffic.states()[0].speed, 16.0, 1e-9);
+  EXPECT_NEAR(traffic.timings()[1].start, 2.0, 1e-9);
+  EXPECT_NEAR(traffic.timings()[2].start, 4.0, 1e-9);
+  EXPECT_NEAR(traffic.timings()[3].start, 5.6, 1e-9);
+  EXPECT_NEAR(traffic.states()[1].speed, 13.0, 1e-9);
 }
 
 // A repeated action's rising conditions start afresh when it is re-armed (esmini resets a
@@ -1082,13 +1123,7 @@ TEST(ScriptedTraffic, ARepeatedActionsRisingConditionsStartAfreshWhenItIsReArmed
                                     0.0, 10.0);
   const Planned run = plan(logical);
   ScriptedTraffic traffic(run.concrete, run.road);
-  const EgoStandIn ego(run.concrete, run.road);
-  std::vector<double> starts;
-  for (int k = 0; k < 50; ++k) {
-    traffic.step(ego.at(0.2 * k));
-    const double start = traffic.timings()[0].start;
-    if (!std::isnan(start) && (starts.empty() || starts.back() != start)) starts.push_back(start);
-  }
+  const auto starts = runStarts(run, traffic, 50, 1).front();
   ASSERT_EQ(starts.size(), 1u);
   EXPECT_NEAR(starts[0], 1.0, 0.2 + 1e-9);
 }

@@ -45,6 +45,7 @@ struct ConcreteTrigger {
   bool fromBody = false;  ///< Distance: TriggerSpec::fromBody
   bool fromReferencePoint = false;  ///< Distance: TriggerSpec::fromReferencePoint
   int action = -1;      ///< After: index into ConcreteScenario::actions
+  bool lastRun = false;  ///< After: TriggerSpec::lastRun
   ConcretePlace place;  ///< Distance: the place
   std::vector<ConcreteTrigger> members;  ///< All, Any
   bool rising = false;   ///< TriggerSpec::rising

@@ -179,6 +179,9 @@ struct TriggerSpec {
   bool fromBody = false;
   bool fromReferencePoint = false;
   std::string action;         ///< After: id of the action whose end starts this one
+  /// After: at the end of the action's last run (the n-th of its `repeat: n`; OpenSCENARIO's
+  /// completeState), not at its first end.
+  bool lastRun = false;
   PositionSpec position;      ///< Distance
   std::vector<TriggerSpec> members;  ///< All, Any
   /// Conditions (not Time, After, All, Any): fires only when the condition becomes true, at an
