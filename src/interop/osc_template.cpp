@@ -125,12 +125,28 @@ LanguagePlace languagePlace(const CarriagewayRoad& road, const Placement& p, dou
 
 namespace {
 
+/// rad: the largest angle between the language's +x and a polyline road's segment, less 0.1 mrad
+/// of margin that keeps the chords inside.
+constexpr double kMaxSegmentTurn = scenario::kMaxArcTurn - 1e-4;
+
+/// rad: the smallest and largest turn from the road's start over reference-line s in [0, end]
+/// (its samples, and `end` itself).
+std::pair<double, double> turnRange(const CarriagewayRoad& road, double end) {
+  double low = 0.0;
+  double high = 0.0;
+  for (const double s : road.sampleS) {
+    if (s > end) break;
+    low = std::min(low, road.turnAt(s));
+    high = std::max(high, road.turnAt(s));
+  }
+  return {std::min(low, road.turnAt(end)), std::max(high, road.turnAt(end))};
+}
+
 /// Reference-line s where the language's region of a road of several curvatures ends: at
-/// kMaxRegion along the driving lanes' centre, at the road's end, or where the road has
-/// turned kMaxArcTurn from its start (a polyline road's segments head at most that from +x;
-/// 0.1 mrad of margin keeps the chords inside).
+/// kMaxRegion along the driving lanes' centre, at the road's end, or where its headings stop
+/// fitting in a window of twice kMaxSegmentTurn (the language's frame turned to the window's
+/// middle puts every segment within kMaxSegmentTurn of +x: frameTurn).
 double regionEndS(const CarriagewayRoad& road) {
-  const double max_turn = scenario::kMaxArcTurn - 1e-4;
   // Bisects [lo, hi] for the last s where `beyond` is false (beyond(lo) false, beyond(hi) true).
   const auto bisect = [](double lo, double hi, const auto& beyond) {
     for (int i = 0; i < 60; ++i) {
@@ -140,12 +156,20 @@ double regionEndS(const CarriagewayRoad& road) {
     return lo;
   };
   double end = road.length;
+  double low = 0.0;
+  double high = 0.0;
   double before = 0.0;
+  const auto wider = [&](double at) {
+    const double turn = road.turnAt(at);
+    return std::max(high, turn) - std::min(low, turn) > 2.0 * kMaxSegmentTurn;
+  };
   for (const double s : road.sampleS) {
-    if (std::abs(road.turnAt(s)) > max_turn) {
-      end = bisect(before, s, [&](double at) { return std::abs(road.turnAt(at)) > max_turn; });
+    if (wider(s)) {
+      end = bisect(before, s, wider);
       break;
     }
+    low = std::min(low, road.turnAt(s));
+    high = std::max(high, road.turnAt(s));
     before = s;
   }
   // languageS grows with s wherever 1 - k t > 0, which a road whose lanes do not fold ensures.
@@ -153,7 +177,19 @@ double regionEndS(const CarriagewayRoad& road) {
   return end;
 }
 
+/// rad: how far the language's +x is turned from the road's start heading: 0 where the
+/// region's headings all lie within kMaxSegmentTurn of it (an arc road, or a road that turns
+/// less), else the least turn that puts them there — a road that turns further starts heading
+/// away from +x, so that x still advances along all of its region.
+double frameTurn(const CarriagewayRoad& road) {
+  if (road.oneCurvature) return 0.0;
+  const auto [low, high] = turnRange(road, regionEndS(road));
+  return std::min(std::max(0.0, high - kMaxSegmentTurn), low + kMaxSegmentTurn);
+}
+
 }  // namespace
+
+double frameHeading(const CarriagewayRoad& road) { return road.heading + frameTurn(road); }
 
 double regionLength(const CarriagewayRoad& road) {
   if (!road.oneCurvature) return road.languageS(regionEndS(road));
@@ -166,13 +202,13 @@ double regionLength(const CarriagewayRoad& road) {
 namespace {
 
 /// The driving lanes' centre line over the region, within 1 cm (as the language samples its
-/// arcs), in the language's frame: starting at the origin, heading +x.
+/// arcs), in the language's frame: starting at the origin, its +x along frameHeading.
 YAML::Node centreLineNode(const CarriagewayRoad& road) {
   const double end = regionEndS(road);
   const double t = road.centreT();
   const Vec2 origin = road.point(0.0, t);
-  const double cos_h = std::cos(road.heading);
-  const double sin_h = std::sin(road.heading);
+  const double cos_h = std::cos(frameHeading(road));
+  const double sin_h = std::sin(frameHeading(road));
   YAML::Node points;
   auto add = [&](double s) {
     const Vec2 d = road.point(s, t) - origin;
@@ -251,10 +287,13 @@ YAML::Node roadNode(Translation& translation, double duration) {
   node["extension"]["before"] = num(extensionBefore(translation, duration));
   node["extension"]["after"] = num(std::clamp(length - region, 150.0, kMaxExtension));
   if ((!road.oneCurvature || road.curvature != 0.0) && length > region + 1e-6) {
+    const std::string turn = road.oneCurvature
+                                 ? fmt::format("{} rad of turn", scenario::kMaxArcTurn)
+                                 : fmt::format("headings within {} rad of each other", 2.0 * scenario::kMaxArcTurn);
     translation.findings.note(fmt::format("{}", road.file.string()),
                               fmt::format("the road curves for {} m; vsd-sumo's road has its first {} m (at most {} m "
-                                          "and {} rad of turn) and goes on straight",
-                                          num(length), num(region), kMaxRegion, scenario::kMaxArcTurn));
+                                          "and {}) and goes on straight",
+                                          num(length), num(region), kMaxRegion, turn));
   }
   return node;
 }

@@ -176,6 +176,10 @@ Placement fixedPlace(Translation& translation, const pugi::xml_node& position);
 /// m of the road's length (along the language's centre line) that is vsd-sumo's scenario
 /// region; the road goes on straight beyond it.
 double regionLength(const CarriagewayRoad& road);
+/// rad: the heading (in the OpenDRIVE file's frame) of the language's +x: the road's start
+/// heading, turned where the road turns by more than kMaxArcTurn over its region so that every
+/// segment of its centre line heads within kMaxArcTurn of +x.
+double frameHeading(const CarriagewayRoad& road);
 
 /// The language's along/lane/offset of an entity's bounding-box centre.
 struct LanguagePlace {

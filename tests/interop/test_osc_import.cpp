@@ -2335,6 +2335,41 @@ TEST(OscImport, ATinyGeometryAndATurnPastTheLimitStillGiveAPolylineRoad) {
   }
 }
 
+// A road that turns by more than the language's 1.4 rad: its centre line is turned so that its
+// headings lie within 1.4 rad of +x either way, and the whole turn is vsd-sumo's region (before,
+// the region ended where the road had turned 1.4 rad and went on straight). By hand: 100 m
+// straight, a quarter circle of 200 m radius, 700 m straight (1,114 m; the region ends at 1,000 m
+// along the lanes' centre); the frame is turned by pi/2 - 1.4 (less 0.1 mrad) to the left, so the
+// first segment heads -0.1709 rad and the last 1.3999 rad. The world's axes turn with it: a
+// RelativeWorldPosition 30 m along the world's x is (30 cos 0.1709, -30 sin 0.1709) in the frame.
+TEST(OscImport, ARoadThatTurnsMoreThanTheLimitIsTurnedSoThatAllOfItsTurnIsTheRegion) {
+  const double radius = 200.0, quarter = kPi / 2.0;
+  const std::string plan_view = geometry(0, Vec2(0, 0), 0, 100, "<line/>") +
+                                geometry(100, Vec2(100, 0), 0, radius * quarter,
+                                         fmt::format(R"(<arc curvature="{:.17g}"/>)", 1.0 / radius)) +
+                                geometry(100 + radius * quarter, Vec2(100 + radius, radius), quarter, 700, "<line/>");
+  const std::string world = R"(<RelativeWorldPosition entityRef="Slow" dx="30" dy="0"/>)";
+  const auto dir = folderWith({{"roads/three_lanes.xodr", roadWithPlanView(800 + radius * quarter, plan_view)},
+                               {"world.xosc", teleportAtOne("Lead", world)}});
+  const auto logical = importTemplate(dir->path() / "world.xosc", {});
+  ASSERT_EQ(logical->road.shape, scenario::RoadSpec::Shape::Polyline);
+  const auto& points = logical->road.centreLine;
+  const auto heading = [&](std::size_t i) {
+    return std::atan2(points[i].second - points[i - 1].second, points[i].first - points[i - 1].first);
+  };
+  const double turn = quarter - (scenario::kMaxArcTurn - 1e-4);
+  EXPECT_NEAR(heading(1), -turn, 1e-6);
+  EXPECT_NEAR(heading(points.size() - 1), quarter - turn, 1e-6);
+  for (std::size_t i = 1; i < points.size(); ++i) EXPECT_LE(std::abs(heading(i)), scenario::kMaxArcTurn) << i;
+  const auto& jump = other(*logical, "Lead").actions.back();
+  ASSERT_TRUE(jump.place.inPlane && jump.place.frameAxes);
+  EXPECT_NEAR(jump.place.x.evaluate({}), 30.0 * std::cos(turn), 1e-6);
+  EXPECT_NEAR(jump.place.y.evaluate({}), -30.0 * std::sin(turn), 1e-6);
+  EXPECT_THAT(checkOpenScenario(dir->path() / "world.xosc", {}).report(),
+              HasSubstr("vsd-sumo's road has its first 1000 m (at most 1000 m and headings within 2.8 rad of each "
+                        "other) and goes on straight"));
+}
+
 namespace {
 
 /// One <lane> of a lane section, of constant width.
