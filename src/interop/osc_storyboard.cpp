@@ -932,18 +932,49 @@ auto followingStarts(Translation& translation, const pugi::xml_node& node, const
   }
 }
 
+/// An Event's maximumExecutionCount, read in the parameters of its Story.
+double executionsOf(Translation& translation, const pugi::xml_node& node, const Translation::EventRecord& event) {
+  return followingStarts(translation, node, event.scope, [&] {
+    return translation.reader.optionalNumber(event.node, "maximumExecutionCount").value_or(1.0);
+  });
+}
+
+/// The language trigger of the end of an Event's action `id`: its end ({after}), or, where the
+/// Event runs more than once, the end of its last run ({after, last: true}: esmini completes an
+/// Event after its maximumExecutionCount runs).
+YAML::Node endOf(const std::string& id, double executions) {
+  YAML::Node end;
+  end["after"] = id;
+  if (executions > 1.0) end["last"] = true;
+  return end;
+}
+
 /// Whether a language trigger holds for good once it holds - a time, an action's end, all of
 /// them - so that it can start an Act (whose Events then check their own conditions).
 bool isMoment(const YAML::Node& trigger) {
   if (!trigger.IsMap() || !(trigger["time"] || trigger["after"] || trigger["all"])) return false;
   for (const auto& entry : trigger) {
     const auto key = entry.first.as<std::string>();
-    if (key != "time" && key != "after" && key != "delay" && key != "all") return false;
+    if (key != "time" && key != "after" && key != "last" && key != "delay" && key != "all") return false;
   }
   for (const YAML::Node& member : trigger["all"]) {
-    if (member["delay"] || !isMoment(member)) return false;
+    if ((member["delay"] && member["all"]) || !isMoment(member)) return false;  // a time or an end may be delayed
   }
   return true;
+}
+
+/// `moment` with the delay of an `all` on each of its members instead (a later moment each): it
+/// holds at the same instants, and an action repeated on it starts again at its end without
+/// waiting the delay again (as esmini restarts an Event whose Act has started).
+YAML::Node delayOnMembers(const YAML::Node& moment) {
+  if (!moment["all"] || !moment["delay"]) return moment;
+  YAML::Node result;
+  for (const YAML::Node& member : moment["all"]) {
+    YAML::Node copy = YAML::Clone(member);
+    copy["delay"] = moment["delay"].as<std::string>();
+    result["all"].push_back(copy);
+  }
+  return result;
 }
 
 /// `trigger` as one that fires at a time or when an action ends ({time: t}, a delay folded
@@ -953,7 +984,7 @@ std::optional<YAML::Node> timeOrActionEnd(const YAML::Node& trigger) {
   if (!trigger.IsMap()) return std::nullopt;
   for (const auto& entry : trigger) {
     const auto key = entry.first.as<std::string>();
-    if (key != "time" && key != "after" && key != "delay") return std::nullopt;
+    if (key != "time" && key != "after" && key != "last" && key != "delay") return std::nullopt;
   }
   if (trigger["after"]) return trigger["time"] || trigger["delay"] ? std::nullopt : std::optional<YAML::Node>(trigger);
   if (!trigger["time"]) return std::nullopt;
@@ -1058,9 +1089,12 @@ std::optional<YAML::Node> storyboardElementState(Translation& translation, const
     reader.fail(condition, fmt::format("storyboardElementRef=\"{}\": expected {} with one action of a scripted road "
                                        "user", name, type == "action" ? "an action" : "an Event"));
   }
-  YAML::Node trigger;
-  trigger["after"] = ids->front();
-  return trigger;
+  // A completeState waits for the Event's last run; an endTransition comes at its first end.
+  const auto owner = translation.eventOfAction.find(name);
+  const std::string event_name = type == "event" ? name : owner == translation.eventOfAction.end() ? "" : owner->second;
+  const auto event = translation.events.find(event_name);
+  const bool last = state == "completeState" && event != translation.events.end();
+  return endOf(ids->front(), last ? executionsOf(translation, condition, event->second) : 1.0);
 }
 
 std::optional<YAML::Node> valueCondition(Translation& translation, const pugi::xml_node& by_value) {
@@ -1108,14 +1142,14 @@ std::optional<YAML::Node> valueCondition(Translation& translation, const pugi::x
 /// A condition's edge (`edge`: rising, falling or risingOrFalling) on its language trigger.
 /// esmini takes the edge of the condition as a whole, so one over several triggering entities
 /// (an `all`/`any` of one condition per entity, whose members would each change on their own)
-/// is refused.
+/// is refused. A moment (a time, actions' ends, all of them: an Act's end) rises once, when it comes.
 void markEdge(const xml::Reader& reader, const pugi::xml_node& node, const std::string& edge, YAML::Node trigger) {
+  if (isMoment(std::as_const(trigger))) return;
   if (std::as_const(trigger)["all"] || std::as_const(trigger)["any"]) {
     reader.fail(node, fmt::format("conditionEdge=\"{}\" over several triggering entities: the language takes the "
                                   "edge of each entity's condition, esmini of their combination",
                                   edge));
   }
-  if (isMoment(std::as_const(trigger))) return;
   if (edge != "falling") trigger["rising"] = "true";
   if (edge != "rising") trigger["falling"] = "true";
 }
@@ -1317,23 +1351,20 @@ std::optional<YAML::Node> actStart(Translation& translation, const pugi::xml_nod
                                                             "starts an Act at a time or at actions' ends (move the "
                                                             "condition to its Events)");
   }
-  return timeOrActionEnd(*start).value_or(*start);
+  return timeOrActionEnd(*start).value_or(delayOnMembers(*start));
 }
 
-/// When the Act `name` ends: when every action of its Events has ended ({after} or {all:
-/// [{after}, ...]}); nullopt: it never ends (an Event that never starts, an action that never
-/// ends). Acts whose Events hand the Ego's controller over, or run more than once, are refused.
+/// When the Act `name` ends: when every Event's action has ended its last run ({after} or {all:
+/// [{after}, ...]}, endOf); nullopt: it never ends (an Event that never starts, an action that
+/// never ends). Acts whose Events hand the Ego's controller over are refused.
 std::optional<YAML::Node> actEnd(Translation& translation, const pugi::xml_node& node, int index) {
   const Translation::ActRecord& act = translation.acts.at(static_cast<std::size_t>(index));
   const std::string& name = act.name;
   for (const std::string& event_name : act.events) {
     const Translation::EventRecord& event = translation.events.at(event_name);
-    const double executions = followingStarts(translation, node, event.scope, [&] {
-      return translation.reader.optionalNumber(event.node, "maximumExecutionCount").value_or(1.0);
-    });
-    if (!event.actor || event.actionIds.empty() || executions != 1.0) {
-      translation.reader.fail(node, fmt::format("the end of Act '{}': its Event '{}' is not one run of actions of "
-                                                "scripted road users (the language follows those ends only)",
+    if (!event.actor || event.actionIds.empty()) {
+      translation.reader.fail(node, fmt::format("the end of Act '{}': its Event '{}' is not a run of actions of "
+                                                "road users (the language follows those ends only)",
                                                 name, event_name));
     }
   }
@@ -1344,11 +1375,8 @@ std::optional<YAML::Node> actEnd(Translation& translation, const pugi::xml_node&
       return eventTrigger(translation, *event.actor, event.node, event.act, /*note=*/false).has_value();
     });
     if (!starts) return std::nullopt;
-    for (const std::string& id : event.actionIds) {
-      YAML::Node end;
-      end["after"] = id;
-      ends.push_back(end);
-    }
+    const double executions = executionsOf(translation, node, event);
+    for (const std::string& id : event.actionIds) ends.push_back(endOf(id, executions));
   }
   if (ends.size() == 0) translation.reader.fail(node, fmt::format("the end of Act '{}': it has no Event", name));
   if (ends.size() == 1) return ends[0];
@@ -1402,6 +1430,36 @@ YAML::Node fromTime(const YAML::Node& start, const YAML::Node& own) {
   return result;
 }
 
+/// An Event's own trigger checked from `start` on, an Act's start that is no time (actions'
+/// ends, all of them, with a delay): an `all` of that moment's members, each with the Act's
+/// delay (a later moment), and of the Event's own condition (its members, if an `all`), with
+/// its own delay on the whole. Its rising edges count from t = 0, esmini's from the Act's
+/// start: the same unless one rises at the very instant the Act starts.
+YAML::Node fromMoment(const Translation& translation, const pugi::xml_node& event, const YAML::Node& start,
+                      const YAML::Node& own) {
+  YAML::Node result;
+  // The start's members carry its delay already (delayOnMembers); the Event's carry none.
+  const auto add_members = [&](const YAML::Node& trigger, bool own_delay_apart) {
+    if (!trigger["all"]) {
+      YAML::Node copy = YAML::Clone(trigger);
+      if (own_delay_apart) copy.remove("delay");
+      result["all"].push_back(copy);
+      return;
+    }
+    for (const YAML::Node& member : trigger["all"]) result["all"].push_back(YAML::Clone(member));
+  };
+  for (const YAML::Node& member : own["any"]) {
+    if (member["delay"]) {
+      translation.reader.fail(event, "condition groups with delays in an Act that starts at actions' ends: the "
+                                     "language delays the conditions of an `all` as a whole");
+    }
+  }
+  add_members(start, false);
+  add_members(own, true);
+  if (own["delay"]) result["delay"] = own["delay"].as<std::string>();
+  return result;
+}
+
 /// The trigger of an Event in the Act `act_name`: its own StartTrigger (startTrigger), checked
 /// once the Act has started; nullopt: it never starts.
 std::optional<YAML::Node> eventTrigger(Translation& translation, const Entity& actor, const pugi::xml_node& event,
@@ -1420,13 +1478,7 @@ std::optional<YAML::Node> eventTrigger(Translation& translation, const Entity& a
   if (!event.child("StartTrigger").child("ConditionGroup")) return start;  // no condition of its own
   const Translation::ActRecord& act = translation.acts.at(static_cast<std::size_t>(act_index));
   if (waitsForItsAct(translation, act, *own)) return own;
-  if (!at_a_time) {
-    const std::string flow = flowText(start);
-    translation.reader.fail(event, fmt::format("an Event with a condition of its own in Act '{}', which starts at {}: "
-                                               "the language checks a condition from a time on, or after an action "
-                                               "of the same Act",
-                                               act.name, flow));
-  }
+  if (!at_a_time) return fromMoment(translation, event, start, *own);
   return fromTime(start, *own);
 }
 
@@ -1502,6 +1554,36 @@ void readEvent(Translation& translation, const std::vector<Entity*>& actors, con
   events.push_back(std::move(pending));
 }
 
+/// Whether the language's parser lets an action repeat on `trigger`: no time or action end
+/// inside `any` (a moment at its top or inside `all` still holds when a run ends).
+bool restartsOn(const YAML::Node& trigger) {
+  if (trigger["any"]) return canHoldAgain(trigger);
+  for (const YAML::Node& member : trigger["all"]) {
+    if (!restartsOn(member)) return false;
+  }
+  return true;
+}
+
+/// An Event that runs several times (maximumExecutionCount > 1) restarts as esmini restarts it
+/// after resetting its conditions: one without conditions of its own at once (the language's
+/// action on its Act's start, a moment that has come, starts again at its end), one with
+/// conditions when they hold again. Conditions of its own that are moments (a time, a state)
+/// are refused: esmini would restart at once, waiting their delay again, or never, rising.
+void requireRepeatable(const Translation& translation, const PendingEvent& event, const YAML::Node& trigger) {
+  bool own_moment = false;
+  for (const pugi::xml_node& group : event.node.child("StartTrigger").children("ConditionGroup")) {
+    for (const pugi::xml_node& condition : group.children("Condition")) {
+      own_moment = own_moment || condition.child("ByValueCondition");
+    }
+  }
+  if (own_moment || !restartsOn(trigger)) {
+    translation.reader.fail(event.node, fmt::format("maximumExecutionCount={} with a start that happens once (a "
+                                                    "simulation time or a storyboard element's state): the language "
+                                                    "repeats an action when its condition holds again",
+                                                    event.executions));
+  }
+}
+
 /// An Event that may run several times (maximumExecutionCount > 1) as its action's `repeat`:
 /// the language restarts an action once it has ended, when its trigger fires again.
 void repeatAction(const Translation& translation, const PendingEvent& event, const YAML::Node& trigger,
@@ -1512,12 +1594,7 @@ void repeatAction(const Translation& translation, const PendingEvent& event, con
                                         "repeats each action on its own, not an Event as a whole",
                                         event.executions, event.actions.size()));
   }
-  if (!canHoldAgain(trigger)) {
-    reader.fail(event.node, fmt::format("maximumExecutionCount={} with a start that happens once (a simulation time "
-                                        "or a storyboard element's state): the language repeats an action when its "
-                                        "condition holds again",
-                                        event.executions));
-  }
+  requireRepeatable(translation, event, trigger);
   item["repeat"] = event.executions;
 }
 
@@ -1569,11 +1646,7 @@ YAML::Node egoControllerAction(Translation& translation, const PendingEvent& eve
   item["id"] = identifier(reader.text(event.node, "name") + suffix, translation.usedIds);
   item["trigger"] = trigger;
   if (event.executions > 1) {
-    if (!canHoldAgain(trigger)) {
-      reader.fail(event.node, fmt::format("maximumExecutionCount={} with a start that happens once: the language "
-                                          "repeats an action when its condition holds again",
-                                          event.executions));
-    }
+    requireRepeatable(translation, event, trigger);
     item["repeat"] = event.executions;
   }
   const std::string flow = flowText(trigger);

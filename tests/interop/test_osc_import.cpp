@@ -2578,7 +2578,7 @@ TEST(OscImport, ConditionsOnAnEventsStartOrEndFollowItsTriggerOrItsAction) {
       {R"(storyboardElementType="maneuver" storyboardElementRef="CutInManeuver" state="startTransition")",
        "storyboardElementType=\"maneuver\": the language follows a Story's start, an Act, an Event or an action"},
       {R"(storyboardElementType="act" storyboardElementRef="CutInAct" state="endTransition")",
-       "the end of Act 'CutInAct': its Event 'Activate' is not one run of actions of scripted road users"},
+       "the end of Act 'CutInAct': its Event 'Activate' is not a run of actions of road users"},
       {R"(storyboardElementType="story" storyboardElementRef="CutInStory" state="endTransition")",
        "state=\"endTransition\" of story 'CutInStory': the language follows a Story's start and an Act's start and "
        "end"},
@@ -2720,6 +2720,87 @@ TEST(OscImport, AVehiclePlacedByARoadOrWorldPositionKeepsTheRightSide) {
   }
 }
 
+namespace {
+
+/// An Event `name` of `actor` in its own Maneuver Group: a linear speed change by `delta` m/s
+/// over 1 s, run up to `runs` times, started by `start` (a StartTrigger, or empty).
+std::string speedDeltaEvent(const std::string& name, const std::string& actor, double delta, int runs,
+                            const std::string& start) {
+  return fmt::format(R"(<ManeuverGroup maximumExecutionCount="1" name="{0}Group">
+      <Actors selectTriggeringEntities="false"><EntityRef entityRef="{1}"/></Actors>
+      <Maneuver name="{0}Maneuver"><Event name="{0}" priority="parallel" maximumExecutionCount="{3}">
+        <Action name="{0}Change"><PrivateAction><LongitudinalAction><SpeedAction>
+          <SpeedActionDynamics dynamicsShape="linear" dynamicsDimension="time" value="1"/>
+          <SpeedActionTarget><RelativeTargetSpeed entityRef="{1}" value="{2}" speedTargetValueType="delta"
+            continuous="false"/></SpeedActionTarget>
+        </SpeedAction></LongitudinalAction></PrivateAction></Action>{4}</Event></Maneuver></ManeuverGroup>)",
+                     name, actor, delta, runs, start);
+}
+
+/// A Maneuver Group of Runner: an Event "Late" that steps its speed to 5 m/s, started by the
+/// `conditions` (ConditionGroups).
+std::string runnerStepsToFive(const std::string& conditions) {
+  return R"(<ManeuverGroup maximumExecutionCount="1" name="RunnerGroup">
+      <Actors selectTriggeringEntities="false"><EntityRef entityRef="Runner"/></Actors>
+      <Maneuver name="RunnerManeuver"><Event name="Late" priority="parallel"><Action name="RunnerStep">
+        <PrivateAction><LongitudinalAction><SpeedAction>
+          <SpeedActionDynamics dynamicsShape="step" dynamicsDimension="time" value="0"/>
+          <SpeedActionTarget><AbsoluteTargetSpeed value="5"/></SpeedActionTarget>
+        </SpeedAction></LongitudinalAction></PrivateAction></Action>
+        <StartTrigger>)" +
+         conditions + "</StartTrigger></Event></Maneuver></ManeuverGroup>";
+}
+
+}  // namespace
+
+// An Act ends when its repeated Event has run its last time (esmini completes an Event after its
+// maximumExecutionCount runs: `after` with `last: true`); in the Act that starts then, an Event
+// without a condition of its own runs twice back to back (esmini restarts it at once) and one with
+// a condition of its own checks it from that start on. By hand: Slow (18 m/s) and Runner (15 m/s)
+// gain 1 m/s over 1 s twice, [0, 1] and [1, 2] s (their condition holds throughout, so each
+// restarts at its end); "Act" ends at 2 s and "Later" starts 1 s after, at 3 s; there Slow loses
+// 1 m/s over 1 s twice, [3, 4] and [4, 5] s, and Runner steps from 17 to 5 m/s at the first
+// instant (0.2 s) Slow is below 18.5 m/s: 4.6 s, seen from the next instant on.
+TEST(OscRun, AnActEndsAfterItsRepeatedEventsLastRunAndTheNextChecksItsEventsFromThen) {
+  std::string text = readTextFile(data("conditions.xosc"));
+  const auto story_begin = text.find("<Story name=\"Story\">");
+  const auto story_end = text.find("</Story>") + 8;
+  const std::string always = group(std::regex_replace(
+      entityCondition("Slow", R"(<SpeedCondition value="100" rule="lessThan"/>)"), std::regex("rising"), "none"));
+  const std::string below = group(entityCondition("Slow", R"(<SpeedCondition value="18.5" rule="lessThan"/>)"));
+  const std::string after_act = R"(<StartTrigger><ConditionGroup><Condition name="AfterAct" delay="1"
+      conditionEdge="rising"><ByValueCondition><StoryboardElementStateCondition storyboardElementType="act"
+      storyboardElementRef="Act" state="completeState"/></ByValueCondition></Condition></ConditionGroup>
+      </StartTrigger>)";
+  const std::string story = R"(<Story name="Story"><Act name="Act">)" +
+                            speedDeltaEvent("Nudge", "Slow", 1, 2, "<StartTrigger>" + always + "</StartTrigger>") +
+                            speedDeltaEvent("Warm", "Runner", 1, 2, "<StartTrigger>" + always + "</StartTrigger>") +
+                            R"(</Act><Act name="Later">)" + speedDeltaEvent("Hold", "Slow", -1, 2, "<StartTrigger/>") +
+                            runnerStepsToFive(below) + after_act + "</Act></Story>";
+  text.replace(story_begin, story_end - story_begin, story);
+  const auto folder = folderWith({{"acts.xosc", text}});
+  const auto logical = importTemplate(folder->path() / "acts.xosc", {});
+  const auto& hold = other(*logical, "Slow").actions.at(1);
+  EXPECT_EQ(hold.repeat, 2);
+  // The Act's start: 1 s after the last runs of both Events, the delay on each (so Hold's second
+  // run does not wait it again).
+  ASSERT_EQ(hold.trigger.kind, scenario::TriggerSpec::Kind::All);
+  ASSERT_EQ(hold.trigger.members.size(), 2u);
+  for (const auto& member : hold.trigger.members) {
+    EXPECT_EQ(member.kind, scenario::TriggerSpec::Kind::After);
+    EXPECT_TRUE(member.lastRun);
+    EXPECT_DOUBLE_EQ(member.delay.evaluate({}), 1.0);
+  }
+  const auto slow = simulatedTrack(folder->path() / "acts.xosc", "Slow");
+  const auto runner = simulatedTrack(folder->path() / "acts.xosc", "Runner");
+  ASSERT_TRUE(slow && runner);
+  const std::vector<std::pair<std::size_t, double>> slow_speeds = {{5, 19.0},  {10, 20.0}, {15, 20.0}, {18, 19.4},
+                                                                   {20, 19.0}, {25, 18.0}, {35, 18.0}};
+  for (const auto& [k, speed] : slow_speeds) EXPECT_NEAR(slow->states.at(k).speed, speed, 1e-6) << "state " << k;
+  EXPECT_NEAR(runner->states.at(23).speed, 17.0, 1e-9);
+  EXPECT_NEAR(runner->states.at(24).speed, 5.0, 1e-9);
+}
+
 // An Event's maximumExecutionCount becomes its action's `repeat` (the language restarts it once
 // it has ended, when its condition fires again) and conditionEdge="rising" the condition's
 // `rising`. A start that happens once (a simulation time) cannot repeat, nor can an Event of
@@ -2743,6 +2824,20 @@ TEST(OscImport, AnEventsMaximumExecutionCountRepeatsItsAction) {
   EXPECT_TRUE(actions[1].trigger.rising);
   const auto once = folderWith({{"once.xosc", with(R"(maximumExecutionCount="1")", speed)}});
   EXPECT_EQ(other(*importTemplate(once->path() / "once.xosc", {}), "Lead").actions.at(1).repeat, 1);
+  // A condition on the repeated Event: its completeState comes after its last run (esmini
+  // completes an Event after maximumExecutionCount runs), its endTransition at its first end.
+  for (const std::string state : {"completeState", "endTransition"}) {
+    std::string text = with(R"(maximumExecutionCount="3")", speed);
+    text.insert(text.find("</Act>"), runnerStepsToFive(fmt::format(R"(<ConditionGroup><Condition name="Done" delay="0"
+        conditionEdge="rising"><ByValueCondition><StoryboardElementStateCondition storyboardElementType="event"
+        storyboardElementRef="SlowDown" state="{}"/></ByValueCondition></Condition></ConditionGroup>)",
+                                                                    state)));
+    const auto states = folderWith({{"states.xosc", text}});
+    const auto& late = other(*importTemplate(states->path() / "states.xosc", {}), "Runner").actions.at(0).trigger;
+    EXPECT_EQ(late.kind, scenario::TriggerSpec::Kind::After) << state;
+    EXPECT_EQ(late.action, "StepDown") << state;
+    EXPECT_EQ(late.lastRun, state == "completeState") << state;
+  }
 
   const std::string second_action = R"(<Action name="StepDownAgain"><PrivateAction><LongitudinalAction><SpeedAction>
       <SpeedActionDynamics dynamicsShape="step" dynamicsDimension="time" value="0"/>
