@@ -186,6 +186,7 @@ struct ScriptedTraffic::Impl {
   std::vector<ActionTiming> timings;
   std::vector<double> scheduled;  ///< per action: start time once its trigger fired (NaN before)
   std::vector<int> starts;        ///< per action: how many times it started (up to its repeat)
+  std::vector<double> firstEnds;  ///< per action: the end of its first run once a second has started (NaN before)
   /// An edge condition's memory: whether it held when last checked, and its answer at instant `instant`.
   struct Edge {
     std::size_t instant = std::numeric_limits<std::size_t>::max();
@@ -315,6 +316,7 @@ void ScriptedTraffic::Impl::init() {
   timings.assign(concrete->actions.size(), {kNaN, kNaN});
   scheduled.assign(concrete->actions.size(), kNaN);
   starts.assign(concrete->actions.size(), 0);
+  firstEnds.assign(concrete->actions.size(), kNaN);
   for (std::size_t a = 0; a < concrete->actions.size(); ++a) {
     const auto& trigger = concrete->actions[a].trigger;
     if (trigger.kind == TriggerSpec::Kind::Time) scheduled[a] = trigger.value + trigger.delay;
@@ -616,6 +618,7 @@ void ScriptedTraffic::Impl::forgetEdges(const scenario::ConcreteTrigger& trigger
 void ScriptedTraffic::Impl::activate(std::size_t a, const VehicleState& ego) {
   const auto& action = concrete->actions[a];
   const double t0 = scheduled[a];
+  if (starts[a] == 1) firstEnds[a] = timings[a].end;  // an `after` keeps waiting for that one
   ++starts[a];
   endListed(a, ego);
   if (action.kind == ActionSpec::Kind::SetSpeed || action.kind == ActionSpec::Kind::Controller) {
@@ -866,12 +869,16 @@ void ScriptedTraffic::Impl::activateEgoLateral(std::size_t a, const VehicleState
   scheduleWaiters(a, ego);
 }
 
-/// The end an `after` waits for (s): its action's latest end; with `last`, only once that is the
-/// end of its last run. NaN before.
+/// The end an `after` waits for (s): the end of its action's first run (a moment that stays
+/// when the action runs again); with `last`, of its last run, once that has started. NaN before.
 double ScriptedTraffic::Impl::awaitedEnd(const scenario::ConcreteTrigger& trigger) const {
   const auto a = static_cast<std::size_t>(trigger.action);
-  if (trigger.lastRun && starts[a] < concrete->actions[a].repeat) return kNaN;
-  return timings[a].end;
+  if (trigger.lastRun) {
+    // Its start is set after its count (activate): in between, its end is the run's before.
+    const bool last_started = starts[a] == concrete->actions[a].repeat && !std::isnan(timings[a].start);
+    return last_started ? timings[a].end : kNaN;
+  }
+  return starts[a] >= 2 ? firstEnds[a] : timings[a].end;
 }
 
 /// Once action `a` has started and its end is known (or has moved earlier: it was replaced): the

@@ -1083,10 +1083,12 @@ TEST(ScriptedTraffic, ARepeatedActionStartsAgainUpToItsRepeatCount) {
 
 // A repeated action whose trigger is a moment that has come (a time, an action's end) starts
 // again where its run ends, as esmini restarts an Event whose start still holds (an empty
-// StartTrigger). `after` fires at the first end of a repeated action, `after` with `last: true`
-// at the end of its last run (OpenSCENARIO's completeState); a delay on an `after` inside `all`
-// is a later moment. By hand: +2 m/s over 1 s from t = 1, three times: runs [1, 2], [2, 3],
-// [3, 4], 10 -> 16 m/s; `first` starts at 2, `done` at 4, `later` at 4 + 1.6 = 5.6 s.
+// StartTrigger). `after` fires at the first end of a repeated action (inside `all` too: a moment
+// that stays while it runs again), `after` with `last: true` at the end of its last run
+// (OpenSCENARIO's completeState); a delay on an `after` inside `all` is a later moment. By hand:
+// +2 m/s over 1 s from t = 1, three times: runs [1, 2], [2, 3], [3, 4], 10 -> 16 m/s; `first`
+// starts at 2, `mid` at the first instant the mover has 14.9 m/s (3.6 s: 15.2), `done` at 4,
+// `later` at 4 + 1.6 = 5.6 s.
 TEST(ScriptedTraffic, ARepeatedActionOnAMomentStartsAgainAtItsEndAndLastWaitsForItsLastRun) {
   const auto logical = scenarioWith(R"(
     - {id: mover, s: 60, lane: 0, speed: 10,
@@ -1095,7 +1097,9 @@ TEST(ScriptedTraffic, ARepeatedActionOnAMomentStartsAgainAtItsEndAndLastWaitsFor
        actions: [{id: first, trigger: {after: speed_up}, speed: {delta: 1, duration: 0.4}},
                  {id: done, trigger: {after: speed_up, last: true}, speed: {delta: 1, duration: 0.4}},
                  {id: later, speed: {delta: 1, duration: 0.4},
-                  trigger: {all: [{after: speed_up, last: true, delay: 1.6}, {speed_at_least: 15.9, of: mover}]}}]})",
+                  trigger: {all: [{after: speed_up, last: true, delay: 1.6}, {speed_at_least: 15.9, of: mover}]}},
+                 {id: mid, trigger: {all: [{after: speed_up}, {speed_at_least: 14.9, of: mover}]},
+                  speed: {delta: 1, duration: 0.4}}]})",
                                     0.0, 10.0);
   const Planned run = plan(logical);
   ScriptedTraffic traffic(run.concrete, run.road);
@@ -1107,7 +1111,29 @@ TEST(ScriptedTraffic, ARepeatedActionOnAMomentStartsAgainAtItsEndAndLastWaitsFor
   EXPECT_NEAR(traffic.timings()[1].start, 2.0, 1e-9);
   EXPECT_NEAR(traffic.timings()[2].start, 4.0, 1e-9);
   EXPECT_NEAR(traffic.timings()[3].start, 5.6, 1e-9);
-  EXPECT_NEAR(traffic.states()[1].speed, 13.0, 1e-9);
+  EXPECT_NEAR(traffic.timings()[4].start, 3.6, 1e-9);
+  EXPECT_NEAR(traffic.states()[1].speed, 14.0, 1e-9);
+}
+
+// An `after` with `last: true` waits for the last run itself, not the end of the run before it
+// when that run is replaced: `a` (twice) is replaced by `c` at 1 s, starts again there (the
+// instant it ended at) and replaces `c`, and runs to 3 s; `b` starts there (before, an `any`
+// offered while `a` started again saw the replaced run's end, 1 s, and started at once).
+TEST(ScriptedTraffic, ALastRunIsWaitedForWhenTheRunBeforeItWasReplaced) {
+  const auto logical = scenarioWith(R"(
+    - {id: mover, s: 60, lane: 0, speed: 10,
+       actions: [{id: a, repeat: 2, trigger: {time: 0}, speed: {target: 25, duration: 2}},
+                 {id: c, trigger: {time: 1}, speed: {target: 15, duration: 5}},
+                 {id: b, trigger: {any: [{after: a, last: true}, {gap_at_least: 500}]},
+                  lateral_offset: {offset: 0.5, duration: 1}}]})",
+                                    0.0, 10.0);
+  const Planned run = plan(logical);
+  ScriptedTraffic traffic(run.concrete, run.road);
+  const auto starts = runStarts(run, traffic, 30, 3);
+  ASSERT_EQ(starts[0].size(), 2u);
+  EXPECT_NEAR(starts[0][1], 1.0, 1e-9);
+  ASSERT_EQ(starts[2].size(), 1u);
+  EXPECT_NEAR(starts[2][0], 3.0, 1e-9);
 }
 
 // A repeated action's rising conditions start afresh when it is re-armed (esmini resets a
