@@ -1089,11 +1089,10 @@ std::optional<YAML::Node> storyboardElementState(Translation& translation, const
     reader.fail(condition, fmt::format("storyboardElementRef=\"{}\": expected {} with one action of a scripted road "
                                        "user", name, type == "action" ? "an action" : "an Event"));
   }
-  // A completeState waits for the Event's last run; an endTransition comes at its first end.
-  const auto owner = translation.eventOfAction.find(name);
-  const std::string event_name = type == "event" ? name : owner == translation.eventOfAction.end() ? "" : owner->second;
-  const auto event = translation.events.find(event_name);
-  const bool last = state == "completeState" && event != translation.events.end();
+  // An Event's completeState waits for its last run; its endTransition, and an action's either
+  // state, come at its first end (esmini completes an action at each run's end).
+  const auto event = translation.events.find(name);
+  const bool last = type == "event" && state == "completeState" && event != translation.events.end();
   return endOf(ids->front(), last ? executionsOf(translation, condition, event->second) : 1.0);
 }
 
@@ -1433,10 +1432,23 @@ YAML::Node fromTime(const YAML::Node& start, const YAML::Node& own) {
 /// An Event's own trigger checked from `start` on, an Act's start that is no time (actions'
 /// ends, all of them, with a delay): an `all` of that moment's members, each with the Act's
 /// delay (a later moment), and of the Event's own condition (its members, if an `all`), with
-/// its own delay on the whole. Its rising edges count from t = 0, esmini's from the Act's
-/// start: the same unless one rises at the very instant the Act starts.
+/// its own delay on the whole. The members of an `all` are checked in order while the ones
+/// before hold, so its conditions are first checked when the Act starts, as esmini checks
+/// them. A rising moment of its own (a time, a state) is refused: whether it already holds
+/// when the Act starts - then esmini never fires it - depends on when that is.
 YAML::Node fromMoment(const Translation& translation, const pugi::xml_node& event, const YAML::Node& start,
                       const YAML::Node& own) {
+  for (const pugi::xml_node& group : event.child("StartTrigger").children("ConditionGroup")) {
+    for (const pugi::xml_node& condition : group.children("Condition")) {
+      const std::string edge = condition.attribute("conditionEdge").value();
+      if (condition.child("ByValueCondition") && edge != "none") {
+        translation.reader.fail(condition, fmt::format("conditionEdge=\"{}\" on a time or a state in an Act that "
+                                                       "starts at actions' ends: esmini never fires it if it holds "
+                                                       "when the Act starts, which only a run can tell",
+                                                       edge));
+      }
+    }
+  }
   YAML::Node result;
   // The start's members carry its delay already (delayOnMembers); the Event's carry none.
   const auto add_members = [&](const YAML::Node& trigger, bool own_delay_apart) {

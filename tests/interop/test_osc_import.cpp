@@ -2799,6 +2799,13 @@ TEST(OscRun, AnActEndsAfterItsRepeatedEventsLastRunAndTheNextChecksItsEventsFrom
   for (const auto& [k, speed] : slow_speeds) EXPECT_NEAR(slow->states.at(k).speed, speed, 1e-6) << "state " << k;
   EXPECT_NEAR(runner->states.at(23).speed, 17.0, 1e-9);
   EXPECT_NEAR(runner->states.at(24).speed, 5.0, 1e-9);
+  // A rising time of the Event's own: esmini never fires it if it holds when the Act starts,
+  // which depends on when that is - refused.
+  std::string rising = text;
+  rising.replace(rising.find(below), below.size(), group(risingTime("1")));
+  const auto rising_folder = folderWith({{"rising.xosc", rising}});
+  const std::string error = test::configErrorOf([&] { importTemplate(rising_folder->path() / "rising.xosc", {}); });
+  EXPECT_THAT(error, HasSubstr("conditionEdge=\"rising\" on a time or a state in an Act that starts at actions' ends"));
 }
 
 // An Event's maximumExecutionCount becomes its action's `repeat` (the language restarts it once
@@ -2825,18 +2832,23 @@ TEST(OscImport, AnEventsMaximumExecutionCountRepeatsItsAction) {
   const auto once = folderWith({{"once.xosc", with(R"(maximumExecutionCount="1")", speed)}});
   EXPECT_EQ(other(*importTemplate(once->path() / "once.xosc", {}), "Lead").actions.at(1).repeat, 1);
   // A condition on the repeated Event: its completeState comes after its last run (esmini
-  // completes an Event after maximumExecutionCount runs), its endTransition at its first end.
-  for (const std::string state : {"completeState", "endTransition"}) {
+  // completes an Event after maximumExecutionCount runs), its endTransition at its first end, and
+  // so do its action's (esmini completes an action at each run's end).
+  using StateCase = std::tuple<std::string, std::string, std::string, bool>;  // type, element, state, last run
+  const std::vector<StateCase> state_cases = {{"event", "SlowDown", "completeState", true},
+                                              {"event", "SlowDown", "endTransition", false},
+                                              {"action", "StepDown", "completeState", false}};
+  for (const auto& [type, element, state, last] : state_cases) {
     std::string text = with(R"(maximumExecutionCount="3")", speed);
     text.insert(text.find("</Act>"), runnerStepsToFive(fmt::format(R"(<ConditionGroup><Condition name="Done" delay="0"
-        conditionEdge="rising"><ByValueCondition><StoryboardElementStateCondition storyboardElementType="event"
-        storyboardElementRef="SlowDown" state="{}"/></ByValueCondition></Condition></ConditionGroup>)",
-                                                                    state)));
+        conditionEdge="rising"><ByValueCondition><StoryboardElementStateCondition storyboardElementType="{}"
+        storyboardElementRef="{}" state="{}"/></ByValueCondition></Condition></ConditionGroup>)",
+                                                                    type, element, state)));
     const auto states = folderWith({{"states.xosc", text}});
     const auto& late = other(*importTemplate(states->path() / "states.xosc", {}), "Runner").actions.at(0).trigger;
-    EXPECT_EQ(late.kind, scenario::TriggerSpec::Kind::After) << state;
-    EXPECT_EQ(late.action, "StepDown") << state;
-    EXPECT_EQ(late.lastRun, state == "completeState") << state;
+    EXPECT_EQ(late.kind, scenario::TriggerSpec::Kind::After) << type << " " << state;
+    EXPECT_EQ(late.action, "StepDown") << type << " " << state;
+    EXPECT_EQ(late.lastRun, last) << type << " " << state;
   }
 
   const std::string second_action = R"(<Action name="StepDownAgain"><PrivateAction><LongitudinalAction><SpeedAction>
