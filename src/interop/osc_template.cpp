@@ -142,7 +142,16 @@ std::pair<double, double> turnRange(const CarriagewayRoad& road, double end) {
   return {std::min(low, road.turnAt(end)), std::max(high, road.turnAt(end))};
 }
 
-/// Reference-line s where the language's region of a road of several curvatures ends: at
+/// Whether the language gets the road as its arc road: lines, or arcs of one curvature, that
+/// end (or reach kMaxRegion) before they turn kMaxArcTurn. An arc that turns further becomes a
+/// polyline road, whose headings may span twice that (frameTurn).
+bool asArc(const CarriagewayRoad& road) {
+  if (!road.oneCurvature) return false;
+  const double curvature = std::abs(road.languageCurvature());
+  return curvature == 0.0 || scenario::kMaxArcTurn / curvature >= std::min(road.languageS(road.length), kMaxRegion);
+}
+
+/// Reference-line s where the language's region of a polyline road ends: at
 /// kMaxRegion along the driving lanes' centre, at the road's end, or where its headings stop
 /// fitting in a window of twice kMaxSegmentTurn (the language's frame turned to the window's
 /// middle puts every segment within kMaxSegmentTurn of +x: frameTurn).
@@ -155,7 +164,9 @@ double regionEndS(const CarriagewayRoad& road) {
     }
     return lo;
   };
-  double end = road.length;
+  // An arc turns in proportion to s; any other road is followed through its samples.
+  const bool arc = road.oneCurvature && road.curvature != 0.0;
+  double end = arc ? std::min(road.length, 2.0 * kMaxSegmentTurn / std::abs(road.curvature)) : road.length;
   double low = 0.0;
   double high = 0.0;
   double before = 0.0;
@@ -182,7 +193,7 @@ double regionEndS(const CarriagewayRoad& road) {
 /// less), else the least turn that puts them there — a road that turns further starts heading
 /// away from +x, so that x still advances along all of its region.
 double frameTurn(const CarriagewayRoad& road) {
-  if (road.oneCurvature) return 0.0;
+  if (asArc(road)) return 0.0;
   const auto [low, high] = turnRange(road, regionEndS(road));
   return std::min(std::max(0.0, high - kMaxSegmentTurn), low + kMaxSegmentTurn);
 }
@@ -192,7 +203,7 @@ double frameTurn(const CarriagewayRoad& road) {
 double frameHeading(const CarriagewayRoad& road) { return road.heading + frameTurn(road); }
 
 double regionLength(const CarriagewayRoad& road) {
-  if (!road.oneCurvature) return road.languageS(regionEndS(road));
+  if (!asArc(road)) return road.languageS(regionEndS(road));
   const double curvature = road.languageCurvature();
   double region = std::min(road.languageS(road.length), kMaxRegion);
   if (curvature != 0.0) region = std::min(region, scenario::kMaxArcTurn / std::abs(curvature));
@@ -268,7 +279,7 @@ YAML::Node roadNode(Translation& translation, double duration) {
   const double length = road.languageS(road.length);
   const double region = regionLength(road);
   YAML::Node node;
-  if (road.oneCurvature) {
+  if (asArc(road)) {
     node["shape"] = "arc";
     node["curvature"] = num(road.languageCurvature());
     node["length"] = num(region);
@@ -287,7 +298,7 @@ YAML::Node roadNode(Translation& translation, double duration) {
   node["extension"]["before"] = num(extensionBefore(translation, duration));
   node["extension"]["after"] = num(std::clamp(length - region, 150.0, kMaxExtension));
   if ((!road.oneCurvature || road.curvature != 0.0) && length > region + 1e-6) {
-    const std::string turn = road.oneCurvature
+    const std::string turn = asArc(road)
                                  ? fmt::format("{} rad of turn", scenario::kMaxArcTurn)
                                  : fmt::format("headings within {} rad of each other", 2.0 * scenario::kMaxArcTurn);
     translation.findings.note(fmt::format("{}", road.file.string()),

@@ -2368,6 +2368,29 @@ TEST(OscImport, ARoadThatTurnsMoreThanTheLimitIsTurnedSoThatAllOfItsTurnIsTheReg
   EXPECT_THAT(checkOpenScenario(dir->path() / "world.xosc", {}).report(),
               HasSubstr("vsd-sumo's road has its first 1000 m (at most 1000 m and headings within 2.8 rad of each "
                         "other) and goes on straight"));
+  // An arc of one curvature that turns further than 1.4 rad within 1,000 m becomes such a
+  // polyline too (ASAM's 250 m-radius roads: one arc of 1,500 m): its region ends where it has
+  // turned 2 x 1.4 rad, its first segment heading -1.4 rad and its last +1.4 rad (less the
+  // margin); one of 1,000 m radius turns 1 rad in 1,000 m and stays the language's arc road.
+  for (const double curvature : {0.004, 0.001}) {
+    const auto arc = folderWith(
+        {{"roads/three_lanes.xodr",
+          roadWithPlanView(1500, geometry(0, Vec2(0, 0), 0, 1500, fmt::format(R"(<arc curvature="{}"/>)", curvature)))},
+         {"arc.xosc", readTextFile(data("conditions.xosc"))}});
+    const auto arc_road = importTemplate(arc->path() / "arc.xosc", {})->road;
+    if (curvature == 0.001) {
+      EXPECT_EQ(arc_road.shape, scenario::RoadSpec::Shape::Arc);
+      continue;
+    }
+    ASSERT_EQ(arc_road.shape, scenario::RoadSpec::Shape::Polyline);
+    const auto& line = arc_road.centreLine;
+    const auto first = std::atan2(line[1].second - line[0].second, line[1].first - line[0].first);
+    const auto last = std::atan2(line.back().second - line[line.size() - 2].second,
+                                 line.back().first - line[line.size() - 2].first);
+    EXPECT_NEAR(first, -(scenario::kMaxArcTurn - 1e-4), 0.01);  // a 4.4 m chord: half its turn, 0.009 rad, inside
+    EXPECT_NEAR(last, scenario::kMaxArcTurn - 1e-4, 0.01);
+    EXPECT_LE(std::max(std::abs(first), std::abs(last)), scenario::kMaxArcTurn);
+  }
 }
 
 namespace {
