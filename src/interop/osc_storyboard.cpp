@@ -883,6 +883,7 @@ std::optional<YAML::Node> eventTrigger(Translation& translation, const Entity& a
                                        int act, bool note);
 std::optional<YAML::Node> actStart(Translation& translation, const pugi::xml_node& node, int act);
 std::optional<YAML::Node> actEnd(Translation& translation, const pugi::xml_node& node, int act);
+bool waitsForItsAct(const Translation& translation, const Translation::ActRecord& act, const YAML::Node& trigger);
 
 /// The Act a condition names (`node`: the condition): its index into Translation::acts.
 int actNamed(Translation& translation, const pugi::xml_node& node, const std::string& name) {
@@ -1154,18 +1155,25 @@ void markEdge(const xml::Reader& reader, const pugi::xml_node& node, const std::
 }
 
 /// Translation::firstCheck for one scope, restored at its end.
+/// And Translation::laterAct (`act`, -1 for none), restored with it.
 class FirstCheckAt {
  public:
-  FirstCheckAt(Translation& translation, double time) : translation_(translation), outer_(translation.firstCheck) {
+  FirstCheckAt(Translation& translation, double time, int act = -1)
+      : translation_(translation), outer_(translation.firstCheck), outerAct_(translation.laterAct) {
     translation.firstCheck = time;
+    translation.laterAct = act;
   }
-  ~FirstCheckAt() { translation_.firstCheck = outer_; }
+  ~FirstCheckAt() {
+    translation_.firstCheck = outer_;
+    translation_.laterAct = outerAct_;
+  }
   FirstCheckAt(const FirstCheckAt&) = delete;
   FirstCheckAt& operator=(const FirstCheckAt&) = delete;
 
  private:
   Translation& translation_;
   double outer_;
+  int outerAct_;
 };
 
 /// Whether a rising SimulationTime or Parameter condition holds when first checked (at
@@ -1206,6 +1214,24 @@ void refuseEdgeOnPassingState(const xml::Reader& reader, const pugi::xml_node& s
                                      : "one step after it"));
 }
 
+/// esmini checks an Event's conditions first when its Act starts, and a rising (or
+/// risingOrFalling) one that holds then never fires. For an Act that starts later, a moment
+/// that may have come by then - a time, where the Act starts at actions' ends; the end of an
+/// action outside the Act - cannot be decided here (a time against an Act that starts at a
+/// time is: holdsAtFirstCheck), so it is refused; an end of the Act's own actions is fine.
+void refuseRisingMomentOfALaterAct(const Translation& translation, const pugi::xml_node& node, const std::string& edge,
+                                   const YAML::Node& result) {
+  if (translation.laterAct < 0 || edge == "none" || edge == "falling" || !isMoment(result)) return;
+  const Translation::ActRecord& act = translation.acts.at(static_cast<std::size_t>(translation.laterAct));
+  if (waitsForItsAct(translation, act, result)) return;
+  if (result["time"] && translation.firstCheck > 0.0) return;
+  translation.reader.fail(node, fmt::format("conditionEdge=\"{}\" on {} in Act '{}', which starts later: esmini "
+                                            "never fires it if it holds when the Act starts, which only a run can "
+                                            "tell",
+                                            edge, result["time"] ? "a time" : "the state of an element outside the Act",
+                                            act.name));
+}
+
 /// One <Condition> without its delay; nullopt: it never holds.
 std::optional<YAML::Node> condition(Translation& translation, const Entity& actor, const pugi::xml_node& node) {
   const xml::Reader& reader = translation.reader;
@@ -1232,6 +1258,7 @@ std::optional<YAML::Node> condition(Translation& translation, const Entity& acto
                                                               edge, when, edge == "rising" ? "" : " or falls"));
     return std::nullopt;
   }
+  refuseRisingMomentOfALaterAct(translation, node, edge, *result);
   markEdge(reader, node, edge, *result);
   return result;
 }
@@ -1434,21 +1461,10 @@ YAML::Node fromTime(const YAML::Node& start, const YAML::Node& own) {
 /// delay (a later moment), and of the Event's own condition (its members, if an `all`), with
 /// its own delay on the whole. The members of an `all` are checked in order while the ones
 /// before hold, so its conditions are first checked when the Act starts, as esmini checks
-/// them. A rising moment of its own (a time, a state) is refused: whether it already holds
-/// when the Act starts - then esmini never fires it - depends on when that is.
+/// them (a rising moment of its own that may hold by then is refused as it is read:
+/// refuseRisingMomentOfALaterAct).
 YAML::Node fromMoment(const Translation& translation, const pugi::xml_node& event, const YAML::Node& start,
                       const YAML::Node& own) {
-  for (const pugi::xml_node& group : event.child("StartTrigger").children("ConditionGroup")) {
-    for (const pugi::xml_node& condition : group.children("Condition")) {
-      const std::string edge = condition.attribute("conditionEdge").value();
-      if (condition.child("ByValueCondition") && edge != "none") {
-        translation.reader.fail(condition, fmt::format("conditionEdge=\"{}\" on a time or a state in an Act that "
-                                                       "starts at actions' ends: esmini never fires it if it holds "
-                                                       "when the Act starts, which only a run can tell",
-                                                       edge));
-      }
-    }
-  }
   YAML::Node result;
   // The start's members carry its delay already (delayOnMembers); the Event's carry none.
   const auto add_members = [&](const YAML::Node& trigger, bool own_delay_apart) {
@@ -1481,7 +1497,9 @@ std::optional<YAML::Node> eventTrigger(Translation& translation, const Entity& a
   std::optional<YAML::Node> own;
   {
     // Its conditions are first checked when the Act starts (a rising one that holds then never fires).
-    const FirstCheckAt first_check(translation, at_a_time ? constantOf((*act_start)["time"]).value_or(0.0) : 0.0);
+    const double first = at_a_time ? constantOf((*act_start)["time"]).value_or(0.0) : 0.0;
+    const bool later = act_start && (!at_a_time || first > 0.0);
+    const FirstCheckAt first_check(translation, first, later ? act_index : -1);
     own = startTrigger(translation, actor, event, note);
   }
   if (!own || !act_start) return std::nullopt;

@@ -130,6 +130,9 @@ struct Translation {
   /// s: when the conditions being read are first checked: 0, or the start of the Act whose
   /// Event they start (esmini checks an Event's conditions only while its Act runs).
   double firstCheck = 0.0;
+  /// The Act (index into acts) that starts later than t = 0 whose Event's conditions are being
+  /// read; -1: none (or an Act that runs from t = 0).
+  int laterAct = -1;
   std::set<std::string> usedIds = {"ego"};
   double duration = 0.0;  ///< s; 0: not known from the file
   /// s: the first ActivateControllerAction of the Ego in the Story (none: it drives from t = 0).
