@@ -421,8 +421,9 @@ YAML::Node objectPlace(Translation& translation, const pugi::xml_node& position)
     item["dy"] = num(dy);
     return item;
   }
-  const double cos_h = std::cos(frameHeading(translation.road));
-  const double sin_h = std::sin(frameHeading(translation.road));
+  const double heading = frameHeading(translation.road);
+  const double cos_h = std::cos(heading);
+  const double sin_h = std::sin(heading);
   item["dx"] = num(cos_h * dx + sin_h * dy);
   item["dy"] = num(-sin_h * dx + cos_h * dy);
   item["axes"] = "frame";

@@ -129,19 +129,6 @@ namespace {
 /// of margin that keeps the chords inside.
 constexpr double kMaxSegmentTurn = scenario::kMaxArcTurn - 1e-4;
 
-/// rad: the smallest and largest turn from the road's start over reference-line s in [0, end]
-/// (its samples, and `end` itself).
-std::pair<double, double> turnRange(const CarriagewayRoad& road, double end) {
-  double low = 0.0;
-  double high = 0.0;
-  for (const double s : road.sampleS) {
-    if (s > end) break;
-    low = std::min(low, road.turnAt(s));
-    high = std::max(high, road.turnAt(s));
-  }
-  return {std::min(low, road.turnAt(end)), std::max(high, road.turnAt(end))};
-}
-
 /// Whether the language gets the road as its arc road: lines, or arcs of one curvature, that
 /// end (or reach kMaxRegion) before they turn kMaxArcTurn. An arc that turns further becomes a
 /// polyline road, whose headings may span twice that (frameTurn).
@@ -151,11 +138,19 @@ bool asArc(const CarriagewayRoad& road) {
   return curvature == 0.0 || scenario::kMaxArcTurn / curvature >= std::min(road.languageS(road.length), kMaxRegion);
 }
 
-/// Reference-line s where the language's region of a polyline road ends: at
-/// kMaxRegion along the driving lanes' centre, at the road's end, or where its headings stop
-/// fitting in a window of twice kMaxSegmentTurn (the language's frame turned to the window's
-/// middle puts every segment within kMaxSegmentTurn of +x: frameTurn).
-double regionEndS(const CarriagewayRoad& road) {
+/// The language's region of a polyline road: the reference-line s where it ends, and the
+/// smallest and largest turn (rad) from the road's start heading over it.
+struct RegionWindow {
+  double end = 0.0;
+  double low = 0.0;
+  double high = 0.0;
+};
+
+/// The region of a polyline road: up to kMaxRegion along the driving lanes' centre, the road's
+/// end, or where its headings stop fitting in a window of twice kMaxSegmentTurn (the language's
+/// frame turned into the window puts every segment within kMaxSegmentTurn of +x: frameTurn).
+/// One pass over the road's samples, as far as the region goes.
+RegionWindow regionWindow(const CarriagewayRoad& road) {
   // Bisects [lo, hi] for the last s where `beyond` is false (beyond(lo) false, beyond(hi) true).
   const auto bisect = [](double lo, double hi, const auto& beyond) {
     for (int i = 0; i < 60; ++i) {
@@ -166,44 +161,46 @@ double regionEndS(const CarriagewayRoad& road) {
   };
   // An arc turns in proportion to s; any other road is followed through its samples.
   const bool arc = road.oneCurvature && road.curvature != 0.0;
-  double end = arc ? std::min(road.length, 2.0 * kMaxSegmentTurn / std::abs(road.curvature)) : road.length;
-  double low = 0.0;
-  double high = 0.0;
-  double before = 0.0;
-  const auto wider = [&](double at) {
+  RegionWindow window{arc ? std::min(road.length, 2.0 * kMaxSegmentTurn / std::abs(road.curvature)) : road.length};
+  // languageS grows with s wherever 1 - k t > 0, which a road whose lanes do not fold ensures.
+  const auto beyond = [&](double at) {
     const double turn = road.turnAt(at);
-    return std::max(high, turn) - std::min(low, turn) > 2.0 * kMaxSegmentTurn;
+    return std::max(window.high, turn) - std::min(window.low, turn) > 2.0 * kMaxSegmentTurn ||
+           road.languageS(at) > kMaxRegion;
   };
+  double before = 0.0;
   for (const double s : road.sampleS) {
-    if (wider(s)) {
-      end = bisect(before, s, wider);
+    if (beyond(s)) {
+      window.end = bisect(before, s, beyond);
       break;
     }
-    low = std::min(low, road.turnAt(s));
-    high = std::max(high, road.turnAt(s));
+    window.low = std::min(window.low, road.turnAt(s));
+    window.high = std::max(window.high, road.turnAt(s));
     before = s;
   }
-  // languageS grows with s wherever 1 - k t > 0, which a road whose lanes do not fold ensures.
-  if (road.languageS(end) > kMaxRegion) end = bisect(0.0, end, [&](double at) { return road.languageS(at) > kMaxRegion; });
-  return end;
+  if (road.languageS(window.end) > kMaxRegion) {
+    window.end = bisect(0.0, window.end, [&](double at) { return road.languageS(at) > kMaxRegion; });
+  }
+  window.low = std::min(window.low, road.turnAt(window.end));
+  window.high = std::max(window.high, road.turnAt(window.end));
+  return window;
 }
 
 /// rad: how far the language's +x is turned from the road's start heading: 0 where the
 /// region's headings all lie within kMaxSegmentTurn of it (an arc road, or a road that turns
 /// less), else the least turn that puts them there — a road that turns further starts heading
 /// away from +x, so that x still advances along all of its region.
-double frameTurn(const CarriagewayRoad& road) {
+double frameTurn(const CarriagewayRoad& road, const RegionWindow& window) {
   if (asArc(road)) return 0.0;
-  const auto [low, high] = turnRange(road, regionEndS(road));
-  return std::min(std::max(0.0, high - kMaxSegmentTurn), low + kMaxSegmentTurn);
+  return std::min(std::max(0.0, window.high - kMaxSegmentTurn), window.low + kMaxSegmentTurn);
 }
 
 }  // namespace
 
-double frameHeading(const CarriagewayRoad& road) { return road.heading + frameTurn(road); }
+double frameHeading(const CarriagewayRoad& road) { return road.heading + frameTurn(road, regionWindow(road)); }
 
 double regionLength(const CarriagewayRoad& road) {
-  if (!asArc(road)) return road.languageS(regionEndS(road));
+  if (!asArc(road)) return road.languageS(regionWindow(road).end);
   const double curvature = road.languageCurvature();
   double region = std::min(road.languageS(road.length), kMaxRegion);
   if (curvature != 0.0) region = std::min(region, scenario::kMaxArcTurn / std::abs(curvature));
@@ -215,11 +212,13 @@ namespace {
 /// The driving lanes' centre line over the region, within 1 cm (as the language samples its
 /// arcs), in the language's frame: starting at the origin, its +x along frameHeading.
 YAML::Node centreLineNode(const CarriagewayRoad& road) {
-  const double end = regionEndS(road);
+  const RegionWindow window = regionWindow(road);
+  const double end = window.end;
   const double t = road.centreT();
   const Vec2 origin = road.point(0.0, t);
-  const double cos_h = std::cos(frameHeading(road));
-  const double sin_h = std::sin(frameHeading(road));
+  const double heading = road.heading + frameTurn(road, window);
+  const double cos_h = std::cos(heading);
+  const double sin_h = std::sin(heading);
   YAML::Node points;
   auto add = [&](double s) {
     const Vec2 d = road.point(s, t) - origin;
