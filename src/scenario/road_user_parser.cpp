@@ -391,8 +391,8 @@ void parseTrigger(const YamlReader& reader, const YAML::Node& node, const std::s
                   const std::vector<std::string>& inputs, bool delay_allowed, TriggerSpec& trigger) {
   trigger.where = reader.where(node, field);
   reader.requireMap(node, field);
-  std::set<std::string> allowed = {"to",    "of",     "between", "measure", "from",
-                                   "position", "delay", "rising",  "falling", "last"};
+  std::set<std::string> allowed = {"to", "of", "between", "measure", "from", "position", "delay", "rising", "falling",
+                                   "last"};
   std::vector<std::string> keys;
   for (const auto& entry : kTriggerKeys) {
     allowed.insert(entry.key);

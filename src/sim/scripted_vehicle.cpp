@@ -237,6 +237,10 @@ struct ScriptedTraffic::Impl {
   bool conditionHolds(const scenario::ConcreteTrigger& trigger, int owner, const VehicleState& ego) const;
   void rearmEnded();
   double awaitedEnd(const scenario::ConcreteTrigger& trigger) const;
+  /// When a time or after trigger fires (s), its delay included; NaN before its action's end is known.
+  double momentOf(const scenario::ConcreteTrigger& trigger) const {
+    return (trigger.kind == TriggerSpec::Kind::Time ? trigger.value : awaitedEnd(trigger)) + trigger.delay;
+  }
   /// Its edge conditions (rising, falling; and its members') as if never checked.
   void forgetEdges(const scenario::ConcreteTrigger& trigger) const;
   double fireTime(const scenario::ConcreteTrigger& trigger, int owner, const VehicleState& ego) const;
@@ -516,8 +520,7 @@ bool ScriptedTraffic::Impl::conditionHolds(const scenario::ConcreteTrigger& trig
 /// action's end exactly, `any` at its earliest member, any other at this instant; plus delays.
 double ScriptedTraffic::Impl::fireTime(const scenario::ConcreteTrigger& trigger, int owner,
                                        const VehicleState& ego) const {
-  if (trigger.kind == TriggerSpec::Kind::Time) return trigger.value + trigger.delay;
-  if (trigger.kind == TriggerSpec::Kind::After) return awaitedEnd(trigger) + trigger.delay;
+  if (trigger.kind == TriggerSpec::Kind::Time || trigger.kind == TriggerSpec::Kind::After) return momentOf(trigger);
   if (trigger.kind == TriggerSpec::Kind::Any) {
     double earliest = kNaN;
     for (const auto& member : trigger.members) {
@@ -603,8 +606,7 @@ void ScriptedTraffic::Impl::rearmEnded() {
     scheduled[a] = kNaN;
     forgetEdges(trigger);
     if (trigger.kind == TriggerSpec::Kind::Time || trigger.kind == TriggerSpec::Kind::After) {
-      const bool at_time = trigger.kind == TriggerSpec::Kind::Time;
-      const double moment = (at_time ? trigger.value : awaitedEnd(trigger)) + trigger.delay;
+      const double moment = momentOf(trigger);
       if (!std::isnan(moment)) scheduled[a] = std::max(now, moment);
     }
   }
