@@ -965,15 +965,16 @@ bool isMoment(const YAML::Node& trigger) {
   return true;
 }
 
-/// `moment` with the delay of an `all` on each of its members instead (a later moment each): it
-/// holds at the same instants, and an action repeated on it starts again at its end without
-/// waiting the delay again (as esmini restarts an Event whose Act has started).
+/// `moment` with the delay of an `all` added to each of its members' instead (a later moment
+/// each): it holds at the same instants, and an action repeated on it starts again at its end
+/// without waiting the delay again (as esmini restarts an Event whose Act has started).
 YAML::Node delayOnMembers(const YAML::Node& moment) {
   if (!moment["all"] || !moment["delay"]) return moment;
   YAML::Node result;
   for (const YAML::Node& member : moment["all"]) {
     YAML::Node copy = YAML::Clone(member);
-    copy["delay"] = moment["delay"].as<std::string>();
+    const double own = member["delay"] ? member["delay"].as<double>() : 0.0;
+    copy["delay"] = num(own + moment["delay"].as<double>());
     result["all"].push_back(copy);
   }
   return result;

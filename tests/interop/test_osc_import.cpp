@@ -2776,6 +2776,18 @@ std::string runnerStepsToFive(const std::string& conditions) {
 
 }  // namespace
 
+/// A third Act: Lead steps to 10 m/s 0.5 s after the Act "Later" starts.
+const std::string kLastAct = R"(<Act name="Last"><ManeuverGroup maximumExecutionCount="1" name="LeadGroup">
+      <Actors selectTriggeringEntities="false"><EntityRef entityRef="Lead"/></Actors>
+      <Maneuver name="LeadManeuver"><Event name="LeadStep" priority="parallel"><Action name="LeadStepDown">
+        <PrivateAction><LongitudinalAction><SpeedAction>
+          <SpeedActionDynamics dynamicsShape="step" dynamicsDimension="time" value="0"/>
+          <SpeedActionTarget><AbsoluteTargetSpeed value="10"/></SpeedActionTarget>
+        </SpeedAction></LongitudinalAction></PrivateAction></Action></Event></Maneuver></ManeuverGroup>
+      <StartTrigger><ConditionGroup><Condition name="AfterLater" delay="0.5" conditionEdge="rising"><ByValueCondition>
+        <StoryboardElementStateCondition storyboardElementType="act" storyboardElementRef="Later"
+        state="startTransition"/></ByValueCondition></Condition></ConditionGroup></StartTrigger></Act>)";
+
 // An Act ends when its repeated Event has run its last time (esmini completes an Event after its
 // maximumExecutionCount runs: `after` with `last: true`); in the Act that starts then, an Event
 // without a condition of its own runs twice back to back (esmini restarts it at once) and one with
@@ -2799,12 +2811,17 @@ TEST(OscRun, AnActEndsAfterItsRepeatedEventsLastRunAndTheNextChecksItsEventsFrom
                             speedDeltaEvent("Nudge", "Slow", 1, 2, "<StartTrigger>" + always + "</StartTrigger>") +
                             speedDeltaEvent("Warm", "Runner", 1, 2, "<StartTrigger>" + always + "</StartTrigger>") +
                             R"(</Act><Act name="Later">)" + speedDeltaEvent("Hold", "Slow", -1, 2, "<StartTrigger/>") +
-                            runnerStepsToFive(below) + after_act + "</Act></Story>";
+                            runnerStepsToFive(below) + after_act + "</Act>" + kLastAct + "</Story>";
   text.replace(story_begin, story_end - story_begin, story);
   const auto folder = folderWith({{"acts.xosc", text}});
   const auto logical = importTemplate(folder->path() / "acts.xosc", {});
   const auto& hold = other(*logical, "Slow").actions.at(1);
   EXPECT_EQ(hold.repeat, 2);
+  // An Act that starts 0.5 s after "Later" starts: 1.5 s after each of those ends.
+  const auto& lead_step = other(*logical, "Lead").actions.back().trigger;
+  ASSERT_EQ(lead_step.kind, scenario::TriggerSpec::Kind::All);
+  ASSERT_EQ(lead_step.members.size(), 2u);
+  for (const auto& member : lead_step.members) EXPECT_DOUBLE_EQ(member.delay.evaluate({}), 1.5);
   // The Act's start: 1 s after the last runs of both Events, the delay on each (so Hold's second
   // run does not wait it again).
   ASSERT_EQ(hold.trigger.kind, scenario::TriggerSpec::Kind::All);
