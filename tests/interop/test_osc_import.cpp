@@ -2760,33 +2760,35 @@ std::string speedDeltaEvent(const std::string& name, const std::string& actor, d
                      name, actor, delta, runs, start);
 }
 
+/// A Maneuver Group of `actor` with one Event `event` whose action `action` steps its speed to
+/// `speed` m/s, started by `start` (a StartTrigger, or empty: with its Act).
+std::string speedStepGroup(const std::string& actor, const std::string& event, const std::string& action, double speed,
+                           const std::string& start) {
+  return fmt::format(R"(<ManeuverGroup maximumExecutionCount="1" name="{0}Group">
+      <Actors selectTriggeringEntities="false"><EntityRef entityRef="{0}"/></Actors>
+      <Maneuver name="{0}Maneuver"><Event name="{1}" priority="parallel"><Action name="{2}">
+        <PrivateAction><LongitudinalAction><SpeedAction>
+          <SpeedActionDynamics dynamicsShape="step" dynamicsDimension="time" value="0"/>
+          <SpeedActionTarget><AbsoluteTargetSpeed value="{3}"/></SpeedActionTarget>
+        </SpeedAction></LongitudinalAction></PrivateAction></Action>{4}</Event></Maneuver></ManeuverGroup>)",
+                     actor, event, action, speed, start);
+}
+
 /// A Maneuver Group of Runner: an Event "Late" that steps its speed to 5 m/s, started by the
 /// `conditions` (ConditionGroups).
 std::string runnerStepsToFive(const std::string& conditions) {
-  return R"(<ManeuverGroup maximumExecutionCount="1" name="RunnerGroup">
-      <Actors selectTriggeringEntities="false"><EntityRef entityRef="Runner"/></Actors>
-      <Maneuver name="RunnerManeuver"><Event name="Late" priority="parallel"><Action name="RunnerStep">
-        <PrivateAction><LongitudinalAction><SpeedAction>
-          <SpeedActionDynamics dynamicsShape="step" dynamicsDimension="time" value="0"/>
-          <SpeedActionTarget><AbsoluteTargetSpeed value="5"/></SpeedActionTarget>
-        </SpeedAction></LongitudinalAction></PrivateAction></Action>
-        <StartTrigger>)" +
-         conditions + "</StartTrigger></Event></Maneuver></ManeuverGroup>";
+  return speedStepGroup("Runner", "Late", "RunnerStep", 5, "<StartTrigger>" + conditions + "</StartTrigger>");
+}
+
+/// A third Act: Lead steps to 10 m/s 0.5 s after the Act "Later" starts.
+std::string lastAct() {
+  return R"(<Act name="Last">)" + speedStepGroup("Lead", "LeadStep", "LeadStepDown", 10, "") +
+         R"(<StartTrigger><ConditionGroup><Condition name="AfterLater" delay="0.5" conditionEdge="rising">
+      <ByValueCondition><StoryboardElementStateCondition storyboardElementType="act" storyboardElementRef="Later"
+      state="startTransition"/></ByValueCondition></Condition></ConditionGroup></StartTrigger></Act>)";
 }
 
 }  // namespace
-
-/// A third Act: Lead steps to 10 m/s 0.5 s after the Act "Later" starts.
-const std::string kLastAct = R"(<Act name="Last"><ManeuverGroup maximumExecutionCount="1" name="LeadGroup">
-      <Actors selectTriggeringEntities="false"><EntityRef entityRef="Lead"/></Actors>
-      <Maneuver name="LeadManeuver"><Event name="LeadStep" priority="parallel"><Action name="LeadStepDown">
-        <PrivateAction><LongitudinalAction><SpeedAction>
-          <SpeedActionDynamics dynamicsShape="step" dynamicsDimension="time" value="0"/>
-          <SpeedActionTarget><AbsoluteTargetSpeed value="10"/></SpeedActionTarget>
-        </SpeedAction></LongitudinalAction></PrivateAction></Action></Event></Maneuver></ManeuverGroup>
-      <StartTrigger><ConditionGroup><Condition name="AfterLater" delay="0.5" conditionEdge="rising"><ByValueCondition>
-        <StoryboardElementStateCondition storyboardElementType="act" storyboardElementRef="Later"
-        state="startTransition"/></ByValueCondition></Condition></ConditionGroup></StartTrigger></Act>)";
 
 // An Act ends when its repeated Event has run its last time (esmini completes an Event after its
 // maximumExecutionCount runs: `after` with `last: true`); in the Act that starts then, an Event
@@ -2811,7 +2813,7 @@ TEST(OscRun, AnActEndsAfterItsRepeatedEventsLastRunAndTheNextChecksItsEventsFrom
                             speedDeltaEvent("Nudge", "Slow", 1, 2, "<StartTrigger>" + always + "</StartTrigger>") +
                             speedDeltaEvent("Warm", "Runner", 1, 2, "<StartTrigger>" + always + "</StartTrigger>") +
                             R"(</Act><Act name="Later">)" + speedDeltaEvent("Hold", "Slow", -1, 2, "<StartTrigger/>") +
-                            runnerStepsToFive(below) + after_act + "</Act>" + kLastAct + "</Story>";
+                            runnerStepsToFive(below) + after_act + "</Act>" + lastAct() + "</Story>";
   text.replace(story_begin, story_end - story_begin, story);
   const auto folder = folderWith({{"acts.xosc", text}});
   const auto logical = importTemplate(folder->path() / "acts.xosc", {});
