@@ -811,9 +811,10 @@ YAML::Node motionLeaf(Translation& translation, const Entity& actor, const Entit
     trigger = distanceLeaf(translation, subject, condition);
   } else if (kind == "EndOfRoadCondition") {
     reader.requireSubset(condition, {});
-    if (translation.road.languageS(translation.road.length) > regionLength(translation.road) + 1e-6) {
+    const double region = regionLength(translation.road);
+    if (translation.road.languageS(translation.road.length) > region + 1e-6) {
       reader.fail(condition, fmt::format("the road goes on beyond vsd-sumo's region ({} m): the language's end of road is "
-                                         "the region's end", num(regionLength(translation.road))));
+                                         "the region's end", num(region)));
     }
     trigger["end_of_road"] = num(reader.number(condition, "duration", NumberRange::atLeast(0.0)));
     const double front = subject.centreAhead + 0.5 * subject.length;  // m ahead of its reference point
@@ -1433,9 +1434,18 @@ bool waitsForItsAct(const Translation& translation, const Translation::ActRecord
 /// An Event's own trigger checked from `start` (a time, s) on, as OpenSCENARIO checks the
 /// conditions of an Event once its Act runs: a time becomes the later of the two; any other
 /// condition must hold at or after `start` (an `all` with it); a delay stays the condition's.
+/// Condition groups without delays wait for the start together (an `all` of it and their `any`,
+/// which a repeated action can restart on); each group with a delay waits for it on its own.
 YAML::Node fromTime(const YAML::Node& start, const YAML::Node& own) {
   YAML::Node result;
   if (own["any"]) {
+    const bool delays = std::any_of(own["any"].begin(), own["any"].end(),
+                                    [](const YAML::Node& member) { return bool(member["delay"]); });
+    if (!delays) {
+      result["all"].push_back(YAML::Clone(start));
+      result["all"].push_back(YAML::Clone(own));
+      return result;
+    }
     for (const YAML::Node& member : own["any"]) result["any"].push_back(fromTime(start, member));
     return result;
   }
@@ -1596,23 +1606,42 @@ bool restartsOn(const YAML::Node& trigger) {
   return true;
 }
 
+/// Why an Event's own moment (a ByValueCondition) starts it once only, where esmini, after a run,
+/// resets its conditions and checks them again: a storyboard element's state; an edge, which
+/// rises once (esmini keeps a condition's last value through the reset); a delay, which esmini
+/// waits again from the run's end while the language's moment restarts at once. nullopt: a
+/// simulation time reached, or a parameter comparison that holds, with conditionEdge="none" and
+/// no delay, holds on, and the action starts again at its end, as the language restarts it.
+std::optional<std::string> startsOnceBecause(const xml::Reader& reader, const pugi::xml_node& condition) {
+  const pugi::xml_node by_value = condition.child("ByValueCondition");
+  if (!by_value) return std::nullopt;
+  if (by_value.child("StoryboardElementStateCondition")) return std::string("a storyboard element's state");
+  const std::string kind = by_value.child("SimulationTimeCondition") ? "a simulation time" : "a parameter comparison";
+  const std::string edge = condition.attribute("conditionEdge").value();
+  if (edge != "none") return fmt::format("conditionEdge=\"{}\" on {}: it changes once", edge, kind);
+  const double delay = reader.number(condition, "delay", NumberRange::atLeast(0.0));
+  if (delay > 0.0) {
+    return fmt::format("a delay of {} s on {}: esmini waits it again after each run", xml::number(delay), kind);
+  }
+  return std::nullopt;
+}
+
 /// An Event that runs several times (maximumExecutionCount > 1) restarts as esmini restarts it
 /// after resetting its conditions: one without conditions of its own at once (the language's
 /// action on its Act's start, a moment that has come, starts again at its end), one with
-/// conditions when they hold again. Conditions of its own that are moments (a time, a state)
-/// are refused: esmini would restart at once, waiting their delay again, or never, rising.
+/// conditions when they hold again. Moments of its own are read as startsOnceBecause says.
 void requireRepeatable(const Translation& translation, const PendingEvent& event, const YAML::Node& trigger) {
-  bool own_moment = false;
+  std::optional<std::string> once;
   for (const pugi::xml_node& group : event.node.child("StartTrigger").children("ConditionGroup")) {
     for (const pugi::xml_node& condition : group.children("Condition")) {
-      own_moment = own_moment || condition.child("ByValueCondition");
+      if (!once) once = startsOnceBecause(translation.reader, condition);
     }
   }
-  if (own_moment || !restartsOn(trigger)) {
-    translation.reader.fail(event.node, fmt::format("maximumExecutionCount={} with a start that happens once (a "
-                                                    "simulation time or a storyboard element's state): the language "
-                                                    "repeats an action when its condition holds again",
-                                                    event.executions));
+  if (!once && !restartsOn(trigger)) once = "a time or an action's end in one of several condition groups";
+  if (once) {
+    translation.reader.fail(event.node, fmt::format("maximumExecutionCount={} with a start that happens once ({}): "
+                                                    "the language repeats an action when its condition holds again",
+                                                    event.executions, *once));
   }
 }
 

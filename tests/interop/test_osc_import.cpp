@@ -689,10 +689,10 @@ TEST(OscImport, CubicDynamicsAreTheLanguagesCubicShape) {
                  R"(<LaneOffsetActionDynamics dynamicsShape="linear")")}});
   EXPECT_EQ(other(*importTemplate(dir->path() / "cubic.xosc", {}), "Cutter").actions[1].shape,
             scenario::TransitionShape::Cubic);
-  const auto& swerve = other(*importTemplate(dir->path() / "swerve.xosc", {}), "Cutter").actions[2];
+  const auto swerve = other(*importTemplate(dir->path() / "swerve.xosc", {}), "Cutter").actions[2];
   EXPECT_EQ(swerve.shape, scenario::TransitionShape::Cubic);
   EXPECT_EQ(swerve.pace, scenario::ActionSpec::Pace::LateralAccel);
-  const auto& linear = other(*importTemplate(dir->path() / "linear.xosc", {}), "Cutter").actions[2];
+  const auto linear = other(*importTemplate(dir->path() / "linear.xosc", {}), "Cutter").actions[2];
   EXPECT_EQ(linear.shape, scenario::TransitionShape::Linear);
   EXPECT_EQ(linear.pace, scenario::ActionSpec::Pace::LateralAccel);
 }
@@ -2906,7 +2906,7 @@ TEST(OscImport, AnEventsMaximumExecutionCountRepeatsItsAction) {
         storyboardElementRef="{}" state="{}"/></ByValueCondition></Condition></ConditionGroup>)",
                                                                     type, element, state)));
     const auto states = folderWith({{"states.xosc", text}});
-    const auto& late = other(*importTemplate(states->path() / "states.xosc", {}), "Runner").actions.at(0).trigger;
+    const auto late = other(*importTemplate(states->path() / "states.xosc", {}), "Runner").actions.at(0).trigger;
     EXPECT_EQ(late.kind, scenario::TriggerSpec::Kind::After) << type << " " << state;
     EXPECT_EQ(late.action, "StepDown") << type << " " << state;
     EXPECT_EQ(late.lastRun, last) << type << " " << state;
@@ -2916,9 +2916,49 @@ TEST(OscImport, AnEventsMaximumExecutionCountRepeatsItsAction) {
       <SpeedActionDynamics dynamicsShape="step" dynamicsDimension="time" value="0"/>
       <SpeedActionTarget><AbsoluteTargetSpeed value="12"/></SpeedActionTarget></SpeedAction></LongitudinalAction>
       </PrivateAction></Action>)";
+  // A simulation time reached holds on: esmini, resetting the Event's conditions after a run,
+  // starts it again at once, as the language restarts an action on a moment at its end. With
+  // an edge it rises once (esmini keeps the last value through the reset), with a delay esmini
+  // waits that again: refused, as is a state.
+  const auto at_three =
+      folderWith({{"at_three.xosc", with(R"(maximumExecutionCount="2")", group(timeCondition("3")))}});
+  const auto timed_logical = importTemplate(at_three->path() / "at_three.xosc", {});
+  const auto& timed = other(*timed_logical, "Lead").actions.at(1);
+  EXPECT_EQ(timed.repeat, 2);
+  EXPECT_EQ(timed.trigger.kind, scenario::TriggerSpec::Kind::Time);
+  EXPECT_DOUBLE_EQ(timed.trigger.value.evaluate({}), 3.0);
+  // Two condition groups in an Act that starts at 2 s: all of the Act's start and either group,
+  // which can hold again after a run (the start put into each group would be a time inside `any`).
+  const std::string slow = group(entityCondition("Lead", R"(<SpeedCondition value="5" rule="lessThan"/>)"));
+  std::string later = with(R"(maximumExecutionCount="2")", speed + slow);
+  later.insert(later.find("</Act>"), "<StartTrigger>" + group(timeCondition("2")) + "</StartTrigger>");
+  const auto later_folder = folderWith({{"later.xosc", later}});
+  const auto later_logical = importTemplate(later_folder->path() / "later.xosc", {});
+  const auto& either = other(*later_logical, "Lead").actions.at(1);
+  EXPECT_EQ(either.repeat, 2);
+  ASSERT_EQ(either.trigger.kind, scenario::TriggerSpec::Kind::All);
+  ASSERT_EQ(either.trigger.members.size(), 2u);
+  EXPECT_EQ(either.trigger.members[0].kind, scenario::TriggerSpec::Kind::Time);
+  EXPECT_DOUBLE_EQ(either.trigger.members[0].value.evaluate({}), 2.0);
+  EXPECT_EQ(either.trigger.members[1].kind, scenario::TriggerSpec::Kind::Any);
+  EXPECT_EQ(either.trigger.members[1].members.size(), 2u);
+  const auto time_with = [](const std::string& edge, const std::string& delay) {
+    return group(fmt::format(R"(<Condition name="t" delay="{}" conditionEdge="{}"><ByValueCondition>
+        <SimulationTimeCondition value="3" rule="greaterOrEqual"/></ByValueCondition></Condition>)",
+                             delay, edge));
+  };
+  const std::string state = group(R"(<Condition name="s" delay="0" conditionEdge="none"><ByValueCondition>
+      <StoryboardElementStateCondition storyboardElementType="act" storyboardElementRef="Act" state="startTransition"/>
+      </ByValueCondition></Condition>)");
   const std::vector<std::pair<std::string, std::string>> refused = {
-      {with(R"(maximumExecutionCount="2")", group(timeCondition("3"))),
-       "maximumExecutionCount=2 with a start that happens once (a simulation time or a storyboard element's state)"},
+      {with(R"(maximumExecutionCount="2")", time_with("rising", "0")),
+       "maximumExecutionCount=2 with a start that happens once (conditionEdge=\"rising\" on a simulation time: it "
+       "changes once)"},
+      {with(R"(maximumExecutionCount="2")", time_with("none", "1.5")),
+       "(a delay of 1.5 s on a simulation time: esmini waits it again after each run)"},
+      {with(R"(maximumExecutionCount="2")", state), "(a storyboard element's state)"},
+      {with(R"(maximumExecutionCount="2")", time_with("none", "0") + speed),
+       "(a time or an action's end in one of several condition groups)"},
       {with(R"(maximumExecutionCount="2.5")", speed),
        "maximumExecutionCount=2.5: expected a whole number 1 .. 1000000"},
       {with(R"(maximumExecutionCount="0")", speed), "maximumExecutionCount=0: expected a whole number"},
