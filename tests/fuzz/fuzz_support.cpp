@@ -199,6 +199,30 @@ void checkLeftovers(const Case& c, std::vector<std::string>& problems) {
 
 }  // namespace
 
+namespace {
+
+/// The run's own TMPDIR (a fresh folder under `work`) as an environment entry.
+std::vector<std::string> withTemporaryDirectory(std::vector<std::string> environment, const fs::path& scratch) {
+  fs::remove_all(scratch);
+  fs::create_directories(scratch);
+  environment.push_back("TMPDIR=" + scratch.string());
+  return environment;
+}
+
+/// A run that ended by itself, or by a signal it handles, leaves its TMPDIR as it found it
+/// (empty): scratch folders are removed on errors and interruptions too. A SIGKILL leaves them.
+void checkTemporaryDirectory(const RunResult& run, const fs::path& scratch, std::vector<std::string>& problems) {
+  if (run.exited) {
+    for (const auto& entry : fs::directory_iterator(scratch)) {
+      problems.push_back(
+          fmt::format("left in TMPDIR after exit {}: {}", run.exitCode, entry.path().filename().string()));
+    }
+  }
+  fs::remove_all(scratch);
+}
+
+}  // namespace
+
 Verdict runCase(const Case& c, const fs::path& work) {
   Verdict verdict;
   verdict.name = c.name;
@@ -206,7 +230,9 @@ Verdict runCase(const Case& c, const fs::path& work) {
   for (const auto& output : c.outputs) before.push_back(Snapshot::of(output));
   std::vector<Snapshot> aimed_at;
   for (const auto& path : c.untouched) aimed_at.push_back(Snapshot::of(path));
-  const RunResult run = runWatched(vsdArgv(c), work, c.timeout, c.environment);
+  const fs::path scratch = work / "tmp";
+  const RunResult run = runWatched(vsdArgv(c), work, c.timeout, withTemporaryDirectory(c.environment, scratch));
+  checkTemporaryDirectory(run, scratch, verdict.problems);
   verdict.exitCode = run.exitCode;
   verdict.seconds = run.seconds;
   verdict.peakMiB = run.peakMiB;
@@ -228,7 +254,10 @@ Verdict runCase(const Case& c, const fs::path& work) {
     again.expectKill = false;
     std::vector<Snapshot> now;
     for (const auto& output : c.outputs) now.push_back(Snapshot::of(output));
-    const RunResult next = runWatched(vsdArgv(again), work / "next", c.timeout);
+    const fs::path next_scratch = work / "next" / "tmp";
+    const RunResult next =
+        runWatched(vsdArgv(again), work / "next", c.timeout, withTemporaryDirectory({}, next_scratch));
+    checkTemporaryDirectory(next, next_scratch, problems);
     verdict.seconds += next.seconds;
     verdict.peakMiB = std::max(verdict.peakMiB, next.peakMiB);
     if (!next.exited || next.exitCode != 0) {

@@ -47,9 +47,13 @@ RunOptions smallRun(const fs::path& out, std::uint64_t seed, int jobs) {
 /// Runs `work` in a forked child with VSD_FAULT / VSD_FAULT_TRACE set and
 /// signals handled as by the CLI. The child exits 0 on success, 128 + signal when
 /// interrupted (also after completing), 1 on an error. Returns the wait status.
+/// Its TMPDIR is a folder of its own: a child that exits (on an error or signal too) must
+/// leave it empty; what a SIGKILL leaves there is removed with it.
 int inChild(const std::function<void()>& work, const std::string& fault, const fs::path& trace = {}) {
+  const TemporaryDirectory scratch("vsd-child-tmp");
   const pid_t pid = ::fork();
   if (pid == 0) {
+    ::setenv("TMPDIR", scratch.path().c_str(), 1);
     ::setenv("VSD_FAULT", fault.c_str(), 1);
     ::setenv("VSD_FAULT_TRACE", trace.c_str(), 1);
     reloadFaultInjection();
@@ -68,6 +72,10 @@ int inChild(const std::function<void()>& work, const std::string& fault, const f
   }
   int status = 0;
   ::waitpid(pid, &status, 0);
+  if (WIFEXITED(status)) {
+    EXPECT_TRUE(fs::is_empty(scratch.path())) << "exit " << WEXITSTATUS(status) << " with '" << fault
+                                               << "' left a scratch folder in TMPDIR";
+  }
   return status;
 }
 

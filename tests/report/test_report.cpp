@@ -205,7 +205,10 @@ TEST(ReportHtml, RendersInHeadlessChromiumWithoutJavaScriptErrors) {
   const auto c = syntheticComparison();
   const auto page = dir.path() / "index.html";
   writeTextFileAtomically(page, renderHtmlReport(c, computeStatistics(c), {{17, "caption", sceneSvgStub()}}));
-  const std::vector<std::string> common = {"/usr/bin/chromium", "--headless", "--no-sandbox", "--disable-gpu",
+  // Chromium's own scratch (org.chromium.Chromium.*) goes inside the test's folder, not /tmp.
+  fs::create_directories(dir.path() / "tmp");
+  const std::vector<std::string> common = {"/usr/bin/env", "TMPDIR=" + (dir.path() / "tmp").string(),
+                                           "/usr/bin/chromium", "--headless", "--no-sandbox", "--disable-gpu",
                                            "--no-first-run", "--disable-background-networking",
                                            "--disable-component-update", "--disable-sync", "--enable-logging=stderr",
                                            "--v=0", "--user-data-dir=" + (dir.path() / "profile").string()};
