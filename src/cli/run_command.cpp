@@ -32,8 +32,9 @@ void addImportOptions(CLI::App& command, interop::OscImportOptions& import) {
   command.add_option_function<double>(
       "--duration",
       [&import](double seconds) {
+        // Thrown while the command line is parsed: a usage error (exit 2), as CLI11's own checks are.
         if (!(seconds > 0.0 && std::isfinite(seconds))) {
-          throw ConfigError::field("command line", "--duration", fmt::format("{}", seconds), "seconds > 0");
+          throw CLI::ValidationError("--duration", fmt::format("got '{}', expected finite seconds > 0", seconds));
         }
         import.duration = seconds;
       },

@@ -6,6 +6,8 @@
 #include "vsd/core/error.hpp"
 #include "vsd/core/files.hpp"
 #include "vsd/core/log.hpp"
+#include "vsd/core/numbers.hpp"
+#include "vsd/core/progress.hpp"
 #include "vsd/scenario/concrete_scenario.hpp"
 
 namespace fs = std::filesystem;
@@ -62,7 +64,8 @@ void countSets(const ParameterGrid& grid, const OscImportOptions& options, osc::
   std::string first_skipped;
   std::string first_refused;
   std::string first_failing;
-  for (std::size_t set = 0; set < grid.sets.size(); ++set) {
+  Progress progress(fmt::format("check {}", grid.file.filename().string()), grid.sets.size(), "sets");
+  for (std::size_t set = 0; set < grid.sets.size(); ++set, progress.advance()) {
     // Sample 0 of seed 1: a check has no sweep seed, and an imported set is one concrete scenario.
     const auto verdict = osc::judgeSet(grid, options, {}, set, 1, 0);
     const std::string first = fmt::format("set {}: {}", set, verdict.message);
@@ -101,6 +104,7 @@ void countSets(const ParameterGrid& grid, const OscImportOptions& options, osc::
 }  // namespace
 
 ScenarioCheck checkOpenScenario(const fs::path& file, const OscImportOptions& options) {
+  if (options.step) checkStep(*options.step, "command line", "--step");  // a usage error, not a finding
   osc::Findings findings(/*collect=*/true);
   ScenarioCheck check;
   fs::path scenario_file = file;
@@ -124,6 +128,13 @@ ScenarioCheck checkOpenScenario(const fs::path& file, const OscImportOptions& op
   }
   osc::TranslationResult result;
   findings.attempt([&] { result = osc::translate(scenario_file, options, {}, "", findings); });
+  if (result.violated && grid) {
+    // The sets assign the values that count (each set is checked against the constraints above).
+    findings.note(scenario_file.string(), "the template's declared values violate its constraints, so its elements "
+                                          "are not checked at them: " + *result.violated);
+  } else if (result.violated) {
+    findings.refuse(*result.violated);  // as run refuses it
+  }
   if (!result.yaml.empty()) {
     findings.attempt([&] {
       const auto logical = loadTranslation(scenario_file, result.yaml);

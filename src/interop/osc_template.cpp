@@ -14,6 +14,7 @@
 #include "vsd/core/error.hpp"
 #include "vsd/core/files.hpp"
 #include "vsd/core/log.hpp"
+#include "vsd/core/numbers.hpp"
 #include "vsd/road/road_geometry.hpp"
 #include "vsd/scenario/yaml_reader.hpp"
 
@@ -541,6 +542,8 @@ void chooseCarriageway(Translation& translation, const pugi::xml_node& root) {
 /// Reads the whole file into the language. Refusals go to `findings` (and throw unless it collects).
 TranslationResult translate(const fs::path& xosc, const OscImportOptions& options, const ParameterValues& assigned,
                             const std::string& assigned_where, Findings& findings, const StringCodes& codes) {
+  // Before anything counts steps (the longest window a StopTrigger may ask for).
+  if (options.step) checkStep(*options.step, "command line", "--step");
   xml::Reader reader(xosc, read_limits::kScenario);
   const pugi::xml_node root = reader.root();
   if (std::string(root.name()) != "OpenSCENARIO") reader.fail(root, "expected the root element <OpenSCENARIO>");

@@ -11,7 +11,9 @@
 #include "osc_template.hpp"
 #include "vsd/interop/scenario_formats.hpp"
 #include "vsd/core/error.hpp"
+#include "vsd/core/fault.hpp"
 #include "vsd/core/files.hpp"
+#include "vsd/core/interrupt.hpp"
 #include "vsd/core/numbers.hpp"
 #include "vsd/core/progress.hpp"
 #include "vsd/road/road_geometry.hpp"
@@ -202,6 +204,8 @@ namespace osc {
 
 SetVerdict judgeSet(const ParameterGrid& grid, const OscImportOptions& import, const StringCodes& codes,
                     std::size_t set, std::uint64_t seed, std::uint64_t index) {
+  faultPoint("osc.set");
+  throwIfInterrupted();  // a grid of a million sets takes minutes to judge
   try {
     std::string violation;
     const auto logical = importSet(grid, import, codes, set, &violation);
@@ -229,7 +233,8 @@ std::vector<std::size_t> acceptSets(const ParameterGrid& grid, const OscImportOp
                                     const osc::StringCodes& codes, std::uint64_t seed, SweepSummary& summary) {
   summary.sets = grid.sets.size();
   std::vector<std::size_t> accepted;
-  for (std::size_t set = 0; set < grid.sets.size(); ++set) {
+  Progress progress(fmt::format("import {}", grid.file.filename().string()), grid.sets.size(), "sets");
+  for (std::size_t set = 0; set < grid.sets.size(); ++set, progress.advance()) {
     const auto verdict = osc::judgeSet(grid, import, codes, set, seed, accepted.size());
     switch (verdict.kind) {
       case osc::SetVerdict::Kind::Runs:

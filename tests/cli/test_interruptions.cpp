@@ -74,6 +74,23 @@ TEST(Interruptions, TheExitCodeSaysWhichSignalStoppedTheRun) {
   }
 }
 
+// Judging the parameter sets of a distribution (before a sweep, or all of them in a check)
+// stops at a signal: no verdict, no outputs.
+TEST(Interruptions, ASignalStopsJudgingTheSetsOfADistribution) {
+  TemporaryDirectory dir;
+  const fs::path variation = test::sourceDir() / "tests/interop/data/osc/cut_in_variation.xosc";
+  const fs::path out = dir.path() / "out";
+  for (const auto& [args, fault, code] : std::vector<std::tuple<std::vector<std::string>, std::string, int>>{
+           {{"scenario", "check", variation.string()}, "int@osc.set#3", 130},
+           {{"run", variation.string(), "--out", out.string()}, "term@osc.set#2", 143}}) {
+    const auto result = runVsd(args, dir.path(), fault);
+    EXPECT_EQ(result.exitCode, code) << fault << ": " << result.output;
+    EXPECT_NE(result.output.find("interrupted by SIG"), std::string::npos) << result.output;
+    EXPECT_EQ(result.output.find("would run"), std::string::npos) << result.output;
+    EXPECT_FALSE(fs::exists(out));
+  }
+}
+
 TEST(Interruptions, SigtermToTheParentStopsAPluginThatLoopsForever) {
   TemporaryDirectory dir;
   const fs::path plugin = test::binaryDir() / "plugins" / "libvsd_misbehaving_egos.so";

@@ -931,6 +931,29 @@ TEST(OscCli, ScenarioCheckExitStatusSaysWhetherItWouldRun) {
   EXPECT_NE(flag.exitCode, 0);
   EXPECT_THAT(flag.output, HasSubstr("--duration"));
   EXPECT_THAT(flag.output, HasSubstr("a flag for other formats than vsd-scenario"));
+  // Flag values out of range are usage errors (exit 2, one line), whatever the file.
+  for (const auto& [flag_name, value] : std::vector<std::pair<std::string, std::string>>{
+           {"--duration", "-5"}, {"--duration", "0"}, {"--step", "0"}, {"--step", "0.0005"}}) {
+    for (const char* command : {"run", "check"}) {
+      std::vector<std::string> args = {test::vsdSumo().string(), "--quiet"};
+      if (std::string(command) == "check") args.push_back("scenario");
+      args.insert(args.end(), {command, data("cut_in.xosc").string(), flag_name, value});
+      const auto out_of_range = test::run(args, dir.path());
+      EXPECT_EQ(out_of_range.exitCode, 2) << command << " " << flag_name << " " << value << ": " << out_of_range.output;
+      EXPECT_THAT(out_of_range.output, HasSubstr(flag_name + ": got '" + value + "'"));
+      EXPECT_EQ(std::count(out_of_range.output.begin(), out_of_range.output.end(), '\n'), 1) << out_of_range.output;
+    }
+  }
+  // The declared values break a constraint: `check` refuses the file as `run` does.
+  std::string fast = readTextFile(data("cut_in.xosc"));
+  fast.replace(fast.find(R"(parameterType="double" value="72")"), 33, R"(parameterType="double" value="140")");
+  const auto fast_folder = folderWith({{"fast.xosc", fast}});
+  const auto violated = test::run(
+      {test::vsdSumo().string(), "--quiet", "scenario", "check", (fast_folder->path() / "fast.xosc").string()},
+      dir.path());
+  EXPECT_EQ(violated.exitCode, 1) << violated.output;
+  EXPECT_THAT(violated.output, HasSubstr("fast.xosc:7: <ParameterDeclaration>: parameter 'Ego_Speed_kph' = '140' "
+                                         "violates its constraints"));
 }
 
 namespace {
