@@ -327,7 +327,7 @@ void addInitialSpeedActions(Translation& translation) {
         // A gradual change from the start.
         item["speed"] = speedAction(translation, entity, entity.gradualSpeed);
       } else if (const pugi::xml_node target = entity.speedTarget.child("RelativeTargetSpeed");
-                 target && reader.optionalText(target, "continuous") == std::optional<std::string>("true")) {
+                 target && reader.boolean(target, "continuous")) {
         if (&entity == translation.ego) {
           reader.fail(target, "a continuous relative speed of the Ego: its controller drives it (the language sets "
                               "its set speed, an absolute one)");

@@ -168,6 +168,17 @@ Placement resolvePosition(Translation& translation, const pugi::xml_node& positi
 
 double speedOf(Translation& translation, Entity& entity);
 
+/// Where a LongitudinalDistanceAction puts its actor: its displacement; without one, behind the
+/// referenced entity in OpenSCENARIO 1.1+ (the standard's default, esmini's too), on its own
+/// side in 1.0 (which had no such attribute).
+std::string displacementOf(const xml::Reader& reader, const pugi::xml_node& action) {
+  if (action.attribute("displacement")) {
+    return reader.oneOf(action, "displacement", {"any", "leadingReferencedEntity", "trailingReferencedEntity"});
+  }
+  const pugi::xml_node header = action.root().child("OpenSCENARIO").child("FileHeader");
+  return header.attribute("revMinor").as_int() >= 1 ? "trailingReferencedEntity" : "any";
+}
+
 /// An Init LongitudinalDistanceAction (continuous="false", no DynamicConstraints): the actor
 /// moves along the road to the gap (freespace) or distance from the referenced entity, as a
 /// player executes it at once at t = 0.
@@ -175,7 +186,7 @@ void applyDistance(Translation& translation, Entity& entity, Placement& placemen
   const xml::Reader& reader = translation.reader;
   const pugi::xml_node action = entity.distanceAction;
   reader.requireSubset(action, {});
-  if (reader.optionalText(action, "continuous").value_or("false") == "true") {
+  if (reader.boolean(action, "continuous")) {
     reader.fail(action, "continuous=\"true\": the language does not keep a distance (in the Init: continuous=\"false\")");
   }
   Entity& other = translation.entity(action, reader.text(action, "entityRef"));
@@ -184,18 +195,26 @@ void applyDistance(Translation& translation, Entity& entity, Placement& placemen
   const auto distance = reader.optionalNumber(action, "distance", NumberRange::atLeast(0.0));
   if (time_gap.has_value() == distance.has_value()) reader.fail(action, "expected one of timeGap and distance");
   double gap = distance ? *distance : *time_gap * speedOf(translation, other);
-  const bool freespace = reader.text(action, "freespace") == "true";
-  // Centre to centre along the road; reference points are what positions give.
-  const double centres = freespace ? gap + (entity.length + other.length) / 2.0 : gap;
-  const std::string side = reader.optionalText(action, "displacement").value_or("any");
+  // freespace: between the bodies (their centres that gap plus half of each length apart);
+  // else between the reference points, which positions give (OpenSCENARIO's distances).
+  const bool freespace = reader.boolean(action, "freespace");
+  const std::string side = displacementOf(reader, action);
+  const auto system = reader.optionalText(action, "coordinateSystem");
+  if (system && *system != "entity" && *system != "road" && *system != "lane") {
+    reader.fail(action,
+                fmt::format("coordinateSystem=\"{}\": the language places a road user along the road", *system));
+  }
   const double sign = side == "trailingReferencedEntity" ? -1.0
                       : side == "leadingReferencedEntity" ? 1.0
                       : (placement.s + entity.centreAhead >= base.s + other.centreAhead ? 1.0 : -1.0);
   const double stretch = 1.0 - translation.road.curvatureAt(placement.s) * placement.t;
-  placement.s = base.s + other.centreAhead + sign * centres / stretch - entity.centreAhead;
-  translation.findings.mapped(reader.where(action), fmt::format("'{}' placed {} m ({}) {} '{}'", entity.name,
-                                                                xml::number(gap), freespace ? "bumper to bumper" : "centres",
-                                                                sign > 0 ? "ahead of" : "behind", other.name));
+  placement.s = freespace ? base.s + other.centreAhead +
+                                sign * (gap + (entity.length + other.length) / 2.0) / stretch - entity.centreAhead
+                          : base.s + sign * gap / stretch;
+  translation.findings.mapped(reader.where(action),
+                              fmt::format("'{}' placed {} m ({}) {} '{}'", entity.name, xml::number(gap),
+                                          freespace ? "bumper to bumper" : "reference points",
+                                          sign > 0 ? "ahead of" : "behind", other.name));
   if (!entity.speedTarget) entity.speed = speedOf(translation, other);
 }
 

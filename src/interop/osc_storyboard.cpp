@@ -182,7 +182,7 @@ YAML::Node crossing(Translation& translation, const Entity& actor, const pugi::x
   reader.requireSubset(follow, {"TrajectoryRef", "TimeReference", "TrajectoryFollowingMode"});
   const pugi::xml_node trajectory = reader.only(reader.only(follow, "TrajectoryRef"), "Trajectory");
   reader.requireSubset(trajectory, {"Shape"});
-  if (reader.text(trajectory, "closed") != "false") reader.fail(trajectory, "a closed trajectory: a crossing ends");
+  if (reader.boolean(trajectory, "closed")) reader.fail(trajectory, "a closed trajectory: a crossing ends");
   const pugi::xml_node polyline = reader.choice(reader.only(trajectory, "Shape"), {"Polyline"});
   reader.requireSubset(polyline, {"Vertex"});
   std::vector<pugi::xml_node> vertices(polyline.children("Vertex").begin(), polyline.children("Vertex").end());
@@ -290,7 +290,7 @@ YAML::Node speedAction(Translation& translation, const Entity& actor, const pugi
     item["target"] = num(value);
     return item;
   }
-  const bool continuous = reader.oneOf(target, "continuous", {"false", "true"}) == "true";
+  const bool continuous = reader.boolean(target, "continuous");
   if (continuous && item["shape"].as<std::string>() != "step") {
     reader.fail(dynamics, fmt::format("dynamicsShape=\"{}\" with a continuous target: the language follows the other's "
                                       "speed at once (step)",
@@ -665,7 +665,7 @@ YAML::Node relationLeaf(Translation& translation, const Entity& actor, const Ent
     reference = reader.text(condition, "entityRef");
   }
   // freespace="false": between the entities' reference points (their places in the language).
-  const bool freespace = reader.oneOf(condition, "freespace", {"true", "false"}) == "true";
+  const bool freespace = reader.boolean(condition, "freespace");
   // Longitudinal is along the lane and lateral across it in any coordinate system the language
   // has (entity, road, lane: one lane frame, the entity's while it drives along the road).
   const std::string measure = measureOf(reader, condition);
@@ -673,7 +673,8 @@ YAML::Node relationLeaf(Translation& translation, const Entity& actor, const Ent
     reader.fail(condition, "relativeDistanceType=\"lateral\": a headway or time to collision across the lane (the "
                            "language measures them along the Ego's lane or in a straight line)");
   }
-  if (condition.attribute("alongRoute")) reader.oneOf(condition, "alongRoute", {"true", "false"});
+  // alongRoute (deprecated since 1.1) is read either way as the measure above, as esmini reads it.
+  reader.optionalBoolean(condition, "alongRoute");
   const auto system = reader.optionalText(condition, "coordinateSystem");
   if (system && *system != "entity" && *system != "road" && *system != "lane") {
     reader.fail(condition, fmt::format("coordinateSystem=\"{}\": the language measures along or across the Ego's "
@@ -745,9 +746,9 @@ YAML::Node placeOf(Translation& translation, const Entity& subject, const pugi::
 /// esmini's differ from it on bends). True if it measures from the body.
 bool distanceMeasure(Translation& translation, const pugi::xml_node& condition, YAML::Node& trigger) {
   const xml::Reader& reader = translation.reader;
-  const bool from_body = reader.oneOf(condition, "freespace", {"true", "false"}) == "true";
+  const bool from_body = reader.boolean(condition, "freespace");
   if (from_body) trigger["from"] = "body";
-  if (reader.optionalText(condition, "alongRoute").value_or("false") != "false") {
+  if (reader.optionalBoolean(condition, "alongRoute").value_or(false)) {
     reader.fail(condition, "alongRoute=\"true\": the language measures a distance to a position in a straight line, "
                            "or along or across the Ego's lane (relativeDistanceType)");
   }
@@ -1823,7 +1824,7 @@ void readManeuverGroup(Translation& translation, const pugi::xml_node& group, st
   }
   const pugi::xml_node actors_node = reader.only(group, "Actors");
   reader.requireSubset(actors_node, {"EntityRef"});
-  if (reader.text(actors_node, "selectTriggeringEntities") == "true") {
+  if (reader.boolean(actors_node, "selectTriggeringEntities")) {
     reader.fail(actors_node, "selectTriggeringEntities=\"true\": name the actors");
   }
   std::vector<Entity*> actors;

@@ -133,6 +133,10 @@ std::string Reader::oneOf(const pugi::xml_node& node, const char* attribute,
 
 std::optional<bool> Reader::optionalBoolean(const pugi::xml_node& node, const char* attribute) const {
   if (!node.attribute(attribute)) return std::nullopt;
+  return boolean(node, attribute);
+}
+
+bool Reader::boolean(const pugi::xml_node& node, const char* attribute) const {
   const std::string value = oneOf(node, attribute, {"true", "false", "1", "0"});
   return value == "true" || value == "1";
 }

@@ -74,6 +74,8 @@ class Reader {
   /// An xsd:boolean attribute ("true", "false", "1", "0"; any other value refused by name);
   /// std::nullopt if absent.
   std::optional<bool> optionalBoolean(const pugi::xml_node& node, const char* attribute) const;
+  /// A required xsd:boolean attribute (refused by name if missing or another value).
+  bool boolean(const pugi::xml_node& node, const char* attribute) const;
 
   /// The single child element `name`; throws ConfigError if it is missing or repeated.
   pugi::xml_node only(const pugi::xml_node& parent, const char* name) const;

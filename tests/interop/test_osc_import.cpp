@@ -553,6 +553,31 @@ TEST(OscImport, InitDistanceActionPlacesAndRateZeroLeavesTheSpeed) {
   ASSERT_EQ(cutter.actions.size(), 2u);
   EXPECT_EQ(cutter.actions[0].kind, scenario::ActionSpec::Kind::LaneChange);
   EXPECT_EQ(cutter.actions[1].kind, scenario::ActionSpec::Kind::LateralOffset);
+
+  // freespace="false": between the reference points (the Ego's 1.25 m behind its centre, the
+  // walker's at its centre); no displacement in OpenSCENARIO 1.1: behind the Ego.
+  const auto walker_with = [&](const std::string& attributes) {
+    std::string variant = text;
+    const std::string from =
+        R"(timeGap="2" freespace="true" continuous="false" displacement="leadingReferencedEntity")";
+    variant.replace(variant.find(from), from.size(), attributes);
+    const auto folder = folderWith({{"variant.xosc", variant}});
+    return other(*importTemplate(folder->path() / "variant.xosc", {}), "Walker").alongValue.evaluate({});
+  };
+  const std::string ahead = R"(displacement="leadingReferencedEntity")";
+  EXPECT_DOUBLE_EQ(walker_with(R"(distance="30" freespace="false" continuous="0" )" + ahead), 50.0);  // 20 + 30
+  EXPECT_DOUBLE_EQ(walker_with(R"(distance="10" freespace="0" continuous="false")"), 10.0);  // 20 - 10
+  // xsd:boolean reads 1 and 0 as true and false, and nothing else.
+  const std::vector<std::pair<std::string, std::string>> refused = {
+      {R"(distance="10" freespace="false" continuous="1")",
+       R"(continuous="true": the language does not keep a distance)"},
+      {R"(distance="10" freespace="False" continuous="false")",
+       R"(attribute freespace="False" is outside the supported subset (supported: true, false, 1, 0))"},
+      {R"(distance="10" freespace="false" continuous="false" coordinateSystem="trajectory")",
+       R"(coordinateSystem="trajectory": the language places a road user along the road)"}};
+  for (const auto& [attributes, message] : refused) {
+    EXPECT_THAT(test::configErrorOf([&] { walker_with(attributes); }), HasSubstr(message)) << attributes;
+  }
 }
 
 TEST(OscVariation, GridIsTheProductInFileOrder) {
