@@ -48,6 +48,33 @@ struct Body {
   double width = 0.0;
 };
 
+/// The numbers of an object the language does not simulate (its mass, height, Performance,
+/// Axles) are still numbers: a bad one is refused by name, as any other (esmini reads it as 0).
+void checkNumbersNotSimulated(const xml::Reader& reader, const pugi::xml_node& object) {
+  reader.optionalNumber(object, "mass", NumberRange::atLeast(0.0));
+  const pugi::xml_node box = object.child("BoundingBox");
+  reader.number(box.child("Dimensions"), "height", NumberRange::atLeast(0.0));
+  reader.number(box.child("Center"), "z");
+  if (const pugi::xml_node performance = object.child("Performance")) {
+    reader.requireSubset(performance, {});
+    for (const char* limit : {"maxSpeed", "maxAcceleration", "maxDeceleration"}) {
+      reader.number(performance, limit, NumberRange::atLeast(0.0));
+    }
+    for (const char* rate : {"maxAccelerationRate", "maxDecelerationRate"}) {
+      reader.optionalNumber(performance, rate, NumberRange::atLeast(0.0));
+    }
+  }
+  if (object.child("Axles")) reader.requireSubset(object.child("Axles"), {"FrontAxle", "RearAxle", "AdditionalAxle"});
+  for (const pugi::xml_node& axle : object.child("Axles").children()) {
+    if (axle.type() != pugi::node_element) continue;
+    reader.requireSubset(axle, {});
+    for (const char* size : {"maxSteering", "wheelDiameter", "trackWidth"}) {
+      reader.number(axle, size, NumberRange::atLeast(0.0));
+    }
+    for (const char* place : {"positionX", "positionZ"}) reader.number(axle, place);
+  }
+}
+
 /// The <BoundingBox> of a <Vehicle>, <Pedestrian> or <MiscObject>.
 Body boxOf(const xml::Reader& reader, const pugi::xml_node& object) {
   const pugi::xml_node box = reader.only(object, "BoundingBox");
@@ -55,6 +82,7 @@ Body boxOf(const xml::Reader& reader, const pugi::xml_node& object) {
   const pugi::xml_node dimensions = reader.only(box, "Dimensions");
   const double length = reader.number(dimensions, "length", scenario_bounds::kVehicleLength);
   const double width = reader.number(dimensions, "width", scenario_bounds::kVehicleWidth);
+  checkNumbersNotSimulated(reader, object);
   const pugi::xml_node centre = reader.only(box, "Center");
   const double ahead = reader.number(centre, "x", NumberRange::closed(-100.0, 100.0));
   if (std::abs(reader.number(centre, "y")) > kAxisTolerance) {

@@ -13,31 +13,46 @@ namespace vsd::interop::osc {
 
 namespace {
 
-enum class Type { Real, Whole, Boolean, Text };
+enum class Kind { Real, Whole, Boolean, Text };
+
+/// A declared parameterType: its kind and, for whole numbers, the values the type holds.
+struct Type {
+  Kind kind = Kind::Text;
+  double lowest = 0.0;
+  double highest = 0.0;
+  const char* name = "";
+};
 
 Type typeOf(const xml::Reader& reader, const pugi::xml_node& declaration) {
   const std::string type = reader.oneOf(declaration, "parameterType",
                                         {"double", "int", "integer", "unsignedInt", "unsignedShort", "string",
                                          "boolean", "dateTime"});
-  if (type == "double") return Type::Real;
-  if (type == "boolean") return Type::Boolean;
-  if (type == "string" || type == "dateTime") return Type::Text;
-  return Type::Whole;
+  if (type == "double") return {Kind::Real};
+  if (type == "boolean") return {Kind::Boolean};
+  if (type == "string" || type == "dateTime") return {Kind::Text};
+  if (type == "unsignedInt") return {Kind::Whole, 0.0, 4294967295.0, "an unsignedInt"};
+  if (type == "unsignedShort") return {Kind::Whole, 0.0, 65535.0, "an unsignedShort"};
+  return {Kind::Whole, -2147483648.0, 2147483647.0, "an int"};
 }
 
 /// Checks `value` against the declared type; returns it as a number for numeric types.
-std::optional<double> typed(Type type, const std::string& value, const std::string& where, const std::string& name) {
-  switch (type) {
-    case Type::Text:
+std::optional<double> typed(const Type& type, const std::string& value, const std::string& where,
+                            const std::string& name) {
+  switch (type.kind) {
+    case Kind::Text:
       return std::nullopt;
-    case Type::Boolean:
+    case Kind::Boolean:
       if (value != "true" && value != "false") throw ConfigError::field(where, name, value, "true or false (boolean)");
       return value == "true" ? 1.0 : 0.0;
-    case Type::Real:
+    case Kind::Real:
       return parseReal(value, NumberRange::any(), where, name);
-    case Type::Whole: {
-      const double number = parseReal(value, NumberRange::closed(-2147483648.0, 4294967295.0), where, name);
-      if (number != std::floor(number)) throw ConfigError::field(where, name, value, "a whole number (integer)");
+    case Kind::Whole: {
+      const double number = parseReal(value, NumberRange::any(), where, name);
+      if (number != std::floor(number) || number < type.lowest || number > type.highest) {
+        throw ConfigError::field(where, name, value,
+                                 fmt::format("{} ({} .. {})", type.name, xml::number(type.lowest),
+                                             xml::number(type.highest)));
+      }
       return number;
     }
   }
@@ -77,7 +92,7 @@ Parameters readParameters(xml::Reader& reader, const pugi::xml_node& parent, con
       result.values[name] = value;
       reader.setParameters(result.values);
       declared.push_back(name);
-      if (number && type != Type::Boolean) {
+      if (number && type.kind != Kind::Boolean) {
         result.numeric.emplace_back(name, *number);
       } else if (!number) {
         result.strings.emplace_back(name, value);
@@ -112,7 +127,7 @@ std::optional<std::string> violatedConstraint(const xml::Reader& reader, const p
                                                                    "greaterOrEqual", "lessOrEqual"});
         const std::string limit = resolveValue(constraint.attribute("value").value(), values, reader.where(constraint));
         terms.push_back(fmt::format("{} {}", rule, limit));
-        if (type == Type::Text) {
+        if (type.kind == Kind::Text) {
           if (rule != "equalTo" && rule != "notEqualTo") {
             reader.fail(constraint, fmt::format("rule {} on the string parameter '{}': expected equalTo or notEqualTo",
                                                 rule, name));

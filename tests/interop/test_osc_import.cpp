@@ -441,6 +441,44 @@ TEST(OscImport, EntitiesAreDefinedOnceAndTheirCatalogConstraintsHold) {
                                                "(as "));
 }
 
+// What the language does not simulate (Performance, Axles, mass, height) must still be valid
+// numbers: esmini reads "fast" as 0, vsd-sumo refuses it by name.
+TEST(OscImport, NumbersThatAreNotSimulatedAreStillCheckedNumbers) {
+  const std::string fleet = readTextFile(data("catalogs/vehicles/fleet.xosc"));
+  const std::vector<std::tuple<std::string, std::string, std::string>> cases = {
+      {R"(maxSpeed="$TopSpeed")", R"(maxSpeed="fast")", "<Performance>: maxSpeed: got 'fast'"},
+      {R"(maxDeceleration="9")", R"(maxDeceleration="-9")", "<Performance>: maxDeceleration: got '-9'"},
+      {R"(height="1.4")", R"(height="-0.6")", "<Dimensions>: height: got '-0.6'"},
+      {R"(<Vehicle name="sedan" vehicleCategory="car">)", R"(<Vehicle name="sedan" vehicleCategory="car" mass="-2">)",
+       "<Vehicle>: mass: got '-2'"},
+      {R"(trackWidth="1.6" positionX="2.7")", R"(trackWidth="1.6" positionX="x")", "<FrontAxle>: positionX: got 'x'"}};
+  for (const auto& [from, to, message] : cases) {
+    std::string changed = fleet;
+    changed.replace(changed.find(from), from.size(), to);
+    const auto folder = folderWith({{"catalogs/vehicles/fleet.xosc", changed}});
+    const std::string error = test::configErrorOf([&] { importTemplate(folder->path() / "cut_in.xosc", {}); });
+    EXPECT_THAT(error, HasSubstr("fleet.xosc:")) << to;
+    EXPECT_THAT(error, HasSubstr(message)) << error;
+  }
+}
+
+// A whole-number parameter holds what its declared type holds: an unsignedInt of -1 is no
+// number of that type (it was read as a place 1 m behind), nor is an int of 1.5.
+TEST(OscImport, WholeNumberParametersHoldWhatTheirTypeHolds) {
+  const std::string declared = R"(name="Cutter_Side" parameterType="integer" value="-1")";
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {R"(name="Cutter_Side" parameterType="unsignedInt" value="-1")",
+       "Cutter_Side: got '-1', expected an unsignedInt (0 .. 4294967295)"},
+      {R"(name="Cutter_Side" parameterType="unsignedShort" value="70000")",
+       "Cutter_Side: got '70000', expected an unsignedShort (0 .. 65535)"},
+      {R"(name="Cutter_Side" parameterType="int" value="-1.5")",
+       "Cutter_Side: got '-1.5', expected an int (-2147483648 .. 2147483647)"}};
+  for (const auto& [changed, message] : cases) {
+    const auto folder = folderWith({{"typed.xosc", dataWith("cut_in.xosc", declared, changed)}});
+    EXPECT_THAT(test::configErrorOf([&] { importTemplate(folder->path() / "typed.xosc", {}); }), HasSubstr(message));
+  }
+}
+
 // The Walker faces across the road (h = pi/2): given a speed in the Init or a speed action in
 // the Story, it is refused where the file gives it (the language moves road users along the
 // road); holding it at 0 is fine.
