@@ -92,6 +92,15 @@ std::shared_ptr<xml::Reader> Catalogs::catalog(const xml::Reader& scenario, cons
                                                               : fmt::format("{}", fmt::join(searched, ", "))));
 }
 
+std::vector<std::string> Catalogs::unreadAttributes() const {
+  std::vector<std::string> unread;
+  for (const auto& [file, reader] : files_) {
+    const auto more = reader->unreadAttributes();
+    unread.insert(unread.end(), more.begin(), more.end());
+  }
+  return unread;
+}
+
 CatalogEntry Catalogs::resolve(const xml::Reader& scenario, const pugi::xml_node& reference,
                                const std::vector<std::string>& kinds) {
   scenario.requireSubset(reference, {"ParameterAssignments"});
@@ -102,6 +111,7 @@ CatalogEntry Catalogs::resolve(const xml::Reader& scenario, const pugi::xml_node
     scenario.requireSubset(assignments, {"ParameterAssignment"});
     for (const pugi::xml_node& assignment : assignments.children("ParameterAssignment")) {
       // OpenSCENARIO names the parameter; esmini also reads a name written as a reference ("$Name").
+      scenario.leave(assignment, {"parameterRef"});  // a name, read as written (no parameter resolved in it)
       std::string name = assignment.attribute("parameterRef").value();
       if (!name.empty() && name[0] == '$') {
         name.erase(0, 1);

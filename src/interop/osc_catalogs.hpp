@@ -48,6 +48,8 @@ class Catalogs {
   /// entry's parameters until the next resolve() of the same catalog.
   CatalogEntry resolve(const xml::Reader& scenario, const pugi::xml_node& reference,
                        const std::vector<std::string>& kinds);
+  /// xml::Reader::unreadAttributes of every catalog file read, by file.
+  std::vector<std::string> unreadAttributes() const;
 
  private:
   std::shared_ptr<xml::Reader> catalog(const xml::Reader& scenario, const pugi::xml_node& reference,

@@ -18,7 +18,14 @@ constexpr double kAxisTolerance = 0.01;
 
 RoadUserType categoryType(const xml::Reader& reader, const pugi::xml_node& object) {
   const std::string kind = object.name();
-  if (kind == "MiscObject") return RoadUserType::StationaryObject;
+  // 3D models are not used (as the SceneGraphFile), nor a vehicle's role (1.2).
+  reader.leave(object, {"model3d", "model", "role"});
+  if (kind == "MiscObject") {
+    reader.oneOf(object, "miscObjectCategory",
+                 {"none", "obstacle", "pole", "tree", "vegetation", "barrier", "building", "parkingSpace", "patch",
+                  "railing", "trafficIsland", "crosswalk", "streetLamp", "gantry", "soundBarrier", "wind", "roadMark"});
+    return RoadUserType::StationaryObject;
+  }
   if (kind == "Pedestrian") {
     const std::string category = reader.text(object, "pedestrianCategory");
     if (category != "pedestrian") {
@@ -162,6 +169,11 @@ Body vehicleBody(Translation& translation, Catalogs& catalogs, const xml::Reader
                  const pugi::xml_node& vehicle, int towed) {
   reader.requireSubset(vehicle, {"ParameterDeclarations", "BoundingBox", "Performance", "Axles", "TrailerHitch",
                                  "TrailerCoupler", "Trailer", "Properties"});
+  if (towed > 0) {  // a trailer is part of its tractor's body: its category is only checked
+    reader.leave(vehicle, {"model3d", "role"});
+    reader.oneOf(vehicle, "vehicleCategory", {"car", "van", "truck", "trailer", "semitrailer", "bus", "motorbike",
+                                              "bicycle", "train", "tram"});
+  }
   return withTrailer(translation, catalogs, reader, vehicle, boxOf(reader, vehicle), towed);
 }
 
@@ -271,6 +283,8 @@ void noteActivation(Translation& translation, const pugi::xml_node& action, Enti
   const pugi::xml_node activate =
       std::string(action.name()) == "ActivateControllerAction" ? action : action.child("ActivateControllerAction");
   const pugi::xml_node assign = action.child("AssignControllerAction");
+  if (activate) readAppearanceDomains(translation, activate, {"animation", "lighting"});
+  if (assign) readAppearanceDomains(translation, assign, {"activateAnimation", "activateLighting"});
   // An absent attribute of an ActivateControllerAction activates its domain, as esmini reads it.
   const bool longitudinal = activate ? reader.optionalBoolean(activate, "longitudinal").value_or(true)
                                      : reader.optionalBoolean(assign, "activateLongitudinal").value_or(false);
@@ -306,6 +320,8 @@ void readInitAction(Translation& translation, Entity& entity, const pugi::xml_no
                          (reader.optionalText(dynamics, "dynamicsDimension") == std::optional<std::string>("time") &&
                           reader.optionalNumber(dynamics, "value") == std::optional<double>(0.0));
     if (at_once) {
+      reader.oneOf(dynamics, "dynamicsShape", {"step", "linear", "cubic", "sinusoidal"});
+      unusedPace(reader, dynamics);
       entity.speedTarget = reader.only(speed, "SpeedActionTarget");
       if (entity.gradualSpeed) {
         // Init actions run in file order: the step ends the gradual change before it at once.
@@ -313,6 +329,7 @@ void readInitAction(Translation& translation, Entity& entity, const pugi::xml_no
                                   fmt::format("replaced by the step to a speed at line {} (Init actions run in "
                                               "their order): '{}' starts at that speed",
                                               reader.line(action), entity.name));
+        reader.leaveAll(entity.gradualSpeed);  // never simulated
         entity.gradualSpeed = pugi::xml_node();
       }
     } else {

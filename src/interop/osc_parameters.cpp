@@ -85,7 +85,9 @@ Parameters readParameters(xml::Reader& reader, const pugi::xml_node& parent, con
       if (name.empty()) reader.fail(declaration, "attribute 'name' is missing");
       const Type type = typeOf(reader, declaration);
       const auto given = assigned.find(name);
-      // A declared value may refer to the parameters before it (the reader resolves it).
+      // A declared value may refer to the parameters before it (the reader resolves it); an
+      // assigned one replaces it.
+      if (given != assigned.end()) reader.leave(declaration, {"value"});
       const std::string value = given != assigned.end() ? given->second : reader.text(declaration, "value");
       const std::string where = given != assigned.end() ? assigned_where : reader.where(declaration);
       const auto number = typed(type, value, where, name);
@@ -125,6 +127,8 @@ std::optional<std::string> violatedConstraint(const xml::Reader& reader, const p
       for (const pugi::xml_node& constraint : group.children("ValueConstraint")) {
         const std::string rule = reader.oneOf(constraint, "rule", {"equalTo", "notEqualTo", "greaterThan", "lessThan",
                                                                    "greaterOrEqual", "lessOrEqual"});
+        // Resolved against the whole set, not the reader's parameters so far: read here.
+        reader.leave(constraint, {"value"});
         const std::string limit = resolveValue(constraint.attribute("value").value(), values, reader.where(constraint));
         terms.push_back(fmt::format("{} {}", rule, limit));
         if (type.kind == Kind::Text) {

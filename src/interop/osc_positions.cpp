@@ -120,6 +120,12 @@ Placement planePosition(Translation& translation, const pugi::xml_node& position
   const std::string kind = position.name();
   Vec2 point;
   double heading = 0.0;  // absolute, of the reference (relative orientations count from it)
+  // Heights: vsd-sumo is planar, a road user stands on its road.
+  const auto height = reader.optionalNumber(position, kind == "WorldPosition" ? "z" : "dz");
+  if (height && *height != 0.0) {
+    translation.findings.note(reader.where(position), fmt::format("{} m of height: vsd-sumo is planar, not simulated",
+                                                                  xml::number(*height)));
+  }
   if (kind == "WorldPosition") {
     point = Vec2(reader.number(position, "x"), reader.number(position, "y"));
     for (const char* unsupported : {"p", "r"}) {

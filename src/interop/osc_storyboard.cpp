@@ -59,6 +59,25 @@ void pace(Translation& translation, const pugi::xml_node& dynamics, const char* 
   action[dimension == "rate" ? rate_key : "duration"] = num(value);
 }
 
+}  // namespace
+
+void readAppearanceDomains(Translation& translation, const pugi::xml_node& action,
+                           std::initializer_list<const char*> attributes) {
+  for (const char* attribute : attributes) {
+    if (translation.reader.optionalBoolean(action, attribute).value_or(false)) {
+      translation.findings.note(translation.reader.where(action),
+                                fmt::format("{}=\"true\": vsd-sumo simulates no lights or animations", attribute));
+    }
+  }
+}
+
+void unusedPace(const xml::Reader& reader, const pugi::xml_node& dynamics) {
+  reader.oneOf(dynamics, "dynamicsDimension", {"time", "rate", "distance"});
+  reader.number(dynamics, "value");
+}
+
+namespace {
+
 /// The target of a lane change of `actor`: a number of lanes from its own lane (`lanes`, also
 /// relative to itself), from the Ego's lane at the start (`ego_lane`, relative to the Ego), or a
 /// lane of the road (`lane`: an absolute lane, or one relative to another road user that keeps
@@ -98,6 +117,7 @@ YAML::Node laneChange(Translation& translation, const Entity& actor, const pugi:
   const pugi::xml_node dynamics = reader.only(action, "LaneChangeActionDynamics");
   item["shape"] = shapeOf(translation, dynamics, /*step_allowed=*/of_ego);
   if (item["shape"].as<std::string>() == "step") {  // the Ego's: its lane moves at once
+    unusedPace(reader, dynamics);
     translation.findings.note(reader.where(dynamics), "a step moves the lane at once: its value is not used");
   } else {
     pace(translation, dynamics, "lateral_speed", item);
@@ -282,7 +302,11 @@ YAML::Node speedAction(Translation& translation, const Entity& actor, const pugi
   const pugi::xml_node dynamics = reader.only(action, "SpeedActionDynamics");
   reader.requireSubset(dynamics, {});
   item["shape"] = shapeOf(translation, dynamics, true);
-  if (item["shape"].as<std::string>() != "step") pace(translation, dynamics, "rate", item);
+  if (item["shape"].as<std::string>() != "step") {
+    pace(translation, dynamics, "rate", item);
+  } else {
+    unusedPace(reader, dynamics);
+  }
   const pugi::xml_node target = reader.choice(reader.only(action, "SpeedActionTarget"),
                                               {"AbsoluteTargetSpeed", "RelativeTargetSpeed"});
   const double value = reader.number(target, "value");
@@ -312,6 +336,8 @@ YAML::Node egoSetSpeed(Translation& translation, const pugi::xml_node& action) {
   reader.requireSubset(action, {"SpeedActionDynamics", "SpeedActionTarget"});
   const pugi::xml_node dynamics = reader.only(action, "SpeedActionDynamics");
   reader.requireSubset(dynamics, {});
+  shapeOf(translation, dynamics, true);
+  unusedPace(reader, dynamics);
   const pugi::xml_node target = reader.choice(reader.only(action, "SpeedActionTarget"),
                                               {"AbsoluteTargetSpeed", "RelativeTargetSpeed"});
   if (std::string(target.name()) != "AbsoluteTargetSpeed") {
@@ -528,11 +554,15 @@ std::optional<YAML::Node> privateAction(Translation& translation, Entity& actor,
       }
       YAML::Node item;
       if (activate) {
+        readAppearanceDomains(translation, activate, {"animation", "lighting"});
         // An absent domain is activated, as esmini reads it.
         item[kActivation] = activationOf(reader.optionalBoolean(activate, "longitudinal").value_or(true),
                                          reader.optionalBoolean(activate, "lateral").value_or(true));
       }
-      if (assign) item[kAssignment] = assignedController(translation, assign, item);
+      if (assign) {
+        readAppearanceDomains(translation, assign, {"activateAnimation", "activateLighting"});
+        item[kAssignment] = assignedController(translation, assign, item);
+      }
       return item;
     }
     if (kind == "LongitudinalAction") {
@@ -2004,7 +2034,11 @@ void readStopTrigger(Translation& translation, const pugi::xml_node& storyboard)
   const double longest = translation.options.step.value_or(scenario::LogicalScenario{}.step) * kMaxWindowSteps;
   if (translation.options.duration) {
     translation.duration = *translation.options.duration;
-    if (stop) translation.findings.note(reader.where(stop), fmt::format("--duration {} s replaces it", num(translation.duration)));
+    if (stop) {
+      translation.findings.note(reader.where(stop),
+                                fmt::format("--duration {} s replaces it", num(translation.duration)));
+      reader.leaveAll(stop);
+    }
     return;
   }
   if (!stop) reader.fail(storyboard, "no StopTrigger: pass --duration (s)");

@@ -551,6 +551,7 @@ TranslationResult translate(const fs::path& xosc, const OscImportOptions& option
                               "Storyboard"});
   const pugi::xml_node header = reader.only(root, "FileHeader");
   if (reader.number(header, "revMajor") != 1.0) reader.fail(header, "revMajor: expected OpenSCENARIO 1.x");
+  reader.leave(header, {"revMinor", "date", "description", "author"});  // 1.x are read alike
   const Parameters parameters = readParameters(reader, root, {}, assigned, assigned_where);
   TranslationResult result;
   result.inputs = parameters.numeric;
@@ -617,6 +618,11 @@ TranslationResult translate(const fs::path& xosc, const OscImportOptions& option
   addInitialSpeedActions(translation);
   readStories(translation, storyboard);
   findings.attempt([&] { readStopTrigger(translation, storyboard); });
+  // Checked once the rest is: an element a refusal cut short has attributes nothing read yet.
+  if (!findings.anyRefused()) {
+    for (const std::string& unread : reader.unreadAttributes()) findings.refuse(unread);
+    for (const std::string& unread : catalogs.unreadAttributes()) findings.refuse(unread);
+  }
   if (findings.anyRefused()) return result;
   result.yaml = languageYaml(translation, parameters, codes);
   return result;

@@ -238,6 +238,13 @@ YAML::Node speedAction(Translation& translation, const Entity& actor, const pugi
 /// set speed from then on, as esmini's ACC takes a speed action on its Ego; the dynamics are
 /// the controller's own (noted). Refuses a relative target.
 YAML::Node egoSetSpeed(Translation& translation, const pugi::xml_node& action);
+/// The appearance domains of an Activate- or AssignControllerAction (`attributes`: animation
+/// and lighting, or their activate... forms): read, and noted where activated (not simulated).
+void readAppearanceDomains(Translation& translation, const pugi::xml_node& action,
+                           std::initializer_list<const char*> attributes);
+/// The dimension and value of dynamics whose pace is not used (a step; the Ego's, which its
+/// controller paces): still read, so that a bad one is refused by name, not ignored.
+void unusedPace(const xml::Reader& reader, const pugi::xml_node& dynamics);
 /// A speed action's YAML that keeps tracking a <RelativeTargetSpeed continuous="true"> of
 /// `actor` at once (shape step).
 YAML::Node continuousSpeed(Translation& translation, const Entity& actor, const pugi::xml_node& target);

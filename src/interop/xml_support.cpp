@@ -88,8 +88,10 @@ void Reader::fail(const pugi::xml_node& node, const std::string& message) const 
 }
 
 std::optional<std::string> Reader::optionalText(const pugi::xml_node& node, const char* attribute) const {
+  interpreted_.insert(node.internal_object());
   const pugi::xml_attribute found = node.attribute(attribute);
   if (!found) return std::nullopt;
+  read_.insert(found.internal_object());
   // "$name" and "${expression}" (OpenSCENARIO parameters); literal text otherwise.
   return osc::resolveValue(found.value(), parameters_, fmt::format("{}: attribute {}", where(node), attribute));
 }
@@ -141,6 +143,38 @@ bool Reader::boolean(const pugi::xml_node& node, const char* attribute) const {
   return value == "true" || value == "1";
 }
 
+void Reader::leave(const pugi::xml_node& node, std::initializer_list<const char*> attributes) const {
+  for (const char* attribute : attributes) {
+    if (const pugi::xml_attribute found = node.attribute(attribute)) read_.insert(found.internal_object());
+  }
+}
+
+void Reader::leaveAll(const pugi::xml_node& node) const {
+  for (const pugi::xml_attribute& attribute : node.attributes()) read_.insert(attribute.internal_object());
+  for (const pugi::xml_node& child : node.children()) {
+    if (child.type() == pugi::node_element) leaveAll(child);
+  }
+}
+
+std::vector<std::string> Reader::unreadAttributes() const {
+  std::vector<std::string> unread;
+  const std::function<void(const pugi::xml_node&)> visit = [&](const pugi::xml_node& node) {
+    if (interpreted_.count(node.internal_object()) > 0) {
+      for (const pugi::xml_attribute& attribute : node.attributes()) {
+        if (read_.count(attribute.internal_object()) > 0 || std::string(attribute.name()) == "name") continue;
+        unread.push_back(fmt::format("{}: attribute {}=\"{}\" is outside the supported subset (vsd-sumo does not "
+                                     "read it)",
+                                     where(node), attribute.name(), attribute.value()));
+      }
+    }
+    for (const pugi::xml_node& child : node.children()) {
+      if (child.type() == pugi::node_element) visit(child);
+    }
+  };
+  visit(root());
+  return unread;
+}
+
 pugi::xml_node Reader::only(const pugi::xml_node& parent, const char* name) const {
   pugi::xml_node found;
   for (const pugi::xml_node& node : parent.children(name)) {
@@ -152,6 +186,7 @@ pugi::xml_node Reader::only(const pugi::xml_node& parent, const char* name) cons
 }
 
 void Reader::requireSubset(const pugi::xml_node& parent, std::initializer_list<const char*> supported) const {
+  interpreted_.insert(parent.internal_object());
   for (const pugi::xml_node& node : parent.children()) {
     if (node.type() != pugi::node_element) continue;
     const bool known = std::any_of(supported.begin(), supported.end(),

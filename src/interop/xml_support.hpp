@@ -16,6 +16,7 @@
 #include <map>
 #include <optional>
 #include <string>
+#include <unordered_set>
 #include <vector>
 
 #include "vsd/core/files.hpp"
@@ -88,6 +89,18 @@ class Reader {
   /// ConfigError "file:line: <element>: message".
   [[noreturn]] void fail(const pugi::xml_node& node, const std::string& message) const;
 
+  /// Attributes read above (text, numbers, ...) are remembered, and so are the elements
+  /// interpreted (an attribute read, or the children checked by requireSubset). An attribute
+  /// of such an element that nothing read is outside the supported subset, unless it is left
+  /// here on purpose: known and, as the caller says where it is read, not simulated.
+  void leave(const pugi::xml_node& node, std::initializer_list<const char*> attributes) const;
+  /// leave() for every attribute of `node` and the elements inside it (a part replaced whole).
+  void leaveAll(const pugi::xml_node& node) const;
+  /// "file:line: <element>: attribute a=\"v\" ..." for each attribute of an interpreted element
+  /// that was neither read nor left, in document order. A `name` is always known: names
+  /// identify elements, and references to them are read where they occur.
+  std::vector<std::string> unreadAttributes() const;
+
  private:
   void parse();
   /// 1-based line of a byte offset of the text.
@@ -100,6 +113,9 @@ class Reader {
   std::vector<std::size_t> lineStarts_;
   pugi::xml_document document_;
   std::map<std::string, std::string> parameters_;
+  // pugixml's node and attribute records, stable while the document lives.
+  mutable std::unordered_set<const void*> interpreted_;
+  mutable std::unordered_set<const void*> read_;
 };
 
 }  // namespace vsd::interop::xml

@@ -462,6 +462,51 @@ TEST(OscImport, NumbersThatAreNotSimulatedAreStillCheckedNumbers) {
   }
 }
 
+// An attribute nothing reads is refused, not ignored: a typo (ofset: the offset would stay 0),
+// one the standard has that vsd-sumo does not follow (1.2's followingMode), one it does not
+// have. `scenario check` names each; names, the file header and 3D models are known.
+TEST(OscImport, AnAttributeNothingReadsIsRefusedByName) {
+  std::string text = dataWith("cut_in.xosc", R"(<LanePosition roadId="7" laneId="-3" s="20" offset="0"/>)",
+                              R"(<LanePosition roadId="7" laneId="-3" s="20" ofset="0.5"/>)");
+  const std::string dynamics = R"(<SpeedActionDynamics dynamicsShape="linear" value="-2" dynamicsDimension="rate"/>)";
+  text.replace(text.find(dynamics), dynamics.size(),
+               R"(<SpeedActionDynamics dynamicsShape="linear" value="-2" dynamicsDimension="rate" )"
+               R"(followingMode="follow"/>)");
+  const std::string walker = R"(<CatalogReference catalogName="people" entryName="walker"/>)";
+  text.replace(text.find(walker), walker.size(),
+               R"(<CatalogReference catalogName="people" entryName="walker" bogus="7"/>)");
+  const auto folder = folderWith({{"unread.xosc", text}});
+  const std::string report = checkOpenScenario(folder->path() / "unread.xosc", {}).report();
+  const auto line_of = [&](const std::string& part) {
+    const std::string before = text.substr(0, text.find(part));
+    return std::count(before.begin(), before.end(), '\n') + 1;
+  };
+  for (const auto& [element, attribute, part] : std::vector<std::tuple<std::string, std::string, std::string>>{
+           {"LanePosition", R"(ofset="0.5")", "ofset="},
+           {"SpeedActionDynamics", R"(followingMode="follow")", "followingMode="},
+           {"CatalogReference", R"(bogus="7")", "bogus="}}) {
+    EXPECT_THAT(report, HasSubstr(fmt::format("REFUSED {}:{}: <{}>: attribute {} is outside the supported subset",
+                                              (folder->path() / "unread.xosc").string(), line_of(part), element,
+                                              attribute)))
+        << report;
+  }
+  EXPECT_THAT(report, Not(HasSubstr("attribute name=")));
+  EXPECT_THAT(report, Not(HasSubstr("attribute author=")));
+  // Known, not simulated: lights (noted where switched on) and heights.
+  std::string known = dataWith("cut_in.xosc", R"(<ActivateControllerAction longitudinal="true" lateral="true"/>)",
+                               R"(<ActivateControllerAction longitudinal="true" lateral="true" lighting="true"/>)");
+  const std::string place = R"(<WorldPosition x="300" y="-12.75" )";
+  known.replace(known.find(place), place.size(), R"(<WorldPosition x="300" y="-12.75" z="0.5" )");
+  const auto known_folder = folderWith({{"known.xosc", known}});
+  const ScenarioCheck known_check = checkOpenScenario(known_folder->path() / "known.xosc", {});
+  EXPECT_TRUE(known_check.runnable()) << known_check.report();
+  EXPECT_THAT(known_check.report(), HasSubstr("lighting=\"true\": vsd-sumo simulates no lights or animations"));
+  EXPECT_THAT(known_check.report(), HasSubstr("<WorldPosition>: 0.5 m of height: vsd-sumo is planar"));
+  // `run` stops at the first in document order.
+  EXPECT_THAT(test::configErrorOf([&] { importTemplate(folder->path() / "unread.xosc", {}); }),
+              HasSubstr("<CatalogReference>: attribute bogus=\"7\" is outside the supported subset"));
+}
+
 // A whole-number parameter holds what its declared type holds: an unsignedInt of -1 is no
 // number of that type (it was read as a place 1 m behind), nor is an int of 1.5.
 TEST(OscImport, WholeNumberParametersHoldWhatTheirTypeHolds) {
