@@ -39,11 +39,16 @@ void addImportOptions(CLI::App& command, interop::OscImportOptions& import) {
         import.duration = seconds;
       },
       "OpenSCENARIO input: seconds to simulate (needed when the StopTrigger is not a simulation time)");
-  command.add_option("--ego", import.ego, "OpenSCENARIO input without controllers: the entity that is the Ego")
-      ->capture_default_str();
-  command.add_option("--controller", import.controller,
-                     "OpenSCENARIO input without controllers: the Ego's vsd-sumo controller")
-      ->capture_default_str();
+  command
+      .add_option_function<std::string>(
+          "--ego", [&import](const std::string& name) { import.ego = name; },
+          "OpenSCENARIO input without controllers: the entity that is the Ego")
+      ->default_str(interop::kDefaultEgo);
+  command
+      .add_option_function<std::string>(
+          "--controller", [&import](const std::string& name) { import.controller = name; },
+          "OpenSCENARIO input without controllers: the Ego's vsd-sumo controller")
+      ->default_str(interop::kDefaultEgoController);
   command.add_option("--controller-map", import.controllerMap,
                      "OpenSCENARIO input: YAML map from the file's controller names to vsd-sumo controllers")
       ->check(CLI::ExistingFile);

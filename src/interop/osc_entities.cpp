@@ -339,9 +339,8 @@ void readInitAction(Translation& translation, Entity& entity, const pugi::xml_no
     reader.requireSubset(action, {"AssignControllerAction", "ActivateControllerAction"});
     bool activates = static_cast<bool>(action.child("ActivateControllerAction"));
     if (const pugi::xml_node assign = action.child("AssignControllerAction")) {
-      reader.requireSubset(assign, {"Controller"});
-      entity.controller = reader.text(reader.only(assign, "Controller"), "name");
-      entity.controllerWhere = reader.where(assign);
+      // Defined in place or a controller catalog's entry, as an ObjectController.
+      entity.controller = controllerName(translation, *translation.catalogs, assign, entity.controllerWhere);
       // OpenSCENARIO 1.2 may activate the assigned controller with the assignment.
       for (const char* domain : {"activateLateral", "activateLongitudinal"}) {
         activates = activates || reader.optionalBoolean(assign, domain).value_or(false);

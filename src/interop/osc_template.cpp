@@ -95,20 +95,32 @@ Entity& findEgo(Translation& translation, ControllerChoice& controller) {
     ego = &entity;
   }
   if (ego) {
+    // The file says who the Ego is and how it is driven: a flag that would say otherwise is not ignored.
+    for (const auto& [flag, value] : {std::pair{"--ego", translation.options.ego},
+                                      std::pair{"--controller", translation.options.controller}}) {
+      if (value) {
+        throw ConfigError::field("command line", flag, *value,
+                                 fmt::format("none for {}: it assigns '{}' the controller '{}' ({}), which makes it "
+                                             "the Ego, driven by what --controller-map maps that name onto",
+                                             translation.reader.file().string(), ego->name, *ego->controller,
+                                             ego->controllerWhere));
+      }
+    }
     controller = translation.controllerMap.choice(*ego->controller, ego->controllerWhere);
     translation.findings.mapped(ego->controllerWhere, fmt::format("the Ego '{}' is driven by vsd-sumo's '{}' (the file's "
                                                                   "controller '{}'; its properties are not passed on)",
                                                                   ego->name, controller.name, *ego->controller));
     return *ego;
   }
+  const std::string ego_name = translation.options.ego.value_or(kDefaultEgo);
   for (auto& entity : translation.entities) {
-    if (entity.name == translation.options.ego) ego = &entity;
+    if (entity.name == ego_name) ego = &entity;
   }
   if (!ego) {
     throw ConfigError(fmt::format("{}: no entity has a controller and none is named '{}' (--ego NAME: which is the Ego?)",
-                                  translation.reader.file().string(), translation.options.ego));
+                                  translation.reader.file().string(), ego_name));
   }
-  controller = {translation.options.controller, {}};
+  controller = {translation.options.controller.value_or(kDefaultEgoController), {}};
   translation.findings.note(ego->where, fmt::format("no controller in the file: '{}' is the Ego, driven by '{}' "
                                                     "(--ego, --controller)", ego->name, controller.name));
   return *ego;

@@ -1052,6 +1052,18 @@ TEST(OscCli, ScenarioCheckExitStatusSaysWhetherItWouldRun) {
       EXPECT_EQ(std::count(out_of_range.output.begin(), out_of_range.output.end(), '\n'), 1) << out_of_range.output;
     }
   }
+  // The file assigns the Ego its controller: --ego and --controller would say otherwise, so
+  // they are refused rather than ignored.
+  for (const auto& [flag_name, value] : std::vector<std::pair<std::string, std::string>>{{"--ego", "Cutter"},
+                                                                                          {"--controller", "idm"}}) {
+    const auto contradicted = test::run({test::vsdSumo().string(), "--quiet", "run", data("cut_in.xosc").string(),
+                                         flag_name, value, "--out", (dir.path() / "contradicted").string()},
+                                        dir.path());
+    EXPECT_EQ(contradicted.exitCode, 2) << contradicted.output;
+    EXPECT_THAT(contradicted.output, HasSubstr(flag_name + ": got '" + value + "', expected none for "));
+    EXPECT_THAT(contradicted.output, HasSubstr("it assigns 'Ego' the controller 'ALKSController'"));
+    EXPECT_FALSE(fs::exists(dir.path() / "contradicted"));
+  }
   // The declared values break a constraint: `check` refuses the file as `run` does.
   std::string fast = readTextFile(data("cut_in.xosc"));
   fast.replace(fast.find(R"(parameterType="double" value="72")"), 33, R"(parameterType="double" value="140")");
@@ -3299,9 +3311,17 @@ TEST(OscImport, TheEgosControllerActivationTimeIsItsActiveFrom) {
           <AssignControllerAction activateLateral="true" activateLongitudinal="true">
           <Controller name="ALKSController"><Properties/></Controller></AssignControllerAction>
           </ControllerAction></PrivateAction>)");
-  const auto assigned_at_start = folderWith({{"assigned.xosc", assigned}});
+  // The assigned controller may be a controller catalog's entry, as an ObjectController's.
+  std::string from_catalog = assigned;
+  const std::string in_place = R"(<Controller name="ALKSController"><Properties/></Controller>)";
+  from_catalog.replace(from_catalog.find(in_place), in_place.size(),
+                       R"(<CatalogReference catalogName="drivers" entryName="ALKSController"/>)");
+  const auto assigned_at_start = folderWith({{"assigned.xosc", assigned}, {"catalogued.xosc", from_catalog}});
   EXPECT_DOUBLE_EQ(
       importTemplate(assigned_at_start->path() / "assigned.xosc", {})->ego.controller.activeFrom.evaluate({}), 0.0);
+  const auto catalogued = importTemplate(assigned_at_start->path() / "catalogued.xosc", {});
+  EXPECT_DOUBLE_EQ(catalogued->ego.controller.activeFrom.evaluate({}), 0.0);
+  EXPECT_EQ(catalogued->ego.controller.name, "alks");
   // Booleans are xsd:boolean ("1" is true); any other word is refused by name, not read as false.
   std::string assigned_as_digits = assigned;
   for (const std::string domain : {"activateLateral", "activateLongitudinal"}) {

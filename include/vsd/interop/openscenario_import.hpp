@@ -23,14 +23,19 @@
 
 namespace vsd::interop {
 
+/// The entity that is the Ego of a file without controllers, and its controller, by default.
+inline constexpr const char* kDefaultEgo = "Ego";
+inline constexpr const char* kDefaultEgoController = "alks";
+
 struct OscImportOptions {
   std::optional<double> step;      ///< s; unset: the scenario language's default step
   /// s simulated; unset: the file's StopTrigger when it is a simulation time that fits the
   /// window (at most kMaxWindowSteps steps). A StopTrigger of another kind needs it.
   std::optional<double> duration;
-  /// The Ego when no entity has a controller: this entity, driven by `controller`.
-  std::string ego = "Ego";
-  std::string controller = "alks";
+  /// The Ego when no entity has a controller: this entity (unset: kDefaultEgo), driven by
+  /// `controller` (unset: kDefaultEgoController). Set where an entity has one: refused.
+  std::optional<std::string> ego;
+  std::optional<std::string> controller;
   /// YAML map from the file's controller names to vsd-sumo controllers (empty: the defaults).
   std::filesystem::path controllerMap;
   /// `--data-root`: the folder every file a scenario names (its road network, catalog
