@@ -101,6 +101,19 @@ void countSets(const ParameterGrid& grid, const OscImportOptions& options, osc::
   }
 }
 
+/// The Ego's controllers as `run` builds them before it simulates (names, parameters): built-in
+/// ones here; a plugin's code is not run by a check (noted: `run` loads it).
+void checkControllers(const scenario::LogicalScenario& logical, const scenario::ConcreteScenario& concrete,
+                      osc::Findings& findings) {
+  bool plugin = !logical.ego.controller.library.empty();
+  for (const auto& action : logical.ego.actions) plugin = plugin || !action.controller.library.empty();
+  if (plugin) {
+    findings.note(logical.sourceFile.string(), "a controller plugin: run loads it and checks its parameters");
+    return;
+  }
+  pipeline::buildEgoControllers(logical, concrete);
+}
+
 }  // namespace
 
 ScenarioCheck checkOpenScenario(const fs::path& file, const OscImportOptions& options) {
@@ -139,7 +152,8 @@ ScenarioCheck checkOpenScenario(const fs::path& file, const OscImportOptions& op
     findings.attempt([&] {
       const auto logical = loadTranslation(scenario_file, result.yaml);
       // Per-sample checks (lanes that exist, road users that do not overlap) on the one scenario.
-      scenario::sampleConcreteScenario(logical, 1, 0);
+      const auto concrete = scenario::sampleConcreteScenario(logical, 1, 0);
+      checkControllers(*logical, concrete, findings);
       check.yaml = result.yaml;
     });
   }

@@ -54,7 +54,14 @@ ControllerChoice ControllerMap::choice(const std::string& name, const std::strin
     if (!map.IsMap()) throw ConfigError(fmt::format("{}: expected a map from controller names to vsd-sumo controllers", file));
     if (const YAML::Node entry = map[name]) {
       if (entry.IsScalar()) return {entry.as<std::string>(), {}};
-      if (entry.IsMap() && entry["controller"]) return {entry["controller"].as<std::string>(), entry["params"]};
+      const bool keys_known = entry.IsMap() && std::all_of(entry.begin(), entry.end(), [](const auto& key_value) {
+        const std::string key = key_value.first.template as<std::string>();
+        return key == "controller" || key == "params";
+      });
+      const YAML::Node params = entry.IsMap() ? entry["params"] : YAML::Node();
+      if (keys_known && entry["controller"] && entry["controller"].IsScalar() && (!params || params.IsMap())) {
+        return {entry["controller"].as<std::string>(), params ? params : YAML::Node()};
+      }
       throw ConfigError(fmt::format("{}: {}: expected a controller name or {{controller: NAME, params: {{...}}}}", file, name));
     }
   }

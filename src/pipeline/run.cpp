@@ -756,31 +756,39 @@ void stageBatchFiles(const Context& context, const OutputFolder& folder) {
   }
 }
 
+}  // namespace
+
+void buildEgoControllers(const scenario::LogicalScenario& logical, const scenario::ConcreteScenario& concrete,
+                         const std::string& reference) {
+  auto registry = sim::ControllerRegistry::withBuiltins();
+  const sim::ControllerNeeds needs = sim::controllerNeeds(logical);
+  sim::makeController(registry, logical.ego.controller.name, logical.ego.controller.library,
+                      logical.sourceFile.parent_path(),
+                      sim::ControllerParams(concrete.controllerParams, logical.ego.controller.where), needs);
+  if (!reference.empty()) {
+    sim::makeController(registry, reference, {}, logical.sourceFile.parent_path(),
+                        sim::ControllerParams({}, "--reference " + reference), needs);
+  }
+  // The controllers the Ego's controller actions hand it to (the Ego's actions come last).
+  const std::size_t first = concrete.actions.size() - logical.ego.actions.size();
+  for (std::size_t j = 0; j < logical.ego.actions.size(); ++j) {
+    const auto& spec = logical.ego.actions[j];
+    if (spec.kind != scenario::ActionSpec::Kind::Controller) continue;
+    sim::makeController(registry, spec.controller.name, spec.controller.library, logical.sourceFile.parent_path(),
+                        sim::ControllerParams(concrete.actions[first + j].controllerParams, spec.controller.where),
+                        sim::controllerNeeds(logical, spec));
+  }
+}
+
+namespace {
+
 /// Fails fast on problems every scenario would hit (unknown controller, bad
 /// parameters, a plugin that cannot be loaded) before any output is created.
 /// The probe runs the controller's code, so it runs in a worker: a probe that
 /// crashes or hangs proves nothing about the run (its scenario will record it).
 void probeController(const std::shared_ptr<const scenario::LogicalScenario>& logical, const RunOptions& options) {
   auto make_controller = [&] {
-    auto concrete = concreteScenario(logical, options, options.firstSample).concrete;
-    auto registry = sim::ControllerRegistry::withBuiltins();
-    const sim::ControllerNeeds needs = sim::controllerNeeds(*logical);
-    sim::makeController(registry, logical->ego.controller.name, logical->ego.controller.library,
-                        logical->sourceFile.parent_path(),
-                        sim::ControllerParams(concrete.controllerParams, logical->ego.controller.where), needs);
-    if (!options.reference.empty()) {
-      sim::makeController(registry, options.reference, {}, logical->sourceFile.parent_path(),
-                          sim::ControllerParams({}, "--reference " + options.reference), needs);
-    }
-    // The controllers the Ego's controller actions hand it to (the Ego's actions come last).
-    const std::size_t first = concrete.actions.size() - logical->ego.actions.size();
-    for (std::size_t j = 0; j < logical->ego.actions.size(); ++j) {
-      const auto& spec = logical->ego.actions[j];
-      if (spec.kind != scenario::ActionSpec::Kind::Controller) continue;
-      sim::makeController(registry, spec.controller.name, spec.controller.library, logical->sourceFile.parent_path(),
-                          sim::ControllerParams(concrete.actions[first + j].controllerParams, spec.controller.where),
-                          sim::controllerNeeds(*logical, spec));
-    }
+    buildEgoControllers(*logical, concreteScenario(logical, options, options.firstSample).concrete, options.reference);
   };
   if (options.isolation == RunOptions::Isolation::None) {
     make_controller();

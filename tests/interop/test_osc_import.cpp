@@ -3117,6 +3117,33 @@ TEST(OscImport, AnEventsMaximumExecutionCountRepeatsItsAction) {
   }
 }
 
+// `scenario check` builds the Ego's controllers as `run` does before it simulates: a name or a
+// parameter the controller does not know is refused by both, and a map entry of another shape
+// is one line naming the map file.
+TEST(OscImport, CheckRefusesTheControllerChoicesRunRefuses) {
+  const auto folder = folderWith({{"unknown.yaml", "ALKSController: {controller: idmm}\n"},
+                                  {"typo.yaml", "ALKSController: {controller: idm, params: {time_gapp: 2}}\n"},
+                                  {"shape.yaml", "ALKSController: {controler: idm}\n"}});
+  for (const auto& [map, message] : std::vector<std::pair<std::string, std::string>>{
+           {"unknown.yaml", "unknown controller 'idmm' (available: "},
+           {"typo.yaml", "params.time_gapp: unknown parameter of controller 'idm'"},
+           {"shape.yaml", "shape.yaml: ALKSController: expected a controller name or {controller: NAME"}}) {
+    OscImportOptions options;
+    options.controllerMap = folder->path() / map;
+    const ScenarioCheck check = checkOpenScenario(data("cut_in.xosc"), options);
+    EXPECT_FALSE(check.runnable()) << map;
+    EXPECT_THAT(check.report(), HasSubstr(message)) << check.report();
+    EXPECT_THAT(test::configErrorOf([&] {
+                  pipeline::RunOptions run;
+                  run.samples = 1;
+                  run.writeFiles = false;
+                  run.isolation = pipeline::RunOptions::Isolation::None;
+                  pipeline::runScenarios(importTemplate(data("cut_in.xosc"), options), run);
+                }),
+                HasSubstr(message));
+  }
+}
+
 // A controller the map sends to `script` (esmini's sloppyDriver on a cutting-in vehicle) is not
 // simulated: its entity stays scripted and the one with the other controller is the Ego; without
 // the map the file has two controller-driven entities, which the language refuses.

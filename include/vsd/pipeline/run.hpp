@@ -177,6 +177,13 @@ using OutcomeCallback = std::function<void(const ScenarioOutcome&)>;
 /// controller or libsumo) are recorded in the outcomes and concrete.csv.
 RunSummary runScenarios(const RunOptions& options, const OutcomeCallback& on_outcome = {});
 
+/// Builds the controllers the Ego of `concrete` uses: its own, those its controller actions
+/// hand it to, and `reference` (a controller name; empty: none). Throws ConfigError for an
+/// unknown name, bad parameters or a plugin that cannot be loaded. It runs their code in this
+/// process: `run` does so in a worker, `scenario check` for built-in controllers only.
+void buildEgoControllers(const scenario::LogicalScenario& logical, const scenario::ConcreteScenario& concrete,
+                         const std::string& reference = {});
+
 /// Where a run of `logical` writes without --out: out/<functional scenario>.
 std::filesystem::path defaultRunFolder(const scenario::LogicalScenario& logical);
 
