@@ -143,6 +143,7 @@ CatalogEntry Catalogs::resolve(const xml::Reader& scenario, const pugi::xml_node
                                          fmt::join(kinds, " or ")));
   }
   const Parameters parameters = readParameters(*entry.reader, entry.node, {}, assigned, scenario.where(reference));
+  for (const auto& [where, what] : parameters.notes) findings_.note(where, what);
   // A catalog entry's constraints hold for the values the reference gives it, as the scenario's own do.
   if (const auto violated = violatedConstraint(*entry.reader, entry.node, parameters.values)) {
     throw ConfigError(fmt::format("{} (as {} uses the entry)", *violated, scenario.where(reference)));

@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <map>
 
 #include "vsd/core/error.hpp"
 #include "vsd/core/numbers.hpp"
@@ -77,12 +78,25 @@ Parameters readParameters(xml::Reader& reader, const pugi::xml_node& parent, con
   reader.setParameters(result.values);
   const pugi::xml_node declarations = parent.child("ParameterDeclarations");
   std::vector<std::string> declared;
+  std::map<std::string, int> declared_at;  // name -> line of its (latest) declaration
   if (declarations) {
     reader.requireSubset(declarations, {"ParameterDeclaration"});
     for (const pugi::xml_node& declaration : declarations.children("ParameterDeclaration")) {
       reader.requireSubset(declaration, {"ConstraintGroup"});
       const std::string name = declaration.attribute("name").value();
       if (name.empty()) reader.fail(declaration, "attribute 'name' is missing");
+      // Declared again in one scope: the later value replaces the earlier one, as esmini reads it
+      // (with a warning; esmini's own follow_reference and vehicle catalog do so). Said, and one input.
+      if (const auto earlier = declared_at.find(name); earlier != declared_at.end()) {
+        result.notes.emplace_back(reader.where(declaration),
+                                  fmt::format("parameter '{}' declared again: this declaration replaces the one at "
+                                              "line {}, as esmini reads it",
+                                              name, earlier->second));
+        const auto same = [&](const auto& entry) { return entry.first == name; };
+        result.numeric.erase(std::remove_if(result.numeric.begin(), result.numeric.end(), same), result.numeric.end());
+        result.strings.erase(std::remove_if(result.strings.begin(), result.strings.end(), same), result.strings.end());
+      }
+      declared_at[name] = reader.line(declaration);
       const Type type = typeOf(reader, declaration);
       const auto given = assigned.find(name);
       // A declared value may refer to the parameters before it (the reader resolves it); an

@@ -25,6 +25,8 @@ struct Parameters {
   std::vector<std::pair<std::string, double>> numeric;
   /// Declared string parameters of this scope, in order (catalog names, file paths, ...).
   std::vector<std::pair<std::string, std::string>> strings;
+  /// Where and what to note (a parameter declared again), for the caller's findings.
+  std::vector<std::pair<std::string, std::string>> notes;
 };
 
 /// Reads the <ParameterDeclarations> under `parent` (none: no parameters) on top of

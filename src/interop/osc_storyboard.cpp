@@ -1916,7 +1916,9 @@ void readStoryParameters(Translation& translation, const pugi::xml_node& story, 
                   "a constraint on a Story's parameter: constraints apply to the file's global parameters");
     }
   }
-  readParameters(reader, story, global, {}, "");
+  for (const auto& [where, what] : readParameters(reader, story, global, {}, "").notes) {
+    translation.findings.note(where, what);
+  }
   translation.findings.mapped(reader.where(declarations),
                               fmt::format("parameters of Story '{}', in scope inside it", reader.text(story, "name")));
 }

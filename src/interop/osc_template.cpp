@@ -572,6 +572,7 @@ TranslationResult translate(const fs::path& xosc, const OscImportOptions& option
   if (reader.number(header, "revMajor") != 1.0) reader.fail(header, "revMajor: expected OpenSCENARIO 1.x");
   reader.leave(header, {"revMinor", "date", "description", "author"});  // 1.x are read alike
   const Parameters parameters = readParameters(reader, root, {}, assigned, assigned_where);
+  for (const auto& [where, what] : parameters.notes) findings.note(where, what);
   TranslationResult result;
   result.inputs = parameters.numeric;
   result.violated = violatedConstraint(reader, root, parameters.values);

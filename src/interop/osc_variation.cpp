@@ -70,7 +70,10 @@ Axis multiDistribution(const xml::Reader& reader, const pugi::xml_node& multi) {
     reader.requireSubset(set, {"ParameterAssignment"});
     std::map<std::string, std::string> values;
     for (const pugi::xml_node& assignment : set.children("ParameterAssignment")) {
-      values[reader.text(assignment, "parameterRef")] = reader.text(assignment, "value");
+      const std::string name = reader.text(assignment, "parameterRef");
+      if (!values.emplace(name, reader.text(assignment, "value")).second) {
+        reader.fail(assignment, fmt::format("parameter '{}' is assigned twice in one <ParameterValueSet>", name));
+      }
     }
     axis.push_back(values);
   }
@@ -109,10 +112,22 @@ ParameterGrid readParameterDistribution(const fs::path& file, const OscImportOpt
   reader.requireSubset(deterministic, {"DeterministicSingleParameterDistribution", "DeterministicMultiParameterDistribution"});
   std::vector<Axis> axes;
   double product = 1.0;
+  std::map<std::string, int> varied_at;  // parameter -> line of the distribution that varies it
   for (const pugi::xml_node& node : deterministic.children()) {
     if (node.type() != pugi::node_element) continue;
     axes.push_back(std::string(node.name()) == "DeterministicSingleParameterDistribution" ? singleDistribution(reader, node)
                                                                                           : multiDistribution(reader, node));
+    // A parameter varied twice would take the later distribution's values only: refused.
+    for (const auto& alternative : axes.back()) {
+      for (const auto& [name, value] : alternative) {
+        const auto [earlier, first] = varied_at.emplace(name, reader.line(node));
+        if (!first && earlier->second != reader.line(node)) {
+          reader.fail(node, fmt::format("parameter '{}' is varied by the distribution at line {} already: each "
+                                        "parameter is varied by one distribution",
+                                        name, earlier->second));
+        }
+      }
+    }
     product *= static_cast<double>(axes.back().size());
     if (product > kMaxSets) reader.fail(node, fmt::format("more than {} parameter sets", kMaxSets));
   }

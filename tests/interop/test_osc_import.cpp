@@ -462,6 +462,35 @@ TEST(OscImport, NumbersThatAreNotSimulatedAreStillCheckedNumbers) {
   }
 }
 
+// A parameter declared twice in one scope: the later declaration replaces the earlier one (as
+// esmini reads it), said in a note, and it is one input. Varied by two distributions of a grid,
+// only the later one's values would count: refused.
+TEST(OscImport, AParameterDeclaredTwiceIsOneInputAndOneVariedTwiceIsRefused) {
+  const std::string first = R"(<ParameterDeclaration name="Cutter_Side" parameterType="integer" value="-1">)";
+  std::string twice = readTextFile(data("cut_in.xosc"));
+  twice.insert(twice.find(first), R"(<ParameterDeclaration name="Ego_Speed_kph" parameterType="double" value="50"/>)"
+                                  "\n    ");
+  const auto folder = folderWith({{"twice.xosc", twice}});
+  const auto logical = importTemplate(folder->path() / "twice.xosc", {});
+  const auto inputs = logical->inputNames();
+  EXPECT_EQ(std::count(inputs.begin(), inputs.end(), "Ego_Speed_kph"), 1);
+  EXPECT_EQ(std::count_if(inputs.begin(), inputs.end(),
+                          [](const std::string& name) { return name.rfind("Ego_Speed_kph", 0) == 0; }),
+            1);
+  EXPECT_THAT(checkOpenScenario(folder->path() / "twice.xosc", {}).report(),
+              HasSubstr("parameter 'Ego_Speed_kph' declared again: this declaration replaces the one at line 7"));
+
+  std::string varied = readTextFile(data("cut_in_variation.xosc"));
+  const std::string deterministic = "<Deterministic>";
+  varied.insert(varied.find(deterministic) + deterministic.size(),
+                R"(<DeterministicSingleParameterDistribution parameterName="LaneChange_Vy">
+                     <DistributionSet><Element value="2"/></DistributionSet>
+                   </DeterministicSingleParameterDistribution>)");
+  const auto varied_folder = folderWith({{"varied.xosc", varied}});
+  EXPECT_THAT(test::configErrorOf([&] { readParameterDistribution(varied_folder->path() / "varied.xosc", {}); }),
+              HasSubstr("parameter 'LaneChange_Vy' is varied by the distribution at line "));
+}
+
 // An attribute nothing reads is refused, not ignored: a typo (ofset: the offset would stay 0),
 // one the standard has that vsd-sumo does not follow (1.2's followingMode), one it does not
 // have. `scenario check` names each; names, the file header and 3D models are known.
