@@ -149,29 +149,44 @@ void Reader::leave(const pugi::xml_node& node, std::initializer_list<const char*
   }
 }
 
+namespace {
+
+/// Calls `visit` for `root` and every element inside it, without recursion (pugixml's walker
+/// keeps its own stack: a hostile file may nest a million elements).
+template <class Visit>
+void forEachElement(const pugi::xml_node& root, Visit visit) {
+  struct Walker : pugi::xml_tree_walker {
+    explicit Walker(Visit& v) : visit(v) {}
+    bool for_each(pugi::xml_node& node) override {
+      if (node.type() == pugi::node_element) visit(node);
+      return true;
+    }
+    Visit& visit;
+  } walker(visit);
+  visit(root);
+  pugi::xml_node start = root;
+  start.traverse(walker);
+}
+
+}  // namespace
+
 void Reader::leaveAll(const pugi::xml_node& node) const {
-  for (const pugi::xml_attribute& attribute : node.attributes()) read_.insert(attribute.internal_object());
-  for (const pugi::xml_node& child : node.children()) {
-    if (child.type() == pugi::node_element) leaveAll(child);
-  }
+  forEachElement(node, [&](const pugi::xml_node& element) {
+    for (const pugi::xml_attribute& attribute : element.attributes()) read_.insert(attribute.internal_object());
+  });
 }
 
 std::vector<std::string> Reader::unreadAttributes() const {
   std::vector<std::string> unread;
-  const std::function<void(const pugi::xml_node&)> visit = [&](const pugi::xml_node& node) {
-    if (interpreted_.count(node.internal_object()) > 0) {
-      for (const pugi::xml_attribute& attribute : node.attributes()) {
-        if (read_.count(attribute.internal_object()) > 0 || std::string(attribute.name()) == "name") continue;
-        unread.push_back(fmt::format("{}: attribute {}=\"{}\" is outside the supported subset (vsd-sumo does not "
-                                     "read it)",
-                                     where(node), attribute.name(), attribute.value()));
-      }
+  forEachElement(root(), [&](const pugi::xml_node& node) {
+    if (interpreted_.count(node.internal_object()) == 0) return;
+    for (const pugi::xml_attribute& attribute : node.attributes()) {
+      if (read_.count(attribute.internal_object()) > 0 || std::string(attribute.name()) == "name") continue;
+      unread.push_back(fmt::format("{}: attribute {}=\"{}\" is outside the supported subset (vsd-sumo does not "
+                                   "read it)",
+                                   where(node), attribute.name(), attribute.value()));
     }
-    for (const pugi::xml_node& child : node.children()) {
-      if (child.type() == pugi::node_element) visit(child);
-    }
-  };
-  visit(root());
+  });
   return unread;
 }
 

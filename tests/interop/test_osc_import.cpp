@@ -531,6 +531,15 @@ TEST(OscImport, AnAttributeNothingReadsIsRefusedByName) {
   EXPECT_TRUE(known_check.runnable()) << known_check.report();
   EXPECT_THAT(known_check.report(), HasSubstr("lighting=\"true\": vsd-sumo simulates no lights or animations"));
   EXPECT_THAT(known_check.report(), HasSubstr("<WorldPosition>: 0.5 m of height: vsd-sumo is planar"));
+  // The check walks the files without recursion: a catalog whose Properties (not interpreted)
+  // nest 200,000 elements deep imports as before.
+  std::string deep;
+  for (int i = 0; i < 200000; ++i) deep += "<P>";
+  for (int i = 0; i < 200000; ++i) deep += "</P>";
+  std::string drivers = readTextFile(data("catalogs/controllers/drivers.xosc"));
+  drivers.replace(drivers.find("<Properties/>"), 13, "<Properties>" + deep + "</Properties>");
+  const auto deep_folder = folderWith({{"catalogs/controllers/drivers.xosc", drivers}});
+  EXPECT_EQ(importTemplate(deep_folder->path() / "cut_in.xosc", {})->ego.controller.name, "alks");
   // `run` stops at the first in document order.
   EXPECT_THAT(test::configErrorOf([&] { importTemplate(folder->path() / "unread.xosc", {}); }),
               HasSubstr("<CatalogReference>: attribute bogus=\"7\" is outside the supported subset"));
