@@ -6,7 +6,6 @@
 #include "vsd/core/error.hpp"
 #include "vsd/core/files.hpp"
 #include "vsd/core/log.hpp"
-#include "vsd/core/numbers.hpp"
 #include "vsd/core/progress.hpp"
 #include "vsd/scenario/concrete_scenario.hpp"
 
@@ -117,7 +116,7 @@ void checkControllers(const scenario::LogicalScenario& logical, const scenario::
 }  // namespace
 
 ScenarioCheck checkOpenScenario(const fs::path& file, const OscImportOptions& options) {
-  if (options.step) checkStep(*options.step, "command line", "--step");  // a usage error, not a finding
+  osc::checkCommandLine(options);  // a usage error, not a finding
   osc::Findings findings(/*collect=*/true);
   ScenarioCheck check;
   fs::path scenario_file = file;

@@ -558,11 +558,18 @@ void chooseCarriageway(Translation& translation, const pugi::xml_node& root) {
 
 }  // namespace
 
+void checkCommandLine(const OscImportOptions& options) {
+  if (options.step) checkStep(*options.step, "command line", "--step");
+  if (options.duration) {
+    checkDurationSteps(*options.duration, options.step.value_or(scenario::LogicalScenario{}.step), "command line",
+                       "--duration");
+  }
+}
+
 /// Reads the whole file into the language. Refusals go to `findings` (and throw unless it collects).
 TranslationResult translate(const fs::path& xosc, const OscImportOptions& options, const ParameterValues& assigned,
                             const std::string& assigned_where, Findings& findings, const StringCodes& codes) {
-  // Before anything counts steps (the longest window a StopTrigger may ask for).
-  if (options.step) checkStep(*options.step, "command line", "--step");
+  checkCommandLine(options);  // before anything counts steps (the longest window a StopTrigger may ask for)
   xml::Reader reader(xosc, read_limits::kScenario);
   const pugi::xml_node root = reader.root();
   if (std::string(root.name()) != "OpenSCENARIO") reader.fail(root, "expected the root element <OpenSCENARIO>");

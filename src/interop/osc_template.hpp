@@ -238,6 +238,9 @@ YAML::Node speedAction(Translation& translation, const Entity& actor, const pugi
 /// set speed from then on, as esmini's ACC takes a speed action on its Ego; the dynamics are
 /// the controller's own (noted). Refuses a relative target.
 YAML::Node egoSetSpeed(Translation& translation, const pugi::xml_node& action);
+/// --step and --duration as the language will take them (a step SUMO counts; a duration of
+/// whole steps within the window), named as the user wrote them: ConfigError, a usage error.
+void checkCommandLine(const OscImportOptions& options);
 /// The appearance domains of an Activate- or AssignControllerAction (`attributes`: animation
 /// and lighting, or their activate... forms): read, and noted where activated (not simulated).
 void readAppearanceDomains(Translation& translation, const pugi::xml_node& action,

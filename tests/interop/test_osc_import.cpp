@@ -1079,7 +1079,8 @@ TEST(OscCli, ScenarioCheckExitStatusSaysWhetherItWouldRun) {
   EXPECT_THAT(flag.output, HasSubstr("a flag for other formats than vsd-scenario"));
   // Flag values out of range are usage errors (exit 2, one line), whatever the file.
   for (const auto& [flag_name, value] : std::vector<std::pair<std::string, std::string>>{
-           {"--duration", "-5"}, {"--duration", "0"}, {"--step", "0"}, {"--step", "0.0005"}}) {
+           {"--duration", "-5"}, {"--duration", "0"}, {"--duration", "500"}, {"--duration", "7.05"}, {"--step", "0"},
+           {"--step", "0.0005"}}) {
     for (const char* command : {"run", "check"}) {
       std::vector<std::string> args = {test::vsdSumo().string(), "--quiet"};
       if (std::string(command) == "check") args.push_back("scenario");
