@@ -320,7 +320,7 @@ void readInitAction(Translation& translation, Entity& entity, const pugi::xml_no
                          (reader.optionalText(dynamics, "dynamicsDimension") == std::optional<std::string>("time") &&
                           reader.optionalNumber(dynamics, "value") == std::optional<double>(0.0));
     if (at_once) {
-      reader.oneOf(dynamics, "dynamicsShape", {"step", "linear", "cubic", "sinusoidal"});
+      shapeOf(translation, dynamics, /*step_allowed=*/true);
       unusedPace(reader, dynamics);
       entity.speedTarget = reader.only(speed, "SpeedActionTarget");
       if (entity.gradualSpeed) {

@@ -77,7 +77,6 @@ Parameters readParameters(xml::Reader& reader, const pugi::xml_node& parent, con
   result.values = outer;
   reader.setParameters(result.values);
   const pugi::xml_node declarations = parent.child("ParameterDeclarations");
-  std::vector<std::string> declared;
   std::map<std::string, int> declared_at;  // name -> line of its (latest) declaration
   if (declarations) {
     reader.requireSubset(declarations, {"ParameterDeclaration"});
@@ -107,7 +106,6 @@ Parameters readParameters(xml::Reader& reader, const pugi::xml_node& parent, con
       const auto number = typed(type, value, where, name);
       result.values[name] = value;
       reader.setParameters(result.values);
-      declared.push_back(name);
       if (number && type.kind != Kind::Boolean) {
         result.numeric.emplace_back(name, *number);
       } else if (!number) {
@@ -116,7 +114,7 @@ Parameters readParameters(xml::Reader& reader, const pugi::xml_node& parent, con
     }
   }
   for (const auto& [name, value] : assigned) {
-    if (std::find(declared.begin(), declared.end(), name) == declared.end()) {
+    if (declared_at.count(name) == 0) {
       throw ConfigError(fmt::format("{}: assigns parameter '{}', which {} does not declare", assigned_where, name,
                                     reader.file().string()));
     }

@@ -205,11 +205,7 @@ void applyDistance(Translation& translation, Entity& entity, Placement& placemen
   // else between the reference points, which positions give (OpenSCENARIO's distances).
   const bool freespace = reader.boolean(action, "freespace");
   const std::string side = displacementOf(reader, action);
-  const auto system = reader.optionalText(action, "coordinateSystem");
-  if (system && *system != "entity" && *system != "road" && *system != "lane") {
-    reader.fail(action,
-                fmt::format("coordinateSystem=\"{}\": the language places a road user along the road", *system));
-  }
+  requireLaneFrame(reader, action, "the language places a road user along the road");
   const double sign = side == "trailingReferencedEntity" ? -1.0
                       : side == "leadingReferencedEntity" ? 1.0
                       : (placement.s + entity.centreAhead >= base.s + other.centreAhead ? 1.0 : -1.0);

@@ -29,7 +29,8 @@ std::string flowText(const YAML::Node& node) {
   return flow.c_str();
 }
 
-/// The language's shape of a transition ("shape"): sinusoidal is its smooth (half-cosine) one.
+}  // namespace
+
 std::string shapeOf(Translation& translation, const pugi::xml_node& dynamics, bool step_allowed) {
   const xml::Reader& reader = translation.reader;
   const std::string shape = reader.oneOf(dynamics, "dynamicsShape", {"step", "linear", "cubic", "sinusoidal"});
@@ -38,6 +39,15 @@ std::string shapeOf(Translation& translation, const pugi::xml_node& dynamics, bo
   }
   return shape == "sinusoidal" ? "smooth" : shape;
 }
+
+void requireLaneFrame(const xml::Reader& reader, const pugi::xml_node& node, const std::string& why) {
+  const auto system = reader.optionalText(node, "coordinateSystem");
+  if (system && *system != "entity" && *system != "road" && *system != "lane") {
+    reader.fail(node, fmt::format("coordinateSystem=\"{}\": {}", *system, why));
+  }
+}
+
+namespace {
 
 /// A pace (rate, time or distance) of a TransitionDynamics: the key and value of the language
 /// (`rate_key` for a rate, `distance` for a distance).
@@ -705,12 +715,7 @@ YAML::Node relationLeaf(Translation& translation, const Entity& actor, const Ent
   }
   // alongRoute (deprecated since 1.1) is read either way as the measure above, as esmini reads it.
   reader.optionalBoolean(condition, "alongRoute");
-  const auto system = reader.optionalText(condition, "coordinateSystem");
-  if (system && *system != "entity" && *system != "road" && *system != "lane") {
-    reader.fail(condition, fmt::format("coordinateSystem=\"{}\": the language measures along or across the Ego's "
-                                       "lane or in a straight line",
-                                       *system));
-  }
+  requireLaneFrame(reader, condition, "the language measures along or across the Ego's lane or in a straight line");
   const std::string quantity = kind == "RelativeDistanceCondition" ? "gap"
                                : kind == "TimeHeadwayCondition"    ? "headway"
                                                                    : "ttc";

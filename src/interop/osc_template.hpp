@@ -238,6 +238,12 @@ YAML::Node speedAction(Translation& translation, const Entity& actor, const pugi
 /// set speed from then on, as esmini's ACC takes a speed action on its Ego; the dynamics are
 /// the controller's own (noted). Refuses a relative target.
 YAML::Node egoSetSpeed(Translation& translation, const pugi::xml_node& action);
+/// The language's shape of a transition from a TransitionDynamics' dynamicsShape (sinusoidal is
+/// its smooth one); a step is refused unless `step_allowed`.
+std::string shapeOf(Translation& translation, const pugi::xml_node& dynamics, bool step_allowed);
+/// A `coordinateSystem` the language can follow: entity, road or lane (one lane frame along
+/// the road); any other (trajectory) is refused with `why`.
+void requireLaneFrame(const xml::Reader& reader, const pugi::xml_node& node, const std::string& why);
 /// --step and --duration as the language will take them (a step SUMO counts; a duration of
 /// whole steps within the window), named as the user wrote them: ConfigError, a usage error.
 void checkCommandLine(const OscImportOptions& options);

@@ -118,15 +118,17 @@ ParameterGrid readParameterDistribution(const fs::path& file, const OscImportOpt
     axes.push_back(std::string(node.name()) == "DeterministicSingleParameterDistribution" ? singleDistribution(reader, node)
                                                                                           : multiDistribution(reader, node));
     // A parameter varied twice would take the later distribution's values only: refused.
+    std::set<std::string> varied;
     for (const auto& alternative : axes.back()) {
-      for (const auto& [name, value] : alternative) {
-        const auto [earlier, first] = varied_at.emplace(name, reader.line(node));
-        if (!first && earlier->second != reader.line(node)) {
-          reader.fail(node, fmt::format("parameter '{}' is varied by the distribution at line {} already: each "
-                                        "parameter is varied by one distribution",
-                                        name, earlier->second));
-        }
+      for (const auto& [name, value] : alternative) varied.insert(name);
+    }
+    for (const std::string& name : varied) {
+      if (const auto earlier = varied_at.find(name); earlier != varied_at.end()) {
+        reader.fail(node, fmt::format("parameter '{}' is varied by the distribution at line {} already: each "
+                                      "parameter is varied by one distribution",
+                                      name, earlier->second));
       }
+      varied_at.emplace(name, reader.line(node));
     }
     product *= static_cast<double>(axes.back().size());
     if (product > kMaxSets) reader.fail(node, fmt::format("more than {} parameter sets", kMaxSets));
