@@ -60,6 +60,8 @@ void countSets(const ParameterGrid& grid, const OscImportOptions& options, osc::
   std::size_t skipped = 0;
   std::size_t refused = 0;
   std::size_t failing = 0;
+  std::size_t overlapping = 0;
+  std::string first_overlapping;
   std::string first_skipped;
   std::string first_refused;
   std::string first_failing;
@@ -70,6 +72,9 @@ void countSets(const ParameterGrid& grid, const OscImportOptions& options, osc::
     const std::string first = fmt::format("set {}: {}", set, verdict.message);
     switch (verdict.kind) {
       case osc::SetVerdict::Kind::Runs:
+        if (!verdict.overlap.empty() && overlapping++ == 0) {
+          first_overlapping = fmt::format("set {}: {}", set, verdict.overlap);
+        }
         break;
       case osc::SetVerdict::Kind::Skipped:
         if (skipped++ == 0) first_skipped = first;
@@ -88,6 +93,11 @@ void countSets(const ParameterGrid& grid, const OscImportOptions& options, osc::
                               grid.sets.size(), skipped, first_skipped.empty() ? "" : " (first: " + first_skipped + ")",
                               refused, failing, first_failing.empty() ? "" : "; first: " + first_failing,
                               grid.sets.size() - skipped - refused - failing));
+  if (overlapping > 0) {
+    findings.note(grid.file.string(), fmt::format("{} of the sets that would run start with road users other than the "
+                                                  "Ego overlapping (simulated as placed), the first: {}",
+                                                  overlapping, first_overlapping));
+  }
   // `run` fails such sets alone and runs the others (runVariation); with none left it refuses the file.
   const bool none_run = skipped + refused + failing == grid.sets.size();
   if (refused > 0 && none_run) {
@@ -111,6 +121,15 @@ void checkControllers(const scenario::LogicalScenario& logical, const scenario::
     return;
   }
   pipeline::buildEgoControllers(logical, concrete);
+}
+
+/// Road users other than the Ego that start overlapping: OpenSCENARIO sets no rule against it.
+std::string overlapNote(const std::string& overlap) {
+  return overlap + " (road users other than the Ego may: simulated as placed, they move through each other)";
+}
+
+void noteOverlap(const fs::path& file, const std::string& overlap, osc::Findings& findings) {
+  findings.note(file.string(), overlapNote(overlap));
 }
 
 }  // namespace
@@ -151,8 +170,8 @@ ScenarioCheck checkOpenScenario(const fs::path& file, const OscImportOptions& op
     findings.attempt([&] {
       const auto logical = loadTranslation(scenario_file, result.yaml);
       // Per-sample checks (lanes that exist, road users that do not overlap) on the one scenario.
-      const auto concrete = scenario::sampleConcreteScenario(logical, 1, 0);
-      checkControllers(*logical, concrete, findings);
+      for (const auto& overlap : osc::checkStart(logical, 1, 0)) noteOverlap(scenario_file, overlap, findings);
+      checkControllers(*logical, scenario::sampleConcreteScenario(logical, 1, 0), findings);
       check.yaml = result.yaml;
     });
   }
@@ -178,6 +197,9 @@ pipeline::RunSummary runTemplate(pipeline::RunOptions options, const OscImportOp
                              "no such flag for an OpenSCENARIO scenario (it is one concrete scenario)");
   }
   const auto logical = importTemplate(options.scenarioFile, import);
+  for (const auto& overlap : osc::checkStart(logical, options.seed, 0)) {
+    spdlog::warn("{}: {}", options.scenarioFile.string(), overlapNote(overlap));
+  }
   options.samples = 1;
   options.firstSample = 0;
   return pipeline::runScenarios(logical, options);

@@ -226,7 +226,15 @@ struct SetVerdict {
   };
   Kind kind = Kind::Runs;
   std::string message;  ///< why, for every kind but Runs
+  /// Runs: the first pair of road users its start lets overlap (checkStart), empty if none.
+  std::string overlap;
 };
+/// What the simulation meets at the start of sample `index` of `logical` with `seed`: throws
+/// ConfigError where the language's per-sample checks or the simulation refuse the start (road
+/// users overlapping or off their road), as `run` would; returns the pairs of road users it lets
+/// start overlapping (sim::ScriptedTraffic::startOverlaps).
+std::vector<std::string> checkStart(const std::shared_ptr<const scenario::LogicalScenario>& logical,
+                                    std::uint64_t seed, std::uint64_t index);
 /// Imports set `set` of `grid` (string parameters coded by `codes`) and checks sample `index`
 /// of it with `seed`.
 SetVerdict judgeSet(const ParameterGrid& grid, const OscImportOptions& import, const StringCodes& codes,

@@ -160,6 +160,10 @@ std::string SweepSummary::report() const {
       simulated < runnable ? fmt::format(" (--samples: evenly spaced over the {} others)", runnable) : "");
   if (!firstSkipped.empty()) text += fmt::format("first skipped: {}\n", firstSkipped);
   if (!firstRefused.empty()) text += fmt::format("first failed: {}\n", firstRefused);
+  if (overlapping > 0) {
+    text += fmt::format("{} of the sets that run start with road users other than the Ego overlapping (simulated as "
+                        "placed), the first: {}\n", overlapping, firstOverlapping);
+  }
   return text;
 }
 
@@ -219,6 +223,13 @@ std::shared_ptr<const scenario::LogicalScenario> importSet(const ParameterGrid& 
 
 namespace osc {
 
+std::vector<std::string> checkStart(const std::shared_ptr<const scenario::LogicalScenario>& logical,
+                                    std::uint64_t seed, std::uint64_t index) {
+  const auto concrete = scenario::sampleConcreteScenario(logical, seed, index);
+  const auto road = road::buildRoadGeometry(concrete);
+  return sim::ScriptedTraffic(concrete, road).startOverlaps();
+}
+
 SetVerdict judgeSet(const ParameterGrid& grid, const OscImportOptions& import, const StringCodes& codes,
                     std::size_t set, std::uint64_t seed, std::uint64_t index) {
   faultPoint("osc.set");
@@ -226,16 +237,15 @@ SetVerdict judgeSet(const ParameterGrid& grid, const OscImportOptions& import, c
   try {
     std::string violation;
     const auto logical = importSet(grid, import, codes, set, &violation);
-    if (!logical) return {SetVerdict::Kind::Skipped, violation};
+    if (!logical) return {SetVerdict::Kind::Skipped, violation, ""};
     try {
-      const auto concrete = scenario::sampleConcreteScenario(logical, seed, index);
-      const auto road = road::buildRoadGeometry(concrete);
-      const sim::ScriptedTraffic traffic(concrete, road);  // throws where the simulation would refuse the start
+      const auto overlaps = checkStart(logical, seed, index);
+      if (!overlaps.empty()) return {SetVerdict::Kind::Runs, "", overlaps.front()};
     } catch (const ConfigError& error) {
-      return {SetVerdict::Kind::CannotStart, error.what()};
+      return {SetVerdict::Kind::CannotStart, error.what(), ""};
     }
   } catch (const ConfigError& error) {
-    return {SetVerdict::Kind::Refused, error.what()};
+    return {SetVerdict::Kind::Refused, error.what(), ""};
   }
   return {};
 }
@@ -256,6 +266,9 @@ std::vector<std::size_t> acceptSets(const ParameterGrid& grid, const OscImportOp
     switch (verdict.kind) {
       case osc::SetVerdict::Kind::Runs:
         accepted.push_back(set);
+        if (!verdict.overlap.empty() && summary.overlapping++ == 0) {
+          summary.firstOverlapping = fmt::format("parameter set {}: {}", set, verdict.overlap);
+        }
         break;
       case osc::SetVerdict::Kind::Skipped:
         if (summary.skipped++ == 0) summary.firstSkipped = fmt::format("parameter set {}: {}", set, verdict.message);

@@ -119,6 +119,7 @@ ConcreteVehicle placeVehicle(const VehicleSpec& spec, const std::vector<double>&
   vehicle.offset = evaluateFinite(spec.offset, inputs, spec.where, "offset");
   vehicle.heading = evaluateFinite(spec.headingDeg, inputs, spec.where, "heading_deg") * kPi / 180.0;
   vehicle.againstRoad = spec.againstRoad;
+  vehicle.mayStartOverlapping = spec.mayStartOverlapping;
   if (vehicle.againstRoad) {
     // A drawn type is known per sample only (a fixed one is checked at load).
     if (!roadUserKind(vehicle.type).drivesInLanes) {

@@ -817,6 +817,9 @@ void parseOther(const YamlReader& reader, const YAML::Node& item, const std::str
   parseOtherSpeed(reader, item, field, inputs, other);
   parseHeadingNoise(reader, item, field, inputs, other);
   parseDirection(reader, item, field, other);
+  if (item["may_start_overlapping"]) {
+    other.mayStartOverlapping = flag(reader, item["may_start_overlapping"], field + ".may_start_overlapping");
+  }
   parseActions(reader, item, field, inputs, scenario, other);
 }
 
@@ -988,7 +991,7 @@ void parseRoadUsers(const YamlReader& reader, const YAML::Node& node, LogicalSce
     const std::string field = fmt::format("vehicles.others[{}]", i);
     reader.checkKeys(item, field,
                      {"id", "type", "x", "s", "ds", "gap", "from", "lane", "relative_lane", "offset", "heading_deg",
-                      "direction", "length", "width", "reference_point",
+                      "direction", "may_start_overlapping", "length", "width", "reference_point",
                       "speed_profile", "speed", "relative_speed", "speed_noise", "heading_noise_deg", "actions"});
     VehicleSpec other;
     other.id = item["id"] ? reader.scalar(item["id"], field + ".id") : fmt::format("other{}", i);

@@ -217,8 +217,11 @@ struct ScriptedTraffic::Impl {
   double regionStartS = 0.0;  ///< m along the centre line where the scenario region starts
   double regionEndS = 0.0;    ///< m along the centre line where it ends (the road's end for end_of_road)
 
+  /// Pairs let start overlapping (VehicleSpec::mayStartOverlapping), in scenario order.
+  std::vector<std::string> startOverlaps;
+
   void init();
-  void checkOverlaps() const;
+  void checkOverlaps();
   double relationValue(const scenario::ConcreteTrigger& trigger, int owner, const VehicleState& ego) const;
   double distanceToPlace(const scenario::ConcreteTrigger& trigger, const VehicleState& ego) const;
   /// Road user `user`'s id: -1 the Ego, else others[user].
@@ -337,7 +340,7 @@ void ScriptedTraffic::Impl::init() {
   checkOverlaps();
 }
 
-void ScriptedTraffic::Impl::checkOverlaps() const {
+void ScriptedTraffic::Impl::checkOverlaps() {
   std::vector<Footprint> footprints = {footprintOf(egoStart, concrete->ego.length, concrete->ego.width)};
   std::vector<const scenario::ConcreteVehicle*> users = {&concrete->ego};
   for (const auto& mover : movers) {
@@ -348,6 +351,12 @@ void ScriptedTraffic::Impl::checkOverlaps() const {
     for (std::size_t j = i + 1; j < footprints.size(); ++j) {
       const double clearance = footprintGap(footprints[i], footprints[j]);
       if (clearance >= 0.0) continue;
+      // Index 0 is the Ego: nothing may start inside it (its test would begin with a collision).
+      if (i > 0 && (users[i]->mayStartOverlapping || users[j]->mayStartOverlapping)) {
+        startOverlaps.push_back(fmt::format("'{}' starts overlapping '{}' (clearance {:.2f} m)", users[j]->id,
+                                            users[i]->id, clearance));
+        continue;
+      }
       throw ConfigError(fmt::format("{}: road user '{}' starts overlapping '{}' (clearance {:.2f} m): expected road "
                                     "users apart at t = 0 (check their x/s/ds, lane and offset)",
                                     concrete->where(), users[j]->id, users[i]->id, clearance));
@@ -1011,6 +1020,8 @@ const VehicleState& ScriptedTraffic::egoStart() const { return impl_->egoStart; 
 std::size_t ScriptedTraffic::instant() const { return impl_->k; }
 const std::vector<VehicleState>& ScriptedTraffic::states() const { return impl_->states; }
 const std::vector<ScriptedTraffic::ActionTiming>& ScriptedTraffic::timings() const { return impl_->timings; }
+
+const std::vector<std::string>& ScriptedTraffic::startOverlaps() const { return impl_->startOverlaps; }
 
 namespace {
 /// The value of the last started entry (start time, value) that has started by `time`: asked every

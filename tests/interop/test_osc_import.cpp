@@ -1004,27 +1004,70 @@ TEST(OscRun, VariationRunsTheGridAndSkipsViolatedSets) {
   EXPECT_THAT(fewer.report(), HasSubstr("2 run (--samples: evenly spaced over the 6 others)"));
 }
 
-// ASAM's multiple-blocking-target sweeps hold sets whose targets overlap at t = 0: such a set
-// fails alone and is counted; the sweep runs the others (before, it ended at the first one).
+// ASAM's multiple-blocking-target sweeps hold sets whose targets overlap at t = 0 (the file's
+// 18.75 m truck 15 m before the second target): OpenSCENARIO sets no rule against that, so such a
+// set runs, counted and named. A set that starts a road user inside the Ego cannot start: it fails
+// alone and is counted; the sweep runs the others.
 TEST(OscRun, ASetWhoseRoadUsersCannotStartFailsAloneAndTheSweepGoesOn) {
   TemporaryDirectory dir("vsd-osc-sweep");
   const SweepSummary summary = sweep(data("blocking_targets_variation.xosc"), dir.path() / "sweep");
-  EXPECT_EQ(summary.sets, 3u);
+  EXPECT_EQ(summary.sets, 4u);
   EXPECT_EQ(summary.skipped, 0u);
-  EXPECT_EQ(summary.refused, 1u);  // the 3 m gap between 5 m long vehicles
-  EXPECT_EQ(summary.run.ok, 2u);
-  EXPECT_THAT(summary.firstRefused, HasSubstr("parameter set 1:"));
-  EXPECT_THAT(summary.firstRefused, HasSubstr("road user 'Second' starts overlapping 'First'"));
-  EXPECT_THAT(summary.report(), HasSubstr("3 in the grid, 0 skipped by the template's constraints, 1 failed (refused "
-                                          "by the import or road users that cannot start), 2 run\n"));
+  EXPECT_EQ(summary.refused, 1u);  // the second target placed onto the Ego
+  EXPECT_EQ(summary.run.ok, 3u);
+  EXPECT_THAT(summary.firstRefused, HasSubstr("parameter set 3:"));
+  EXPECT_THAT(summary.firstRefused, HasSubstr("road user 'Second' starts overlapping 'ego'"));
+  EXPECT_EQ(summary.overlapping, 1u);  // the 3 m gap between 5 m long vehicles
+  EXPECT_THAT(summary.firstOverlapping, HasSubstr("parameter set 1: 'Second' starts overlapping 'First' (clearance -"));
+  EXPECT_THAT(summary.report(), HasSubstr("4 in the grid, 0 skipped by the template's constraints, 1 failed (refused "
+                                          "by the import or road users that cannot start), 3 run\n"));
+  EXPECT_THAT(summary.report(), HasSubstr("1 of the sets that run start with road users other than the Ego "
+                                          "overlapping (simulated as placed), the first: parameter set 1:"));
   const std::string csv = readTextFile(dir.path() / "sweep" / "concrete.csv");
-  EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 3);  // header and the two sets that ran
+  EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 4);  // header and the three sets that ran
 
   // `scenario check` counts them the same way, and the file still runs.
   const auto check = checkOpenScenario(data("blocking_targets_variation.xosc"), {});
   EXPECT_TRUE(check.runnable()) << check.report();
-  EXPECT_THAT(check.report(), HasSubstr("0 refused, 1 would fail (road users that cannot start; first: set 1:"));
-  EXPECT_THAT(check.report(), HasSubstr("2 would run"));
+  EXPECT_THAT(check.report(), HasSubstr("0 refused, 1 would fail (road users that cannot start; first: set 3:"));
+  EXPECT_THAT(check.report(), HasSubstr("3 would run"));
+  EXPECT_THAT(check.report(), HasSubstr("1 of the sets that would run start with road users other than the Ego "
+                                        "overlapping (simulated as placed), the first: set 1: 'Second' starts "
+                                        "overlapping 'First'"));
+}
+
+// One concrete scenario whose targets overlap: check notes it, run warns once and simulates it;
+// one whose target starts inside the Ego: check says it would not run, as run refuses it.
+TEST(OscRun, ATemplatesOverlappingTargetsRunAndATargetInsideTheEgoIsRefusedByCheckAsByRun) {
+  TemporaryDirectory dir("vsd-osc-overlap");
+  for (const char* folder : {"roads", "catalogs"}) {
+    fs::copy(data(folder), dir.path() / folder, fs::copy_options::recursive);
+  }
+  const auto copy = [&](const std::string& gap) {
+    const fs::path file = dir.path() / ("gap_" + gap + ".xosc");
+    test::writeFile(file, dataWith("blocking_targets.xosc", R"(name="Gap_m" parameterType="double" value="20")",
+                                   R"(name="Gap_m" parameterType="double" value=")" + gap + "\""));
+    return file;
+  };
+  const fs::path overlapping = copy("3");
+  const auto check = checkOpenScenario(overlapping, {});
+  EXPECT_TRUE(check.runnable()) << check.report();
+  EXPECT_THAT(check.report(), HasSubstr("'Second' starts overlapping 'First' (clearance -"));
+  EXPECT_THAT(check.report(), HasSubstr(" m) (road users other than the Ego may: simulated as placed"));
+  const auto ran = test::run({test::vsdSumo().string(), "run", overlapping.string(), "--out",
+                              (dir.path() / "ran").string()}, dir.path());
+  EXPECT_EQ(ran.exitCode, 0) << ran.output;
+  EXPECT_THAT(ran.output, HasSubstr("warning: " + overlapping.string() + ": 'Second' starts overlapping 'First'"));
+
+  const fs::path onto_ego = copy("-128");
+  const auto refused = checkOpenScenario(onto_ego, {});
+  EXPECT_FALSE(refused.runnable()) << refused.report();
+  EXPECT_THAT(refused.report(), HasSubstr("road user 'Second' starts overlapping 'ego'"));
+  const auto not_run = test::run({test::vsdSumo().string(), "--quiet", "run", onto_ego.string(), "--out",
+                                  (dir.path() / "not_run").string()}, dir.path());
+  EXPECT_EQ(not_run.exitCode, 1) << not_run.output;
+  EXPECT_THAT(not_run.output, HasSubstr("road user 'Second' starts overlapping 'ego'"));
+  EXPECT_FALSE(fs::exists(dir.path() / "not_run"));
 }
 
 // A set whose values the import refuses (here a lane driven against the reference line, which
@@ -1051,8 +1094,8 @@ TEST(OscCli, BenchImportTimesTheSweepsImportOverTheSetsThatRun) {
   const auto bench = test::run({test::vsdSumo().string(), "--quiet", "bench", "import",
                                 data("blocking_targets_variation.xosc").string()}, dir.path());
   ASSERT_EQ(bench.exitCode, 0) << bench.output;
-  EXPECT_THAT(bench.output, HasSubstr("parameter sets: 3 in the grid, 0 skipped by the template's constraints, 1 failed "
-                                      "(refused by the import or road users that cannot start), 2 would run"));
+  EXPECT_THAT(bench.output, HasSubstr("parameter sets: 4 in the grid, 0 skipped by the template's constraints, "
+                                      "1 failed (refused by the import or road users that cannot start), 3 would run"));
   EXPECT_THAT(bench.output, HasSubstr("import overhead per concrete scenario: "));
   EXPECT_THAT(bench.output, HasSubstr("(target <= 20 ms: "));
   // A template is one concrete scenario, not a sweep: refused in one line, nothing printed before it.

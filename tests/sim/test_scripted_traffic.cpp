@@ -288,6 +288,33 @@ TEST(ScriptedTraffic, RoadUsersOverlappingAtTheStartAreRefused) {
       << error;
 }
 
+// `may_start_overlapping: true` (obstacles an OpenSCENARIO file places closer than their lengths)
+// lets a road user start inside another, named and measured; never inside the Ego.
+TEST(ScriptedTraffic, RoadUsersThatMayStartOverlappingDoSoButNeverInsideTheEgo) {
+  const auto logical = scenarioWith(R"(
+    - {id: lead, gap: 20, relative_lane: 0, relative_speed: 0}
+    - {id: twin, ds: 1, from: lead, relative_lane: 0, relative_speed: 0, may_start_overlapping: true})");
+  const auto concrete = scenario::sampleConcreteScenario(logical, 1, 3);
+  const auto road = road::buildRoadGeometry(concrete);
+  const ScriptedTraffic traffic(concrete, road);
+  ASSERT_EQ(traffic.startOverlaps().size(), 1u);
+  // Two cars of the table's 5 m x 1.8 m one metre apart in one lane: 4 m inside each other along
+  // the lane, 1.8 m across, the clearance minus the lesser depth.
+  EXPECT_EQ(traffic.startOverlaps()[0], "'twin' starts overlapping 'lead' (clearance -1.80 m)");
+
+  const auto onto_ego = scenarioWith(R"(
+    - {id: twin, ds: 1, relative_lane: 0, relative_speed: 0, may_start_overlapping: true})");
+  const auto concrete_ego = scenario::sampleConcreteScenario(onto_ego, 1, 3);
+  const auto road_ego = road::buildRoadGeometry(concrete_ego);
+  const std::string error = test::configErrorOf([&] { ScriptedTraffic refused(concrete_ego, road_ego); });
+  EXPECT_NE(error.find("road user 'twin' starts overlapping 'ego'"), std::string::npos) << error;
+
+  const std::string flag = test::configErrorOf([&] {
+    scenarioWith("\n    - {id: twin, ds: 30, relative_lane: 0, relative_speed: 0, may_start_overlapping: yes}");
+  });
+  EXPECT_NE(flag.find("may_start_overlapping: got 'yes', expected true or false"), std::string::npos) << flag;
+}
+
 // Triggers on motion (docs/scenario-language.md "Actions and triggers"), in planning: the
 // others move as scripted and the Ego is its stand-in (s = 30 on lane 1 at 10 m/s). Every
 // start time is derived by hand from the numbers, to the recorded instant (step 0.2 s). The

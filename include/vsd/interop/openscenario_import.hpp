@@ -113,6 +113,10 @@ struct SweepSummary {
   std::uint64_t simulated = 0;  ///< sets run: all the others, or --samples of them
   std::string firstSkipped;   ///< the first violation, as reported
   std::string firstRefused;   ///< the first refusal, as reported
+  /// Of the sets that would run: those whose road users other than the Ego start overlapping
+  /// (the import lets them: OpenSCENARIO has no rule against it), and the first such pair.
+  std::uint64_t overlapping = 0;
+  std::string firstOverlapping;
   std::string report() const;
 };
 SweepSummary runVariation(pipeline::RunOptions options, const OscImportOptions& import, bool samples_given);

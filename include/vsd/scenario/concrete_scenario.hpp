@@ -91,6 +91,7 @@ struct ConcreteVehicle {
   double offset = 0.0;  ///< m, lateral offset from the lane centre at the start, > 0 left
   double heading = 0.0; ///< rad, relative to the road's direction at the start (pi: against the road)
   bool againstRoad = false;  ///< drives against the road's direction, s decreasing (VehicleSpec::againstRoad)
+  bool mayStartOverlapping = false;  ///< VehicleSpec::mayStartOverlapping
   double speed = 0.0;   ///< m/s, initial speed
   /// Non-Ego vehicles: scripted speed (m/s, >= 0, noise included) at every instant t_k, k = 0..steps,
   /// before any speed action.

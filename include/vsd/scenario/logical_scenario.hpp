@@ -295,6 +295,9 @@ struct VehicleSpec {
   /// Others that drive in lanes (`direction: against`): it drives against the road's direction,
   /// s decreasing (oncoming traffic, or an overtaker on the Ego's lane); default along it.
   bool againstRoad = false;
+  /// Others (`may_start_overlapping: true`): it may start overlapping any road user but the Ego
+  /// (obstacles an OpenSCENARIO file places closer than their lengths); default false: refused.
+  bool mayStartOverlapping = false;
   double length = 0.0;     ///< m, from the type's table entry unless given
   double width = 0.0;      ///< m
   /// m ahead of its centre along its heading (< 0 behind; within half its length): the point

@@ -21,6 +21,7 @@
 #include <cstddef>
 #include <memory>
 #include <optional>
+#include <string>
 #include <vector>
 
 #include "vsd/core/trace.hpp"
@@ -47,7 +48,8 @@ class EgoStandIn {
 class ScriptedTraffic {
  public:
   /// At t = 0. Throws ConfigError (naming the file, the road user and the sample) if a road
-  /// user starts outside its road or overlapping another road user (the Ego included).
+  /// user starts outside its road or overlapping another road user (the Ego included; two
+  /// others where one may start overlapping, VehicleSpec::mayStartOverlapping, are let be).
   ScriptedTraffic(const scenario::ConcreteScenario& concrete, const road::RoadGeometry& road);
   ScriptedTraffic(ScriptedTraffic&&) noexcept;
   ScriptedTraffic& operator=(ScriptedTraffic&&) noexcept;
@@ -74,6 +76,10 @@ class ScriptedTraffic {
   };
   /// Per action of ConcreteScenario::actions.
   const std::vector<ActionTiming>& timings() const;
+  /// The road users that start overlapping where one of them may (VehicleSpec::mayStartOverlapping),
+  /// one line per pair in scenario order ("'b' starts overlapping 'a' (clearance -2.50 m)",
+  /// the clearance as the refusal gives it: minus the overlap's least depth); empty if none.
+  const std::vector<std::string>& startOverlaps() const;
   /// The set speed (m/s) the Ego's latest set_speed action started by `time` (s) commands its
   /// controller; none before the first. Actions start while stepping to the instant after
   /// their start, so ask with the time the controller acts at.
