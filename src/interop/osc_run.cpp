@@ -190,12 +190,7 @@ std::shared_ptr<const scenario::LogicalScenario> importTemplate(const fs::path& 
   return loadTranslation(xosc, result.yaml);
 }
 
-pipeline::RunSummary runTemplate(pipeline::RunOptions options, const OscImportOptions& import,
-                                 const std::vector<std::string>& fixed_by_file) {
-  if (!fixed_by_file.empty()) {
-    throw ConfigError::field("command line", fixed_by_file.front(), options.scenarioFile.string(),
-                             "no such flag for an OpenSCENARIO scenario (it is one concrete scenario)");
-  }
+pipeline::RunSummary runTemplate(pipeline::RunOptions options, const OscImportOptions& import) {
   const auto logical = importTemplate(options.scenarioFile, import);
   for (const auto& overlap : osc::checkStart(logical, options.seed, 0)) {
     spdlog::warn("{}: {}", options.scenarioFile.string(), overlapNote(overlap));

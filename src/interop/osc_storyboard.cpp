@@ -394,7 +394,7 @@ YAML::Node assignedController(Translation& translation, const pugi::xml_node& as
   ControllerChoice choice = translation.controllerMap.choice(name, where);
   if (choice.name == kFollowsItsScript) {
     // The Ego follows its script where this controller drives: it keeps its speed and lane.
-    choice = {kKeepsItsLane, YAML::Node()};
+    choice = {kKeepsItsLane, YAML::Node(), {}};
     translation.findings.note(where, fmt::format("controller '{}' is mapped to '{}': the Ego follows its script where "
                                                  "it drives (keeps its speed and lane: vsd-sumo's '{}')",
                                                  name, kFollowsItsScript, kKeepsItsLane));
@@ -409,9 +409,7 @@ YAML::Node assignedController(Translation& translation, const pugi::xml_node& as
     }
     item[kActivation] = domains;
   }
-  YAML::Node controller;
-  controller["name"] = choice.name;
-  if (choice.params && choice.params.IsMap()) controller["params"] = choice.params;
+  const YAML::Node controller = choice.languageNode();
   translation.findings.mapped(where, fmt::format("the Ego's controller '{}' is vsd-sumo's '{}' (its properties are "
                                                  "not passed on)",
                                                  name, choice.name));
@@ -1804,12 +1802,8 @@ void activateAlone(Translation& translation, const PendingEvent& event, const st
     activateEgoController(translation, event.node, trigger);
     // Where the file hands the Ego over, an activation hands it back to its own controller.
     if (translation.egoHandedOver) {
-      YAML::Node own;
-      own["name"] = translation.controller.name;
-      if (translation.controller.params && translation.controller.params.IsMap()) {
-        own["params"] = translation.controller.params;
-      }
-      translation.ego->actions.push_back(egoControllerAction(translation, event, trigger, own, "true", ""));
+      translation.ego->actions.push_back(
+          egoControllerAction(translation, event, trigger, translation.controller.languageNode(), "true", ""));
     }
     return;
   }

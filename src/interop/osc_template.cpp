@@ -17,6 +17,7 @@
 #include "vsd/core/numbers.hpp"
 #include "vsd/road/road_geometry.hpp"
 #include "vsd/scenario/yaml_reader.hpp"
+#include "vsd/sim/controller.hpp"
 
 namespace fs = std::filesystem;
 
@@ -46,6 +47,63 @@ constexpr double kMaxExtension = 10'000.0;
 
 }  // namespace
 
+YAML::Node ControllerChoice::languageNode() const {
+  YAML::Node node;
+  node["name"] = name;
+  if (params && params.IsMap()) node["params"] = params;
+  if (!library.empty()) node["library"] = library.string();
+  return node;
+}
+
+namespace {
+
+/// A map file's entry: a controller name, or {controller: NAME, params: {...}, library: PATH}
+/// (PATH relative to the map file); throws ConfigError naming the file and the entry otherwise.
+ControllerChoice mapEntry(const YAML::Node& entry, const fs::path& file, const std::string& name) {
+  const std::string expected = fmt::format("{}: {}: expected a controller name or {{controller: NAME, params: {{...}}, "
+                                           "library: PLUGIN.so}}", file.string(), name);
+  if (entry.IsScalar()) return {entry.as<std::string>(), {}, {}};
+  if (!entry.IsMap()) throw ConfigError(expected);
+  for (const auto& key_value : entry) {
+    const std::string key = key_value.first.as<std::string>();
+    if (key != "controller" && key != "params" && key != "library") throw ConfigError(expected);
+  }
+  const YAML::Node params = entry["params"];
+  const YAML::Node library = entry["library"];
+  if (!entry["controller"] || !entry["controller"].IsScalar() || (params && !params.IsMap()) ||
+      (library && !library.IsScalar())) {
+    throw ConfigError(expected);
+  }
+  ControllerChoice choice{entry["controller"].as<std::string>(), params ? params : YAML::Node(), {}};
+  if (!library) return choice;
+  choice.library = fs::absolute(file.parent_path() / library.as<std::string>()).lexically_normal();
+  if (!fs::is_regular_file(choice.library)) {
+    throw ConfigError(fmt::format("{}: {}: library: got '{}', expected a controller plugin's shared library (relative "
+                                  "to the map file): {} does not exist",
+                                  file.string(), name, library.as<std::string>(), choice.library.string()));
+  }
+  return choice;
+}
+
+/// A choice without a library names a built-in controller (or `script`, where `script_allowed`);
+/// a plugin is loaded by `run`. Throws ConfigError starting with `where`.
+void requireKnownController(const ControllerChoice& choice, const std::string& where, bool script_allowed) {
+  const auto builtins = sim::ControllerRegistry::withBuiltins();
+  if (!choice.library.empty() || (script_allowed && choice.name == kFollowsItsScript) ||
+      builtins.contains(choice.name)) {
+    return;
+  }
+  std::vector<std::string> known;
+  for (const auto& [known_name, description] : builtins.available()) known.push_back(known_name);
+  throw ConfigError(fmt::format("{}: controller '{}' is not built in (built-in: {}{}){}", where, choice.name,
+                                fmt::join(known, ", "),
+                                script_allowed ? fmt::format("; or {} to leave the entity scripted", kFollowsItsScript)
+                                               : "",
+                                script_allowed ? "; a plugin needs library: PLUGIN.so" : ""));
+}
+
+}  // namespace
+
 ControllerChoice ControllerMap::choice(const std::string& name, const std::string& where) const {
   if (given()) {
     const std::string file = file_.string();
@@ -53,16 +111,9 @@ ControllerChoice ControllerMap::choice(const std::string& name, const std::strin
     const YAML::Node& map = *map_;
     if (!map.IsMap()) throw ConfigError(fmt::format("{}: expected a map from controller names to vsd-sumo controllers", file));
     if (const YAML::Node entry = map[name]) {
-      if (entry.IsScalar()) return {entry.as<std::string>(), {}};
-      const bool keys_known = entry.IsMap() && std::all_of(entry.begin(), entry.end(), [](const auto& key_value) {
-        const std::string key = key_value.first.template as<std::string>();
-        return key == "controller" || key == "params";
-      });
-      const YAML::Node params = entry.IsMap() ? entry["params"] : YAML::Node();
-      if (keys_known && entry["controller"] && entry["controller"].IsScalar() && (!params || params.IsMap())) {
-        return {entry["controller"].as<std::string>(), params ? params : YAML::Node()};
-      }
-      throw ConfigError(fmt::format("{}: {}: expected a controller name or {{controller: NAME, params: {{...}}}}", file, name));
+      ControllerChoice choice = mapEntry(entry, file_, name);
+      requireKnownController(choice, fmt::format("{}: {}", file, name), /*script_allowed=*/true);
+      return choice;
     }
   }
   const auto& defaults = defaultControllerMap();
@@ -73,7 +124,7 @@ ControllerChoice ControllerMap::choice(const std::string& name, const std::strin
                                   "ECE_ALKS_RefDriverController, ACCController)",
                                   where, name));
   }
-  return {found->second, {}};
+  return {found->second, {}, {}};
 }
 
 namespace {
@@ -127,7 +178,7 @@ Entity& findEgo(Translation& translation, ControllerChoice& controller) {
     throw ConfigError(fmt::format("{}: no entity has a controller and none is named '{}' (--ego NAME: which is the Ego?)",
                                   translation.reader.file().string(), ego_name));
   }
-  controller = {translation.options.controller.value_or(kDefaultEgoController), {}};
+  controller = {translation.options.controller.value_or(kDefaultEgoController), {}, {}};
   translation.findings.note(ego->where, fmt::format("no controller in the file: '{}' is the Ego, driven by '{}' "
                                                     "(--ego, --controller)", ego->name, controller.name));
   return *ego;
@@ -426,8 +477,7 @@ std::string languageYaml(Translation& translation, const Parameters& parameters,
   if (inputs.size() > 0) root["inputs"] = inputs;
   root["road"] = roadNode(translation, duration);
   root["vehicles"]["ego"] = roadUserNode(translation, ego, true);
-  root["vehicles"]["ego"]["controller"]["name"] = controller.name;
-  if (controller.params && controller.params.IsMap()) root["vehicles"]["ego"]["controller"]["params"] = controller.params;
+  root["vehicles"]["ego"]["controller"] = controller.languageNode();
   if (translation.egoActiveFrom && *translation.egoActiveFrom > 0.0) {
     root["vehicles"]["ego"]["controller"]["active_from"] = num(*translation.egoActiveFrom);
   }
@@ -562,6 +612,9 @@ void chooseCarriageway(Translation& translation, const pugi::xml_node& root) {
 }  // namespace
 
 void checkCommandLine(const OscImportOptions& options) {
+  if (options.controller) {
+    requireKnownController({*options.controller, {}, {}}, "command line: --controller", /*script_allowed=*/false);
+  }
   if (options.step) checkStep(*options.step, "command line", "--step");
   if (options.duration) {
     checkDurationSteps(*options.duration, options.step.value_or(scenario::LogicalScenario{}.step), "command line",

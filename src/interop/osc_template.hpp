@@ -74,6 +74,10 @@ struct Entity {
 struct ControllerChoice {
   std::string name;
   YAML::Node params;  ///< null: its defaults
+  std::filesystem::path library;  ///< a plugin's shared library (absolute); empty: a built-in
+
+  /// The scenario language's controller node: name, params, library.
+  YAML::Node languageNode() const;
 };
 
 /// The --controller-map file (read at the first lookup, once per translation) and the defaults.
@@ -82,7 +86,8 @@ class ControllerMap {
   explicit ControllerMap(const OscImportOptions& options) : file_(options.controllerMap) {}
   bool given() const { return !file_.empty(); }
   /// The vsd-sumo controller a file's controller name maps onto (the map file, then the
-  /// defaults); throws ConfigError naming `where` for a name that maps nowhere.
+  /// defaults); throws ConfigError naming `where` for a name that maps nowhere, and the map file
+  /// for an entry that names no built-in controller (or `script`) and no plugin library.
   ControllerChoice choice(const std::string& name, const std::string& where) const;
 
  private:

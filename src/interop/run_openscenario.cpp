@@ -30,12 +30,7 @@ double netconvertDeviation(const ImportedScenario& imported) {
   return worst;
 }
 
-pipeline::RunSummary runOpenScenario(pipeline::RunOptions options, const ImportOptions& import,
-                                     const std::vector<std::string>& fixed_by_file) {
-  if (!fixed_by_file.empty()) {
-    throw ConfigError::field("command line", fixed_by_file.front(), options.scenarioFile.string(),
-                             "no such flag for an OpenSCENARIO file (it is one concrete scenario)");
-  }
+pipeline::RunSummary runOpenScenario(pipeline::RunOptions options, const ImportOptions& import) {
   const ImportedScenario imported = importOpenScenario(options.scenarioFile, import);
   const double deviation = netconvertDeviation(imported);
   if (deviation > kNetconvertTolerance) {

@@ -54,29 +54,33 @@ ScenarioCheck checkExport(const fs::path& file, const OscImportOptions& options)
   return check;
 }
 
-/// The sampling flags given for a file that is one concrete scenario (they are refused by name).
-std::vector<std::string> fixedByFile(const ScenarioRunRequest& request) {
-  std::vector<std::string> fixed;
+/// A file that is one concrete scenario has nothing to sample: a sampling flag given is a usage error.
+void refuseSamplingFlags(const ScenarioRunRequest& request) {
   for (const char* flag : {"--samples", "--seed", "--first-sample"}) {
-    if (request.given(flag)) fixed.push_back(flag);
+    if (!request.given(flag)) continue;
+    throw ConfigError(fmt::format("command line: {}: {} is one concrete scenario, there is nothing to sample (a "
+                                  "ParameterValueDistribution file runs a sweep)",
+                                  flag, request.options.scenarioFile.string()));
   }
-  return fixed;
 }
 
 std::string runExport(const ScenarioRunRequest& request) {
+  refuseSamplingFlags(request);
   ImportOptions import;
   import.step = request.import.step;
-  return runOpenScenario(request.options, import, fixedByFile(request)).report();
+  return runOpenScenario(request.options, import).report();
 }
 
 std::string runTemplateFile(const ScenarioRunRequest& request) {
-  return runTemplate(request.options, request.import, fixedByFile(request)).report();
+  refuseSamplingFlags(request);
+  return runTemplate(request.options, request.import).report();
 }
 
 std::string runDistribution(const ScenarioRunRequest& request) {
   if (request.given("--first-sample")) {
-    throw ConfigError::field("command line", "--first-sample", request.options.scenarioFile.string(),
-                             "no such flag for a parameter distribution (it runs its grid)");
+    throw ConfigError(fmt::format("command line: --first-sample: {} is a parameter distribution: it runs its grid in "
+                                  "order (--samples takes sets evenly spaced over it)",
+                                  request.options.scenarioFile.string()));
   }
   return runVariation(request.options, request.import, request.given("--samples")).report();
 }

@@ -84,12 +84,13 @@ std::map<std::string, std::string> ControllerRegistry::available() const {
   return result;
 }
 
-std::unique_ptr<EgoController> ControllerRegistry::create(const std::string& name) const {
+std::unique_ptr<EgoController> ControllerRegistry::create(const std::string& name, const std::string& where) const {
   const auto it = entries_.find(name);
   if (it == entries_.end()) {
     std::vector<std::string> names;
     for (const auto& [known, entry] : entries_) names.push_back(known);
-    throw ConfigError(fmt::format("unknown controller '{}' (available: {})", name, fmt::join(names, ", ")));
+    throw ConfigError(fmt::format("{}unknown controller '{}' (available: {})", where.empty() ? "" : where + ": ", name,
+                                  fmt::join(names, ", ")));
   }
   return it->second.factory();
 }
@@ -222,7 +223,7 @@ std::unique_ptr<EgoController> makeController(ControllerRegistry& registry, cons
     registry.loadLibrary(library.is_absolute() ? library : scenario_dir / library);
   }
   registry.require(name, needs);
-  auto controller = registry.create(name);
+  auto controller = registry.create(name, params.where());
   controller->init(params);
   controller->reset();
   return controller;

@@ -1039,17 +1039,13 @@ TEST(OscRun, ASetWhoseRoadUsersCannotStartFailsAloneAndTheSweepGoesOn) {
 // One concrete scenario whose targets overlap: check notes it, run warns once and simulates it;
 // one whose target starts inside the Ego: check says it would not run, as run refuses it.
 TEST(OscRun, ATemplatesOverlappingTargetsRunAndATargetInsideTheEgoIsRefusedByCheckAsByRun) {
-  TemporaryDirectory dir("vsd-osc-overlap");
-  for (const char* folder : {"roads", "catalogs"}) {
-    fs::copy(data(folder), dir.path() / folder, fs::copy_options::recursive);
-  }
-  const auto copy = [&](const std::string& gap) {
-    const fs::path file = dir.path() / ("gap_" + gap + ".xosc");
-    test::writeFile(file, dataWith("blocking_targets.xosc", R"(name="Gap_m" parameterType="double" value="20")",
-                                   R"(name="Gap_m" parameterType="double" value=")" + gap + "\""));
-    return file;
+  const auto gap = [](const std::string& metres) {
+    return dataWith("blocking_targets.xosc", R"(name="Gap_m" parameterType="double" value="20")",
+                    R"(name="Gap_m" parameterType="double" value=")" + metres + "\"");
   };
-  const fs::path overlapping = copy("3");
+  const auto folder = folderWith({{"gap_3.xosc", gap("3")}, {"gap_-128.xosc", gap("-128")}});
+  const TemporaryDirectory& dir = *folder;
+  const fs::path overlapping = dir.path() / "gap_3.xosc";
   const auto check = checkOpenScenario(overlapping, {});
   EXPECT_TRUE(check.runnable()) << check.report();
   EXPECT_THAT(check.report(), HasSubstr("'Second' starts overlapping 'First' (clearance -"));
@@ -1059,7 +1055,7 @@ TEST(OscRun, ATemplatesOverlappingTargetsRunAndATargetInsideTheEgoIsRefusedByChe
   EXPECT_EQ(ran.exitCode, 0) << ran.output;
   EXPECT_THAT(ran.output, HasSubstr("warning: " + overlapping.string() + ": 'Second' starts overlapping 'First'"));
 
-  const fs::path onto_ego = copy("-128");
+  const fs::path onto_ego = dir.path() / "gap_-128.xosc";
   const auto refused = checkOpenScenario(onto_ego, {});
   EXPECT_FALSE(refused.runnable()) << refused.report();
   EXPECT_THAT(refused.report(), HasSubstr("road user 'Second' starts overlapping 'ego'"));
@@ -1106,6 +1102,26 @@ TEST(OscCli, BenchImportTimesTheSweepsImportOverTheSetsThatRun) {
   EXPECT_THAT(one.output, HasSubstr("expected <OpenSCENARIO> with a <ParameterValueDistribution>"));
 }
 
+// A template is one concrete scenario: a sampling flag is a usage error naming the flag and the
+// file (exit 2, one line, nothing written); a distribution takes --samples but not --first-sample.
+TEST(OscCli, SamplingFlagsOnOneConcreteScenarioAreAUsageError) {
+  TemporaryDirectory dir("vsd-osc-cli");
+  for (const std::string flag : {"--samples", "--seed", "--first-sample"}) {
+    const auto given = test::run({test::vsdSumo().string(), "--quiet", "run", data("cut_in.xosc").string(), flag, "3",
+                                  "--out", (dir.path() / "out").string()}, dir.path());
+    EXPECT_EQ(given.exitCode, 2) << given.output;
+    EXPECT_EQ(std::count(given.output.begin(), given.output.end(), '\n'), 1) << given.output;
+    EXPECT_THAT(given.output, HasSubstr("command line: " + flag + ": " + data("cut_in.xosc").string() +
+                                        " is one concrete scenario, there is nothing to sample"));
+  }
+  const auto first = test::run({test::vsdSumo().string(), "--quiet", "run", data("cut_in_variation.xosc").string(),
+                                "--first-sample", "3", "--out", (dir.path() / "out").string()}, dir.path());
+  EXPECT_EQ(first.exitCode, 2) << first.output;
+  EXPECT_THAT(first.output, HasSubstr("command line: --first-sample: " + data("cut_in_variation.xosc").string() +
+                                      " is a parameter distribution: it runs its grid in order"));
+  EXPECT_FALSE(fs::exists(dir.path() / "out"));
+}
+
 TEST(OscCli, ScenarioCheckExitStatusSaysWhetherItWouldRun) {
   TemporaryDirectory dir("vsd-osc-cli");
   const auto ok = test::run({test::vsdSumo().string(), "--quiet", "scenario", "check", data("cut_in.xosc").string()}, dir.path());
@@ -1145,6 +1161,15 @@ TEST(OscCli, ScenarioCheckExitStatusSaysWhetherItWouldRun) {
     EXPECT_THAT(contradicted.output, HasSubstr(flag_name + ": got '" + value + "', expected none for "));
     EXPECT_THAT(contradicted.output, HasSubstr("it assigns 'Ego' the controller 'ALKSController'"));
     EXPECT_FALSE(fs::exists(dir.path() / "contradicted"));
+  }
+  // A --controller that is no built-in controller is a usage error, whatever the file holds.
+  for (const char* command : {"run", "check"}) {
+    std::vector<std::string> args = {test::vsdSumo().string(), "--quiet"};
+    if (std::string(command) == "check") args.push_back("scenario");
+    args.insert(args.end(), {command, data("cut_in.xosc").string(), "--controller", "idmm"});
+    const auto unknown = test::run(args, dir.path());
+    EXPECT_EQ(unknown.exitCode, 2) << unknown.output;
+    EXPECT_THAT(unknown.output, HasSubstr("command line: --controller: controller 'idmm' is not built in (built-in: "));
   }
   // The declared values break a constraint: `check` refuses the file as `run` does.
   std::string fast = readTextFile(data("cut_in.xosc"));
@@ -3207,7 +3232,7 @@ TEST(OscImport, CheckRefusesTheControllerChoicesRunRefuses) {
                                   {"typo.yaml", "ALKSController: {controller: idm, params: {time_gapp: 2}}\n"},
                                   {"shape.yaml", "ALKSController: {controler: idm}\n"}});
   for (const auto& [map, message] : std::vector<std::pair<std::string, std::string>>{
-           {"unknown.yaml", "unknown controller 'idmm' (available: "},
+           {"unknown.yaml", "unknown.yaml: ALKSController: controller 'idmm' is not built in (built-in: alks, "},
            {"typo.yaml", "params.time_gapp: unknown parameter of controller 'idm'"},
            {"shape.yaml", "shape.yaml: ALKSController: expected a controller name or {controller: NAME"}}) {
     OscImportOptions options;
@@ -3224,6 +3249,39 @@ TEST(OscImport, CheckRefusesTheControllerChoicesRunRefuses) {
                 }),
                 HasSubstr(message));
   }
+}
+
+// A map entry names a plugin by its library (relative to the map file): the Ego is driven by it,
+// with the entry's parameters (the plugin itself refuses one it does not know, so it was loaded
+// with them); a library that does not exist is refused naming the map file and the entry.
+TEST(OscImport, AControllerMapEntryNamesAPluginByItsLibrary) {
+  const auto folder = folderWith(
+      {{"plugin.yaml", "ALKSController: {controller: cautious_ego, library: plugins/libvsd_cautious_ego.so, "
+                       "params: {time_gap: 2.5}}\n"},
+       {"typo.yaml", "ALKSController: {controller: cautious_ego, library: plugins/libvsd_cautious_ego.so, "
+                     "params: {time_gapp: 2.5}}\n"},
+       {"missing.yaml", "ALKSController: {controller: cautious_ego, library: plugins/libnone.so}\n"}});
+  fs::create_directories(folder->path() / "plugins");
+  fs::copy_file(test::cautiousEgoPlugin(), folder->path() / "plugins" / "libvsd_cautious_ego.so");
+  const auto run_with = [&](const std::string& map) {
+    OscImportOptions options;
+    options.controllerMap = folder->path() / map;
+    pipeline::RunOptions run;
+    run.samples = 1;
+    run.writeFiles = false;
+    run.isolation = pipeline::RunOptions::Isolation::None;
+    return pipeline::runScenarios(importTemplate(folder->path() / "cut_in.xosc", options), run);
+  };
+  EXPECT_EQ(run_with("plugin.yaml").ok, 1u);
+  OscImportOptions options;
+  options.controllerMap = folder->path() / "plugin.yaml";
+  const auto check = checkOpenScenario(folder->path() / "cut_in.xosc", options);
+  EXPECT_TRUE(check.runnable()) << check.report();
+  EXPECT_THAT(check.yaml, HasSubstr("library: " + (folder->path() / "plugins" / "libvsd_cautious_ego.so").string()));
+  EXPECT_THAT(test::configErrorOf([&] { run_with("typo.yaml"); }), HasSubstr("unknown parameter 'time_gapp'"));
+  EXPECT_THAT(test::configErrorOf([&] { run_with("missing.yaml"); }),
+              HasSubstr("missing.yaml: ALKSController: library: got 'plugins/libnone.so', expected a controller "
+                        "plugin's shared library (relative to the map file)"));
 }
 
 // A controller the map sends to `script` (esmini's sloppyDriver on a cutting-in vehicle) is not

@@ -78,10 +78,9 @@ std::shared_ptr<const scenario::LogicalScenario> importTemplate(const std::files
                                                                 const OscImportOptions& options,
                                                                 const std::map<std::string, std::string>& assigned = {});
 
-/// `vsd-sumo run TEMPLATE.xosc`: one concrete scenario. Throws ConfigError if a flag that the
-/// file fixes was given (`fixed_by_file`: --samples, --seed, --first-sample).
-pipeline::RunSummary runTemplate(pipeline::RunOptions options, const OscImportOptions& import,
-                                 const std::vector<std::string>& fixed_by_file);
+/// `vsd-sumo run TEMPLATE.xosc`: one concrete scenario, sample 0 of options.seed (options' sample
+/// count and first sample are replaced).
+pipeline::RunSummary runTemplate(pipeline::RunOptions options, const OscImportOptions& import);
 
 /// The parameter sets of a ParameterValueDistribution file and its template. Throws
 /// ConfigError for elements outside what is read (naming them).

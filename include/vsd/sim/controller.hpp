@@ -93,6 +93,8 @@ class ControllerParams {
   void rejectUnknown(const std::string& controller_name) const;
 
   const std::vector<std::pair<std::string, double>>& values() const { return values_; }
+  /// What the parameters belong to (a scenario file's line and field), as messages name it.
+  const std::string& where() const { return where_; }
 
  private:
   std::vector<std::pair<std::string, double>> values_;
@@ -143,7 +145,9 @@ class ControllerRegistry {
   void add(const std::string& name, const std::string& description, Factory factory,
            int abi_version = VSD_CONTROLLER_ABI_VERSION);
   /// Throws ConfigError naming `name` and listing every available controller.
-  std::unique_ptr<EgoController> create(const std::string& name) const;
+  /// `where`: what named it (a scenario file's line and field), put before the message of an
+  /// unknown name.
+  std::unique_ptr<EgoController> create(const std::string& name, const std::string& where = "") const;
   bool contains(const std::string& name) const { return entries_.count(name) > 0; }
   /// name -> description
   std::map<std::string, std::string> available() const;
