@@ -11,7 +11,8 @@
 #   - ASAM's 15 concrete templates: `run --duration 60` (their StopTriggers are
 #     not simulation times; 60 s covers every manoeuvre of the set).
 #   - ASAM's variation files: `scenario check --duration 60` imports every parameter set
-#     (skipped by the template's constraints / refused / would fail / would run), then `run --samples 200
+#     (skipped by the template's constraints / refused / would fail / would run, and how many of
+#     those that run start with road users other than the Ego overlapping), then `run --samples 200
 #     --duration 60` simulates 200 sets drawn from the grid (seed 1).
 #   - esmini's resources/xosc: `scenario check --data-root resources --controller-map
 #     tools/esmini_controllers.yaml` (its scenarios name roads in ../xodr; its human-driver
@@ -70,6 +71,10 @@ for file in "$asam"/logical_scenarios/*_variation*.xosc; do
     | grep -oE '[0-9]+ (parameter sets|skipped by the template.s constraints|refused|would fail|would run)' \
     | paste -sd ';' - | sed 's/;/, /g' || true)"
   [ -z "$sets" ] && sets="$(grep -m1 '^REFUSED' "$work/check" | sed "s|$asam/||g" || true)"
+  # Sets that run although road users other than the Ego start overlapping (the files' own values).
+  overlapping="$(grep -m1 -oE '[0-9]+ of the sets that would run start with road users other than the Ego overlapping' \
+    "$work/check" || true)"
+  [ -n "$overlapping" ] && sets="$sets ($overlapping)"
   echo "  $(basename "$file"): check exit $status; $sets"
   if [ "$status" -eq 0 ]; then
     run_status=0
