@@ -261,6 +261,9 @@ Entity& Translation::entity(const pugi::xml_node& node, const std::string& name)
   for (auto& candidate : entities) {
     if (candidate.name == name) return candidate;
   }
+  if (refusedEntities.count(name)) {
+    throw FollowsARefusal(fmt::format("{}: entityRef=\"{}\": an entity refused above", reader.where(node), name));
+  }
   reader.fail(node, fmt::format("entityRef=\"{}\" names no entity of <Entities>", name));
 }
 
@@ -269,7 +272,9 @@ void readEntities(Translation& translation, const pugi::xml_node& root, Catalogs
   const pugi::xml_node entities = reader.only(root, "Entities");
   reader.requireSubset(entities, {"ScenarioObject"});
   for (const pugi::xml_node& object : entities.children("ScenarioObject")) {
-    translation.findings.attempt([&] { readScenarioObject(translation, catalogs, object); });
+    if (!translation.findings.attempt([&] { readScenarioObject(translation, catalogs, object); })) {
+      translation.refusedEntities.insert(object.attribute("name").value());
+    }
   }
   if (translation.entities.empty()) reader.fail(entities, "expected at least one <ScenarioObject> the import can use");
 }

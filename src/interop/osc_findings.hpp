@@ -14,6 +14,14 @@
 
 namespace vsd::interop::osc {
 
+/// An element that cannot be read because one it depends on was refused already (an entity
+/// whose catalog entry was refused, named by a position or an Action): a check records nothing
+/// more for it, so that one mistake is one line.
+class FollowsARefusal : public ConfigError {
+ public:
+  using ConfigError::ConfigError;
+};
+
 class Findings {
  public:
   enum class Kind { Mapped, Note, Refused };
@@ -52,6 +60,8 @@ class Findings {
     try {
       read();
       return true;
+    } catch (const FollowsARefusal&) {
+      return false;
     } catch (const ConfigError& error) {
       refuse(error.what());
       return false;

@@ -174,6 +174,10 @@ Entity& findEgo(Translation& translation, ControllerChoice& controller) {
   for (auto& entity : translation.entities) {
     if (entity.name == ego_name) ego = &entity;
   }
+  if (!ego && !translation.refusedEntities.empty()) {
+    // The Ego may be among them (its controller unread): which one it is stays open.
+    throw FollowsARefusal(fmt::format("{}: no Ego among the entities read", translation.reader.file().string()));
+  }
   if (!ego) {
     throw ConfigError(fmt::format("{}: no entity has a controller and none is named '{}' (--ego NAME: which is the Ego?)",
                                   translation.reader.file().string(), ego_name));

@@ -106,6 +106,8 @@ struct Translation {
   ControllerMap controllerMap;
   CarriagewayRoad road;
   std::vector<Entity> entities;
+  /// ScenarioObjects refused while they were read (check goes on): what names them says nothing more.
+  std::set<std::string> refusedEntities;
   Entity* ego = nullptr;
   ControllerChoice controller;
   Catalogs* catalogs = nullptr;  ///< the file's catalogs (set while it is translated)

@@ -3224,6 +3224,22 @@ TEST(OscImport, AnEventsMaximumExecutionCountRepeatsItsAction) {
   }
 }
 
+// One mistake is one line: an entity refused (a misspelled catalog parameter) is not refused
+// again where a position or an Action names it, nor is the Ego it would have been missed.
+TEST(OscImport, AnEntityRefusedIsNotRefusedAgainWhereItIsNamed) {
+  const auto folder = folderWith({{"typo.xosc", dataWith("cut_in.xosc", R"(parameterRef="Length")",
+                                                         R"(parameterRef="Lenght")")}});
+  const ScenarioCheck check = checkOpenScenario(folder->path() / "typo.xosc", {});
+  EXPECT_FALSE(check.runnable());
+  std::vector<std::string> refused;
+  for (const auto& line : check.lines) {
+    if (line.kind == ScenarioCheck::Line::Kind::Refused) refused.push_back(line.text);
+  }
+  ASSERT_EQ(refused.size(), 1u) << check.report();
+  EXPECT_THAT(refused[0], HasSubstr("typo.xosc:37: <CatalogReference>: assigns parameter 'Lenght', which "));
+  EXPECT_THAT(importRefusal(*folder, "typo"), HasSubstr("assigns parameter 'Lenght'"));  // run: the same line
+}
+
 // `scenario check` builds the Ego's controllers as `run` does before it simulates: a name or a
 // parameter the controller does not know is refused by both, and a map entry of another shape
 // is one line naming the map file.
