@@ -16,6 +16,7 @@
 #include "vsd/core/interrupt.hpp"
 #include "vsd/core/numbers.hpp"
 #include "vsd/core/progress.hpp"
+#include "vsd/core/random.hpp"
 #include "vsd/road/road_geometry.hpp"
 #include "vsd/scenario/concrete_scenario.hpp"
 #include "vsd/sim/scripted_vehicle.hpp"
@@ -157,7 +158,9 @@ std::string SweepSummary::report() const {
       "parameter sets: {} in the grid, {} skipped by the template's constraints, {} failed (refused by the import or "
       "road users that cannot start), {} run{}\n",
       sets, skipped, refused, simulated,
-      simulated < runnable ? fmt::format(" (--samples: evenly spaced over the {} others)", runnable) : "");
+      simulated < runnable ? fmt::format(" (--samples: drawn with seed {} from the {} others)", drawnWithSeed,
+                                         runnable)
+                           : "");
   if (!firstSkipped.empty()) text += fmt::format("first skipped: {}\n", firstSkipped);
   if (!firstRefused.empty()) text += fmt::format("first failed: {}\n", firstRefused);
   if (overlapping > 0) {
@@ -290,6 +293,19 @@ std::vector<std::size_t> acceptSets(const ParameterGrid& grid, const OscImportOp
   return accepted;
 }
 
+/// `count` of the `accepted` sets, drawn without replacement from the seed's own stream (a
+/// regular spacing would alias with a grid's periods and could leave a value out), in grid order.
+std::vector<std::size_t> drawSets(const std::vector<std::size_t>& accepted, std::uint64_t count, std::uint64_t seed) {
+  Rng rng = Rng::derive(seed, 0, RandomStream::GridSamples);
+  std::vector<std::size_t> order = rng.permutation(accepted.size());
+  order.resize(static_cast<std::size_t>(count));
+  std::sort(order.begin(), order.end());
+  std::vector<std::size_t> chosen;
+  chosen.reserve(order.size());
+  for (const std::size_t position : order) chosen.push_back(accepted[position]);
+  return chosen;
+}
+
 /// What the sweep's workers do per sample: the set imported again, sampled, its road built.
 pipeline::ScenarioWithRoad sweepSample(const ParameterGrid& grid, const OscImportOptions& import,
                                        const osc::StringCodes& codes, std::size_t set, std::uint64_t seed,
@@ -310,10 +326,8 @@ SweepSummary runVariation(pipeline::RunOptions options, const OscImportOptions& 
   std::vector<std::size_t> accepted = acceptSets(grid, import, codes, options.seed, summary);
   const auto first = importSet(grid, import, codes, accepted.front(), nullptr);
   if (samples_given && options.samples < accepted.size()) {
-    // Evenly spaced over the grid: every distribution's range is still covered.
-    std::vector<std::size_t> chosen;
-    for (std::uint64_t k = 0; k < options.samples; ++k) chosen.push_back(accepted[k * accepted.size() / options.samples]);
-    accepted = std::move(chosen);
+    accepted = drawSets(accepted, options.samples, options.seed);
+    summary.drawnWithSeed = options.seed;
   }
   options.samples = accepted.size();
   summary.simulated = accepted.size();

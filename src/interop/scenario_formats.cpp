@@ -79,7 +79,7 @@ std::string runTemplateFile(const ScenarioRunRequest& request) {
 std::string runDistribution(const ScenarioRunRequest& request) {
   if (request.given("--first-sample")) {
     throw ConfigError(fmt::format("command line: --first-sample: {} is a parameter distribution: it runs its grid in "
-                                  "order (--samples takes sets evenly spaced over it)",
+                                  "order (--samples draws sets from it with --seed)",
                                   request.options.scenarioFile.string()));
   }
   return runVariation(request.options, request.import, request.given("--samples")).report();

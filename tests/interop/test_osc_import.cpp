@@ -997,11 +997,32 @@ TEST(OscRun, VariationRunsTheGridAndSkipsViolatedSets) {
               HasSubstr("12 in the grid, 6 skipped by the template's constraints, 0 failed (refused by the import or road "
                         "users that cannot start), 6 run\n"));
 
-  // --samples below the sets that satisfy the constraints: evenly spaced over them, and said.
-  const SweepSummary fewer = sweep(data("cut_in_variation.xosc"), dir.path() / "fewer", 2);
-  EXPECT_EQ(fewer.simulated, 2u);
-  EXPECT_EQ(fewer.run.ok, 2u);
-  EXPECT_THAT(fewer.report(), HasSubstr("2 run (--samples: evenly spaced over the 6 others)"));
+  // --samples below the sets that satisfy the constraints: drawn with the seed, in grid order,
+  // and said; the same seed draws the same sets, other seeds others.
+  const SweepSummary fewer = sweep(data("cut_in_variation.xosc"), dir.path() / "fewer", 3);
+  EXPECT_EQ(fewer.simulated, 3u);
+  EXPECT_EQ(fewer.run.ok, 3u);
+  EXPECT_THAT(fewer.report(), HasSubstr("3 run (--samples: drawn with seed 1 from the 6 others)"));
+  const auto drawn = [&](std::uint64_t seed, const std::string& name) {
+    sweep(data("cut_in_variation.xosc"), dir.path() / name, 3, seed);
+    // A set is its row without the sample index and the run's seed (its inputs and outcomes).
+    const CsvTable table = CsvTable::read(dir.path() / name / "concrete.csv");
+    std::vector<std::string> sets;
+    for (std::size_t row = 0; row < table.rows(); ++row) {
+      std::string set;
+      for (std::size_t column = 0; column < table.header().size(); ++column) {
+        const std::string& heading = table.header()[column];
+        if (heading != "sample" && heading != "seed") set += table.cell(row, column) + ",";
+      }
+      sets.push_back(set);
+    }
+    return sets;
+  };
+  const auto seed_1 = drawn(1, "again");
+  EXPECT_EQ(seed_1, drawn(1, "same"));
+  std::set<std::vector<std::string>> subsets = {seed_1};
+  for (std::uint64_t seed = 2; seed <= 6; ++seed) subsets.insert(drawn(seed, "seed" + std::to_string(seed)));
+  EXPECT_GE(subsets.size(), 3u);  // C(6, 3) = 20 subsets: six seeds draw at least three of them
 }
 
 // ASAM's multiple-blocking-target sweeps hold sets whose targets overlap at t = 0 (the file's

@@ -30,6 +30,7 @@ enum class RandomStream : std::uint64_t {
   OtherHeadingNoise = 8,
   SearchSelection = 9,  ///< `search`: importance draws from a round's candidate pool
   PredictionSamples = 10,  ///< `predict --samples`, compare's drawn futures
+  GridSamples = 11,  ///< `run VARIATION.xosc --samples`: which parameter sets of a grid run
 };
 
 class Rng {

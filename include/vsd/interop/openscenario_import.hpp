@@ -110,6 +110,7 @@ struct SweepSummary {
   /// lacks, say) or road users that cannot start (overlapping, off the road).
   std::uint64_t refused = 0;
   std::uint64_t simulated = 0;  ///< sets run: all the others, or --samples of them
+  std::uint64_t drawnWithSeed = 0;  ///< --seed the --samples sets were drawn with (when fewer than the others)
   std::string firstSkipped;   ///< the first violation, as reported
   std::string firstRefused;   ///< the first refusal, as reported
   /// Of the sets that would run: those whose road users other than the Ego start overlapping
