@@ -177,6 +177,10 @@ void refuseWhatTheFilesCannotCarry(const scenario::LogicalScenario& logical) {
       throw ConfigError(fmt::format("{}: '{}' drives against the road (direction: against): {}", user->where, user->id,
                                     limit));
     }
+    if (user->mayStartOverlapping) {
+      throw ConfigError(fmt::format("{}: '{}' may start overlapping others (may_start_overlapping: true), which is not "
+                                    "written: {}", user->where, user->id, limit));
+    }
     if (user->actions.empty()) continue;
     const auto& action = user->actions.front();
     throw ConfigError(fmt::format("{}: action '{}' of '{}': actions and their triggers are not written: {}",

@@ -61,6 +61,7 @@ class Findings {
       read();
       return true;
     } catch (const FollowsARefusal&) {
+      if (!collect_) throw;  // only a check goes on after a refusal; a run never gets here
       return false;
     } catch (const ConfigError& error) {
       refuse(error.what());

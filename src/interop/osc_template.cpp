@@ -396,8 +396,8 @@ YAML::Node roadUserNode(Translation& translation, const Entity& entity, bool ego
   }
   node["s"] = num(place.s);
   node["lane"] = std::to_string(place.lane);
-  // OpenSCENARIO sets no rule against bodies that overlap (esmini places them as written):
-  // ASAM's 4.2.4 and 4.5.2 put their second blocking target 15 m beyond the first, an 18.75 m truck.
+  // OpenSCENARIO sets no rule against bodies that overlap (esmini places them as written): ASAM's
+  // 4.2.4 and 4.5.2 put their second blocking target 15 m beyond the first, which may be an 18.75 m truck.
   if (!ego) node["may_start_overlapping"] = "true";
   const double heading_deg = entity.placement->heading * 180.0 / kPi;
   if (!ego && entity.drivesAgainstRoad()) {

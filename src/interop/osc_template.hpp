@@ -229,19 +229,17 @@ struct SetVerdict {
     Skipped,      ///< violates the template's constraints
     Refused,      ///< its values take the file outside what the import supports
     CannotStart,  ///< its sample fails the language's per-sample checks or the simulation's start
-                  ///< (road users overlapping at t = 0 or off their road)
+                  ///< (a road user inside the Ego at t = 0, or off its road)
   };
   Kind kind = Kind::Runs;
   std::string message;  ///< why, for every kind but Runs
   /// Runs: the first pair of road users its start lets overlap (checkStart), empty if none.
   std::string overlap;
 };
-/// What the simulation meets at the start of sample `index` of `logical` with `seed`: throws
-/// ConfigError where the language's per-sample checks or the simulation refuse the start (road
-/// users overlapping or off their road), as `run` would; returns the pairs of road users it lets
-/// start overlapping (sim::ScriptedTraffic::startOverlaps).
-std::vector<std::string> checkStart(const std::shared_ptr<const scenario::LogicalScenario>& logical,
-                                    std::uint64_t seed, std::uint64_t index);
+/// What the simulation meets at the start of `concrete`: throws ConfigError where it refuses the
+/// start (a road user inside the Ego, or off its road), as `run` would; returns the pairs of road
+/// users it lets start overlapping (sim::ScriptedTraffic::startOverlaps).
+std::vector<std::string> checkStart(const scenario::ConcreteScenario& concrete);
 /// Imports set `set` of `grid` (string parameters coded by `codes`) and checks sample `index`
 /// of it with `seed`.
 SetVerdict judgeSet(const ParameterGrid& grid, const OscImportOptions& import, const StringCodes& codes,

@@ -226,9 +226,7 @@ std::shared_ptr<const scenario::LogicalScenario> importSet(const ParameterGrid& 
 
 namespace osc {
 
-std::vector<std::string> checkStart(const std::shared_ptr<const scenario::LogicalScenario>& logical,
-                                    std::uint64_t seed, std::uint64_t index) {
-  const auto concrete = scenario::sampleConcreteScenario(logical, seed, index);
+std::vector<std::string> checkStart(const scenario::ConcreteScenario& concrete) {
   const auto road = road::buildRoadGeometry(concrete);
   return sim::ScriptedTraffic(concrete, road).startOverlaps();
 }
@@ -242,7 +240,7 @@ SetVerdict judgeSet(const ParameterGrid& grid, const OscImportOptions& import, c
     const auto logical = importSet(grid, import, codes, set, &violation);
     if (!logical) return {SetVerdict::Kind::Skipped, violation, ""};
     try {
-      const auto overlaps = checkStart(logical, seed, index);
+      const auto overlaps = checkStart(scenario::sampleConcreteScenario(logical, seed, index));
       if (!overlaps.empty()) return {SetVerdict::Kind::Runs, "", overlaps.front()};
     } catch (const ConfigError& error) {
       return {SetVerdict::Kind::CannotStart, error.what(), ""};
@@ -257,21 +255,24 @@ SetVerdict judgeSet(const ParameterGrid& grid, const OscImportOptions& import, c
 
 namespace {
 
+/// A parameter set that runs, and the first pair of its road users let start overlapping ("" if none).
+struct AcceptedSet {
+  std::size_t set = 0;
+  std::string overlap;
+};
+
 /// The sets of a grid that run, in grid order: each imported and its road users' start checked,
 /// the others counted in `summary` (skipped by a constraint, failed at the start).
-std::vector<std::size_t> acceptSets(const ParameterGrid& grid, const OscImportOptions& import,
+std::vector<AcceptedSet> acceptSets(const ParameterGrid& grid, const OscImportOptions& import,
                                     const osc::StringCodes& codes, std::uint64_t seed, SweepSummary& summary) {
   summary.sets = grid.sets.size();
-  std::vector<std::size_t> accepted;
+  std::vector<AcceptedSet> accepted;
   Progress progress(fmt::format("import {}", grid.file.filename().string()), grid.sets.size(), "sets");
   for (std::size_t set = 0; set < grid.sets.size(); ++set, progress.advance()) {
     const auto verdict = osc::judgeSet(grid, import, codes, set, seed, accepted.size());
     switch (verdict.kind) {
       case osc::SetVerdict::Kind::Runs:
-        accepted.push_back(set);
-        if (!verdict.overlap.empty() && summary.overlapping++ == 0) {
-          summary.firstOverlapping = fmt::format("parameter set {}: {}", set, verdict.overlap);
-        }
+        accepted.push_back({set, verdict.overlap});
         break;
       case osc::SetVerdict::Kind::Skipped:
         if (summary.skipped++ == 0) summary.firstSkipped = fmt::format("parameter set {}: {}", set, verdict.message);
@@ -295,15 +296,25 @@ std::vector<std::size_t> acceptSets(const ParameterGrid& grid, const OscImportOp
 
 /// `count` of the `accepted` sets, drawn without replacement from the seed's own stream (a
 /// regular spacing would alias with a grid's periods and could leave a value out), in grid order.
-std::vector<std::size_t> drawSets(const std::vector<std::size_t>& accepted, std::uint64_t count, std::uint64_t seed) {
+std::vector<AcceptedSet> drawSets(const std::vector<AcceptedSet>& accepted, std::uint64_t count, std::uint64_t seed) {
   Rng rng = Rng::derive(seed, 0, RandomStream::GridSamples);
   std::vector<std::size_t> order = rng.permutation(accepted.size());
   order.resize(static_cast<std::size_t>(count));
   std::sort(order.begin(), order.end());
-  std::vector<std::size_t> chosen;
+  std::vector<AcceptedSet> chosen;
   chosen.reserve(order.size());
   for (const std::size_t position : order) chosen.push_back(accepted[position]);
   return chosen;
+}
+
+/// Counts the sets that run with road users other than the Ego overlapping, the first named.
+void countOverlaps(const std::vector<AcceptedSet>& running, SweepSummary& summary) {
+  for (const AcceptedSet& accepted : running) {
+    if (accepted.overlap.empty()) continue;
+    if (summary.overlapping++ == 0) {
+      summary.firstOverlapping = fmt::format("parameter set {}: {}", accepted.set, accepted.overlap);
+    }
+  }
 }
 
 /// What the sweep's workers do per sample: the set imported again, sampled, its road built.
@@ -319,21 +330,23 @@ pipeline::ScenarioWithRoad sweepSample(const ParameterGrid& grid, const OscImpor
 }  // namespace
 
 SweepSummary runVariation(pipeline::RunOptions options, const OscImportOptions& import, bool samples_given) {
+  options.validate();  // the flags before judging the sets, which takes minutes on a large grid
   const ParameterGrid grid = readParameterDistribution(options.scenarioFile, import, options.seed);
   // Numeric-looking strings are numbers in concrete.csv already; only names need codes.
   const osc::StringCodes codes = stringCodes(grid);
   SweepSummary summary;
-  std::vector<std::size_t> accepted = acceptSets(grid, import, codes, options.seed, summary);
-  const auto first = importSet(grid, import, codes, accepted.front(), nullptr);
+  std::vector<AcceptedSet> accepted = acceptSets(grid, import, codes, options.seed, summary);
+  const auto first = importSet(grid, import, codes, accepted.front().set, nullptr);
   if (samples_given && options.samples < accepted.size()) {
     accepted = drawSets(accepted, options.samples, options.seed);
     summary.drawnWithSeed = options.seed;
   }
+  countOverlaps(accepted, summary);
   options.samples = accepted.size();
   summary.simulated = accepted.size();
   options.firstSample = 0;
   options.source = [grid, import, codes, accepted, seed = options.seed](std::uint64_t index) {
-    return sweepSample(grid, import, codes, accepted.at(index), seed, index);
+    return sweepSample(grid, import, codes, accepted.at(index).set, seed, index);
   };
   summary.run = pipeline::runScenarios(first, options);
   return summary;
@@ -346,10 +359,13 @@ SweepImportTiming timeSweepImport(const fs::path& file, const OscImportOptions& 
   const osc::StringCodes codes = stringCodes(grid);
   timing.gridSeconds = secondsSince(start);
   start = std::chrono::steady_clock::now();
-  const std::vector<std::size_t> accepted = acceptSets(grid, import, codes, seed, timing.counts);
+  const std::vector<AcceptedSet> accepted = acceptSets(grid, import, codes, seed, timing.counts);
   timing.acceptSeconds = secondsSince(start);
+  countOverlaps(accepted, timing.counts);
   start = std::chrono::steady_clock::now();
-  for (std::size_t index = 0; index < accepted.size(); ++index) sweepSample(grid, import, codes, accepted[index], seed, index);
+  for (std::size_t index = 0; index < accepted.size(); ++index) {
+    sweepSample(grid, import, codes, accepted[index].set, seed, index);
+  }
   timing.sampleSeconds = secondsSince(start);
   timing.counts.simulated = accepted.size();
   return timing;

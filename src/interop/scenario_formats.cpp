@@ -78,8 +78,8 @@ std::string runTemplateFile(const ScenarioRunRequest& request) {
 
 std::string runDistribution(const ScenarioRunRequest& request) {
   if (request.given("--first-sample")) {
-    throw ConfigError(fmt::format("command line: --first-sample: {} is a parameter distribution: it runs its grid in "
-                                  "order (--samples draws sets from it with --seed)",
+    throw ConfigError(fmt::format("command line: --first-sample: {} is a parameter distribution: it runs its "
+                                  "parameter sets in order (--samples draws some of them with --seed)",
                                   request.options.scenarioFile.string()));
   }
   return runVariation(request.options, request.import, request.given("--samples")).report();

@@ -981,6 +981,21 @@ SweepSummary sweep(const fs::path& variation, const fs::path& out, std::optional
   return runVariation(options, {}, samples.has_value());
 }
 
+/// The parameter sets a sweep into `out` ran, in its order: each row's inputs (the columns
+/// between `failure` and the first metric, `a_min`).
+std::vector<std::string> setsRun(const fs::path& out) {
+  const CsvTable table = CsvTable::read(out / "concrete.csv");
+  std::vector<std::string> sets;
+  for (std::size_t row = 0; row < table.rows(); ++row) {
+    std::string set;
+    for (std::size_t column = table.column("failure") + 1; column < table.column("a_min"); ++column) {
+      set += table.header()[column] + "=" + table.cell(row, column) + " ";
+    }
+    sets.push_back(set);
+  }
+  return sets;
+}
+
 }  // namespace
 
 TEST(OscRun, VariationRunsTheGridAndSkipsViolatedSets) {
@@ -1003,22 +1018,21 @@ TEST(OscRun, VariationRunsTheGridAndSkipsViolatedSets) {
   EXPECT_EQ(fewer.simulated, 3u);
   EXPECT_EQ(fewer.run.ok, 3u);
   EXPECT_THAT(fewer.report(), HasSubstr("3 run (--samples: drawn with seed 1 from the 6 others)"));
+  const std::vector<std::string> all = setsRun(dir.path() / "sweep");
   const auto drawn = [&](std::uint64_t seed, const std::string& name) {
     sweep(data("cut_in_variation.xosc"), dir.path() / name, 3, seed);
-    // A set is its row without the sample index and the run's seed (its inputs and outcomes).
-    const CsvTable table = CsvTable::read(dir.path() / name / "concrete.csv");
-    std::vector<std::string> sets;
-    for (std::size_t row = 0; row < table.rows(); ++row) {
-      std::string set;
-      for (std::size_t column = 0; column < table.header().size(); ++column) {
-        const std::string& heading = table.header()[column];
-        if (heading != "sample" && heading != "seed") set += table.cell(row, column) + ",";
-      }
-      sets.push_back(set);
+    const std::vector<std::string> sets = setsRun(dir.path() / name);
+    // Sets the full sweep ran, in its order.
+    std::size_t next = 0;
+    for (const auto& set : sets) {
+      const auto at = std::find(all.begin() + static_cast<std::ptrdiff_t>(next), all.end(), set);
+      EXPECT_NE(at, all.end()) << "seed " << seed << ": " << set << " not after the previous one in the full sweep";
+      next = static_cast<std::size_t>(at - all.begin()) + 1;
     }
     return sets;
   };
   const auto seed_1 = drawn(1, "again");
+  EXPECT_EQ(seed_1.size(), 3u);
   EXPECT_EQ(seed_1, drawn(1, "same"));
   std::set<std::vector<std::string>> subsets = {seed_1};
   for (std::uint64_t seed = 2; seed <= 6; ++seed) subsets.insert(drawn(seed, "seed" + std::to_string(seed)));
@@ -1046,6 +1060,20 @@ TEST(OscRun, ASetWhoseRoadUsersCannotStartFailsAloneAndTheSweepGoesOn) {
                                           "overlapping (simulated as placed), the first: parameter set 1:"));
   const std::string csv = readTextFile(dir.path() / "sweep" / "concrete.csv");
   EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 4);  // header and the three sets that ran
+
+  // With --samples, the overlapping sets counted are those drawn: the 3 m gap's set or none.
+  bool some_without = false;
+  for (std::uint64_t seed = 1; seed <= 4; ++seed) {
+    const fs::path out = dir.path() / ("drawn" + std::to_string(seed));
+    const SweepSummary drawn = sweep(data("blocking_targets_variation.xosc"), out, 2, seed);
+    const auto sets = setsRun(out);
+    const auto with_gap_3 = std::count_if(sets.begin(), sets.end(), [](const std::string& set) {
+      return set.find("Gap_m=3 ") != std::string::npos;
+    });
+    EXPECT_EQ(drawn.overlapping, static_cast<std::uint64_t>(with_gap_3)) << "seed " << seed;
+    some_without = some_without || with_gap_3 == 0;
+  }
+  EXPECT_TRUE(some_without);  // seeds 1 .. 4 draw {20, 30} at least once
 
   // `scenario check` counts them the same way, and the file still runs.
   const auto check = checkOpenScenario(data("blocking_targets_variation.xosc"), {});
@@ -1075,6 +1103,17 @@ TEST(OscRun, ATemplatesOverlappingTargetsRunAndATargetInsideTheEgoIsRefusedByChe
                               (dir.path() / "ran").string()}, dir.path());
   EXPECT_EQ(ran.exitCode, 0) << ran.output;
   EXPECT_THAT(ran.output, HasSubstr("warning: " + overlapping.string() + ": 'Second' starts overlapping 'First'"));
+
+  // Under a distribution, the sets assign the values that count: a template that cannot start at
+  // its declared values is a note there, and the grid's sets run.
+  const auto distribution = folderWith(
+      {{"gap_-128.xosc", gap("-128")},
+       {"over.xosc", dataWith("blocking_targets_variation.xosc", R"(filepath="./blocking_targets.xosc")",
+                              R"(filepath="./gap_-128.xosc")")}});
+  const auto over = checkOpenScenario(distribution->path() / "over.xosc", {});
+  EXPECT_TRUE(over.runnable()) << over.report();
+  EXPECT_THAT(over.report(), HasSubstr("the template cannot start at its declared values, so neither its start nor "
+                                       "its controllers are checked at them (the sets are, above): "));
 
   const fs::path onto_ego = dir.path() / "gap_-128.xosc";
   const auto refused = checkOpenScenario(onto_ego, {});
@@ -1139,7 +1178,7 @@ TEST(OscCli, SamplingFlagsOnOneConcreteScenarioAreAUsageError) {
                                 "--first-sample", "3", "--out", (dir.path() / "out").string()}, dir.path());
   EXPECT_EQ(first.exitCode, 2) << first.output;
   EXPECT_THAT(first.output, HasSubstr("command line: --first-sample: " + data("cut_in_variation.xosc").string() +
-                                      " is a parameter distribution: it runs its grid in order"));
+                                      " is a parameter distribution: it runs its parameter sets in order"));
   EXPECT_FALSE(fs::exists(dir.path() / "out"));
 }
 

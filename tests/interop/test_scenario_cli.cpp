@@ -161,6 +161,9 @@ TEST(ScenarioCli, BadInputIsOneLineAndLeavesNothingBehind) {
                    "    - {id: a, x: 20, lane: 1, speed: 8, direction: against}\n";
   const std::string late =
       paper_road + "vehicles:\n  ego: {x: -50, lane: 0, speed: 10, controller: {name: idm, active_from: 3}}\n";
+  const std::string piled =
+      paper_road + "vehicles:\n  ego: {x: -50, lane: 0, speed: 10, controller: {name: idm}}\n  others:\n"
+                   "    - {id: a, x: 20, lane: 1, speed: 0, may_start_overlapping: true}\n";
   const std::vector<std::pair<fs::path, std::string>> refused = {
       {test::sourceDir() / "scenarios" / "alks" / "free_driving.yaml", "road.shape: an arc or polyline road"},
       {test::writeFile(dir.path() / "by_s.yaml", "name: by_s\n" + by_s), "'ego' placed by s, ds or gap rather than x"},
@@ -169,7 +172,9 @@ TEST(ScenarioCli, BadInputIsOneLineAndLeavesNothingBehind) {
       {test::writeFile(dir.path() / "oncoming.yaml", "name: oncoming\n" + oncoming),
        "'a' drives against the road (direction: against)"},
       {test::writeFile(dir.path() / "late.yaml", "name: late\n" + late),
-       "controller.active_from 3: the Ego's scripted phase is not written"}};
+       "controller.active_from 3: the Ego's scripted phase is not written"},
+      {test::writeFile(dir.path() / "piled.yaml", "name: piled\n" + piled),
+       "'a' may start overlapping others (may_start_overlapping: true), which is not written"}};
   for (const auto& [file, message] : refused) {
     expectOneLineError(errorsOf({"scenario", "export", file.string(), "--samples", "1", "--out", out.string()},
                                 dir.path()),

@@ -100,21 +100,21 @@ ParameterGrid readParameterDistribution(const std::filesystem::path& file, const
 
 /// `vsd-sumo run VARIATION.xosc`: the template at every parameter set that satisfies its
 /// ConstraintGroups, one concrete scenario (row of concrete.csv) each; the others are
-/// skipped and counted in the report. --samples (if given) takes that many sets from the
-/// start of the grid; --seed is recorded.
+/// skipped and counted in the report. --samples (if given and fewer than the sets that can
+/// run) draws that many of them with --seed, run in grid order.
 struct SweepSummary {
   pipeline::RunSummary run;
   std::uint64_t sets = 0;     ///< in the grid
   std::uint64_t skipped = 0;  ///< violating a constraint
   /// Satisfying the constraints, but failing alone: values the import refuses (a lane the road
-  /// lacks, say) or road users that cannot start (overlapping, off the road).
+  /// lacks, say) or road users that cannot start (one inside the Ego, or off the road).
   std::uint64_t refused = 0;
   std::uint64_t simulated = 0;  ///< sets run: all the others, or --samples of them
   std::uint64_t drawnWithSeed = 0;  ///< --seed the --samples sets were drawn with (when fewer than the others)
   std::string firstSkipped;   ///< the first violation, as reported
   std::string firstRefused;   ///< the first refusal, as reported
-  /// Of the sets that would run: those whose road users other than the Ego start overlapping
-  /// (the import lets them: OpenSCENARIO has no rule against it), and the first such pair.
+  /// Of the sets run (all, or the drawn ones): those whose road users other than the Ego start
+  /// overlapping (the import lets them: OpenSCENARIO has no rule against it), and the first such pair.
   std::uint64_t overlapping = 0;
   std::string firstOverlapping;
   std::string report() const;

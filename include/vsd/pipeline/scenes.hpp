@@ -34,7 +34,7 @@ std::vector<LaneGeometry> plannedLanes(const road::RoadGeometry& road);
 /// Ego's stand-in - the Ego carrying on along its lane at its initial speed - wherever a
 /// trigger relates to the Ego. Without such triggers these are exactly the paths the
 /// simulation places them on. Throws ConfigError if a road user starts outside its road or
-/// overlapping another.
+/// overlapping another (ScriptedTraffic's rule: two others may where one is let).
 Trace plannedTrace(const scenario::ConcreteScenario& concrete, const road::RoadGeometry& road);
 
 /// The scene of a concrete scenario before simulation (targets all invalid), with
