@@ -28,22 +28,27 @@ class Findings {
   struct Line {
     Kind kind;
     std::string text;  ///< "file:line: <Element>: ..."
+    /// A note `run` prints as a warning (once per run), as it matters to what is simulated.
+    bool warn = false;
   };
 
   /// `collect`: record refusals and go on (scenario check); else throw at the first.
   explicit Findings(bool collect) : collect_(collect) {}
 
   /// A supported element and what it became.
-  void mapped(const std::string& where, const std::string& what) { lines_.push_back({Kind::Mapped, where + ": " + what}); }
+  void mapped(const std::string& where, const std::string& what) {
+    lines_.push_back({Kind::Mapped, where + ": " + what, false});
+  }
   /// Supported, but not exactly as the file says (or not simulated at all): said once, here.
   /// A note already made (the same place and words: a condition translated again for another
   /// Event) is not repeated.
-  void note(const std::string& where, const std::string& what) {
+  /// `warn`: one that matters to what is simulated, which `run` prints as a warning.
+  void note(const std::string& where, const std::string& what, bool warn = false) {
     std::string text = where + ": " + what;
     for (const Line& line : lines_) {
       if (line.kind == Kind::Note && line.text == text) return;
     }
-    lines_.push_back({Kind::Note, std::move(text)});
+    lines_.push_back({Kind::Note, std::move(text), warn});
   }
   /// A refusal: ConfigError now (run), or recorded (check) once (an element translated again
   /// for another Event refuses the same way).
@@ -52,7 +57,7 @@ class Findings {
     for (const Line& line : lines_) {
       if (line.kind == Kind::Refused && line.text == message) return;
     }
-    lines_.push_back({Kind::Refused, message});
+    lines_.push_back({Kind::Refused, message, false});
   }
   /// Runs `read`; a ConfigError it throws becomes a refusal. Returns false if it threw.
   template <class Read>

@@ -199,7 +199,8 @@ std::shared_ptr<const scenario::LogicalScenario> importTemplate(const fs::path& 
   const auto result = osc::translate(xosc, options, assigned, xosc.string(), findings);
   if (result.violated) throw ConfigError(*result.violated);
   for (const auto& line : findings.lines()) {
-    if (line.kind == osc::Findings::Kind::Note) spdlog::debug("{}", line.text);
+    if (line.warn) spdlog::warn("{}", line.text);
+    else if (line.kind == osc::Findings::Kind::Note) spdlog::debug("{}", line.text);
   }
   return loadTranslation(xosc, result.yaml);
 }

@@ -14,6 +14,7 @@
 #include "vsd/core/fault.hpp"
 #include "vsd/core/files.hpp"
 #include "vsd/core/interrupt.hpp"
+#include "vsd/core/log.hpp"
 #include "vsd/core/numbers.hpp"
 #include "vsd/core/progress.hpp"
 #include "vsd/core/random.hpp"
@@ -222,6 +223,19 @@ std::shared_ptr<const scenario::LogicalScenario> importSet(const ParameterGrid& 
   return osc::loadLanguage(grid.file, result.yaml);
 }
 
+/// The warnings of the sweep's template (a road's slopes, say), printed once: the sets are
+/// imported without their notes. `set` names a set that runs.
+void warnOnce(const ParameterGrid& grid, const OscImportOptions& import, const osc::StringCodes& codes,
+              std::size_t set) {
+  if (grid.logicalTemplate) return;
+  osc::Findings findings(/*collect=*/false);
+  const std::string where = fmt::format("{}: parameter set {}", grid.file.string(), set);
+  osc::translate(grid.scenarioFile, import, grid.sets[set], where, findings, codes);
+  for (const auto& line : findings.lines()) {
+    if (line.warn) spdlog::warn("{}", line.text);
+  }
+}
+
 }  // namespace
 
 namespace osc {
@@ -337,6 +351,7 @@ SweepSummary runVariation(pipeline::RunOptions options, const OscImportOptions& 
   SweepSummary summary;
   std::vector<AcceptedSet> accepted = acceptSets(grid, import, codes, options.seed, summary);
   const auto first = importSet(grid, import, codes, accepted.front().set, nullptr);
+  warnOnce(grid, import, codes, accepted.front().set);
   if (samples_given && options.samples < accepted.size()) {
     accepted = drawSets(accepted, options.samples, options.seed);
     summary.drawnWithSeed = options.seed;

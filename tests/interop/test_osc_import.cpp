@@ -1162,6 +1162,41 @@ TEST(OscCli, BenchImportTimesTheSweepsImportOverTheSetsThatRun) {
   EXPECT_THAT(one.output, HasSubstr("expected <OpenSCENARIO> with a <ParameterValueDistribution>"));
 }
 
+// vsd-sumo is planar: a road's heights are a note in check, and where a grade reaches 2 % (here
+// 3 % over the 1,000 m road, by hand: 30 m, g sin(atan 0.03) = 0.29 m/s^2) run warns once, a
+// sweep too; the tests' own road (1 %, 10 m) is a note only.
+TEST(OscCli, ARoadsSlopesAreNotedAndRunWarnsOnceWhereTheyMatter) {
+  const auto folder = folderWith({{"roads/three_lanes.xodr", dataWith("roads/three_lanes.xodr",
+                                                                      R"(<elevation s="0" a="0" b="0.01")",
+                                                                      R"(<elevation s="0" a="0" b="0.03")")}});
+  const std::string steep = "three_lanes.xodr:13: <elevationProfile>: vsd-sumo is planar: the road rises and falls "
+                            "by 30.0 m, with grades up to 3.0 %; gravity along it (up to 0.29 m/s^2)";
+  EXPECT_THAT(checkReport(*folder, "cut_in.xosc"), HasSubstr(steep));
+  const auto warnings = [](const std::string& output) {  // warning lines about the road's heights
+    std::size_t count = 0;
+    std::istringstream lines(output);
+    for (std::string line; std::getline(lines, line);) {
+      count += line.rfind("warning: ", 0) == 0 && line.find("<elevationProfile>") != std::string::npos;
+    }
+    return count;
+  };
+  for (const char* file : {"cut_in.xosc", "cut_in_variation.xosc"}) {
+    const auto ran = test::run({test::vsdSumo().string(), "run", (folder->path() / file).string(), "--out",
+                                (folder->path() / (std::string("out_") + file)).string()}, folder->path());
+    EXPECT_EQ(ran.exitCode, 0) << ran.output;
+    EXPECT_THAT(ran.output, HasSubstr(steep)) << file;
+    EXPECT_EQ(warnings(ran.output), 1u) << file << ": " << ran.output;
+  }
+  TemporaryDirectory dir("vsd-osc-cli");
+  EXPECT_THAT(checkOpenScenario(data("cut_in.xosc"), {}).report(),
+              HasSubstr("three_lanes.xodr:13: <elevationProfile>: vsd-sumo is planar: heights are not simulated (the "
+                        "road rises and falls by 10.0 m, grades up to 1.0 %)"));
+  const auto level = test::run({test::vsdSumo().string(), "run", data("cut_in.xosc").string(), "--out",
+                                (dir.path() / "level").string()}, dir.path());
+  EXPECT_EQ(level.exitCode, 0) << level.output;
+  EXPECT_EQ(warnings(level.output), 0u) << level.output;
+}
+
 // A template is one concrete scenario: a sampling flag is a usage error naming the flag and the
 // file (exit 2, one line, nothing written); a distribution takes --samples but not --first-sample.
 TEST(OscCli, SamplingFlagsOnOneConcreteScenarioAreAUsageError) {
