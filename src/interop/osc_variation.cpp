@@ -208,9 +208,11 @@ std::shared_ptr<const scenario::LogicalScenario> logicalSet(const ParameterGrid&
 }
 
 /// The language scenario of one parameter set; nullopt (and `violation`) if a constraint fails.
+/// `warn`: print the translation's warnings (a road's slopes, say) — the sweep's first set does,
+/// so that they are said once, not per set.
 std::shared_ptr<const scenario::LogicalScenario> importSet(const ParameterGrid& grid, const OscImportOptions& import,
                                                            const osc::StringCodes& codes, std::size_t set,
-                                                           std::string* violation) {
+                                                           std::string* violation, bool warn = false) {
   if (grid.logicalTemplate) return logicalSet(grid, set);
   osc::Findings findings(/*collect=*/false);
   const auto result = osc::translate(grid.scenarioFile, import, grid.sets[set], fmt::format("{}: parameter set {}",
@@ -220,20 +222,10 @@ std::shared_ptr<const scenario::LogicalScenario> importSet(const ParameterGrid& 
     *violation = *result.violated;
     return nullptr;
   }
-  return osc::loadLanguage(grid.file, result.yaml);
-}
-
-/// The warnings of the sweep's template (a road's slopes, say), printed once: the sets are
-/// imported without their notes. `set` names a set that runs.
-void warnOnce(const ParameterGrid& grid, const OscImportOptions& import, const osc::StringCodes& codes,
-              std::size_t set) {
-  if (grid.logicalTemplate) return;
-  osc::Findings findings(/*collect=*/false);
-  const std::string where = fmt::format("{}: parameter set {}", grid.file.string(), set);
-  osc::translate(grid.scenarioFile, import, grid.sets[set], where, findings, codes);
   for (const auto& line : findings.lines()) {
-    if (line.warn) spdlog::warn("{}", line.text);
+    if (warn && line.warn) spdlog::warn("{}", line.text);
   }
+  return osc::loadLanguage(grid.file, result.yaml);
 }
 
 }  // namespace
@@ -350,8 +342,7 @@ SweepSummary runVariation(pipeline::RunOptions options, const OscImportOptions& 
   const osc::StringCodes codes = stringCodes(grid);
   SweepSummary summary;
   std::vector<AcceptedSet> accepted = acceptSets(grid, import, codes, options.seed, summary);
-  const auto first = importSet(grid, import, codes, accepted.front().set, nullptr);
-  warnOnce(grid, import, codes, accepted.front().set);
+  const auto first = importSet(grid, import, codes, accepted.front().set, nullptr, /*warn=*/true);
   if (samples_given && options.samples < accepted.size()) {
     accepted = drawSets(accepted, options.samples, options.seed);
     summary.drawnWithSeed = options.seed;
