@@ -176,12 +176,21 @@ void Reader::leaveAll(const pugi::xml_node& node) const {
   });
 }
 
+namespace {
+/// Namespace declarations and XML Schema instance attributes (xsi:noNamespaceSchemaLocation) belong
+/// to XML, not to the format read: they say nothing a simulation could follow or ignore.
+bool xmlLevel(const std::string& name) {
+  return name == "xmlns" || name.rfind("xmlns:", 0) == 0 || name.rfind("xsi:", 0) == 0;
+}
+}  // namespace
+
 std::vector<std::string> Reader::unreadAttributes() const {
   std::vector<std::string> unread;
   forEachElement(root(), [&](const pugi::xml_node& node) {
     if (interpreted_.count(node.internal_object()) == 0) return;
     for (const pugi::xml_attribute& attribute : node.attributes()) {
-      if (read_.count(attribute.internal_object()) > 0 || std::string(attribute.name()) == "name") continue;
+      const std::string name = attribute.name();
+      if (read_.count(attribute.internal_object()) > 0 || name == "name" || xmlLevel(name)) continue;
       unread.push_back(fmt::format("{}: attribute {}=\"{}\" is outside the supported subset (vsd-sumo does not "
                                    "read it)",
                                    where(node), attribute.name(), attribute.value()));
