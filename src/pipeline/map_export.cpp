@@ -687,11 +687,13 @@ ExportJob makeJob(const ExportOptions& options, const TemporaryDirectory& work) 
   job.simulation.end = options.end;
   job.simulation.seed = options.seed;
   job.simulation.laneChangeDuration = options.laneChangeDuration;
+  job.simulation.placed = options.placed;
   if (!options.openDrive.empty()) {
     job.simulation.source.net =
         road::MapImporterRegistry::withBuiltins().forFile(options.openDrive).toNet(options.openDrive, work.path());
     job.mapFile = options.openDrive;
   }
+  if (!options.sourceFile.empty()) job.mapFile = options.sourceFile;
   job.label = options.label.empty() ? job.mapFile.stem().string() : options.label;
   return job;
 }

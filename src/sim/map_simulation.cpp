@@ -5,11 +5,14 @@
 
 #include <algorithm>
 #include <cmath>
+#include <sstream>
 #include <unordered_set>
 
 #include "vsd/sim/activity.hpp"
 #include "vsd/core/error.hpp"
 #include "vsd/core/fault.hpp"
+#include "vsd/core/files.hpp"
+#include "vsd/core/svg.hpp"
 #include "vsd/sim/ego_driver.hpp"
 #include "vsd/sim/sumo_session.hpp"
 
@@ -21,6 +24,136 @@ namespace {
 void requireFile(const fs::path& path, const std::string& what) {
   if (path.empty()) return;
   if (!fs::is_regular_file(path)) throw ConfigError(fmt::format("{} '{}' does not exist", what, path.string()));
+}
+
+/// A route of this many edges is long enough for any scenario (and ends a loop-free search).
+constexpr std::size_t kMaxRouteEdges = 10'000;
+
+/// How far a connection of SUMO's (its `dir`) turns off the road: straight on first, then
+/// partial turns, then turns; a turn back (or anything else) never continues a road.
+int turnRank(const std::string& direction) {
+  if (direction == "s") return 0;
+  if (direction == "L" || direction == "R") return 1;
+  if (direction == "l" || direction == "r") return 2;
+  return -1;
+}
+
+/// The connection onward from `lane` that turns least (first of equals), or none.
+std::optional<libsumo::TraCIConnection> straightestLink(const std::string& lane) {
+  std::optional<libsumo::TraCIConnection> best;
+  for (const auto& link : libsumo::Lane::getLinks(lane)) {
+    const int rank = turnRank(link.direction);
+    if (rank >= 0 && (!best || rank < turnRank(best->direction))) best = link;
+  }
+  return best;
+}
+
+/// Edges from `lane`'s edge on along the road: the straightest connection of the lane, else of
+/// its edge's other lanes, until a dead end, an edge already passed or kMaxRouteEdges.
+std::vector<std::string> roadAhead(const std::string& lane) {
+  std::vector<std::string> edges{libsumo::Lane::getEdgeID(lane)};
+  std::unordered_set<std::string> passed(edges.begin(), edges.end());
+  std::string current = lane;
+  while (edges.size() < kMaxRouteEdges) {
+    auto link = straightestLink(current);
+    const std::string edge = libsumo::Lane::getEdgeID(current);
+    for (int i = 0; !link && i < libsumo::Edge::getLaneNumber(edge); ++i) {
+      link = straightestLink(fmt::format("{}_{}", edge, i));
+    }
+    if (!link) break;
+    const std::string next = libsumo::Lane::getEdgeID(link->approachedLane);
+    if (!passed.insert(next).second) break;
+    edges.push_back(next);
+    current = link->approachedLane;
+  }
+  return edges;
+}
+
+/// rad: the direction of `lane` at `pos` m along it.
+double laneHeading(const std::string& edge, int lane, double pos, double lane_length) {
+  const double a = std::clamp(pos - 0.5, 0.0, lane_length);
+  const double b = std::clamp(pos + 0.5, 0.0, lane_length);
+  const auto p = libsumo::Simulation::convert2D(edge, a, lane);
+  const auto q = libsumo::Simulation::convert2D(edge, b, lane);
+  return std::atan2(q.y - p.y, q.x - p.x);
+}
+
+/// Where SUMO is to insert a placed road user: its lane and route.
+struct Placement {
+  int laneIndex = 0;
+  double front = 0.0;  ///< m along the lane of its front (SUMO places vehicles by it)
+  std::vector<std::string> route;
+};
+
+/// `user`'s lane (in the loaded network) and route, or ConfigError naming its `where`.
+Placement placementOf(const PlacedRoadUser& user) {
+  const auto fail = [&](const std::string& why) {
+    throw ConfigError(fmt::format("{}: road user '{}' at ({:.2f}, {:.2f}) {}", user.where, user.id, user.centre.x(),
+                                  user.centre.y(), why));
+  };
+  const auto at = libsumo::Simulation::convertRoad(user.centre.x(), user.centre.y(), false, user.vehicleClass);
+  if (at.edgeID.empty()) fail("lies on no lane of the network its class may use");
+  if (at.edgeID.front() == ':') fail(fmt::format("lies inside a junction (lane {}_{})", at.edgeID, at.laneIndex));
+  const std::string lane = fmt::format("{}_{}", at.edgeID, at.laneIndex);
+  const auto foot = libsumo::Simulation::convert2D(at.edgeID, at.pos, at.laneIndex);
+  const double off = (Vec2(foot.x, foot.y) - user.centre).norm();
+  if (off > PlacedRoadUser::kMaxPlacementOffset) {
+    fail(fmt::format("lies {:.2f} m beside the centre line of its lane {} (road users start on it: at most {} m off)",
+                     off, lane, PlacedRoadUser::kMaxPlacementOffset));
+  }
+  const double lane_length = libsumo::Lane::getLength(lane);
+  const double turn = std::abs(wrapAngle(user.heading - laneHeading(at.edgeID, at.laneIndex, at.pos, lane_length)));
+  if (turn > 0.5 * kPi) {
+    fail(fmt::format("faces against the direction of its lane {} ({:.0f} degrees off)", lane, turn * 180.0 / kPi));
+  }
+  const double front = at.pos + 0.5 * user.length;
+  if (front > lane_length + 1e-6) {
+    fail(fmt::format("reaches beyond the end of its lane {} ({:.2f} m long; its front at {:.2f} m)", lane, lane_length,
+                     front));
+  }
+  return {at.laneIndex, front, roadAhead(lane)};
+}
+
+/// The placed road users as SUMO route-file XML: each its own type, route and vehicle, departing
+/// at `begin` without SUMO's insertion checks (a scenario places them where it wants them).
+std::string placedRoadUsersXml(const std::vector<PlacedRoadUser>& users, double begin) {
+  std::string xml = "<additional>\n";
+  for (const auto& user : users) {
+    const Placement placement = placementOf(user);
+    const std::string id = escapeXml(user.id);
+    xml += fmt::format("  <vType id=\"vsd_type_{}\" length=\"{}\" width=\"{}\" vClass=\"{}\"/>\n", id, user.length,
+                       user.width, escapeXml(user.vehicleClass));
+    const std::string edges = escapeXml(fmt::format("{}", fmt::join(placement.route, " ")));
+    xml += fmt::format("  <route id=\"vsd_route_{}\" edges=\"{}\"/>\n", id, edges);
+    xml += fmt::format("  <vehicle id=\"{0}\" type=\"vsd_type_{0}\" route=\"vsd_route_{0}\" depart=\"{1}\" "
+                       "departLane=\"{2}\" departPos=\"{3:.3f}\" departSpeed=\"{4}\" insertionChecks=\"none\"/>\n",
+                       id, begin, placement.laneIndex, placement.front, user.speed);
+  }
+  return xml + "</additional>\n";
+}
+
+/// The SUMO arguments of `options` with its placed road users written into `work` as an
+/// additional file (their lanes and routes found in a first, planning load of the map).
+std::vector<std::string> argumentsWithPlaced(const MapSimulationOptions& options, const fs::path& work) {
+  auto args = mapSimulationArguments(options);
+  if (options.placed.empty()) return args;
+  std::vector<std::string> additional;
+  {
+    const SumoSession planning(args);
+    const std::string xml = placedRoadUsersXml(options.placed, libsumo::Simulation::getTime());
+    writeTextFileAtomically(work / "placed.add.xml", xml);
+    std::stringstream given(libsumo::Simulation::getOption("additional-files"));
+    const fs::path base = options.source.config.empty() ? fs::current_path() : options.source.config.parent_path();
+    for (std::string file; std::getline(given, file, ',');) {
+      if (!file.empty()) additional.push_back(fs::path(file).is_absolute() ? file : (base / file).string());
+    }
+  }
+  additional.push_back((work / "placed.add.xml").string());
+  args.insert(args.end(), {"--additional-files", fmt::format("{}", fmt::join(additional, ","))});
+  // Scripted road users move as scripted, through whatever is in their way (as in the scenario
+  // language); SUMO would take colliding vehicles out of the simulation.
+  args.insert(args.end(), {"--collision.action", "none"});
+  return args;
 }
 }  // namespace
 
@@ -64,15 +197,39 @@ struct MapSimulation::Impl {
     std::string type;
   };
   std::unordered_map<std::string, Dimensions> dimensions;
+  /// Placed road users not yet seen departing (checked after the first step).
+  std::vector<PlacedRoadUser> placing;
 
-  Impl(const MapSimulationOptions& options) : session(mapSimulationArguments(options)), step(options.step) {
+  Impl(const MapSimulationOptions& options, const fs::path& work)
+      : session(argumentsWithPlaced(options, work)), step(options.step), placing(options.placed) {
     const double map_end = libsumo::Simulation::getEndTime();
     if (options.end) end = options.end;
     else if (map_end >= 0.0) end = map_end;
+    for (const auto& user : placing) {
+      if (!user.holdsSpeed) continue;
+      libsumo::Vehicle::setSpeedMode(user.id, 0);
+      libsumo::Vehicle::setLaneChangeMode(user.id, 0);
+      libsumo::Vehicle::setSpeed(user.id, user.speed);
+    }
+  }
+
+  /// After the first step: every placed road user departed (SUMO inserts none where it would not fit).
+  void checkPlaced(const std::vector<std::string>& present) {
+    const std::unordered_set<std::string> ids(present.begin(), present.end());
+    for (const auto& user : placing) {
+      if (ids.count(user.id)) continue;
+      throw ConfigError(fmt::format("{}: road user '{}' could not start where it is placed (SUMO found no room for "
+                                    "it there: another vehicle too close ahead or behind at its speed)",
+                                    user.where, user.id));
+    }
+    placing.clear();
   }
 };
 
-MapSimulation::MapSimulation(const MapSimulationOptions& options) : impl_(std::make_unique<Impl>(options)) {}
+MapSimulation::MapSimulation(const MapSimulationOptions& options) {
+  if (!options.placed.empty()) placedFiles_ = std::make_unique<TemporaryDirectory>("vsd-placed");
+  impl_ = std::make_unique<Impl>(options, placedFiles_ ? placedFiles_->path() : fs::path());
+}
 
 MapSimulation::~MapSimulation() {
   drivers_.clear();  // before the session closes: drivers talk to SUMO
@@ -82,6 +239,11 @@ std::vector<LaneGeometry> MapSimulation::lanes() const {
   std::vector<LaneGeometry> result;
   for (const auto& id : libsumo::Lane::getIDList()) result.push_back(fetchLane(id, Vec2::Zero()));
   return result;
+}
+
+const VehicleSnapshot* MapSimulation::vehicle(const std::string& id) const {
+  const auto found = std::find_if(vehicles_.begin(), vehicles_.end(), [&](const auto& v) { return v.id == id; });
+  return found == vehicles_.end() ? nullptr : &*found;
 }
 
 double MapSimulation::time() const { return impl_->session.time(); }
@@ -162,6 +324,7 @@ bool MapSimulation::step() {
   releaseFinishedDrivers();
 
   const auto ids = libsumo::Vehicle::getIDList();
+  if (!impl_->placing.empty()) impl_->checkPlaced(ids);
   vehicles_.clear();
   vehicles_.reserve(ids.size());
   for (const auto& id : ids) {

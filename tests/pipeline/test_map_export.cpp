@@ -1,4 +1,5 @@
 #include <fmt/format.h>
+#include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -8,6 +9,8 @@
 #include "vsd/core/error.hpp"
 #include "vsd/pipeline/map_export.hpp"
 #include "vsd/pipeline/run.hpp"
+#include "vsd/road/map_importers.hpp"
+#include "vsd/sim/map_simulation.hpp"
 #include "vsd/vector/dataset.hpp"
 
 using namespace vsd;
@@ -300,4 +303,86 @@ TEST(Export, ParkedVehiclesNeverJumpIntoTrajectories) {
     if (reader.scene(i).provenance.egoId == "bus") ++bus_seen;
   }
   EXPECT_GT(bus_seen, 0u);  // windows of the bus before and after parking remain
+}
+
+namespace {
+
+/// The curve map's network (its two lanes: "-1_0" along the road's s, "1_0" against it).
+sim::MapSimulationOptions curveSimulation(const TemporaryDirectory& dir) {
+  sim::MapSimulationOptions options;
+  const auto registry = road::MapImporterRegistry::withBuiltins();
+  options.source.net = registry.forFile(openDriveMap()).toNet(openDriveMap(), dir.path());
+  options.step = 0.1;
+  options.end = 20.0;
+  return options;
+}
+
+sim::PlacedRoadUser placedAt(const std::string& id, const Vec2& centre, double heading, double speed) {
+  sim::PlacedRoadUser user;
+  user.id = id;
+  user.centre = centre;
+  user.heading = heading;
+  user.speed = speed;
+  user.where = "test.xosc:" + id;
+  return user;
+}
+
+}  // namespace
+
+// Road users an imported scenario places on a network start on the lane under them, facing its
+// way, and keep their speed along the road (round the curve onto its last straight), whatever is
+// ahead; one placed off its lane's centre line, facing against its lane or on no lane is refused
+// by name.
+TEST(MapSimulation, PlacedRoadUsersStartOnTheirLaneAndFollowTheRoadAtTheirSpeed) {
+  TemporaryDirectory dir;
+  auto options = curveSimulation(dir);
+  // The curve map's right lane (-1) runs along +x at y = -1.75 on its first straight; its left
+  // lane (1) the other way at y = +1.75. A slow car 30 m ahead of a scripted one on its lane.
+  options.placed = {placedAt("slow", {50.0, -1.75}, 0.0, 2.0), placedAt("scripted", {20.0, -1.75}, 0.0, 12.0),
+                    placedAt("oncoming", {60.0, 1.75}, kPi, 5.0)};
+  options.placed[0].holdsSpeed = false;  // SUMO drives it
+  {
+    sim::MapSimulation simulation(options);
+    while (simulation.time() < 10.0 - 1e-9) ASSERT_TRUE(simulation.step());
+    // SUMO inserts them at the end of the first step (t = 0.1 s) where they were placed; they
+    // have moved for 9.9 s since.
+    const auto* scripted = simulation.vehicle("scripted");
+    ASSERT_NE(scripted, nullptr);
+    EXPECT_NEAR(scripted->state.speed, 12.0, 1e-9);  // through the slow car ahead: a script is kept
+    // 118.8 m along its lane from x = 20: 80 m to the arc, then 38.8 m round it on a radius of
+    // 100 + 1.75 m (the lane lies 1.75 m right of the reference line).
+    const double angle = (12.0 * 9.9 - 80.0) / 101.75;
+    const Vec2 expected(100.0 + 101.75 * std::sin(angle), 100.0 - 101.75 * std::cos(angle));
+    EXPECT_LT((scripted->state.position() - expected).norm(), 0.1) << scripted->state.position().transpose();
+    const auto* oncoming = simulation.vehicle("oncoming");
+    ASSERT_NE(oncoming, nullptr);
+    EXPECT_NEAR(oncoming->state.x, 60.0 - 5.0 * 9.9, 0.01);
+    EXPECT_NEAR(oncoming->state.y, 1.75, 0.01);
+    const auto* slow = simulation.vehicle("slow");
+    ASSERT_NE(slow, nullptr);
+    EXPECT_GT(slow->state.speed, 2.5);  // SUMO drives it: it speeds up
+  }
+
+  const auto refused = [&](const sim::PlacedRoadUser& user) {
+    auto bad = curveSimulation(dir);
+    bad.placed = {user};
+    try {
+      sim::MapSimulation refusing(bad);
+      refusing.step();
+    } catch (const ConfigError& error) {
+      return std::string(error.what());
+    }
+    return std::string("not refused");
+  };
+  EXPECT_THAT(refused(placedAt("beside", {20.0, -0.75}, 0.0, 5.0)),
+              testing::HasSubstr("test.xosc:beside: road user 'beside' at (20.00, -0.75) lies 1.00 m beside the "
+                                 "centre line of its lane"));
+  EXPECT_THAT(refused(placedAt("wrong_way", {20.0, -1.75}, kPi, 5.0)),
+              testing::HasSubstr("faces against the direction of its lane"));
+  EXPECT_THAT(refused(placedAt("off_road", {298.0, -1.75}, 0.0, 5.0)), testing::HasSubstr("m beside the centre line"));
+  // 1 m before the end of the last straight (heading 1 rad): its front would stick out.
+  const Vec2 end(184.1470984807897 + 100.0 * std::cos(1.0), 45.96976941318602 + 100.0 * std::sin(1.0));
+  const Vec2 right_lane = end + 1.75 * Vec2(std::sin(1.0), -std::cos(1.0)) - 1.0 * Vec2(std::cos(1.0), std::sin(1.0));
+  EXPECT_THAT(refused(placedAt("at_the_end", right_lane, 1.0, 5.0)),
+              testing::HasSubstr("reaches beyond the end of its lane -1_0"));
 }

@@ -69,6 +69,11 @@ struct ExportOptions {
   std::filesystem::path controllerLibrary;
   std::vector<std::pair<std::string, double>> controllerParams;
   WatchdogOptions watchdog;              ///< per-step time limit of controllers and libsumo (--step-timeout)
+  /// Road users placed at the start besides the map's demand (an imported network scenario's;
+  /// sim::MapSimulationOptions::placed), network frame.
+  std::vector<sim::PlacedRoadUser> placed;
+  /// The file the dataset's provenance and messages name (an imported scenario); empty: the map's.
+  std::filesystem::path sourceFile;
 
   /// Throws ConfigError naming the flag, the value and the constraint.
   void validate() const;

@@ -135,8 +135,9 @@ enum class OpenDriveOrigin {
 /// MapImporterRegistry, src/road/importers/opendrive.cpp, and the OpenDRIVE import of
 /// interop). Throws ConfigError for a missing file, SumoError "netconvert rejects FILE
 /// (exit code N): first error line".
+/// `extra`: further netconvert options (e.g. {"--flatten", "true"}: no elevation).
 void convertOpenDrive(const std::filesystem::path& xodr, const std::filesystem::path& net,
-                      OpenDriveOrigin origin = OpenDriveOrigin::Normalised);
+                      OpenDriveOrigin origin = OpenDriveOrigin::Normalised, const std::vector<std::string>& extra = {});
 
 /// Options this project always gives netconvert (net coordinates = generator coordinates, ...).
 std::vector<std::string> baseNetconvertOptions();

@@ -13,9 +13,14 @@
 #include <unordered_map>
 #include <vector>
 
+#include "vsd/core/geometry.hpp"
 #include "vsd/core/road_user.hpp"
 #include "vsd/core/trace.hpp"
 #include "vsd/sim/controller.hpp"
+
+namespace vsd {
+class TemporaryDirectory;
+}
 
 namespace vsd::sim {
 
@@ -49,6 +54,27 @@ struct EgoFailure {
   std::string reason;  ///< e.g. "Ego controller crashed (signal 11, Segmentation fault) at t = 12.4 s"
 };
 
+/// A road user the simulation places on the network itself at its start (an imported
+/// scenario's entity): on the lane whose centre line is nearest its centre, on a route that
+/// follows the road from there (straight on where it branches, never turning back) to a dead
+/// end or an edge it already passed.
+struct PlacedRoadUser {
+  std::string id;
+  Vec2 centre = Vec2::Zero();  ///< m, network frame; within kMaxPlacementOffset of a lane's centre line
+  double heading = 0.0;        ///< rad; within 90 degrees of that lane's direction
+  double speed = 0.0;          ///< m/s at the start, >= 0
+  double length = kCarLength;  ///< m
+  double width = kCarWidth;    ///< m
+  std::string vehicleClass = "passenger";  ///< SUMO's vClass
+  /// true: keeps `speed` on its lane whatever lies ahead (a scripted entity); false: SUMO
+  /// drives it (until a controller takes it over).
+  bool holdsSpeed = true;
+  std::string where;  ///< where it comes from, for messages (e.g. "F.xosc:57: <Private>")
+
+  /// m: how far from its lane's centre line a road user may be placed (it starts on it).
+  static constexpr double kMaxPlacementOffset = 0.25;
+};
+
 struct MapSimulationOptions {
   MapSource source;
   double step = 0.0;             ///< s (> 0); no default: from the export options
@@ -59,11 +85,15 @@ struct MapSimulationOptions {
   /// within one step (which would put lane-width jumps into recorded trajectories).
   /// 0 keeps the map's setting (e.g. for maps using the sublane model).
   double laneChangeDuration = 2.0;
+  /// Road users placed at the start besides the map's own demand; each departs at once
+  /// (the first step), or the constructor's first step() throws ConfigError naming it.
+  std::vector<PlacedRoadUser> placed;
 };
 
 class MapSimulation {
  public:
-  /// Loads the map. Throws ConfigError for missing files, SumoError if SUMO rejects them.
+  /// Loads the map and places options.placed. Throws ConfigError for missing files and a road
+  /// user that cannot be placed (naming its `where`), SumoError if SUMO rejects the map.
   explicit MapSimulation(const MapSimulationOptions& options);
   MapSimulation(const MapSimulation&) = delete;
   MapSimulation& operator=(const MapSimulation&) = delete;
@@ -79,6 +109,8 @@ class MapSimulation {
   std::optional<double> endTime() const;
   /// Vehicles in the network after the last step.
   const std::vector<VehicleSnapshot>& vehicles() const { return vehicles_; }
+  /// The vehicle `id` after the last step; null if it is not in the network.
+  const VehicleSnapshot* vehicle(const std::string& id) const;
   /// From the next step on, `id` (present now) is driven by `controller`.
   void takeOver(const std::string& id, std::unique_ptr<EgoController> controller);
   /// Takes a closed-loop (or about to be taken over) Ego out of the simulation
@@ -104,6 +136,7 @@ class MapSimulation {
   void driveEgos(double now);
 
   struct Impl;
+  std::unique_ptr<TemporaryDirectory> placedFiles_;  ///< the placed road users' file (before impl_: outlives it)
   std::unique_ptr<Impl> impl_;
   std::vector<VehicleSnapshot> vehicles_;
   std::unordered_map<std::string, std::unique_ptr<class EgoDriver>> drivers_;

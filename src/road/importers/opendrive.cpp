@@ -10,13 +10,15 @@ namespace fs = std::filesystem;
 
 namespace vsd::road {
 
-void convertOpenDrive(const fs::path& xodr, const fs::path& net, OpenDriveOrigin origin) {
+void convertOpenDrive(const fs::path& xodr, const fs::path& net, OpenDriveOrigin origin,
+                      const std::vector<std::string>& extra) {
   ensureSumoHome();
   if (!fs::exists(xodr)) throw ConfigError(fmt::format("{}: OpenDRIVE file does not exist", xodr.string()));
   const fs::path log = net.string() + ".netconvert.log";
   std::vector<std::string> command = {"netconvert", "--opendrive-files", xodr.string(), "--output-file", net.string(),
                                       "--no-warnings", "true"};
   if (origin == OpenDriveOrigin::AsWritten) command.insert(command.end(), {"--offset.disable-normalization", "true"});
+  command.insert(command.end(), extra.begin(), extra.end());
   const auto result = runProcess(command, log);
   std::error_code ignored;
   fs::remove(log, ignored);
