@@ -19,7 +19,9 @@
 #     controllers map onto built-ins; `--ego FIRST_ENTITY` only where no entity has a
 #     controller or is named Ego; `--duration 30` only where the StopTrigger is no
 #     simulation time), then `run` of each file that would run (with the same options):
-#     ran, or the first refusal. Each file is also placed in or outside the issue's goal
+#     ran, or the first refusal. A file the scenario language refuses with a hint at `--network`
+#     (its roads or SUMO traffic) is checked and run again with `--network` (its Init on SUMO's
+#     network of its roads). Each file is also placed in or outside the issue's goal
 #     ("roads netconvert reads", actions and conditions in its list): tools/xosc_scope.py,
 #     then netconvert on the road it names.
 set -euo pipefail
@@ -45,7 +47,7 @@ echo "# ASAM OSC-ALKS-scenarios $(git -C "$asam" rev-parse --short HEAD 2>/dev/n
 # The line of a run's output that counts its scenarios, or its error line.
 run_line() {
   local log="$1" status="$2"
-  if [ "$status" -eq 0 ]; then grep -m1 -E 'concrete scenarios? \(seed' "$log" || tail -1 "$log"
+  if [ "$status" -eq 0 ]; then grep -m1 -E 'concrete scenarios? \(seed|samples from [0-9]+ Egos' "$log" || tail -1 "$log"
   else grep -m1 '^vsd-sumo: ' "$log" || tail -1 "$log"; fi
 }
 
@@ -92,6 +94,26 @@ echo "## esmini resources/xosc: scenario check --data-root resources --controlle
 echo "   scope: in the issue's goal = netconvert reads its road and its actions and conditions are in the issue's list"
 ran=0; total=0; in_scope=0; ran_in_scope=0
 declare -A netconvert_reads
+# `scenario check` of $file with ${options[@]} into $work/check, its exit in $status; adds --ego
+# FIRST_ENTITY where no entity has a controller or is named Ego (all scripted: its first entity is
+# the Ego, driven by the default controller, as a user would say with --ego) and --duration 30
+# where the StopTrigger is no simulation time.
+check_esmini() {
+  status=0
+  "$vsd" scenario check "${options[@]}" "$file" >"$work/check" 2>&1 || status=$?
+  if grep -q 'which is the Ego?' "$work/check"; then
+    first="$(python3 -c 'import sys, xml.etree.ElementTree as t
+print(t.parse(sys.argv[1]).find(".//{*}ScenarioObject").get("name"))' "$file" 2>/dev/null || true)"
+    if [ -n "$first" ]; then
+      options+=(--ego "$first"); status=0
+      "$vsd" scenario check "${options[@]}" "$file" >"$work/check" 2>&1 || status=$?
+    fi
+  fi
+  if grep -q 'pass --duration' "$work/check"; then
+    options+=(--duration 30); status=0
+    "$vsd" scenario check "${options[@]}" "$file" >"$work/check" 2>&1 || status=$?
+  fi
+}
 for file in "$esmini"/resources/xosc/*.xosc; do
   total=$((total + 1)); status=0
   scope="$(python3 "$root/tools/xosc_scope.py" "$file")"
@@ -109,24 +131,19 @@ for file in "$esmini"/resources/xosc/*.xosc; do
   fi
   # The file's own end where its StopTrigger is a simulation time; 30 s where it asks for one.
   options=(--data-root "$esmini/resources" --controller-map "$root/tools/esmini_controllers.yaml")
-  "$vsd" scenario check "${options[@]}" "$file" >"$work/check" 2>&1 || status=$?
-  # A file without controllers and without an entity named Ego (all scripted): its first entity
-  # is the Ego (driven by the default controller), as a user would say with --ego.
-  if grep -q 'which is the Ego?' "$work/check"; then
-    first="$(python3 -c 'import sys, xml.etree.ElementTree as t
-print(t.parse(sys.argv[1]).find(".//{*}ScenarioObject").get("name"))' "$file" 2>/dev/null || true)"
-    if [ -n "$first" ]; then
-      options+=(--ego "$first"); status=0
-      "$vsd" scenario check "${options[@]}" "$file" >"$work/check" 2>&1 || status=$?
-    fi
-  fi
-  if grep -q 'pass --duration' "$work/check"; then
-    options+=(--duration 30); status=0
-    "$vsd" scenario check "${options[@]}" "$file" >"$work/check" 2>&1 || status=$?
+  check_esmini
+  # A file whose roads (or SUMO traffic) the scenario language cannot carry: its Init on SUMO's
+  # network of them, as the refusal suggests.
+  if [ "$status" -ne 0 ] && grep -m1 -E '^REFUSED|^vsd-sumo: ' "$work/check" | grep -q -- '--network'; then
+    options=(--data-root "$esmini/resources" --controller-map "$root/tools/esmini_controllers.yaml" --network)
+    check_esmini
   fi
   if [ "$status" -eq 0 ]; then
-    "$vsd" run "$file" "${options[@]}" --out "$work/e$total" >"$work/log" 2>&1 || status=$?
-    if [ "$status" -eq 0 ]; then line="ran: $(run_line "$work/log" 0)"; ran=$((ran + 1))
+    how=ran; run_out="$work/e$total"
+    # A network scenario writes a dataset file (the scenes around the Ego), as `export` does.
+    case " ${options[*]} " in *" --network "*) how="ran with --network"; run_out="$work/e$total.h5" ;; esac
+    "$vsd" run "$file" "${options[@]}" --out "$run_out" >"$work/log" 2>&1 || status=$?
+    if [ "$status" -eq 0 ]; then line="$how: $(run_line "$work/log" 0)"; ran=$((ran + 1))
     else line="run failed (exit $status): $(run_line "$work/log" "$status" | cut -c1-200)"; fi
   else line="$(grep -m1 -E '^REFUSED|^vsd-sumo: ' "$work/check" | sed "s|$esmini/||g" | cut -c1-220)"; fi
   if [ "$scope" = "in scope" ]; then

@@ -52,6 +52,10 @@ void addImportOptions(CLI::App& command, interop::OscImportOptions& import) {
   command.add_option("--controller-map", import.controllerMap,
                      "OpenSCENARIO input: YAML map from the file's controller names to vsd-sumo controllers")
       ->check(CLI::ExistingFile);
+  command.add_flag("--network", import.network,
+                   "OpenSCENARIO input: simulate the Init on SUMO's network of the file's OpenDRIVE roads (or its SUMO "
+                   "controller's configuration) instead of the scenario language's one road; writes the scenes around "
+                   "the Ego as `export` does (docs/openscenario-import.md)");
   command.add_option("--data-root", import.dataRoot,
                      "OpenSCENARIO input: the folder the files a scenario names (road, catalogs, template) may lie in, "
                      "e.g. esmini's resources/ (default: the scenario file's own folder)")
@@ -78,7 +82,7 @@ void checkFlagsFor(const interop::ScenarioFormat& format, const interop::Scenari
     throw ConfigError::field("command line", flag, file, fmt::format("a flag for other formats than {}", format.name));
   };
   if (request.given("--step") && !format.can.step) refuse("--step");
-  for (const char* flag : {"--duration", "--ego", "--controller", "--controller-map", "--data-root"}) {
+  for (const char* flag : {"--duration", "--ego", "--controller", "--controller-map", "--data-root", "--network"}) {
     if (request.given(flag) && !format.can.importOptions) refuse(flag);
   }
   for (const char* flag : {"--shard", "--merge"}) {

@@ -197,16 +197,18 @@ void readObject(Translation& translation, Catalogs& catalogs, const xml::Reader&
 }  // namespace
 
 std::string controllerName(Translation& translation, Catalogs& catalogs, const pugi::xml_node& parent,
-                           std::string& where) {
+                           std::string& where, ControllerDefinition* definition) {
   const xml::Reader& reader = translation.reader;
   reader.requireSubset(parent, {"Controller", "CatalogReference"});
   if (const pugi::xml_node reference = parent.child("CatalogReference")) {
     const CatalogEntry entry = catalogs.resolve(translation.reader, reference, {"Controller"});
     where = reader.where(reference);
+    if (definition) *definition = {entry.reader, entry.reader.get(), entry.node};
     return entry.reader->text(entry.node, "name");
   }
   const pugi::xml_node controller = reader.only(parent, "Controller");
   where = reader.where(controller);
+  if (definition) *definition = {nullptr, &reader, controller};
   return reader.text(controller, "name");
 }
 
@@ -246,7 +248,8 @@ void readScenarioObject(Translation& translation, Catalogs& catalogs, const pugi
     readObject(translation, catalogs, reader, definition, entity);
   }
   if (const pugi::xml_node controller = object.child("ObjectController")) {
-    entity.controller = controllerName(translation, catalogs, controller, entity.controllerWhere);
+    entity.controller =
+        controllerName(translation, catalogs, controller, entity.controllerWhere, &entity.controllerDefinition);
   }
   translation.findings.mapped(entity.where, fmt::format("{} '{}', {} x {} m (Performance, Axles and Properties are "
                                                         "not simulated)",
@@ -345,7 +348,8 @@ void readInitAction(Translation& translation, Entity& entity, const pugi::xml_no
     bool activates = static_cast<bool>(action.child("ActivateControllerAction"));
     if (const pugi::xml_node assign = action.child("AssignControllerAction")) {
       // Defined in place or a controller catalog's entry, as an ObjectController.
-      entity.controller = controllerName(translation, *translation.catalogs, assign, entity.controllerWhere);
+      entity.controller = controllerName(translation, *translation.catalogs, assign, entity.controllerWhere,
+                                         &entity.controllerDefinition);
       // OpenSCENARIO 1.2 may activate the assigned controller with the assignment.
       for (const char* domain : {"activateLateral", "activateLongitudinal"}) {
         activates = activates || reader.optionalBoolean(assign, domain).value_or(false);

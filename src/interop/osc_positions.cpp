@@ -9,6 +9,23 @@
 
 namespace vsd::interop::osc {
 
+void requirePlanar(const xml::Reader& reader, const pugi::xml_node& node) {
+  for (const char* unsupported : {"p", "r"}) {
+    if (reader.optionalNumber(node, unsupported).value_or(0.0) != 0.0) {
+      reader.fail(node, fmt::format("{}: vsd-sumo is planar (pitch and roll 0)", unsupported));
+    }
+  }
+}
+
+std::optional<OrientationElement> readOrientation(const xml::Reader& reader, const pugi::xml_node& position) {
+  const pugi::xml_node node = position.child("Orientation");
+  if (!node) return std::nullopt;
+  reader.requireSubset(node, {});
+  requirePlanar(reader, node);
+  return OrientationElement{reader.optionalNumber(node, "h").value_or(0.0),
+                            reader.optionalText(node, "type").value_or("relative") == "absolute"};
+}
+
 namespace {
 
 Placement placementOf(Translation& translation, Entity& entity);
@@ -16,20 +33,10 @@ Placement placementOf(Translation& translation, Entity& entity);
 /// The heading (rad, relative to the road) an <Orientation> under `position` gives,
 /// `base` when it has none. Relative orientations count from `base`.
 double orientation(const Translation& translation, const pugi::xml_node& position, double s, double base) {
-  const xml::Reader& reader = translation.reader;
-  const pugi::xml_node node = position.child("Orientation");
-  if (!node) return base;
-  reader.requireSubset(node, {});
-  for (const char* unsupported : {"p", "r"}) {
-    if (reader.optionalNumber(node, unsupported).value_or(0.0) != 0.0) {
-      reader.fail(node, fmt::format("{}: vsd-sumo is planar (pitch and roll 0)", unsupported));
-    }
-  }
-  const double h = reader.optionalNumber(node, "h").value_or(0.0);
-  if (reader.optionalText(node, "type").value_or("relative") == "absolute") {
-    return std::remainder(h - translation.road.headingAt(s), 2.0 * kPi);
-  }
-  return std::remainder(base + h, 2.0 * kPi);
+  const auto given = readOrientation(translation.reader, position);
+  if (!given) return base;
+  if (given->absolute) return std::remainder(given->h - translation.road.headingAt(s), 2.0 * kPi);
+  return std::remainder(base + given->h, 2.0 * kPi);
 }
 
 /// `heading`: rad relative to the road that a relative <Orientation> counts from (and the
@@ -128,11 +135,7 @@ Placement planePosition(Translation& translation, const pugi::xml_node& position
   }
   if (kind == "WorldPosition") {
     point = Vec2(reader.number(position, "x"), reader.number(position, "y"));
-    for (const char* unsupported : {"p", "r"}) {
-      if (reader.optionalNumber(position, unsupported).value_or(0.0) != 0.0) {
-        reader.fail(position, fmt::format("{}: vsd-sumo is planar (pitch and roll 0)", unsupported));
-      }
-    }
+    requirePlanar(reader, position);
   } else {
     const Placement base = placementOf(translation, translation.entity(position, reader.text(position, "entityRef")));
     const Vec2 offset(reader.number(position, "dx"), reader.number(position, "dy"));
@@ -242,8 +245,8 @@ Placement placementOf(Translation& translation, Entity& entity) {
         translation.reader.root(),
         fmt::format("entity '{}' has no TeleportAction in the Init, only a controller ('{}', at {}): "
                     "vsd-sumo's road users start where the Init places them (traffic a controller "
-                    "brings from elsewhere, such as a SUMO route file, is not imported)",
-                    entity.name, *entity.controller, entity.controllerWhere));
+                    "brings from elsewhere, such as a SUMO route file, is not imported){}",
+                    entity.name, *entity.controller, entity.controllerWhere, kTryTheNetwork));
   }
   if (!entity.position) {
     translation.reader.fail(translation.reader.root(),

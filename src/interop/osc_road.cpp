@@ -41,34 +41,6 @@ Vec2 integrateTangent(const Heading& h, double a, double b) {
   return (b - a) / 6.0 * (tangent(a) + 4.0 * tangent(m) + tangent(b));
 }
 
-/// `offset`: m of the chain's reference line where the geometry's road starts.
-PlanGeometry readGeometry(const xml::Reader& reader, const pugi::xml_node& geometry, double offset) {
-  const pugi::xml_node shape = reader.choice(geometry, {"line", "arc", "spiral", "paramPoly3"});
-  const double s = offset + reader.number(geometry, "s", NumberRange::atLeast(0.0));
-  const Vec2 start(reader.number(geometry, "x"), reader.number(geometry, "y"));
-  const double heading = reader.number(geometry, "hdg");
-  const double length = reader.number(geometry, "length", kLength);
-  const std::string kind = shape.name();
-  const NumberRange curvature_range = NumberRange::closed(-1.0, 1.0);
-  if (kind == "line") return PlanGeometry::line(s, start, heading, length);
-  if (kind == "arc") return PlanGeometry::arc(s, start, heading, length, reader.number(shape, "curvature", curvature_range));
-  if (kind == "spiral") {
-    return PlanGeometry::spiral(s, start, heading, length, reader.number(shape, "curvStart", curvature_range),
-                                reader.number(shape, "curvEnd", curvature_range));
-  }
-  std::array<double, 4> u{};
-  std::array<double, 4> v{};
-  const char* names[] = {"a", "b", "c", "d"};
-  for (std::size_t i = 0; i < 4; ++i) {
-    u[i] = reader.number(shape, (std::string(names[i]) + "U").c_str());
-    v[i] = reader.number(shape, (std::string(names[i]) + "V").c_str());
-  }
-  const std::string range = reader.optionalText(shape, "pRange").value_or("normalized");
-  if (range != "normalized" && range != "arcLength") {
-    reader.fail(shape, fmt::format("pRange=\"{}\": expected arcLength or normalized", range));
-  }
-  return PlanGeometry::paramPoly3(s, start, heading, length, u, v, range == "normalized");
-}
 
 /// The plan view of a road that starts `offset` m along the chain (0: the first road):
 /// geometries joined end to start (within kJoinTolerance), in order of s, appended to `result`;
@@ -78,7 +50,7 @@ void readPlanView(const xml::Reader& reader, const pugi::xml_node& road, Carriag
   reader.requireSubset(plan, {"geometry"});
   const std::size_t first = result.geometries.size();
   for (const pugi::xml_node& node : plan.children("geometry")) {
-    PlanGeometry geometry = readGeometry(reader, node, offset);
+    PlanGeometry geometry = readPlanGeometry(reader, node, offset);
     if (result.geometries.empty()) {
       result.start = geometry.point(0.0);
       result.heading = geometry.heading(0.0);
@@ -423,6 +395,36 @@ void readLanes(const xml::Reader& reader, const pugi::xml_node& road, Carriagewa
 }
 
 }  // namespace
+
+PlanGeometry readPlanGeometry(const xml::Reader& reader, const pugi::xml_node& geometry, double offset) {
+  const pugi::xml_node shape = reader.choice(geometry, {"line", "arc", "spiral", "paramPoly3"});
+  const double s = offset + reader.number(geometry, "s", NumberRange::atLeast(0.0));
+  const Vec2 start(reader.number(geometry, "x"), reader.number(geometry, "y"));
+  const double heading = reader.number(geometry, "hdg");
+  const double length = reader.number(geometry, "length", kLength);
+  const std::string kind = shape.name();
+  const NumberRange curvature_range = NumberRange::closed(-1.0, 1.0);
+  if (kind == "line") return PlanGeometry::line(s, start, heading, length);
+  if (kind == "arc") {
+    return PlanGeometry::arc(s, start, heading, length, reader.number(shape, "curvature", curvature_range));
+  }
+  if (kind == "spiral") {
+    return PlanGeometry::spiral(s, start, heading, length, reader.number(shape, "curvStart", curvature_range),
+                                reader.number(shape, "curvEnd", curvature_range));
+  }
+  std::array<double, 4> u{};
+  std::array<double, 4> v{};
+  const char* names[] = {"a", "b", "c", "d"};
+  for (std::size_t i = 0; i < 4; ++i) {
+    u[i] = reader.number(shape, (std::string(names[i]) + "U").c_str());
+    v[i] = reader.number(shape, (std::string(names[i]) + "V").c_str());
+  }
+  const std::string range = reader.optionalText(shape, "pRange").value_or("normalized");
+  if (range != "normalized" && range != "arcLength") {
+    reader.fail(shape, fmt::format("pRange=\"{}\": expected arcLength or normalized", range));
+  }
+  return PlanGeometry::paramPoly3(s, start, heading, length, u, v, range == "normalized");
+}
 
 void CarriagewayRoad::requireSteadyLeftSide() const {
   if (leftSideChanges.empty()) return;

@@ -36,6 +36,7 @@
 #include <vector>
 
 #include "osc_findings.hpp"
+#include "xml_support.hpp"
 #include "vsd/core/geometry.hpp"
 
 namespace vsd::interop::osc {
@@ -91,6 +92,10 @@ class PlanGeometry {
   double parameterStep_ = 0.0;       ///< p between a paramPoly3's tabulated arc lengths
   std::vector<double> arcLengths_;   ///< m along a paramPoly3 at multiples of parameterStep_
 };
+
+/// A plan view's <geometry>; `offset`: m of a chain's reference line where its road starts (0: s
+/// as in the file). Throws ConfigError naming the element for a shape or number outside the subset.
+PlanGeometry readPlanGeometry(const xml::Reader& reader, const pugi::xml_node& geometry, double offset);
 
 /// A run of driving lanes on one side of the reference line, as a carriageway driven along it.
 struct DrivenRun {

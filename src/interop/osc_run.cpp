@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include "osc_network.hpp"
 #include "osc_template.hpp"
 #include "vsd/core/error.hpp"
 #include "vsd/core/files.hpp"
@@ -168,6 +169,21 @@ ScenarioCheck checkOpenScenario(const fs::path& file, const OscImportOptions& op
     scenario_file = grid->scenarioFile;
   });
   if (!readable) {
+    for (const auto& line : findings.lines()) check.lines.push_back({kindOf(line.kind), line.text});
+    return check;
+  }
+  if (grid && options.network) {
+    findings.refuse(fmt::format("command line: --network: {} is a parameter distribution: a network scenario is one "
+                                "concrete scenario (check its template with --network)",
+                                file.string()));
+  }
+  if (!grid && options.network) {
+    findings.attempt([&] {
+      const auto scenario = osc::translateNetwork(file, options, findings);
+      if (scenario) osc::checkNetworkStart(*scenario, options.step.value_or(kDefaultStep), findings);
+    });
+  }
+  if (options.network) {
     for (const auto& line : findings.lines()) check.lines.push_back({kindOf(line.kind), line.text});
     return check;
   }

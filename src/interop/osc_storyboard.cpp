@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <iterator>
+#include <limits>
 #include <set>
 #include <string>
 #include <utility>
@@ -2029,10 +2030,11 @@ void readStories(Translation& translation, const pugi::xml_node& storyboard) {
   reader.setParameters(global);
 }
 
-void readStopTrigger(Translation& translation, const pugi::xml_node& storyboard) {
+void readStopTrigger(Translation& translation, const pugi::xml_node& storyboard, bool window_bound) {
   const xml::Reader& reader = translation.reader;
   const pugi::xml_node stop = storyboard.child("StopTrigger");
-  const double longest = translation.options.step.value_or(scenario::LogicalScenario{}.step) * kMaxWindowSteps;
+  const double step = translation.options.step.value_or(scenario::LogicalScenario{}.step);
+  const double longest = window_bound ? step * kMaxWindowSteps : std::numeric_limits<double>::infinity();
   if (translation.options.duration) {
     translation.duration = *translation.options.duration;
     if (stop) {

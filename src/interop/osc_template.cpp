@@ -142,6 +142,8 @@ bool followsItsScript(Translation& translation, const Entity& entity) {
   return false;
 }
 
+}  // namespace
+
 Entity& findEgo(Translation& translation, ControllerChoice& controller) {
   Entity* ego = nullptr;
   for (auto& entity : translation.entities) {
@@ -187,8 +189,6 @@ Entity& findEgo(Translation& translation, ControllerChoice& controller) {
                                                     "(--ego, --controller)", ego->name, controller.name));
   return *ego;
 }
-
-}  // namespace
 
 LanguagePlace languagePlace(const CarriagewayRoad& road, const Placement& p, double centre_ahead, bool keep_lane) {
   const double stretch = 1.0 - road.curvatureAt(p.s) * p.t;  // reference-line s per m along the entity's line
@@ -626,11 +626,23 @@ void checkCommandLine(const OscImportOptions& options) {
   }
 }
 
-/// Reads the whole file into the language. Refusals go to `findings` (and throw unless it collects).
-TranslationResult translate(const fs::path& xosc, const OscImportOptions& options, const ParameterValues& assigned,
-                            const std::string& assigned_where, Findings& findings, const StringCodes& codes) {
-  checkCommandLine(options);  // before anything counts steps (the longest window a StopTrigger may ask for)
-  xml::Reader reader(xosc, read_limits::kScenario);
+fs::path roadNetworkFile(Translation& translation, const pugi::xml_node& root, const fs::path& xosc) {
+  const xml::Reader& reader = translation.reader;
+  const pugi::xml_node network = reader.only(root, "RoadNetwork");
+  reader.requireSubset(network, {"LogicFile", "SceneGraphFile"});
+  if (network.child("SceneGraphFile")) {
+    translation.findings.note(reader.where(network.child("SceneGraphFile")), "3D models are not used");
+  }
+  const pugi::xml_node logic = reader.only(network, "LogicFile");
+  // The road network must lie next to the scenario file or below it (or inside --data-root).
+  const fs::path xodr =
+      referencedFile(translation.options, xosc, reader.text(logic, "filepath"), reader.where(logic), "filepath");
+  if (!fs::exists(xodr)) reader.fail(logic, fmt::format("the road network {} does not exist", xodr.string()));
+  return xodr;
+}
+
+Parameters readScenarioHead(xml::Reader& reader, const ParameterValues& assigned, const std::string& assigned_where,
+                            Findings& findings) {
   const pugi::xml_node root = reader.root();
   if (std::string(root.name()) != "OpenSCENARIO") reader.fail(root, "expected the root element <OpenSCENARIO>");
   reader.requireSubset(root, {"FileHeader", "ParameterDeclarations", "CatalogLocations", "RoadNetwork", "Entities",
@@ -638,8 +650,18 @@ TranslationResult translate(const fs::path& xosc, const OscImportOptions& option
   const pugi::xml_node header = reader.only(root, "FileHeader");
   if (reader.number(header, "revMajor") != 1.0) reader.fail(header, "revMajor: expected OpenSCENARIO 1.x");
   reader.leave(header, {"revMinor", "date", "description", "author"});  // 1.x are read alike
-  const Parameters parameters = readParameters(reader, root, {}, assigned, assigned_where);
+  Parameters parameters = readParameters(reader, root, {}, assigned, assigned_where);
   for (const auto& [where, what] : parameters.notes) findings.note(where, what);
+  return parameters;
+}
+
+/// Reads the whole file into the language. Refusals go to `findings` (and throw unless it collects).
+TranslationResult translate(const fs::path& xosc, const OscImportOptions& options, const ParameterValues& assigned,
+                            const std::string& assigned_where, Findings& findings, const StringCodes& codes) {
+  checkCommandLine(options);  // before anything counts steps (the longest window a StopTrigger may ask for)
+  xml::Reader reader(xosc, read_limits::kScenario);
+  const pugi::xml_node root = reader.root();
+  const Parameters parameters = readScenarioHead(reader, assigned, assigned_where, findings);
   TranslationResult result;
   result.inputs = parameters.numeric;
   result.violated = violatedConstraint(reader, root, parameters.values);
@@ -648,28 +670,28 @@ TranslationResult translate(const fs::path& xosc, const OscImportOptions& option
   Translation translation{reader, findings, options};
   Catalogs catalogs(reader, root, options, findings);
   translation.catalogs = &catalogs;
-  const pugi::xml_node network = reader.only(root, "RoadNetwork");
-  reader.requireSubset(network, {"LogicFile", "SceneGraphFile"});
-  if (network.child("SceneGraphFile")) findings.note(reader.where(network.child("SceneGraphFile")), "3D models are not used");
-  const pugi::xml_node logic = reader.only(network, "LogicFile");
-  // The road network must lie next to the scenario file or below it (or inside --data-root).
-  const fs::path xodr = referencedFile(options, xosc, reader.text(logic, "filepath"), reader.where(logic), "filepath");
-  if (!fs::exists(xodr)) reader.fail(logic, fmt::format("the road network {} does not exist", xodr.string()));
+  const fs::path xodr = roadNetworkFile(translation, root, xosc);
+  const pugi::xml_node logic = root.child("RoadNetwork").child("LogicFile");
   // In a network of several roads, the scenario's road is the first one a position names (the
   // Init's first), else the one under its first world position.
   pugi::xml_node named = root.select_node("Storyboard/Init//*[@roadId]").node();
   if (!named) named = root.select_node("//*[@roadId]").node();
   pugi::xml_node world = root.select_node("Storyboard/Init//WorldPosition").node();
   if (!world) world = root.select_node("//WorldPosition").node();
-  if (named) {
-    const std::string road_id = reader.text(named, "roadId");
-    translation.road = readCarriagewayRoad(xodr, findings, road_id, "the roadId at " + reader.where(named));
-  } else if (world) {
-    const WorldPlace place{Vec2(reader.number(world, "x"), reader.number(world, "y")),
-                           reader.optionalNumber(world, "h")};
-    translation.road = readCarriagewayRoad(xodr, findings, "", reader.where(world), place);
-  } else {
-    translation.road = readCarriagewayRoad(xodr, findings);
+  try {
+    if (named) {
+      const std::string road_id = reader.text(named, "roadId");
+      translation.road = readCarriagewayRoad(xodr, findings, road_id, "the roadId at " + reader.where(named));
+    } else if (world) {
+      const WorldPlace place{Vec2(reader.number(world, "x"), reader.number(world, "y")),
+                             reader.optionalNumber(world, "h")};
+      translation.road = readCarriagewayRoad(xodr, findings, "", reader.where(world), place);
+    } else {
+      translation.road = readCarriagewayRoad(xodr, findings);
+    }
+  } catch (const ConfigError& error) {
+    // The language has one road; SUMO's network of the file has them all.
+    throw ConfigError(std::string(error.what()) + kTryTheNetwork);
   }
   readEntities(translation, root, catalogs);
   for (auto& entity : translation.entities) entity.id = identifier(entity.name, translation.usedIds);

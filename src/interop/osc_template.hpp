@@ -38,6 +38,13 @@ struct Placement {
   int lane = 0;          ///< language lane (0 = rightmost driving lane)
 };
 
+/// A <Controller> element as defined: in the scenario file or a catalog entry.
+struct ControllerDefinition {
+  std::shared_ptr<const xml::Reader> catalog;  ///< the catalog entry's reader; null: the scenario file's
+  const xml::Reader* reader = nullptr;         ///< the reader of `node`'s file
+  pugi::xml_node node;
+};
+
 struct Entity {
   std::string name;  ///< as in the file
   std::string id;    ///< in the language ("ego" for the Ego)
@@ -48,6 +55,7 @@ struct Entity {
   double centreAhead = 0.0;  ///< m the bounding box centre lies ahead of the reference point
   std::optional<std::string> controller;  ///< the controller's name (ObjectController / AssignControllerAction)
   std::string controllerWhere;
+  ControllerDefinition controllerDefinition;  ///< its ObjectController's <Controller>
   pugi::xml_node position;      ///< the Init's <Position>
   std::optional<Placement> placement;
   bool placing = false;         ///< cycle guard while resolving relative positions
@@ -159,14 +167,17 @@ std::string identifier(const std::string& name, std::set<std::string>& used);
 /// The controller map's word for a controller vsd-sumo does not simulate: its entity follows
 /// its script (e.g. esmini's sloppyDriver, which adds deviations to a scripted vehicle).
 inline constexpr const char* kFollowsItsScript = "script";
+/// Appended to a refusal that `--network` would not meet (the road, a SUMO controller's traffic).
+inline constexpr const char* kTryTheNetwork =
+    " (`--network` simulates the file's Init on SUMO's network of its roads instead)";
 /// The built-in controller that keeps the Ego's speed and lane: the Ego following its script.
 inline constexpr const char* kKeepsItsLane = "keep_lane";
 
 // osc_entities.cpp
 /// The name of the controller a <Controller> or controller <CatalogReference> under `parent`
-/// gives; `where` is set to its place in the file.
+/// gives; `where` is set to its place in the file and `definition` (if given) to its <Controller>.
 std::string controllerName(Translation& translation, Catalogs& catalogs, const pugi::xml_node& parent,
-                           std::string& where);
+                           std::string& where, ControllerDefinition* definition = nullptr);
 void readEntities(Translation& translation, const pugi::xml_node& root, Catalogs& catalogs);
 void readInit(Translation& translation, const pugi::xml_node& storyboard);
 /// Resolves every entity's start (relative positions and speeds after their references).
@@ -182,7 +193,28 @@ InitCarriageway initCarriageway(const Translation& translation);
 /// a position relative to a road user would move with it, which the language's places do not.
 Placement fixedPlace(Translation& translation, const pugi::xml_node& position);
 
+// osc_positions.cpp
+/// Refuses a pitch `p` or roll `r` other than 0 on `node` (vsd-sumo is planar).
+void requirePlanar(const xml::Reader& reader, const pugi::xml_node& node);
+/// A position's <Orientation>: its heading (rad) and whether it is absolute (else relative).
+struct OrientationElement {
+  double h = 0.0;
+  bool absolute = false;
+};
+/// The <Orientation> under `position` (pitch and roll 0), none without one.
+std::optional<OrientationElement> readOrientation(const xml::Reader& reader, const pugi::xml_node& position);
+
 // osc_template.cpp
+/// The OpenSCENARIO file's root, header and global parameters (`assigned` replacing declared
+/// values; their notes in `findings`); refuses another root, a header of another major revision.
+Parameters readScenarioHead(xml::Reader& reader, const ParameterValues& assigned, const std::string& assigned_where,
+                            Findings& findings);
+/// The Ego: the one entity with a controller that is not mapped to its script, else the
+/// entity --ego names (kDefaultEgo), driven by --controller; `controller` is set to what drives it.
+Entity& findEgo(Translation& translation, ControllerChoice& controller);
+/// The OpenDRIVE file the <RoadNetwork>'s <LogicFile> names (noted: a SceneGraphFile is not used).
+std::filesystem::path roadNetworkFile(Translation& translation, const pugi::xml_node& root,
+                                      const std::filesystem::path& xosc);
 /// m of the road's length (along the language's centre line) that is vsd-sumo's scenario
 /// region; the road goes on straight beyond it.
 double regionLength(const CarriagewayRoad& road);
@@ -205,7 +237,9 @@ LanguagePlace languagePlace(const CarriagewayRoad& road, const Placement& p, dou
 
 // osc_storyboard.cpp
 void readStories(Translation& translation, const pugi::xml_node& storyboard);
-void readStopTrigger(Translation& translation, const pugi::xml_node& storyboard);
+/// The scenario's duration (translation.duration): --duration, else a StopTrigger of one simulation
+/// time, at most the longest window when `window_bound` (the language's runs).
+void readStopTrigger(Translation& translation, const pugi::xml_node& storyboard, bool window_bound = true);
 // osc_template.cpp
 struct TranslationResult {
   std::string yaml;                    ///< empty if refused

@@ -7,6 +7,7 @@
 #include <cctype>
 #include <fstream>
 
+#include "osc_network.hpp"
 #include "vsd/core/error.hpp"
 #include "vsd/interop/run_openscenario.hpp"
 #include "vsd/scenario/concrete_scenario.hpp"
@@ -71,12 +72,32 @@ std::string runExport(const ScenarioRunRequest& request) {
   return runOpenScenario(request.options, import).report();
 }
 
+/// A network scenario runs as an export of its map: flags of the language's runs do not apply.
+void refuseLanguageRunFlags(const ScenarioRunRequest& request) {
+  for (const char* flag : {"--jobs", "--net-batch", "--reference", "--keep-nets", "--fcd", "--max-failures",
+                           "--ego-step-cost-ms", "--net-writer"}) {
+    if (!request.given(flag)) continue;
+    throw ConfigError(fmt::format("command line: {}: not for a network scenario (--network runs {} as `vsd-sumo "
+                                  "export` runs a map, in one process)",
+                                  flag, request.options.scenarioFile.string()));
+  }
+}
+
 std::string runTemplateFile(const ScenarioRunRequest& request) {
   refuseSamplingFlags(request);
+  if (request.import.network) {
+    refuseLanguageRunFlags(request);
+    return osc::runNetworkScenario(request.options, request.import);
+  }
   return runTemplate(request.options, request.import).report();
 }
 
 std::string runDistribution(const ScenarioRunRequest& request) {
+  if (request.import.network) {
+    throw ConfigError(fmt::format("command line: --network: {} is a parameter distribution: a network scenario is "
+                                  "one concrete scenario (run its template with --network)",
+                                  request.options.scenarioFile.string()));
+  }
   if (request.given("--first-sample")) {
     throw ConfigError(fmt::format("command line: --first-sample: {} is a parameter distribution: it runs its "
                                   "parameter sets in order (--samples draws some of them with --seed)",

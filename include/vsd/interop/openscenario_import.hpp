@@ -45,6 +45,9 @@ struct OscImportOptions {
   /// `scenario check --seed`: the seed a Stochastic distribution without its own randomSeed
   /// draws its sets with, as `run --seed` would (`run` passes its seed directly).
   std::uint64_t checkSeed = 1;
+  /// `--network`: simulate the file's Init on SUMO's network of its OpenDRIVE file (or a SUMO
+  /// controller's configuration) instead of translating it into the scenario language.
+  bool network = false;
 };
 
 /// The file's controller names that map onto a built-in controller by default
