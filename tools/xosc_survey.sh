@@ -145,7 +145,11 @@ for file in "$esmini"/resources/xosc/*.xosc; do
     "$vsd" run "$file" "${options[@]}" --out "$run_out" >"$work/log" 2>&1 || status=$?
     if [ "$status" -eq 0 ]; then line="$how: $(run_line "$work/log" 0)"; ran=$((ran + 1))
     else line="run failed (exit $status): $(run_line "$work/log" "$status" | cut -c1-200)"; fi
-  else line="$(grep -m1 -E '^REFUSED|^vsd-sumo: ' "$work/check" | sed "s|$esmini/||g" | cut -c1-220)"; fi
+  else
+    line="$(grep -m1 -E '^REFUSED|^vsd-sumo: ' "$work/check" | sed "s|$esmini/||g" | cut -c1-220)"
+    # Refused by the scenario language at its roads, then by the network scenario at this.
+    case " ${options[*]} " in *" --network "*) line="with --network: $line" ;; esac
+  fi
   if [ "$scope" = "in scope" ]; then
     in_scope=$((in_scope + 1)); [ "$status" -eq 0 ] && ran_in_scope=$((ran_in_scope + 1))
   fi

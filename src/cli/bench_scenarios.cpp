@@ -37,6 +37,10 @@ int printInteropBench(const bench::InteropBenchOptions& options) {
 constexpr double kImportTargetMs = 20.0;
 
 int printImportBench(const fs::path& file, const interop::OscImportOptions& import, std::uint64_t seed) {
+  if (import.network) {
+    throw ConfigError("command line: --network: bench import times the scenario language's import of a sweep "
+                      "(a network scenario is one concrete scenario)");
+  }
   const auto timing = interop::timeSweepImport(file, import, seed);
   fmt::print("vsd-sumo bench import: {} (seed {}), vsd-sumo {}\n", file.string(), seed, toolVersion());
   const auto& counts = timing.counts;

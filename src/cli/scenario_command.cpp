@@ -129,6 +129,10 @@ void addCheck(CLI::App& scenario, CommandContext& context) {
   command->callback([file, import, step, step_option, yaml, &context] {
     context.action = [file, import, step, step_option, yaml] {
       if (step_option->count() > 0) import->step = *step;
+      if (*yaml && import->network) {
+        throw ConfigError("command line: --yaml: a network scenario (--network) has no translation into the "
+                          "scenario language");
+      }
       const interop::ScenarioFormat& format = interop::scenarioFormatOf(*file);
       if (!format.can.check) {
         throw ConfigError(fmt::format("{}: {} files are not checked on their own ({})", file->string(), format.name,

@@ -133,6 +133,10 @@ double OpenDriveRoads::laneDirection(const std::string& id, long lane_id) const 
   return (lane_id > 0) != left_hand ? kPi : 0.0;
 }
 
+void OpenDriveRoads::noteElevations(Findings& findings) const {
+  for (const auto& [id, road] : roads_) noteElevation(reader_, road.node, findings);
+}
+
 namespace {
 
 /// The network scenario's reading of one file (after the parts it shares with the language's).
@@ -155,38 +159,50 @@ std::optional<std::string> vehicleClass(RoadUserType type) {
   }
 }
 
-/// The heading (rad, file frame) an <Orientation> under `position` gives; `base` without one,
-/// relative ones counting from `base`.
-double orientationOf(const xml::Reader& reader, const pugi::xml_node& position, double base) {
-  const auto given = readOrientation(reader, position);
-  if (!given) return base;
-  return given->absolute ? given->h : base + given->h;
-}
-
-/// Where an entity's reference point starts (file frame) and which way it faces.
+/// Where an entity's bounding-box centre starts (file frame) and which way it faces: a world
+/// position's point moved along its heading; on a road, where it faces along its lane (or the
+/// reference line), the centre lies that far along the road (on a bend too), else along its heading.
 OpenDriveRoads::Pose startPose(const NetworkReading& reading, const Entity& entity) {
   const xml::Reader& reader = reading.translation.reader;
   if (!entity.position) reader.fail(reader.root(), fmt::format("entity '{}' has no TeleportAction in the Init", entity.name));
   const pugi::xml_node position = reader.choice(entity.position, {"WorldPosition", "LanePosition", "RoadPosition"});
   const std::string kind = position.name();
   const std::string where = reader.where(position);
+  const auto ahead = [&](const OpenDriveRoads::Pose& pose) {
+    return OpenDriveRoads::Pose{pose.point + entity.centreAhead * headingVector(pose.heading), pose.heading};
+  };
   if (kind == "WorldPosition") {
     reader.requireSubset(position, {});
     requirePlanar(reader, position);
-    reader.optionalNumber(position, "z");  // planar: read, not simulated
-    return {Vec2(reader.number(position, "x"), reader.number(position, "y")), reader.number(position, "h")};
+    if (const auto z = reader.optionalNumber(position, "z"); z && *z != 0.0) {
+      reading.translation.findings.note(where, fmt::format("{} m of height: vsd-sumo is planar, not simulated",
+                                                           xml::number(*z)));
+    }
+    return ahead({Vec2(reader.number(position, "x"), reader.number(position, "y")), reader.number(position, "h")});
   }
   reader.requireSubset(position, {"Orientation"});
   const std::string road = reader.text(position, "roadId");
   const double s = reader.number(position, "s");
-  if (kind == "RoadPosition") {
-    const auto pose = reading.roads.roadPoint(road, s, reader.number(position, "t"), where);
-    return {pose.point, orientationOf(reader, position, pose.heading)};
+  const bool lane_position = kind == "LanePosition";
+  const long lane = lane_position ? static_cast<long>(reader.integer(position, "laneId", -1000, 1000)) : 0;
+  // rad from the reference line: the way the lane drives (a road position faces along the line).
+  const double direction = lane_position ? reading.roads.laneDirection(road, lane) : 0.0;
+  const auto orientation = readOrientation(reader, position);
+  const double offset = lane_position ? reader.optionalNumber(position, "offset").value_or(0.0)
+                                      : reader.number(position, "t");
+  // t (m) of the reference point at s: on a lane, its centre (its width where it stands) plus the offset.
+  const auto t_at = [&](double at) {
+    return lane_position ? reading.roads.laneCentreT(road, lane, at, where) + offset : offset;
+  };
+  if (!orientation || (!orientation->absolute && orientation->h == 0.0)) {
+    const double centre_s = s + (direction == 0.0 ? 1.0 : -1.0) * entity.centreAhead;
+    const auto pose = reading.roads.roadPoint(road, centre_s, t_at(centre_s), where);
+    reading.roads.roadPoint(road, s, t_at(s), where);  // the reference point must lie on the road too
+    return {pose.point, pose.heading + direction};
   }
-  const long lane = static_cast<long>(reader.integer(position, "laneId", -1000, 1000));
-  const double t = reading.roads.laneCentreT(road, lane, s, where) + reader.optionalNumber(position, "offset").value_or(0.0);
-  const auto pose = reading.roads.roadPoint(road, s, t, where);
-  return {pose.point, orientationOf(reader, position, pose.heading + reading.roads.laneDirection(road, lane))};
+  const auto pose = reading.roads.roadPoint(road, s, t_at(s), where);
+  // A relative <Orientation> counts from the lane's driving direction (as the language's import reads it).
+  return ahead({pose.point, orientation->absolute ? orientation->h : pose.heading + direction + orientation->h});
 }
 
 /// m/s: the entity's Init speed (an absolute step), 0 without one.
@@ -212,7 +228,7 @@ sim::PlacedRoadUser placedRoadUser(const NetworkReading& reading, const Entity& 
   sim::PlacedRoadUser user;
   user.id = entity.name;
   user.heading = pose.heading;
-  user.centre = pose.point + entity.centreAhead * headingVector(pose.heading);
+  user.centre = pose.point;
   user.speed = startSpeed(reading, entity);
   user.length = entity.length;
   user.width = entity.width;
@@ -232,8 +248,9 @@ std::optional<fs::path> sumoConfiguration(const NetworkReading& reading, const E
   reader.requireSubset(properties, {"Property", "File"});
   std::optional<fs::path> config;
   for (const pugi::xml_node& file : properties.children("File")) {
+    // Looked at without reading it: another file is left to the check that every attribute is read.
+    if (fs::path(file.attribute("filepath").value()).extension() != ".sumocfg") continue;
     const std::string path = reader.text(file, "filepath");
-    if (fs::path(path).extension() != ".sumocfg") continue;
     config = referencedFile(reading.translation.options, xosc, path, reader.where(file), "filepath");
     if (!fs::is_regular_file(*config)) reader.fail(file, fmt::format("{} does not exist", config->string()));
   }
@@ -265,7 +282,13 @@ void readSumoControllers(NetworkReading& reading, const fs::path& xosc) {
         it->controllerWhere, fmt::format("'{}' is SUMO's traffic of {} (its network and route files; its vehicles "
                                          "look like '{}' in the file only)",
                                          it->name, config->filename().string(), it->name));
-    if (it->position) reading.translation.reader.leaveAll(it->position);
+    // SUMO's traffic starts where its route files say: an Init for the entity is not followed.
+    for (const pugi::xml_node& init : {it->position, it->speedTarget, it->gradualSpeed, it->distanceAction}) {
+      if (!init) continue;
+      reading.translation.findings.note(reading.translation.reader.where(init),
+                                        fmt::format("'{}' is SUMO's traffic: its Init is not simulated", it->name));
+      reading.translation.reader.leaveAll(init);
+    }
     it = entities.erase(it);
   }
 }
@@ -276,11 +299,14 @@ void readController(NetworkReading& reading, const ControllerChoice& choice) {
   scenario.controller = choice.name;
   scenario.controllerLibrary = choice.library;
   if (!choice.params.IsMap()) return;
+  // The map file gave them (the defaults give none).
+  const std::string where = reading.translation.options.controllerMap.string();
   for (const auto& param : choice.params) {
     const std::string name = param.first.as<std::string>();
-    scenario.controllerParams.emplace_back(
-        name, parseReal(param.second.as<std::string>(), NumberRange::any(), reading.translation.reader.file().string(),
-                        fmt::format("controller '{}' parameter '{}'", choice.name, name)));
+    const std::string field = fmt::format("controller '{}' parameter '{}'", choice.name, name);
+    if (!param.second.IsScalar()) throw ConfigError::field(where, field, "a list or map", "a number");
+    const double value = parseReal(param.second.as<std::string>(), NumberRange::any(), where, field);
+    scenario.controllerParams.emplace_back(name, value);
   }
 }
 
@@ -311,6 +337,7 @@ std::optional<NetworkScenario> translateNetwork(const fs::path& xosc, const OscI
   scenario.name = xosc.stem().string();
   scenario.openDrive = roadNetworkFile(translation, root, xosc);
   const OpenDriveRoads roads(scenario.openDrive);
+  roads.noteElevations(findings);
   NetworkReading reading{translation, roads, scenario};
   readEntities(translation, root, catalogs);
   const pugi::xml_node storyboard = reader.only(root, "Storyboard");
@@ -336,7 +363,13 @@ std::optional<NetworkScenario> translateNetwork(const fs::path& xosc, const OscI
     });
   }
   refuseStories(translation, storyboard);
-  findings.attempt([&] { readStopTrigger(translation, storyboard, /*window_bound=*/false); });
+  findings.attempt([&] {
+    readStopTrigger(translation, storyboard, /*window_bound=*/false);
+    if (!(translation.duration > 0.0)) {
+      throw ConfigError(fmt::format("{}: the scenario ends at t = 0: nothing to simulate (pass --duration)",
+                                    reader.where(storyboard.child("StopTrigger"))));
+    }
+  });
   scenario.duration = translation.duration;
   if (!findings.anyRefused()) {
     for (const std::string& unread : reader.unreadAttributes()) findings.refuse(unread);
@@ -426,6 +459,12 @@ std::string runNetworkScenario(const pipeline::RunOptions& run, const OscImportO
   options.source = prepared.source;
   options.placed = std::move(prepared.placed);
   options.egos = scenario.ego;
+  const auto selection = pipeline::EgoSelection::parse(scenario.ego);
+  if (selection.kind != pipeline::EgoSelection::Kind::Ids || selection.ids != std::vector<std::string>{scenario.ego}) {
+    throw ConfigError(fmt::format("{}: the Ego's name '{}' reads as an Ego selection of `export` (all, random:K, "
+                                  "vtype:NAME or a list): rename the entity",
+                                  run.scenarioFile.string(), scenario.ego));
+  }
   options.closedLoop = true;
   options.controller = scenario.controller;
   options.controllerLibrary = scenario.controllerLibrary;

@@ -47,6 +47,8 @@ class OpenDriveRoads {
   /// rad relative to the reference line: the driving direction of `lane_id` (0 along, pi against)
   /// under the road's traffic rule.
   double laneDirection(const std::string& road, long lane_id) const;
+  /// Every road's heights, noted (warned of where they matter): SUMO's network of them is flat.
+  void noteElevations(Findings& findings) const;
 
  private:
   struct Road {

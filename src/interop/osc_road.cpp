@@ -984,47 +984,6 @@ void noteRules(const xml::Reader& reader, const pugi::xml_node& road, Findings& 
 /// 0.2 m/s^2 or more, a few per cent of a vehicle's braking.
 constexpr double kGradeThatMatters = 2.0;
 
-/// The heights of a road's <elevationProfile>: vsd-sumo is planar. Said in a note; where the road
-/// rises or falls by kGradeThatMatters or more, the note is one `run` warns with: how far it
-/// rises and falls and how steep it gets (z' sampled every 0.5 m of each record's stretch).
-void noteElevation(const xml::Reader& reader, const pugi::xml_node& road, Findings& findings) {
-  const pugi::xml_node profile = road.child("elevationProfile");
-  if (!profile || !profile.first_child()) return;
-  const double length = reader.number(road, "length");
-  std::vector<pugi::xml_node> records(profile.children("elevation").begin(), profile.children("elevation").end());
-  double lowest = std::numeric_limits<double>::infinity();
-  double highest = -lowest;
-  double steepest = 0.0;  // |dz/ds|
-  for (std::size_t i = 0; i < records.size(); ++i) {
-    const double start = reader.number(records[i], "s");
-    const double end = i + 1 < records.size() ? reader.number(records[i + 1], "s") : length;
-    const double a = reader.number(records[i], "a");
-    const double b = reader.number(records[i], "b");
-    const double c = reader.number(records[i], "c");
-    const double d = reader.number(records[i], "d");
-    const int steps = std::max(1, static_cast<int>(std::ceil((end - start) / 0.5)));
-    for (int k = 0; k <= steps; ++k) {
-      const double ds = (end - start) * k / steps;
-      const double z = a + ds * (b + ds * (c + ds * d));
-      lowest = std::min(lowest, z);
-      highest = std::max(highest, z);
-      steepest = std::max(steepest, std::abs(b + ds * (2.0 * c + ds * 3.0 * d)));
-    }
-  }
-  const double grade = 100.0 * steepest;
-  if (grade < kGradeThatMatters) {
-    findings.note(reader.where(profile),
-                  fmt::format("vsd-sumo is planar: heights are not simulated (the road rises and falls by {:.1f} m, "
-                              "grades up to {:.1f} %)", highest - lowest, grade));
-    return;
-  }
-  findings.note(reader.where(profile),
-                fmt::format("vsd-sumo is planar: the road rises and falls by {:.1f} m, with grades up to {:.1f} %; "
-                            "gravity along it (up to {:.2f} m/s^2), lengths over slopes and sight over crests are not "
-                            "simulated", highest - lowest, grade, 9.81 * std::sin(std::atan(steepest))),
-                /*warn=*/true);
-}
-
 /// One road of the chain, appended to `result` (the first gives its lanes; later ones must
 /// repeat them and the traffic rule; `before`: the road before it, whose lanes it continues).
 void readRoadPiece(const xml::Reader& reader, const pugi::xml_node& road, const pugi::xml_node& before,
@@ -1124,6 +1083,44 @@ struct ReadRoad {
 };
 
 }  // namespace
+
+void noteElevation(const xml::Reader& reader, const pugi::xml_node& road, Findings& findings) {
+  const pugi::xml_node profile = road.child("elevationProfile");
+  if (!profile || !profile.first_child()) return;
+  const double length = reader.number(road, "length");
+  std::vector<pugi::xml_node> records(profile.children("elevation").begin(), profile.children("elevation").end());
+  double lowest = std::numeric_limits<double>::infinity();
+  double highest = -lowest;
+  double steepest = 0.0;  // |dz/ds|
+  for (std::size_t i = 0; i < records.size(); ++i) {
+    const double start = reader.number(records[i], "s");
+    const double end = i + 1 < records.size() ? reader.number(records[i + 1], "s") : length;
+    const double a = reader.number(records[i], "a");
+    const double b = reader.number(records[i], "b");
+    const double c = reader.number(records[i], "c");
+    const double d = reader.number(records[i], "d");
+    const int steps = std::max(1, static_cast<int>(std::ceil((end - start) / 0.5)));
+    for (int k = 0; k <= steps; ++k) {
+      const double ds = (end - start) * k / steps;
+      const double z = a + ds * (b + ds * (c + ds * d));
+      lowest = std::min(lowest, z);
+      highest = std::max(highest, z);
+      steepest = std::max(steepest, std::abs(b + ds * (2.0 * c + ds * 3.0 * d)));
+    }
+  }
+  const double grade = 100.0 * steepest;
+  if (grade < kGradeThatMatters) {
+    findings.note(reader.where(profile),
+                  fmt::format("vsd-sumo is planar: heights are not simulated (the road rises and falls by {:.1f} m, "
+                              "grades up to {:.1f} %)", highest - lowest, grade));
+    return;
+  }
+  findings.note(reader.where(profile),
+                fmt::format("vsd-sumo is planar: the road rises and falls by {:.1f} m, with grades up to {:.1f} %; "
+                            "gravity along it (up to {:.2f} m/s^2), lengths over slopes and sight over crests are not "
+                            "simulated", highest - lowest, grade, 9.81 * std::sin(std::atan(steepest))),
+                /*warn=*/true);
+}
 
 CarriagewayRoad readCarriagewayRoad(const std::filesystem::path& file, Findings& findings,
                                     const std::string& scenario_road, const std::string& asked_where,

@@ -97,6 +97,11 @@ class PlanGeometry {
 /// as in the file). Throws ConfigError naming the element for a shape or number outside the subset.
 PlanGeometry readPlanGeometry(const xml::Reader& reader, const pugi::xml_node& geometry, double offset);
 
+/// The heights of a road's <elevationProfile>: vsd-sumo is planar. Said in a note; where the road
+/// rises or falls by kGradeThatMatters or more, the note is one `run` warns with: how far it
+/// rises and falls and how steep it gets (z' sampled every 0.5 m of each record's stretch).
+void noteElevation(const xml::Reader& reader, const pugi::xml_node& road, Findings& findings);
+
 /// A run of driving lanes on one side of the reference line, as a carriageway driven along it.
 struct DrivenRun {
   int innermostLaneId = -1;        ///< OpenDRIVE id of its driving lane next to the reference line

@@ -172,10 +172,10 @@ ScenarioCheck checkOpenScenario(const fs::path& file, const OscImportOptions& op
     for (const auto& line : findings.lines()) check.lines.push_back({kindOf(line.kind), line.text});
     return check;
   }
-  if (grid && options.network) {
-    findings.refuse(fmt::format("command line: --network: {} is a parameter distribution: a network scenario is one "
-                                "concrete scenario (check its template with --network)",
-                                file.string()));
+  if (grid && options.network) {  // a usage error, as `run` says it
+    throw ConfigError(fmt::format("command line: --network: {} is a parameter distribution: a network scenario is "
+                                  "one concrete scenario (check its template with --network)",
+                                  file.string()));
   }
   if (!grid && options.network) {
     findings.attempt([&] {

@@ -169,7 +169,7 @@ std::string identifier(const std::string& name, std::set<std::string>& used);
 inline constexpr const char* kFollowsItsScript = "script";
 /// Appended to a refusal that `--network` would not meet (the road, a SUMO controller's traffic).
 inline constexpr const char* kTryTheNetwork =
-    " (`--network` simulates the file's Init on SUMO's network of its roads instead)";
+    " (`--network` simulates the file's Init on SUMO's network of its roads instead, where netconvert reads them)";
 /// The built-in controller that keeps the Ego's speed and lane: the Ego following its script.
 inline constexpr const char* kKeepsItsLane = "keep_lane";
 

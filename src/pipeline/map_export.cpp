@@ -688,6 +688,7 @@ ExportJob makeJob(const ExportOptions& options, const TemporaryDirectory& work) 
   job.simulation.seed = options.seed;
   job.simulation.laneChangeDuration = options.laneChangeDuration;
   job.simulation.placed = options.placed;
+  job.simulation.workDir = work.path();
   if (!options.openDrive.empty()) {
     job.simulation.source.net =
         road::MapImporterRegistry::withBuiltins().forFile(options.openDrive).toNet(options.openDrive, work.path());

@@ -28,6 +28,10 @@ void requireFile(const fs::path& path, const std::string& what) {
 
 /// A route of this many edges is long enough for any scenario (and ends a loop-free search).
 constexpr std::size_t kMaxRouteEdges = 10'000;
+/// m/s: a placed road user's top speed (its type's maxSpeed) unless it starts faster.
+constexpr double kMaxPlacedSpeed = 70.0;
+/// TraCI lane-change mode: strategic changes (those its route needs) only, nothing else.
+constexpr int kStrategicChangesOnly = 0b01;
 
 /// How far a connection of SUMO's (its `dir`) turns off the road: straight on first, then
 /// partial turns, then turns; a turn back (or anything else) never continues a road.
@@ -85,14 +89,22 @@ struct Placement {
   std::vector<std::string> route;
 };
 
+/// ConfigError "WHERE: road user 'ID' at (X, Y) WHY".
+[[noreturn]] void refusePlacement(const PlacedRoadUser& user, const std::string& why) {
+  throw ConfigError(fmt::format("{}: road user '{}' at ({:.2f}, {:.2f}) {}", user.where, user.id, user.centre.x(),
+                                user.centre.y(), why));
+}
+
 /// `user`'s lane (in the loaded network) and route, or ConfigError naming its `where`.
 Placement placementOf(const PlacedRoadUser& user) {
-  const auto fail = [&](const std::string& why) {
-    throw ConfigError(fmt::format("{}: road user '{}' at ({:.2f}, {:.2f}) {}", user.where, user.id, user.centre.x(),
-                                  user.centre.y(), why));
-  };
-  const auto at = libsumo::Simulation::convertRoad(user.centre.x(), user.centre.y(), false, user.vehicleClass);
-  if (at.edgeID.empty()) fail("lies on no lane of the network its class may use");
+  const auto fail = [&](const std::string& why) { refusePlacement(user, why); };
+  libsumo::TraCIRoadPosition at;
+  try {
+    at = libsumo::Simulation::convertRoad(user.centre.x(), user.centre.y(), false, user.vehicleClass);
+  } catch (const libsumo::TraCIException&) {
+    at = {};  // SUMO finds no lane near it that its class may use
+  }
+  if (at.edgeID.empty()) fail(fmt::format("lies on no lane of the network that a {} may use", user.vehicleClass));
   if (at.edgeID.front() == ':') fail(fmt::format("lies inside a junction (lane {}_{})", at.edgeID, at.laneIndex));
   const std::string lane = fmt::format("{}_{}", at.edgeID, at.laneIndex);
   const auto foot = libsumo::Simulation::convert2D(at.edgeID, at.pos, at.laneIndex);
@@ -121,8 +133,9 @@ std::string placedRoadUsersXml(const std::vector<PlacedRoadUser>& users, double 
   for (const auto& user : users) {
     const Placement placement = placementOf(user);
     const std::string id = escapeXml(user.id);
-    xml += fmt::format("  <vType id=\"vsd_type_{}\" length=\"{}\" width=\"{}\" vClass=\"{}\"/>\n", id, user.length,
-                       user.width, escapeXml(user.vehicleClass));
+    // Its class's default top speed (a bus: 85 km/h) must not refuse the speed the scenario gives it.
+    xml += fmt::format("  <vType id=\"vsd_type_{}\" length=\"{}\" width=\"{}\" vClass=\"{}\" maxSpeed=\"{}\"/>\n", id,
+                       user.length, user.width, escapeXml(user.vehicleClass), std::max(user.speed, kMaxPlacedSpeed));
     const std::string edges = escapeXml(fmt::format("{}", fmt::join(placement.route, " ")));
     xml += fmt::format("  <route id=\"vsd_route_{}\" edges=\"{}\"/>\n", id, edges);
     xml += fmt::format("  <vehicle id=\"{0}\" type=\"vsd_type_{0}\" route=\"vsd_route_{0}\" depart=\"{1}\" "
@@ -137,15 +150,18 @@ std::string placedRoadUsersXml(const std::vector<PlacedRoadUser>& users, double 
 std::vector<std::string> argumentsWithPlaced(const MapSimulationOptions& options, const fs::path& work) {
   auto args = mapSimulationArguments(options);
   if (options.placed.empty()) return args;
+  for (const auto& option : options.source.sumoOptions) {
+    if (option == "--additional-files") throw Error("internal: placed road users with --additional-files of its own");
+  }
   std::vector<std::string> additional;
   {
     const SumoSession planning(args);
     const std::string xml = placedRoadUsersXml(options.placed, libsumo::Simulation::getTime());
     writeTextFileAtomically(work / "placed.add.xml", xml);
+    // A configuration's own additional files, as SUMO resolved them (relative to it).
     std::stringstream given(libsumo::Simulation::getOption("additional-files"));
-    const fs::path base = options.source.config.empty() ? fs::current_path() : options.source.config.parent_path();
     for (std::string file; std::getline(given, file, ',');) {
-      if (!file.empty()) additional.push_back(fs::path(file).is_absolute() ? file : (base / file).string());
+      if (!file.empty()) additional.push_back(file);
     }
   }
   additional.push_back((work / "placed.add.xml").string());
@@ -208,7 +224,8 @@ struct MapSimulation::Impl {
     for (const auto& user : placing) {
       if (!user.holdsSpeed) continue;
       libsumo::Vehicle::setSpeedMode(user.id, 0);
-      libsumo::Vehicle::setLaneChangeMode(user.id, 0);
+      // Only the changes its route needs: off a lane that ends, onto the lane that goes on.
+      libsumo::Vehicle::setLaneChangeMode(user.id, kStrategicChangesOnly);
       libsumo::Vehicle::setSpeed(user.id, user.speed);
     }
   }
@@ -218,8 +235,8 @@ struct MapSimulation::Impl {
     const std::unordered_set<std::string> ids(present.begin(), present.end());
     for (const auto& user : placing) {
       if (ids.count(user.id)) continue;
-      throw ConfigError(fmt::format("{}: road user '{}' could not start where it is placed (SUMO found no room for "
-                                    "it there: another vehicle too close ahead or behind at its speed)",
+      throw ConfigError(fmt::format("{}: road user '{}' could not start where it is placed (SUMO did not insert it "
+                                    "at the first step)",
                                     user.where, user.id));
     }
     placing.clear();
@@ -227,8 +244,10 @@ struct MapSimulation::Impl {
 };
 
 MapSimulation::MapSimulation(const MapSimulationOptions& options) {
-  if (!options.placed.empty()) placedFiles_ = std::make_unique<TemporaryDirectory>("vsd-placed");
-  impl_ = std::make_unique<Impl>(options, placedFiles_ ? placedFiles_->path() : fs::path());
+  if (!options.placed.empty() && options.workDir.empty()) {
+    placedFiles_ = std::make_unique<TemporaryDirectory>("vsd-placed");
+  }
+  impl_ = std::make_unique<Impl>(options, placedFiles_ ? placedFiles_->path() : options.workDir);
 }
 
 MapSimulation::~MapSimulation() {

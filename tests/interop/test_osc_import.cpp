@@ -3885,7 +3885,7 @@ TEST(OscNetwork, ScriptedRoadUsersKeepTheirLaneAndSpeedOnEveryRoadOfTheFile) {
   };
   for (const auto& expected : {Expected{"Oncoming", {250.0 - 1.25, 1.75}, 10.0, kPi},
                                Expected{"Passing", {150.0 + 1.25, -3.5 - 1.75}, 12.0, 0.0},  // in the lane that opened
-                               Expected{"Apart", {20.0 + 5.0, -60.0 - 1.75}, 8.0, 0.0}}) {
+                               Expected{"Apart", {20.0 + 5.0, -60.0 + 0.5 - 1.75}, 8.0, 0.0}}) {  // lane offset
     const auto* vehicle = simulation.vehicle(expected.id);
     ASSERT_NE(vehicle, nullptr) << expected.id;
     const Vec2 end = expected.centre + expected.speed * moving * Vec2(std::cos(expected.heading), 0.0);
@@ -3894,6 +3894,23 @@ TEST(OscNetwork, ScriptedRoadUsersKeepTheirLaneAndSpeedOnEveryRoadOfTheFile) {
     EXPECT_NEAR(vehicle->state.y, end.y(), 0.01) << expected.id;
   }
   ASSERT_NE(simulation.vehicle("Ego"), nullptr);  // SUMO drives it here; `run` hands it to its controller
+}
+
+// Lane centres where widths vary: lane -2 of two_roads.xodr opens over s = 100 .. 120 m with the
+// width 0.02625 ds^2 - 0.000875 ds^3 (3.5 m at ds = 20); road 2's lanes lie 0.5 m left.
+TEST(OscNetwork, LaneCentresFollowWidthsAndTheLaneOffsetWhereTheyStand) {
+  const osc::OpenDriveRoads roads(data("roads/two_roads.xodr"));
+  EXPECT_NEAR(roads.laneCentreT("1", -2, 110.0, "here"), -(3.5 + 0.5 * (0.02625 * 100.0 - 0.000875 * 1000.0)), 1e-12);
+  EXPECT_NEAR(roads.laneCentreT("1", -2, 200.0, "here"), -(3.5 + 1.75), 1e-12);
+  EXPECT_NEAR(roads.laneCentreT("1", 1, 50.0, "here"), 1.75, 1e-12);
+  EXPECT_NEAR(roads.laneCentreT("2", -1, 50.0, "here"), 0.5 - 1.75, 1e-12);
+  EXPECT_DOUBLE_EQ(roads.laneDirection("1", 1), kPi);  // right-hand traffic: the left lane drives back
+  const auto pose = roads.roadPoint("2", 20.0, -1.25, "here");
+  EXPECT_NEAR((pose.point - Vec2(20.0, -61.25)).norm(), 1e-12, 1e-9);
+  EXPECT_THAT(test::configErrorOf([&] { roads.laneCentreT("2", -2, 50.0, "here"); }),
+              HasSubstr("here: laneId=\"-2\": road '2' has no such lane at s = 50 m"));
+  EXPECT_THAT(test::configErrorOf([&] { roads.roadPoint("1", 301.0, 0.0, "here"); }),
+              HasSubstr("here: s = 301 m is off road '1' (0 .. 300 m)"));
 }
 
 namespace {
@@ -3940,12 +3957,12 @@ TEST(OscCli, ANetworkScenarioRunsOnSumosNetworkOfItsRoads) {
   const auto folder = networkWithSumoTraffic();
   const auto language = vsdSumoIn(*folder, {"scenario", "check", "{network.xosc}"});
   EXPECT_EQ(language.exitCode, 1) << language.output;
-  EXPECT_THAT(language.output, HasSubstr("two_roads.xodr:24: <width>: a width that varies along the road: the "
+  EXPECT_THAT(language.output, HasSubstr("two_roads.xodr:25: <width>: a width that varies along the road: the "
                                          "scenario language's lanes keep their width (`--network` simulates"));
   const auto check = vsdSumoIn(*folder, {"scenario", "check", "{network.xosc}", "--network"});
   EXPECT_EQ(check.exitCode, 0) << check.output;
   EXPECT_THAT(check.output,
-              HasSubstr("'Apart' starts at (25.00, -61.75) m heading 0.0 deg at 8 m/s, keeping its lane"));
+              HasSubstr("'Apart' starts at (25.00, -61.25) m heading 0.0 deg at 8 m/s, keeping its lane"));
   EXPECT_THAT(check.output, HasSubstr("every road user starts on netconvert's network of it (4 road users)"));
   const auto ran = vsdSumoIn(*folder, {"run", "{network.xosc}", "--network", "--out", "{scenes.h5}"});
   ASSERT_EQ(ran.exitCode, 0) << ran.output;
@@ -3972,10 +3989,15 @@ TEST(OscCli, ANetworkScenarioRunsOnSumosNetworkOfItsRoads) {
     return result.output;
   };
   EXPECT_THAT(refused("story", "</Init>", R"(</Init><Story name="s"><Act name="a"/></Story>)"),
-              HasSubstr("story.xosc:71: <Story>: a network scenario (--network) simulates the Init only"));
-  EXPECT_THAT(refused("beside", R"(laneId="1" s="250" offset="0")", R"(laneId="1" s="250" offset="1")"),
-              HasSubstr("road user 'Oncoming' at (248.75, 2.75) lies 1.00 m beside the centre line of its lane"));
-  EXPECT_THAT(refused("relative", R"(<RoadPosition roadId="2" s="20" t="-1.75"/>)",
+              HasSubstr("story.xosc:73: <Story>: a network scenario (--network) simulates the Init only"));
+  EXPECT_THAT(refused("beside", R"(laneId="-2" s="150" offset="0")", R"(laneId="-2" s="150" offset="1")"),
+              HasSubstr("road user 'Passing' at (151.25, -4.25) lies 1.00 m beside the centre line of its lane"));
+  // netconvert's lanes do not follow a lane that opens: a car where lane -2 is 1.75 m wide (its
+  // centre 4.375 m right of the reference line) lies beside every lane SUMO has there.
+  const std::string opening = refused("opening", R"(laneId="-2" s="150")", R"(laneId="-2" s="108.75")");
+  EXPECT_THAT(opening, HasSubstr("road user 'Passing' at (110.00, -4.38) lies "));
+  EXPECT_THAT(opening, HasSubstr(" m beside the centre line of its lane"));
+  EXPECT_THAT(refused("relative", R"(<LanePosition roadId="2" laneId="-1" s="20" offset="0"/>)",
                       R"(<RelativeRoadPosition entityRef="Ego" ds="5" dt="0"/>)"),
               HasSubstr("element <RelativeRoadPosition> is outside the supported subset"));
   EXPECT_THAT(refused("cone", R"(<CatalogReference catalogName="fleet" entryName="lorry"/>)",

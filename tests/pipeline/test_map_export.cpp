@@ -10,6 +10,7 @@
 #include "vsd/pipeline/map_export.hpp"
 #include "vsd/pipeline/run.hpp"
 #include "vsd/road/map_importers.hpp"
+#include "vsd/road/network.hpp"
 #include "vsd/sim/map_simulation.hpp"
 #include "vsd/vector/dataset.hpp"
 
@@ -385,4 +386,44 @@ TEST(MapSimulation, PlacedRoadUsersStartOnTheirLaneAndFollowTheRoadAtTheirSpeed)
   const Vec2 right_lane = end + 1.75 * Vec2(std::sin(1.0), -std::cos(1.0)) - 1.0 * Vec2(std::cos(1.0), std::sin(1.0));
   EXPECT_THAT(refused(placedAt("at_the_end", right_lane, 1.0, 5.0)),
               testing::HasSubstr("reaches beyond the end of its lane -1_0"));
+}
+
+// A scripted road user keeps its lane until the lane ends: where the road goes on in another
+// lane, it changes onto that one (SUMO's lane change, the map's 2 s) at its speed, rather than
+// stopping at the end of its own.
+TEST(MapSimulation, AScriptedRoadUserWhoseLaneEndsGoesOnInTheLaneThatContinues) {
+  TemporaryDirectory dir;
+  // 300 m along +x; right of the reference line lane -1 (3.5 m) and lane -2, which closes from
+  // 3.5 m to nothing between s = 100 and 120 m.
+  const auto xodr = test::writeFile(dir.path() / "closing.xodr", R"(<OpenDRIVE>
+  <header revMajor="1" revMinor="6" name="closing"/>
+  <road name="closing" length="300.0" id="1" junction="-1"><link/>
+    <planView><geometry s="0" x="0" y="0" hdg="0" length="300"><line/></geometry></planView>
+    <lanes><laneSection s="0">
+      <center><lane id="0" type="none" level="false"><link/></lane></center>
+      <right>
+        <lane id="-1" type="driving" level="false"><link/><width sOffset="0" a="3.5" b="0" c="0" d="0"/></lane>
+        <lane id="-2" type="driving" level="false"><link/>
+          <width sOffset="0" a="3.5" b="0" c="0" d="0"/>
+          <width sOffset="100" a="3.5" b="0" c="-0.02625" d="0.000875"/>
+          <width sOffset="120" a="0" b="0" c="0" d="0"/>
+        </lane>
+      </right>
+    </laneSection></lanes>
+  </road>
+</OpenDRIVE>)");
+  sim::MapSimulationOptions options;
+  options.source.net = dir.path() / "closing.net.xml";
+  road::convertOpenDrive(xodr, options.source.net, road::OpenDriveOrigin::AsWritten);
+  options.step = 0.1;
+  options.end = 15.0;
+  options.placed = {placedAt("merging", {20.0, -5.25}, 0.0, 10.0)};
+  sim::MapSimulation simulation(options);
+  while (simulation.step()) {
+  }
+  const auto* merging = simulation.vehicle("merging");
+  ASSERT_NE(merging, nullptr);
+  EXPECT_NEAR(merging->state.speed, 10.0, 1e-9);
+  EXPECT_NEAR(merging->state.x, 20.0 + 10.0 * 14.9, 0.5);  // along the road at its speed all the way
+  EXPECT_NEAR(merging->state.y, -1.75, 0.05);                 // in lane -1, the one that goes on
 }

@@ -66,8 +66,9 @@ struct PlacedRoadUser {
   double length = kCarLength;  ///< m
   double width = kCarWidth;    ///< m
   std::string vehicleClass = "passenger";  ///< SUMO's vClass
-  /// true: keeps `speed` on its lane whatever lies ahead (a scripted entity); false: SUMO
-  /// drives it (until a controller takes it over).
+  /// true: keeps `speed` on its lane whatever lies ahead (a scripted entity; it changes lanes only
+  /// where its lane ends and the road goes on in another); false: SUMO drives it (until a
+  /// controller takes it over).
   bool holdsSpeed = true;
   std::string where;  ///< where it comes from, for messages (e.g. "F.xosc:57: <Private>")
 
@@ -88,6 +89,9 @@ struct MapSimulationOptions {
   /// Road users placed at the start besides the map's own demand; each departs at once
   /// (the first step), or the constructor's first step() throws ConfigError naming it.
   std::vector<PlacedRoadUser> placed;
+  /// An existing folder the caller owns for the placed road users' file (a worker process that
+  /// is killed leaves nothing behind); empty: a temporary folder of the simulation's own.
+  std::filesystem::path workDir;
 };
 
 class MapSimulation {
