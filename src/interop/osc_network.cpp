@@ -249,7 +249,9 @@ std::optional<fs::path> sumoConfiguration(const NetworkReading& reading, const E
   std::optional<fs::path> config;
   for (const pugi::xml_node& file : properties.children("File")) {
     // Looked at without reading it: another file is left to the check that every attribute is read.
-    if (fs::path(file.attribute("filepath").value()).extension() != ".sumocfg") continue;
+    const std::string looked_at = resolveValue(file.attribute("filepath").value(), reader.parameters(),
+                                               reader.where(file) + ": attribute filepath");
+    if (fs::path(looked_at).extension() != ".sumocfg") continue;
     const std::string path = reader.text(file, "filepath");
     config = referencedFile(reading.translation.options, xosc, path, reader.where(file), "filepath");
     if (!fs::is_regular_file(*config)) reader.fail(file, fmt::format("{} does not exist", config->string()));

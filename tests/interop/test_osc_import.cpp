@@ -3927,17 +3927,23 @@ ProcessResult vsdSumoIn(const TemporaryDirectory& dir, std::vector<std::string> 
 }
 
 /// network.xosc with a SUMO controller's traffic: an entity "Traffic" whose controller names
-/// sumo/two_roads.sumocfg (two_roads.xodr's network, one vehicle of its own on road 2).
+/// sumo/two_roads.sumocfg (two_roads.xodr's network, one vehicle of its own on road 2) through a
+/// parameter, as esmini's catalogue does.
 std::unique_ptr<TemporaryDirectory> networkWithSumoTraffic() {
   const std::string traffic = R"(<ScenarioObject name="Traffic">
       <CatalogReference catalogName="fleet" entryName="sedan"/>
       <ObjectController><Controller name="SumoTraffic"><Properties>
         <Property name="esminiController" value="SumoController"/>
-        <File filepath="./sumo/two_roads.sumocfg"/>
+        <File filepath="$SumoConfig"/>
       </Properties></Controller></ObjectController>
     </ScenarioObject>
   </Entities>)";
-  auto folder = folderWith({{"traffic.xosc", dataWith("network.xosc", "</Entities>", traffic)},
+  std::string scenario = dataWith("network.xosc", "</Entities>", traffic);
+  const std::string declarations = "<ParameterDeclarations>";
+  scenario.replace(scenario.find(declarations), declarations.size(),
+                   declarations + R"(<ParameterDeclaration name="SumoConfig" parameterType="string"
+                                        value="./sumo/two_roads.sumocfg"/>)");
+  auto folder = folderWith({{"traffic.xosc", scenario},
                             {"sumo/two_roads.sumocfg", R"(<configuration><input><net-file value="two_roads.net.xml"/>
   <route-files value="two_roads.rou.xml"/></input></configuration>)"},
                             {"sumo/two_roads.rou.xml", R"(<routes><vehicle id="sumo_car" depart="0" departLane="0"
