@@ -164,7 +164,9 @@ std::optional<std::string> vehicleClass(RoadUserType type) {
 /// reference line), the centre lies that far along the road (on a bend too), else along its heading.
 OpenDriveRoads::Pose startPose(const NetworkReading& reading, const Entity& entity) {
   const xml::Reader& reader = reading.translation.reader;
-  if (!entity.position) reader.fail(reader.root(), fmt::format("entity '{}' has no TeleportAction in the Init", entity.name));
+  if (!entity.position) {
+    reader.fail(reader.root(), fmt::format("entity '{}' has no TeleportAction in the Init", entity.name));
+  }
   const pugi::xml_node position = reader.choice(entity.position, {"WorldPosition", "LanePosition", "RoadPosition"});
   const std::string kind = position.name();
   const std::string where = reader.where(position);
@@ -209,7 +211,8 @@ OpenDriveRoads::Pose startPose(const NetworkReading& reading, const Entity& enti
 double startSpeed(const NetworkReading& reading, const Entity& entity) {
   const xml::Reader& reader = reading.translation.reader;
   if (entity.gradualSpeed) {
-    reader.fail(entity.gradualSpeed, "a network scenario starts road users at a speed (a step), not with a change of it");
+    reader.fail(entity.gradualSpeed,
+                "a network scenario starts road users at a speed (a step), not with a change of it");
   }
   if (entity.distanceAction) reader.fail(entity.distanceAction, "a network scenario places road users by positions");
   if (!entity.speedTarget) return 0.0;
@@ -221,8 +224,8 @@ double startSpeed(const NetworkReading& reading, const Entity& entity) {
 sim::PlacedRoadUser placedRoadUser(const NetworkReading& reading, const Entity& entity) {
   const auto vehicle_class = vehicleClass(entity.type);
   if (!vehicle_class) {
-    throw ConfigError(fmt::format("{}: '{}' is a {}: a network scenario places vehicles only", entity.where, entity.name,
-                                  roadUserKind(entity.type).name));
+    throw ConfigError(fmt::format("{}: '{}' is a {}: a network scenario places vehicles only", entity.where,
+                                  entity.name, roadUserKind(entity.type).name));
   }
   const auto pose = startPose(reading, entity);
   sim::PlacedRoadUser user;
@@ -258,8 +261,9 @@ std::optional<fs::path> sumoConfiguration(const NetworkReading& reading, const E
   }
   if (!config) return std::nullopt;
   for (const pugi::xml_node& property : properties.children("Property")) {
+    const std::string name = reader.text(property, "name");
     reading.translation.findings.note(reader.where(property),
-                                      fmt::format("property '{}' of the SUMO controller: not used", reader.text(property, "name")));
+                                      fmt::format("property '{}' of the SUMO controller: not used", name));
     reader.leave(property, {"value"});
   }
   return config;
@@ -402,7 +406,9 @@ fs::path configuredNet(const fs::path& config) {
     throw ConfigError(fmt::format("{}: not a readable SUMO configuration", config.string()));
   }
   const std::string net = document.document_element().child("input").child("net-file").attribute("value").as_string();
-  if (net.empty()) throw ConfigError(fmt::format("{}: <input><net-file>: expected the network's file", config.string()));
+  if (net.empty()) {
+    throw ConfigError(fmt::format("{}: <input><net-file>: expected the network's file", config.string()));
+  }
   return config.parent_path() / net;
 }
 
@@ -455,7 +461,9 @@ std::string runNetworkScenario(const pipeline::RunOptions& run, const OscImportO
   options.label = scenario.name;
   options.sourceFile = run.scenarioFile;
   checkOutput({options.output, &output_kinds::datasetFile(), options.label, run.force, "--out", "--force",
-               {{"scenario", run.scenarioFile}, {"road network", scenario.openDrive}, {"SUMO configuration", scenario.sumoConfig}}});
+               {{"scenario", run.scenarioFile},
+                {"road network", scenario.openDrive},
+                {"SUMO configuration", scenario.sumoConfig}}});
   TemporaryDirectory work("vsd-network");
   PreparedNetwork prepared = prepareNetwork(scenario, work.path());
   options.source = prepared.source;

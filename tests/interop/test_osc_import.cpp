@@ -3995,7 +3995,7 @@ TEST(OscCli, ANetworkScenarioRunsOnSumosNetworkOfItsRoads) {
     return result.output;
   };
   EXPECT_THAT(refused("story", "</Init>", R"(</Init><Story name="s"><Act name="a"/></Story>)"),
-              HasSubstr("story.xosc:73: <Story>: a network scenario (--network) simulates the Init only"));
+              HasSubstr("story.xosc:74: <Story>: a network scenario (--network) simulates the Init only"));
   EXPECT_THAT(refused("beside", R"(laneId="-2" s="150" offset="0")", R"(laneId="-2" s="150" offset="1")"),
               HasSubstr("road user 'Passing' at (151.25, -4.25) lies 1.00 m beside the centre line of its lane"));
   // netconvert's lanes do not follow a lane that opens: a car where lane -2 is 1.75 m wide (its
@@ -4024,4 +4024,13 @@ TEST(OscCli, ANetworkScenarioRunsOnSumosNetworkOfItsRoads) {
   EXPECT_THAT(distribution.output, HasSubstr("cut_in_variation.xosc is a parameter distribution: a network scenario is "
                                              "one concrete scenario"));
   EXPECT_THAT(distribution.output, HasSubstr("command line: --network: "));
+  // The other usage errors: a distribution's check, a translation asked for, the import benchmark.
+  for (const auto& args : std::vector<std::vector<std::string>>{
+           {"scenario", "check", "{cut_in_variation.xosc}", "--network"},
+           {"scenario", "check", "{network.xosc}", "--network", "--yaml"},
+           {"bench", "import", "{cut_in_variation.xosc}", "--network"}}) {
+    const auto usage = vsdSumoIn(*folder, args);
+    EXPECT_EQ(usage.exitCode, 2) << usage.output;
+    EXPECT_THAT(usage.output, HasSubstr("command line: --")) << usage.output;
+  }
 }
