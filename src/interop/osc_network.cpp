@@ -59,7 +59,8 @@ OpenDriveRoads::OpenDriveRoads(const fs::path& xodr) : reader_(xodr, read_limits
     for (const auto& lane : node.select_nodes(".//lane[border]")) {
       reader_.fail(lane.node(), "a lane given by its <border>: positions are evaluated on lane <width>s");
     }
-    roads_.emplace(reader_.text(node, "id"), std::move(road));
+    const std::string id = reader_.text(node, "id");
+    if (!roads_.emplace(id, std::move(road)).second) reader_.fail(node, fmt::format("road id '{}' is given twice", id));
   }
 }
 

@@ -230,7 +230,7 @@ struct MapSimulation::Impl {
     }
   }
 
-  /// After the first step: every placed road user departed (SUMO inserts none where it would not fit).
+  /// After the first step: every placed road user departed (inserted without SUMO's checks, so at its place).
   void checkPlaced(const std::vector<std::string>& present) {
     const std::unordered_set<std::string> ids(present.begin(), present.end());
     for (const auto& user : placing) {

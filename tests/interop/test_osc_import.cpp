@@ -3911,6 +3911,10 @@ TEST(OscNetwork, LaneCentresFollowWidthsAndTheLaneOffsetWhereTheyStand) {
               HasSubstr("here: laneId=\"-2\": road '2' has no such lane at s = 50 m"));
   EXPECT_THAT(test::configErrorOf([&] { roads.roadPoint("1", 301.0, 0.0, "here"); }),
               HasSubstr("here: s = 301 m is off road '1' (0 .. 300 m)"));
+  TemporaryDirectory dir("vsd-osc-network");
+  const auto twice =
+      test::writeFile(dir.path() / "twice.xodr", dataWith("roads/two_roads.xodr", R"(id="2")", R"(id="1")"));
+  EXPECT_THAT(test::configErrorOf([&] { osc::OpenDriveRoads{twice}; }), HasSubstr("road id '1' is given twice"));
 }
 
 namespace {
