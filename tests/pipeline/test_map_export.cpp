@@ -427,3 +427,35 @@ TEST(MapSimulation, AScriptedRoadUserWhoseLaneEndsGoesOnInTheLaneThatContinues) 
   EXPECT_NEAR(merging->state.x, 20.0 + 10.0 * 14.9, 0.5);  // along the road at its speed all the way
   EXPECT_NEAR(merging->state.y, -1.75, 0.05);                 // in lane -1, the one that goes on
 }
+
+// A road user is not placed inside a junction: its lanes there are SUMO's connections, which no
+// scenario's position names.
+TEST(MapSimulation, ARoadUserPlacedInsideAJunctionIsRefused) {
+  TemporaryDirectory dir;
+  // A T: A (0, 0) -> B (100, 0) -> C (200, 0), and B -> D (100, 100); SUMO's junction at B.
+  test::writeFile(dir.path() / "t.nod.xml", R"(<nodes><node id="A" x="0" y="0"/><node id="B" x="100" y="0"/>
+    <node id="C" x="200" y="0"/><node id="D" x="100" y="100"/></nodes>)");
+  test::writeFile(dir.path() / "t.edg.xml", R"(<edges><edge id="AB" from="A" to="B"/><edge id="BC" from="B" to="C"/>
+    <edge id="BD" from="B" to="D"/></edges>)");
+  road::ensureSumoHome();
+  sim::MapSimulationOptions options;
+  options.source.net = dir.path() / "t.net.xml";
+  const auto converted = test::run({"netconvert", "-n", (dir.path() / "t.nod.xml").string(), "-e",
+                                    (dir.path() / "t.edg.xml").string(), "-o", options.source.net.string()},
+                                   dir.path());
+  ASSERT_EQ(converted.exitCode, 0) << converted.output;
+  options.step = 0.1;
+  options.placed = {placedAt("crossing", {101.0, -1.6}, 0.0, 5.0)};  // on the straight connection through B
+  EXPECT_THAT(test::configErrorOf([&] { sim::MapSimulation simulation(options); }),
+              testing::HasSubstr("test.xosc:crossing: road user 'crossing' at (101.00, -1.60) lies inside a junction "
+                                 "(lane :B_0_0)"));
+  options.placed = {placedAt("before", {50.0, -1.6}, 0.0, 20.0)};  // on AB: placed; at B it goes straight on
+  options.end = 4.0;
+  sim::MapSimulation simulation(options);
+  while (simulation.step()) {
+  }
+  const auto* before = simulation.vehicle("before");
+  ASSERT_NE(before, nullptr);
+  EXPECT_NEAR(before->state.x, 50.0 + 20.0 * 3.9, 0.5);  // on BC, not turned onto BD
+  EXPECT_NEAR(before->state.y, -1.6, 0.05);
+}
