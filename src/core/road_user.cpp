@@ -8,15 +8,15 @@ const std::vector<RoadUserKind>& roadUserKinds() {
   // direction, 0.7 m across the shoulders and swinging arms. Bicycle: an adult's bicycle with
   // its rider, 1.8 m long and 0.65 m across the handlebars; it rides in lanes.
   static const std::vector<RoadUserKind> kinds = {
-      {RoadUserType::Car, "car", "passenger car", kCarLength, kCarWidth, true, false},
-      {RoadUserType::Van, "van", "light commercial vehicle", 5.5, 2.0, true, false},
-      {RoadUserType::Truck, "truck", "heavy goods vehicle", 12.0, 2.55, true, false},
-      {RoadUserType::Bus, "bus", "bus or coach", 12.0, 2.55, true, false},
-      {RoadUserType::Motorbike, "motorbike", "powered two-wheeler", 2.2, 0.8, true, false},
-      {RoadUserType::Pedestrian, "pedestrian", "person on foot", 0.5, 0.7, false, false},
+      {RoadUserType::Car, "car", "passenger car", kCarLength, kCarWidth, true, false, "passenger"},
+      {RoadUserType::Van, "van", "light commercial vehicle", 5.5, 2.0, true, false, "delivery"},
+      {RoadUserType::Truck, "truck", "heavy goods vehicle", 12.0, 2.55, true, false, "truck"},
+      {RoadUserType::Bus, "bus", "bus or coach", 12.0, 2.55, true, false, "bus"},
+      {RoadUserType::Motorbike, "motorbike", "powered two-wheeler", 2.2, 0.8, true, false, "motorcycle"},
+      {RoadUserType::Pedestrian, "pedestrian", "person on foot", 0.5, 0.7, false, false, "pedestrian"},
       {RoadUserType::StationaryObject, "stationary_object", "object that never moves (debris, a barrier)", 1.0, 1.0,
-       false, true},
-      {RoadUserType::Bicycle, "bicycle", "pedal cycle with its rider", 1.8, 0.65, true, false},
+       false, true, "ignoring"},
+      {RoadUserType::Bicycle, "bicycle", "pedal cycle with its rider", 1.8, 0.65, true, false, "bicycle"},
   };
   return kinds;
 }

@@ -147,18 +147,6 @@ struct NetworkReading {
   NetworkScenario& scenario;
 };
 
-/// SUMO's vehicle class of a road user type; none for road users a network scenario does not place.
-std::optional<std::string> vehicleClass(RoadUserType type) {
-  switch (type) {
-    case RoadUserType::Car:
-    case RoadUserType::Van: return "passenger";
-    case RoadUserType::Truck: return "truck";
-    case RoadUserType::Bus: return "bus";
-    case RoadUserType::Motorbike: return "motorcycle";
-    case RoadUserType::Bicycle: return "bicycle";
-    default: return std::nullopt;
-  }
-}
 
 /// Where an entity's bounding-box centre starts (file frame) and which way it faces: a world
 /// position's point moved along its heading; on a road, where it faces along its lane (or the
@@ -223,10 +211,10 @@ double startSpeed(const NetworkReading& reading, const Entity& entity) {
 
 /// The road user `entity` is on the network (file frame).
 sim::PlacedRoadUser placedRoadUser(const NetworkReading& reading, const Entity& entity) {
-  const auto vehicle_class = vehicleClass(entity.type);
-  if (!vehicle_class) {
+  const RoadUserKind& kind = roadUserKind(entity.type);
+  if (!kind.drivesInLanes) {
     throw ConfigError(fmt::format("{}: '{}' is a {}: a network scenario places vehicles only", entity.where,
-                                  entity.name, roadUserKind(entity.type).name));
+                                  entity.name, kind.name));
   }
   const auto pose = startPose(reading, entity);
   sim::PlacedRoadUser user;
@@ -236,7 +224,7 @@ sim::PlacedRoadUser placedRoadUser(const NetworkReading& reading, const Entity& 
   user.speed = startSpeed(reading, entity);
   user.length = entity.length;
   user.width = entity.width;
-  user.vehicleClass = *vehicle_class;
+  user.vehicleClass = kind.sumoClass;
   user.where = entity.where;
   return user;
 }
@@ -354,6 +342,13 @@ std::optional<NetworkScenario> translateNetwork(const fs::path& xosc, const OscI
   findings.attempt([&] {
     ControllerChoice choice;
     const Entity& ego = findEgo(translation, choice);
+    // The export chooses its Ego by this name: one that reads as another selection is refused (in check too).
+    const auto selection = pipeline::EgoSelection::parse(ego.name);
+    if (selection.kind != pipeline::EgoSelection::Kind::Ids || selection.ids != std::vector<std::string>{ego.name}) {
+      throw ConfigError(fmt::format("{}: the Ego's name '{}' reads as an Ego selection of `export` (all, random:K, "
+                                    "vtype:NAME or a list): rename the entity",
+                                    ego.where, ego.name));
+    }
     scenario.ego = ego.name;
     readController(reading, choice);
   });
@@ -469,13 +464,7 @@ std::string runNetworkScenario(const pipeline::RunOptions& run, const OscImportO
   PreparedNetwork prepared = prepareNetwork(scenario, work.path());
   options.source = prepared.source;
   options.placed = std::move(prepared.placed);
-  options.egos = scenario.ego;
-  const auto selection = pipeline::EgoSelection::parse(scenario.ego);
-  if (selection.kind != pipeline::EgoSelection::Kind::Ids || selection.ids != std::vector<std::string>{scenario.ego}) {
-    throw ConfigError(fmt::format("{}: the Ego's name '{}' reads as an Ego selection of `export` (all, random:K, "
-                                  "vtype:NAME or a list): rename the entity",
-                                  run.scenarioFile.string(), scenario.ego));
-  }
+  options.egos = scenario.ego;  // a name that is no other selection (translateNetwork)
   options.closedLoop = true;
   options.controller = scenario.controller;
   options.controllerLibrary = scenario.controllerLibrary;

@@ -24,21 +24,8 @@ namespace vsd::sim {
 
 namespace {
 
-/// SUMO's vehicle class of a road user (also what sumo-gui draws): pedestrians and objects
-/// are SUMO vehicles too, so that SUMO's collision checks and SSM devices see them.
-const char* sumoClassOf(RoadUserType type) {
-  switch (type) {
-    case RoadUserType::Car: return "passenger";
-    case RoadUserType::Van: return "delivery";
-    case RoadUserType::Truck: return "truck";
-    case RoadUserType::Bus: return "bus";
-    case RoadUserType::Motorbike: return "motorcycle";
-    case RoadUserType::Pedestrian: return "pedestrian";
-    case RoadUserType::StationaryObject: return "ignoring";
-    case RoadUserType::Bicycle: return "bicycle";
-  }
-  return "passenger";
-}
+/// SUMO's vehicle class of a road user (the road-user table's).
+const char* sumoClassOf(RoadUserType type) { return roadUserKind(type).sumoClass; }
 
 /// SUMO vehicle types by (length, width, kind); scripted vehicles ignore SUMO's
 /// car-following, so only the dimensions matter (minGap 0: gaps are bumper to bumper).

@@ -4019,6 +4019,13 @@ TEST(OscCli, ANetworkScenarioRunsOnSumosNetworkOfItsRoads) {
                       R"(<LanePosition roadId="7" laneId="-2" s="150")"),
               HasSubstr("roadId=\"7\": " + (folder->path() / "roads" / "two_roads.xodr").string() +
                         " has no road of that id"));
+  // The export takes its Ego by name: a name that reads as another of its selections is refused, by check too.
+  std::string all = readTextFile(data("network.xosc"));
+  for (auto at = all.find("Ego"); at != std::string::npos; at = all.find("Ego", at)) all.replace(at, 3, "all");
+  test::writeFile(folder->path() / "all.xosc", all);
+  const auto named_all = vsdSumoIn(*folder, {"scenario", "check", "{all.xosc}", "--network"});
+  EXPECT_EQ(named_all.exitCode, 1) << named_all.output;
+  EXPECT_THAT(named_all.output, HasSubstr("the Ego's name 'all' reads as an Ego selection of `export`"));
   const auto jobs = vsdSumoIn(*folder, {"run", "{network.xosc}", "--network", "--jobs", "2", "--out", "{jobs.h5}"});
   EXPECT_EQ(jobs.exitCode, 2) << jobs.output;
   EXPECT_THAT(jobs.output, HasSubstr("command line: --jobs: not for a network scenario"));

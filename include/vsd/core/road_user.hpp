@@ -31,6 +31,9 @@ struct RoadUserKind {
   double width = 0.0;            ///< m, default bounding-box width (> 0)
   bool drivesInLanes = false;    ///< a vehicle: follows lanes, changes lanes (not a pedestrian or an object)
   bool stationary = false;       ///< never moves (speed 0 throughout)
+  /// SUMO's vehicle class (also what sumo-gui draws): pedestrians and objects are SUMO vehicles
+  /// too, so that SUMO's collision checks and SSM devices see them.
+  const char* sumoClass = "passenger";
 };
 
 /// Every kind, in RoadUserType order.
